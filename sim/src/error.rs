@@ -1,0 +1,155 @@
+//! The errors the world reports to its callers.
+
+use thiserror::Error;
+
+/// Everything that can go wrong when building or driving a world.
+///
+/// Every variant names the offending value, so a caller can turn it into one clear line
+/// for a user without adding context of its own.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+pub enum SimError {
+    /// A grid with a zero side, or more cells than the occupancy model holds.
+    #[error("grid {width}x{height} is not allowed: each side must be at least 1 and the grid at most {max} cells")]
+    BadGrid {
+        /// Requested width.
+        width: usize,
+        /// Requested height.
+        height: usize,
+        /// Largest number of cells supported.
+        max: usize,
+    },
+    /// A block count outside the supported range.
+    #[error("{count} blocks is not allowed: use between {min} and {max}")]
+    BadBlockCount {
+        /// Requested block count.
+        count: usize,
+        /// Smallest supported count.
+        min: usize,
+        /// Largest supported count.
+        max: usize,
+    },
+    /// More blocks than the grid can hold while leaving a cell free to move into.
+    #[error("{blocks} blocks do not fit a {width}x{height} grid: at least one cell must stay free")]
+    TooManyBlocks {
+        /// Requested block count.
+        blocks: usize,
+        /// Grid width.
+        width: usize,
+        /// Grid height.
+        height: usize,
+    },
+    /// The goal's stack does not fit the grid's height.
+    #[error("a stack of {blocks} blocks is taller than the grid ({height} rows)")]
+    StackTooTall {
+        /// Blocks in the stack.
+        blocks: usize,
+        /// Rows in the grid.
+        height: usize,
+    },
+    /// A goal that is not a permutation of the block ids `0..count`.
+    #[error("goal {goal} is not a permutation of the blocks 0..{count}: {reason}")]
+    BadGoal {
+        /// The goal as written.
+        goal: String,
+        /// How many blocks the world has.
+        count: usize,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// Text that does not parse as a goal, a cell or an action.
+    #[error("cannot read {what} from {text:?}: {reason}")]
+    Parse {
+        /// What was being read ("goal", "cell", ...).
+        what: &'static str,
+        /// The text given.
+        text: String,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// An action index outside `0..5 + blocks`.
+    #[error("action {index} is out of range: with {blocks} blocks the actions are 0..{}", 5 + blocks)]
+    ActionOutOfRange {
+        /// The index given.
+        index: usize,
+        /// How many blocks the world has.
+        blocks: usize,
+    },
+    /// A block id outside `0..blocks`.
+    #[error("block {block} does not exist: the blocks are 0..{blocks}")]
+    NoSuchBlock {
+        /// The id given.
+        block: usize,
+        /// How many blocks the world has.
+        blocks: usize,
+    },
+    /// A cell outside the grid.
+    #[error("cell ({x}, {y}) is outside the {width}x{height} grid")]
+    CellOutsideGrid {
+        /// Column.
+        x: i64,
+        /// Row.
+        y: i64,
+        /// Grid width.
+        width: usize,
+        /// Grid height.
+        height: usize,
+    },
+    /// Two blocks placed on one cell.
+    #[error("blocks {first} and {second} both stand on cell ({x}, {y})")]
+    CellsOverlap {
+        /// One block.
+        first: usize,
+        /// The other block.
+        second: usize,
+        /// Column.
+        x: u8,
+        /// Row.
+        y: u8,
+    },
+    /// Two things that must agree on the number of blocks do not.
+    #[error("block counts differ: the world has {expected} blocks but {what} has {found}")]
+    BlockCountMismatch {
+        /// Blocks in the world (or config).
+        expected: usize,
+        /// What disagrees ("the goal", "the state").
+        what: &'static str,
+        /// Blocks it has.
+        found: usize,
+    },
+    /// A zero horizon.
+    #[error("the horizon must be at least 1 step")]
+    ZeroHorizon,
+    /// `step` called before the first `reset`.
+    #[error("the environment has not been reset: call reset before step")]
+    NotReset,
+    /// `step` called after the episode ended.
+    #[error("the episode has ended (terminated or truncated): call reset before step")]
+    EpisodeOver,
+    /// A vectorised step given a different number of actions than it has environments.
+    #[error("{actions} actions given for {envs} environments: give one action per environment")]
+    ActionCountMismatch {
+        /// Environments.
+        envs: usize,
+        /// Actions given.
+        actions: usize,
+    },
+    /// The thread pool for parallel stepping could not start.
+    #[error("cannot start {threads} worker threads: {reason}")]
+    ThreadPool {
+        /// Threads asked for.
+        threads: usize,
+        /// The system's reason.
+        reason: String,
+    },
+    /// Writing a file (trajectory, picture) failed.
+    #[error("cannot write {path}: {reason}")]
+    Write {
+        /// The path.
+        path: String,
+        /// The system's reason.
+        reason: String,
+    },
+}
+
+/// Shorthand for results whose error is a [`SimError`].
+pub type Result<T, E = SimError> = std::result::Result<T, E>;

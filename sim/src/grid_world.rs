@@ -1,0 +1,104 @@
+//! The pure occupancy-grid backend: the reference model, and what planners search over.
+
+use crate::error::{Result, SimError};
+use crate::grid::{Cell, Direction, Grid};
+use crate::occupancy::Occupancy;
+use crate::state::{BlockId, State};
+use crate::world::World;
+
+/// Blocks on a grid, with an occupancy bit per cell deciding every move.
+///
+/// `Copy`, a few dozen bytes: cloning one is how a planner tries an action.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct GridWorld {
+    grid: Grid,
+    state: State,
+    occupancy: Occupancy,
+}
+
+impl GridWorld {
+    /// A world on `grid` in `state`; an error if the state does not fit the grid.
+    pub fn new(grid: Grid, state: State) -> Result<Self> {
+        state.check_fits(grid)?;
+        Ok(Self {
+            grid,
+            state,
+            occupancy: Occupancy::of(grid, &state),
+        })
+    }
+
+    /// The occupied cells.
+    pub fn occupancy(&self) -> &Occupancy {
+        &self.occupancy
+    }
+
+    /// Whether `cell` has a block on it.
+    #[inline]
+    pub fn is_occupied(&self, cell: Cell) -> bool {
+        self.occupancy.contains(self.grid, cell)
+    }
+
+    /// The state as a reference, without the copy [`World::state`] makes.
+    #[inline]
+    pub fn state_ref(&self) -> &State {
+        &self.state
+    }
+}
+
+impl World for GridWorld {
+    #[inline]
+    fn grid(&self) -> Grid {
+        self.grid
+    }
+
+    #[inline]
+    fn block_count(&self) -> usize {
+        self.state.block_count()
+    }
+
+    #[inline]
+    fn cell_of(&self, block: BlockId) -> Cell {
+        self.state.cell(block)
+    }
+
+    #[inline]
+    fn held_block(&self) -> Option<BlockId> {
+        self.state.held_block()
+    }
+
+    #[inline]
+    fn set_held(&mut self, held: Option<BlockId>) {
+        self.state.set_held(held);
+    }
+
+    #[inline]
+    fn try_move(&mut self, block: BlockId, dir: Direction) -> bool {
+        let from = self.state.cell(block);
+        match self.grid.neighbour(from, dir) {
+            Some(to) if !self.occupancy.contains(self.grid, to) => {
+                self.occupancy.remove(self.grid, from);
+                self.occupancy.insert(self.grid, to);
+                self.state.set_cell(block, to);
+                true
+            }
+            _ => false,
+        }
+    }
+
+    fn place(&mut self, state: &State) -> Result<()> {
+        if state.block_count() != self.block_count() {
+            return Err(SimError::BlockCountMismatch {
+                expected: self.block_count(),
+                what: "the state",
+                found: state.block_count(),
+            });
+        }
+        *self = GridWorld::new(self.grid, *state)?;
+        Ok(())
+    }
+
+    #[inline]
+    fn state(&self) -> State {
+        self.state
+    }
+}

@@ -1,0 +1,90 @@
+//! Many environments stepped together, in parallel.
+
+use rayon::prelude::*;
+
+use crate::action::Action;
+use crate::env::{Env, EnvConfig, Step};
+use crate::error::{Result, SimError};
+use crate::observation::Observation;
+
+/// `M` environments of one config, stepped together on a rayon thread pool.
+///
+/// Seeds: environment `i` is reset with `base_seed + i`, and each continues its own
+/// generator from there, so every environment plays its own fixed sequence of episodes.
+///
+/// Autoreset: Gymnasium's **same-step** mode. When an environment's episode ends on a step,
+/// it is reset within that step: the returned `observation` is the new episode's first, the
+/// ended episode's last observation is in `info.final_observation`, and `reward`,
+/// `terminated` and `truncated` are those of the step that ended it. The next action
+/// therefore always applies to the observation just returned.
+pub struct VecEnv {
+    envs: Vec<Env>,
+    pool: rayon::ThreadPool,
+}
+
+impl VecEnv {
+    /// `count` environments of `config`, stepped on `threads` threads (0: one per core).
+    pub fn new(config: EnvConfig, count: usize, threads: usize) -> Result<VecEnv> {
+        let envs = (0..count).map(|_| Env::new(config)).collect::<Result<Vec<_>>>()?;
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(|e| SimError::ThreadPool {
+                threads,
+                reason: e.to_string(),
+            })?;
+        Ok(VecEnv { envs, pool })
+    }
+
+    /// Number of environments.
+    pub fn len(&self) -> usize {
+        self.envs.len()
+    }
+
+    /// Whether there are no environments.
+    pub fn is_empty(&self) -> bool {
+        self.envs.is_empty()
+    }
+
+    /// Resets environment `i` with seed `base_seed + i`; returns every first observation.
+    pub fn reset(&mut self, base_seed: u64) -> Vec<Observation> {
+        let envs = &mut self.envs;
+        self.pool.install(|| {
+            envs.par_iter_mut()
+                .enumerate()
+                .map(|(i, env)| env.reset(base_seed.wrapping_add(i as u64)))
+                .collect()
+        })
+    }
+
+    /// Steps environment `i` with `actions[i]`, resetting those whose episode ends (see
+    /// the type's docs). An error if the action count differs from the environment count,
+    /// or if any step fails (the first such error).
+    pub fn step(&mut self, actions: &[Action]) -> Result<Vec<Step>> {
+        if actions.len() != self.envs.len() {
+            return Err(SimError::ActionCountMismatch {
+                envs: self.envs.len(),
+                actions: actions.len(),
+            });
+        }
+        let envs = &mut self.envs;
+        self.pool.install(|| {
+            envs.par_iter_mut()
+                .zip(actions.par_iter())
+                .map(|(env, &action)| {
+                    let mut step = env.step(action)?;
+                    if step.terminated || step.truncated {
+                        step.info.final_observation = Some(step.observation);
+                        step.observation = env.reset(None);
+                    }
+                    Ok(step)
+                })
+                .collect()
+        })
+    }
+
+    /// The environments, for reading their state.
+    pub fn envs(&self) -> &[Env] {
+        &self.envs
+    }
+}

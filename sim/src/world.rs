@@ -1,0 +1,91 @@
+//! The rules of the world (SPEC section 2), in one place, over any backend.
+//!
+//! A backend ([`GridWorld`](crate::GridWorld), [`PhysicsWorld`](crate::PhysicsWorld)) only
+//! knows how to read its blocks back and how to decide and carry out a one-cell move of a
+//! block; [`World::act`] is the only code that says what an action does.
+
+use crate::action::Action;
+use crate::error::{Result, SimError};
+use crate::grid::{Cell, Direction, Grid};
+use crate::state::{BlockId, State};
+
+/// What an action did to the world.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Effect {
+    /// The held block moved one cell.
+    Moved,
+    /// A block was held but the wall or another block stopped the move.
+    Blocked,
+    /// A move with no block held: nothing moves.
+    NothingHeld,
+    /// A block became the held one (any other held block was released where it stood).
+    Picked,
+    /// The held block was released.
+    Dropped,
+    /// A pick of the block already held, or a drop with nothing held: nothing changes.
+    Unchanged,
+}
+
+/// A world backend: blocks on a grid, one of them perhaps held.
+///
+/// Implementors supply the primitives; the rules live in the provided [`World::act`].
+pub trait World {
+    /// The grid the blocks stand on.
+    fn grid(&self) -> Grid;
+
+    /// Number of blocks.
+    fn block_count(&self) -> usize;
+
+    /// The cell `block` stands on, read from the backend itself.
+    fn cell_of(&self, block: BlockId) -> Cell;
+
+    /// The held block, if any.
+    fn held_block(&self) -> Option<BlockId>;
+
+    /// Sets the held block; the caller has checked that it exists.
+    fn set_held(&mut self, held: Option<BlockId>);
+
+    /// Moves `block` one cell in `dir` if the backend finds the way free (inside the grid
+    /// and not occupied); returns whether it moved.
+    fn try_move(&mut self, block: BlockId, dir: Direction) -> bool;
+
+    /// Puts every block where `state` says and holds what it holds; an error if `state`
+    /// does not fit this world (block count, grid bounds).
+    fn place(&mut self, state: &State) -> Result<()>;
+
+    /// The whole logical state, read back from the backend.
+    fn state(&self) -> State;
+
+    /// Carries out `action` by the rules of SPEC section 2; an error only for a pick of a
+    /// block that does not exist.
+    fn act(&mut self, action: Action) -> Result<Effect> {
+        let held = self.held_block();
+        Ok(match action {
+            Action::Pick(b) if b.index() >= self.block_count() => {
+                return Err(SimError::NoSuchBlock {
+                    block: b.index(),
+                    blocks: self.block_count(),
+                });
+            }
+            Action::Pick(b) if held == Some(b) => Effect::Unchanged,
+            Action::Pick(b) => {
+                self.set_held(Some(b));
+                Effect::Picked
+            }
+            Action::Drop if held.is_none() => Effect::Unchanged,
+            Action::Drop => {
+                self.set_held(None);
+                Effect::Dropped
+            }
+            Action::Up | Action::Down | Action::Left | Action::Right => {
+                let dir = action.direction().expect("a move has a direction");
+                match held {
+                    None => Effect::NothingHeld,
+                    Some(b) if self.try_move(b, dir) => Effect::Moved,
+                    Some(_) => Effect::Blocked,
+                }
+            }
+        })
+    }
+}
