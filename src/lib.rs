@@ -1,1 +1,9 @@
+//! blockstack: a physics-backed 2D block-stacking world, its planners and learners, and
+//! the reproduction of "Interactive Robot Learning".
+//!
+//! The work lives in the crates re-exported here; [`cli`] is the command line over them.
+
+pub mod cli;
+
+pub use agent;
 pub use sim;

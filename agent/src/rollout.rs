@@ -1,0 +1,145 @@
+//! Playing episodes: the loop every command and experiment shares, and its statistics.
+
+use serde::Serialize;
+use sim::seeding::{self, SimRng};
+use sim::trajectory::{Record, TrajectoryWriter};
+use sim::{Env, Goal, State};
+
+use crate::error::Result;
+use crate::policy::Policy;
+
+/// How one episode went.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EpisodeResult {
+    /// Episode number in the run.
+    pub episode: u64,
+    /// The seed the environment was reset with.
+    pub seed: u64,
+    /// The goal.
+    pub goal: Goal,
+    /// The start state.
+    pub start: State,
+    /// Actions taken.
+    pub steps: u32,
+    /// Whether the goal was reached (otherwise the episode was truncated).
+    pub reached_goal: bool,
+    /// Sum of the rewards.
+    pub total_reward: f64,
+}
+
+/// The generator a policy draws from in the episode reset with `episode_seed`: a stream of
+/// its own, so the policy's draws never shift the start and every arm of a comparison
+/// plays the same starts.
+pub fn policy_rng(episode_seed: u64) -> SimRng {
+    let mut rng = seeding::rng(episode_seed);
+    rng.set_stream(1);
+    rng
+}
+
+/// Plays one episode of `policy` in `env`, reset with `seed`; writes it to `trajectory`
+/// as episode `episode` when given.
+pub fn play_episode(
+    env: &mut Env,
+    policy: &mut dyn Policy,
+    episode: u64,
+    seed: u64,
+    mut trajectory: Option<&mut TrajectoryWriter>,
+) -> Result<EpisodeResult> {
+    let obs = env.reset(seed);
+    let config = *env.config();
+    if let Some(t) = trajectory.as_deref_mut() {
+        t.write(&Record::episode(
+            episode,
+            seed,
+            config.grid,
+            obs.goal,
+            config.horizon,
+            &obs.state,
+        ))?;
+    }
+    let start = obs.state;
+    let mut rng = policy_rng(seed);
+    policy.begin_episode(&obs);
+    let mut obs = obs;
+    let mut total_reward = 0.0;
+    let mut reached_goal = false;
+    while !env.is_over() {
+        let action = policy.act(&obs, &mut rng)?;
+        let step = env.step(action)?;
+        if let Some(t) = trajectory.as_deref_mut() {
+            t.write(&Record::step(episode, action.index(), &step))?;
+        }
+        total_reward += step.reward;
+        reached_goal = step.terminated;
+        obs = step.observation;
+    }
+    Ok(EpisodeResult {
+        episode,
+        seed,
+        goal: obs.goal,
+        start,
+        steps: env.steps(),
+        reached_goal,
+        total_reward,
+    })
+}
+
+/// Plays `episodes` episodes of `policy` in `env`; episode `k` is reset with
+/// [`seeding::episode_seed`]`(base_seed, k)`, so any two policies run with the same base
+/// seed play the same starts.
+pub fn play(
+    env: &mut Env,
+    policy: &mut dyn Policy,
+    episodes: u64,
+    base_seed: u64,
+    mut trajectory: Option<&mut TrajectoryWriter>,
+) -> Result<Vec<EpisodeResult>> {
+    (0..episodes)
+        .map(|k| {
+            play_episode(
+                env,
+                policy,
+                k,
+                seeding::episode_seed(base_seed, k),
+                trajectory.as_deref_mut(),
+            )
+        })
+        .collect()
+}
+
+/// Failures and steps to goal over a set of episodes.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Summary {
+    /// Episodes played.
+    pub episodes: usize,
+    /// Episodes truncated without reaching the goal.
+    pub failures: usize,
+    /// Mean steps to goal over the successful episodes (`None` if there were none).
+    pub mean_steps: Option<f64>,
+    /// Median steps to goal over the successful episodes (`None` if there were none); the
+    /// mean of the two middle values for an even count.
+    pub median_steps: Option<f64>,
+}
+
+impl Summary {
+    /// The summary of `results`.
+    pub fn of(results: &[EpisodeResult]) -> Summary {
+        let mut steps: Vec<u32> = results.iter().filter(|r| r.reached_goal).map(|r| r.steps).collect();
+        steps.sort_unstable();
+        let n = steps.len();
+        let mean_steps = (n > 0).then(|| steps.iter().map(|&s| f64::from(s)).sum::<f64>() / n as f64);
+        let median_steps = (n > 0).then(|| {
+            if n % 2 == 1 {
+                f64::from(steps[n / 2])
+            } else {
+                (f64::from(steps[n / 2 - 1]) + f64::from(steps[n / 2])) / 2.0
+            }
+        });
+        Summary {
+            episodes: results.len(),
+            failures: results.len() - n,
+            mean_steps,
+            median_steps,
+        }
+    }
+}

@@ -1,0 +1,34 @@
+//! The command line: one module per subcommand. Errors come back as `anyhow` errors; the
+//! binary prints them as one line and exits with status 2.
+
+use clap::{Parser, Subcommand};
+
+mod render;
+mod run;
+mod world;
+
+/// blockstack: teach an agent to stack blocks in a physics-backed 2D world.
+#[derive(Debug, Parser)]
+#[command(name = "blockstack", version, about, long_about = None)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Play episodes with an agent and report failures and steps to goal.
+    Run(run::RunArgs),
+    /// Draw a start state as a PNG picture or as text.
+    Render(render::RenderArgs),
+}
+
+/// Carries out `cli`'s command.
+pub fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Command::Run(args) => run::run(args),
+        Command::Render(args) => render::render(args),
+    }
+}

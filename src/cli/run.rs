@@ -1,0 +1,108 @@
+//! `blockstack run`: play episodes with an agent.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::{Args, ValueEnum};
+use serde::Serialize;
+use sim::trajectory::TrajectoryWriter;
+use sim::{Env, GoalSpec};
+
+use agent::{Policy, RandomPolicy, Summary};
+
+use super::world::WorldArgs;
+
+/// Which agent plays.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum AgentKind {
+    /// Uniformly random actions.
+    Random,
+}
+
+/// Arguments of `blockstack run`.
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    /// The agent.
+    #[arg(long, value_enum, default_value_t = AgentKind::Random)]
+    pub agent: AgentKind,
+    #[command(flatten)]
+    pub world: WorldArgs,
+    /// Episodes to play.
+    #[arg(long, default_value_t = 100)]
+    pub episodes: u64,
+    /// Base seed: episode k starts from seed episode_seed(seed, k).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Write every episode, step by step, to this file as JSON Lines.
+    #[arg(long)]
+    pub trajectory: Option<PathBuf>,
+    /// Print the result as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The machine-readable result of a run: no timings, so two runs compare equal.
+#[derive(Debug, Serialize)]
+struct RunReport {
+    agent: String,
+    blocks: usize,
+    goal: Option<String>,
+    grid: String,
+    horizon: u32,
+    backend: String,
+    seed: u64,
+    #[serde(flatten)]
+    summary: Summary,
+}
+
+/// Plays the episodes and prints the summary.
+pub fn run(args: RunArgs) -> Result<()> {
+    let config = args.world.config()?;
+    let mut policy: Box<dyn Policy> = match args.agent {
+        AgentKind::Random => Box::new(RandomPolicy),
+    };
+    let mut env = Env::new(config)?;
+    let mut trajectory = args.trajectory.as_deref().map(TrajectoryWriter::create).transpose()?;
+    let results = agent::play(&mut env, policy.as_mut(), args.episodes, args.seed, trajectory.as_mut())?;
+    if let Some(t) = trajectory {
+        t.finish()?;
+    }
+    let report = RunReport {
+        agent: policy.name(),
+        blocks: config.blocks,
+        goal: match config.goal {
+            GoalSpec::Fixed(g) => Some(g.to_string()),
+            GoalSpec::Random => None,
+        },
+        grid: config.grid.to_string(),
+        horizon: config.horizon,
+        backend: config.backend.to_string(),
+        seed: args.seed,
+        summary: Summary::of(&results),
+    };
+    if args.json {
+        println!("{}", serde_json::to_string(&report)?);
+    } else {
+        print_report(&report);
+    }
+    Ok(())
+}
+
+fn print_report(r: &RunReport) {
+    let s = &r.summary;
+    println!(
+        "agent {}, {} blocks, goal {}, grid {}, horizon {}, {} backend, seed {}",
+        r.agent,
+        r.blocks,
+        r.goal.as_deref().unwrap_or("random"),
+        r.grid,
+        r.horizon,
+        r.backend,
+        r.seed
+    );
+    println!("episodes      {}", s.episodes);
+    println!("failures      {}", s.failures);
+    let fmt = |v: Option<f64>| v.map_or("- (no episode reached the goal)".to_string(), |v| format!("{v:.2}"));
+    println!("mean steps    {}", fmt(s.mean_steps));
+    println!("median steps  {}", fmt(s.median_steps));
+}

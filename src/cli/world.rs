@@ -1,0 +1,51 @@
+//! Arguments that describe a world, shared by the subcommands.
+
+use anyhow::Result;
+use clap::Args;
+use sim::{Backend, EnvConfig, Goal, GoalSpec, Grid, RewardModel};
+
+/// The world: grid, blocks, goal, horizon, reward, backend.
+#[derive(Debug, Clone, Args)]
+pub struct WorldArgs {
+    /// Number of blocks.
+    #[arg(long, default_value_t = 3)]
+    pub blocks: usize,
+    /// The goal, bottom to top, e.g. 1,0,2 (default: drawn at random every episode).
+    #[arg(long)]
+    pub goal: Option<String>,
+    /// Grid size, WxH.
+    #[arg(long, default_value = "7x7")]
+    pub grid: String,
+    /// Steps before an episode is cut off.
+    #[arg(long, default_value_t = sim::DEFAULT_HORIZON)]
+    pub horizon: u32,
+    /// Reward model: sparse, dense, paper or step-cost.
+    #[arg(long, default_value = "sparse")]
+    pub reward: String,
+    /// World backend: physics (rapier2d) or grid (occupancy model).
+    #[arg(long, default_value = "physics")]
+    pub backend: String,
+}
+
+impl WorldArgs {
+    /// The environment config these arguments describe, checked.
+    pub fn config(&self) -> Result<EnvConfig> {
+        let grid: Grid = self.grid.parse()?;
+        let goal = match &self.goal {
+            Some(text) => GoalSpec::Fixed(Goal::parse(text, Some(self.blocks))?),
+            None => GoalSpec::Random,
+        };
+        let reward: RewardModel = self.reward.parse()?;
+        let backend: Backend = self.backend.parse()?;
+        let config = EnvConfig {
+            grid,
+            blocks: self.blocks,
+            goal,
+            horizon: self.horizon,
+            reward,
+            backend,
+        };
+        config.validate()?;
+        Ok(config)
+    }
+}
