@@ -43,6 +43,8 @@
 //!   otherwise the finite-n distribution of the one-sample two-sided
 //!   statistic (SciPy's `kstwo`) at `n = round(n1 n2 / (n1 + n2))`.
 
+#[cfg(test)]
+mod fixtures;
 mod kolmogorov;
 mod ks;
 mod mann_whitney;
@@ -129,11 +131,7 @@ fn rank_average(values: &[f64]) -> (Vec<f64>, Vec<usize>) {
     let mut start = 0;
     while start < order.len() {
         let first = values[order[start]];
-        let end = start
-            + order[start..]
-                .iter()
-                .take_while(|&&i| values[i] == first)
-                .count();
+        let end = start + order[start..].iter().take_while(|&&i| values[i] == first).count();
         let size = end - start;
         // Same expression as SciPy: first ordinal rank + (count - 1) / 2.
         let rank = (start + 1) as f64 + (size as f64 - 1.0) / 2.0;

@@ -221,3 +221,232 @@ fn outer_prob_inside(m: usize, n: usize, g: usize, h: usize) -> f64 {
     }
     a[(maxj - minj - 1) as usize]
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::stats::fixtures::{STEPS_8, STEPS_200, STEPS_300, STEPS_500_A, STEPS_500_B};
+    use proptest::prelude::*;
+    use std::time::{Duration, Instant};
+
+    /// Asserts `got` is within relative tolerance `rel` of SciPy's `want`.
+    fn assert_close(got: f64, want: f64, rel: f64, what: &str) {
+        let err = if got == want {
+            0.0
+        } else {
+            (got - want).abs() / want.abs().max(f64::MIN_POSITIVE)
+        };
+        assert!(err <= rel, "{what}: got {got:e}, scipy {want:e} (rel err {err:e})");
+    }
+
+    /// Checks against SciPy's statistic and p-value. Exact cases run the
+    /// same float recursions as SciPy, so 1e-9 relative is generous. The
+    /// asymptotic ones get the tolerance given by the caller (see there).
+    fn check(x: &[f64], y: &[f64], statistic: f64, p: f64, method: Method, rel: f64) {
+        let res = ks_2samp(x, y).unwrap();
+        assert_eq!(res.method, method, "method");
+        assert_close(res.statistic, statistic, 1e-12, "statistic");
+        assert_close(res.p_value, p, rel, "p-value");
+    }
+
+    const A10: [f64; 10] = [0.61, 0.29, 0.06, 0.59, -1.73, -0.74, 0.51, -0.56, 0.39, 1.64];
+    const B10: [f64; 10] = [-0.1, 1.2, 0.81, 1.5, 0.3, 2.1, 0.95, 0.71, 1.33, 0.02];
+
+    #[test]
+    fn exact_equal_sizes() {
+        // scipy.stats.ks_2samp(A10, B10) -> statistic=0.6, pvalue=0.05244755244755244
+        check(&A10, &B10, 0.6, 0.05244755244755244, Method::Exact, 1e-9);
+        check(&B10, &A10, 0.6, 0.05244755244755244, Method::Exact, 1e-9);
+        // scipy.stats.ks_2samp([1.0], [2.0]) -> statistic=1.0, pvalue=1.0
+        check(&[1.0], &[2.0], 1.0, 1.0, Method::Exact, 1e-9);
+    }
+
+    #[test]
+    fn exact_unequal_sizes() {
+        // scipy.stats.ks_2samp(A10[:8], B10 + [1.7])
+        //   -> statistic=0.7272727272727273, pvalue=0.007435632822629727
+        let mut b11 = B10.to_vec();
+        b11.push(1.7);
+        check(
+            &A10[..8],
+            &b11,
+            0.7272727272727273,
+            0.007435632822629727,
+            Method::Exact,
+            1e-9,
+        );
+    }
+
+    #[test]
+    fn exact_with_ties() {
+        // scipy.stats.ks_2samp([1, 2, 2, 3, 3, 3, 4], [2, 3, 3, 4, 4, 5, 5, 5, 6])
+        //   -> statistic=0.5238095238095238, pvalue=0.1687062937062937
+        let x = [1.0, 2.0, 2.0, 3.0, 3.0, 3.0, 4.0];
+        let y = [2.0, 3.0, 3.0, 4.0, 4.0, 5.0, 5.0, 5.0, 6.0];
+        check(&x, &y, 0.5238095238095238, 0.1687062937062937, Method::Exact, 1e-9);
+    }
+
+    #[test]
+    fn identical_samples_are_immediate() {
+        // statrs hangs here: two agents that never fail.
+        // scipy.stats.ks_2samp([1000.0] * 500, [1000.0] * 500)
+        //   -> statistic=0.0, pvalue=1.0
+        let start = Instant::now();
+        check(&[1000.0; 500], &[1000.0; 500], 0.0, 1.0, Method::Exact, 0.0);
+        // scipy.stats.ks_2samp([1000.0] * 500, [1000.0] * 499 + [999.0])
+        //   -> statistic=0.002, pvalue=0.9999999999999998
+        let mut one_off = vec![1000.0; 500];
+        one_off[499] = 999.0;
+        check(&[1000.0; 500], &one_off, 0.002, 0.9999999999999998, Method::Exact, 1e-9);
+        assert!(start.elapsed() < Duration::from_secs(1));
+    }
+
+    #[test]
+    fn realistic_step_counts() {
+        // scipy.stats.ks_2samp(STEPS_200, STEPS_300)
+        //   -> statistic=0.155, pvalue=0.0057556086682506126
+        check(
+            &STEPS_200,
+            &STEPS_300,
+            0.155,
+            0.0057556086682506126,
+            Method::Exact,
+            1e-9,
+        );
+        // scipy.stats.ks_2samp(STEPS_500_A, STEPS_500_B)
+        //   -> statistic=0.116, pvalue=0.0023738215453611602
+        check(
+            &STEPS_500_A,
+            &STEPS_500_B,
+            0.116,
+            0.0023738215453611602,
+            Method::Exact,
+            1e-9,
+        );
+        // scipy.stats.ks_2samp(STEPS_8, STEPS_300)
+        //   -> statistic=0.33666666666666667, pvalue=0.2744224692286659
+        check(
+            &STEPS_8,
+            &STEPS_300,
+            0.33666666666666667,
+            0.2744224692286659,
+            Method::Exact,
+            1e-9,
+        );
+    }
+
+    /// `big_x(n)` of experiments/scripts/scipy_reference.py:
+    /// `(i * 7919 + 13) % 10007` for `i` in `0..n` (many ties).
+    fn big_x(n: u64) -> Vec<f64> {
+        (0..n).map(|i| ((i * 7919 + 13) % 10007) as f64).collect()
+    }
+
+    /// `big_y(n, scale)`: `((i * 104729 + 7) % 9973) * scale`.
+    fn big_y(n: u64, scale: f64) -> Vec<f64> {
+        (0..n).map(|i| ((i * 104729 + 7) % 9973) as f64 * scale).collect()
+    }
+
+    /// `near_y(n, offset, scale)`: `(((i + offset) * 7919 + 13) % 10007) * scale`.
+    fn near_y(n: u64, offset: u64, scale: f64) -> Vec<f64> {
+        (0..n)
+            .map(|i| (((i + offset) * 7919 + 13) % 10007) as f64 * scale)
+            .collect()
+    }
+
+    #[test]
+    fn asymptotic_beyond_ten_thousand() {
+        // Tolerance 1e-9 except where noted: the kstwo methods are the same
+        // float algorithms as SciPy's except `smirnov`, which SciPy runs in
+        // double-double arithmetic and we in f64 (at most ~1e-13 apart).
+        let x = big_x(12_000);
+        // en = round(n1 n2 / (n1 + n2)); the comments name the kstwo method.
+        let cases = [
+            // scipy.stats.ks_2samp(big_x(12000), big_y(50, 1.0))  # en=50: smirnov
+            //   -> (0.43975, 2.5448487855324576e-09)
+            (big_y(50, 1.0), 0.43975, 2.5448487855324576e-09),
+            // scipy.stats.ks_2samp(big_x(12000), big_y(50, 1.2))  # en=50: smirnov
+            //   -> (0.4271666666666667, 8.469854568421509e-09)
+            (big_y(50, 1.2), 0.4271666666666667, 8.469854568421509e-09),
+            // scipy.stats.ks_2samp(big_x(12000), near_y(50, 1000, 1.1))  # en=50: DMTW
+            //   -> (0.08699999999999997, 0.8120563697031828)
+            (near_y(50, 1000, 1.1), 0.08699999999999997, 0.8120563697031828),
+            // scipy.stats.ks_2samp(big_x(12000), near_y(50, 0, 1.3))  # en=50: Pomeranz
+            //   -> (0.2642500000000001, 0.0014307051527585601)
+            (near_y(50, 0, 1.3), 0.2642500000000001, 0.0014307051527585601),
+            // scipy.stats.ks_2samp(big_x(12000), near_y(100, 0, 1.1))  # en=99: Pomeranz
+            //   -> (0.10083333333333333, 0.24926781708216783)
+            (near_y(100, 0, 1.1), 0.10083333333333333, 0.24926781708216783),
+            // scipy.stats.ks_2samp(big_x(12000), big_y(300, 1.1))  # en=293: smirnov
+            //   -> (0.08966666666666667, 0.01685465177689444)
+            (big_y(300, 1.1), 0.08966666666666667, 0.01685465177689444),
+            // scipy.stats.ks_2samp(big_x(12000), big_y(11000, 1.0))  # en=5739: Pelz-Good
+            //   -> (0.00734090909090912, 0.9142398796625582)
+            (big_y(11_000, 1.0), 0.00734090909090912, 0.9142398796625582),
+            // scipy.stats.ks_2samp(big_x(12000), big_y(11000, 1.01))  # en=5739: Pelz-Good
+            //   -> (0.006590909090909092, 0.962991212485241)
+            (big_y(11_000, 1.01), 0.006590909090909092, 0.962991212485241),
+        ];
+        for (y, d, p) in &cases {
+            check(&x, y, *d, *p, Method::Asymptotic, 1e-9);
+        }
+        // scipy.stats.ks_2samp(big_x(10001), big_y(10000, 1.0))  # en=5000: DMTW
+        //   -> (0.00339966003399661, 0.9999999917309427)
+        let (x, y) = (big_x(10_001), big_y(10_000, 1.0));
+        check(
+            &x,
+            &y,
+            0.00339966003399661,
+            0.9999999917309427,
+            Method::Asymptotic,
+            1e-9,
+        );
+    }
+
+    #[test]
+    fn bad_input_is_an_error() {
+        assert_eq!(ks_2samp(&[], &[1.0]), Err(StatsError::EmptySample));
+        assert_eq!(ks_2samp(&[1.0], &[]), Err(StatsError::EmptySample));
+        assert_eq!(ks_2samp(&[f64::NAN], &[1.0]), Err(StatsError::NaN));
+        assert_eq!(ks_2samp(&[1.0], &[2.0, f64::NAN]), Err(StatsError::NaN));
+    }
+
+    #[test]
+    fn square_matches_inside_method() {
+        // For n1 == n2 SciPy uses the reflection sum; the lattice recursion
+        // must agree with it where both apply.
+        for n in [1, 2, 5, 17, 40] {
+            for h in 1..=n {
+                let square = prob_outside_square(n, h);
+                let inside = outer_prob_inside(n, n, n, h);
+                assert!((square - inside).abs() < 1e-12, "n={n} h={h}: {square} vs {inside}");
+            }
+        }
+    }
+
+    fn sample() -> impl Strategy<Value = Vec<f64>> {
+        prop::collection::vec((0i32..30).prop_map(f64::from), 1..60)
+    }
+
+    proptest! {
+        #[test]
+        fn p_value_is_a_probability(x in sample(), y in sample()) {
+            let res = ks_2samp(&x, &y).unwrap();
+            prop_assert!((0.0..=1.0).contains(&res.p_value), "{res:?}");
+            prop_assert!((0.0..=1.0).contains(&res.statistic));
+        }
+
+        #[test]
+        fn swapping_samples_keeps_result(x in sample(), y in sample()) {
+            prop_assert_eq!(ks_2samp(&x, &y).unwrap(), ks_2samp(&y, &x).unwrap());
+        }
+
+        #[test]
+        fn identical_samples_give_p_one(x in sample()) {
+            let mut shuffled = x.clone();
+            shuffled.reverse();
+            let res = ks_2samp(&x, &shuffled).unwrap();
+            prop_assert_eq!(res.statistic, 0.0);
+            prop_assert_eq!(res.p_value, 1.0);
+        }
+    }
+}
