@@ -75,13 +75,17 @@ impl World for GridWorld {
     fn try_move(&mut self, block: BlockId, dir: Direction) -> bool {
         let from = self.state.cell(block);
         match self.grid.neighbour(from, dir) {
-            Some(to) if !self.occupancy.contains(self.grid, to) => {
-                self.occupancy.remove(self.grid, from);
-                self.occupancy.insert(self.grid, to);
+            Some(to) => {
+                // Index arithmetic once: this is the hottest path of every planner.
+                let (fi, ti) = (self.grid.index(from), self.grid.index(to));
+                if self.occupancy.contains_index(ti) {
+                    return false;
+                }
+                self.occupancy.move_index(fi, ti);
                 self.state.set_cell(block, to);
                 true
             }
-            _ => false,
+            None => false,
         }
     }
 

@@ -38,6 +38,19 @@ impl Occupancy {
         self.0[i >> 6] &= !(1 << (i & 63));
     }
 
+    /// Whether the cell with row-major index `index` is occupied.
+    #[inline]
+    pub fn contains_index(&self, index: usize) -> bool {
+        self.0[index >> 6] & (1 << (index & 63)) != 0
+    }
+
+    /// Moves the mark of cell index `from` to cell index `to`.
+    #[inline]
+    pub fn move_index(&mut self, from: usize, to: usize) {
+        self.0[from >> 6] &= !(1 << (from & 63));
+        self.0[to >> 6] |= 1 << (to & 63);
+    }
+
     /// Number of occupied cells.
     pub fn len(&self) -> usize {
         self.0.iter().map(|w| w.count_ones() as usize).sum()

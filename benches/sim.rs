@@ -1,0 +1,109 @@
+//! Step throughput of the two backends, environment resets, and the vectorised env.
+//!
+//! `cargo bench --bench sim`. Actions are drawn up front from a seeded generator so the
+//! timing is of the world, not of the generator.
+
+use std::hint::black_box;
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use rand::RngExt;
+use sim::{Action, Backend, Env, EnvConfig, Grid, GridWorld, PhysicsWorld, VecEnv, World};
+
+/// Random actions of a world with `blocks` blocks.
+fn random_actions(blocks: usize, count: usize) -> Vec<Action> {
+    let mut rng = sim::seeding::rng(42);
+    (0..count).map(|_| Action::from_index(rng.random_range(0..Action::count(blocks)), blocks).unwrap()).collect()
+}
+
+/// A start state of `blocks` blocks on `grid`.
+fn start(grid: Grid, blocks: usize) -> sim::State {
+    let config = EnvConfig { grid, blocks, backend: Backend::Grid, ..EnvConfig::default() };
+    Env::new(config).unwrap().reset(1).state
+}
+
+fn world_step(c: &mut Criterion) {
+    let mut group = c.benchmark_group("step");
+    group.throughput(Throughput::Elements(1));
+    // Eight blocks need eight rows for their stack; the world itself would not mind.
+    for (blocks, grid) in [(3, Grid::default()), (8, Grid::new(8, 8).unwrap())] {
+        let actions = random_actions(blocks, 1 << 16);
+        let mut grid_world = GridWorld::new(grid, start(grid, blocks)).unwrap();
+        let mut i = 0;
+        group.bench_function(BenchmarkId::new("grid", blocks), |b| {
+            b.iter(|| {
+                i = (i + 1) & 0xFFFF;
+                black_box(grid_world.act(actions[i]).unwrap())
+            })
+        });
+        let mut physics = PhysicsWorld::new(grid, start(grid, blocks)).unwrap();
+        group.bench_function(BenchmarkId::new("physics", blocks), |b| {
+            b.iter(|| {
+                i = (i + 1) & 0xFFFF;
+                black_box(physics.act(actions[i]).unwrap())
+            })
+        });
+    }
+    group.finish();
+}
+
+fn env_step(c: &mut Criterion) {
+    // The whole Env step: action, state read-back, reward, goal check, autoreset on end.
+    let mut group = c.benchmark_group("env_step");
+    group.throughput(Throughput::Elements(1));
+    for (blocks, grid) in [(3, Grid::default()), (8, Grid::new(8, 8).unwrap())] {
+        let actions = random_actions(blocks, 1 << 16);
+        for backend in [Backend::Grid, Backend::Physics] {
+            let mut env = Env::new(EnvConfig { grid, blocks, backend, ..EnvConfig::default() }).unwrap();
+            env.reset(1);
+            let mut i = 0;
+            group.bench_function(BenchmarkId::new(backend.to_string(), blocks), |b| {
+                b.iter(|| {
+                    i = (i + 1) & 0xFFFF;
+                    let step = env.step(actions[i]).unwrap();
+                    if step.terminated || step.truncated {
+                        env.reset(None);
+                    }
+                    black_box(step.reward)
+                })
+            });
+        }
+    }
+    group.finish();
+}
+
+fn reset(c: &mut Criterion) {
+    let mut group = c.benchmark_group("reset");
+    for backend in [Backend::Grid, Backend::Physics] {
+        let mut env = Env::new(EnvConfig { backend, ..EnvConfig::default() }).unwrap();
+        let mut seed = 0;
+        group.bench_function(backend.to_string(), |b| {
+            b.iter(|| {
+                seed += 1;
+                black_box(env.reset(seed))
+            })
+        });
+    }
+    group.finish();
+}
+
+fn vec_step(c: &mut Criterion) {
+    const ENVS: usize = 64;
+    let mut group = c.benchmark_group("vec_step");
+    group.throughput(Throughput::Elements(ENVS as u64));
+    let batches: Vec<Vec<Action>> = random_actions(3, 64 * ENVS).chunks(ENVS).map(<[Action]>::to_vec).collect();
+    for threads in [1, 2] {
+        let mut v = VecEnv::new(EnvConfig::default(), ENVS, threads).unwrap();
+        v.reset(0);
+        let mut i = 0;
+        group.bench_function(BenchmarkId::new("physics_64_envs_threads", threads), |b| {
+            b.iter(|| {
+                i = (i + 1) % batches.len();
+                black_box(v.step(&batches[i]).unwrap().len())
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, world_step, env_step, reset, vec_step);
+criterion_main!(benches);
