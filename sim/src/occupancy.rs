@@ -3,6 +3,9 @@
 use crate::grid::{Cell, Grid, MAX_CELLS};
 use crate::state::State;
 
+/// Masks a word index into `0..MAX_CELLS / 64`.
+const WORD_MASK: usize = MAX_CELLS / 64 - 1;
+
 /// The occupied cells of a grid, one bit each, indexed by [`Grid::index`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct Occupancy([u64; MAX_CELLS / 64]);
@@ -41,14 +44,16 @@ impl Occupancy {
     /// Whether the cell with row-major index `index` is occupied.
     #[inline]
     pub fn contains_index(&self, index: usize) -> bool {
-        self.0[index >> 6] & (1 << (index & 63)) != 0
+        // The mask keeps the word index in range without a bounds check (indices are
+        // below MAX_CELLS by construction of the grid).
+        self.0[(index >> 6) & WORD_MASK] & (1 << (index & 63)) != 0
     }
 
     /// Moves the mark of cell index `from` to cell index `to`.
     #[inline]
     pub fn move_index(&mut self, from: usize, to: usize) {
-        self.0[from >> 6] &= !(1 << (from & 63));
-        self.0[to >> 6] |= 1 << (to & 63);
+        self.0[(from >> 6) & WORD_MASK] &= !(1 << (from & 63));
+        self.0[(to >> 6) & WORD_MASK] |= 1 << (to & 63);
     }
 
     /// Number of occupied cells.

@@ -59,6 +59,7 @@ pub trait World {
 
     /// Carries out `action` by the rules of SPEC section 2; an error only for a pick of a
     /// block that does not exist.
+    #[inline]
     fn act(&mut self, action: Action) -> Result<Effect> {
         let held = self.held_block();
         Ok(match action {
