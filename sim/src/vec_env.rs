@@ -19,20 +19,28 @@ use crate::observation::Observation;
 /// therefore always applies to the observation just returned.
 pub struct VecEnv {
     envs: Vec<Env>,
-    pool: rayon::ThreadPool,
+    /// `None` for one thread: the caller's thread steps the environments itself, which
+    /// spares a hand-off to a pool thread and back on every step.
+    pool: Option<rayon::ThreadPool>,
 }
 
 impl VecEnv {
-    /// `count` environments of `config`, stepped on `threads` threads (0: one per core).
+    /// `count` environments of `config`, stepped on `threads` threads (0: one per core; 1:
+    /// on the caller's thread, without a pool).
     pub fn new(config: EnvConfig, count: usize, threads: usize) -> Result<VecEnv> {
         let envs = (0..count).map(|_| Env::new(config)).collect::<Result<Vec<_>>>()?;
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .map_err(|e| SimError::ThreadPool {
-                threads,
-                reason: e.to_string(),
-            })?;
+        let pool = match threads {
+            1 => None,
+            _ => Some(
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .map_err(|e| SimError::ThreadPool {
+                        threads,
+                        reason: e.to_string(),
+                    })?,
+            ),
+        };
         Ok(VecEnv { envs, pool })
     }
 
@@ -48,13 +56,11 @@ impl VecEnv {
 
     /// Resets environment `i` with seed `base_seed + i`; returns every first observation.
     pub fn reset(&mut self, base_seed: u64) -> Vec<Observation> {
-        let envs = &mut self.envs;
-        self.pool.install(|| {
-            envs.par_iter_mut()
-                .enumerate()
-                .map(|(i, env)| env.reset(base_seed.wrapping_add(i as u64)))
-                .collect()
-        })
+        let reset = |(i, env): (usize, &mut Env)| env.reset(base_seed.wrapping_add(i as u64));
+        match &self.pool {
+            None => self.envs.iter_mut().enumerate().map(reset).collect(),
+            Some(pool) => pool.install(|| self.envs.par_iter_mut().enumerate().map(reset).collect()),
+        }
     }
 
     /// Steps environment `i` with `actions[i]`, resetting those whose episode ends (see
@@ -67,20 +73,18 @@ impl VecEnv {
                 actions: actions.len(),
             });
         }
-        let envs = &mut self.envs;
-        self.pool.install(|| {
-            envs.par_iter_mut()
-                .zip(actions.par_iter())
-                .map(|(env, &action)| {
-                    let mut step = env.step(action)?;
-                    if step.terminated || step.truncated {
-                        step.info.final_observation = Some(step.observation);
-                        step.observation = env.reset(None);
-                    }
-                    Ok(step)
-                })
-                .collect()
-        })
+        let step = |(env, &action): (&mut Env, &Action)| {
+            let mut step = env.step(action)?;
+            if step.terminated || step.truncated {
+                step.info.final_observation = Some(step.observation);
+                step.observation = env.reset(None);
+            }
+            Ok(step)
+        };
+        match &self.pool {
+            None => self.envs.iter_mut().zip(actions).map(step).collect(),
+            Some(pool) => pool.install(|| self.envs.par_iter_mut().zip(actions.par_iter()).map(step).collect()),
+        }
     }
 
     /// The environments, for reading their state.

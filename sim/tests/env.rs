@@ -291,25 +291,28 @@ fn vec_env_seeds_each_env_and_resets_in_the_same_step() {
         backend: Backend::Grid,
         ..EnvConfig::with_goal(goal("0,1,2"))
     };
-    let mut v = VecEnv::new(config, 4, 2).unwrap();
-    let first = v.reset(10);
-    for (i, obs) in first.iter().enumerate() {
-        assert_eq!(*obs, Env::new(config).unwrap().reset(10 + i as u64));
+    // One thread steps on the caller's thread, two on a pool: same results.
+    for threads in [1, 2] {
+        let mut v = VecEnv::new(config, 4, threads).unwrap();
+        let first = v.reset(10);
+        for (i, obs) in first.iter().enumerate() {
+            assert_eq!(*obs, Env::new(config).unwrap().reset(10 + i as u64));
+        }
+        let drops = vec![Action::Drop; 4];
+        v.step(&drops).unwrap();
+        v.step(&drops).unwrap();
+        let last = v.step(&drops).unwrap();
+        for (i, s) in last.iter().enumerate() {
+            assert!(s.truncated);
+            assert_eq!(s.info.final_observation.unwrap().state, first[i].state);
+            // The returned observation starts the next episode: the env's generator continued.
+            let mut solo = Env::new(config).unwrap();
+            solo.reset(10 + i as u64);
+            assert_eq!(s.observation, solo.reset(None));
+        }
+        assert!(matches!(
+            v.step(&drops[..3]),
+            Err(SimError::ActionCountMismatch { envs: 4, actions: 3 })
+        ));
     }
-    let drops = vec![Action::Drop; 4];
-    v.step(&drops).unwrap();
-    v.step(&drops).unwrap();
-    let last = v.step(&drops).unwrap();
-    for (i, s) in last.iter().enumerate() {
-        assert!(s.truncated);
-        assert_eq!(s.info.final_observation.unwrap().state, first[i].state);
-        // The returned observation starts the next episode: the env's generator continued.
-        let mut solo = Env::new(config).unwrap();
-        solo.reset(10 + i as u64);
-        assert_eq!(s.observation, solo.reset(None));
-    }
-    assert!(matches!(
-        v.step(&drops[..3]),
-        Err(SimError::ActionCountMismatch { envs: 4, actions: 3 })
-    ));
 }
