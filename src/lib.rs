@@ -6,4 +6,5 @@
 pub mod cli;
 
 pub use agent;
+pub use oracle;
 pub use sim;

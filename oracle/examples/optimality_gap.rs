@@ -1,0 +1,46 @@
+//! The oracle's optimality gap: for every goal of 2 and 3 blocks on 7 x 7, the oracle's
+//! plan against a shortest plan on 500 seeded starts (`Env::reset` with the episode seeds
+//! of base seed 0).
+//!
+//! Run: `cargo run --release -p oracle --example optimality_gap`
+
+use oracle::gap::{self, GapReport};
+use oracle::{ExactSolver, Oracle};
+use sim::{Goal, Grid};
+
+const STARTS: u64 = 500;
+const SEED: u64 = 0;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let grid = Grid::default();
+    let (oracle, exact) = (Oracle::new(grid), ExactSolver::new(grid));
+    println!("oracle steps / exact steps, {STARTS} seeded starts per goal (seed {SEED}), grid {grid}");
+    println!("goal    mean oracle  mean exact  mean ratio  max ratio  longer");
+    let mut reports: Vec<GapReport> = Vec::new();
+    for blocks in [2, 3] {
+        for goal in Goal::all(blocks)? {
+            let starts = gap::seeded_starts(grid, &goal, STARTS, SEED)?;
+            let r = gap::measure(&oracle, &exact, &goal, &starts)?;
+            println!(
+                "{:<7} {:>11.3} {:>11.3} {:>11.4} {:>10.3} {:>7}",
+                r.goal.to_string(),
+                r.mean_oracle_steps,
+                r.mean_exact_steps,
+                r.mean_ratio,
+                r.max_ratio,
+                r.longer
+            );
+            reports.push(r);
+        }
+    }
+    if let Some((r, case)) = reports
+        .iter()
+        .filter_map(|r| r.worst.as_ref().map(|c| (r, c)))
+        .max_by_key(|(_, c)| c.oracle.len() - c.exact.len())
+    {
+        println!("\nlargest excess: goal {}, start {:?}", r.goal, case.start);
+        println!("  oracle ({} steps): {}", case.oracle.len(), case.oracle);
+        println!("  exact  ({} steps): {}", case.exact.len(), case.exact);
+    }
+    Ok(())
+}

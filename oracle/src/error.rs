@@ -1,0 +1,64 @@
+//! The errors the planners report.
+
+use thiserror::Error;
+
+/// Why a planner could not return a plan.
+///
+/// Every variant names the offending value, so a caller can show it as one clear line.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+pub enum OracleError {
+    /// The state and the goal disagree on the number of blocks.
+    #[error("block counts differ: the state has {state} blocks but the goal has {goal}")]
+    BlockCountMismatch {
+        /// Blocks in the state.
+        state: usize,
+        /// Blocks in the goal.
+        goal: usize,
+    },
+    /// The state or the goal does not fit the planner's grid (a block outside it, a stack
+    /// taller than it, too many blocks).
+    #[error(transparent)]
+    Sim(#[from] sim::SimError),
+    /// The goal holds already, so there is no next action to give.
+    #[error("goal {goal} already holds: there is no next action")]
+    GoalAlreadyHolds {
+        /// The goal, bottom to top.
+        goal: String,
+    },
+    /// No sequence of actions reaches the goal from this state.
+    #[error("goal {goal} cannot be reached from this state: {reason}")]
+    GoalUnreachable {
+        /// The goal, bottom to top.
+        goal: String,
+        /// Why.
+        reason: String,
+    },
+    /// The oracle's routing got stuck at every placement of the stack and the exact search
+    /// it falls back on ran out of its budget.
+    #[error("the oracle found no plan to goal {goal} for {blocks} blocks on a {grid} grid: routing was stuck at every placement and the exact fallback ran out of its budget")]
+    OracleStuck {
+        /// The goal, bottom to top.
+        goal: String,
+        /// Blocks in the problem.
+        blocks: usize,
+        /// The grid, `WxH`.
+        grid: String,
+    },
+    /// The exact search stored as many states as its budget allows without proving a
+    /// shortest plan.
+    #[error(
+        "the exact search stored its budget of {budget} states for {blocks} blocks on a {grid} grid without \
+         finding a shortest plan: use the oracle, or raise the budget"
+    )]
+    BudgetExceeded {
+        /// The budget: the most states the search may store.
+        budget: usize,
+        /// Blocks in the problem.
+        blocks: usize,
+        /// The grid, `WxH`.
+        grid: String,
+    },
+}
+
+/// Shorthand for results whose error is an [`OracleError`].
+pub type Result<T, E = OracleError> = std::result::Result<T, E>;
