@@ -3,8 +3,10 @@
 
 use clap::{Parser, Subcommand};
 
+mod eval;
 mod render;
 mod run;
+mod train;
 mod world;
 
 /// blockstack: teach an agent to stack blocks in a physics-backed 2D world.
@@ -23,6 +25,10 @@ pub enum Command {
     Run(run::RunArgs),
     /// Draw a start state as a PNG picture or as text.
     Render(render::RenderArgs),
+    /// Train a tabular Q-learner and save it as a model file.
+    Train(train::TrainArgs),
+    /// Evaluate a model on seeded starts, per goal and overall.
+    Eval(eval::EvalArgs),
 }
 
 /// Carries out `cli`'s command.
@@ -30,5 +36,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Run(args) => run::run(args),
         Command::Render(args) => render::render(args),
+        Command::Train(args) => train::train(args),
+        Command::Eval(args) => eval::eval(args),
     }
 }

@@ -1,0 +1,386 @@
+//! Tabular Q-learning (paper section III-B2): the agent, its hyper-parameters, and the
+//! policy it plays with.
+//!
+//! The update is `Q(s,a) <- (1 - alpha) Q(s,a) + alpha (r + gamma max_a' Q(s',a'))`, with
+//! `max_a' Q(s',a')` taken as 0 when `s'` ends the episode by reaching the goal (a
+//! truncated episode's last state is not terminal: its value still counts). Actions are
+//! chosen epsilon-greedily, ties between equal values broken uniformly at random by the
+//! caller's seeded generator.
+
+use rand::RngExt;
+use serde::{Deserialize, Serialize};
+use sim::seeding::SimRng;
+use sim::{Action, Goal, Grid, Observation};
+
+use crate::error::{AgentError, Result};
+use crate::policy::Policy;
+use crate::qtable::QTable;
+use crate::repr::{Repr, ReprKind, Representation};
+use crate::train::TrainConfig;
+
+/// The learner's hyper-parameters.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct QParams {
+    /// Learning rate, `0 < alpha <= 1` (paper: 1).
+    pub alpha: f64,
+    /// Discount factor, `0 <= gamma <= 1` (paper: 0.1).
+    pub gamma: f64,
+    /// Probability of a uniformly random action while training, `0 <= epsilon <= 1`
+    /// (paper: 0.1).
+    pub epsilon: f64,
+    /// The value every entry of the table starts at (paper: not stated; 0).
+    pub initial_q: f64,
+}
+
+impl Default for QParams {
+    /// The paper's: alpha 1, gamma 0.1, epsilon 0.1, table starting at 0.
+    fn default() -> Self {
+        QParams {
+            alpha: 1.0,
+            gamma: 0.1,
+            epsilon: 0.1,
+            initial_q: 0.0,
+        }
+    }
+}
+
+impl QParams {
+    /// An error naming the first value out of its range.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |what: &str, v: f64, range: &str| Err(AgentError::Config(format!("{what} {v} is not in {range}")));
+        if !(self.alpha > 0.0 && self.alpha <= 1.0) {
+            return bad("alpha", self.alpha, "(0, 1]");
+        }
+        if !(0.0..=1.0).contains(&self.gamma) {
+            return bad("gamma", self.gamma, "[0, 1]");
+        }
+        check_epsilon(self.epsilon)?;
+        if !self.initial_q.is_finite() {
+            return bad("the initial Q-value", self.initial_q, "the finite numbers");
+        }
+        Ok(())
+    }
+}
+
+/// An error unless `0 <= epsilon <= 1`.
+pub fn check_epsilon(epsilon: f64) -> Result<()> {
+    if (0.0..=1.0).contains(&epsilon) {
+        Ok(())
+    } else {
+        Err(AgentError::Config(format!("epsilon {epsilon} is not in [0, 1]")))
+    }
+}
+
+/// A tabular Q-learner: a representation, its table, and its hyper-parameters.
+///
+/// The table's columns are the representation's (for `role`, Pick columns name goal
+/// places, not block ids); the methods taking an [`Observation`] and an [`Action`] speak
+/// the world's terms and translate. They check that the observation belongs to the
+/// agent's world (grid and block count) and return an error otherwise.
+#[derive(Clone, Debug, PartialEq)]
+pub struct QAgent {
+    repr: Repr,
+    grid: Grid,
+    blocks: usize,
+    params: QParams,
+    table: QTable,
+    training: Option<TrainConfig>,
+}
+
+impl QAgent {
+    /// An untrained agent with representation `kind` for `blocks` blocks on `grid`, every
+    /// Q-value at `params.initial_q`.
+    pub fn new(kind: ReprKind, grid: Grid, blocks: usize, params: QParams) -> Result<QAgent> {
+        params.validate()?;
+        let repr = Repr::new(kind, grid, blocks)?;
+        let table = QTable::new(repr.key_count(), Action::count(blocks), params.initial_q as f32);
+        Ok(QAgent {
+            repr,
+            grid,
+            blocks,
+            params,
+            table,
+            training: None,
+        })
+    }
+
+    /// Reassembles an agent from its parts (a model file's); an error if the table does not
+    /// have the representation's shape.
+    pub(crate) fn from_parts(
+        kind: ReprKind,
+        grid: Grid,
+        blocks: usize,
+        params: QParams,
+        table: QTable,
+        training: Option<TrainConfig>,
+    ) -> Result<QAgent> {
+        params.validate()?;
+        let repr = Repr::new(kind, grid, blocks)?;
+        if table.key_count() != repr.key_count() || table.columns() != Action::count(blocks) {
+            return Err(AgentError::ModelMismatch(format!(
+                "a {kind} table for {blocks} blocks on {grid} has {} keys and {} columns, not {} and {}",
+                repr.key_count(),
+                Action::count(blocks),
+                table.key_count(),
+                table.columns()
+            )));
+        }
+        Ok(QAgent {
+            repr,
+            grid,
+            blocks,
+            params,
+            table,
+            training,
+        })
+    }
+
+    /// The representation.
+    pub fn repr(&self) -> &Repr {
+        &self.repr
+    }
+
+    /// Which representation.
+    pub fn kind(&self) -> ReprKind {
+        self.repr.kind()
+    }
+
+    /// The grid the agent plays on.
+    pub fn grid(&self) -> Grid {
+        self.grid
+    }
+
+    /// The number of blocks the agent plays with.
+    pub fn blocks(&self) -> usize {
+        self.blocks
+    }
+
+    /// The hyper-parameters.
+    pub fn params(&self) -> &QParams {
+        &self.params
+    }
+
+    /// Changes the hyper-parameters used by later updates (the table is kept).
+    pub fn set_params(&mut self, params: QParams) -> Result<()> {
+        params.validate()?;
+        self.params = params;
+        Ok(())
+    }
+
+    /// The table.
+    pub fn table(&self) -> &QTable {
+        &self.table
+    }
+
+    /// The table, to write to directly (rules beyond the Q-update, such as a large-margin
+    /// correction).
+    pub fn table_mut(&mut self) -> &mut QTable {
+        &mut self.table
+    }
+
+    /// How the agent was trained, if it was.
+    pub fn training(&self) -> Option<&TrainConfig> {
+        self.training.as_ref()
+    }
+
+    /// Records how the agent was trained.
+    pub fn set_training(&mut self, training: Option<TrainConfig>) {
+        self.training = training;
+    }
+
+    /// A short name for reports: `q-<representation>`.
+    pub fn name(&self) -> String {
+        format!("q-{}", self.kind())
+    }
+
+    /// An error unless a world of `blocks` blocks on `grid` is the agent's.
+    pub fn check_world(&self, grid: Grid, blocks: usize) -> Result<()> {
+        if grid != self.grid || blocks != self.blocks {
+            return Err(AgentError::ModelMismatch(format!(
+                "the agent plays {} blocks on a {} grid, the world has {blocks} blocks on a {grid} grid",
+                self.blocks, self.grid
+            )));
+        }
+        Ok(())
+    }
+
+    /// An error unless `obs` belongs to the agent's world.
+    fn check(&self, obs: &Observation) -> Result<()> {
+        self.check_world(obs.grid, obs.state.block_count())?;
+        if obs.goal.block_count() != self.blocks {
+            return Err(AgentError::ModelMismatch(format!(
+                "the goal {} has {} blocks, the agent plays {}",
+                obs.goal,
+                obs.goal.block_count(),
+                self.blocks
+            )));
+        }
+        obs.state.check_fits(self.grid)?;
+        Ok(())
+    }
+
+    /// The table key of `obs`.
+    pub fn key(&self, obs: &Observation) -> Result<u64> {
+        self.check(obs)?;
+        Ok(self.key_unchecked(obs))
+    }
+
+    #[inline]
+    pub(crate) fn key_unchecked(&self, obs: &Observation) -> u64 {
+        self.repr.key(&obs.state, &obs.goal)
+    }
+
+    /// The table column of `action` under `goal`; an error for a block that does not exist.
+    pub fn column(&self, goal: &Goal, action: Action) -> Result<usize> {
+        if action.index() >= Action::count(self.blocks) {
+            return Err(sim::SimError::ActionOutOfRange {
+                index: action.index(),
+                blocks: self.blocks,
+            }
+            .into());
+        }
+        Ok(self.repr.column(goal, action))
+    }
+
+    /// The world action of table column `column` under `goal`.
+    #[inline]
+    pub fn action_of_column(&self, goal: &Goal, column: usize) -> Action {
+        self.repr.action(goal, column)
+    }
+
+    /// Q(obs, a) for every action `a`, in the world's action-index order.
+    pub fn q_values(&self, obs: &Observation) -> Result<Vec<f32>> {
+        let row = self.table.row(self.key(obs)?);
+        Ok(Action::all(self.blocks)
+            .map(|a| row[self.repr.column(&obs.goal, a)])
+            .collect())
+    }
+
+    /// Q(obs, action).
+    pub fn q(&self, obs: &Observation, action: Action) -> Result<f32> {
+        let column = self.column(&obs.goal, action)?;
+        Ok(self.table.row(self.key(obs)?)[column])
+    }
+
+    /// Sets Q(obs, action) to `value`.
+    pub fn set_q(&mut self, obs: &Observation, action: Action, value: f32) -> Result<()> {
+        let column = self.column(&obs.goal, action)?;
+        let key = self.key(obs)?;
+        self.table.row_mut(key)[column] = value;
+        Ok(())
+    }
+
+    /// The action with the highest Q-value in `obs`, ties broken uniformly at random.
+    pub fn greedy_action(&self, obs: &Observation, rng: &mut SimRng) -> Result<Action> {
+        let key = self.key(obs)?;
+        Ok(self.repr.action(&obs.goal, self.greedy_column(key, rng)))
+    }
+
+    /// With probability `epsilon` a uniformly random action, otherwise the greedy one: the
+    /// agent's proposal for `obs`.
+    pub fn choose_action(&self, obs: &Observation, epsilon: f64, rng: &mut SimRng) -> Result<Action> {
+        check_epsilon(epsilon)?;
+        let key = self.key(obs)?;
+        Ok(self.repr.action(&obs.goal, self.choose_column(key, epsilon, rng)))
+    }
+
+    /// The Q-learning update for `action` taken in `obs`, which gave `reward` and led to
+    /// `next` (`terminated`: the goal holds in `next`). `action` may be any action, the
+    /// agent's or a demonstrator's. Returns the new Q(obs, action).
+    pub fn update(
+        &mut self,
+        obs: &Observation,
+        action: Action,
+        reward: f64,
+        next: &Observation,
+        terminated: bool,
+    ) -> Result<f32> {
+        let column = self.column(&obs.goal, action)?;
+        let key = self.key(obs)?;
+        let next_key = self.key(next)?;
+        Ok(self.update_key(key, column, reward, (!terminated).then_some(next_key)))
+    }
+
+    /// The greedy column of row `key`, ties broken at random.
+    #[inline]
+    pub(crate) fn greedy_column(&self, key: u64, rng: &mut SimRng) -> usize {
+        let row = self.table.row(key);
+        let max = row.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        let ties = row.iter().filter(|&&v| v == max).count();
+        match ties {
+            1 => row.iter().position(|&v| v == max).expect("the maximum is in the row"),
+            // Only NaNs: nothing to prefer.
+            0 => rng.random_range(0..row.len()),
+            _ => {
+                let k = rng.random_range(0..ties);
+                row.iter()
+                    .enumerate()
+                    .filter(|&(_, &v)| v == max)
+                    .nth(k)
+                    .expect("k < ties")
+                    .0
+            }
+        }
+    }
+
+    /// Epsilon-greedy column of row `key`.
+    #[inline]
+    pub(crate) fn choose_column(&self, key: u64, epsilon: f64, rng: &mut SimRng) -> usize {
+        if epsilon > 0.0 && rng.random_bool(epsilon) {
+            rng.random_range(0..self.table.columns())
+        } else {
+            self.greedy_column(key, rng)
+        }
+    }
+
+    /// The update on table coordinates; `next_key` is `None` when the next state is
+    /// terminal.
+    #[inline]
+    pub(crate) fn update_key(&mut self, key: u64, column: usize, reward: f64, next_key: Option<u64>) -> f32 {
+        let QParams { alpha, gamma, .. } = self.params;
+        let future = next_key.map_or(0.0, |k| {
+            f64::from(self.table.row(k).iter().copied().fold(f32::NEG_INFINITY, f32::max))
+        });
+        let target = reward + gamma * future;
+        let cell = &mut self.table.row_mut(key)[column];
+        let value = if alpha == 1.0 {
+            target
+        } else {
+            (1.0 - alpha) * f64::from(*cell) + alpha * target
+        };
+        *cell = value as f32;
+        *cell
+    }
+
+    /// The agent as a [`Policy`] that plays epsilon-greedily with `epsilon` (the paper's
+    /// test policy: 0.1) and does not learn.
+    pub fn policy(&self, epsilon: f64) -> Result<QPolicy<'_>> {
+        check_epsilon(epsilon)?;
+        Ok(QPolicy { agent: self, epsilon })
+    }
+}
+
+/// A trained agent playing without learning: epsilon-greedy over its table. Borrows the
+/// agent, so many can play one agent at once (e.g. on several threads).
+#[derive(Clone, Copy, Debug)]
+pub struct QPolicy<'a> {
+    agent: &'a QAgent,
+    epsilon: f64,
+}
+
+impl QPolicy<'_> {
+    /// The probability of a random action.
+    pub fn epsilon(&self) -> f64 {
+        self.epsilon
+    }
+}
+
+impl Policy for QPolicy<'_> {
+    fn name(&self) -> String {
+        self.agent.name()
+    }
+
+    fn act(&mut self, obs: &Observation, rng: &mut SimRng) -> Result<Action> {
+        self.agent.choose_action(obs, self.epsilon, rng)
+    }
+}

@@ -1,0 +1,494 @@
+//! State representations for the tabular Q-learner (SPEC section 7).
+//!
+//! A representation turns a state and a goal into a table key in `0..key_count()`, and
+//! maps the world's actions to table columns and back. The paper's three ([`Raw`],
+//! [`Pairwise`], [`Chasing`]) lose or keep different parts of the state; ours ([`Role`])
+//! keeps all of it but names blocks by their place in the goal, so every goal is the same
+//! problem.
+//!
+//! Keys are mixed-radix numbers of the representation's fields, so a key count is a product
+//! of field sizes; a representation whose key count would not fit in a `u64` cannot be
+//! built (an error, e.g. `raw` with 16 blocks on a 16 x 16 grid).
+
+use std::fmt;
+
+use serde::{Deserialize, Serialize};
+use sim::{Action, BlockId, Goal, Grid, State};
+
+use crate::error::{AgentError, Result};
+
+/// The representations by name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ReprKind {
+    /// See [`Raw`].
+    Raw,
+    /// See [`Pairwise`].
+    Pairwise,
+    /// See [`Chasing`].
+    Chasing,
+    /// See [`Role`].
+    Role,
+}
+
+impl ReprKind {
+    /// All four, in the order the SPEC lists them.
+    pub const ALL: [ReprKind; 4] = [ReprKind::Raw, ReprKind::Pairwise, ReprKind::Chasing, ReprKind::Role];
+
+    /// The name it is chosen by on the command line and written under in model files.
+    pub fn name(self) -> &'static str {
+        match self {
+            ReprKind::Raw => "raw",
+            ReprKind::Pairwise => "pairwise",
+            ReprKind::Chasing => "chasing",
+            ReprKind::Role => "role",
+        }
+    }
+}
+
+impl fmt::Display for ReprKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for ReprKind {
+    type Err = AgentError;
+
+    fn from_str(text: &str) -> Result<ReprKind> {
+        ReprKind::ALL.into_iter().find(|k| k.name() == text).ok_or_else(|| {
+            AgentError::Config(format!(
+                "unknown representation {text:?}: choose raw, pairwise, chasing or role"
+            ))
+        })
+    }
+}
+
+/// What every representation offers the Q-table.
+pub trait Representation {
+    /// How many keys there are: every key is below this.
+    fn key_count(&self) -> u64;
+
+    /// The table key of `state` under `goal`. The state must have the representation's
+    /// block count and fit its grid (the agent checks this before asking).
+    fn key(&self, state: &State, goal: &Goal) -> u64;
+
+    /// The table column of `action`: its index unless the representation renames blocks.
+    fn column(&self, _goal: &Goal, action: Action) -> usize {
+        action.index()
+    }
+
+    /// The action of table column `column` (`column < 5 + N`).
+    fn action(&self, _goal: &Goal, column: usize) -> Action {
+        action_of_index(column)
+    }
+}
+
+/// The action with index `index`, for an index known to be in range.
+#[inline]
+fn action_of_index(index: usize) -> Action {
+    match index {
+        0 => Action::Up,
+        1 => Action::Down,
+        2 => Action::Left,
+        3 => Action::Right,
+        4 => Action::Drop,
+        i => Action::Pick(BlockId((i - 5) as u8)),
+    }
+}
+
+/// Builds a key from fields, most significant first, and checks the key count fits a u64.
+#[derive(Clone, Copy)]
+struct KeySpace(Option<u64>);
+
+impl KeySpace {
+    fn new() -> Self {
+        KeySpace(Some(1))
+    }
+
+    /// Adds a field with `size` values.
+    fn field(self, size: u64) -> Self {
+        KeySpace(self.0.and_then(|n| n.checked_mul(size)))
+    }
+
+    fn count(self, kind: ReprKind, grid: Grid, blocks: usize) -> Result<u64> {
+        self.0.ok_or_else(|| {
+            AgentError::Config(format!(
+                "the {kind} representation of {blocks} blocks on a {grid} grid has more states than a table can number"
+            ))
+        })
+    }
+}
+
+/// Appends digit `digit` of a field with `size` values to `key`.
+#[inline]
+fn push(key: u64, size: u64, digit: u64) -> u64 {
+    key * size + digit
+}
+
+/// 0 when nothing is held, `1 + slot` otherwise.
+#[inline]
+fn held_slot(held: Option<usize>) -> u64 {
+    held.map_or(0, |s| s as u64 + 1)
+}
+
+/// The sign of `to - from` as a field digit: 0 equal, 1 lower (down or left), 2 higher.
+#[inline]
+fn sign_digit(from: i32, to: i32) -> u64 {
+    match to.cmp(&from) {
+        std::cmp::Ordering::Equal => 0,
+        std::cmp::Ordering::Less => 1,
+        std::cmp::Ordering::Greater => 2,
+    }
+}
+
+/// Representation 1 of the paper: every block's cell (by block id) and the held block.
+///
+/// It knows nothing of the goal, so one table serves one goal: trained on several, it
+/// learns their average. Key count `C^N (N + 1)` for `C` cells.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Raw {
+    grid: Grid,
+    blocks: usize,
+    key_count: u64,
+}
+
+impl Raw {
+    /// The representation of `blocks` blocks on `grid`.
+    pub fn new(grid: Grid, blocks: usize) -> Result<Raw> {
+        let cells = grid.cell_count() as u64;
+        let space = (0..blocks).fold(KeySpace::new(), |s, _| s.field(cells));
+        let key_count = space.field(blocks as u64 + 1).count(ReprKind::Raw, grid, blocks)?;
+        Ok(Raw {
+            grid,
+            blocks,
+            key_count,
+        })
+    }
+}
+
+impl Representation for Raw {
+    fn key_count(&self) -> u64 {
+        self.key_count
+    }
+
+    #[inline]
+    fn key(&self, state: &State, _goal: &Goal) -> u64 {
+        let cells = self.grid.cell_count() as u64;
+        let key = state
+            .cells()
+            .iter()
+            .fold(0, |k, &c| push(k, cells, self.grid.index(c) as u64));
+        push(
+            key,
+            self.blocks as u64 + 1,
+            held_slot(state.held_block().map(BlockId::index)),
+        )
+    }
+}
+
+/// Representation 2 of the paper: the total Manhattan distance over all pairs of blocks,
+/// the direction (up/down/level, left/right/level) from the held block to its closest
+/// block (lowest id on a tie; level-level when nothing is held), the held block, and the
+/// goal (its rank among the `N!` orders).
+///
+/// Key count `(C(N,2)(W + H - 2) + 1) * 9 * (N + 1) * N!`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Pairwise {
+    blocks: usize,
+    goals: u64,
+    key_count: u64,
+}
+
+impl Pairwise {
+    /// The representation of `blocks` blocks on `grid`.
+    pub fn new(grid: Grid, blocks: usize) -> Result<Pairwise> {
+        let n = blocks as u64;
+        let total_values = n * (n.saturating_sub(1)) / 2 * (grid.width() + grid.height() - 2) as u64 + 1;
+        let goals = (1..=n).try_fold(1u64, |f, k| f.checked_mul(k));
+        let space = KeySpace::new().field(total_values).field(9).field(n + 1);
+        let space = match goals {
+            Some(g) => space.field(g),
+            None => KeySpace(None),
+        };
+        let key_count = space.count(ReprKind::Pairwise, grid, blocks)?;
+        Ok(Pairwise {
+            blocks,
+            goals: goals.unwrap_or(u64::MAX),
+            key_count,
+        })
+    }
+}
+
+/// The rank of `goal` among the permutations of its blocks in lexicographic order (the
+/// Lehmer code), in `0..N!`.
+pub fn goal_rank(goal: &Goal) -> u64 {
+    let order = goal.order();
+    let n = order.len();
+    let mut rank = 0u64;
+    for i in 0..n {
+        let smaller_after = order[i + 1..].iter().filter(|b| b.0 < order[i].0).count() as u64;
+        rank = rank * (n - i) as u64 + smaller_after;
+    }
+    rank
+}
+
+impl Representation for Pairwise {
+    fn key_count(&self) -> u64 {
+        self.key_count
+    }
+
+    fn key(&self, state: &State, goal: &Goal) -> u64 {
+        let cells = state.cells();
+        let mut total = 0u64;
+        for (i, a) in cells.iter().enumerate() {
+            for b in &cells[i + 1..] {
+                total += u64::from(a.manhattan(*b));
+            }
+        }
+        let (dy, dx) = match state.held_block() {
+            None => (0, 0),
+            Some(h) => {
+                let from = state.cell(h);
+                let closest = state
+                    .blocks()
+                    .filter(|&b| b != h)
+                    .min_by_key(|&b| (from.manhattan(state.cell(b)), b.0))
+                    .map(|b| state.cell(b))
+                    .expect("at least two blocks");
+                (
+                    sign_digit(from.y.into(), closest.y.into()),
+                    sign_digit(from.x.into(), closest.x.into()),
+                )
+            }
+        };
+        let mut key = total;
+        key = push(key, 9, dy * 3 + dx);
+        key = push(
+            key,
+            self.blocks as u64 + 1,
+            held_slot(state.held_block().map(BlockId::index)),
+        );
+        push(key, self.goals, goal_rank(goal))
+    }
+}
+
+/// Representation 3 of the paper, the one its tables use (SPEC sections 6 and 7): the held
+/// block's Manhattan distance to the cell it chases, the total distance along the goal
+/// chain, the direction of the chased cell (up/down/level, left/right/level, and whether it
+/// is occupied by another block or lies outside the grid), the held block, and the block it
+/// chases. With nothing held, every held-block field is zero.
+///
+/// It names no goal, only the (held, chased) pair, so what is learnt for a pair serves
+/// every goal that contains it: the paper's partial extension to unseen goals.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Chasing {
+    grid: Grid,
+    blocks: usize,
+    distance_values: u64,
+    chain_values: u64,
+    key_count: u64,
+}
+
+impl Chasing {
+    /// The representation of `blocks` blocks on `grid`.
+    pub fn new(grid: Grid, blocks: usize) -> Result<Chasing> {
+        let (w, h, n) = (grid.width() as u64, grid.height() as u64, blocks as u64);
+        // The chased cell may lie one row outside the grid: distances reach W - 1 + H.
+        let distance_values = w + h;
+        let chain_values = n.saturating_sub(1) * (w + h - 2) + 1;
+        let key_count = KeySpace::new()
+            .field(n + 1)
+            .field(n)
+            .field(distance_values)
+            .field(chain_values)
+            .field(18)
+            .count(ReprKind::Chasing, grid, blocks)?;
+        Ok(Chasing {
+            grid,
+            blocks,
+            distance_values,
+            chain_values,
+            key_count,
+        })
+    }
+}
+
+impl Representation for Chasing {
+    fn key_count(&self) -> u64 {
+        self.key_count
+    }
+
+    fn key(&self, state: &State, goal: &Goal) -> u64 {
+        let n = self.blocks as u64;
+        let chain = u64::from(goal.chain_distance(state));
+        let (slot, target, distance, direction) = match state.held_block() {
+            None => (0, 0, 0, 0),
+            Some(h) => {
+                let p = goal.place_of(h);
+                let (chased, dy) = if p + 1 < self.blocks {
+                    (goal.block_at_place(p + 1), -1)
+                } else {
+                    (goal.block_at_place(p - 1), 1)
+                };
+                let from = state.cell(h);
+                let t = state.cell(chased);
+                let (tx, ty) = (i32::from(t.x), i32::from(t.y) + dy);
+                let occupied = match self.grid.cell(i64::from(tx), i64::from(ty)) {
+                    Err(_) => true,
+                    Ok(c) => state.block_at(c).is_some_and(|b| b != h),
+                };
+                let direction =
+                    (sign_digit(from.y.into(), ty) * 3 + sign_digit(from.x.into(), tx)) * 2 + u64::from(occupied);
+                (
+                    held_slot(Some(h.index())),
+                    u64::from(chased.0),
+                    u64::from(goal.chased_distance(h, state)),
+                    direction,
+                )
+            }
+        };
+        let mut key = slot;
+        key = push(key, n, target);
+        key = push(key, self.distance_values, distance);
+        key = push(key, self.chain_values, chain);
+        push(key, 18, direction)
+    }
+}
+
+/// Ours: every block's cell and the held block, with blocks named by their place in the
+/// goal (bottom, second, ...) instead of their id; a Pick column picks the block at a
+/// place. Every goal becomes the same problem (build `0, 1, ..., N-1` out of places), so
+/// one table serves every goal, unseen ones included, and nothing of the state is lost.
+///
+/// Key count `C^N (N + 1)` for `C` cells.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Role {
+    grid: Grid,
+    blocks: usize,
+    key_count: u64,
+}
+
+impl Role {
+    /// The representation of `blocks` blocks on `grid`.
+    pub fn new(grid: Grid, blocks: usize) -> Result<Role> {
+        let cells = grid.cell_count() as u64;
+        let space = (0..blocks).fold(KeySpace::new(), |s, _| s.field(cells));
+        let key_count = space.field(blocks as u64 + 1).count(ReprKind::Role, grid, blocks)?;
+        Ok(Role {
+            grid,
+            blocks,
+            key_count,
+        })
+    }
+}
+
+impl Representation for Role {
+    fn key_count(&self) -> u64 {
+        self.key_count
+    }
+
+    #[inline]
+    fn key(&self, state: &State, goal: &Goal) -> u64 {
+        let cells = self.grid.cell_count() as u64;
+        let key = goal
+            .order()
+            .iter()
+            .fold(0, |k, &b| push(k, cells, self.grid.index(state.cell(b)) as u64));
+        push(
+            key,
+            self.blocks as u64 + 1,
+            held_slot(state.held_block().map(|b| goal.place_of(b))),
+        )
+    }
+
+    #[inline]
+    fn column(&self, goal: &Goal, action: Action) -> usize {
+        match action {
+            Action::Pick(b) => 5 + goal.place_of(b),
+            a => a.index(),
+        }
+    }
+
+    #[inline]
+    fn action(&self, goal: &Goal, column: usize) -> Action {
+        if column >= 5 {
+            Action::Pick(goal.block_at_place(column - 5))
+        } else {
+            action_of_index(column)
+        }
+    }
+}
+
+/// Any of the four representations, chosen at run time, for a given grid and block count.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Repr {
+    /// See [`Raw`].
+    Raw(Raw),
+    /// See [`Pairwise`].
+    Pairwise(Pairwise),
+    /// See [`Chasing`].
+    Chasing(Chasing),
+    /// See [`Role`].
+    Role(Role),
+}
+
+impl Repr {
+    /// Representation `kind` of `blocks` blocks on `grid`; an error if its key count does
+    /// not fit a u64.
+    pub fn new(kind: ReprKind, grid: Grid, blocks: usize) -> Result<Repr> {
+        Ok(match kind {
+            ReprKind::Raw => Repr::Raw(Raw::new(grid, blocks)?),
+            ReprKind::Pairwise => Repr::Pairwise(Pairwise::new(grid, blocks)?),
+            ReprKind::Chasing => Repr::Chasing(Chasing::new(grid, blocks)?),
+            ReprKind::Role => Repr::Role(Role::new(grid, blocks)?),
+        })
+    }
+
+    /// Which representation this is.
+    pub fn kind(&self) -> ReprKind {
+        match self {
+            Repr::Raw(_) => ReprKind::Raw,
+            Repr::Pairwise(_) => ReprKind::Pairwise,
+            Repr::Chasing(_) => ReprKind::Chasing,
+            Repr::Role(_) => ReprKind::Role,
+        }
+    }
+}
+
+impl Representation for Repr {
+    fn key_count(&self) -> u64 {
+        match self {
+            Repr::Raw(r) => r.key_count(),
+            Repr::Pairwise(r) => r.key_count(),
+            Repr::Chasing(r) => r.key_count(),
+            Repr::Role(r) => r.key_count(),
+        }
+    }
+
+    #[inline]
+    fn key(&self, state: &State, goal: &Goal) -> u64 {
+        match self {
+            Repr::Raw(r) => r.key(state, goal),
+            Repr::Pairwise(r) => r.key(state, goal),
+            Repr::Chasing(r) => r.key(state, goal),
+            Repr::Role(r) => r.key(state, goal),
+        }
+    }
+
+    #[inline]
+    fn column(&self, goal: &Goal, action: Action) -> usize {
+        match self {
+            Repr::Role(r) => r.column(goal, action),
+            _ => action.index(),
+        }
+    }
+
+    #[inline]
+    fn action(&self, goal: &Goal, column: usize) -> Action {
+        match self {
+            Repr::Role(r) => r.action(goal, column),
+            _ => action_of_index(column),
+        }
+    }
+}

@@ -1,0 +1,307 @@
+//! Training a Q-learner headless: games against the world (physics by default), on a set
+//! of goals, fixed by a seed.
+//!
+//! Game `k` plays goal `goals[k % goals.len()]` from the start
+//! `reset(episode_seed(seed, k))`, and draws its exploration from
+//! [`policy_rng`]`(episode_seed(seed, k))`: the same config gives the same table, bit for
+//! bit. Nothing is printed: progress goes to an optional callback after every game.
+
+use std::collections::VecDeque;
+
+use rand::RngExt;
+use serde::{Deserialize, Serialize};
+use sim::seeding::episode_seed;
+use sim::{Backend, BlockId, Env, EnvConfig, Goal, GoalSpec, Grid, RewardModel};
+
+use crate::error::{AgentError, Result};
+use crate::qlearning::{QAgent, QParams};
+use crate::repr::ReprKind;
+use crate::rollout::policy_rng;
+
+/// Games the progress figures look back over.
+pub const RECENT_GAMES: usize = 100;
+
+/// Everything that defines a training run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TrainConfig {
+    /// The grid (default 7 x 7).
+    pub grid: Grid,
+    /// Number of blocks.
+    pub blocks: usize,
+    /// The state representation.
+    pub repr: ReprKind,
+    /// The reward the learner maximises.
+    pub reward: RewardModel,
+    /// Learning rate, discount, exploration, initial values.
+    pub params: QParams,
+    /// The goals trained on, played in turn.
+    pub goals: Vec<Goal>,
+    /// Games to play.
+    pub games: u64,
+    /// The seed every start and every random choice derives from.
+    pub seed: u64,
+    /// Steps before a training game is cut off.
+    pub horizon: u32,
+    /// The world the games are played in.
+    pub backend: Backend,
+    /// Exploring starts: begin each game holding a block drawn at random (or none, with
+    /// equal chance), so that states with any block held are tried from the first step.
+    /// Starts with nothing held, as the paper's, when false.
+    pub exploring_starts: bool,
+    /// Backward replay: after each game, apply the game's updates once more, last step
+    /// first, so that what the last steps learnt reaches the first ones within the game
+    /// (with alpha 1 in this deterministic world, the whole path gets the values of its
+    /// end). Off in the paper's learner.
+    pub backward_replay: bool,
+}
+
+impl TrainConfig {
+    /// The paper's learner (section VI): `chasing` representation, `paper` reward, alpha 1,
+    /// gamma 0.1, epsilon 0.1, 3 blocks on 7 x 7, horizon 1000, physics, on `goals`, 5000
+    /// games, seed 1.
+    pub fn paper(goals: Vec<Goal>) -> TrainConfig {
+        TrainConfig {
+            grid: Grid::default(),
+            blocks: goals.first().map_or(3, Goal::block_count),
+            repr: ReprKind::Chasing,
+            reward: RewardModel::from_name("paper").expect("a known model"),
+            params: QParams::default(),
+            goals,
+            games: 5000,
+            seed: 1,
+            horizon: sim::DEFAULT_HORIZON,
+            backend: Backend::Physics,
+            exploring_starts: false,
+            backward_replay: false,
+        }
+    }
+
+    /// An error naming the first thing in the config that cannot train.
+    pub fn validate(&self) -> Result<()> {
+        self.params.validate()?;
+        if self.goals.is_empty() {
+            return Err(AgentError::Config("no goals to train on".into()));
+        }
+        for goal in &self.goals {
+            self.env_config(*goal).validate()?;
+        }
+        QAgent::new(self.repr, self.grid, self.blocks, self.params).map(|_| ())
+    }
+
+    /// The environment a game on `goal` is played in.
+    pub fn env_config(&self, goal: Goal) -> EnvConfig {
+        EnvConfig {
+            grid: self.grid,
+            blocks: self.blocks,
+            goal: GoalSpec::Fixed(goal),
+            horizon: self.horizon,
+            reward: self.reward,
+            backend: self.backend,
+        }
+    }
+}
+
+/// How training is going, after a game.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Progress {
+    /// Games played so far.
+    pub games_played: u64,
+    /// Games this call was asked to play, counting from the start of the run.
+    pub games_target: u64,
+    /// Of the last (at most [`RECENT_GAMES`]) games, how many.
+    pub recent_games: usize,
+    /// Of those, how many reached the goal.
+    pub recent_successes: usize,
+    /// Mean steps of the recent games that reached the goal (`None` if none did).
+    pub recent_mean_steps: Option<f64>,
+}
+
+impl Progress {
+    /// The share of recent games that reached the goal, in `[0, 1]` (0 before any game).
+    pub fn recent_success_rate(&self) -> f64 {
+        if self.recent_games == 0 {
+            0.0
+        } else {
+            self.recent_successes as f64 / self.recent_games as f64
+        }
+    }
+}
+
+/// Totals of a training run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct TrainReport {
+    /// Games played.
+    pub games: u64,
+    /// Games that reached the goal.
+    pub successes: u64,
+    /// Actions taken, in all games.
+    pub steps: u64,
+}
+
+/// The outcome of [`train`].
+#[derive(Clone, Debug)]
+pub struct Trained {
+    /// The trained agent; its [`QAgent::training`] is the config, with the games played.
+    pub agent: QAgent,
+    /// Totals.
+    pub report: TrainReport,
+}
+
+/// A training run in progress: play some games, look at (or evaluate) the agent, play
+/// more. `Send`, so runs go on separate threads.
+pub struct Trainer {
+    config: TrainConfig,
+    agent: QAgent,
+    /// One environment per goal, in the order of `config.goals`.
+    envs: Vec<Env>,
+    report: TrainReport,
+    /// Steps of the recent games, `None` for a game cut off.
+    recent: VecDeque<Option<u32>>,
+    /// The current game's transitions, for backward replay.
+    path: Vec<Transition>,
+}
+
+/// One step of a game, in table coordinates.
+#[derive(Clone, Copy, Debug)]
+struct Transition {
+    key: u64,
+    column: usize,
+    reward: f64,
+    /// `None` when the step reached the goal.
+    next: Option<u64>,
+}
+
+impl Trainer {
+    /// A fresh agent about to be trained as `config` says; an error for a config that
+    /// cannot train.
+    pub fn new(config: TrainConfig) -> Result<Trainer> {
+        config.validate()?;
+        let agent = QAgent::new(config.repr, config.grid, config.blocks, config.params)?;
+        let envs = config
+            .goals
+            .iter()
+            .map(|&g| Env::new(config.env_config(g)))
+            .collect::<sim::Result<Vec<_>>>()?;
+        Ok(Trainer {
+            config,
+            agent,
+            envs,
+            report: TrainReport::default(),
+            recent: VecDeque::with_capacity(RECENT_GAMES),
+            path: Vec::new(),
+        })
+    }
+
+    /// The agent as trained so far.
+    pub fn agent(&self) -> &QAgent {
+        &self.agent
+    }
+
+    /// The config.
+    pub fn config(&self) -> &TrainConfig {
+        &self.config
+    }
+
+    /// Totals so far.
+    pub fn report(&self) -> &TrainReport {
+        &self.report
+    }
+
+    /// Plays `count` more games, calling `progress` after each.
+    pub fn play_games(&mut self, count: u64, mut progress: Option<&mut dyn FnMut(&Progress)>) -> Result<()> {
+        let target = self.report.games + count;
+        for _ in 0..count {
+            let outcome = self.play_game()?;
+            if self.recent.len() == RECENT_GAMES {
+                self.recent.pop_front();
+            }
+            self.recent.push_back(outcome);
+            if let Some(report) = progress.as_deref_mut() {
+                report(&self.progress(target));
+            }
+        }
+        Ok(())
+    }
+
+    fn progress(&self, target: u64) -> Progress {
+        let successes: Vec<u32> = self.recent.iter().flatten().copied().collect();
+        Progress {
+            games_played: self.report.games,
+            games_target: target,
+            recent_games: self.recent.len(),
+            recent_successes: successes.len(),
+            recent_mean_steps: (!successes.is_empty())
+                .then(|| successes.iter().map(|&s| f64::from(s)).sum::<f64>() / successes.len() as f64),
+        }
+    }
+
+    /// Plays the next game and learns from every step; its steps if it reached the goal.
+    fn play_game(&mut self) -> Result<Option<u32>> {
+        let k = self.report.games;
+        let env = &mut self.envs[(k % self.config.goals.len() as u64) as usize];
+        let agent = &mut self.agent;
+        let seed = episode_seed(self.config.seed, k);
+        let mut rng = policy_rng(seed);
+        let mut obs = env.reset(seed);
+        if self.config.exploring_starts {
+            let slot = rng.random_range(0..=self.config.blocks);
+            if slot > 0 {
+                let held = obs.state.with_held(Some(BlockId(slot as u8 - 1)))?;
+                obs = env.reset_to(held, obs.goal)?;
+            }
+        }
+        let epsilon = agent.params().epsilon;
+        let mut key = agent.key_unchecked(&obs);
+        let mut reached = false;
+        let replay = self.config.backward_replay;
+        let path = &mut self.path;
+        path.clear();
+        while !env.is_over() {
+            let column = agent.choose_column(key, epsilon, &mut rng);
+            let step = env.step(agent.action_of_column(&obs.goal, column))?;
+            let next_key = agent.key_unchecked(&step.observation);
+            let next = (!step.terminated).then_some(next_key);
+            agent.update_key(key, column, step.reward, next);
+            if replay {
+                path.push(Transition {
+                    key,
+                    column,
+                    reward: step.reward,
+                    next,
+                });
+            }
+            key = next_key;
+            obs = step.observation;
+            reached = step.terminated;
+        }
+        for t in path.iter().rev() {
+            agent.update_key(t.key, t.column, t.reward, t.next);
+        }
+        let steps = env.steps();
+        self.report.games += 1;
+        self.report.steps += u64::from(steps);
+        self.report.successes += u64::from(reached);
+        Ok(reached.then_some(steps))
+    }
+
+    /// Ends the run: the agent, with the config (and the games actually played) recorded
+    /// in it, and the totals.
+    pub fn finish(self) -> Trained {
+        let mut agent = self.agent;
+        agent.set_training(Some(TrainConfig {
+            games: self.report.games,
+            ..self.config
+        }));
+        Trained {
+            agent,
+            report: self.report,
+        }
+    }
+}
+
+/// Trains an agent as `config` says, calling `progress` after every game.
+pub fn train(config: &TrainConfig, progress: Option<&mut dyn FnMut(&Progress)>) -> Result<Trained> {
+    let mut trainer = Trainer::new(config.clone())?;
+    trainer.play_games(config.games, progress)?;
+    Ok(trainer.finish())
+}

@@ -1,0 +1,188 @@
+//! The state representations: keys in range, what each keeps and what it forgets.
+
+use agent::repr::goal_rank;
+use agent::{Repr, ReprKind, Representation};
+use proptest::prelude::*;
+use sim::{Action, BlockId, Cell, Goal, Grid, State};
+
+/// A state of `n` blocks on distinct cells of `grid` from `picks` (indices into the
+/// cells not yet taken), holding `held` (`n` = nothing).
+fn state_from(grid: Grid, n: usize, picks: &[usize], held: usize) -> State {
+    let mut free: Vec<Cell> = grid.cells().collect();
+    let cells: Vec<Cell> = picks[..n].iter().map(|&p| free.remove(p % free.len())).collect();
+    let held = (held % (n + 1) < n).then(|| BlockId((held % (n + 1)) as u8));
+    State::new(&cells, held).unwrap()
+}
+
+fn goal_from(n: usize, index: usize) -> Goal {
+    let all = Goal::all(n).unwrap();
+    all[index % all.len()]
+}
+
+/// The state with block ids renamed by `rename` (block b becomes rename[b]).
+fn renamed(state: &State, rename: &[usize]) -> State {
+    let mut cells = vec![Cell::default(); state.block_count()];
+    for b in state.blocks() {
+        cells[rename[b.index()]] = state.cell(b);
+    }
+    State::new(&cells, state.held_block().map(|h| BlockId(rename[h.index()] as u8))).unwrap()
+}
+
+fn renamed_goal(goal: &Goal, rename: &[usize]) -> Goal {
+    let order: Vec<usize> = goal.order().iter().map(|b| rename[b.index()]).collect();
+    Goal::from_indices(&order).unwrap()
+}
+
+proptest! {
+    #[test]
+    fn keys_are_below_the_key_count(
+        n in 2usize..5, w in 2usize..8, h in 4usize..8,
+        picks in prop::collection::vec(0usize..1000, 4), held in 0usize..5, g in 0usize..24,
+    ) {
+        let grid = Grid::new(w, h).unwrap();
+        let state = state_from(grid, n, &picks, held);
+        let goal = goal_from(n, g);
+        for kind in ReprKind::ALL {
+            let repr = Repr::new(kind, grid, n).unwrap();
+            prop_assert!(repr.key(&state, &goal) < repr.key_count(), "{kind}");
+        }
+    }
+
+    #[test]
+    fn role_names_blocks_by_their_place_in_the_goal(
+        picks in prop::collection::vec(0usize..1000, 3), held in 0usize..4, g in 0usize..6, r in 0usize..6,
+    ) {
+        // Renaming the blocks in state and goal alike is the same problem: same key, and
+        // every action maps to the column of the renamed action.
+        let grid = Grid::default();
+        let repr = Repr::new(ReprKind::Role, grid, 3).unwrap();
+        let state = state_from(grid, 3, &picks, held);
+        let goal = goal_from(3, g);
+        let rename: Vec<usize> = goal_from(3, r).order().iter().map(|b| b.index()).collect();
+        let (state2, goal2) = (renamed(&state, &rename), renamed_goal(&goal, &rename));
+        prop_assert_eq!(repr.key(&state, &goal), repr.key(&state2, &goal2));
+        for a in Action::all(3) {
+            let a2 = match a {
+                Action::Pick(b) => Action::Pick(BlockId(rename[b.index()] as u8)),
+                other => other,
+            };
+            prop_assert_eq!(repr.column(&goal, a), repr.column(&goal2, a2));
+            prop_assert_eq!(repr.action(&goal, repr.column(&goal, a)), a);
+        }
+    }
+
+    #[test]
+    fn role_and_raw_keep_the_whole_state(
+        p1 in prop::collection::vec(0usize..1000, 3), h1 in 0usize..4,
+        p2 in prop::collection::vec(0usize..1000, 3), h2 in 0usize..4, g in 0usize..6,
+    ) {
+        let grid = Grid::default();
+        let (s1, s2) = (state_from(grid, 3, &p1, h1), state_from(grid, 3, &p2, h2));
+        let goal = goal_from(3, g);
+        for kind in [ReprKind::Role, ReprKind::Raw] {
+            let repr = Repr::new(kind, grid, 3).unwrap();
+            prop_assert_eq!(repr.key(&s1, &goal) == repr.key(&s2, &goal), s1 == s2, "{}", kind);
+        }
+    }
+}
+
+#[test]
+fn raw_ignores_the_goal_and_pairwise_does_not() {
+    let grid = Grid::default();
+    let state = State::new(&[Cell::new(0, 0), Cell::new(3, 4), Cell::new(6, 6)], Some(BlockId(1))).unwrap();
+    let (a, b) = (
+        Goal::from_indices(&[0, 1, 2]).unwrap(),
+        Goal::from_indices(&[2, 1, 0]).unwrap(),
+    );
+    let raw = Repr::new(ReprKind::Raw, grid, 3).unwrap();
+    assert_eq!(raw.key(&state, &a), raw.key(&state, &b));
+    let pairwise = Repr::new(ReprKind::Pairwise, grid, 3).unwrap();
+    assert_ne!(pairwise.key(&state, &a), pairwise.key(&state, &b));
+}
+
+#[test]
+fn pairwise_sees_distances_and_directions_only() {
+    // Shifting every block by the same amount keeps the pairwise key.
+    let grid = Grid::default();
+    let goal = Goal::from_indices(&[0, 1, 2]).unwrap();
+    let pairwise = Repr::new(ReprKind::Pairwise, grid, 3).unwrap();
+    let s = State::new(&[Cell::new(0, 0), Cell::new(2, 1), Cell::new(4, 4)], Some(BlockId(0))).unwrap();
+    let shifted = State::new(&[Cell::new(1, 2), Cell::new(3, 3), Cell::new(5, 6)], Some(BlockId(0))).unwrap();
+    assert_eq!(pairwise.key(&s, &goal), pairwise.key(&shifted, &goal));
+    // Moving the closest block to the other side of the held block changes it.
+    let flipped = State::new(&[Cell::new(2, 0), Cell::new(0, 1), Cell::new(4, 4)], Some(BlockId(0))).unwrap();
+    assert_ne!(pairwise.key(&s, &goal), pairwise.key(&flipped, &goal));
+}
+
+#[test]
+fn chasing_keeps_the_pair_not_the_goal() {
+    // Block 1 held, chasing the cell below 2 in both goals, with equal chain distances:
+    // the two goals share the key, the paper's partial extension to unseen goals.
+    let grid = Grid::default();
+    let chasing = Repr::new(ReprKind::Chasing, grid, 3).unwrap();
+    let state = State::new(&[Cell::new(0, 3), Cell::new(3, 1), Cell::new(3, 5)], Some(BlockId(1))).unwrap();
+    let (a, b) = (
+        Goal::from_indices(&[0, 1, 2]).unwrap(),
+        Goal::from_indices(&[1, 2, 0]).unwrap(),
+    );
+    assert_eq!(a.chain_distance(&state), b.chain_distance(&state));
+    assert_eq!(chasing.key(&state, &a), chasing.key(&state, &b));
+    // Holding another block, or moving the chased cell, changes the key.
+    let other = state.with_held(Some(BlockId(0))).unwrap();
+    assert_ne!(chasing.key(&state, &a), chasing.key(&other, &a));
+    let moved = State::new(&[Cell::new(0, 3), Cell::new(3, 1), Cell::new(4, 5)], Some(BlockId(1))).unwrap();
+    assert_ne!(chasing.key(&state, &a), chasing.key(&moved, &a));
+}
+
+#[test]
+fn chasing_sees_whether_the_chased_cell_is_taken() {
+    // Goal 0,1,2: block 0 chases the cell below 1. With 2 on that cell the key differs
+    // from the same distances with the cell free.
+    let grid = Grid::default();
+    let chasing = Repr::new(ReprKind::Chasing, grid, 3).unwrap();
+    let goal = Goal::from_indices(&[0, 1, 2]).unwrap();
+    let taken = State::new(&[Cell::new(0, 3), Cell::new(3, 4), Cell::new(3, 3)], Some(BlockId(0))).unwrap();
+    let free = State::new(&[Cell::new(0, 3), Cell::new(3, 4), Cell::new(2, 4)], Some(BlockId(0))).unwrap();
+    assert_eq!(goal.chain_distance(&taken), goal.chain_distance(&free));
+    assert_eq!(
+        goal.chased_distance(BlockId(0), &taken),
+        goal.chased_distance(BlockId(0), &free)
+    );
+    assert_ne!(chasing.key(&taken, &goal), chasing.key(&free, &goal));
+}
+
+#[test]
+fn goal_rank_numbers_the_goals_in_order() {
+    for n in 2..6 {
+        for (i, g) in Goal::all(n).unwrap().iter().enumerate() {
+            assert_eq!(goal_rank(g), i as u64);
+        }
+    }
+}
+
+#[test]
+fn key_counts_for_three_blocks_on_seven_by_seven() {
+    let grid = Grid::default();
+    let count = |k| Repr::new(k, grid, 3).unwrap().key_count();
+    assert_eq!(count(ReprKind::Raw), 49 * 49 * 49 * 4);
+    assert_eq!(count(ReprKind::Role), 49 * 49 * 49 * 4);
+    assert_eq!(count(ReprKind::Pairwise), 37 * 9 * 4 * 6);
+    assert_eq!(count(ReprKind::Chasing), 4 * 3 * 14 * 25 * 18);
+}
+
+#[test]
+fn a_representation_too_large_to_number_is_an_error() {
+    let grid = Grid::new(16, 16).unwrap();
+    let err = Repr::new(ReprKind::Raw, grid, 16).unwrap_err();
+    assert!(err.to_string().contains("more states than a table can number"), "{err}");
+    assert!(Repr::new(ReprKind::Chasing, grid, 16).is_ok());
+}
+
+#[test]
+fn representation_names_parse() {
+    for k in ReprKind::ALL {
+        assert_eq!(k.name().parse::<ReprKind>().unwrap(), k);
+    }
+    let err = "roles".parse::<ReprKind>().unwrap_err();
+    assert!(err.to_string().contains("choose raw, pairwise, chasing or role"));
+}

@@ -1,0 +1,140 @@
+//! `blockstack eval`: play a trained model on seeded starts, per goal and overall.
+
+use std::path::PathBuf;
+
+use agent::{EpisodeResult, QAgent, Summary};
+use anyhow::Result;
+use clap::Args;
+use serde::Serialize;
+use sim::{Backend, Env, EnvConfig, Goal, GoalSpec, RewardModel};
+
+use super::train::parse_goals;
+
+/// Arguments of `blockstack eval`.
+#[derive(Debug, Args)]
+pub struct EvalArgs {
+    /// The model file to evaluate.
+    #[arg(long)]
+    pub model: PathBuf,
+    /// Goals to evaluate on, separated by ':', e.g. 2,1,0:1,2,0 (default: every goal).
+    #[arg(long)]
+    pub goals: Option<String>,
+    /// Episodes per goal.
+    #[arg(long, default_value_t = 500)]
+    pub episodes: u64,
+    /// Base seed: episode k of every goal starts from seed episode_seed(seed, k).
+    #[arg(long, default_value_t = 2)]
+    pub seed: u64,
+    /// Probability of a random action (the paper's test policy: 0.1; 0 is greedy).
+    #[arg(long, default_value_t = 0.1)]
+    pub epsilon: f64,
+    /// Steps before an episode is cut off.
+    #[arg(long, default_value_t = sim::DEFAULT_HORIZON)]
+    pub horizon: u32,
+    /// World backend: physics (rapier2d) or grid (occupancy model).
+    #[arg(long, default_value = "physics")]
+    pub backend: String,
+    /// Print the result as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// One goal's figures.
+#[derive(Debug, Serialize)]
+struct GoalReport {
+    goal: String,
+    #[serde(flatten)]
+    summary: Summary,
+}
+
+/// The machine-readable result: the fields of `run --json`, per-goal figures, no timings.
+#[derive(Debug, Serialize)]
+struct EvalReport {
+    agent: String,
+    blocks: usize,
+    goal: Option<String>,
+    grid: String,
+    horizon: u32,
+    backend: String,
+    seed: u64,
+    #[serde(flatten)]
+    summary: Summary,
+    model: String,
+    epsilon: f64,
+    per_goal: Vec<GoalReport>,
+}
+
+/// Evaluates the model and prints the figures.
+pub fn eval(args: EvalArgs) -> Result<()> {
+    let model = QAgent::load(&args.model)?;
+    let goals = parse_goals(args.goals.as_deref(), model.blocks())?;
+    let backend: Backend = args.backend.parse()?;
+    let reward = model.training().map_or_else(
+        || RewardModel::from_name("sparse").expect("a known model"),
+        |t| t.reward,
+    );
+    let mut all: Vec<EpisodeResult> = Vec::new();
+    let mut per_goal = Vec::new();
+    for goal in &goals {
+        let mut env = Env::new(EnvConfig {
+            grid: model.grid(),
+            blocks: model.blocks(),
+            goal: GoalSpec::Fixed(*goal),
+            horizon: args.horizon,
+            reward,
+            backend,
+        })?;
+        let mut policy = model.policy(args.epsilon)?;
+        let results = agent::play(&mut env, &mut policy, args.episodes, args.seed, None)?;
+        per_goal.push(GoalReport {
+            goal: goal.to_string(),
+            summary: Summary::of(&results),
+        });
+        all.extend(results);
+    }
+    let report = EvalReport {
+        agent: model.name(),
+        blocks: model.blocks(),
+        goal: Some(goals.iter().map(Goal::to_string).collect::<Vec<_>>().join(":")),
+        grid: model.grid().to_string(),
+        horizon: args.horizon,
+        backend: backend.to_string(),
+        seed: args.seed,
+        summary: Summary::of(&all),
+        model: args.model.display().to_string(),
+        epsilon: args.epsilon,
+        per_goal,
+    };
+    if args.json {
+        println!("{}", serde_json::to_string(&report)?);
+    } else {
+        print_report(&report);
+    }
+    Ok(())
+}
+
+fn print_report(r: &EvalReport) {
+    println!(
+        "agent {} from {}, {} blocks, grid {}, horizon {}, {} backend, seed {}, epsilon {}",
+        r.agent, r.model, r.blocks, r.grid, r.horizon, r.backend, r.seed, r.epsilon
+    );
+    let fmt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.2}"));
+    println!(
+        "{:<10} {:>8} {:>8} {:>10} {:>12}",
+        "goal", "episodes", "failures", "mean steps", "median steps"
+    );
+    let line = |name: &str, s: &Summary| {
+        println!(
+            "{:<10} {:>8} {:>8} {:>10} {:>12}",
+            name,
+            s.episodes,
+            s.failures,
+            fmt(s.mean_steps),
+            fmt(s.median_steps)
+        );
+    };
+    for g in &r.per_goal {
+        line(&g.goal, &g.summary);
+    }
+    line("all", &r.summary);
+}

@@ -1,0 +1,221 @@
+//! `blockstack train`, `eval` and `run --agent q` end to end, and their answers to bad input.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn blockstack(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_blockstack"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A fresh scratch folder for one test.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("blockstack-cli-agent-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn path(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// Trains the role learner on one goal, on the grid backend (quick), and returns the model.
+fn train_role(dir: &Path, name: &str, games: &str) -> PathBuf {
+    let out = dir.join(name);
+    let o = blockstack(&[
+        "train",
+        "--repr",
+        "role",
+        "--reward",
+        "step-cost",
+        "--goals",
+        "0,1,2",
+        "--games",
+        games,
+        "--seed",
+        "1",
+        "--alpha",
+        "1",
+        "--gamma",
+        "1",
+        "--epsilon",
+        "0",
+        "--backward-replay",
+        "--backend",
+        "grid",
+        "--out",
+        path(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // Not a terminal: no progress bar, nothing on stderr.
+    assert_eq!(stderr(&o), "");
+    assert!(stdout(&o).contains("games"), "{}", stdout(&o));
+    out
+}
+
+#[test]
+fn train_then_eval_on_unseen_goals() {
+    let dir = scratch("train-eval");
+    let model = train_role(&dir, "role.json", "200000");
+    let eval_json = || {
+        let words = "eval --goals 2,1,0:1,2,0 --episodes 40 --seed 2 --epsilon 0.1 --backend grid --json";
+        let mut args: Vec<&str> = words.split(' ').collect();
+        args.extend(["--model", path(&model)]);
+        blockstack(&args)
+    };
+    let o = eval_json();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let run_fields = ["agent", "blocks", "goal", "grid", "horizon", "backend", "seed"];
+    for field in run_fields
+        .into_iter()
+        .chain(["episodes", "failures", "mean_steps", "median_steps"])
+    {
+        assert!(v.get(field).is_some(), "no {field} in {v}");
+    }
+    assert_eq!(v["agent"], "q-role");
+    assert_eq!(v["episodes"], 80);
+    assert_eq!(v["per_goal"].as_array().unwrap().len(), 2);
+    assert_eq!(v["per_goal"][0]["goal"], "2,1,0");
+    // Trained briefly on 0,1,2 only, the role learner stacks goals it never saw (the random
+    // agent fails most of these episodes).
+    assert!(v["failures"].as_u64().unwrap() <= 4, "{v}");
+    assert!(v["mean_steps"].as_f64().unwrap() < 150.0, "{v}");
+    // No timings: the same command prints the same line.
+    assert_eq!(stdout(&eval_json()), stdout(&o));
+    // The text form: a line per goal and one for all.
+    let text = blockstack(&[
+        "eval",
+        "--model",
+        path(&model),
+        "--goals",
+        "2,1,0:1,2,0",
+        "--episodes",
+        "5",
+    ]);
+    assert!(text.status.success(), "{}", stderr(&text));
+    let out = stdout(&text);
+    for label in ["2,1,0", "1,2,0", "all", "failures", "mean steps"] {
+        assert!(out.contains(label), "{out}");
+    }
+}
+
+#[test]
+fn the_same_seed_trains_the_same_model_file() {
+    let dir = scratch("same-seed");
+    let a = train_role(&dir, "a.json", "500");
+    let b = train_role(&dir, "b.json", "500");
+    assert_eq!(std::fs::read(a).unwrap(), std::fs::read(b).unwrap());
+}
+
+#[test]
+fn run_plays_a_q_model_and_writes_trajectories() {
+    let dir = scratch("run-q");
+    let model = train_role(&dir, "role.json", "3000");
+    let trajectory = dir.join("t.jsonl");
+    let o = blockstack(&[
+        "run",
+        "--agent",
+        "q",
+        "--model",
+        path(&model),
+        "--epsilon",
+        "0.1",
+        "--goal",
+        "1,0,2",
+        "--episodes",
+        "5",
+        "--seed",
+        "3",
+        "--trajectory",
+        path(&trajectory),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(v["agent"], "q-role");
+    assert_eq!(v["episodes"], 5);
+    let lines = std::fs::read_to_string(&trajectory).unwrap();
+    assert_eq!(lines.lines().filter(|l| l.contains("\"type\":\"episode\"")).count(), 5);
+}
+
+#[test]
+fn the_paper_learner_trains_with_its_defaults() {
+    let dir = scratch("paper");
+    let out = dir.join("paper.json");
+    let o = blockstack(&[
+        "train",
+        "--goals",
+        "0,1,2:1,0,2",
+        "--games",
+        "20",
+        "--backend",
+        "grid",
+        "--out",
+        path(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let model: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(model["repr"], "chasing");
+    assert_eq!(model["params"]["gamma"], 0.1);
+    assert_eq!(model["training"]["reward"]["model"], "paper");
+    assert_eq!(model["training"]["goals"], serde_json::json!([[0, 1, 2], [1, 0, 2]]));
+}
+
+#[test]
+fn bad_models_and_arguments_are_one_line_errors() {
+    let dir = scratch("bad");
+    let model = train_role(&dir, "role.json", "50");
+    let check = |args: &[&str], needle: &str| {
+        let o = blockstack(args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        let err = stderr(&o);
+        assert!(err.contains(needle), "{args:?}: {err}");
+    };
+    let text = std::fs::read_to_string(&model).unwrap();
+    let truncated = dir.join("truncated.json");
+    std::fs::write(&truncated, &text[..text.len() - 10]).unwrap();
+    check(&["eval", "--model", path(&truncated)], "truncated");
+    check(&["run", "--agent", "q", "--model", path(&truncated)], "truncated");
+    check(&["eval", "--model", path(&dir.join("missing.json"))], "missing.json");
+    check(
+        &["run", "--agent", "q", "--model", path(&model), "--blocks", "4"],
+        "4 blocks",
+    );
+    check(&["run", "--agent", "q"], "--model");
+    check(&["eval", "--model", path(&model), "--goals", "0,1"], "goal 0,1");
+    check(&["eval", "--model", path(&model), "--epsilon", "2"], "epsilon 2");
+    let out = dir.join("x.json");
+    check(
+        &["train", "--repr", "deep", "--out", path(&out)],
+        "choose raw, pairwise, chasing or role",
+    );
+    check(&["train", "--alpha", "0", "--out", path(&out)], "alpha 0");
+    check(
+        &["train", "--goals", "0,1,3", "--out", path(&out)],
+        "block 3 does not exist",
+    );
+    check(&["train", "--reward", "big", "--out", path(&out)], "reward model");
+    check(
+        &[
+            "train",
+            "--games",
+            "1",
+            "--out",
+            path(&dir.join("no-such-dir").join("m.json")),
+        ],
+        "cannot write",
+    );
+    assert!(!out.exists());
+}
