@@ -35,7 +35,9 @@ pub enum OracleError {
     },
     /// The oracle's routing got stuck at every placement of the stack and the exact search
     /// it falls back on ran out of its budget.
-    #[error("the oracle found no plan to goal {goal} for {blocks} blocks on a {grid} grid: routing was stuck at every placement and the exact fallback ran out of its budget")]
+    #[error(
+        "the oracle found no plan to goal {goal} for {blocks} blocks on a {grid} grid: routing was stuck at every placement and the exact fallback ran out of its budget"
+    )]
     OracleStuck {
         /// The goal, bottom to top.
         goal: String,

@@ -232,6 +232,16 @@ mod tests {
             .with_node_budget(10)
             .solve(&s, &Goal::identity(3).unwrap())
             .unwrap_err();
-        assert!(matches!(err, OracleError::BudgetExceeded { budget: 10, blocks: 3, .. }), "{err}");
+        assert!(
+            matches!(
+                err,
+                OracleError::BudgetExceeded {
+                    budget: 10,
+                    blocks: 3,
+                    ..
+                }
+            ),
+            "{err}"
+        );
     }
 }

@@ -88,9 +88,10 @@ impl Oracle {
     /// The first action of [`Oracle::plan`]; an error if the goal holds already.
     pub fn next_action(&self, state: &State, goal: &Goal) -> Result<Action> {
         let plan = self.plan(state, goal)?;
-        plan.actions.first().copied().ok_or_else(|| OracleError::GoalAlreadyHolds {
-            goal: goal.to_string(),
-        })
+        plan.actions
+            .first()
+            .copied()
+            .ok_or_else(|| OracleError::GoalAlreadyHolds { goal: goal.to_string() })
     }
 
     /// A plan from `state`, which may hold a block, to `goal` (empty if the goal holds).
@@ -184,9 +185,9 @@ fn next_stretch(world: &GridWorld, goal: &Goal, placement: Placement) -> Option<
             break;
         }
         if let Some(path) = route::route(world, b, target(b)) {
-            let better = best.as_ref().is_none_or(|(c, p)| {
-                (path.len(), goal.place_of(b)) < (p.len(), goal.place_of(*c))
-            });
+            let better = best
+                .as_ref()
+                .is_none_or(|(c, p)| (path.len(), goal.place_of(b)) < (p.len(), goal.place_of(*c)));
             if better {
                 best = Some((b, path));
             }

@@ -90,11 +90,7 @@ pub(crate) fn route(world: &GridWorld, block: BlockId, target: Cell) -> Option<V
 /// (ties: the lowest row-major index), or `None` if it can reach none. The choice does not
 /// change as the block walks the returned path: every other candidate stays at least as
 /// far, and ties keep going the same way.
-pub(crate) fn to_nearest(
-    world: &GridWorld,
-    block: BlockId,
-    wanted: impl Fn(Cell) -> bool,
-) -> Option<Vec<Action>> {
+pub(crate) fn to_nearest(world: &GridWorld, block: BlockId, wanted: impl Fn(Cell) -> bool) -> Option<Vec<Action>> {
     let start = holding(world, block);
     let grid: Grid = world.grid();
     let reached = dijkstra_all(&start, Moving::next);

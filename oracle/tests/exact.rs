@@ -105,7 +105,10 @@ fn exact_and_oracle_plans_replay_to_the_goal_in_the_physics_world() {
     let (solver, oracle) = (ExactSolver::new(grid), Oracle::new(grid));
     for goal in Goal::all(3).unwrap() {
         for start in gap::seeded_starts(grid, &goal, 50, 3).unwrap() {
-            for plan in [solver.solve(&start, &goal).unwrap(), oracle.plan(&start, &goal).unwrap()] {
+            for plan in [
+                solver.solve(&start, &goal).unwrap(),
+                oracle.plan(&start, &goal).unwrap(),
+            ] {
                 let mut world = PhysicsWorld::new(grid, start).unwrap();
                 for (i, &a) in plan.actions.iter().enumerate() {
                     assert!(!goal.holds(&world.state()), "{start:?}: goal before action {i}");
@@ -138,7 +141,11 @@ fn oracle_optimality_gap_is_within_three_percent_for_every_three_block_goal() {
     for goal in Goal::all(3).unwrap() {
         let starts = gap::seeded_starts(grid, &goal, 500, 0).unwrap();
         let report = gap::measure(&oracle, &solver, &goal, &starts).unwrap();
-        assert!(report.mean_ratio <= 1.03, "goal {goal}: mean ratio {}", report.mean_ratio);
+        assert!(
+            report.mean_ratio <= 1.03,
+            "goal {goal}: mean ratio {}",
+            report.mean_ratio
+        );
         assert!(report.mean_ratio >= 1.0 && report.max_ratio >= 1.0);
     }
 }

@@ -16,7 +16,9 @@ use sim::{Action, BlockId, Goal, Grid, GridWorld, State, World};
 /// least one action shorter (so following `next_action` always ends at the goal).
 fn check_oracle(oracle: &Oracle, start: &State, goal: &Goal) -> Result<usize, String> {
     let grid = oracle.grid();
-    let plan = oracle.plan(start, goal).map_err(|e| format!("{start:?} goal {goal}: {e}"))?;
+    let plan = oracle
+        .plan(start, goal)
+        .map_err(|e| format!("{start:?} goal {goal}: {e}"))?;
     if !goal.holds(&replay(grid, start, &plan.actions)) {
         return Err(format!("{start:?} goal {goal}: plan {plan} does not reach the goal"));
     }
@@ -62,7 +64,12 @@ fn oracle_reaches_the_goal_from_every_three_block_placement() {
             .par_iter()
             .filter_map(|s| check_oracle(&oracle, s, &goal).err())
             .collect();
-        assert!(failures.is_empty(), "{} failures, first: {}", failures.len(), failures[0]);
+        assert!(
+            failures.is_empty(),
+            "{} failures, first: {}",
+            failures.len(),
+            failures[0]
+        );
     }
 }
 
@@ -101,9 +108,14 @@ fn following_next_action_from_mid_episode_states_reaches_the_goal() {
         let mut world = GridWorld::new(grid, start).unwrap();
         let mut steps = 0;
         while !goal.holds(world.state_ref()) {
-            world.act(oracle.next_action(world.state_ref(), &goal).unwrap()).unwrap();
+            world
+                .act(oracle.next_action(world.state_ref(), &goal).unwrap())
+                .unwrap();
             steps += 1;
-            assert!(steps <= planned, "{start:?} goal {goal}: more than the planned {planned} steps");
+            assert!(
+                steps <= planned,
+                "{start:?} goal {goal}: more than the planned {planned} steps"
+            );
         }
     }
 }
@@ -111,7 +123,12 @@ fn following_next_action_from_mid_episode_states_reaches_the_goal() {
 #[test]
 fn oracle_reaches_the_goal_with_many_blocks() {
     let mut r = rng(12);
-    for (grid, blocks) in [(Grid::default(), 4), (Grid::default(), 5), (Grid::default(), 7), (Grid::new(8, 8).unwrap(), 8)] {
+    for (grid, blocks) in [
+        (Grid::default(), 4),
+        (Grid::default(), 5),
+        (Grid::default(), 7),
+        (Grid::new(8, 8).unwrap(), 8),
+    ] {
         let oracle = Oracle::new(grid);
         for _ in 0..300 {
             let goal = Goal::random(blocks, &mut r).unwrap();
@@ -125,7 +142,15 @@ fn oracle_reaches_the_goal_with_many_blocks() {
 
 #[test]
 fn on_small_grids_both_planners_succeed_exactly_where_the_goal_can_be_reached() {
-    for (w, h, blocks) in [(1, 3, 2), (1, 4, 3), (2, 2, 2), (2, 3, 3), (3, 2, 2), (3, 3, 3), (4, 3, 3)] {
+    for (w, h, blocks) in [
+        (1, 3, 2),
+        (1, 4, 3),
+        (2, 2, 2),
+        (2, 3, 3),
+        (3, 2, 2),
+        (3, 3, 3),
+        (4, 3, 3),
+    ] {
         let grid = Grid::new(w, h).unwrap();
         let (oracle, exact) = (Oracle::new(grid), ExactSolver::new(grid));
         for goal in Goal::all(blocks).unwrap() {
@@ -140,7 +165,10 @@ fn on_small_grids_both_planners_succeed_exactly_where_the_goal_can_be_reached() 
                         assert!(plan.len() as u32 >= d);
                     }
                     None => {
-                        assert!(w == 1, "only one-wide grids have unreachable goals: {grid} {s:?} {goal}");
+                        assert!(
+                            w == 1,
+                            "only one-wide grids have unreachable goals: {grid} {s:?} {goal}"
+                        );
                         assert!(matches!(o, Err(OracleError::GoalUnreachable { .. })), "{o:?}");
                         assert!(matches!(e, Err(OracleError::GoalUnreachable { .. })), "{e:?}");
                     }

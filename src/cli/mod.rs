@@ -3,10 +3,9 @@
 
 use clap::{Parser, Subcommand};
 
-mod eval;
 mod render;
 mod run;
-mod train;
+mod solve;
 mod world;
 
 /// blockstack: teach an agent to stack blocks in a physics-backed 2D world.
@@ -25,10 +24,8 @@ pub enum Command {
     Run(run::RunArgs),
     /// Draw a start state as a PNG picture or as text.
     Render(render::RenderArgs),
-    /// Train a tabular Q-learner and save it as a model file.
-    Train(train::TrainArgs),
-    /// Evaluate a model on seeded starts, per goal and overall.
-    Eval(eval::EvalArgs),
+    /// Plan from a given state with the exact solver or the oracle, and print the plan.
+    Solve(solve::SolveArgs),
 }
 
 /// Carries out `cli`'s command.
@@ -36,7 +33,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Run(args) => run::run(args),
         Command::Render(args) => render::render(args),
-        Command::Train(args) => train::train(args),
-        Command::Eval(args) => eval::eval(args),
+        Command::Solve(args) => solve::solve(args),
     }
 }

@@ -1,0 +1,179 @@
+//! The planners as agents: the oracle and the exact solver play episodes like any policy.
+//!
+//! Each plans once from the episode's start and then follows its plan, replanning only if
+//! the world is not in the state the plan expects (say, a learner or a demonstrator took
+//! some actions in between).
+
+use oracle::{ExactSolver, Oracle, Plan};
+use sim::seeding::SimRng;
+use sim::{Action, Goal, Grid, GridWorld, Observation, State, World};
+
+use crate::error::Result;
+use crate::policy::Policy;
+
+/// The rest of a plan: each action with the state it is to be taken from, next one last.
+#[derive(Clone, Debug, Default)]
+struct PlanCursor {
+    goal: Option<Goal>,
+    steps: Vec<(State, Action)>,
+}
+
+impl PlanCursor {
+    /// The plan's next action, if `obs` is the state the plan expects now.
+    fn next(&mut self, obs: &Observation) -> Option<Action> {
+        match self.steps.last() {
+            Some(&(state, action)) if state == obs.state && self.goal == Some(obs.goal) => {
+                self.steps.pop();
+                Some(action)
+            }
+            _ => None,
+        }
+    }
+
+    /// Follows `plan` from `obs`, returning its first action.
+    fn follow(&mut self, obs: &Observation, plan: Plan) -> Result<Action> {
+        let mut world = GridWorld::new(obs.grid, obs.state)?;
+        let mut steps = Vec::with_capacity(plan.len());
+        for &action in &plan.actions {
+            steps.push((*world.state_ref(), action));
+            world.act(action)?;
+        }
+        steps.reverse();
+        self.goal = Some(obs.goal);
+        self.steps = steps;
+        // An empty plan means the goal holds; the oracle says so as an error.
+        self.next(obs).map_or_else(
+            || {
+                Err(oracle::OracleError::GoalAlreadyHolds {
+                    goal: obs.goal.to_string(),
+                }
+                .into())
+            },
+            Ok,
+        )
+    }
+}
+
+/// The centroid + A* oracle as a policy (name `oracle`).
+#[derive(Clone, Debug)]
+pub struct OraclePolicy {
+    oracle: Oracle,
+    cursor: PlanCursor,
+}
+
+impl OraclePolicy {
+    /// An oracle policy for worlds on `grid`.
+    pub fn new(grid: Grid) -> Self {
+        Self {
+            oracle: Oracle::new(grid),
+            cursor: PlanCursor::default(),
+        }
+    }
+}
+
+impl Policy for OraclePolicy {
+    fn name(&self) -> String {
+        "oracle".into()
+    }
+
+    fn begin_episode(&mut self, _obs: &Observation) {
+        self.cursor = PlanCursor::default();
+    }
+
+    fn act(&mut self, obs: &Observation, _rng: &mut SimRng) -> Result<Action> {
+        match self.cursor.next(obs) {
+            Some(action) => Ok(action),
+            None => {
+                let plan = self.oracle.plan(&obs.state, &obs.goal)?;
+                self.cursor.follow(obs, plan)
+            }
+        }
+    }
+}
+
+/// The exact solver as a policy (name `exact`): it takes a shortest path to the goal.
+#[derive(Clone, Debug)]
+pub struct ExactPolicy {
+    solver: ExactSolver,
+    cursor: PlanCursor,
+}
+
+impl ExactPolicy {
+    /// An exact policy for worlds on `grid`, with the solver's default budget.
+    pub fn new(grid: Grid) -> Self {
+        Self {
+            solver: ExactSolver::new(grid),
+            cursor: PlanCursor::default(),
+        }
+    }
+}
+
+impl Policy for ExactPolicy {
+    fn name(&self) -> String {
+        "exact".into()
+    }
+
+    fn begin_episode(&mut self, _obs: &Observation) {
+        self.cursor = PlanCursor::default();
+    }
+
+    fn act(&mut self, obs: &Observation, _rng: &mut SimRng) -> Result<Action> {
+        match self.cursor.next(obs) {
+            Some(action) => Ok(action),
+            None => {
+                let plan = self.solver.solve(&obs.state, &obs.goal)?;
+                self.cursor.follow(obs, plan)
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Summary, play};
+    use sim::{Backend, Env, EnvConfig};
+
+    #[test]
+    fn planners_reach_the_goal_in_the_physics_world_in_their_planned_steps() {
+        let config = EnvConfig {
+            backend: Backend::Physics,
+            ..EnvConfig::default()
+        };
+        let grid = config.grid;
+        let mut env = Env::new(config).unwrap();
+        let exact = play(&mut env, &mut ExactPolicy::new(grid), 30, 5, None).unwrap();
+        let oracle = play(&mut env, &mut OraclePolicy::new(grid), 30, 5, None).unwrap();
+        for (e, o) in exact.iter().zip(&oracle) {
+            assert!(e.reached_goal && o.reached_goal);
+            assert_eq!(e.start, o.start);
+            let shortest = ExactSolver::new(grid).distance(&e.start, &e.goal).unwrap();
+            assert_eq!(e.steps, shortest);
+            assert_eq!(
+                o.steps as usize,
+                Oracle::new(grid).plan(&o.start, &o.goal).unwrap().len()
+            );
+        }
+        assert_eq!(Summary::of(&oracle).failures, 0);
+    }
+
+    #[test]
+    fn a_policy_replans_when_the_world_left_its_plan() {
+        let goal: Goal = "1,0,2".parse().unwrap();
+        let mut env = Env::new(EnvConfig::with_goal(goal)).unwrap();
+        let mut policy = OraclePolicy::new(env.config().grid);
+        let mut rng = sim::seeding::rng(0);
+        let obs = env.reset(3);
+        policy.begin_episode(&obs);
+        policy.act(&obs, &mut rng).unwrap();
+        // Someone else acts instead: pick block 2 and move it.
+        env.step(Action::Pick(sim::BlockId(2))).unwrap();
+        let mut obs = env.step(Action::Up).unwrap().observation;
+        let mut steps = 0;
+        while !goal.holds(&obs.state) {
+            obs = env.step(policy.act(&obs, &mut rng).unwrap()).unwrap().observation;
+            steps += 1;
+            assert!(steps < 100);
+        }
+    }
+}

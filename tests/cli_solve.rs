@@ -1,0 +1,144 @@
+//! `blockstack solve` and `run --agent oracle|exact` end to end, and their answers to bad
+//! input.
+
+use std::process::{Command, Output};
+
+use sim::{Action, Cell, Goal, Grid, GridWorld, State, World};
+
+fn blockstack(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_blockstack"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn json(o: &Output) -> serde_json::Value {
+    assert!(o.status.success(), "{}", stderr(o));
+    serde_json::from_str(&stdout(o)).unwrap()
+}
+
+/// Replays action indices from `start` and says whether the goal holds at the end.
+fn reaches(start: &[(u8, u8)], held: Option<u8>, goal: &str, actions: &[usize]) -> bool {
+    let cells: Vec<Cell> = start.iter().map(|&(x, y)| Cell::new(x, y)).collect();
+    let goal: Goal = goal.parse().unwrap();
+    let state = State::new(&cells, held.map(sim::BlockId)).unwrap();
+    let mut world = GridWorld::new(Grid::default(), state).unwrap();
+    for &i in actions {
+        world.act(Action::from_index(i, cells.len()).unwrap()).unwrap();
+    }
+    goal.holds(world.state_ref())
+}
+
+#[test]
+fn solve_prints_a_shortest_plan_as_json() {
+    let o = blockstack(&["solve", "--start", "0,0;3,0;5,2", "--goal", "1,0,2", "--json"]);
+    let v = json(&o);
+    assert_eq!(v["solver"], "exact");
+    let actions: Vec<usize> = v["actions"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| a.as_u64().unwrap() as usize)
+        .collect();
+    assert_eq!(v["length"].as_u64().unwrap() as usize, actions.len());
+    assert_eq!(actions.len(), 8);
+    assert!(reaches(&[(0, 0), (3, 0), (5, 2)], None, "1,0,2", &actions));
+}
+
+#[test]
+fn solve_with_a_held_block_and_the_oracle() {
+    let args = ["solve", "--start", "0,0;3,0;5,2", "--goal", "1,0,2", "--held", "2"];
+    let exact = json(&blockstack(&[&args[..], &["--json"]].concat()));
+    let oracle = json(&blockstack(&[&args[..], &["--json", "--solver", "oracle"]].concat()));
+    assert_eq!(oracle["solver"], "oracle");
+    assert!(oracle["length"].as_u64() >= exact["length"].as_u64());
+    for v in [exact, oracle] {
+        let actions: Vec<usize> = v["actions"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|a| a.as_u64().unwrap() as usize)
+            .collect();
+        assert!(reaches(&[(0, 0), (3, 0), (5, 2)], Some(2), "1,0,2", &actions));
+    }
+}
+
+#[test]
+fn solve_prints_action_names_and_length() {
+    let o = blockstack(&["solve", "--start", "0,0;3,0", "--goal", "1,0", "--grid", "7x7"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(out.contains("exact plan, goal 1,0, grid 7x7: 5 actions"), "{out}");
+    assert!(out.contains("pick 0, "), "{out}");
+}
+
+#[test]
+fn solve_rejects_bad_input_with_one_line_and_exit_2() {
+    for (args, message) in [
+        (
+            &["--start", "0,0;0,0", "--goal", "0,1"][..],
+            "both stand on cell (0, 0)",
+        ),
+        (
+            &["--start", "0,0;9,0", "--goal", "0,1"],
+            "cell (9, 0) is outside the 7x7 grid",
+        ),
+        (&["--start", "0,0;1,0", "--goal", "0,0"], "not a permutation"),
+        (&["--start", "0,0;1,0;2,0", "--goal", "0,1"], "not a permutation"),
+        (
+            &["--start", "0,0;1,0;2,0", "--goal", "0,1,2", "--grid", "3x2"],
+            "taller than the grid",
+        ),
+        (&["--start", "0,0;1", "--goal", "0,1"], "cannot read cell \"1\""),
+        (
+            &["--start", "0,0;1,0", "--goal", "0,1", "--held", "5"],
+            "block 5 does not exist",
+        ),
+        (
+            &["--start", "0,0;0,1", "--goal", "1,0", "--grid", "1x4"],
+            "cannot be reached",
+        ),
+    ] {
+        let o = blockstack(&[&["solve"][..], args].concat());
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(message), "{args:?}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+        assert!(stdout(&o).is_empty());
+    }
+}
+
+#[test]
+fn run_plays_the_planners_in_the_physics_world() {
+    let run = |agent: &str| {
+        json(&blockstack(&[
+            "run",
+            "--agent",
+            agent,
+            "--blocks",
+            "3",
+            "--goal",
+            "2,0,1",
+            "--episodes",
+            "20",
+            "--seed",
+            "4",
+            "--json",
+        ]))
+    };
+    let (exact, oracle) = (run("exact"), run("oracle"));
+    for (v, name) in [(&exact, "exact"), (&oracle, "oracle")] {
+        assert_eq!(v["agent"], name);
+        assert_eq!(v["backend"], "physics");
+        assert_eq!(v["failures"], 0);
+    }
+    assert!(oracle["mean_steps"].as_f64() >= exact["mean_steps"].as_f64());
+}
