@@ -11,6 +11,21 @@ pub enum AgentError {
     /// A planner (the oracle or the exact solver) could not plan.
     #[error(transparent)]
     Oracle(#[from] oracle::OracleError),
+    /// A model file that cannot be used: missing, truncated, corrupt, or of another format
+    /// or version.
+    #[error("cannot read model {path}: {reason}")]
+    Model {
+        /// The file.
+        path: String,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// A model used with a world (or for a purpose) it was not made for.
+    #[error("the model does not fit: {0}")]
+    ModelMismatch(String),
+    /// A learner or training configuration that cannot work (names the setting).
+    #[error("invalid configuration: {0}")]
+    Config(String),
 }
 
 /// Shorthand for results whose error is an [`AgentError`].

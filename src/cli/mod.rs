@@ -3,9 +3,11 @@
 
 use clap::{Parser, Subcommand};
 
+mod eval;
 mod render;
 mod run;
 mod solve;
+mod train;
 mod world;
 
 /// blockstack: teach an agent to stack blocks in a physics-backed 2D world.
@@ -26,6 +28,10 @@ pub enum Command {
     Render(render::RenderArgs),
     /// Plan from a given state with the exact solver or the oracle, and print the plan.
     Solve(solve::SolveArgs),
+    /// Train a tabular Q-learner and save it as a model file.
+    Train(train::TrainArgs),
+    /// Evaluate a model on seeded starts, per goal and overall.
+    Eval(eval::EvalArgs),
 }
 
 /// Carries out `cli`'s command.
@@ -34,5 +40,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Run(args) => run::run(args),
         Command::Render(args) => render::render(args),
         Command::Solve(args) => solve::solve(args),
+        Command::Train(args) => train::train(args),
+        Command::Eval(args) => eval::eval(args),
     }
 }

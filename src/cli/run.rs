@@ -8,7 +8,7 @@ use serde::Serialize;
 use sim::trajectory::TrajectoryWriter;
 use sim::{Env, GoalSpec};
 
-use agent::{ExactPolicy, OraclePolicy, Policy, RandomPolicy, Summary};
+use agent::{ExactPolicy, OraclePolicy, Policy, QAgent, RandomPolicy, Summary};
 
 use super::world::WorldArgs;
 
@@ -21,6 +21,8 @@ pub enum AgentKind {
     Oracle,
     /// The exact solver: shortest plans.
     Exact,
+    /// A trained tabular Q-learner, read from --model.
+    Q,
 }
 
 /// Arguments of `blockstack run`.
@@ -43,6 +45,12 @@ pub struct RunArgs {
     /// Print the result as one JSON object.
     #[arg(long)]
     pub json: bool,
+    /// The model file the `q` agent plays (see `blockstack train`).
+    #[arg(long, required_if_eq("agent", "q"))]
+    pub model: Option<PathBuf>,
+    /// The `q` agent's probability of a random action (the paper's test policy: 0.1).
+    #[arg(long, default_value_t = 0.1)]
+    pub epsilon: f64,
 }
 
 /// The machine-readable result of a run: no timings, so two runs compare equal.
@@ -62,10 +70,20 @@ struct RunReport {
 /// Plays the episodes and prints the summary.
 pub fn run(args: RunArgs) -> Result<()> {
     let config = args.world.config()?;
-    let mut policy: Box<dyn Policy> = match args.agent {
-        AgentKind::Random => Box::new(RandomPolicy),
-        AgentKind::Oracle => Box::new(OraclePolicy::new(config.grid)),
-        AgentKind::Exact => Box::new(ExactPolicy::new(config.grid)),
+    let q_agent = match (args.agent, &args.model) {
+        (AgentKind::Q, Some(path)) => {
+            let q = QAgent::load(path)?;
+            q.check_world(config.grid, config.blocks)?;
+            Some(q)
+        }
+        _ => None,
+    };
+    let mut policy: Box<dyn Policy + '_> = match (args.agent, &q_agent) {
+        (AgentKind::Random, _) => Box::new(RandomPolicy),
+        (AgentKind::Oracle, _) => Box::new(OraclePolicy::new(config.grid)),
+        (AgentKind::Exact, _) => Box::new(ExactPolicy::new(config.grid)),
+        (AgentKind::Q, Some(q)) => Box::new(q.policy(args.epsilon)?),
+        (AgentKind::Q, None) => anyhow::bail!("--agent q needs --model FILE"),
     };
     let mut env = Env::new(config)?;
     let mut trajectory = args.trajectory.as_deref().map(TrajectoryWriter::create).transpose()?;
