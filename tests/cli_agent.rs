@@ -88,6 +88,13 @@ fn train_then_eval_on_unseen_goals() {
     assert_eq!(v["episodes"], 80);
     assert_eq!(v["per_goal"].as_array().unwrap().len(), 2);
     assert_eq!(v["per_goal"][0]["goal"], "2,1,0");
+    // Against the exact optimum: a ratio of at least 1, and the optimum below the steps.
+    assert!(v["mean_ratio_to_optimum"].as_f64().unwrap() >= 1.0, "{v}");
+    assert!(
+        v["mean_optimal_steps"].as_f64().unwrap() <= v["mean_steps"].as_f64().unwrap(),
+        "{v}"
+    );
+    assert!(v["mean_steps_failures_as_horizon"].as_f64().unwrap() >= v["mean_steps"].as_f64().unwrap());
     // Trained briefly on 0,1,2 only, the role learner stacks goals it never saw (the random
     // agent fails most of these episodes).
     assert!(v["failures"].as_u64().unwrap() <= 4, "{v}");
@@ -106,7 +113,7 @@ fn train_then_eval_on_unseen_goals() {
     ]);
     assert!(text.status.success(), "{}", stderr(&text));
     let out = stdout(&text);
-    for label in ["2,1,0", "1,2,0", "all", "failures", "mean steps"] {
+    for label in ["2,1,0", "1,2,0", "all", "failures", "mean steps", "mean ratio"] {
         assert!(out.contains(label), "{out}");
     }
 }

@@ -5,9 +5,11 @@
 //!   [`Summary`](rollout::Summary) of failures and steps to goal.
 //! - [`QAgent`]: tabular Q-learning over one of the [`repr`] state representations, trained
 //!   by [`train`](train::train) / [`Trainer`], saved and loaded as [`model`] files.
+//! - [`optimality`]: steps taken against the exact solver's shortest plans.
 
 pub mod error;
 pub mod model;
+pub mod optimality;
 pub mod planner_policy;
 pub mod policy;
 pub mod qlearning;
@@ -23,4 +25,4 @@ pub use qlearning::{QAgent, QParams, QPolicy};
 pub use qtable::QTable;
 pub use repr::{Repr, ReprKind, Representation};
 pub use rollout::{EpisodeResult, Summary, play, play_episode};
-pub use train::{Progress, TrainConfig, TrainReport, Trained, Trainer, train};
+pub use train::{Assist, Progress, TrainConfig, TrainReport, Trained, Trainer, train};

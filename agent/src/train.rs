@@ -7,11 +7,12 @@
 //! bit. Nothing is printed: progress goes to an optional callback after every game.
 
 use std::collections::VecDeque;
+use std::fmt;
 
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
 use sim::seeding::episode_seed;
-use sim::{Backend, BlockId, Env, EnvConfig, Goal, GoalSpec, Grid, RewardModel};
+use sim::{Action, Backend, BlockId, Env, EnvConfig, Goal, GoalSpec, Grid, RewardModel};
 
 use crate::error::{AgentError, Result};
 use crate::qlearning::{QAgent, QParams};
@@ -20,6 +21,90 @@ use crate::rollout::policy_rng;
 
 /// Games the progress figures look back over.
 pub const RECENT_GAMES: usize = 100;
+
+/// When the oracle chooses the action during training (paper section VI-B2). The table
+/// learns from the executed action, whoever chose it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case")]
+pub enum Assist {
+    /// Never: the learner alone.
+    #[default]
+    None,
+    /// When the learner oscillates: the last six actions are one pair `a, b` (`a != b`)
+    /// three times in a row, the oracle chooses the next action.
+    Oscillation,
+    /// On oscillation as above, and besides at every step with probability `p`.
+    OscillationOrChance {
+        /// The probability of handing a step to the oracle (paper: 0.1).
+        p: f64,
+    },
+}
+
+impl Assist {
+    /// An error unless `p` is a probability.
+    pub fn validate(&self) -> Result<()> {
+        match self {
+            Assist::OscillationOrChance { p } if !(0.0..=1.0).contains(p) => Err(AgentError::Config(format!(
+                "the oracle's probability {p} is not in [0, 1]"
+            ))),
+            _ => Ok(()),
+        }
+    }
+}
+
+impl fmt::Display for Assist {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Assist::None => f.write_str("none"),
+            Assist::Oscillation => f.write_str("oscillation"),
+            Assist::OscillationOrChance { p } => write!(f, "oscillation+{p}"),
+        }
+    }
+}
+
+impl std::str::FromStr for Assist {
+    type Err = AgentError;
+
+    /// Reads `none`, `oscillation`, or `oscillation+P` (e.g. `oscillation+0.1`).
+    fn from_str(text: &str) -> Result<Assist> {
+        let bad = || {
+            AgentError::Config(format!(
+                "unknown assistance {text:?}: choose none, oscillation or oscillation+P (e.g. oscillation+0.1)"
+            ))
+        };
+        let assist = match text {
+            "none" => Assist::None,
+            "oscillation" => Assist::Oscillation,
+            _ => {
+                let p = text.strip_prefix("oscillation+").ok_or_else(bad)?;
+                Assist::OscillationOrChance {
+                    p: p.parse().map_err(|_| bad())?,
+                }
+            }
+        };
+        assist.validate()?;
+        Ok(assist)
+    }
+}
+
+/// The last six actions of a game, to spot oscillation.
+#[derive(Clone, Copy, Debug, Default)]
+struct RecentActions {
+    actions: [Option<Action>; 6],
+}
+
+impl RecentActions {
+    fn push(&mut self, action: Action) {
+        self.actions.rotate_left(1);
+        self.actions[5] = Some(action);
+    }
+
+    /// Whether the last six are `a, b, a, b, a, b` with `a != b`.
+    fn oscillating(&self) -> bool {
+        let h = &self.actions;
+        h[0].is_some() && h[0] != h[1] && h[0] == h[2] && h[2] == h[4] && h[1] == h[3] && h[3] == h[5]
+    }
+}
 
 /// Everything that defines a training run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -53,6 +138,8 @@ pub struct TrainConfig {
     /// (with alpha 1 in this deterministic world, the whole path gets the values of its
     /// end). Off in the paper's learner.
     pub backward_replay: bool,
+    /// When the oracle chooses the action instead of the learner.
+    pub assist: Assist,
 }
 
 impl TrainConfig {
@@ -73,12 +160,36 @@ impl TrainConfig {
             backend: Backend::Physics,
             exploring_starts: false,
             backward_replay: false,
+            assist: Assist::None,
+        }
+    }
+
+    /// Our learner: `role` representation, `step-cost` reward, alpha 1 and gamma 1 (the
+    /// world is deterministic and the return is minus the steps to go), epsilon 0 (every
+    /// value starts at 0, above any true value, so untried actions look best and the
+    /// greedy learner explores them: optimism in place of random exploration), backward
+    /// replay, 2,000,000 games against the physics world from the paper's starts (nothing
+    /// held), seed 1. Trained on one goal it plays all of them.
+    pub fn role_step_cost(goals: Vec<Goal>) -> TrainConfig {
+        TrainConfig {
+            repr: ReprKind::Role,
+            reward: RewardModel::from_name("step-cost").expect("a known model"),
+            params: QParams {
+                alpha: 1.0,
+                gamma: 1.0,
+                epsilon: 0.0,
+                initial_q: 0.0,
+            },
+            games: 2_000_000,
+            backward_replay: true,
+            ..TrainConfig::paper(goals)
         }
     }
 
     /// An error naming the first thing in the config that cannot train.
     pub fn validate(&self) -> Result<()> {
         self.params.validate()?;
+        self.assist.validate()?;
         if self.goals.is_empty() {
             return Err(AgentError::Config("no goals to train on".into()));
         }
@@ -136,6 +247,8 @@ pub struct TrainReport {
     pub successes: u64,
     /// Actions taken, in all games.
     pub steps: u64,
+    /// Of those, actions the oracle chose.
+    pub assisted_steps: u64,
 }
 
 /// The outcome of [`train`].
@@ -159,6 +272,8 @@ pub struct Trainer {
     recent: VecDeque<Option<u32>>,
     /// The current game's transitions, for backward replay.
     path: Vec<Transition>,
+    /// The oracle, when it assists.
+    oracle: Option<oracle::Oracle>,
 }
 
 /// One step of a game, in table coordinates.
@@ -183,12 +298,13 @@ impl Trainer {
             .map(|&g| Env::new(config.env_config(g)))
             .collect::<sim::Result<Vec<_>>>()?;
         Ok(Trainer {
-            config,
             agent,
             envs,
             report: TrainReport::default(),
             recent: VecDeque::with_capacity(RECENT_GAMES),
             path: Vec::new(),
+            oracle: (config.assist != Assist::None).then(|| oracle::Oracle::new(config.grid)),
+            config,
         })
     }
 
@@ -256,9 +372,27 @@ impl Trainer {
         let replay = self.config.backward_replay;
         let path = &mut self.path;
         path.clear();
+        let mut recent = RecentActions::default();
+        let mut assisted = 0;
         while !env.is_over() {
-            let column = agent.choose_column(key, epsilon, &mut rng);
-            let step = env.step(agent.action_of_column(&obs.goal, column))?;
+            let by_oracle = match self.config.assist {
+                Assist::None => false,
+                Assist::Oscillation => recent.oscillating(),
+                Assist::OscillationOrChance { p } => recent.oscillating() || rng.random_bool(p),
+            };
+            let (action, column) = match &self.oracle {
+                Some(oracle) if by_oracle => {
+                    assisted += 1;
+                    let action = oracle.next_action(&obs.state, &obs.goal)?;
+                    (action, agent.column(&obs.goal, action)?)
+                }
+                _ => {
+                    let column = agent.choose_column(key, epsilon, &mut rng);
+                    (agent.action_of_column(&obs.goal, column), column)
+                }
+            };
+            recent.push(action);
+            let step = env.step(action)?;
             let next_key = agent.key_unchecked(&step.observation);
             let next = (!step.terminated).then_some(next_key);
             agent.update_key(key, column, step.reward, next);
@@ -281,6 +415,7 @@ impl Trainer {
         self.report.games += 1;
         self.report.steps += u64::from(steps);
         self.report.successes += u64::from(reached);
+        self.report.assisted_steps += assisted;
         Ok(reached.then_some(steps))
     }
 
@@ -304,4 +439,47 @@ pub fn train(config: &TrainConfig, progress: Option<&mut dyn FnMut(&Progress)>) 
     let mut trainer = Trainer::new(config.clone())?;
     trainer.play_games(config.games, progress)?;
     Ok(trainer.finish())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn recent(actions: &[Action]) -> RecentActions {
+        let mut r = RecentActions::default();
+        for &a in actions {
+            r.push(a);
+        }
+        r
+    }
+
+    #[test]
+    fn oscillation_is_one_pair_three_times_in_a_row() {
+        let (u, d, p, x) = (Action::Up, Action::Down, Action::Pick(BlockId(1)), Action::Drop);
+        assert!(recent(&[u, d, u, d, u, d]).oscillating());
+        assert!(recent(&[x, x, p, x, p, x, p, x]).oscillating());
+        assert!(!recent(&[u, d, u, d, u]).oscillating(), "only two and a half pairs");
+        assert!(!recent(&[u, d, u, d, u, u]).oscillating());
+        assert!(
+            !recent(&[u, u, u, u, u, u]).oscillating(),
+            "six moves one way are progress"
+        );
+        assert!(recent(&[x, u, d, u, d, u, d, u]).oscillating(), "d, u three times");
+        assert!(!recent(&[u, d, u, d, u, d, x]).oscillating(), "the window moved on");
+    }
+
+    #[test]
+    fn assistance_reads_and_writes_its_names() {
+        for text in ["none", "oscillation", "oscillation+0.1", "oscillation+1"] {
+            let a: Assist = text.parse().unwrap();
+            assert_eq!(a.to_string().parse::<Assist>().unwrap(), a);
+        }
+        assert_eq!(
+            "oscillation+0.1".parse::<Assist>().unwrap(),
+            Assist::OscillationOrChance { p: 0.1 }
+        );
+        for bad in ["always", "oscillation+", "oscillation+x", "oscillation+1.5"] {
+            assert!(bad.parse::<Assist>().is_err(), "{bad}");
+        }
+    }
 }

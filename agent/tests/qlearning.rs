@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use agent::{AgentError, Policy, Progress, QAgent, QParams, ReprKind, TrainConfig, Trainer};
+use agent::{AgentError, Assist, Policy, Progress, QAgent, QParams, ReprKind, TrainConfig, Trainer};
 use sim::seeding::rng;
 use sim::{Action, Backend, BlockId, Cell, Env, EnvConfig, Goal, GoalSpec, Grid, Observation, RewardModel, State};
 
@@ -17,22 +17,13 @@ fn temp_path(name: &str) -> PathBuf {
     dir.join(name)
 }
 
-/// The role + step-cost learner on the grid backend: quick enough for tests.
+/// Our role + step-cost learner, on the grid backend (quick enough for tests).
 fn role_config(goals: &[&str], games: u64, seed: u64) -> TrainConfig {
     TrainConfig {
-        repr: ReprKind::Role,
-        reward: RewardModel::from_name("step-cost").unwrap(),
-        params: QParams {
-            alpha: 1.0,
-            gamma: 1.0,
-            epsilon: 0.0,
-            initial_q: 0.0,
-        },
         games,
         seed,
         backend: Backend::Grid,
-        backward_replay: true,
-        ..TrainConfig::paper(goals.iter().map(|g| goal(g)).collect())
+        ..TrainConfig::role_step_cost(goals.iter().map(|g| goal(g)).collect())
     }
 }
 
@@ -214,6 +205,35 @@ fn training_reports_progress_after_every_game() {
     let whole = agent::train(&role_config(&["0,1,2"], 200, 1), None).unwrap();
     assert_eq!(split.agent, whole.agent);
     assert_eq!(split.agent.training().unwrap().games, 200);
+}
+
+#[test]
+fn the_oracle_assists_as_asked_and_the_table_learns_its_actions() {
+    let base = TrainConfig {
+        games: 200,
+        backend: Backend::Grid,
+        ..TrainConfig::paper(vec![goal("0,1,2"), goal("2,1,0")])
+    };
+    let run = |assist| agent::train(&TrainConfig { assist, ..base.clone() }, None).unwrap();
+    let none = run(Assist::None);
+    assert_eq!(none.report.assisted_steps, 0);
+    let oscillation = run(Assist::Oscillation);
+    assert!(oscillation.report.assisted_steps > 0);
+    assert!(oscillation.report.assisted_steps < oscillation.report.steps / 10);
+    let chance = run(Assist::OscillationOrChance { p: 0.1 });
+    assert!(chance.report.assisted_steps > chance.report.steps / 20);
+    assert_eq!(
+        chance.agent,
+        run(Assist::OscillationOrChance { p: 0.1 }).agent,
+        "deterministic"
+    );
+    // Handing every step to the oracle: every game reaches the goal on the oracle's plan
+    // (about ten steps from a random start), and the table learns from those steps.
+    let always = run(Assist::OscillationOrChance { p: 1.0 });
+    assert_eq!(always.report.successes, 200);
+    assert_eq!(always.report.assisted_steps, always.report.steps);
+    assert!(always.report.steps < 200 * 20);
+    assert_ne!(always.agent.table(), none.agent.table());
 }
 
 #[test]

@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 
+use agent::optimality::{self, Optimality};
 use agent::{EpisodeResult, QAgent, Summary};
 use anyhow::Result;
 use clap::Args;
@@ -45,6 +46,11 @@ struct GoalReport {
     goal: String,
     #[serde(flatten)]
     summary: Summary,
+    #[serde(flatten)]
+    optimality: Optimality,
+    /// Mean steps over every episode, a failure counted as the horizon (as the paper's
+    /// figures seem to be: 847.7 = 0.7 x 1000 + 0.3 x 492).
+    mean_steps_failures_as_horizon: f64,
 }
 
 /// The machine-readable result: the fields of `run --json`, per-goal figures, no timings.
@@ -59,6 +65,11 @@ struct EvalReport {
     seed: u64,
     #[serde(flatten)]
     summary: Summary,
+    #[serde(flatten)]
+    optimality: Optimality,
+    /// Mean steps over every episode, a failure counted as the horizon (as the paper's
+    /// figures seem to be: 847.7 = 0.7 x 1000 + 0.3 x 492).
+    mean_steps_failures_as_horizon: f64,
     model: String,
     epsilon: f64,
     per_goal: Vec<GoalReport>,
@@ -73,7 +84,7 @@ pub fn eval(args: EvalArgs) -> Result<()> {
         || RewardModel::from_name("sparse").expect("a known model"),
         |t| t.reward,
     );
-    let mut all: Vec<EpisodeResult> = Vec::new();
+    let (mut all, mut all_optimal): (Vec<EpisodeResult>, Vec<u32>) = (Vec::new(), Vec::new());
     let mut per_goal = Vec::new();
     for goal in &goals {
         let mut env = Env::new(EnvConfig {
@@ -86,11 +97,15 @@ pub fn eval(args: EvalArgs) -> Result<()> {
         })?;
         let mut policy = model.policy(args.epsilon)?;
         let results = agent::play(&mut env, &mut policy, args.episodes, args.seed, None)?;
+        let optimal = optimality::optimal_steps(model.grid(), &results)?;
         per_goal.push(GoalReport {
             goal: goal.to_string(),
             summary: Summary::of(&results),
+            optimality: Optimality::of(&results, &optimal),
+            mean_steps_failures_as_horizon: optimality::mean_steps_failures_as_horizon(&results, args.horizon),
         });
         all.extend(results);
+        all_optimal.extend(optimal);
     }
     let report = EvalReport {
         agent: model.name(),
@@ -101,6 +116,8 @@ pub fn eval(args: EvalArgs) -> Result<()> {
         backend: backend.to_string(),
         seed: args.seed,
         summary: Summary::of(&all),
+        optimality: Optimality::of(&all, &all_optimal),
+        mean_steps_failures_as_horizon: optimality::mean_steps_failures_as_horizon(&all, args.horizon),
         model: args.model.display().to_string(),
         epsilon: args.epsilon,
         per_goal,
@@ -120,21 +137,26 @@ fn print_report(r: &EvalReport) {
     );
     let fmt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.2}"));
     println!(
-        "{:<10} {:>8} {:>8} {:>10} {:>12}",
-        "goal", "episodes", "failures", "mean steps", "median steps"
+        "{:<10} {:>8} {:>8} {:>10} {:>12} {:>12} {:>10} {:>14}",
+        "goal", "episodes", "failures", "mean steps", "median steps", "mean optimum", "mean ratio", "mean, fail=H"
     );
-    let line = |name: &str, s: &Summary| {
+    let line = |name: &str, s: &Summary, o: &Optimality, with_failures: f64| {
         println!(
-            "{:<10} {:>8} {:>8} {:>10} {:>12}",
+            "{:<10} {:>8} {:>8} {:>10} {:>12} {:>12} {:>10} {:>14.2}",
             name,
             s.episodes,
             s.failures,
             fmt(s.mean_steps),
-            fmt(s.median_steps)
+            fmt(s.median_steps),
+            fmt(o.mean_optimal_steps),
+            o.mean_ratio_to_optimum.map_or("-".to_string(), |v| format!("{v:.4}")),
+            with_failures
         );
     };
     for g in &r.per_goal {
-        line(&g.goal, &g.summary);
+        line(&g.goal, &g.summary, &g.optimality, g.mean_steps_failures_as_horizon);
     }
-    line("all", &r.summary);
+    line("all", &r.summary, &r.optimality, r.mean_steps_failures_as_horizon);
+    println!("steps, optimum and ratio are over the episodes that reached the goal; the optimum is the");
+    println!("exact solver's shortest plan from each start; the last column counts a failure as the horizon H");
 }

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use agent::{QParams, ReprKind, TrainConfig};
+use agent::{Assist, QParams, ReprKind, TrainConfig};
 use anyhow::{Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -52,6 +52,10 @@ pub struct TrainArgs {
     /// After each game, replay its updates once more, last step first.
     #[arg(long)]
     pub backward_replay: bool,
+    /// When the oracle chooses the action: none, oscillation (the same pair of actions three
+    /// times in a row), or oscillation+P (also at each step with probability P).
+    #[arg(long, default_value = "none")]
+    pub assist: Assist,
     /// Steps before a training game is cut off.
     #[arg(long, default_value_t = sim::DEFAULT_HORIZON)]
     pub horizon: u32,
@@ -97,6 +101,7 @@ impl TrainArgs {
             backend: self.backend.parse::<Backend>()?,
             exploring_starts: self.exploring_starts,
             backward_replay: self.backward_replay,
+            assist: self.assist,
         };
         config.validate()?;
         Ok(config)
@@ -144,10 +149,12 @@ pub fn train(args: TrainArgs) -> Result<()> {
         config.seed
     );
     println!(
-        "{} games, {} reached the goal, {} steps, in {seconds:.1} s ({:.0} games/s)",
+        "{} games, {} reached the goal, {} steps ({} chosen by the oracle, assistance {}), in {seconds:.1} s ({:.0} games/s)",
         r.games,
         r.successes,
         r.steps,
+        r.assisted_steps,
+        config.assist,
         r.games as f64 / seconds.max(1e-9)
     );
     println!("saved {}", args.out.display());

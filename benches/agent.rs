@@ -1,0 +1,73 @@
+//! The Q-learner's speed: one table update, and training games per second of our `role`
+//! learner against the physics world and the grid world.
+//!
+//! `cargo bench --bench agent`. `train_games/<backend>/fresh` plays the first 100 games of
+//! a new agent (every value optimistic: long, exploring games); `.../trained` plays games
+//! of an agent already trained for 300,000 games (near the end of the recipe's 2,000,000,
+//! short games), the regime most of a training run is spent in.
+
+use std::hint::black_box;
+
+use agent::{QAgent, QParams, ReprKind, TrainConfig, Trainer};
+use criterion::{BatchSize, BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use sim::{Action, Backend, BlockId, Cell, Grid, Observation, State};
+
+fn q_update(c: &mut Criterion) {
+    let grid = Grid::default();
+    let goal = "1,0,2".parse().unwrap();
+    let params = QParams {
+        alpha: 0.5,
+        ..QParams::default()
+    };
+    let mut q = QAgent::new(ReprKind::Role, grid, 3, params).unwrap();
+    let obs = |cells: [Cell; 3], held| Observation {
+        grid,
+        state: State::new(&cells, held).unwrap(),
+        goal,
+    };
+    let before = obs([Cell::new(1, 1), Cell::new(4, 0), Cell::new(6, 6)], Some(BlockId(2)));
+    let after = obs([Cell::new(1, 1), Cell::new(4, 0), Cell::new(5, 6)], Some(BlockId(2)));
+    c.bench_function("q_update", |b| {
+        b.iter(|| {
+            black_box(
+                q.update(black_box(&before), Action::Left, -1.0, black_box(&after), false)
+                    .unwrap(),
+            )
+        })
+    });
+}
+
+fn train_games(c: &mut Criterion) {
+    let mut group = c.benchmark_group("train_games");
+    let config = |backend| TrainConfig {
+        backend,
+        ..TrainConfig::role_step_cost(vec!["0,1,2".parse().unwrap()])
+    };
+    for backend in [Backend::Physics, Backend::Grid] {
+        let fresh_games = 100;
+        group.throughput(Throughput::Elements(fresh_games));
+        group.sample_size(10);
+        group.bench_function(BenchmarkId::new(backend.to_string(), "fresh"), |b| {
+            b.iter_batched(
+                || Trainer::new(config(backend)).unwrap(),
+                |mut trainer| {
+                    trainer.play_games(fresh_games, None).unwrap();
+                    trainer
+                },
+                BatchSize::PerIteration,
+            )
+        });
+        let mut trainer = Trainer::new(config(backend)).unwrap();
+        trainer.play_games(300_000, None).unwrap();
+        let games = 1000;
+        group.throughput(Throughput::Elements(games));
+        group.sample_size(20);
+        group.bench_function(BenchmarkId::new(backend.to_string(), "trained"), |b| {
+            b.iter(|| trainer.play_games(games, None).unwrap())
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, q_update, train_games);
+criterion_main!(benches);
