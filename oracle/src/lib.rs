@@ -7,6 +7,12 @@
 //! - [`ExactSolver`]: A* over the joint state with an admissible, consistent heuristic; its
 //!   plans are provably shortest, the yardstick for every "steps to goal" figure.
 //!
+//! How far each goes: the oracle plans 3 blocks in a few microseconds and 8 in tens, from
+//! any state; it is never shorter than the exact plan and is within a fraction of a percent
+//! of it on average (the [`gap`] module measures it; `cargo run --release -p oracle
+//! --example optimality_gap` prints it). The exact solver's reach and its memory budget are
+//! in the docs of [`exact`].
+//!
 //! Both search over [`sim::GridWorld`] and take every step with [`sim::World::act`]: the
 //! rules of the world live in `sim` only. Both are `Copy`, `Send` and `Sync`, keep no
 //! state between calls, and take `&self`, so threads can share one.

@@ -12,8 +12,10 @@
 //!    route there;
 //! 2. the held block stands on another block's target and can leave the stack's cells:
 //!    move it to the nearest free cell outside them;
-//! 3. some block not placed can reach its target: pick the one with the shortest route
-//!    (then the lowest place in the goal) and route it (rule 1 goes on with it);
+//! 3. some block not placed can reach its target: pick one and route it (rule 1 goes on
+//!    with it). Which one is the policy's *order*: the one with the shortest route (then
+//!    the lowest in the goal), or the lowest in the goal, or the highest. Placing the
+//!    nearest block first can wall off another's straight route; another order avoids it;
 //! 4. some block on another block's target can leave: pick the one with the shortest way
 //!    out (rule 2 goes on with it);
 //! 5. otherwise the policy is stuck at `P`.
@@ -25,13 +27,22 @@
 //!
 //! # Choosing the placement
 //!
-//! [`Oracle::plan`] rolls the policy out for every placement and keeps the shortest plan;
-//! equally short plans go to the placement nearest the blocks' centroid (the paper's rule).
-//! Placements are tried in order of the exact solver's lower bound, and one whose bound is
-//! no shorter than the best plan so far is skipped, so usually one or two are rolled out.
+//! [`Oracle::plan`] rolls the policy out for every placement and order and keeps the
+//! shortest plan; equally short plans go to the placement nearest the blocks' centroid
+//! (the paper's rule). Placements are tried in order of the exact solver's lower bound, and
+//! one whose bound is no shorter than the best plan so far is skipped, so usually one or
+//! two rollouts are made.
 //!
-//! Each rule's choice depends only on the state, and a stretch, cut after any of its
-//! actions, is finished by the same rule from there. So the plan from the state after the
+//! SPEC section 8 places the stack at the cell nearest the centroid. That cell is not
+//! where a shortest plan builds in general: it ignores that a block left where it stands
+//! needs no pick, and that routes bend around blocks. So the centroid only breaks ties
+//! here, and plan length decides (`cargo run --release -p oracle --example
+//! optimality_gap` prints how close to the optimum that comes).
+//!
+//! Each rule's choice depends only on the state (for a given placement and order), and a
+//! stretch, cut after any of its actions, is finished by the same rule from there: the
+//! held block keeps the priority, and the nearest free cell off the stack stays the
+//! nearest as the block walks towards it. So the plan from the state after the
 //! first action is the rest of this plan or a shorter one, and following
 //! [`Oracle::next_action`] from any state reaches the goal in at most `plan(..).len()`
 //! steps, wherever control is handed over.
@@ -113,8 +124,8 @@ impl Oracle {
         }
     }
 
-    /// The shortest routing-policy plan over every placement, `None` if the policy is stuck
-    /// at all of them; `state` and `goal` have been checked.
+    /// The shortest routing-policy plan over every placement and block order, `None` if the
+    /// policy is stuck at all of them; `state` and `goal` have been checked.
     fn routed_plan(&self, state: &State, goal: &Goal) -> Result<Option<Plan>> {
         let world = GridWorld::new(self.grid, *state)?;
         let mut placements: Vec<(u32, u64, Placement)> = Placement::all(self.grid, goal.block_count())
@@ -123,12 +134,14 @@ impl Oracle {
         placements.sort_unstable_by_key(|&(bound, centroid, p)| (bound, centroid, p.bottom, p.column));
         let mut best: Option<Vec<Action>> = None;
         for (bound, _, placement) in placements {
-            if best.as_ref().is_some_and(|b| bound as usize >= b.len()) {
-                continue;
-            }
-            if let Some(actions) = rollout(world, goal, placement) {
-                if best.as_ref().is_none_or(|b| actions.len() < b.len()) {
-                    best = Some(actions);
+            for order in Order::ALL {
+                if best.as_ref().is_some_and(|b| bound as usize >= b.len()) {
+                    break;
+                }
+                if let Some(actions) = rollout(world, goal, placement, order) {
+                    if best.as_ref().is_none_or(|b| actions.len() < b.len()) {
+                        best = Some(actions);
+                    }
                 }
             }
         }
@@ -136,12 +149,28 @@ impl Oracle {
     }
 }
 
-/// The routing policy's actions from `world` to the goal at `placement`, or `None` if it
-/// gets stuck.
-fn rollout(mut world: GridWorld, goal: &Goal, placement: Placement) -> Option<Vec<Action>> {
+/// Which block rule 3 of the routing policy places first.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Order {
+    /// The one with the shortest route (then the lowest in the goal).
+    Nearest,
+    /// The lowest in the goal.
+    BottomUp,
+    /// The highest in the goal.
+    TopDown,
+}
+
+impl Order {
+    /// Every order, in the order the oracle tries them.
+    const ALL: [Order; 3] = [Order::Nearest, Order::BottomUp, Order::TopDown];
+}
+
+/// The routing policy's actions from `world` to the goal at `placement`, placing blocks in
+/// `order`, or `None` if it gets stuck.
+fn rollout(mut world: GridWorld, goal: &Goal, placement: Placement, order: Order) -> Option<Vec<Action>> {
     let mut actions = Vec::new();
     while !goal.holds(world.state_ref()) {
-        let stretch = next_stretch(&world, goal, placement)?;
+        let stretch = next_stretch(&world, goal, placement, order)?;
         for &a in &stretch {
             world.act(a).expect("planned actions name existing blocks");
         }
@@ -151,7 +180,7 @@ fn rollout(mut world: GridWorld, goal: &Goal, placement: Placement) -> Option<Ve
 }
 
 /// The next stretch of actions of the routing policy (module docs), or `None` if stuck.
-fn next_stretch(world: &GridWorld, goal: &Goal, placement: Placement) -> Option<Vec<Action>> {
+fn next_stretch(world: &GridWorld, goal: &Goal, placement: Placement, order: Order) -> Option<Vec<Action>> {
     let state = world.state_ref();
     let target = |b: BlockId| placement.target(goal, b);
     let unplaced = |b: &BlockId| state.cell(*b) != target(*b);
@@ -168,29 +197,43 @@ fn next_stretch(world: &GridWorld, goal: &Goal, placement: Placement) -> Option<
             }
         }
     }
-    // Rule 3: place the block with the shortest route; a block's Manhattan distance bounds
-    // its route from below, so blocks farther than the best route so far are not routed.
+    // Rule 3: place a block that can reach its target, chosen as `order` says.
     let mut candidates: Vec<BlockId> = state
         .blocks()
         .filter(unplaced)
         .filter(|&b| !world.is_occupied(target(b)))
         .collect();
-    candidates.sort_by_key(|&b| (state.cell(b).manhattan(target(b)), goal.place_of(b)));
     let mut best: Option<(BlockId, Vec<Action>)> = None;
-    for b in candidates {
-        if best
-            .as_ref()
-            .is_some_and(|(_, path)| state.cell(b).manhattan(target(b)) as usize > path.len())
-        {
-            break;
-        }
-        if let Some(path) = route::route(world, b, target(b)) {
-            let better = best
-                .as_ref()
-                .is_none_or(|(c, p)| (path.len(), goal.place_of(b)) < (p.len(), goal.place_of(*c)));
-            if better {
-                best = Some((b, path));
+    match order {
+        Order::Nearest => {
+            // A block's Manhattan distance bounds its route from below, so blocks farther
+            // than the best route so far are not routed.
+            candidates.sort_by_key(|&b| (state.cell(b).manhattan(target(b)), goal.place_of(b)));
+            for b in candidates {
+                if best
+                    .as_ref()
+                    .is_some_and(|(_, path)| state.cell(b).manhattan(target(b)) as usize > path.len())
+                {
+                    break;
+                }
+                if let Some(path) = route::route(world, b, target(b)) {
+                    let better = best
+                        .as_ref()
+                        .is_none_or(|(c, p)| (path.len(), goal.place_of(b)) < (p.len(), goal.place_of(*c)));
+                    if better {
+                        best = Some((b, path));
+                    }
+                }
             }
+        }
+        Order::BottomUp | Order::TopDown => {
+            candidates.sort_by_key(|&b| goal.place_of(b));
+            if order == Order::TopDown {
+                candidates.reverse();
+            }
+            best = candidates
+                .into_iter()
+                .find_map(|b| route::route(world, b, target(b)).map(|path| (b, path)));
         }
     }
     // Rule 4: take a wrong block off the stack's cells.

@@ -1,89 +1,112 @@
 //! Routes for one block over the occupancy grid, the other blocks standing still as
 //! obstacles. Every step is taken with [`sim::World::act`] on a [`GridWorld`], so the
 //! routes obey the world's rules by construction.
+//!
+//! Both searches index cells by [`Grid::index`] into fixed arrays instead of hashing
+//! states: the oracle routes a few dozen times per plan, and hashing and allocation were
+//! most of its time.
 
-use std::hash::{Hash, Hasher};
+use sim::{Action, BlockId, Cell, Effect, Grid, GridWorld, MAX_CELLS, World};
 
-use pathfinding::directed::astar::astar;
-use pathfinding::directed::dijkstra::{build_path, dijkstra_all};
-use sim::{Action, BlockId, Cell, Effect, Grid, GridWorld, World};
+/// Marks a cell not reached yet.
+const UNSEEN: u16 = u16::MAX;
 
-/// A world in which one block is held and moving; only that block's cell tells two of
-/// them apart, since nothing else moves while it is routed.
-#[derive(Clone, Copy, Debug)]
-struct Moving {
-    world: GridWorld,
-    block: BlockId,
+/// The four moves.
+const MOVES: [Action; 4] = [Action::Up, Action::Down, Action::Left, Action::Right];
+
+/// Per-cell search records: the best number of moves found to reach each cell, and the
+/// cell it was reached from.
+struct Records {
+    moves: [u16; MAX_CELLS],
+    from: [u8; MAX_CELLS],
 }
 
-impl Moving {
-    fn cell(&self) -> Cell {
-        self.world.state_ref().cell(self.block)
+impl Records {
+    fn new() -> Self {
+        Self {
+            moves: [UNSEEN; MAX_CELLS],
+            from: [0; MAX_CELLS],
+        }
     }
 
-    /// The worlds one move away, by the rules.
-    fn next(&self) -> impl Iterator<Item = (Moving, u32)> + use<> {
-        let this = *self;
-        [Action::Up, Action::Down, Action::Left, Action::Right]
-            .into_iter()
-            .filter_map(move |a| {
-                let mut world = this.world;
-                (world.act(a) == Ok(Effect::Moved)).then_some((Moving { world, ..this }, 1))
-            })
-    }
-}
-
-impl PartialEq for Moving {
-    fn eq(&self, other: &Self) -> bool {
-        self.cell() == other.cell()
-    }
-}
-
-impl Eq for Moving {}
-
-impl Hash for Moving {
-    fn hash<H: Hasher>(&self, state: &mut H) {
-        self.cell().hash(state);
+    /// The moves from the start to the cell with index `end`.
+    fn path(&self, grid: Grid, start: Cell, end: usize) -> Vec<Action> {
+        let mut actions = Vec::with_capacity(usize::from(self.moves[end]));
+        let mut at = end;
+        while grid.cell_at(at) != start {
+            let prev = usize::from(self.from[at]);
+            let (a, b) = (grid.cell_at(prev), grid.cell_at(at));
+            actions.push(
+                match (i16::from(b.x) - i16::from(a.x), i16::from(b.y) - i16::from(a.y)) {
+                    (0, 1) => Action::Up,
+                    (0, -1) => Action::Down,
+                    (-1, 0) => Action::Left,
+                    _ => Action::Right,
+                },
+            );
+            at = prev;
+        }
+        actions.reverse();
+        actions
     }
 }
 
 /// `world` with `block` held (picked if it was not).
-fn holding(world: &GridWorld, block: BlockId) -> Moving {
+fn holding(world: &GridWorld, block: BlockId) -> GridWorld {
     let mut world = *world;
     world.act(Action::Pick(block)).expect("the block exists");
-    Moving { world, block }
+    world
 }
 
-/// The moves along a path of worlds.
-fn moves(path: &[Moving]) -> Vec<Action> {
-    path.windows(2)
-        .map(|w| {
-            let (a, b) = (w[0].cell(), w[1].cell());
-            match (i16::from(b.x) - i16::from(a.x), i16::from(b.y) - i16::from(a.y)) {
-                (0, 1) => Action::Up,
-                (0, -1) => Action::Down,
-                (-1, 0) => Action::Left,
-                _ => Action::Right,
-            }
-        })
-        .collect()
+/// The worlds one move of the held `block` away, by the rules.
+fn next(world: GridWorld) -> impl Iterator<Item = GridWorld> {
+    MOVES.into_iter().filter_map(move |a| {
+        let mut w = world;
+        (w.act(a) == Ok(Effect::Moved)).then_some(w)
+    })
 }
 
-/// A shortest sequence of moves taking `block` to `target` around the other blocks (A*
-/// with the Manhattan distance), or `None` if they wall it off. The moves assume `block` is
-/// held; the caller adds the pick.
+/// A shortest sequence of moves taking `block` to `target` around the other blocks, or
+/// `None` if they wall it off. The moves assume `block` is held; the caller adds the pick.
+///
+/// A* with the Manhattan distance: a move changes it by one, so `f = moves + distance`
+/// stays the same on a move towards the target and grows by two on a move away. Two
+/// stacks, the current `f` and the next, make the priority queue.
 pub(crate) fn route(world: &GridWorld, block: BlockId, target: Cell) -> Option<Vec<Action>> {
-    let start = holding(world, block);
-    if start.cell() != target && world.is_occupied(target) {
+    let grid = world.grid();
+    let start = world.state_ref().cell(block);
+    if start != target && world.is_occupied(target) {
         return None;
     }
-    let (path, _) = astar(
-        &start,
-        Moving::next,
-        |m| m.cell().manhattan(target),
-        |m| m.cell() == target,
-    )?;
-    Some(moves(&path))
+    let mut records = Records::new();
+    let goal = grid.index(target);
+    records.moves[grid.index(start)] = 0;
+    let (mut current, mut later) = (vec![holding(world, block)], Vec::new());
+    while !current.is_empty() {
+        while let Some(w) = current.pop() {
+            let here = w.state_ref().cell(block);
+            let i = grid.index(here);
+            if i == goal {
+                return Some(records.path(grid, start, goal));
+            }
+            let g = records.moves[i] + 1;
+            for n in next(w) {
+                let cell = n.state_ref().cell(block);
+                let j = grid.index(cell);
+                if g < records.moves[j] {
+                    records.moves[j] = g;
+                    records.from[j] = i as u8;
+                    if cell.manhattan(target) < here.manhattan(target) {
+                        current.push(n);
+                    } else {
+                        later.push(n);
+                    }
+                }
+            }
+        }
+        std::mem::swap(&mut current, &mut later);
+    }
+    None
 }
 
 /// The moves taking `block` to the nearest cell it can reach for which `wanted` is true
@@ -91,12 +114,37 @@ pub(crate) fn route(world: &GridWorld, block: BlockId, target: Cell) -> Option<V
 /// change as the block walks the returned path: every other candidate stays at least as
 /// far, and ties keep going the same way.
 pub(crate) fn to_nearest(world: &GridWorld, block: BlockId, wanted: impl Fn(Cell) -> bool) -> Option<Vec<Action>> {
-    let start = holding(world, block);
-    let grid: Grid = world.grid();
-    let reached = dijkstra_all(&start, Moving::next);
-    let (goal, _) = reached
-        .iter()
-        .filter(|(m, _)| wanted(m.cell()))
-        .min_by_key(|(m, (_, cost))| (*cost, grid.index(m.cell())))?;
-    Some(moves(&build_path(goal, &reached)))
+    let grid = world.grid();
+    let start = world.state_ref().cell(block);
+    let mut records = Records::new();
+    records.moves[grid.index(start)] = 0;
+    // Breadth first, level by level, so each level's wanted cells can be compared by index.
+    let mut level = vec![holding(world, block)];
+    let mut depth = 0;
+    while !level.is_empty() {
+        let best = level
+            .iter()
+            .map(|w| w.state_ref().cell(block))
+            .filter(|&c| c != start && wanted(c))
+            .map(|c| grid.index(c))
+            .min();
+        if let Some(end) = best {
+            return Some(records.path(grid, start, end));
+        }
+        depth += 1;
+        let mut deeper = Vec::new();
+        for w in level {
+            let i = grid.index(w.state_ref().cell(block));
+            for n in next(w) {
+                let j = grid.index(n.state_ref().cell(block));
+                if records.moves[j] == UNSEEN {
+                    records.moves[j] = depth;
+                    records.from[j] = i as u8;
+                    deeper.push(n);
+                }
+            }
+        }
+        level = deeper;
+    }
+    None
 }
