@@ -1,3 +1,4 @@
 //! Experiments.
 
+pub mod plots;
 pub mod stats;
