@@ -26,6 +26,15 @@ pub enum AgentError {
     /// A learner or training configuration that cannot work (names the setting).
     #[error("invalid configuration: {0}")]
     Config(String),
+    /// A demonstration recording that cannot be read or written (names the file, and the
+    /// line when one is at fault).
+    #[error("demonstrations {path}: {reason}")]
+    Demos {
+        /// The file.
+        path: String,
+        /// What is wrong.
+        reason: String,
+    },
 }
 
 /// Shorthand for results whose error is an [`AgentError`].

@@ -6,7 +6,12 @@
 //! - [`QAgent`]: tabular Q-learning over one of the [`repr`] state representations, trained
 //!   by [`train`](train::train) / [`Trainer`], saved and loaded as [`model`] files.
 //! - [`optimality`]: steps taken against the exact solver's shortest plans.
+//! - [`correction`]: learning from a demonstrator's corrections, simulated [`demonstrator`]s,
+//!   and [`demos`] recordings and their replay.
 
+pub mod correction;
+pub mod demonstrator;
+pub mod demos;
 pub mod error;
 pub mod model;
 pub mod optimality;
@@ -18,6 +23,9 @@ pub mod repr;
 pub mod rollout;
 pub mod train;
 
+pub use correction::{CorrectionConfig, CorrectionRule, CorrectionSession, Corrected, correct};
+pub use demonstrator::{Demonstrator, DemonstratorProfile};
+pub use demos::{BadLines, DemoRecord, DemoSink, DemoWriter};
 pub use error::{AgentError, Result};
 pub use planner_policy::{ExactPolicy, OraclePolicy};
 pub use policy::{Policy, RandomPolicy};

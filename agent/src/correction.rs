@@ -1,0 +1,571 @@
+//! Learning from a demonstrator's corrections (paper section VI-C), and the session loop that
+//! people (`blockstack demo`) and simulated demonstrators (`blockstack correct`) share.
+//!
+//! # The learning rule
+//!
+//! A demonstrator watches the agent play and may replace the action the agent proposes with
+//! its own, `a_E`. Each executed step `(s, a, r, s')` is learnt from as follows:
+//!
+//! 1. **Q-update.** The ordinary Q-learning update of [`QAgent::update`] with the executed
+//!    action: `Q(s,a) <- (1 - alpha) Q(s,a) + alpha (r + gamma max_a' Q(s',a'))`. For a
+//!    correction `a = a_E`, the demonstrator's action. The agent's own steps are learnt from
+//!    too when [`CorrectionRule::learn_agent_steps`] is set (the default: the paper's table
+//!    "is updated during the demonstrations").
+//! 2. **Large margin** (corrections only), in the spirit of DQfD (Hester et al. 2018), whose
+//!    loss `max_a [Q(s,a) + l(a_E,a)] - Q(s,a_E)` is zero exactly when the demonstrator's
+//!    action beats every other by the margin `l`. A table can meet that directly: after the
+//!    update, `Q(s,a_E) <- max(Q(s,a_E), max_{a != a_E} Q(s,a) + margin)`. Only `Q(s,a_E)`
+//!    moves, and only upward, so the greedy action in `s` becomes `a_E` and stays so until
+//!    later learning says otherwise. The margin is [`CorrectionRule::margin`] (default
+//!    [`DEFAULT_MARGIN`], 0.8; 0 only breaks ties in `a_E`'s favour).
+//!
+//! With the paper's `chasing` representation many world states share one table row, so a
+//! correction in one state changes the agent's choice in every state that looks the same to
+//! it, on other goals too (Tables III and IV measure that).
+//!
+//! # Sessions
+//!
+//! [`CorrectionSession`] plays episodes of an agent, proposes the agent's action for each
+//! state, executes it or a correction, learns by the rule above, and records every step to a
+//! [`DemoSink`] (a JSON Lines file: [`crate::demos`]). [`correct`] runs a session with a
+//! simulated [`Demonstrator`] headless, fixed by a seed.
+
+use serde::{Deserialize, Serialize};
+use sim::seeding::{SimRng, episode_seed};
+use sim::{Action, Backend, Env, EnvConfig, Goal, GoalSpec, Grid, Observation, RewardModel};
+
+use crate::demonstrator::{Demonstrator, DemonstratorProfile};
+use crate::demos::{DemoRecord, DemoSink, EpisodeLine, SessionLine, StepLine};
+use crate::error::{AgentError, Result};
+use crate::qlearning::{QAgent, check_epsilon};
+use crate::rollout::policy_rng;
+
+/// The default margin by which a demonstrator's action is made to beat every other.
+pub const DEFAULT_MARGIN: f64 = 0.8;
+
+/// How an agent learns from a demonstration session (module docs: the rule).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CorrectionRule {
+    /// After a correction, `Q(s, a_E)` is raised to at least `max_{a != a_E} Q(s, a) +
+    /// margin`; finite and at least 0.
+    pub margin: f64,
+    /// Whether the agent's own (uncorrected) steps get the Q-update too.
+    pub learn_agent_steps: bool,
+}
+
+impl Default for CorrectionRule {
+    /// Margin 0.8, learning from every step.
+    fn default() -> Self {
+        CorrectionRule {
+            margin: DEFAULT_MARGIN,
+            learn_agent_steps: true,
+        }
+    }
+}
+
+impl CorrectionRule {
+    /// An error unless the margin is finite and not negative.
+    pub fn validate(&self) -> Result<()> {
+        if self.margin.is_finite() && self.margin >= 0.0 {
+            Ok(())
+        } else {
+            Err(AgentError::Config(format!(
+                "the margin {} is not a finite number at least 0",
+                self.margin
+            )))
+        }
+    }
+
+    /// Learns from one executed step: `action` taken in `obs` gave `reward` and led to
+    /// `next` (`terminated`: the goal holds there); `corrected` when a demonstrator chose
+    /// `action`. Returns the new Q(obs, action).
+    pub fn learn(
+        &self,
+        agent: &mut QAgent,
+        obs: &Observation,
+        action: Action,
+        reward: f64,
+        next: &Observation,
+        terminated: bool,
+        corrected: bool,
+    ) -> Result<f32> {
+        if corrected || self.learn_agent_steps {
+            agent.update(obs, action, reward, next, terminated)?;
+        }
+        if corrected {
+            raise_to_margin(agent, obs, action, self.margin)
+        } else {
+            agent.q(obs, action)
+        }
+    }
+}
+
+/// The large-margin step: raises `Q(obs, action)` to at least `max_{a != action} Q(obs, a) +
+/// margin` (computed in f64, stored as f32) and returns it. Other entries are untouched.
+pub fn raise_to_margin(agent: &mut QAgent, obs: &Observation, action: Action, margin: f64) -> Result<f32> {
+    let key = agent.key(obs)?;
+    let column = agent.column(&obs.goal, action)?;
+    let row = agent.table_mut().row_mut(key);
+    let best_other = row
+        .iter()
+        .enumerate()
+        .filter(|&(c, _)| c != column)
+        .map(|(_, &v)| v)
+        .fold(f32::NEG_INFINITY, f32::max);
+    let floor = (f64::from(best_other) + margin) as f32;
+    if row[column] < floor {
+        row[column] = floor;
+    }
+    Ok(row[column])
+}
+
+/// The world a session plays in, beside the agent's grid and block count.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SessionWorld {
+    /// The reward the agent learns from (use the one it was trained with).
+    pub reward: RewardModel,
+    /// Steps before an episode is cut off.
+    pub horizon: u32,
+    /// The backend the episodes are played in.
+    pub backend: Backend,
+}
+
+impl SessionWorld {
+    /// The world `agent` was trained in (its reward, horizon and backend), or the paper's
+    /// reward, horizon 1000 and physics for an agent that does not say.
+    pub fn of(agent: &QAgent) -> SessionWorld {
+        match agent.training() {
+            Some(t) => SessionWorld {
+                reward: t.reward,
+                horizon: sim::DEFAULT_HORIZON,
+                backend: t.backend,
+            },
+            None => SessionWorld {
+                reward: RewardModel::from_name("paper").expect("a known model"),
+                horizon: sim::DEFAULT_HORIZON,
+                backend: Backend::Physics,
+            },
+        }
+    }
+}
+
+/// What one step of a session did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SessionStep {
+    /// The agent's proposal.
+    pub proposed: Action,
+    /// The action executed.
+    pub action: Action,
+    /// Whether a demonstrator chose `action`.
+    pub corrected: bool,
+    /// The reward.
+    pub reward: f64,
+    /// The goal holds after the step.
+    pub terminated: bool,
+    /// The horizon was reached without the goal.
+    pub truncated: bool,
+}
+
+/// Totals of a session.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SessionReport {
+    /// Episodes begun.
+    pub episodes: u64,
+    /// Of those, episodes that reached the goal.
+    pub successes: u64,
+    /// Steps executed.
+    pub steps: u64,
+    /// Of those, steps a demonstrator chose.
+    pub corrections: u64,
+}
+
+/// An agent playing episodes under a demonstrator's eye, learning as it goes (module docs).
+///
+/// Episode `k` of a session with seed `seed` plays `goals[k % goals.len()]` from the start
+/// `reset(episode_seed(seed, k))`, and the agent draws its proposals from
+/// [`policy_rng`]`(episode_seed(seed, k))` with probability `epsilon` of a random action.
+/// Every line is handed to the sink as it happens.
+pub struct CorrectionSession<S: DemoSink> {
+    agent: QAgent,
+    rule: CorrectionRule,
+    world: SessionWorld,
+    goals: Vec<Goal>,
+    seed: u64,
+    epsilon: f64,
+    sink: S,
+    report: SessionReport,
+    /// The current episode: its number, environment and the agent's generator.
+    episode: Option<(u64, Env, SimRng)>,
+    /// The agent's proposal for the current state, drawn once per state.
+    proposal: Option<Action>,
+}
+
+impl<S: DemoSink> CorrectionSession<S> {
+    /// A session of `agent` on `goals`; writes the session header to `sink`. `demonstrator`
+    /// and `model` are recorded as given (who corrects, which model file).
+    #[allow(clippy::too_many_arguments, reason = "each is one documented setting of the session")]
+    pub fn new(
+        agent: QAgent,
+        rule: CorrectionRule,
+        world: SessionWorld,
+        goals: Vec<Goal>,
+        seed: u64,
+        epsilon: f64,
+        demonstrator: &str,
+        model: Option<&str>,
+        mut sink: S,
+    ) -> Result<Self> {
+        rule.validate()?;
+        check_epsilon(epsilon)?;
+        if goals.is_empty() {
+            return Err(AgentError::Config("no goals to demonstrate on".into()));
+        }
+        for goal in &goals {
+            env_config(&agent, &world, *goal).validate()?;
+        }
+        sink.record(&DemoRecord::Session(SessionLine::new(
+            agent.grid(),
+            agent.blocks(),
+            rule,
+            demonstrator,
+            model,
+        )))?;
+        Ok(CorrectionSession {
+            agent,
+            rule,
+            world,
+            goals,
+            seed,
+            epsilon,
+            sink,
+            report: SessionReport::default(),
+            episode: None,
+            proposal: None,
+        })
+    }
+
+    /// The agent as corrected so far.
+    pub fn agent(&self) -> &QAgent {
+        &self.agent
+    }
+
+    /// The rule.
+    pub fn rule(&self) -> &CorrectionRule {
+        &self.rule
+    }
+
+    /// The goals, played in turn.
+    pub fn goals(&self) -> &[Goal] {
+        &self.goals
+    }
+
+    /// Totals so far.
+    pub fn report(&self) -> &SessionReport {
+        &self.report
+    }
+
+    /// The number of the current episode (from 0), if one has begun.
+    pub fn episode_number(&self) -> Option<u64> {
+        self.episode.as_ref().map(|(k, _, _)| *k)
+    }
+
+    /// The current observation, if an episode has begun.
+    pub fn observation(&self) -> Option<Observation> {
+        self.episode.as_ref().map(|(_, env, _)| env.observation())
+    }
+
+    /// Steps taken in the current episode.
+    pub fn steps(&self) -> u32 {
+        self.episode.as_ref().map_or(0, |(_, env, _)| env.steps())
+    }
+
+    /// Whether no episode is under way (none begun, or the current one ended).
+    pub fn is_over(&self) -> bool {
+        self.episode.as_ref().is_none_or(|(_, env, _)| env.is_over())
+    }
+
+    /// The agent's proposal for the current state (`None` when no episode is under way).
+    pub fn proposal(&self) -> Option<Action> {
+        self.proposal
+    }
+
+    /// Begins the next episode (abandoning the current one, if any) and returns its first
+    /// observation.
+    pub fn next_episode(&mut self) -> Result<Observation> {
+        let k = self.episode.as_ref().map_or(0, |(k, _, _)| k + 1);
+        let goal = self.goals[(k % self.goals.len() as u64) as usize];
+        let seed = episode_seed(self.seed, k);
+        let mut env = Env::new(env_config(&self.agent, &self.world, goal))?;
+        let obs = env.reset(seed);
+        self.sink.record(&DemoRecord::Episode(EpisodeLine::new(k, seed, &obs)))?;
+        self.episode = Some((k, env, policy_rng(seed)));
+        self.report.episodes += 1;
+        self.propose()?;
+        Ok(obs)
+    }
+
+    /// Draws the agent's proposal for the current state.
+    fn propose(&mut self) -> Result<()> {
+        self.proposal = match &mut self.episode {
+            Some((_, env, rng)) if !env.is_over() => {
+                Some(self.agent.choose_action(&env.observation(), self.epsilon, rng)?)
+            }
+            _ => None,
+        };
+        Ok(())
+    }
+
+    /// Executes one step: the demonstrator's `correction` if given, the agent's proposal
+    /// otherwise; learns from it and records it. An error if no episode is under way.
+    pub fn step(&mut self, correction: Option<Action>) -> Result<SessionStep> {
+        let (Some((k, env, _)), Some(proposed)) = (&mut self.episode, self.proposal) else {
+            return Err(AgentError::Config(
+                "no episode is under way: begin the next one first".into(),
+            ));
+        };
+        let obs = env.observation();
+        let action = correction.unwrap_or(proposed);
+        let step = env.step(action)?;
+        let corrected = correction.is_some();
+        self.rule.learn(
+            &mut self.agent,
+            &obs,
+            action,
+            step.reward,
+            &step.observation,
+            step.terminated,
+            corrected,
+        )?;
+        let line = StepLine::new(*k, &obs, proposed, action, corrected, &step);
+        self.sink.record(&DemoRecord::Step(line))?;
+        self.report.steps += 1;
+        self.report.corrections += u64::from(corrected);
+        self.report.successes += u64::from(step.terminated);
+        self.propose()?;
+        Ok(SessionStep {
+            proposed,
+            action,
+            corrected,
+            reward: step.reward,
+            terminated: step.terminated,
+            truncated: step.truncated,
+        })
+    }
+
+    /// Ends the session: the corrected agent, the sink, and the totals.
+    pub fn finish(self) -> (QAgent, S, SessionReport) {
+        (self.agent, self.sink, self.report)
+    }
+}
+
+/// The environment of an episode on `goal`.
+fn env_config(agent: &QAgent, world: &SessionWorld, goal: Goal) -> EnvConfig {
+    EnvConfig {
+        grid: agent.grid(),
+        blocks: agent.blocks(),
+        goal: GoalSpec::Fixed(goal),
+        horizon: world.horizon,
+        reward: world.reward,
+        backend: world.backend,
+    }
+}
+
+/// Everything that defines a headless correction run by a simulated demonstrator.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CorrectionConfig {
+    /// Who corrects.
+    pub demonstrator: DemonstratorProfile,
+    /// The goals demonstrated on, in turn (the paper: 4 of the 6).
+    pub goals: Vec<Goal>,
+    /// Demonstrations (episodes) to give (the paper: 10 per demonstrator).
+    pub demos: u64,
+    /// The seed of the starts, the agent's proposals and the demonstrator's choices.
+    pub seed: u64,
+    /// How the agent learns.
+    pub rule: CorrectionRule,
+    /// The agent's probability of a random proposal (the paper's test policy: 0.1).
+    pub epsilon: f64,
+    /// The world's reward, horizon and backend (`None`: [`SessionWorld::of`] the agent).
+    pub world: Option<SessionWorld>,
+}
+
+impl CorrectionConfig {
+    /// `demos` demonstrations by `demonstrator` on `goals`, seed `seed`, the default rule,
+    /// proposals with epsilon 0.1, in the agent's own world.
+    pub fn new(demonstrator: DemonstratorProfile, goals: Vec<Goal>, demos: u64, seed: u64) -> Self {
+        CorrectionConfig {
+            demonstrator,
+            goals,
+            demos,
+            seed,
+            rule: CorrectionRule::default(),
+            epsilon: 0.1,
+            world: None,
+        }
+    }
+}
+
+/// The outcome of [`correct`].
+#[derive(Clone, Debug)]
+pub struct Corrected<S> {
+    /// The corrected agent.
+    pub agent: QAgent,
+    /// Totals of the session.
+    pub report: SessionReport,
+    /// The sink the session was recorded to, e.g. a `Vec<DemoRecord>` holding every line.
+    pub sink: S,
+}
+
+/// Lets a simulated demonstrator correct `agent` for `config.demos` episodes and returns the
+/// corrected agent; every line goes to `sink` (`()` records nothing, a `Vec<DemoRecord>`
+/// keeps them, a [`DemoWriter`](crate::demos::DemoWriter) writes a file). Fixed by
+/// `config.seed`: the same inputs give the same table, bit for bit. Prints nothing, and
+/// runs on the caller's thread, so many can run at once.
+pub fn correct<S: DemoSink>(agent: QAgent, config: &CorrectionConfig, sink: S) -> Result<Corrected<S>> {
+    config.demonstrator.validate()?;
+    let world = config.world.unwrap_or_else(|| SessionWorld::of(&agent));
+    let grid: Grid = agent.grid();
+    let mut session = CorrectionSession::new(
+        agent,
+        config.rule,
+        world,
+        config.goals.clone(),
+        config.seed,
+        config.epsilon,
+        &config.demonstrator.name,
+        None,
+        sink,
+    )?;
+    let mut demonstrator = Demonstrator::new(config.demonstrator.clone(), grid);
+    for _ in 0..config.demos {
+        let obs = session.next_episode()?;
+        let k = session.episode_number().expect("an episode has begun");
+        demonstrator.begin_episode(&obs, episode_seed(config.seed, k));
+        while !session.is_over() {
+            let obs = session.observation().expect("an episode is under way");
+            let proposed = session.proposal().expect("an episode is under way");
+            let correction = demonstrator.review(&obs, proposed)?;
+            session.step(correction)?;
+        }
+    }
+    let (agent, sink, report) = session.finish();
+    Ok(Corrected { agent, report, sink })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::qlearning::QParams;
+    use crate::repr::ReprKind;
+    use proptest::prelude::*;
+    use sim::BlockId;
+
+    fn agent() -> QAgent {
+        QAgent::new(ReprKind::Chasing, Grid::default(), 3, QParams::default()).unwrap()
+    }
+
+    fn obs() -> Observation {
+        let goal: Goal = "0,1,2".parse().unwrap();
+        let mut env = Env::new(EnvConfig::with_goal(goal)).unwrap();
+        env.reset(4)
+    }
+
+    #[test]
+    fn the_margin_puts_the_demonstrators_action_on_top_by_the_margin() {
+        let mut a = agent();
+        let o = obs();
+        a.set_q(&o, Action::Up, 3.0).unwrap();
+        a.set_q(&o, Action::Drop, 7.5).unwrap();
+        a.set_q(&o, Action::Left, -2.0).unwrap();
+        let before = a.q_values(&o).unwrap();
+        let q = raise_to_margin(&mut a, &o, Action::Left, 0.8).unwrap();
+        assert_eq!(q, 8.3);
+        let after = a.q_values(&o).unwrap();
+        for (i, (x, y)) in before.iter().zip(&after).enumerate() {
+            if i != Action::Left.index() {
+                assert_eq!(x, y, "only Q(s, a_E) moves");
+            }
+        }
+        let mut rng = sim::seeding::rng(0);
+        assert_eq!(a.greedy_action(&o, &mut rng).unwrap(), Action::Left);
+    }
+
+    #[test]
+    fn the_margin_never_lowers_a_value_already_ahead() {
+        let mut a = agent();
+        let o = obs();
+        a.set_q(&o, Action::Pick(BlockId(2)), 20.0).unwrap();
+        a.set_q(&o, Action::Up, 1.0).unwrap();
+        assert_eq!(raise_to_margin(&mut a, &o, Action::Pick(BlockId(2)), 0.8).unwrap(), 20.0);
+        // A zero margin only breaks the tie with the best other action.
+        a.set_q(&o, Action::Down, 1.0).unwrap();
+        assert_eq!(raise_to_margin(&mut a, &o, Action::Down, 0.0).unwrap(), 20.0);
+    }
+
+    #[test]
+    fn a_correction_gets_the_q_update_then_the_margin() {
+        let goal: Goal = "0,1,2".parse().unwrap();
+        let mut env = Env::new(EnvConfig {
+            reward: RewardModel::from_name("paper").unwrap(),
+            ..EnvConfig::with_goal(goal)
+        })
+        .unwrap();
+        let o = env.reset(4);
+        let step = env.step(Action::Pick(BlockId(0))).unwrap();
+        let rule = CorrectionRule::default();
+        // Uncorrected with learn_agent_steps off: nothing changes.
+        let mut a = agent();
+        let quiet = CorrectionRule {
+            learn_agent_steps: false,
+            ..rule
+        };
+        quiet
+            .learn(&mut a, &o, Action::Pick(BlockId(0)), 5.0, &step.observation, false, false)
+            .unwrap();
+        assert_eq!(a, agent());
+        // A correction: the update gives r + gamma * 0 = 5, above every other (0) by more
+        // than the margin, so the margin changes nothing.
+        let q = rule
+            .learn(&mut a, &o, Action::Pick(BlockId(0)), 5.0, &step.observation, false, true)
+            .unwrap();
+        assert_eq!(q, 5.0);
+        // A correction whose update leaves it behind: raised to best other + margin.
+        a.set_q(&o, Action::Up, 9.0).unwrap();
+        let q = rule.learn(&mut a, &o, Action::Drop, -1.0, &o, false, true).unwrap();
+        assert_eq!(q, (9.0f64 + 0.8) as f32);
+    }
+
+    #[test]
+    fn a_negative_or_infinite_margin_is_refused() {
+        for margin in [-0.1, f64::INFINITY, f64::NAN] {
+            let rule = CorrectionRule {
+                margin,
+                ..CorrectionRule::default()
+            };
+            assert!(rule.validate().is_err());
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn after_a_correction_the_demonstrators_action_leads_by_the_margin(
+            values in proptest::collection::vec(-100.0f32..100.0, 8),
+            column in 0usize..8,
+            margin in 0.0f64..5.0,
+        ) {
+            let mut a = agent();
+            let o = obs();
+            for (i, &v) in values.iter().enumerate() {
+                a.set_q(&o, Action::from_index(i, 3).unwrap(), v).unwrap();
+            }
+            let chosen = Action::from_index(column, 3).unwrap();
+            raise_to_margin(&mut a, &o, chosen, margin).unwrap();
+            let q = a.q_values(&o).unwrap();
+            let best_other = q.iter().enumerate().filter(|&(i, _)| i != column).map(|(_, &v)| v).fold(f32::MIN, f32::max);
+            prop_assert!(q[column] >= values[column]);
+            prop_assert!(q[column] >= (f64::from(best_other) + margin) as f32);
+            prop_assert!(q[column] == values[column] || q[column] == (f64::from(best_other) + margin) as f32);
+        }
+    }
+}
