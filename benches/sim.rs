@@ -12,12 +12,19 @@ use sim::{Action, Backend, Env, EnvConfig, Grid, GridWorld, PhysicsWorld, VecEnv
 /// Random actions of a world with `blocks` blocks.
 fn random_actions(blocks: usize, count: usize) -> Vec<Action> {
     let mut rng = sim::seeding::rng(42);
-    (0..count).map(|_| Action::from_index(rng.random_range(0..Action::count(blocks)), blocks).unwrap()).collect()
+    (0..count)
+        .map(|_| Action::from_index(rng.random_range(0..Action::count(blocks)), blocks).unwrap())
+        .collect()
 }
 
 /// A start state of `blocks` blocks on `grid`.
 fn start(grid: Grid, blocks: usize) -> sim::State {
-    let config = EnvConfig { grid, blocks, backend: Backend::Grid, ..EnvConfig::default() };
+    let config = EnvConfig {
+        grid,
+        blocks,
+        backend: Backend::Grid,
+        ..EnvConfig::default()
+    };
     Env::new(config).unwrap().reset(1).state
 }
 
@@ -53,7 +60,13 @@ fn env_step(c: &mut Criterion) {
     for (blocks, grid) in [(3, Grid::default()), (8, Grid::new(8, 8).unwrap())] {
         let actions = random_actions(blocks, 1 << 16);
         for backend in [Backend::Grid, Backend::Physics] {
-            let mut env = Env::new(EnvConfig { grid, blocks, backend, ..EnvConfig::default() }).unwrap();
+            let mut env = Env::new(EnvConfig {
+                grid,
+                blocks,
+                backend,
+                ..EnvConfig::default()
+            })
+            .unwrap();
             env.reset(1);
             let mut i = 0;
             group.bench_function(BenchmarkId::new(backend.to_string(), blocks), |b| {
@@ -74,7 +87,11 @@ fn env_step(c: &mut Criterion) {
 fn reset(c: &mut Criterion) {
     let mut group = c.benchmark_group("reset");
     for backend in [Backend::Grid, Backend::Physics] {
-        let mut env = Env::new(EnvConfig { backend, ..EnvConfig::default() }).unwrap();
+        let mut env = Env::new(EnvConfig {
+            backend,
+            ..EnvConfig::default()
+        })
+        .unwrap();
         let mut seed = 0;
         group.bench_function(backend.to_string(), |b| {
             b.iter(|| {
@@ -90,7 +107,10 @@ fn vec_step(c: &mut Criterion) {
     const ENVS: usize = 64;
     let mut group = c.benchmark_group("vec_step");
     group.throughput(Throughput::Elements(ENVS as u64));
-    let batches: Vec<Vec<Action>> = random_actions(3, 64 * ENVS).chunks(ENVS).map(<[Action]>::to_vec).collect();
+    let batches: Vec<Vec<Action>> = random_actions(3, 64 * ENVS)
+        .chunks(ENVS)
+        .map(<[Action]>::to_vec)
+        .collect();
     for threads in [1, 2] {
         let mut v = VecEnv::new(EnvConfig::default(), ENVS, threads).unwrap();
         v.reset(0);

@@ -4,7 +4,10 @@ use std::path::PathBuf;
 use std::process::{Command, Output};
 
 fn blockstack(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_blockstack")).args(args).output().expect("the binary runs")
+    Command::new(env!("CARGO_BIN_EXE_blockstack"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
 }
 
 fn stdout(o: &Output) -> String {
@@ -25,7 +28,20 @@ fn scratch(name: &str) -> PathBuf {
 
 #[test]
 fn run_reports_failures_and_steps_as_json() {
-    let o = blockstack(&["run", "--agent", "random", "--blocks", "2", "--goal", "0,1", "--episodes", "20", "--seed", "7", "--json"]);
+    let o = blockstack(&[
+        "run",
+        "--agent",
+        "random",
+        "--blocks",
+        "2",
+        "--goal",
+        "0,1",
+        "--episodes",
+        "20",
+        "--seed",
+        "7",
+        "--json",
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
     assert_eq!(v["episodes"], 20);
@@ -34,8 +50,35 @@ fn run_reports_failures_and_steps_as_json() {
     assert!(v["median_steps"].as_f64().unwrap() > 1.0);
     assert_eq!(v["agent"], "random");
     // Same seed, same figures; both backends play the same episodes.
-    assert_eq!(stdout(&blockstack(&["run", "--blocks", "2", "--goal", "0,1", "--episodes", "20", "--seed", "7", "--json"])), stdout(&o));
-    let grid = blockstack(&["run", "--blocks", "2", "--goal", "0,1", "--episodes", "20", "--seed", "7", "--backend", "grid", "--json"]);
+    assert_eq!(
+        stdout(&blockstack(&[
+            "run",
+            "--blocks",
+            "2",
+            "--goal",
+            "0,1",
+            "--episodes",
+            "20",
+            "--seed",
+            "7",
+            "--json"
+        ])),
+        stdout(&o)
+    );
+    let grid = blockstack(&[
+        "run",
+        "--blocks",
+        "2",
+        "--goal",
+        "0,1",
+        "--episodes",
+        "20",
+        "--seed",
+        "7",
+        "--backend",
+        "grid",
+        "--json",
+    ]);
     let g: serde_json::Value = serde_json::from_str(&stdout(&grid)).unwrap();
     assert_eq!((&g["failures"], &g["mean_steps"]), (&v["failures"], &v["mean_steps"]));
 }
@@ -56,16 +99,30 @@ fn the_same_seed_writes_the_same_trajectory_byte_for_byte() {
     let (a, b) = (dir.join("a.jsonl"), dir.join("b.jsonl"));
     for path in [&a, &b] {
         let o = blockstack(&[
-            "run", "--blocks", "3", "--goal", "1,0,2", "--episodes", "3", "--seed", "11", "--horizon", "50",
-            "--trajectory", path.to_str().unwrap(),
+            "run",
+            "--blocks",
+            "3",
+            "--goal",
+            "1,0,2",
+            "--episodes",
+            "3",
+            "--seed",
+            "11",
+            "--horizon",
+            "50",
+            "--trajectory",
+            path.to_str().unwrap(),
         ]);
         assert!(o.status.success(), "{}", stderr(&o));
     }
     let (ta, tb) = (std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
     assert_eq!(ta, tb);
     // The documented format: a header per episode, then one line per step counted from 1.
-    let lines: Vec<serde_json::Value> =
-        String::from_utf8(ta).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    let lines: Vec<serde_json::Value> = String::from_utf8(ta)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
     assert_eq!(lines[0]["type"], "episode");
     assert_eq!(lines[0]["grid"], serde_json::json!([7, 7]));
     assert_eq!(lines[0]["goal"], serde_json::json!([1, 0, 2]));
@@ -73,12 +130,23 @@ fn the_same_seed_writes_the_same_trajectory_byte_for_byte() {
     assert_eq!(lines[0]["start"].as_array().unwrap().len(), 3);
     assert_eq!(lines[1]["type"], "step");
     assert_eq!(lines[1]["step"], 1);
-    for key in ["episode", "action", "blocks", "held", "reward", "terminated", "truncated"] {
+    for key in [
+        "episode",
+        "action",
+        "blocks",
+        "held",
+        "reward",
+        "terminated",
+        "truncated",
+    ] {
         assert!(lines[1].get(key).is_some(), "missing {key}");
     }
     assert_eq!(lines.iter().filter(|l| l["type"] == "episode").count(), 3);
     // Each episode ends with a terminated or truncated step.
-    let ends = lines.iter().filter(|l| l["terminated"] == true || l["truncated"] == true).count();
+    let ends = lines
+        .iter()
+        .filter(|l| l["terminated"] == true || l["truncated"] == true)
+        .count();
     assert_eq!(ends, 3);
 }
 
@@ -86,7 +154,18 @@ fn the_same_seed_writes_the_same_trajectory_byte_for_byte() {
 fn render_writes_a_png_and_prints_ascii() {
     let dir = scratch("render");
     let png = dir.join("world.png");
-    let o = blockstack(&["render", "--blocks", "3", "--goal", "0,1,2", "--seed", "7", "--out", png.to_str().unwrap(), "--ascii"]);
+    let o = blockstack(&[
+        "render",
+        "--blocks",
+        "3",
+        "--goal",
+        "0,1,2",
+        "--seed",
+        "7",
+        "--out",
+        png.to_str().unwrap(),
+        "--ascii",
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let img = image::open(&png).unwrap().to_rgb8();
     assert!(img.width() >= 7 * 48 && img.height() >= 7 * 48);
@@ -101,15 +180,24 @@ fn bad_input_gets_one_line_and_exit_status_2() {
         (&["run", "--goal", "0,1"], "goal 0,1"),
         (&["run", "--goal", "0,1,x"], "not a block number"),
         (&["run", "--blocks", "8"], "taller than the grid"),
-        (&["run", "--blocks", "3", "--grid", "1x3"], "at least one cell must stay free"),
+        (
+            &["run", "--blocks", "3", "--grid", "1x3"],
+            "at least one cell must stay free",
+        ),
         (&["run", "--blocks", "1"], "1 blocks is not allowed"),
         (&["run", "--grid", "0x7"], "grid 0x7"),
         (&["run", "--grid", "seven"], "WxH"),
         (&["run", "--horizon", "0"], "horizon"),
         (&["run", "--reward", "lots"], "reward model"),
         (&["run", "--backend", "box2d"], "physics or grid"),
-        (&["run", "--episodes", "1", "--trajectory", "/nonexistent-dir/t.jsonl"], "cannot write /nonexistent-dir/t.jsonl"),
-        (&["render", "--out", "/nonexistent-dir/w.png"], "cannot write /nonexistent-dir/w.png"),
+        (
+            &["run", "--episodes", "1", "--trajectory", "/nonexistent-dir/t.jsonl"],
+            "cannot write /nonexistent-dir/t.jsonl",
+        ),
+        (
+            &["render", "--out", "/nonexistent-dir/w.png"],
+            "cannot write /nonexistent-dir/w.png",
+        ),
     ];
     for (args, needle) in cases {
         let o = blockstack(args);
