@@ -22,13 +22,13 @@ use std::path::Path;
 
 use serde::ser::{SerializeTuple, Serializer};
 use serde::{Deserialize, Serialize};
-use sim::Grid;
 use sim::files::{AtomicWriter, write_error};
+use sim::{Action, Grid};
 
 use crate::error::{AgentError, Result};
 use crate::qlearning::{QAgent, QParams};
 use crate::qtable::QTable;
-use crate::repr::ReprKind;
+use crate::repr::{Repr, ReprKind, Representation};
 use crate::train::TrainConfig;
 
 /// The `format` field of every model file.
@@ -201,6 +201,21 @@ impl QAgent {
             return Err(fail(
                 "the table does not match its checksum: the file is corrupt".into(),
             ));
+        }
+        // The shape comes from the representation, not from the file, before anything is
+        // allocated.
+        let repr = Repr::new(model.repr, model.grid, model.blocks).map_err(|e| fail(e.to_string()))?;
+        if t.keys != repr.key_count() || t.columns != Action::count(model.blocks) {
+            return Err(fail(format!(
+                "the table has {} keys and {} columns, but a {} table for {} blocks on {} has {} and {}",
+                t.keys,
+                t.columns,
+                model.repr,
+                model.blocks,
+                model.grid,
+                repr.key_count(),
+                Action::count(model.blocks)
+            )));
         }
         let mut table = QTable::new(t.keys, t.columns, t.initial);
         let mut previous = None;

@@ -104,8 +104,8 @@ impl QAgent {
         })
     }
 
-    /// Reassembles an agent from its parts (a model file's); an error if the table does not
-    /// have the representation's shape.
+    /// Reassembles an agent from its parts (a model file's, whose table the reader has
+    /// checked has the representation's shape).
     pub(crate) fn from_parts(
         kind: ReprKind,
         grid: Grid,
@@ -116,15 +116,10 @@ impl QAgent {
     ) -> Result<QAgent> {
         params.validate()?;
         let repr = Repr::new(kind, grid, blocks)?;
-        if table.key_count() != repr.key_count() || table.columns() != Action::count(blocks) {
-            return Err(AgentError::ModelMismatch(format!(
-                "a {kind} table for {blocks} blocks on {grid} has {} keys and {} columns, not {} and {}",
-                repr.key_count(),
-                Action::count(blocks),
-                table.key_count(),
-                table.columns()
-            )));
-        }
+        debug_assert_eq!(
+            (table.key_count(), table.columns()),
+            (repr.key_count(), Action::count(blocks))
+        );
         Ok(QAgent {
             repr,
             grid,

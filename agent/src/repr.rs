@@ -13,7 +13,7 @@
 use std::fmt;
 
 use serde::{Deserialize, Serialize};
-use sim::{Action, BlockId, Goal, Grid, State};
+use sim::{Action, BlockId, Goal, Grid, MAX_BLOCKS, MIN_BLOCKS, State};
 
 use crate::error::{AgentError, Result};
 
@@ -111,7 +111,16 @@ impl KeySpace {
         KeySpace(self.0.and_then(|n| n.checked_mul(size)))
     }
 
+    /// The key count; an error for an unsupported block count or a count beyond u64.
     fn count(self, kind: ReprKind, grid: Grid, blocks: usize) -> Result<u64> {
+        if !(MIN_BLOCKS..=MAX_BLOCKS).contains(&blocks) {
+            return Err(sim::SimError::BadBlockCount {
+                count: blocks,
+                min: MIN_BLOCKS,
+                max: MAX_BLOCKS,
+            }
+            .into());
+        }
         self.0.ok_or_else(|| {
             AgentError::Config(format!(
                 "the {kind} representation of {blocks} blocks on a {grid} grid has more states than a table can number"

@@ -337,11 +337,18 @@ fn bad_model_files_are_clear_errors() {
     assert!(load("flipped.json", &flipped).contains("checksum"));
     // A table of another shape than its representation's.
     let reshaped = text.replacen("\"repr\":\"role\"", "\"repr\":\"chasing\"", 1);
-    let message = load("reshaped.json", &reshaped);
-    assert!(
-        message.contains("does not fit") || message.contains("inconsistent"),
-        "{message}"
-    );
+    assert!(load("reshaped.json", &reshaped).contains("but a chasing table for 3 blocks"));
+    // Shapes are checked against the representation before anything is allocated.
+    let empty = |blocks: usize, columns: u64| {
+        format!(
+            r#"{{"format":"blockstack-q-agent","version":1,"grid":{{"width":7,"height":7}},"blocks":{blocks},"repr":"role","params":{{"alpha":1.0,"gamma":0.1,"epsilon":0.1,"initial_q":0.0}},"training":null,"table":{{"keys":470596,"columns":{columns},"initial":0.0,"rows":[],"checksum":0}}}}"#
+        )
+    };
+    let fine = temp_path("empty.json");
+    std::fs::write(&fine, empty(3, 8)).unwrap();
+    assert!(QAgent::load(&fine).is_ok());
+    assert!(load("huge.json", &empty(3, 1_000_000_000_000)).contains("1000000000000 columns"));
+    assert!(load("blocks.json", &empty(40, 45)).contains("40 blocks is not allowed"));
     let missing = temp_path("no-such-model.json");
     assert!(
         QAgent::load(&missing)
