@@ -4,6 +4,7 @@
 //! The work lives in the crates re-exported here; [`cli`] is the command line over them.
 
 pub mod cli;
+pub mod tui;
 
 pub use agent;
 pub use oracle;

@@ -77,28 +77,42 @@ impl CorrectionRule {
         }
     }
 
-    /// Learns from one executed step: `action` taken in `obs` gave `reward` and led to
-    /// `next` (`terminated`: the goal holds there); `corrected` when a demonstrator chose
-    /// `action`. Returns the new Q(obs, action).
-    pub fn learn(
-        &self,
-        agent: &mut QAgent,
-        obs: &Observation,
-        action: Action,
-        reward: f64,
-        next: &Observation,
-        terminated: bool,
-        corrected: bool,
-    ) -> Result<f32> {
+    /// Learns from one executed step; returns the new Q(obs, action).
+    pub fn learn(&self, agent: &mut QAgent, step: &Experience) -> Result<f32> {
+        let Experience {
+            obs,
+            action,
+            reward,
+            next,
+            terminated,
+            corrected,
+        } = *step;
         if corrected || self.learn_agent_steps {
-            agent.update(obs, action, reward, next, terminated)?;
+            agent.update(&obs, action, reward, &next, terminated)?;
         }
         if corrected {
-            raise_to_margin(agent, obs, action, self.margin)
+            raise_to_margin(agent, &obs, action, self.margin)
         } else {
-            agent.q(obs, action)
+            agent.q(&obs, action)
         }
     }
+}
+
+/// One executed step, as the rule learns from it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Experience {
+    /// The state it was taken in.
+    pub obs: Observation,
+    /// The executed action.
+    pub action: Action,
+    /// The reward.
+    pub reward: f64,
+    /// The state it led to.
+    pub next: Observation,
+    /// The goal holds in `next`.
+    pub terminated: bool,
+    /// A demonstrator chose `action`.
+    pub corrected: bool,
 }
 
 /// The large-margin step: raises `Q(obs, action)` to at least `max_{a != action} Q(obs, a) +
@@ -298,7 +312,8 @@ impl<S: DemoSink> CorrectionSession<S> {
         let seed = episode_seed(self.seed, k);
         let mut env = Env::new(env_config(&self.agent, &self.world, goal))?;
         let obs = env.reset(seed);
-        self.sink.record(&DemoRecord::Episode(EpisodeLine::new(k, seed, &obs)))?;
+        self.sink
+            .record(&DemoRecord::Episode(EpisodeLine::new(k, seed, &obs)))?;
         self.episode = Some((k, env, policy_rng(seed)));
         self.report.episodes += 1;
         self.propose()?;
@@ -330,12 +345,14 @@ impl<S: DemoSink> CorrectionSession<S> {
         let corrected = correction.is_some();
         self.rule.learn(
             &mut self.agent,
-            &obs,
-            action,
-            step.reward,
-            &step.observation,
-            step.terminated,
-            corrected,
+            &Experience {
+                obs,
+                action,
+                reward: step.reward,
+                next: step.observation,
+                terminated: step.terminated,
+                corrected,
+            },
         )?;
         let line = StepLine::new(*k, &obs, proposed, action, corrected, &step);
         self.sink.record(&DemoRecord::Step(line))?;
@@ -497,7 +514,10 @@ mod tests {
         let o = obs();
         a.set_q(&o, Action::Pick(BlockId(2)), 20.0).unwrap();
         a.set_q(&o, Action::Up, 1.0).unwrap();
-        assert_eq!(raise_to_margin(&mut a, &o, Action::Pick(BlockId(2)), 0.8).unwrap(), 20.0);
+        assert_eq!(
+            raise_to_margin(&mut a, &o, Action::Pick(BlockId(2)), 0.8).unwrap(),
+            20.0
+        );
         // A zero margin only breaks the tie with the best other action.
         a.set_q(&o, Action::Down, 1.0).unwrap();
         assert_eq!(raise_to_margin(&mut a, &o, Action::Down, 0.0).unwrap(), 20.0);
@@ -520,19 +540,39 @@ mod tests {
             learn_agent_steps: false,
             ..rule
         };
-        quiet
-            .learn(&mut a, &o, Action::Pick(BlockId(0)), 5.0, &step.observation, false, false)
-            .unwrap();
+        let pick = Experience {
+            obs: o,
+            action: Action::Pick(BlockId(0)),
+            reward: 5.0,
+            next: step.observation,
+            terminated: false,
+            corrected: false,
+        };
+        quiet.learn(&mut a, &pick).unwrap();
         assert_eq!(a, agent());
         // A correction: the update gives r + gamma * 0 = 5, above every other (0) by more
         // than the margin, so the margin changes nothing.
         let q = rule
-            .learn(&mut a, &o, Action::Pick(BlockId(0)), 5.0, &step.observation, false, true)
+            .learn(
+                &mut a,
+                &Experience {
+                    corrected: true,
+                    ..pick
+                },
+            )
             .unwrap();
         assert_eq!(q, 5.0);
         // A correction whose update leaves it behind: raised to best other + margin.
         a.set_q(&o, Action::Up, 9.0).unwrap();
-        let q = rule.learn(&mut a, &o, Action::Drop, -1.0, &o, false, true).unwrap();
+        let drop = Experience {
+            obs: o,
+            action: Action::Drop,
+            reward: -1.0,
+            next: o,
+            terminated: false,
+            corrected: true,
+        };
+        let q = rule.learn(&mut a, &drop).unwrap();
         assert_eq!(q, (9.0f64 + 0.8) as f32);
     }
 

@@ -170,7 +170,7 @@ impl Demonstrator {
         let mut after = GridWorld::new(self.grid, obs.state)?;
         after.act(proposed)?;
         let after = *after.state_ref();
-        let loops = notices_loops && self.recent.iter().any(|s| *s == after);
+        let loops = notices_loops && self.recent.contains(&after);
         let off_path = looks && !obs.goal.holds(&after) && {
             let now = self.distance(&obs.state, &obs.goal)?;
             self.distance(&after, &obs.goal)? + 1 != now

@@ -38,7 +38,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use sim::{Action, Cell, Goal, Grid, Observation, State, Step};
 
-use crate::correction::CorrectionRule;
+use crate::correction::{CorrectionRule, Experience};
 use crate::error::{AgentError, Result};
 use crate::qlearning::QAgent;
 
@@ -166,7 +166,14 @@ pub struct StepLine {
 impl StepLine {
     /// The line of `step`, the outcome of `action` (proposed: `proposed`) taken in `obs`
     /// in episode `episode`.
-    pub fn new(episode: u64, obs: &Observation, proposed: Action, action: Action, correction: bool, step: &Step) -> Self {
+    pub fn new(
+        episode: u64,
+        obs: &Observation,
+        proposed: Action,
+        action: Action,
+        correction: bool,
+        step: &Step,
+    ) -> Self {
         StepLine {
             episode,
             step: step.info.steps,
@@ -424,7 +431,10 @@ impl<'a> Replay<'a> {
     fn bad(&mut self, e: LineError) -> Result<()> {
         let line = self.report.lines;
         if e.fatal || self.policy == BadLines::Fail {
-            return Err(demos_error(Path::new(&self.name), &format!("line {line}: {}", e.reason)));
+            return Err(demos_error(
+                Path::new(&self.name),
+                &format!("line {line}: {}", e.reason),
+            ));
         }
         self.report.bad_lines.push(BadLine { line, reason: e.reason });
         Ok(())
@@ -484,7 +494,17 @@ impl<'a> Replay<'a> {
                         fatal: false,
                     });
                 }
-                rule.learn(self.agent, &obs, action, s.reward, &next, s.terminated, s.correction)?;
+                rule.learn(
+                    self.agent,
+                    &Experience {
+                        obs,
+                        action,
+                        reward: s.reward,
+                        next,
+                        terminated: s.terminated,
+                        corrected: s.correction,
+                    },
+                )?;
                 self.report.steps += 1;
                 self.report.corrections += usize::from(s.correction);
             }

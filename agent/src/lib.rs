@@ -23,7 +23,7 @@ pub mod repr;
 pub mod rollout;
 pub mod train;
 
-pub use correction::{CorrectionConfig, CorrectionRule, CorrectionSession, Corrected, correct};
+pub use correction::{Corrected, CorrectionConfig, CorrectionRule, CorrectionSession, correct};
 pub use demonstrator::{Demonstrator, DemonstratorProfile};
 pub use demos::{BadLines, DemoRecord, DemoSink, DemoWriter};
 pub use error::{AgentError, Result};

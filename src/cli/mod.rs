@@ -3,7 +3,10 @@
 
 use clap::{Parser, Subcommand};
 
+mod correct;
+mod demo;
 mod eval;
+mod learn_from_demos;
 mod render;
 mod run;
 mod solve;
@@ -32,6 +35,12 @@ pub enum Command {
     Train(train::TrainArgs),
     /// Evaluate a model on seeded starts, per goal and overall.
     Eval(eval::EvalArgs),
+    /// Watch a trained agent play in the terminal and correct it; it learns from each correction.
+    Demo(demo::DemoArgs),
+    /// Let a simulated demonstrator (1, 2 or 3) correct a trained agent, headless.
+    Correct(correct::CorrectArgs),
+    /// Apply a recorded demonstration session to a model, headless.
+    LearnFromDemos(learn_from_demos::LearnFromDemosArgs),
 }
 
 /// Carries out `cli`'s command.
@@ -42,5 +51,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Solve(args) => solve::solve(args),
         Command::Train(args) => train::train(args),
         Command::Eval(args) => eval::eval(args),
+        Command::Demo(args) => demo::demo(args),
+        Command::Correct(args) => correct::correct(args),
+        Command::LearnFromDemos(args) => learn_from_demos::learn_from_demos(args),
     }
 }

@@ -1,0 +1,85 @@
+//! `blockstack correct`: a simulated demonstrator corrects a trained agent, headless.
+
+use std::path::PathBuf;
+
+use agent::correction::{CorrectionConfig, DEFAULT_MARGIN};
+use agent::{DemoWriter, DemonstratorProfile, QAgent};
+use anyhow::{Context, Result};
+use clap::Args;
+use sim::Goal;
+
+use super::demo::rule;
+use super::train::parse_goals;
+
+/// Arguments of `blockstack correct`.
+#[derive(Debug, Args)]
+pub struct CorrectArgs {
+    /// The trained model to correct.
+    #[arg(long)]
+    pub model: PathBuf,
+    /// The simulated demonstrator: 1 (careful expert), 2 (attentive amateur) or 3
+    /// (distracted); see the agent crate's `demonstrator` docs for their parameters.
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=3))]
+    pub demonstrator: u8,
+    /// Demonstrations (episodes) to give.
+    #[arg(long, default_value_t = 10)]
+    pub demos: u64,
+    /// Goals to demonstrate on, in turn, separated by ':' (default: every goal).
+    #[arg(long)]
+    pub goals: Option<String>,
+    /// Seed of the starts, the agent's proposals and the demonstrator's choices.
+    #[arg(long, default_value_t = 3)]
+    pub seed: u64,
+    /// Where to write the corrected model.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Append every step to this JSON Lines file, as it happens.
+    #[arg(long)]
+    pub record: Option<PathBuf>,
+    /// After a correction, the demonstrated action is raised to at least the best other
+    /// action's value plus this margin.
+    #[arg(long, default_value_t = DEFAULT_MARGIN)]
+    pub margin: f64,
+    /// Learn only from corrections, not from the agent's own steps.
+    #[arg(long)]
+    pub corrections_only: bool,
+    /// Probability that the agent proposes a random action (the paper's test policy: 0.1).
+    #[arg(long, default_value_t = 0.1)]
+    pub epsilon: f64,
+}
+
+/// Corrects, saves, and reports.
+pub fn correct(args: CorrectArgs) -> Result<()> {
+    let agent = QAgent::load(&args.model)?;
+    let goals = parse_goals(args.goals.as_deref(), agent.blocks())?;
+    let profile = DemonstratorProfile::preset(args.demonstrator)?;
+    let config = CorrectionConfig {
+        rule: rule(args.margin, args.corrections_only)?,
+        epsilon: args.epsilon,
+        ..CorrectionConfig::new(profile.clone(), goals.clone(), args.demos, args.seed)
+    };
+    let record = args.record.as_deref().map(DemoWriter::append).transpose()?;
+    let corrected = agent::correct(agent, &config, record)?;
+    corrected
+        .agent
+        .save(&args.out)
+        .context("the agent was corrected but not saved")?;
+    let r = corrected.report;
+    let goals: Vec<String> = goals.iter().map(Goal::to_string).collect();
+    println!(
+        "demonstrator {} ({}) gave {} demonstrations on {} (seed {}): {} steps, {} corrections, {} reached the goal",
+        args.demonstrator,
+        profile.name,
+        r.episodes,
+        goals.join(":"),
+        args.seed,
+        r.steps,
+        r.corrections,
+        r.successes
+    );
+    println!("saved {}", args.out.display());
+    if let Some(path) = &args.record {
+        println!("recorded to {}", path.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,49 @@
+//! `blockstack learn-from-demos`: apply a recorded demonstration session to a model,
+//! headless.
+
+use std::path::PathBuf;
+
+use agent::QAgent;
+use agent::demos::{BadLines, learn_from_file};
+use anyhow::{Context, Result};
+use clap::Args;
+
+/// Arguments of `blockstack learn-from-demos`.
+#[derive(Debug, Args)]
+pub struct LearnFromDemosArgs {
+    /// The recording (JSON Lines, as `demo --record` and `correct --record` write it).
+    pub demos: PathBuf,
+    /// The model the recorded sessions started from.
+    #[arg(long)]
+    pub model: PathBuf,
+    /// Where to write the model after learning.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// A line that cannot be used: skip (report it with its number and use the rest) or
+    /// fail (stop, writing nothing).
+    #[arg(long, default_value = "skip")]
+    pub on_bad_line: BadLines,
+}
+
+/// Replays, saves, and reports.
+pub fn learn_from_demos(args: LearnFromDemosArgs) -> Result<()> {
+    let mut agent = QAgent::load(&args.model)?;
+    let report = learn_from_file(&mut agent, &args.demos, args.on_bad_line)?;
+    for bad in &report.bad_lines {
+        eprintln!("{}:{}: skipped: {}", args.demos.display(), bad.line, bad.reason);
+    }
+    agent
+        .save(&args.out)
+        .context("the demonstrations were learnt but the model not saved")?;
+    println!(
+        "learnt from {} steps ({} corrections) in {} episodes of {} sessions; {} of {} lines skipped",
+        report.steps,
+        report.corrections,
+        report.episodes,
+        report.sessions,
+        report.bad_lines.len(),
+        report.lines
+    );
+    println!("saved {}", args.out.display());
+    Ok(())
+}

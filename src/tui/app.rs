@@ -1,0 +1,413 @@
+//! The state machine of `blockstack demo`, with no terminal in it: what each key does and
+//! what the agent does on each tick.
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use agent::correction::{CorrectionSession, SessionStep};
+use agent::{DemoSink, QAgent};
+use ratatui::crossterm::event::{KeyCode, KeyEvent, KeyEventKind, KeyModifiers};
+use sim::{Action, BlockId};
+
+/// The agent's paces, in steps per second, slowest first.
+pub const PACES: [f64; 8] = [0.5, 1.0, 2.0, 4.0, 8.0, 15.0, 30.0, 60.0];
+
+/// The pace a session starts at (an index into [`PACES`]): 2 steps per second.
+pub const DEFAULT_PACE: usize = 2;
+
+/// What a person can ask for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Command {
+    /// Let the agent play faster (`+`).
+    Faster,
+    /// Slower (`-`).
+    Slower,
+    /// Pause or resume the agent (space).
+    TogglePause,
+    /// Take this action instead of the agent's (arrows, digits, `d`).
+    Override(Action),
+    /// Pick a block that does not exist (a digit too large): explained, nothing done.
+    NoSuchBlock(u32),
+    /// Abandon the episode and begin the next (`n`).
+    NextEpisode,
+    /// Save and quit (`q`, Esc, Ctrl-C).
+    Quit,
+}
+
+/// The command a key press asks for, if any.
+pub fn command_for(key: KeyEvent, blocks: usize) -> Option<Command> {
+    if key.kind == KeyEventKind::Release {
+        return None;
+    }
+    Some(match key.code {
+        KeyCode::Char('c') if key.modifiers.contains(KeyModifiers::CONTROL) => Command::Quit,
+        KeyCode::Char('+' | '=') => Command::Faster,
+        KeyCode::Char('-' | '_') => Command::Slower,
+        KeyCode::Char(' ') | KeyCode::Char('p') => Command::TogglePause,
+        KeyCode::Up => Command::Override(Action::Up),
+        KeyCode::Down => Command::Override(Action::Down),
+        KeyCode::Left => Command::Override(Action::Left),
+        KeyCode::Right => Command::Override(Action::Right),
+        KeyCode::Char('d') => Command::Override(Action::Drop),
+        KeyCode::Char(c @ '0'..='9') => {
+            let i = c.to_digit(10).expect("a digit");
+            if (i as usize) < blocks {
+                Command::Override(Action::Pick(BlockId(i as u8)))
+            } else {
+                Command::NoSuchBlock(i)
+            }
+        }
+        KeyCode::Char('n') => Command::NextEpisode,
+        KeyCode::Char('q') | KeyCode::Esc => Command::Quit,
+        _ => return None,
+    })
+}
+
+/// Where and how often the corrected model is saved.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SavePolicy {
+    /// The model file written (atomically).
+    pub path: PathBuf,
+    /// Save after every this many corrections (and on quitting); 0: only on quitting.
+    pub every: u64,
+}
+
+/// A demonstration session in a terminal: the session, the pace, and what to tell the
+/// person.
+pub struct DemoApp<S: DemoSink> {
+    session: CorrectionSession<S>,
+    save: SavePolicy,
+    pace: usize,
+    paused: bool,
+    quit: bool,
+    /// Corrections when the model was last saved.
+    saved_at: u64,
+    /// Corrections in the current episode.
+    episode_corrections: u64,
+    /// The last step, to show what happened.
+    last: Option<SessionStep>,
+    /// One line about the last thing that happened.
+    message: String,
+}
+
+impl<S: DemoSink> DemoApp<S> {
+    /// Begins the first episode of `session`, the agent playing at [`DEFAULT_PACE`].
+    pub fn new(mut session: CorrectionSession<S>, save: SavePolicy) -> agent::Result<Self> {
+        session.next_episode()?;
+        Ok(DemoApp {
+            session,
+            save,
+            pace: DEFAULT_PACE,
+            paused: false,
+            quit: false,
+            saved_at: 0,
+            episode_corrections: 0,
+            last: None,
+            message: "The agent plays; step in with the arrows, a digit or d.".into(),
+        })
+    }
+
+    /// The session.
+    pub fn session(&self) -> &CorrectionSession<S> {
+        &self.session
+    }
+
+    /// The agent as corrected so far.
+    pub fn agent(&self) -> &QAgent {
+        self.session.agent()
+    }
+
+    /// The agent's pace in steps per second.
+    pub fn pace(&self) -> f64 {
+        PACES[self.pace]
+    }
+
+    /// The time between two of the agent's steps.
+    pub fn tick_interval(&self) -> Duration {
+        Duration::from_secs_f64(1.0 / self.pace())
+    }
+
+    /// Whether the agent is paused.
+    pub fn is_paused(&self) -> bool {
+        self.paused
+    }
+
+    /// Whether the person asked to quit.
+    pub fn should_quit(&self) -> bool {
+        self.quit
+    }
+
+    /// Corrections in the current episode.
+    pub fn episode_corrections(&self) -> u64 {
+        self.episode_corrections
+    }
+
+    /// The last step taken.
+    pub fn last_step(&self) -> Option<&SessionStep> {
+        self.last.as_ref()
+    }
+
+    /// One line about the last thing that happened.
+    pub fn message(&self) -> &str {
+        &self.message
+    }
+
+    /// Where the model is saved.
+    pub fn save_policy(&self) -> &SavePolicy {
+        &self.save
+    }
+
+    /// Carries out a person's command. Errors are the session's (a recording that cannot
+    /// be written, a model that cannot be saved).
+    pub fn handle(&mut self, command: Command) -> agent::Result<()> {
+        match command {
+            Command::Faster => {
+                self.pace = (self.pace + 1).min(PACES.len() - 1);
+                self.message = format!("Pace: {} steps per second.", self.pace());
+            }
+            Command::Slower => {
+                self.pace = self.pace.saturating_sub(1);
+                self.message = format!("Pace: {} steps per second.", self.pace());
+            }
+            Command::TogglePause => {
+                self.paused = !self.paused;
+                self.message = if self.paused {
+                    "Paused: step in with the arrows, a digit or d; space resumes.".into()
+                } else {
+                    "Resumed.".into()
+                };
+            }
+            Command::NoSuchBlock(i) => {
+                self.message = format!(
+                    "There is no block {i}: the blocks are 0 to {}.",
+                    self.agent().blocks() - 1
+                );
+            }
+            Command::Override(action) => {
+                if self.session.is_over() {
+                    self.message = "The episode is over: n begins the next.".into();
+                } else {
+                    let proposed = self.session.proposal();
+                    self.take(Some(action))?;
+                    self.message = match proposed {
+                        Some(p) if p == action => format!("You confirmed {action}; the agent learnt it."),
+                        Some(p) => format!("You chose {action} instead of {p}; the agent learnt it."),
+                        None => format!("You chose {action}."),
+                    };
+                    self.describe_end();
+                }
+            }
+            Command::NextEpisode => {
+                self.begin_next()?;
+                self.message = "Next episode.".into();
+            }
+            Command::Quit => {
+                self.save_model()?;
+                self.quit = true;
+            }
+        }
+        Ok(())
+    }
+
+    /// What the agent does when its time comes: its proposed step, or the next episode
+    /// after one has ended. Nothing while paused.
+    pub fn tick(&mut self) -> agent::Result<()> {
+        if self.paused || self.quit {
+            return Ok(());
+        }
+        if self.session.is_over() {
+            self.begin_next()?;
+            self.message = "Next episode.".into();
+        } else {
+            self.take(None)?;
+            self.describe_end();
+        }
+        Ok(())
+    }
+
+    fn take(&mut self, correction: Option<Action>) -> agent::Result<()> {
+        let step = self.session.step(correction)?;
+        if step.corrected {
+            self.episode_corrections += 1;
+            let corrections = self.session.report().corrections;
+            if self.save.every > 0 && corrections - self.saved_at >= self.save.every {
+                self.save_model()?;
+            }
+        }
+        self.last = Some(step);
+        Ok(())
+    }
+
+    fn begin_next(&mut self) -> agent::Result<()> {
+        self.session.next_episode()?;
+        self.episode_corrections = 0;
+        self.last = None;
+        Ok(())
+    }
+
+    fn describe_end(&mut self) {
+        if let Some(step) = self.last.filter(|s| s.terminated || s.truncated) {
+            let steps = self.session.steps();
+            self.message = if step.terminated {
+                format!("Goal reached in {steps} steps. The next episode follows (n: now).")
+            } else {
+                format!("Cut off after {steps} steps. The next episode follows (n: now).")
+            };
+        }
+    }
+
+    /// Saves the corrected model, atomically.
+    pub fn save_model(&mut self) -> agent::Result<()> {
+        self.session.agent().save(&self.save.path)?;
+        self.saved_at = self.session.report().corrections;
+        self.message = format!(
+            "Saved the corrected model to {} ({} corrections).",
+            self.save.path.display(),
+            self.saved_at
+        );
+        Ok(())
+    }
+
+    /// Ends the app: the session's agent, sink and totals.
+    pub fn finish(self) -> (QAgent, S, agent::correction::SessionReport) {
+        self.session.finish()
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use agent::correction::{CorrectionRule, SessionWorld};
+    use agent::{DemoRecord, QParams, ReprKind};
+    use sim::{Goal, Grid};
+
+    fn key(code: KeyCode) -> KeyEvent {
+        KeyEvent::new(code, KeyModifiers::NONE)
+    }
+
+    pub(crate) fn app(dir: &std::path::Path) -> DemoApp<Vec<DemoRecord>> {
+        let agent = QAgent::new(ReprKind::Chasing, Grid::default(), 3, QParams::default()).unwrap();
+        let goals: Vec<Goal> = vec!["1,0,2".parse().unwrap(), "0,1,2".parse().unwrap()];
+        let session = CorrectionSession::new(
+            agent.clone(),
+            CorrectionRule::default(),
+            SessionWorld::of(&agent),
+            goals,
+            7,
+            0.0,
+            "person",
+            None,
+            Vec::new(),
+        )
+        .unwrap();
+        DemoApp::new(
+            session,
+            SavePolicy {
+                path: dir.join("corrected.json"),
+                every: 2,
+            },
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn keys_map_to_commands() {
+        assert_eq!(command_for(key(KeyCode::Up), 3), Some(Command::Override(Action::Up)));
+        assert_eq!(
+            command_for(key(KeyCode::Left), 3),
+            Some(Command::Override(Action::Left))
+        );
+        assert_eq!(
+            command_for(key(KeyCode::Char('2')), 3),
+            Some(Command::Override(Action::Pick(BlockId(2))))
+        );
+        assert_eq!(command_for(key(KeyCode::Char('3')), 3), Some(Command::NoSuchBlock(3)));
+        assert_eq!(
+            command_for(key(KeyCode::Char('d')), 3),
+            Some(Command::Override(Action::Drop))
+        );
+        assert_eq!(command_for(key(KeyCode::Char(' ')), 3), Some(Command::TogglePause));
+        assert_eq!(command_for(key(KeyCode::Char('+')), 3), Some(Command::Faster));
+        assert_eq!(command_for(key(KeyCode::Char('-')), 3), Some(Command::Slower));
+        assert_eq!(command_for(key(KeyCode::Char('n')), 3), Some(Command::NextEpisode));
+        assert_eq!(command_for(key(KeyCode::Char('q')), 3), Some(Command::Quit));
+        assert_eq!(
+            command_for(KeyEvent::new(KeyCode::Char('c'), KeyModifiers::CONTROL), 3),
+            Some(Command::Quit)
+        );
+        assert_eq!(command_for(key(KeyCode::Char('x')), 3), None);
+    }
+
+    #[test]
+    fn an_override_is_executed_recorded_and_learnt_instead_of_the_proposal() {
+        let dir = tempdir();
+        let mut app = app(&dir);
+        app.handle(Command::TogglePause).unwrap();
+        let before = app.session().observation().unwrap();
+        let q_before = app.agent().q(&before, Action::Pick(BlockId(1))).unwrap();
+        app.handle(Command::Override(Action::Pick(BlockId(1)))).unwrap();
+        let after = app.session().observation().unwrap();
+        assert_eq!(after.held_block(), Some(BlockId(1)));
+        assert!(app.agent().q(&before, Action::Pick(BlockId(1))).unwrap() >= q_before + 0.8);
+        assert_eq!(app.episode_corrections(), 1);
+        assert!(app.last_step().unwrap().corrected);
+        // Paused: ticks do nothing.
+        app.tick().unwrap();
+        assert_eq!(app.session().steps(), 1);
+        app.handle(Command::TogglePause).unwrap();
+        app.tick().unwrap();
+        assert_eq!(app.session().steps(), 2);
+        assert!(!app.last_step().unwrap().corrected);
+    }
+
+    #[test]
+    fn the_model_is_saved_every_n_corrections_and_on_quit() {
+        let dir = tempdir();
+        let mut app = app(&dir);
+        let path = dir.join("corrected.json");
+        app.handle(Command::Override(Action::Pick(BlockId(0)))).unwrap();
+        assert!(!path.exists());
+        app.handle(Command::Override(Action::Up)).unwrap();
+        assert_eq!(QAgent::load(&path).unwrap(), *app.agent());
+        app.handle(Command::Override(Action::Right)).unwrap();
+        assert_ne!(QAgent::load(&path).unwrap(), *app.agent());
+        app.handle(Command::Quit).unwrap();
+        assert!(app.should_quit());
+        assert_eq!(QAgent::load(&path).unwrap(), *app.agent());
+    }
+
+    #[test]
+    fn pace_pause_and_next_episode() {
+        let dir = tempdir();
+        let mut app = app(&dir);
+        let start = app.tick_interval();
+        app.handle(Command::Faster).unwrap();
+        assert!(app.tick_interval() < start);
+        for _ in 0..20 {
+            app.handle(Command::Slower).unwrap();
+        }
+        assert_eq!(app.pace(), PACES[0]);
+        app.handle(Command::NoSuchBlock(5)).unwrap();
+        assert!(app.message().contains("no block 5"));
+        let goal = app.session().observation().unwrap().goal;
+        app.handle(Command::NextEpisode).unwrap();
+        assert_eq!(app.session().episode_number(), Some(1));
+        assert_ne!(app.session().observation().unwrap().goal, goal);
+        let (_, records, _) = app.finish();
+        let episodes = records.iter().filter(|r| matches!(r, DemoRecord::Episode(_))).count();
+        assert_eq!(episodes, 2);
+    }
+
+    /// A fresh directory under the target's temporary folder.
+    pub(crate) fn tempdir() -> PathBuf {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        static N: AtomicUsize = AtomicUsize::new(0);
+        let dir = std::env::temp_dir().join(format!(
+            "blockstack-tui-{}-{}",
+            std::process::id(),
+            N.fetch_add(1, Ordering::Relaxed)
+        ));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+}

@@ -1,0 +1,252 @@
+//! `blockstack demo` in a real terminal, driven through tmux (send-keys, capture-pane): it
+//! starts and shows the grid and the goal, an override key changes the state shown, `q`
+//! quits, the recording holds the corrections and replays to the saved model, and a
+//! session killed with SIGKILL leaves a recording whose complete lines all parse.
+//!
+//! Skips, saying so, when tmux is not installed (`.ci/run` installs it).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::time::{Duration, Instant};
+
+use agent::DemoRecord;
+
+const BIN: &str = env!("CARGO_BIN_EXE_blockstack");
+
+fn path(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// A tmux server of our own (its socket in the test's folder), killed when dropped.
+struct Tmux {
+    socket: PathBuf,
+}
+
+impl Tmux {
+    fn new(dir: &Path) -> Tmux {
+        Tmux {
+            socket: dir.join("tmux.sock"),
+        }
+    }
+
+    fn run(&self, args: &[&str]) -> Output {
+        Command::new("tmux")
+            .arg("-S")
+            .arg(&self.socket)
+            .args(args)
+            .env("TERM", "xterm-256color")
+            .output()
+            .expect("tmux runs")
+    }
+
+    /// Starts `command` in a detached 80 x 24 session named `session`.
+    fn start(&self, session: &str, command: &str) {
+        let o = self.run(&["new-session", "-d", "-s", session, "-x", "80", "-y", "24", command]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+
+    fn screen(&self, session: &str) -> String {
+        String::from_utf8_lossy(&self.run(&["capture-pane", "-p", "-t", session]).stdout).into_owned()
+    }
+
+    fn keys(&self, session: &str, keys: &[&str]) {
+        let mut args = vec!["send-keys", "-t", session];
+        args.extend_from_slice(keys);
+        assert!(self.run(&args).status.success());
+    }
+
+    /// Waits until the screen satisfies `ok`, and returns it.
+    fn wait_for(&self, session: &str, what: &str, ok: impl Fn(&str) -> bool) -> String {
+        let deadline = Instant::now() + Duration::from_secs(30);
+        loop {
+            let screen = self.screen(session);
+            if ok(&screen) {
+                return screen;
+            }
+            assert!(Instant::now() < deadline, "the screen never showed {what}:\n{screen}");
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+
+    fn alive(&self, session: &str) -> bool {
+        self.run(&["has-session", "-t", session]).status.success()
+    }
+}
+
+impl Drop for Tmux {
+    fn drop(&mut self) {
+        // Only our own server, by its socket.
+        let _ = self.run(&["kill-server"]);
+        let _ = std::fs::remove_file(&self.socket);
+    }
+}
+
+fn tmux_missing() -> bool {
+    Command::new("tmux").arg("-V").output().is_err()
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("blockstack-tui-tmux-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn train(dir: &Path) -> PathBuf {
+    let out = dir.join("base.json");
+    let o = Command::new(BIN)
+        .args([
+            "train",
+            "--goals",
+            "1,0,2",
+            "--games",
+            "300",
+            "--backend",
+            "grid",
+            "--out",
+            path(&out),
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    out
+}
+
+/// The value after `label` on the screen, e.g. `held: 2` -> `2`.
+fn field<'a>(screen: &'a str, label: &str) -> &'a str {
+    let at = screen
+        .find(label)
+        .unwrap_or_else(|| panic!("no {label:?} on\n{screen}"))
+        + label.len();
+    screen[at..].split_whitespace().next().unwrap()
+}
+
+fn records(path: &Path) -> Vec<DemoRecord> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let complete = &text[..text.rfind('\n').map_or(0, |i| i + 1)];
+    complete
+        .lines()
+        .enumerate()
+        .map(|(i, l)| serde_json::from_str(l).unwrap_or_else(|e| panic!("line {} does not parse: {e}: {l}", i + 1)))
+        .collect()
+}
+
+#[test]
+fn a_person_corrects_the_agent_in_the_terminal_and_quits() {
+    if tmux_missing() {
+        eprintln!("SKIPPED: tmux is not installed, so the terminal UI cannot be driven (.ci/run installs it)");
+        return;
+    }
+    let dir = scratch("session");
+    let base = train(&dir);
+    let (demos, corrected) = (dir.join("demos.jsonl"), dir.join("corrected.json"));
+    let tmux = Tmux::new(&dir);
+    tmux.start(
+        "demo",
+        &format!(
+            "exec {BIN} demo --model {} --goals 1,0,2 --record {} --out {} --seed 5",
+            path(&base),
+            path(&demos),
+            path(&corrected)
+        ),
+    );
+    let screen = tmux.wait_for("demo", "the grid and the goal", |s| {
+        s.contains("goal 1,0,2") && s.contains("world") && s.contains("q quit")
+    });
+    assert!(screen.lines().filter(|l| l.contains(" .")).count() >= 7, "{screen}");
+    tmux.keys("demo", &["Space"]);
+    let screen = tmux.wait_for("demo", "the pause", |s| s.contains("PAUSED"));
+    // Pick a block that is not held: the screen must show it held, in brackets.
+    let held = field(&screen, "held: ");
+    let pick = if held == "2" { "1" } else { "2" };
+    let step: u32 = field(&screen, "step: ").parse().unwrap();
+    tmux.keys("demo", &[pick]);
+    let screen = tmux.wait_for("demo", "the picked block held", |s| {
+        s.contains(&format!("held: {pick}")) && s.contains(&format!("[{pick}]"))
+    });
+    assert_eq!(field(&screen, "step: ").parse::<u32>().unwrap(), step + 1, "{screen}");
+    assert!(screen.contains("corrections: 1"), "{screen}");
+    // An arrow key takes a step too.
+    tmux.keys("demo", &["Right"]);
+    tmux.wait_for("demo", "the second step", |s| {
+        field(s, "step: ") == (step + 2).to_string()
+    });
+    tmux.keys("demo", &["q"]);
+    let deadline = Instant::now() + Duration::from_secs(20);
+    while tmux.alive("demo") {
+        assert!(Instant::now() < deadline, "q did not quit");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    // The recording holds both corrections, with what the agent proposed.
+    let lines = records(&demos);
+    let corrections: Vec<(String, String)> = lines
+        .iter()
+        .filter_map(|r| match r {
+            DemoRecord::Step(s) if s.correction => Some((s.action.clone(), s.proposed.clone())),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(
+        corrections.iter().map(|(a, _)| a.as_str()).collect::<Vec<_>>(),
+        [format!("pick {pick}").as_str(), "right"]
+    );
+    // Replaying the recording gives the model the session saved on quitting.
+    let replayed = dir.join("replayed.json");
+    let o = Command::new(BIN)
+        .args([
+            "learn-from-demos",
+            path(&demos),
+            "--model",
+            path(&base),
+            "--out",
+            path(&replayed),
+            "--on-bad-line",
+            "fail",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(std::fs::read(&corrected).unwrap(), std::fs::read(&replayed).unwrap());
+}
+
+#[test]
+fn a_demo_killed_mid_episode_leaves_whole_lines() {
+    if tmux_missing() {
+        eprintln!("SKIPPED: tmux is not installed, so the terminal UI cannot be driven (.ci/run installs it)");
+        return;
+    }
+    let dir = scratch("kill");
+    let base = train(&dir);
+    let demos = dir.join("demos.jsonl");
+    let tmux = Tmux::new(&dir);
+    tmux.start(
+        "demo",
+        &format!(
+            "exec {BIN} demo --model {} --record {} --out {} --seed 8",
+            path(&base),
+            path(&demos),
+            path(&dir.join("corrected.json"))
+        ),
+    );
+    tmux.wait_for("demo", "the grid", |s| s.contains("world"));
+    // Fastest pace, and a few corrections on the way.
+    tmux.keys("demo", &["+", "+", "+", "+", "+", "+", "Left", "0", "Up"]);
+    let deadline = Instant::now() + Duration::from_secs(30);
+    while records(&demos).len() < 40 {
+        assert!(Instant::now() < deadline, "the session recorded too little");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let pid = String::from_utf8_lossy(&tmux.run(&["display-message", "-p", "-t", "demo", "#{pane_pid}"]).stdout)
+        .trim()
+        .to_string();
+    assert!(Command::new("kill").args(["-KILL", &pid]).status().unwrap().success());
+    let lines = records(&demos);
+    assert!(matches!(lines[0], DemoRecord::Session(_)));
+    assert!(
+        lines
+            .iter()
+            .filter(|r| matches!(r, DemoRecord::Step(s) if s.correction))
+            .count()
+            >= 3
+    );
+}
