@@ -405,6 +405,8 @@ pub struct CorrectionConfig {
     pub epsilon: f64,
     /// The world's reward, horizon and backend (`None`: [`SessionWorld::of`] the agent).
     pub world: Option<SessionWorld>,
+    /// The model file the agent came from, for the recording's session line.
+    pub model: Option<String>,
 }
 
 impl CorrectionConfig {
@@ -419,6 +421,7 @@ impl CorrectionConfig {
             rule: CorrectionRule::default(),
             epsilon: 0.1,
             world: None,
+            model: None,
         }
     }
 }
@@ -451,7 +454,7 @@ pub fn correct<S: DemoSink>(agent: QAgent, config: &CorrectionConfig, sink: S) -
         config.seed,
         config.epsilon,
         &config.demonstrator.name,
-        None,
+        config.model.as_deref(),
         sink,
     )?;
     let mut demonstrator = Demonstrator::new(config.demonstrator.clone(), grid);
@@ -574,6 +577,14 @@ mod tests {
         };
         let q = rule.learn(&mut a, &drop).unwrap();
         assert_eq!(q, (9.0f64 + 0.8) as f32);
+    }
+
+    #[test]
+    fn correction_runs_can_go_to_other_threads() {
+        fn send<T: Send>() {}
+        send::<CorrectionConfig>();
+        send::<Corrected<Vec<DemoRecord>>>();
+        send::<CorrectionSession<Vec<DemoRecord>>>();
     }
 
     #[test]

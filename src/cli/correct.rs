@@ -56,6 +56,7 @@ pub fn correct(args: CorrectArgs) -> Result<()> {
     let config = CorrectionConfig {
         rule: rule(args.margin, args.corrections_only)?,
         epsilon: args.epsilon,
+        model: Some(args.model.display().to_string()),
         ..CorrectionConfig::new(profile.clone(), goals.clone(), args.demos, args.seed)
     };
     let record = args.record.as_deref().map(DemoWriter::append).transpose()?;
