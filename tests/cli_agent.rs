@@ -52,6 +52,7 @@ fn train_role(dir: &Path, name: &str, games: &str) -> PathBuf {
         "--epsilon",
         "0",
         "--backward-replay",
+        "--final-replay",
         "--backend",
         "grid",
         "--out",
@@ -67,9 +68,9 @@ fn train_role(dir: &Path, name: &str, games: &str) -> PathBuf {
 #[test]
 fn train_then_eval_on_unseen_goals() {
     let dir = scratch("train-eval");
-    let model = train_role(&dir, "role.json", "200000");
+    let model = train_role(&dir, "role.json", "30000");
     let eval_json = || {
-        let words = "eval --goals 2,1,0:1,2,0 --episodes 40 --seed 2 --epsilon 0.1 --backend grid --json";
+        let words = "eval --goals 2,1,0:1,2,0 --episodes 100 --seed 2 --epsilon 0 --backend grid --json";
         let mut args: Vec<&str> = words.split(' ').collect();
         args.extend(["--model", path(&model)]);
         blockstack(&args)
@@ -85,7 +86,7 @@ fn train_then_eval_on_unseen_goals() {
         assert!(v.get(field).is_some(), "no {field} in {v}");
     }
     assert_eq!(v["agent"], "q-role");
-    assert_eq!(v["episodes"], 80);
+    assert_eq!(v["episodes"], 200);
     assert_eq!(v["per_goal"].as_array().unwrap().len(), 2);
     assert_eq!(v["per_goal"][0]["goal"], "2,1,0");
     // Against the exact optimum: a ratio of at least 1, and the optimum below the steps.
@@ -95,10 +96,10 @@ fn train_then_eval_on_unseen_goals() {
         "{v}"
     );
     assert!(v["mean_steps_failures_as_horizon"].as_f64().unwrap() >= v["mean_steps"].as_f64().unwrap());
-    // Trained briefly on 0,1,2 only, the role learner stacks goals it never saw (the random
-    // agent fails most of these episodes).
-    assert!(v["failures"].as_u64().unwrap() <= 4, "{v}");
-    assert!(v["mean_steps"].as_f64().unwrap() < 150.0, "{v}");
+    // Trained on 0,1,2 only, the role learner plays goals it never saw, greedily, without
+    // a failure and within 5% of the shortest plans (the random agent fails most of them).
+    assert_eq!(v["failures"], 0, "{v}");
+    assert!(v["mean_ratio_to_optimum"].as_f64().unwrap() <= 1.05, "{v}");
     // No timings: the same command prints the same line.
     assert_eq!(stdout(&eval_json()), stdout(&o));
     // The text form: a line per goal and one for all.

@@ -13,6 +13,7 @@ pub mod correction;
 pub mod demonstrator;
 pub mod demos;
 pub mod error;
+pub mod memory;
 pub mod model;
 pub mod optimality;
 pub mod planner_policy;

@@ -15,12 +15,16 @@ use sim::seeding::episode_seed;
 use sim::{Action, Backend, BlockId, Env, EnvConfig, Goal, GoalSpec, Grid, RewardModel};
 
 use crate::error::{AgentError, Result};
+use crate::memory::ReplayMemory;
 use crate::qlearning::{QAgent, QParams};
 use crate::repr::ReprKind;
 use crate::rollout::policy_rng;
 
 /// Games the progress figures look back over.
 pub const RECENT_GAMES: usize = 100;
+
+/// The most sweeps of the final experience replay.
+pub const MAX_REPLAY_SWEEPS: u32 = 1000;
 
 /// When the oracle chooses the action during training (paper section VI-B2). The table
 /// learns from the executed action, whoever chose it.
@@ -138,6 +142,14 @@ pub struct TrainConfig {
     /// (with alpha 1 in this deterministic world, the whole path gets the values of its
     /// end). Off in the paper's learner.
     pub backward_replay: bool,
+    /// Experience replay at the end of training: remember the last transition seen from
+    /// every state-action, and after the last game apply the Q-update to every remembered
+    /// transition, sweep after sweep, until no value changes (at most
+    /// [`MAX_REPLAY_SWEEPS`]). The table then agrees with everything the agent has seen,
+    /// with no value left behind by a later change of its successors' (a stale value is
+    /// how a greedy agent gets stuck, e.g. picking the block it already holds). Off in the
+    /// paper's learner.
+    pub final_replay: bool,
     /// When the oracle chooses the action instead of the learner.
     pub assist: Assist,
 }
@@ -160,6 +172,7 @@ impl TrainConfig {
             backend: Backend::Physics,
             exploring_starts: false,
             backward_replay: false,
+            final_replay: false,
             assist: Assist::None,
         }
     }
@@ -167,9 +180,10 @@ impl TrainConfig {
     /// Our learner: `role` representation, `step-cost` reward, alpha 1 and gamma 1 (the
     /// world is deterministic and the return is minus the steps to go), epsilon 0 (every
     /// value starts at 0, above any true value, so untried actions look best and the
-    /// greedy learner explores them: optimism in place of random exploration), backward
-    /// replay, 2,000,000 games against the physics world from the paper's starts (nothing
-    /// held), seed 1. Trained on one goal it plays all of them.
+    /// greedy learner tries them: optimism in place of random exploration), backward
+    /// replay after each game and a final replay of everything seen, 100,000 games against
+    /// the physics world from the paper's starts (nothing held), seed 1. Trained on one
+    /// goal it plays all of them.
     pub fn role_step_cost(goals: Vec<Goal>) -> TrainConfig {
         TrainConfig {
             repr: ReprKind::Role,
@@ -180,8 +194,9 @@ impl TrainConfig {
                 epsilon: 0.0,
                 initial_q: 0.0,
             },
-            games: 2_000_000,
+            games: 100_000,
             backward_replay: true,
+            final_replay: true,
             ..TrainConfig::paper(goals)
         }
     }
@@ -249,6 +264,8 @@ pub struct TrainReport {
     pub steps: u64,
     /// Of those, actions the oracle chose.
     pub assisted_steps: u64,
+    /// Sweeps of the final experience replay (0 without it).
+    pub replay_sweeps: u32,
 }
 
 /// The outcome of [`train`].
@@ -274,6 +291,8 @@ pub struct Trainer {
     path: Vec<Transition>,
     /// The oracle, when it assists.
     oracle: Option<oracle::Oracle>,
+    /// The last transition from every state-action, when the run ends with a replay.
+    memory: Option<ReplayMemory>,
 }
 
 /// One step of a game, in table coordinates.
@@ -292,6 +311,9 @@ impl Trainer {
     pub fn new(config: TrainConfig) -> Result<Trainer> {
         config.validate()?;
         let agent = QAgent::new(config.repr, config.grid, config.blocks, config.params)?;
+        let memory = config
+            .final_replay
+            .then(|| ReplayMemory::new(agent.table().key_count(), agent.table().columns()));
         let envs = config
             .goals
             .iter()
@@ -304,6 +326,7 @@ impl Trainer {
             recent: VecDeque::with_capacity(RECENT_GAMES),
             path: Vec::new(),
             oracle: (config.assist != Assist::None).then(|| oracle::Oracle::new(config.grid)),
+            memory,
             config,
         })
     }
@@ -370,6 +393,7 @@ impl Trainer {
         let mut key = agent.key_unchecked(&obs);
         let mut reached = false;
         let replay = self.config.backward_replay;
+        let memory = &mut self.memory;
         let path = &mut self.path;
         path.clear();
         let mut recent = RecentActions::default();
@@ -396,6 +420,9 @@ impl Trainer {
             let next_key = agent.key_unchecked(&step.observation);
             let next = (!step.terminated).then_some(next_key);
             agent.update_key(key, column, step.reward, next);
+            if let Some(m) = memory.as_mut() {
+                m.remember(key, column, step.reward, next);
+            }
             if replay {
                 path.push(Transition {
                     key,
@@ -419,19 +446,57 @@ impl Trainer {
         Ok(reached.then_some(steps))
     }
 
-    /// Ends the run: the agent, with the config (and the games actually played) recorded
-    /// in it, and the totals.
+    /// Ends the run: the final replay if the config asks for it, then the agent, with the
+    /// config (and the games actually played) recorded in it, and the totals.
     pub fn finish(self) -> Trained {
-        let mut agent = self.agent;
+        let Trainer {
+            mut agent,
+            config,
+            mut report,
+            memory,
+            ..
+        } = self;
+        if let Some(memory) = &memory {
+            report.replay_sweeps = replay(&mut agent, memory);
+        }
         agent.set_training(Some(TrainConfig {
-            games: self.report.games,
-            ..self.config
+            games: report.games,
+            ..config
         }));
-        Trained {
-            agent,
-            report: self.report,
+        Trained { agent, report }
+    }
+
+    /// What [`Trainer::finish`] would give now, leaving the run as it is (to evaluate the
+    /// agent along a learning curve and train on).
+    pub fn snapshot(&self) -> Trained {
+        let mut agent = self.agent.clone();
+        let mut report = self.report;
+        if let Some(memory) = &self.memory {
+            report.replay_sweeps = replay(&mut agent, memory);
+        }
+        agent.set_training(Some(TrainConfig {
+            games: report.games,
+            ..self.config.clone()
+        }));
+        Trained { agent, report }
+    }
+}
+
+/// Replays `memory` into `agent` until a sweep changes no value (relative to its size, by
+/// more than a millionth); the number of sweeps.
+fn replay(agent: &mut QAgent, memory: &ReplayMemory) -> u32 {
+    for sweep in 1..=MAX_REPLAY_SWEEPS {
+        let mut changed = false;
+        memory.for_each(|key, column, reward, next| {
+            let old = agent.table().row(key)[column];
+            let new = agent.update_key(key, column, f64::from(reward), next);
+            changed |= (new - old).abs() > 1e-6 * old.abs().max(1.0);
+        });
+        if !changed {
+            return sweep;
         }
     }
+    MAX_REPLAY_SWEEPS
 }
 
 /// Trains an agent as `config` says, calling `progress` after every game.
@@ -466,6 +531,30 @@ mod tests {
         );
         assert!(recent(&[x, u, d, u, d, u, d, u]).oscillating(), "d, u three times");
         assert!(!recent(&[u, d, u, d, u, d, x]).oscillating(), "the window moved on");
+    }
+
+    #[test]
+    fn the_final_replay_leaves_every_remembered_value_consistent() {
+        // After the replay, with alpha 1 every remembered transition satisfies the update's
+        // fixed point: Q(s, a) = r + gamma max Q(s'), exactly.
+        let config = TrainConfig {
+            games: 300,
+            backend: Backend::Grid,
+            ..TrainConfig::role_step_cost(vec!["1,2,0".parse().unwrap()])
+        };
+        let mut trainer = Trainer::new(config).unwrap();
+        trainer.play_games(300, None).unwrap();
+        let memory = trainer.memory.clone().unwrap();
+        let trained = trainer.finish();
+        assert!(trained.report.replay_sweeps > 1);
+        let table = trained.agent.table();
+        let mut checked = 0;
+        memory.for_each(|key, column, reward, next| {
+            let future = next.map_or(0.0, |k| table.row(k).iter().copied().fold(f32::NEG_INFINITY, f32::max));
+            assert_eq!(table.row(key)[column], reward + future);
+            checked += 1;
+        });
+        assert!(checked > 10_000, "{checked}");
     }
 
     #[test]

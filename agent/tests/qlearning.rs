@@ -110,7 +110,7 @@ fn greedy_choice_breaks_ties_at_random_and_follows_the_table() {
 
 #[test]
 fn a_trained_agent_finishes_an_easy_stack() {
-    let trained = agent::train(&role_config(&["0,1,2"], 50_000, 1), None).unwrap();
+    let trained = agent::train(&role_config(&["0,1,2"], 30_000, 1), None).unwrap();
     let q = &trained.agent;
     let grid = Grid::default();
     // 0 and 1 stacked at the bottom of column 3, 2 one cell above the stack.
@@ -201,7 +201,10 @@ fn training_reports_progress_after_every_game() {
     assert!(last.recent_successes <= 100);
     // Playing on continues the same run: 150 + 50 games equal 200 in one go.
     trainer.play_games(50, None).unwrap();
+    let snapshot = trainer.snapshot();
     let split = trainer.finish();
+    assert_eq!(snapshot.agent, split.agent);
+    assert_eq!(snapshot.report, split.report);
     let whole = agent::train(&role_config(&["0,1,2"], 200, 1), None).unwrap();
     assert_eq!(split.agent, whole.agent);
     assert_eq!(split.agent.training().unwrap().games, 200);

@@ -52,6 +52,10 @@ pub struct TrainArgs {
     /// After each game, replay its updates once more, last step first.
     #[arg(long)]
     pub backward_replay: bool,
+    /// Remember the last transition from every state-action and replay them all, sweep
+    /// after sweep, after the last game.
+    #[arg(long)]
+    pub final_replay: bool,
     /// When the oracle chooses the action: none, oscillation (the same pair of actions three
     /// times in a row), or oscillation+P (also at each step with probability P).
     #[arg(long, default_value = "none")]
@@ -101,6 +105,7 @@ impl TrainArgs {
             backend: self.backend.parse::<Backend>()?,
             exploring_starts: self.exploring_starts,
             backward_replay: self.backward_replay,
+            final_replay: self.final_replay,
             assist: self.assist,
         };
         config.validate()?;
@@ -149,14 +154,10 @@ pub fn train(args: TrainArgs) -> Result<()> {
         config.seed
     );
     println!(
-        "{} games, {} reached the goal, {} steps ({} chosen by the oracle, assistance {}), in {seconds:.1} s ({:.0} games/s)",
-        r.games,
-        r.successes,
-        r.steps,
-        r.assisted_steps,
-        config.assist,
-        r.games as f64 / seconds.max(1e-9)
+        "{} games, {} reached the goal, {} steps; {} steps chosen by the oracle (assistance {}); {} final replay sweeps",
+        r.games, r.successes, r.steps, r.assisted_steps, config.assist, r.replay_sweeps
     );
+    println!("trained in {seconds:.1} s");
     println!("saved {}", args.out.display());
     Ok(())
 }
