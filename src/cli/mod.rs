@@ -8,6 +8,7 @@ mod demo;
 mod eval;
 mod learn_from_demos;
 mod render;
+mod reproduce;
 mod run;
 mod solve;
 mod train;
@@ -25,6 +26,8 @@ pub struct Cli {
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
+    /// Reproduce the paper: run experiments E1-E7 and write the report (README.md, results.json, pictures).
+    Reproduce(reproduce::ReproduceArgs),
     /// Play episodes with an agent and report failures and steps to goal.
     Run(run::RunArgs),
     /// Draw a start state as a PNG picture or as text.
@@ -46,6 +49,7 @@ pub enum Command {
 /// Carries out `cli`'s command.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
+        Command::Reproduce(args) => reproduce::reproduce(args),
         Command::Run(args) => run::run(args),
         Command::Render(args) => render::render(args),
         Command::Solve(args) => solve::solve(args),

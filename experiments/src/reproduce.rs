@@ -1,0 +1,519 @@
+//! The reproduction of the paper (SPEC section 9): experiments E1-E7, each beside the
+//! paper's figures, with their statistical tests, pictures, a report and machine-readable
+//! results. `blockstack reproduce` is the command over it.
+//!
+//! [`reproduce`] runs every experiment and returns the [`Reproduction`]: data only, nothing
+//! printed, nothing written; [`write_report`] then draws the pictures and writes
+//! `README.md` and `results.json` into a directory.
+//!
+//! # How the experiments are run
+//!
+//! - **Same starts for every arm.** Every arm of a comparison plays the same [`Suite`]:
+//!   game `k` starts from `reset(episode_seed(test seed, k))`, with the same goal, so the
+//!   paired tests (Wilcoxon) pair the same start, and an agent's random test actions come
+//!   from its own stream of that seed (the starts never depend on the agent).
+//! - **Replicates.** A learner's result depends a lot on its training seed (the paper's
+//!   learner fails 20% to 40% of games depending on it), so each learner arm of E2-E6 is
+//!   trained [`Scale::replicates`] times, with training seeds `seed, seed + 1, ...`, and
+//!   every replicate plays the whole suite. Failures are given per replicate (mean and
+//!   range), other figures over all games of all replicates, and a paired test pairs game
+//!   `k` of replicate `r` of both arms (the same start, agents of the same training seed).
+//! - **Steps.** The paper's "average number of steps" counts a failed game as the horizon
+//!   (see [`paper`]); we print that figure beside the paper's, and also the mean and median
+//!   over the games that reached the goal, and their ratio to the shortest plan (the exact
+//!   solver's) from the same starts. The tests compare steps with a failure counted as
+//!   the horizon.
+//! - **Test policy.** Learners play as in the paper, a random action with probability 0.1
+//!   ([`paper::SETTINGS`]), unless an experiment says otherwise (E2 is about the test
+//!   epsilon; E3 and E7 also show learners playing greedily).
+//! - **Deterministic.** Everything is fixed by [`Options::seed`]; independent runs go in
+//!   parallel on rayon's pool (size it with a `rayon::ThreadPool`), and the results are
+//!   the same whatever the number of threads.
+
+mod arms;
+mod e1;
+mod e2;
+mod e3;
+mod e4;
+mod e5;
+mod e6;
+mod e7;
+pub mod paper;
+mod report;
+mod text;
+
+pub use arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome};
+pub use report::{ReportFiles, write_report};
+
+use agent::{QAgent, TrainConfig, Trained};
+use rayon::prelude::*;
+use serde::Serialize;
+use sim::Goal;
+use thiserror::Error;
+
+use crate::plots::{BarChart, BoxPlot, EpisodeFrames, LearningCurve, PlotError};
+use crate::stats::StatsError;
+
+/// The `format` field of `results.json`.
+pub const FORMAT: &str = "blockstack-reproduction";
+/// The `version` field of `results.json`; raised whenever a field changes meaning.
+pub const VERSION: u32 = 1;
+
+/// The horizon of every game (the paper's).
+pub const HORIZON: u32 = paper::SETTINGS.horizon;
+
+/// What can go wrong while reproducing.
+#[derive(Debug, Error)]
+pub enum ReproduceError {
+    /// An agent could not train, play or be corrected.
+    #[error(transparent)]
+    Agent(#[from] agent::AgentError),
+    /// The world refused something.
+    #[error(transparent)]
+    Sim(#[from] sim::SimError),
+    /// The exact solver could not plan.
+    #[error(transparent)]
+    Oracle(#[from] oracle::OracleError),
+    /// A test could not run on the samples.
+    #[error("statistics: {0}")]
+    Stats(#[from] StatsError),
+    /// A picture could not be drawn or written.
+    #[error(transparent)]
+    Plot(#[from] PlotError),
+    /// The report could not be written.
+    #[error("cannot write {path}: {reason}")]
+    Write {
+        /// The file or directory.
+        path: String,
+        /// Why.
+        reason: String,
+    },
+}
+
+/// Shorthand for results whose error is a [`ReproduceError`].
+pub type Result<T, E = ReproduceError> = std::result::Result<T, E>;
+
+/// What the user chose.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct Options {
+    /// The seed everything derives from.
+    pub seed: u64,
+    /// Small counts (a check that the pipeline works), not the paper's.
+    pub quick: bool,
+}
+
+/// How much is run: the paper's counts, or small ones with `--quick`.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct Scale {
+    /// Agents trained (with different seeds) per learner arm of E2-E6.
+    pub replicates: usize,
+    /// E1's games (the paper's 100).
+    pub e1_games: u64,
+    /// Test games of E2, E4's points, E5 and each table of E6 (the paper's 500), and of each
+    /// goal in E7.
+    pub test_games: u64,
+    /// E3's test games per unseen goal (the paper's 100 in all, over two goals).
+    pub e3_games_per_goal: u64,
+    /// Training games of the paper's learner (not given in the paper; the preset of
+    /// [`TrainConfig::paper`]).
+    pub paper_games: u64,
+    /// Training games of our learner ([`TrainConfig::role_step_cost`]'s preset).
+    pub ours_games: u64,
+    /// E4: where the paper's learner is tested along its training, in games.
+    pub paper_curve: Vec<u64>,
+    /// E4: where our learner is tested along its training, in games (the last is
+    /// `ours_games`).
+    pub ours_curve: Vec<u64>,
+    /// E6: demonstrations per demonstrator (the paper's 10).
+    pub demos: u64,
+}
+
+impl Scale {
+    /// The paper's counts (`quick`: small ones).
+    pub fn new(quick: bool) -> Scale {
+        let paper_games = TrainConfig::paper(Vec::new()).games;
+        let ours_games = if quick {
+            200_000
+        } else {
+            TrainConfig::role_step_cost(Vec::new()).games
+        };
+        let ours_curve = if quick {
+            vec![0, 20_000, 100_000, ours_games]
+        } else {
+            vec![0, 20_000, 100_000, 250_000, 500_000, 1_000_000, ours_games]
+        };
+        if quick {
+            Scale {
+                replicates: 2,
+                e1_games: 100,
+                test_games: 100,
+                e3_games_per_goal: 50,
+                paper_games,
+                ours_games,
+                paper_curve: vec![0, 1000, paper_games],
+                ours_curve,
+                demos: paper::E6_DEMOS,
+            }
+        } else {
+            Scale {
+                replicates: 5,
+                e1_games: 100,
+                test_games: 500,
+                e3_games_per_goal: 50,
+                paper_games,
+                ours_games,
+                paper_curve: vec![0, 500, 1000, 2000, paper_games, 10_000, 20_000, 50_000],
+                ours_curve,
+                demos: paper::E6_DEMOS,
+            }
+        }
+    }
+
+    /// Jobs (trainings, corrections, suites played) the whole run reports to its
+    /// [`ProgressSink`].
+    pub fn jobs(&self) -> u64 {
+        e1::jobs(self)
+            + e2::jobs(self)
+            + e3::jobs(self)
+            + e4::jobs(self)
+            + e5::jobs(self)
+            + e6::jobs(self)
+            + e7::jobs(self)
+    }
+}
+
+/// The seeds of a run, all derived from [`Options::seed`] `s`.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct Seeds {
+    /// The training seed of each replicate: `s, s + 1, ...`.
+    pub training: Vec<u64>,
+    /// Our learner's training seed: `s`.
+    pub ours: u64,
+    /// The seed of every test suite's starts: `s + 1000`.
+    pub test: u64,
+    /// E6: each demonstrator's session seed (starts, the agent's proposals, the
+    /// demonstrator's choices): `s + 2001`, `s + 2002`, `s + 2003`.
+    pub demonstrations: Vec<u64>,
+}
+
+impl Seeds {
+    /// The seeds derived from `seed` for `scale`.
+    pub fn new(seed: u64, scale: &Scale) -> Seeds {
+        Seeds {
+            training: (0..scale.replicates as u64).map(|r| seed.wrapping_add(r)).collect(),
+            ours: seed,
+            test: seed.wrapping_add(1000),
+            demonstrations: (1..=3).map(|d| seed.wrapping_add(2000 + d)).collect(),
+        }
+    }
+}
+
+/// Where progress goes: told the number of jobs once, then each job as it ends (from any
+/// thread).
+pub trait ProgressSink: Sync {
+    /// The run has `jobs` jobs.
+    fn begin(&self, _jobs: u64) {}
+    /// A job of experiment `stage` (e.g. "E5") ended.
+    fn advance(&self, _stage: &str) {}
+}
+
+/// No progress reports.
+impl ProgressSink for () {}
+
+/// One parameter of an experiment, for the report's "what was run".
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Setting {
+    /// What it is.
+    pub name: String,
+    /// Its value.
+    pub value: String,
+}
+
+/// One point of a learning curve: an agent tested after some training.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct CurvePoint {
+    /// Training games played.
+    pub games: u64,
+    /// Test games over all replicates.
+    pub test_games: usize,
+    /// Mean failures per replicate.
+    pub failures: f64,
+    /// Share of test games failed.
+    pub failure_rate: f64,
+    /// Mean steps, a failure counted as the horizon.
+    pub mean_steps_failures_at_horizon: f64,
+    /// Mean steps over the games that reached the goal.
+    pub mean_steps: Option<f64>,
+}
+
+/// A learner's learning curve.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Curve {
+    /// The learner.
+    pub learner: String,
+    /// The test games at every point.
+    pub suite: String,
+    /// The points, by training games.
+    pub points: Vec<CurvePoint>,
+}
+
+/// What a picture shows, to be drawn by [`write_report`].
+#[derive(Clone, Debug, PartialEq)]
+pub enum Drawing {
+    /// A learning curve (PNG and SVG).
+    Learning(LearningCurve),
+    /// Box plots (PNG and SVG).
+    Boxes(BoxPlot),
+    /// A bar chart (PNG and SVG).
+    Bars(BarChart),
+    /// An animated episode (GIF).
+    Episode(Vec<EpisodeFrames>),
+}
+
+/// A picture of the report.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Figure {
+    /// The files' name without extension, e.g. `e7-steps`.
+    pub stem: String,
+    /// What it shows.
+    pub caption: String,
+    /// The files it is written to, relative to the report.
+    pub files: Vec<String>,
+    /// The data.
+    #[serde(skip)]
+    pub drawing: Drawing,
+}
+
+impl Figure {
+    /// A picture named `stem`.
+    pub fn new(stem: &str, caption: String, drawing: Drawing) -> Figure {
+        let files = match drawing {
+            Drawing::Episode(_) => vec![format!("{stem}.gif")],
+            _ => vec![format!("{stem}.png"), format!("{stem}.svg")],
+        };
+        Figure {
+            stem: stem.into(),
+            caption,
+            files,
+            drawing,
+        }
+    }
+}
+
+/// One experiment's results, ready for the report.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Experiment {
+    /// "E1" to "E7".
+    pub id: String,
+    /// What it asks.
+    pub title: String,
+    /// What was run.
+    pub setup: Vec<Setting>,
+    /// Its tables, ours beside the paper's.
+    pub tables: Vec<Table>,
+    /// Its learning curves (E4).
+    pub curves: Vec<Curve>,
+    /// One line saying what the figures show, computed from them.
+    pub reading: String,
+    /// Its pictures.
+    pub figures: Vec<Figure>,
+}
+
+/// The whole run's results: what `results.json` holds.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Reproduction {
+    /// [`FORMAT`].
+    pub format: &'static str,
+    /// [`VERSION`].
+    pub version: u32,
+    /// The options.
+    pub options: Options,
+    /// The counts.
+    pub scale: Scale,
+    /// The seeds.
+    pub seeds: Seeds,
+    /// The paper's learner settings, as the paper states them.
+    pub paper_settings: paper::PaperSettings,
+    /// E1 to E7, in order.
+    pub experiments: Vec<Experiment>,
+}
+
+/// What every experiment shares: the counts, the seeds, and where progress goes.
+pub(crate) struct Context<'a> {
+    scale: Scale,
+    seeds: Seeds,
+    progress: &'a dyn ProgressSink,
+}
+
+impl Context<'_> {
+    /// The paper's learner on `goals`, replicate `r`'s seed.
+    fn paper_config(&self, goals: &[Goal], r: usize) -> TrainConfig {
+        TrainConfig {
+            seed: self.seeds.training[r],
+            games: self.scale.paper_games,
+            ..TrainConfig::paper(goals.to_vec())
+        }
+    }
+
+    /// Trains every replicate of `config(r)` in parallel, one job each.
+    fn train_replicates<F>(&self, stage: &str, config: F) -> Result<Vec<Trained>>
+    where
+        F: Fn(usize) -> TrainConfig + Sync,
+    {
+        (0..self.scale.replicates)
+            .into_par_iter()
+            .map(|r| {
+                let trained = agent::train(&config(r), None)?;
+                self.progress.advance(stage);
+                Ok(trained)
+            })
+            .collect()
+    }
+
+    /// The paper's test policy's epsilon.
+    fn test_epsilon(&self) -> f64 {
+        paper::SETTINGS.test_epsilon
+    }
+}
+
+/// Parses goals written by [`paper`] (known good).
+fn goals(texts: &[&str]) -> Vec<Goal> {
+    texts
+        .iter()
+        .map(|t| t.parse().expect("the paper's goals parse"))
+        .collect()
+}
+
+/// Runs E1 to E7 with `options`, reporting progress to `progress`, on the current rayon
+/// pool.
+pub fn reproduce(options: &Options, progress: &dyn ProgressSink) -> Result<Reproduction> {
+    reproduce_with(options, Scale::new(options.quick), progress)
+}
+
+/// Runs E1 to E7 with counts of one's own (each schedule in `scale` must have a point, and
+/// `replicates` must be at least 1).
+pub fn reproduce_with(options: &Options, scale: Scale, progress: &dyn ProgressSink) -> Result<Reproduction> {
+    let seeds = Seeds::new(options.seed, &scale);
+    progress.begin(scale.jobs());
+    let ctx = Context { scale, seeds, progress };
+    // Our learner trains for longest: it goes on one thread while the rest share the others.
+    let (ours, rest) = rayon::join(
+        || e4::train_ours(&ctx),
+        || -> Result<_> {
+            let e1 = e1::run(&ctx)?;
+            let e2 = e2::run(&ctx)?;
+            let paper_curve = e4::paper_curve(&ctx)?;
+            let (e5, paper_agent) = e5::run(&ctx)?;
+            let e6 = e6::run(&ctx)?;
+            Ok((e1, e2, paper_curve, e5, paper_agent, e6))
+        },
+    );
+    let (ours, ours_curve): (QAgent, Curve) = ours?;
+    let (e1, e2, paper_curve, e5, paper_agent, e6) = rest?;
+    let e3 = e3::run(&ctx, &ours)?;
+    let e4 = e4::experiment(&ctx, paper_curve, ours_curve);
+    let e7 = e7::run(&ctx, &paper_agent, &ours)?;
+    Ok(Reproduction {
+        format: FORMAT,
+        version: VERSION,
+        options: *options,
+        scale: ctx.scale,
+        seeds: ctx.seeds,
+        paper_settings: paper::SETTINGS,
+        experiments: vec![e1, e2, e3, e4, e5, e6, e7],
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::atomic::{AtomicU64, Ordering};
+
+    /// Counts the jobs announced and reported.
+    #[derive(Default)]
+    struct Count {
+        announced: AtomicU64,
+        done: AtomicU64,
+    }
+
+    impl ProgressSink for Count {
+        fn begin(&self, jobs: u64) {
+            self.announced.store(jobs, Ordering::SeqCst);
+        }
+
+        fn advance(&self, _stage: &str) {
+            self.done.fetch_add(1, Ordering::SeqCst);
+        }
+    }
+
+    /// Tiny counts: the whole pipeline in about a second.
+    fn tiny() -> Scale {
+        Scale {
+            replicates: 2,
+            e1_games: 6,
+            test_games: 6,
+            e3_games_per_goal: 3,
+            paper_games: 60,
+            ours_games: 3000,
+            paper_curve: vec![0, 60, 120],
+            ours_curve: vec![0, 3000],
+            demos: 2,
+        }
+    }
+
+    fn run(threads: usize) -> (Reproduction, u64, u64) {
+        let count = Count::default();
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        let options = Options { seed: 5, quick: true };
+        let r = pool.install(|| reproduce_with(&options, tiny(), &count)).unwrap();
+        (r, count.announced.into_inner(), count.done.into_inner())
+    }
+
+    #[test]
+    fn the_results_do_not_depend_on_the_threads_and_every_job_is_reported() {
+        let (one, announced, done) = run(1);
+        let (three, _, _) = run(3);
+        assert_eq!(
+            serde_json::to_string(&one).unwrap(),
+            serde_json::to_string(&three).unwrap()
+        );
+        assert_eq!(one, three, "the samples behind the tables too");
+        assert_eq!(announced, tiny().jobs());
+        assert_eq!(done, announced);
+        let ids: Vec<&str> = one.experiments.iter().map(|e| e.id.as_str()).collect();
+        assert_eq!(ids, ["E1", "E2", "E3", "E4", "E5", "E6", "E7"]);
+    }
+
+    #[test]
+    fn the_report_holds_every_experiment_and_its_pictures() {
+        let (r, _, _) = run(2);
+        let dir = std::env::temp_dir().join(format!("blockstack-report-{}", std::process::id()));
+        let files = write_report(&r, &dir).unwrap();
+        let readme = std::fs::read_to_string(&files.readme).unwrap();
+        for e in &r.experiments {
+            assert!(readme.contains(&format!("## {}: {}", e.id, e.title)), "{}", e.id);
+            assert!(readme.contains(&e.reading));
+            for f in &e.figures {
+                for file in &f.files {
+                    assert!(dir.join(file).is_file(), "{file}");
+                }
+                assert!(readme.contains(&format!("]({})", f.files[0])));
+            }
+        }
+        assert_eq!(
+            files.pictures.len(),
+            r.experiments
+                .iter()
+                .map(|e| e.figures.iter().map(|f| f.files.len()).sum::<usize>())
+                .sum::<usize>()
+        );
+        let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&files.results).unwrap()).unwrap();
+        assert_eq!(json["format"], FORMAT);
+        assert_eq!(json["experiments"].as_array().unwrap().len(), 7);
+        // Every arm's figures and the paper's beside them.
+        let e5 = &json["experiments"][4]["tables"][0]["rows"];
+        assert_eq!(e5[0]["paper"]["failures"], 186);
+        assert!(e5[2]["tests"][0]["p_value"].as_f64().is_some());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

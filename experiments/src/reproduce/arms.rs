@@ -1,0 +1,466 @@
+//! What every experiment is made of: seeded test suites that every arm plays, the figures
+//! of an arm, the tests between arms, and tables of arms beside the paper's rows.
+
+use agent::optimality::mean_steps_failures_as_horizon;
+use agent::{EpisodeResult, Policy, Summary};
+use serde::Serialize;
+use sim::{Env, EnvConfig, Goal, GoalSpec, Grid, Observation};
+
+use super::paper::{PaperRow, PaperTable};
+use super::{ProgressSink, Result};
+use crate::stats::{self, Method, TestResult};
+
+/// The goals of a suite's games.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Goals {
+    /// Every goal in the list, each played from the same `episodes` starts.
+    Each(Vec<Goal>),
+    /// A goal drawn with each start (uniformly, from the start's seed).
+    Drawn,
+}
+
+/// A set of test games, fixed by a seed: every arm of a comparison plays the same suite,
+/// so game `k` of two arms starts from the same state with the same goal and the arms'
+/// results pair up.
+///
+/// Game `k` of goal `g` is reset with `sim::seeding::episode_seed(seed, k)`, the way
+/// `blockstack run` and `blockstack eval` number games, and the agent draws its random
+/// actions from its own stream of that seed ([`agent::rollout::policy_rng`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Suite {
+    /// Blocks.
+    pub blocks: usize,
+    /// The goals.
+    pub goals: Goals,
+    /// Games per goal (or in all, for drawn goals).
+    pub episodes: u64,
+    /// The seed of the starts.
+    pub seed: u64,
+    /// Steps before a game counts as failed.
+    pub horizon: u32,
+}
+
+impl Suite {
+    /// The grid every experiment plays on: the paper's 7 x 7.
+    pub fn grid(&self) -> Grid {
+        Grid::default()
+    }
+
+    /// The games' environments: one per goal, or one drawing its goals.
+    fn envs(&self) -> Result<Vec<Env>> {
+        let config = |goal| EnvConfig {
+            blocks: self.blocks,
+            goal,
+            horizon: self.horizon,
+            ..EnvConfig::default()
+        };
+        let specs: Vec<GoalSpec> = match &self.goals {
+            Goals::Each(goals) => goals.iter().map(|&g| GoalSpec::Fixed(g)).collect(),
+            Goals::Drawn => vec![GoalSpec::Random],
+        };
+        Ok(specs
+            .into_iter()
+            .map(|s| Env::new(config(s)))
+            .collect::<sim::Result<_>>()?)
+    }
+
+    /// Games in all.
+    pub fn games(&self) -> u64 {
+        match &self.goals {
+            Goals::Each(goals) => self.episodes * goals.len() as u64,
+            Goals::Drawn => self.episodes,
+        }
+    }
+
+    /// `policy`'s games, goal by goal.
+    pub fn play(&self, policy: &mut dyn Policy) -> Result<Vec<EpisodeResult>> {
+        let mut results = Vec::with_capacity(self.games() as usize);
+        for mut env in self.envs()? {
+            results.extend(agent::play(&mut env, policy, self.episodes, self.seed, None)?);
+        }
+        Ok(results)
+    }
+
+    /// The observations of game `index` (in [`Suite::play`]'s order) played by `policy`,
+    /// the start first: the same game as in [`Suite::play`].
+    pub fn record(&self, policy: &mut dyn Policy, index: usize) -> Result<Vec<Observation>> {
+        let per_env = self.episodes as usize;
+        let mut env = self.envs()?.swap_remove(index / per_env);
+        let seed = sim::seeding::episode_seed(self.seed, (index % per_env) as u64);
+        let mut obs = env.reset(seed);
+        let mut rng = agent::rollout::policy_rng(seed);
+        policy.begin_episode(&obs);
+        let mut observations = vec![obs];
+        while !env.is_over() {
+            obs = env.step(policy.act(&obs, &mut rng)?)?.observation;
+            observations.push(obs);
+        }
+        Ok(observations)
+    }
+
+    /// Every game's first observation (start and goal), in [`Suite::play`]'s order.
+    pub fn starts(&self) -> Result<Vec<Observation>> {
+        let mut starts = Vec::with_capacity(self.games() as usize);
+        for mut env in self.envs()? {
+            starts.extend((0..self.episodes).map(|k| env.reset(sim::seeding::episode_seed(self.seed, k))));
+        }
+        Ok(starts)
+    }
+
+    /// The length of a shortest plan from every game's start (the exact solver's), in
+    /// [`Suite::play`]'s order.
+    pub fn optimum(&self) -> Result<Vec<u32>> {
+        let solver = oracle::ExactSolver::new(self.grid());
+        self.starts()?
+            .iter()
+            .map(|obs| Ok(solver.distance(&obs.state, &obs.goal)?))
+            .collect()
+    }
+
+    /// A short description: "500 games, goal drawn per game, starts seed 1001".
+    pub fn describe(&self) -> String {
+        let goals = match &self.goals {
+            Goals::Each(goals) if goals.len() == 1 => format!("{} games of goal {}", self.episodes, goals[0]),
+            Goals::Each(goals) => format!(
+                "{} games of each goal {} ({} in all)",
+                self.episodes,
+                goals.iter().map(Goal::to_string).collect::<Vec<_>>().join(" "),
+                self.games()
+            ),
+            Goals::Drawn => format!(
+                "{} games, goal drawn per game from all {}",
+                self.episodes,
+                goal_count(self.blocks)
+            ),
+        };
+        format!(
+            "{goals}, {} blocks, horizon {}, starts seed {}",
+            self.blocks, self.horizon, self.seed
+        )
+    }
+}
+
+/// The mean of `values` (`None` for none), e.g. of shortest plans' lengths.
+pub fn mean_of(values: &[u32]) -> Option<f64> {
+    (!values.is_empty()).then(|| values.iter().map(|&v| f64::from(v)).sum::<f64>() / values.len() as f64)
+}
+
+/// `n!`: the number of goals of `n` blocks.
+fn goal_count(blocks: usize) -> usize {
+    (1..=blocks).product()
+}
+
+/// One arm's figures over its games: all replicates (agents trained with different seeds)
+/// playing the same suite.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ArmResult {
+    /// The arm's name in the tables.
+    pub name: String,
+    /// What plays: the agent and its training.
+    pub agent: String,
+    /// The test-time probability of a random action, for learners (`None`: not a learner).
+    pub test_epsilon: Option<f64>,
+    /// Agents (training seeds) behind the arm; each played every game of the suite.
+    pub replicates: usize,
+    /// Games per replicate.
+    pub games: usize,
+    /// Failures of each replicate, in replicate order.
+    pub failures_per_replicate: Vec<usize>,
+    /// Mean failures per replicate.
+    pub failures: f64,
+    /// Mean steps over every game of every replicate, a failure counted as the horizon
+    /// (the paper's reading).
+    pub mean_steps_failures_at_horizon: f64,
+    /// Mean steps over the games that reached the goal.
+    pub mean_steps: Option<f64>,
+    /// Median steps over the games that reached the goal.
+    pub median_steps: Option<f64>,
+    /// Mean over the games that reached the goal of steps / shortest plan.
+    pub mean_ratio_to_optimum: Option<f64>,
+    /// Mean shortest-plan length from the starts of the games that reached the goal.
+    pub mean_optimum: Option<f64>,
+    /// Every game's steps, a failure counted as the horizon, replicate after replicate,
+    /// in the suite's order (the samples of the tests and box plots).
+    #[serde(skip)]
+    pub steps: Vec<f64>,
+}
+
+impl ArmResult {
+    /// The figures of `replicates` (each one agent's results on the same suite, whose
+    /// shortest plans are `optimum`).
+    pub fn of(
+        name: impl Into<String>,
+        agent: impl Into<String>,
+        test_epsilon: Option<f64>,
+        replicates: &[Vec<EpisodeResult>],
+        optimum: &[u32],
+        horizon: u32,
+    ) -> ArmResult {
+        let all: Vec<EpisodeResult> = replicates.iter().flatten().copied().collect();
+        let optimal: Vec<u32> = replicates.iter().flat_map(|_| optimum.iter().copied()).collect();
+        let summary = Summary::of(&all);
+        let optimality = agent::optimality::Optimality::of(&all, &optimal);
+        let failures_per_replicate: Vec<usize> = replicates.iter().map(|r| Summary::of(r).failures).collect();
+        ArmResult {
+            name: name.into(),
+            agent: agent.into(),
+            test_epsilon,
+            replicates: replicates.len(),
+            games: replicates.first().map_or(0, Vec::len),
+            failures: failures_per_replicate.iter().sum::<usize>() as f64 / replicates.len().max(1) as f64,
+            failures_per_replicate,
+            mean_steps_failures_at_horizon: mean_steps_failures_as_horizon(&all, horizon),
+            mean_steps: summary.mean_steps,
+            median_steps: summary.median_steps,
+            mean_ratio_to_optimum: optimality.mean_ratio_to_optimum,
+            mean_optimum: optimality.mean_optimal_steps,
+            steps: all
+                .iter()
+                .map(|r| f64::from(if r.reached_goal { r.steps } else { horizon }))
+                .collect(),
+        }
+    }
+
+    /// The share of games that failed, in `[0, 1]`.
+    pub fn failure_rate(&self) -> f64 {
+        self.failures / self.games.max(1) as f64
+    }
+}
+
+/// Which test compared two arms, and what it found.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct TestOutcome {
+    /// The test: "Wilcoxon signed-rank" or "Kolmogorov-Smirnov".
+    pub test: String,
+    /// The arm compared against.
+    pub against: String,
+    /// The statistic as SciPy reports it.
+    pub statistic: f64,
+    /// The two-sided p-value.
+    pub p_value: f64,
+    /// How the p-value was computed: exact, permutation or asymptotic.
+    pub method: String,
+    /// Observations per sample (pairs, for the paired test).
+    pub n: (usize, usize),
+    /// When the arms have several agents: the same test agent by agent (each agent's games
+    /// against the same-seed agent of `against`, or against all of `against` when it has
+    /// one), the paper's protocol of one agent per arm.
+    pub per_agent_p_values: Vec<f64>,
+}
+
+impl TestOutcome {
+    fn from(test: &str, against: &ArmResult, n: (usize, usize), r: TestResult) -> TestOutcome {
+        TestOutcome {
+            per_agent_p_values: Vec::new(),
+            test: test.into(),
+            against: against.name.clone(),
+            statistic: r.statistic,
+            p_value: r.p_value,
+            method: match r.method {
+                Method::Exact => "exact",
+                Method::Permutation => "permutation",
+                Method::Asymptotic => "asymptotic",
+            }
+            .into(),
+            n,
+        }
+    }
+
+    /// The method of a paired test whose pairs are all equal.
+    pub const IDENTICAL: &'static str = "identical samples";
+
+    /// The paired Wilcoxon signed-rank test (SciPy's defaults) of `arm` against `base`:
+    /// game by game, steps with a failure counted as the horizon. When every pair is equal
+    /// no test can tell the arms apart (SciPy returns NaN): p is 1 and the method
+    /// [`TestOutcome::IDENTICAL`].
+    pub fn wilcoxon(arm: &ArmResult, base: &ArmResult) -> Result<TestOutcome> {
+        let n = (arm.steps.len(), base.steps.len());
+        if arm.steps == base.steps {
+            return Ok(TestOutcome {
+                test: "Wilcoxon signed-rank".into(),
+                against: base.name.clone(),
+                statistic: 0.0,
+                p_value: 1.0,
+                method: Self::IDENTICAL.into(),
+                n,
+                per_agent_p_values: Vec::new(),
+            });
+        }
+        let r = stats::wilcoxon(&arm.steps, &base.steps, false)?;
+        Ok(TestOutcome {
+            per_agent_p_values: per_agent(arm, base, |x, y| {
+                Ok(if x == y {
+                    1.0
+                } else {
+                    stats::wilcoxon(x, y, false)?.p_value
+                })
+            })?,
+            ..Self::from("Wilcoxon signed-rank", base, n, r)
+        })
+    }
+
+    /// The two-sample Kolmogorov-Smirnov test (SciPy's defaults) of `arm`'s steps against
+    /// `base`'s, a failure counted as the horizon.
+    pub fn ks(arm: &ArmResult, base: &ArmResult) -> Result<TestOutcome> {
+        let r = stats::ks_2samp(&arm.steps, &base.steps)?;
+        Ok(TestOutcome {
+            per_agent_p_values: per_agent(arm, base, |x, y| Ok(stats::ks_2samp(x, y)?.p_value))?,
+            ..Self::from("Kolmogorov-Smirnov", base, (arm.steps.len(), base.steps.len()), r)
+        })
+    }
+
+    /// How many agents' tests have p below `alpha`, of how many (`None` without per-agent
+    /// tests).
+    pub fn agents_below(&self, alpha: f64) -> Option<(usize, usize)> {
+        (!self.per_agent_p_values.is_empty()).then(|| {
+            (
+                self.per_agent_p_values.iter().filter(|&&p| p < alpha).count(),
+                self.per_agent_p_values.len(),
+            )
+        })
+    }
+}
+
+/// `test`'s p-value for each agent of `arm` against the same-seed agent of `base` (or all
+/// of `base` when it has one agent); none unless `arm` has several agents.
+fn per_agent(arm: &ArmResult, base: &ArmResult, test: impl Fn(&[f64], &[f64]) -> Result<f64>) -> Result<Vec<f64>> {
+    if arm.replicates < 2 || arm.games == 0 || !(base.replicates == 1 || base.replicates == arm.replicates) {
+        return Ok(Vec::new());
+    }
+    arm.steps
+        .chunks(arm.games)
+        .enumerate()
+        .map(|(r, x)| {
+            let y = if base.replicates == 1 {
+                &base.steps[..]
+            } else {
+                &base.steps[r * base.games..(r + 1) * base.games]
+            };
+            test(x, y)
+        })
+        .collect()
+}
+
+/// One row of a table: our arm, the paper's if it has one, and our tests.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Row {
+    /// Ours.
+    pub ours: ArmResult,
+    /// The paper's.
+    pub paper: Option<PaperRow>,
+    /// Our tests, in the order of [`Table::tests`]; `None` where a test does not apply.
+    pub tests: Vec<Option<TestOutcome>>,
+}
+
+/// A table of arms, ours beside the paper's.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Table {
+    /// The table's title.
+    pub title: String,
+    /// The games every arm played.
+    pub suite: String,
+    /// The paper's table this one reproduces, if any.
+    pub paper: Option<PaperTable>,
+    /// The tests' column headings, e.g. "Wilcoxon vs baseline".
+    pub tests: Vec<String>,
+    /// The rows.
+    pub rows: Vec<Row>,
+}
+
+impl Table {
+    /// The row named `name`.
+    pub fn row(&self, name: &str) -> Option<&Row> {
+        self.rows.iter().find(|r| r.ours.name == name)
+    }
+}
+
+/// Plays `suite` with each replicate's policy, on rayon's pool, one job each; the results
+/// in replicate order whatever the threads.
+pub fn play_replicates<'a, P, F>(
+    suite: &Suite,
+    replicates: &'a [P],
+    policy: F,
+    progress: &dyn ProgressSink,
+    stage: &str,
+) -> Result<Vec<Vec<EpisodeResult>>>
+where
+    P: Sync,
+    F: Fn(&'a P) -> Result<Box<dyn Policy + 'a>> + Sync,
+{
+    use rayon::prelude::*;
+    replicates
+        .par_iter()
+        .map(|p| {
+            let mut policy = policy(p)?;
+            let results = suite.play(policy.as_mut());
+            progress.advance(stage);
+            results
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn suite(goals: Goals) -> Suite {
+        Suite {
+            blocks: 3,
+            goals,
+            episodes: 4,
+            seed: 9,
+            horizon: 1000,
+        }
+    }
+
+    #[test]
+    fn a_recorded_game_is_the_played_one() {
+        let s = suite(Goals::Each(vec!["0,1,2".parse().unwrap(), "2,1,0".parse().unwrap()]));
+        let played = s.play(&mut agent::RandomPolicy).unwrap();
+        assert_eq!(played.len(), 8);
+        for index in [0, 5] {
+            let obs = s.record(&mut agent::RandomPolicy, index).unwrap();
+            assert_eq!(obs[0].state, played[index].start);
+            assert_eq!(obs.len() as u32 - 1, played[index].steps);
+            assert_eq!(obs[0].goal, played[index].goal);
+        }
+    }
+
+    #[test]
+    fn every_arm_plays_the_same_starts_and_the_optimum_is_below_them() {
+        let s = suite(Goals::Drawn);
+        let random = s.play(&mut agent::RandomPolicy).unwrap();
+        let exact = s.play(&mut agent::ExactPolicy::new(s.grid())).unwrap();
+        let optimum = s.optimum().unwrap();
+        for ((r, e), o) in random.iter().zip(&exact).zip(&optimum) {
+            assert_eq!((r.start, r.goal), (e.start, e.goal));
+            assert_eq!(e.steps, *o);
+            assert!(!r.reached_goal || r.steps >= *o);
+        }
+        let arm = ArmResult::of("exact", "exact", None, &[exact.clone(), exact], &optimum, 1000);
+        assert_eq!(arm.mean_ratio_to_optimum, Some(1.0));
+        assert_eq!((arm.replicates, arm.games, arm.failures), (2, 4, 0.0));
+        assert_eq!(arm.steps.len(), 8);
+    }
+
+    #[test]
+    fn failures_count_as_the_horizon_in_the_samples() {
+        let s = Suite {
+            horizon: 3,
+            ..suite(Goals::Drawn)
+        };
+        let random = s.play(&mut agent::RandomPolicy).unwrap();
+        let arm = ArmResult::of(
+            "random",
+            "random",
+            None,
+            std::slice::from_ref(&random),
+            &s.optimum().unwrap(),
+            3,
+        );
+        assert_eq!(arm.failures as usize, random.iter().filter(|r| !r.reached_goal).count());
+        for (r, &v) in random.iter().zip(&arm.steps) {
+            assert_eq!(v, if r.reached_goal { f64::from(r.steps) } else { 3.0 });
+        }
+    }
+}

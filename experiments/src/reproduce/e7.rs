@@ -1,0 +1,304 @@
+//! E7, the table the paper never had: steps to goal of the random agent, each Q-learner
+//! (the paper's and ours), the oracle and the exact solver, on the same starts of every
+//! goal, against the shortest plans.
+
+use agent::{EpisodeResult, ExactPolicy, OraclePolicy, Policy, QAgent, RandomPolicy};
+use rayon::prelude::*;
+use sim::Goal;
+
+use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, mean_of};
+use super::e3::ours_description;
+use super::text::{num, significance};
+use super::{Context, Drawing, Experiment, Figure, HORIZON, Result, Scale, Setting};
+use crate::plots::{Bar, BarChart, EpisodeFrames, Reference};
+
+/// The agents, in the table's order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Agent {
+    Random,
+    Paper { greedy: bool },
+    Ours { greedy: bool },
+    Oracle,
+    Exact,
+}
+
+const AGENTS: [Agent; 7] = [
+    Agent::Random,
+    Agent::Paper { greedy: false },
+    Agent::Paper { greedy: true },
+    Agent::Ours { greedy: false },
+    Agent::Ours { greedy: true },
+    Agent::Oracle,
+    Agent::Exact,
+];
+
+impl Agent {
+    fn name(self) -> &'static str {
+        match self {
+            Agent::Random => "random",
+            Agent::Paper { greedy: false } => "Q paper (chasing + paper reward)",
+            Agent::Paper { greedy: true } => "Q paper, greedy",
+            Agent::Ours { greedy: false } => "Q ours (role + step-cost)",
+            Agent::Ours { greedy: true } => "Q ours, greedy",
+            Agent::Oracle => "oracle",
+            Agent::Exact => "exact solver",
+        }
+    }
+
+    fn is_learner(self) -> bool {
+        matches!(self, Agent::Paper { .. } | Agent::Ours { .. })
+    }
+}
+
+/// Jobs reported: one suite per agent.
+pub(super) fn jobs(_: &Scale) -> u64 {
+    AGENTS.len() as u64
+}
+
+/// Runs E7 with the paper's learner `paper_agent` and ours.
+pub(super) fn run(ctx: &Context, paper_agent: &QAgent, ours: &QAgent) -> Result<Experiment> {
+    let suite = Suite {
+        blocks: 3,
+        goals: Goals::Each(Goal::all(3)?),
+        episodes: ctx.scale.test_games,
+        seed: ctx.seeds.test,
+        horizon: HORIZON,
+    };
+    let optimum = suite.optimum()?;
+    let eps = ctx.test_epsilon();
+    let epsilon = |greedy: bool| if greedy { 0.0 } else { eps };
+    let policy = |agent: Agent| -> Result<Box<dyn Policy + '_>> {
+        Ok(match agent {
+            Agent::Random => Box::new(RandomPolicy),
+            Agent::Paper { greedy } => Box::new(paper_agent.policy(epsilon(greedy))?),
+            Agent::Ours { greedy } => Box::new(ours.policy(epsilon(greedy))?),
+            Agent::Oracle => Box::new(OraclePolicy::new(suite.grid())),
+            Agent::Exact => Box::new(ExactPolicy::new(suite.grid())),
+        })
+    };
+    let played: Vec<Vec<EpisodeResult>> = AGENTS
+        .par_iter()
+        .map(|&a| {
+            let results = suite.play(policy(a)?.as_mut());
+            ctx.progress.advance("E7");
+            results
+        })
+        .collect::<Result<_>>()?;
+    let arms: Vec<ArmResult> = AGENTS
+        .iter()
+        .zip(&played)
+        .map(|(&a, results)| {
+            let what = match a {
+                Agent::Random => "uniformly random actions".to_string(),
+                Agent::Paper { .. } => {
+                    "the paper's learner, trained on all six goals (E5's first baseline agent)".into()
+                }
+                Agent::Ours { .. } => "our learner (E4's), trained on 0,1,2 only".into(),
+                Agent::Oracle => "the centroid + A* oracle, planning from each start".into(),
+                Agent::Exact => "the exact solver's shortest plan".into(),
+            };
+            let test_epsilon = a.is_learner().then(|| match a {
+                Agent::Paper { greedy } | Agent::Ours { greedy } => epsilon(greedy),
+                _ => eps,
+            });
+            ArmResult::of(
+                a.name(),
+                what,
+                test_epsilon,
+                std::slice::from_ref(results),
+                &optimum,
+                HORIZON,
+            )
+        })
+        .collect();
+    let index = |agent: Agent| AGENTS.iter().position(|&a| a == agent).expect("every agent has an arm");
+    let (exact, oracle) = (index(Agent::Exact), index(Agent::Oracle));
+    let paper_index = index(Agent::Paper { greedy: false });
+    let mut rows = Vec::new();
+    for arm in &arms {
+        // A row is not tested against itself.
+        let tests = [paper_index, exact]
+            .iter()
+            .map(|&against| {
+                (arm.name != arms[against].name)
+                    .then(|| TestOutcome::wilcoxon(arm, &arms[against]))
+                    .transpose()
+            })
+            .collect::<Result<Vec<_>>>()?;
+        rows.push(Row {
+            ours: arm.clone(),
+            paper: None,
+            tests,
+        });
+    }
+    // The best learner, by mean steps with failures at the horizon.
+    let best = AGENTS
+        .iter()
+        .zip(&arms)
+        .enumerate()
+        .filter(|(_, (a, _))| a.is_learner())
+        .min_by(|(_, (_, x)), (_, (_, y))| {
+            x.mean_steps_failures_at_horizon
+                .total_cmp(&y.mean_steps_failures_at_horizon)
+        })
+        .map(|(i, _)| i)
+        .expect("learners");
+    let (start, gifs) = episodes(
+        &suite,
+        &played[paper_index],
+        [(AGENTS[best], best), (AGENTS[paper_index], paper_index)],
+        &policy,
+        &arms,
+    )?;
+    let (b, p, x) = (&arms[best], &arms[paper_index], &arms[exact]);
+    let to_paper = rows[best].tests[0]
+        .as_ref()
+        .map_or_else(|| "not tested".into(), |t| significance(t.p_value));
+    let reading = format!(
+        "The best learner, {}, failed {} of {} games with mean {} steps, {}x the shortest plan (the exact solver: \
+         {} steps); the paper's learner failed {} with mean {} steps over its successes, {}x; the difference in \
+         steps (a failure at 1000) is {}. The oracle averages {}x the optimum.",
+        b.name,
+        num(Some(b.failures), 0),
+        b.games,
+        num(b.mean_steps, 2),
+        num(b.mean_ratio_to_optimum, 3),
+        num(x.mean_steps, 2),
+        num(Some(p.failures), 0),
+        num(p.mean_steps, 1),
+        num(p.mean_ratio_to_optimum, 1),
+        to_paper,
+        num(arms[oracle].mean_ratio_to_optimum, 4),
+    );
+    let bars = BarChart {
+        title: "E7: steps to goal on the same starts, every goal".into(),
+        y_label: "mean steps (a failure counted as 1000)".into(),
+        bars: arms
+            .iter()
+            .map(|a| Bar {
+                name: a.name.clone(),
+                value: a.mean_steps_failures_at_horizon,
+                interval: None,
+                second: a.median_steps,
+            })
+            .collect(),
+        value_label: "mean steps, a failure at 1000".into(),
+        interval_label: String::new(),
+        second_label: "median over successes".into(),
+        reference: mean_of(&optimum).map(|v| Reference {
+            label: "mean shortest plan (exact solver)".into(),
+            value: v,
+        }),
+        log_scale: true,
+        note: format!(
+            "{}. Learners play with a random action with probability {eps} unless marked greedy.",
+            suite.describe()
+        ),
+    };
+    let mut figures = vec![Figure::new(
+        "e7-steps",
+        "Mean steps to goal per agent (a failure at 1000), median over successes, and the mean shortest plan".into(),
+        Drawing::Bars(bars),
+    )];
+    figures.extend(gifs);
+    Ok(Experiment {
+        id: "E7".into(),
+        title: "Every agent against the optimum (ours)".into(),
+        setup: vec![
+            Setting {
+                name: "agents".into(),
+                value: format!(
+                    "random; the paper's learner (chasing + paper reward, {} training games on all six goals, seed \
+                     {}); ours ({}); the oracle; the exact solver",
+                    paper_agent.training().map_or(0, |t| t.games),
+                    paper_agent.training().map_or(0, |t| t.seed),
+                    ours_description(ours)
+                ),
+            },
+            Setting {
+                name: "games".into(),
+                value: format!("{}, per agent", suite.describe()),
+            },
+            Setting {
+                name: "test policy".into(),
+                value: format!(
+                    "learners: random action with probability {eps} (the paper's), and greedy (epsilon 0) in the \
+                     rows so marked; planners are deterministic"
+                ),
+            },
+            Setting {
+                name: "optimum".into(),
+                value: format!(
+                    "the exact solver's shortest plan from each start: {} steps on average",
+                    num(mean_of(&optimum), 2)
+                ),
+            },
+            Setting {
+                name: "tests".into(),
+                value: "Wilcoxon signed-rank against the paper's learner and against the exact solver, paired by \
+                        start, steps with a failure counted as 1000"
+                    .into(),
+            },
+            Setting {
+                name: "episode pictures".into(),
+                value: format!("game {start} of the table (the paper's learner's most typical success)"),
+            },
+        ],
+        tables: vec![Table {
+            title: "Steps to goal against the optimum".into(),
+            suite: suite.describe(),
+            paper: None,
+            tests: vec!["Wilcoxon vs Q paper".into(), "Wilcoxon vs exact".into()],
+            rows,
+        }],
+        curves: Vec::new(),
+        reading,
+        figures,
+    })
+}
+
+/// The GIFs of `agents` (each with its arm's index) on one start: the game where the
+/// paper's learner reached the goal in the number of steps nearest its median (the first
+/// game if it never did). Returns the game's index and the figures.
+fn episodes<'a>(
+    suite: &Suite,
+    paper_results: &[EpisodeResult],
+    agents: [(Agent, usize); 2],
+    policy: &dyn Fn(Agent) -> Result<Box<dyn Policy + 'a>>,
+    arms: &[ArmResult],
+) -> Result<(usize, Vec<Figure>)> {
+    let median = arms[agents[1].1].median_steps.unwrap_or(0.0);
+    let start = paper_results
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.reached_goal)
+        .min_by(|(_, a), (_, b)| {
+            (f64::from(a.steps) - median)
+                .abs()
+                .total_cmp(&(f64::from(b.steps) - median).abs())
+        })
+        .map_or(0, |(i, _)| i);
+    let mut figures = Vec::new();
+    for (i, (agent, _)) in agents.iter().enumerate() {
+        let observations = suite.record(policy(*agent)?.as_mut(), start)?;
+        let goal = observations[0].goal;
+        let (stem, who) = if i == 0 {
+            ("e7-best", "the best learner")
+        } else {
+            ("e7-paper", "the paper's learner")
+        };
+        figures.push(Figure::new(
+            stem,
+            format!(
+                "One game of {who}, {}, goal {goal}, {} steps",
+                agent.name(),
+                observations.len() - 1
+            ),
+            Drawing::Episode(vec![EpisodeFrames {
+                caption: format!("{}, goal {goal}", agent.name()),
+                observations,
+            }]),
+        ));
+    }
+    Ok((start, figures))
+}

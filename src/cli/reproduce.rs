@@ -1,0 +1,85 @@
+//! `blockstack reproduce`: run experiments E1-E7 and write the report.
+
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use clap::Args;
+use experiments::reproduce::{self, Options, ProgressSink};
+use indicatif::{ProgressBar, ProgressStyle};
+
+/// Arguments of `blockstack reproduce`.
+#[derive(Debug, Args)]
+pub struct ReproduceArgs {
+    /// Directory to write the report to (README.md, results.json, pictures).
+    #[arg(long, default_value = "report")]
+    pub out: PathBuf,
+    /// Small counts, to check the pipeline in a minute; not the paper's figures.
+    #[arg(long)]
+    pub quick: bool,
+    /// The seed every training, start and random choice derives from.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Threads to run on (default: one per core). The results do not depend on it.
+    #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
+    pub jobs: Option<u16>,
+}
+
+/// One progress bar for the whole run; drawn only when stderr is a terminal.
+struct Bar(ProgressBar);
+
+impl ProgressSink for Bar {
+    fn begin(&self, jobs: u64) {
+        self.0.set_length(jobs);
+    }
+
+    fn advance(&self, stage: &str) {
+        self.0.set_message(stage.to_string());
+        self.0.inc(1);
+    }
+}
+
+/// Runs the experiments and writes the report.
+pub fn reproduce(args: ReproduceArgs) -> Result<()> {
+    let mut pool = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = args.jobs {
+        pool = pool.num_threads(usize::from(n));
+    }
+    let pool = pool.build().context("cannot start the worker threads")?;
+    let bar = if std::io::stderr().is_terminal() {
+        ProgressBar::new(0)
+    } else {
+        ProgressBar::hidden()
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{bar:30} {pos}/{len} jobs  {msg}  [{elapsed_precise}]")
+            .expect("a valid template"),
+    );
+    let options = Options {
+        seed: args.seed,
+        quick: args.quick,
+    };
+    let clock = Instant::now();
+    let sink = Bar(bar);
+    let results = pool.install(|| reproduce::reproduce(&options, &sink))?;
+    sink.0.finish_and_clear();
+    let files = reproduce::write_report(&results, &args.out)?;
+    println!(
+        "reproduced E1-E7 ({} run, seed {}, {} threads) in {:.0} s",
+        if args.quick { "quick" } else { "full" },
+        args.seed,
+        pool.current_num_threads(),
+        clock.elapsed().as_secs_f64()
+    );
+    for e in &results.experiments {
+        println!("{}: {}", e.id, e.reading);
+    }
+    println!(
+        "report: {} (results: {}, {} pictures)",
+        files.readme.display(),
+        files.results.display(),
+        files.pictures.len()
+    );
+    Ok(())
+}
