@@ -129,19 +129,12 @@ pub struct Scale {
 }
 
 impl Scale {
-    /// The paper's counts (`quick`: small ones).
+    /// The paper's counts (`quick`: small ones). Training lengths are the agent crate's
+    /// presets; the learning curves test at fractions and multiples of them.
     pub fn new(quick: bool) -> Scale {
         let paper_games = TrainConfig::paper(Vec::new()).games;
-        let ours_games = if quick {
-            200_000
-        } else {
-            TrainConfig::role_step_cost(Vec::new()).games
-        };
-        let ours_curve = if quick {
-            vec![0, 20_000, 100_000, ours_games]
-        } else {
-            vec![0, 20_000, 100_000, 250_000, 500_000, 1_000_000, ours_games]
-        };
+        let ours_games = TrainConfig::role_step_cost(Vec::new()).games;
+        let at = |games: u64, per_mille: &[u64]| -> Vec<u64> { per_mille.iter().map(|m| games * m / 1000).collect() };
         if quick {
             Scale {
                 replicates: 2,
@@ -150,8 +143,8 @@ impl Scale {
                 e3_games_per_goal: 50,
                 paper_games,
                 ours_games,
-                paper_curve: vec![0, 1000, paper_games],
-                ours_curve,
+                paper_curve: at(paper_games, &[0, 200, 1000]),
+                ours_curve: at(ours_games, &[0, 50, 200, 1000]),
                 demos: paper::E6_DEMOS,
             }
         } else {
@@ -162,8 +155,8 @@ impl Scale {
                 e3_games_per_goal: 50,
                 paper_games,
                 ours_games,
-                paper_curve: vec![0, 500, 1000, 2000, paper_games, 10_000, 20_000, 50_000],
-                ours_curve,
+                paper_curve: at(paper_games, &[0, 100, 200, 400, 1000, 2000, 4000, 10_000]),
+                ours_curve: at(ours_games, &[0, 20, 50, 100, 200, 500, 1000]),
                 demos: paper::E6_DEMOS,
             }
         }

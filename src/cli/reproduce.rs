@@ -42,6 +42,9 @@ impl ProgressSink for Bar {
 
 /// Runs the experiments and writes the report.
 pub fn reproduce(args: ReproduceArgs) -> Result<()> {
+    // Before minutes of work, not after.
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot make the report directory {}", args.out.display()))?;
     let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(n) = args.jobs {
         pool = pool.num_threads(usize::from(n));

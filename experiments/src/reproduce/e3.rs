@@ -159,18 +159,27 @@ pub(super) fn run(ctx: &Context, ours: &QAgent) -> Result<Experiment> {
 /// What our learner is, from its recorded training.
 pub(super) fn ours_description(ours: &QAgent) -> String {
     match ours.training() {
-        Some(t) => format!(
-            "{} representation, {} reward, alpha {}, gamma {}, epsilon {}, backward replay, {} training games on {} \
-             (seed {}), physics backend",
-            t.repr,
-            t.reward,
-            t.params.alpha,
-            t.params.gamma,
-            t.params.epsilon,
-            t.games,
-            t.goals.iter().map(ToString::to_string).collect::<Vec<_>>().join(" "),
-            t.seed
-        ),
+        Some(t) => {
+            let replays: Vec<&str> = [(t.backward_replay, "backward replay"), (t.final_replay, "final replay")]
+                .iter()
+                .filter(|(on, _)| *on)
+                .map(|&(_, name)| name)
+                .collect();
+            format!(
+                "{} representation, {} reward, alpha {}, gamma {}, epsilon {}{}, {} training games on {} (seed {}), \
+                 {} backend",
+                t.repr,
+                t.reward,
+                t.params.alpha,
+                t.params.gamma,
+                t.params.epsilon,
+                replays.iter().map(|r| format!(", {r}")).collect::<String>(),
+                t.games,
+                t.goals.iter().map(ToString::to_string).collect::<Vec<_>>().join(" "),
+                t.seed,
+                t.backend
+            )
+        }
         None => ours.name(),
     }
 }

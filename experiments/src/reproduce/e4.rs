@@ -42,9 +42,9 @@ pub(super) fn ours_config(ctx: &Context) -> TrainConfig {
     }
 }
 
-/// Plays `trainer` up to each of `schedule`'s game counts and tests it there; the last
-/// point tests the finished agent (with whatever the training does at its end). Returns
-/// the finished agent and, per point, its test results.
+/// Trains as `config` says, testing the agent at each of `schedule`'s game counts (in
+/// increasing order) as [`agent::train`] would give it after that many games. Returns the
+/// agent at the last point and, per point, its test results.
 fn train_along(
     ctx: &Context,
     config: TrainConfig,
@@ -54,19 +54,16 @@ fn train_along(
     let eps = ctx.test_epsilon();
     let mut trainer = Trainer::new(config)?;
     let mut tests = Vec::with_capacity(schedule.len());
-    let (last, early) = schedule.split_last().expect("a schedule has points");
-    for &games in early {
+    let mut agent = None;
+    for &games in schedule {
         trainer.play_games(games.saturating_sub(trainer.report().games), None)?;
+        let snapshot = trainer.snapshot().agent;
         ctx.progress.advance("E4");
-        tests.push(suite.play(&mut trainer.agent().policy(eps)?)?);
+        tests.push(suite.play(&mut snapshot.policy(eps)?)?);
         ctx.progress.advance("E4");
+        agent = Some(snapshot);
     }
-    trainer.play_games(last.saturating_sub(trainer.report().games), None)?;
-    let agent = trainer.finish().agent;
-    ctx.progress.advance("E4");
-    tests.push(suite.play(&mut agent.policy(eps)?)?);
-    ctx.progress.advance("E4");
-    Ok((agent, tests))
+    Ok((agent.expect("a schedule has points"), tests))
 }
 
 /// A curve's points from each point's test results (one list per replicate).
@@ -165,14 +162,16 @@ pub(super) fn experiment(ctx: &Context, paper_learner: Curve, ours: Curve) -> Ex
         .find(|&i| ours.points[i..].iter().all(|p| p.failure_rate == 0.0))
         .map(|i| &ours.points[i]);
     let reading = format!(
-        "The paper's learner failed {} of its test games untrained, {} after the {} training games the other \
-         experiments use, and {} after {}; its best point is {} at {} games. Ours fails {} untrained and {}, \
-         with mean {} steps at the end.",
+        "The paper's learner failed {} of its test games untrained and {} after the {} training games the other \
+         experiments use{}; its best point is {} at {} games. Ours fails {} untrained and {}, with mean {} steps \
+         at the end.",
         rate(points.first()),
         rate(at_preset),
         ctx.scale.paper_games,
-        rate(points.last()),
-        points.last().map_or(0, |p| p.games),
+        points
+            .last()
+            .filter(|p| p.games != ctx.scale.paper_games)
+            .map_or(String::new(), |p| format!(", {} after {}", rate(Some(p)), p.games)),
         rate(best),
         best.map_or(0, |p| p.games),
         rate(ours.points.first()),
@@ -208,8 +207,8 @@ pub(super) fn experiment(ctx: &Context, paper_learner: Curve, ours: Curve) -> Ex
                 "E4: our learner (role + step-cost), 3 blocks",
                 &ours,
                 format!(
-                    "Points before the last are the agent mid-training; the last is the finished agent. Test \
-                     policy: random action with probability {}.",
+                    "Each point is the agent as training for that many games gives it (final replay included). \
+                     Test policy: random action with probability {}.",
                     ctx.test_epsilon()
                 ),
             )),

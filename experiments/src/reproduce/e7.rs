@@ -45,6 +45,19 @@ impl Agent {
         }
     }
 
+    /// The name under its bar.
+    fn short(self) -> &'static str {
+        match self {
+            Agent::Random => "random",
+            Agent::Paper { greedy: false } => "Q paper",
+            Agent::Paper { greedy: true } => "Q paper greedy",
+            Agent::Ours { greedy: false } => "Q ours",
+            Agent::Ours { greedy: true } => "Q ours greedy",
+            Agent::Oracle => "oracle",
+            Agent::Exact => "exact",
+        }
+    }
+
     fn is_learner(self) -> bool {
         matches!(self, Agent::Paper { .. } | Agent::Ours { .. })
     }
@@ -173,10 +186,11 @@ pub(super) fn run(ctx: &Context, paper_agent: &QAgent, ours: &QAgent) -> Result<
     let bars = BarChart {
         title: "E7: steps to goal on the same starts, every goal".into(),
         y_label: "mean steps (a failure counted as 1000)".into(),
-        bars: arms
+        bars: AGENTS
             .iter()
-            .map(|a| Bar {
-                name: a.name.clone(),
+            .zip(&arms)
+            .map(|(agent, a)| Bar {
+                name: agent.short().into(),
                 value: a.mean_steps_failures_at_horizon,
                 interval: None,
                 second: a.median_steps,

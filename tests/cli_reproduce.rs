@@ -1,0 +1,131 @@
+//! `blockstack reproduce --quick` end to end: the report and results.json hold every
+//! experiment, the pictures exist, and an arm's figures are what `blockstack run` gives on
+//! the same starts.
+//!
+//! CI runs `blockstack reproduce --quick --out DIR` once and sets `BLOCKSTACK_QUICK_REPORT=DIR`
+//! so that this test checks that report instead of making its own.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn blockstack(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_blockstack"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// The quick report: CI's, or one made now.
+fn quick_report() -> PathBuf {
+    if let Some(dir) = std::env::var_os("BLOCKSTACK_QUICK_REPORT") {
+        return PathBuf::from(dir);
+    }
+    let dir = std::env::temp_dir().join(format!("blockstack-cli-reproduce-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let o = blockstack(&["reproduce", "--quick", "--out", dir.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("reproduced E1-E7"), "{out}");
+    dir
+}
+
+fn read_json(path: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(path).expect("results.json exists")).expect("results.json is JSON")
+}
+
+#[test]
+fn the_quick_report_holds_every_experiment() {
+    let dir = quick_report();
+    let readme = std::fs::read_to_string(dir.join("README.md")).expect("README.md exists");
+    let json = read_json(&dir.join("results.json"));
+    assert_eq!(json["format"], "blockstack-reproduction");
+    assert_eq!(json["version"], 1);
+    assert_eq!(json["options"]["quick"], true);
+    let experiments = json["experiments"].as_array().unwrap();
+    let ids: Vec<&str> = experiments.iter().map(|e| e["id"].as_str().unwrap()).collect();
+    assert_eq!(ids, ["E1", "E2", "E3", "E4", "E5", "E6", "E7"]);
+    for e in experiments {
+        let id = e["id"].as_str().unwrap();
+        assert!(readme.contains(&format!("## {id}: ")), "{id} has no section");
+        let reading = e["reading"].as_str().unwrap();
+        assert!(!reading.is_empty() && readme.contains(reading), "{id}'s reading");
+        let tables = e["tables"].as_array().unwrap();
+        let curves = e["curves"].as_array().unwrap();
+        assert!(!tables.is_empty() || !curves.is_empty(), "{id} has no figures");
+        for row in tables.iter().flat_map(|t| t["rows"].as_array().unwrap()) {
+            assert!(row["ours"]["games"].as_u64().unwrap() > 0, "{id}");
+            assert!(row["ours"]["mean_steps_failures_at_horizon"].as_f64().is_some(), "{id}");
+        }
+        for figure in e["figures"].as_array().unwrap() {
+            for file in figure["files"].as_array().unwrap() {
+                let file = file.as_str().unwrap();
+                let len = std::fs::metadata(dir.join(file)).map_or(0, |m| m.len());
+                assert!(len > 0, "{id}: {file} is missing or empty");
+            }
+            assert!(readme.contains(&format!("]({})", figure["files"][0].as_str().unwrap())));
+        }
+    }
+    // The paper's figures beside ours, and tests with p-values.
+    let e5 = &experiments[4]["tables"][0]["rows"];
+    assert_eq!(e5[0]["paper"]["failures"], 186);
+    let p = e5[2]["tests"][0]["p_value"].as_f64().unwrap();
+    assert!((0.0..=1.0).contains(&p));
+    // E7: every agent on the same starts; the exact solver is the optimum.
+    let e7 = experiments[6]["tables"][0]["rows"].as_array().unwrap();
+    assert_eq!(e7.len(), 7);
+    let exact = e7.iter().find(|r| r["ours"]["name"] == "exact solver").unwrap();
+    assert_eq!(exact["ours"]["mean_ratio_to_optimum"], 1.0);
+    assert_eq!(exact["ours"]["failures"], 0.0);
+    for figure in [
+        "e4-paper-learner.png",
+        "e5-steps.png",
+        "e6-all-goals.png",
+        "e7-steps.png",
+        "e7-best.gif",
+        "e7-paper.gif",
+    ] {
+        assert!(dir.join(figure).is_file(), "{figure}");
+    }
+
+    // E1's random agent is `blockstack run` on the same starts.
+    let seed = json["seeds"]["test"].as_u64().unwrap().to_string();
+    let e1 = &experiments[0]["tables"][0]["rows"][0]["ours"];
+    let games = e1["games"].as_u64().unwrap().to_string();
+    let o = blockstack(&[
+        "run",
+        "--agent",
+        "random",
+        "--blocks",
+        "2",
+        "--episodes",
+        &games,
+        "--seed",
+        &seed,
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let run: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(run["failures"].as_f64(), e1["failures"].as_f64());
+    assert_eq!(run["mean_steps"], e1["mean_steps"]);
+    assert_eq!(run["median_steps"], e1["median_steps"]);
+}
+
+#[test]
+fn a_report_directory_that_cannot_be_made_fails_at_once() {
+    let file = std::env::temp_dir().join(format!("blockstack-cli-reproduce-file-{}", std::process::id()));
+    std::fs::write(&file, "not a directory").unwrap();
+    let o = blockstack(&["reproduce", "--quick", "--out", file.join("report").to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = stderr(&o);
+    assert!(
+        err.contains("cannot make the report directory") && err.lines().count() == 1,
+        "{err}"
+    );
+    let o = blockstack(&["reproduce", "--jobs", "0"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    std::fs::remove_file(&file).unwrap();
+}
