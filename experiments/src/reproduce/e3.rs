@@ -66,13 +66,14 @@ pub(super) fn run(ctx: &Context, ours: &QAgent) -> Result<Experiment> {
     let theirs = paper::E3.rows;
     let reading = format!(
         "On the unseen goals the paper's learner failed {} of {} games against the random agent's {} (paper: {} \
-         and {} of 100); the Kolmogorov-Smirnov test finds the difference {} (paper: p = {}). Ours, trained on one \
+         and {} of {}); the Kolmogorov-Smirnov test finds the difference {} (paper: p = {}). Ours, trained on one \
          goal, failed {} with mean {} steps ({}x the shortest plan).",
         num(Some(q.failures), 1),
         q.games,
         num(Some(random.failures), 0),
         theirs[0].failures.unwrap_or_default(),
         theirs[1].failures.unwrap_or_default(),
+        theirs[1].games.unwrap_or_default(),
         significance(ks_q.p_value),
         p_value(theirs[0].p_value.unwrap_or_default()),
         num(Some(ours_arms[0].failures), 0),

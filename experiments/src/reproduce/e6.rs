@@ -238,21 +238,30 @@ pub(super) fn run(ctx: &Context) -> Result<Experiment> {
     })
 }
 
-/// Of the demonstrators' rows: how many beat the baseline's mean steps, how many of
-/// those significantly (p < 5%), and how many rows; from `(mean, p)` pairs, baseline first.
-fn tally(rows: &[(f64, Option<f64>)]) -> (usize, usize, usize) {
+/// Of the demonstrators' rows: how many beat the baseline's mean steps, how many of those
+/// significantly (p < 5%), how many were significantly worse, and how many rows; from
+/// `(mean, p)` pairs, baseline first.
+fn tally(rows: &[(f64, Option<f64>)]) -> (usize, usize, usize, usize) {
     let base = rows[0].0;
+    let significant = |(_, p): &&(f64, Option<f64>)| p.is_some_and(|p| p < super::text::ALPHA);
     let better = rows[1..].iter().filter(|(m, _)| *m < base);
-    let significant = better
-        .clone()
-        .filter(|(_, p)| p.is_some_and(|p| p < super::text::ALPHA))
-        .count();
-    (better.count(), significant, rows.len() - 1)
+    let worse = rows[1..].iter().filter(|(m, _)| *m > base);
+    (
+        better.clone().count(),
+        better.filter(significant).count(),
+        worse.filter(significant).count(),
+        rows.len() - 1,
+    )
 }
 
-/// "2 of 3, 1 significantly".
-fn tally_text((better, significant, n): (usize, usize, usize)) -> String {
-    format!("{better} of {n}, {significant} significantly")
+/// "2 of 3 better, 1 significantly; 1 significantly worse".
+fn tally_text((better, significant, worse, n): (usize, usize, usize, usize)) -> String {
+    let worse = if worse > 0 {
+        format!("; {worse} significantly worse")
+    } else {
+        String::new()
+    };
+    format!("{better} of {n} better, {significant} significantly{worse}")
 }
 
 /// Our table's tally, then the paper's.
@@ -307,7 +316,7 @@ fn reading(tables: &[Table]) -> String {
         })
         .collect();
     format!(
-        "Corrected agents that beat the baseline's mean steps on all goals: {ours_all} (paper: {paper_all}); the \
+        "Corrected agents against the baseline's mean steps on all goals: {ours_all} (paper: {paper_all}); the \
          best, {}, failed {} games per {} against the baseline's {}, {}. On the goals no one demonstrated, {}.",
         best.ours.name,
         num(Some(best.ours.failures), 1),

@@ -21,12 +21,23 @@ pub fn p_value(p: f64) -> String {
     }
 }
 
-/// "significant at the 5% level (p = 0.012)" or "not significant (p = 0.34)".
+/// "p = 0.012", or "p < 1e-300" for a p-value that underflowed.
+pub fn p_is(p: f64) -> String {
+    let text = p_value(p);
+    if text.starts_with('<') {
+        format!("p {text}")
+    } else {
+        format!("p = {text}")
+    }
+}
+
+/// "significant at the 5% level (p = 0.012)" or "not significant at the 5% level (p =
+/// 0.34)".
 pub fn significance(p: f64) -> String {
     if p < ALPHA {
-        format!("significant at the 5% level (p = {})", p_value(p))
+        format!("significant at the 5% level ({})", p_is(p))
     } else {
-        format!("not significant at the 5% level (p = {})", p_value(p))
+        format!("not significant at the 5% level ({})", p_is(p))
     }
 }
 
@@ -79,6 +90,8 @@ mod tests {
         assert_eq!(relative(100.2, 100.0), "within 0.5% of");
         assert!(significance(0.01).starts_with("significant"));
         assert!(significance(0.5).starts_with("not significant"));
+        assert_eq!(p_is(0.0), "p < 1e-300");
+        assert_eq!(p_is(0.5), "p = 0.500");
         assert_eq!(failures(&[126, 248, 140], 171.33), "171.3 (126-248)");
         assert_eq!(failures(&[4], 4.0), "4");
     }
