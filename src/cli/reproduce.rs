@@ -69,10 +69,11 @@ pub fn reproduce(args: ReproduceArgs) -> Result<()> {
     sink.0.finish_and_clear();
     let files = reproduce::write_report(&results, &args.out)?;
     println!(
-        "reproduced E1-E7 ({} run, seed {}, {} threads) in {:.0} s",
+        "reproduced E1-E7 ({} run, seed {}, {} thread{}) in {:.0} s",
         if args.quick { "quick" } else { "full" },
         args.seed,
         pool.current_num_threads(),
+        if pool.current_num_threads() == 1 { "" } else { "s" },
         clock.elapsed().as_secs_f64()
     );
     for e in &results.experiments {
