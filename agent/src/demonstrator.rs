@@ -14,7 +14,7 @@
 //! - **Impatience.** With probability [`DemonstratorProfile::takeover`] it takes the step
 //!   whatever the agent proposed.
 //!
-//! When it steps in it chooses its [`Planner`]'s next action, except that with probability
+//! When it steps in it chooses its [`PlannerKind`]'s next action, except that with probability
 //! [`DemonstratorProfile::slip`] it presses a wrong key: a uniformly drawn other action.
 //! Its draws come from a generator of its own per episode (stream 2 of the episode's seed),
 //! so they never shift the starts or the agent's draws.
@@ -29,6 +29,7 @@
 
 use std::collections::HashMap;
 
+use oracle::Planner;
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
 use sim::seeding::SimRng;
@@ -42,7 +43,7 @@ pub const LOOP_WINDOW: usize = 8;
 /// The planner a demonstrator acts with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
-pub enum Planner {
+pub enum PlannerKind {
     /// The exact solver's shortest plan.
     Exact,
     /// The centroid + A* oracle (sound, a few steps longer than shortest at times).
@@ -61,7 +62,7 @@ pub struct DemonstratorProfile {
     /// Probability of taking a step whatever the proposal, in `[0, 1]`.
     pub takeover: f64,
     /// What it plans its own actions with.
-    pub planner: Planner,
+    pub planner: PlannerKind,
     /// Probability that a chosen action is a wrong one, in `[0, 1]`.
     pub slip: f64,
 }
@@ -78,9 +79,9 @@ impl DemonstratorProfile {
             slip,
         };
         match number {
-            1 => Ok(profile("careful expert", 1.0, 0.0, Planner::Exact, 0.0)),
-            2 => Ok(profile("attentive amateur", 0.5, 0.02, Planner::Oracle, 0.05)),
-            3 => Ok(profile("distracted", 0.15, 0.05, Planner::Oracle, 0.15)),
+            1 => Ok(profile("careful expert", 1.0, 0.0, PlannerKind::Exact, 0.0)),
+            2 => Ok(profile("attentive amateur", 0.5, 0.02, PlannerKind::Oracle, 0.05)),
+            3 => Ok(profile("distracted", 0.15, 0.05, PlannerKind::Oracle, 0.15)),
             _ => Err(AgentError::Config(format!(
                 "there is no demonstrator {number}: choose 1, 2 or 3"
             ))),
@@ -183,17 +184,11 @@ impl Demonstrator {
 
     /// The demonstrator's own action in `obs`: its planner's, or a slip.
     fn choose(&mut self, obs: &Observation) -> Result<Action> {
-        let planned = match self.profile.planner {
-            Planner::Exact => *self
-                .exact
-                .solve(&obs.state, &obs.goal)?
-                .actions
-                .first()
-                .ok_or_else(|| oracle::OracleError::GoalAlreadyHolds {
-                    goal: obs.goal.to_string(),
-                })?,
-            Planner::Oracle => self.oracle.next_action(&obs.state, &obs.goal)?,
+        let planner: &dyn Planner = match self.profile.planner {
+            PlannerKind::Exact => &self.exact,
+            PlannerKind::Oracle => &self.oracle,
         };
+        let planned = planner.next_action(&obs.state, &obs.goal)?;
         if self.rng.random_bool(self.profile.slip) {
             let n = Action::count(obs.state.block_count());
             // A uniformly drawn action other than the planned one.

@@ -28,7 +28,7 @@ pub use correction::{Corrected, CorrectionConfig, CorrectionRule, CorrectionSess
 pub use demonstrator::{Demonstrator, DemonstratorProfile};
 pub use demos::{BadLines, DemoRecord, DemoSink, DemoWriter};
 pub use error::{AgentError, Result};
-pub use planner_policy::{ExactPolicy, OraclePolicy};
+pub use planner_policy::{ExactPolicy, OraclePolicy, PlannerPolicy};
 pub use policy::{Policy, RandomPolicy};
 pub use qlearning::{QAgent, QParams, QPolicy};
 pub use qtable::QTable;

@@ -4,7 +4,7 @@
 //! the world is not in the state the plan expects (say, a learner or a demonstrator took
 //! some actions in between).
 
-use oracle::{ExactSolver, Oracle, Plan};
+use oracle::{ExactSolver, Oracle, Plan, Planner};
 use sim::seeding::SimRng;
 use sim::{Action, Goal, Grid, GridWorld, Observation, State, World};
 
@@ -54,63 +54,47 @@ impl PlanCursor {
     }
 }
 
-/// The centroid + A* oracle as a policy (name `oracle`).
+/// A planner as a policy: it plans once, follows its plan, and replans only when the world
+/// is not in the state the plan expects. Its name is the planner's (`oracle`, `exact`).
 #[derive(Clone, Debug)]
-pub struct OraclePolicy {
-    oracle: Oracle,
+pub struct PlannerPolicy<P> {
+    planner: P,
     cursor: PlanCursor,
+}
+
+/// The centroid + A* oracle as a policy.
+pub type OraclePolicy = PlannerPolicy<Oracle>;
+
+/// The exact solver as a policy: it takes a shortest path to the goal.
+pub type ExactPolicy = PlannerPolicy<ExactSolver>;
+
+impl<P: Planner> PlannerPolicy<P> {
+    /// A policy that follows `planner`'s plans.
+    pub fn with_planner(planner: P) -> Self {
+        Self {
+            planner,
+            cursor: PlanCursor::default(),
+        }
+    }
 }
 
 impl OraclePolicy {
     /// An oracle policy for worlds on `grid`.
     pub fn new(grid: Grid) -> Self {
-        Self {
-            oracle: Oracle::new(grid),
-            cursor: PlanCursor::default(),
-        }
+        Self::with_planner(Oracle::new(grid))
     }
-}
-
-impl Policy for OraclePolicy {
-    fn name(&self) -> String {
-        "oracle".into()
-    }
-
-    fn begin_episode(&mut self, _obs: &Observation) {
-        self.cursor = PlanCursor::default();
-    }
-
-    fn act(&mut self, obs: &Observation, _rng: &mut SimRng) -> Result<Action> {
-        match self.cursor.next(obs) {
-            Some(action) => Ok(action),
-            None => {
-                let plan = self.oracle.plan(&obs.state, &obs.goal)?;
-                self.cursor.follow(obs, plan)
-            }
-        }
-    }
-}
-
-/// The exact solver as a policy (name `exact`): it takes a shortest path to the goal.
-#[derive(Clone, Debug)]
-pub struct ExactPolicy {
-    solver: ExactSolver,
-    cursor: PlanCursor,
 }
 
 impl ExactPolicy {
     /// An exact policy for worlds on `grid`, with the solver's default budget.
     pub fn new(grid: Grid) -> Self {
-        Self {
-            solver: ExactSolver::new(grid),
-            cursor: PlanCursor::default(),
-        }
+        Self::with_planner(ExactSolver::new(grid))
     }
 }
 
-impl Policy for ExactPolicy {
+impl<P: Planner> Policy for PlannerPolicy<P> {
     fn name(&self) -> String {
-        "exact".into()
+        self.planner.name().into()
     }
 
     fn begin_episode(&mut self, _obs: &Observation) {
@@ -121,7 +105,7 @@ impl Policy for ExactPolicy {
         match self.cursor.next(obs) {
             Some(action) => Ok(action),
             None => {
-                let plan = self.solver.solve(&obs.state, &obs.goal)?;
+                let plan = self.planner.plan(&obs.state, &obs.goal)?;
                 self.cursor.follow(obs, plan)
             }
         }

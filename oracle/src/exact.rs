@@ -54,7 +54,7 @@ use sim::{Action, Effect, Goal, Grid, GridWorld, State, World};
 
 use crate::error::{OracleError, Result};
 use crate::placement::{self, check_problem};
-use crate::plan::Plan;
+use crate::plan::{Plan, Planner};
 
 /// The default budget of the exact search: the most states it may store.
 pub const DEFAULT_NODE_BUDGET: usize = 4_000_000;
@@ -181,6 +181,16 @@ impl ExactSolver {
             })
             .collect();
         Ok((Plan { actions }, stats))
+    }
+}
+
+impl Planner for ExactSolver {
+    fn name(&self) -> &'static str {
+        "exact"
+    }
+
+    fn plan(&self, state: &State, goal: &Goal) -> Result<Plan> {
+        self.solve(state, goal)
     }
 }
 

@@ -61,4 +61,4 @@ mod route;
 pub use error::{OracleError, Result};
 pub use exact::{DEFAULT_NODE_BUDGET, ExactSolver, SearchStats};
 pub use oracle::{FALLBACK_NODE_BUDGET, Oracle};
-pub use plan::Plan;
+pub use plan::{Plan, Planner};

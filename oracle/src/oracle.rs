@@ -56,7 +56,7 @@ use sim::{Action, BlockId, Goal, Grid, GridWorld, State, World};
 use crate::error::{OracleError, Result};
 use crate::exact::ExactSolver;
 use crate::placement::{Placement, check_problem};
-use crate::plan::Plan;
+use crate::plan::{Plan, Planner};
 use crate::route;
 
 /// The budget of the exact search the oracle falls back on when its routing is stuck.
@@ -98,11 +98,7 @@ impl Oracle {
 
     /// The first action of [`Oracle::plan`]; an error if the goal holds already.
     pub fn next_action(&self, state: &State, goal: &Goal) -> Result<Action> {
-        let plan = self.plan(state, goal)?;
-        plan.actions
-            .first()
-            .copied()
-            .ok_or_else(|| OracleError::GoalAlreadyHolds { goal: goal.to_string() })
+        Planner::next_action(self, state, goal)
     }
 
     /// A plan from `state`, which may hold a block, to `goal` (empty if the goal holds).
@@ -146,6 +142,16 @@ impl Oracle {
             }
         }
         Ok(best.map(|actions| Plan { actions }))
+    }
+}
+
+impl Planner for Oracle {
+    fn name(&self) -> &'static str {
+        "oracle"
+    }
+
+    fn plan(&self, state: &State, goal: &Goal) -> Result<Plan> {
+        Oracle::plan(self, state, goal)
     }
 }
 
