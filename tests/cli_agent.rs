@@ -1,34 +1,9 @@
 //! `blockstack train`, `eval` and `run --agent q` end to end, and their answers to bad input.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-fn blockstack(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_blockstack"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// A fresh scratch folder for one test.
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("blockstack-cli-agent-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn path(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+mod common;
+use common::{blockstack, path, scratch, stderr, stdout};
 
 /// Trains the role learner on one goal, on the grid backend (quick), and returns the model.
 fn train_role(dir: &Path, name: &str, games: &str) -> PathBuf {

@@ -2,33 +2,13 @@
 //! model, a killed session leaves only whole lines, bad lines are reported or fatal.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use agent::DemoRecord;
 
-fn blockstack(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_blockstack"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// A fresh scratch folder for one test.
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("blockstack-cli-correct-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn path(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+mod common;
+use common::{blockstack, path, scratch, stderr};
 
 /// The paper's learner, briefly trained on two goals on the grid backend.
 fn train(dir: &Path) -> PathBuf {

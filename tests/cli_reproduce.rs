@@ -6,18 +6,9 @@
 //! so that this test checks that report instead of making its own.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-fn blockstack(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_blockstack"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+mod common;
+use common::{blockstack, stderr};
 
 /// The quick report: CI's, or one made now.
 fn quick_report() -> PathBuf {

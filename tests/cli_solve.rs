@@ -1,24 +1,12 @@
 //! `blockstack solve` and `run --agent oracle|exact` end to end, and their answers to bad
 //! input.
 
-use std::process::{Command, Output};
+use std::process::Output;
 
 use sim::{Action, Cell, Goal, Grid, GridWorld, State, World};
 
-fn blockstack(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_blockstack"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+mod common;
+use common::{blockstack, stderr, stdout};
 
 fn json(o: &Output) -> serde_json::Value {
     assert!(o.status.success(), "{}", stderr(o));

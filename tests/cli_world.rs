@@ -1,30 +1,7 @@
 //! `blockstack run` and `render` end to end, and their answers to bad input.
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
-
-fn blockstack(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_blockstack"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// A fresh scratch folder for one test.
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("blockstack-cli-world-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+mod common;
+use common::{blockstack, scratch, stderr, stdout};
 
 #[test]
 fn run_reports_failures_and_steps_as_json() {

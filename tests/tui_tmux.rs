@@ -11,11 +11,8 @@ use std::time::{Duration, Instant};
 
 use agent::DemoRecord;
 
-const BIN: &str = env!("CARGO_BIN_EXE_blockstack");
-
-fn path(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+mod common;
+use common::{BIN, path};
 
 /// A tmux server of our own (its socket in the test's folder), killed when dropped.
 struct Tmux {
