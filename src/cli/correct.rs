@@ -2,13 +2,13 @@
 
 use std::path::PathBuf;
 
-use agent::correction::{CorrectionConfig, DEFAULT_MARGIN};
+use agent::correction::CorrectionConfig;
 use agent::{DemoWriter, DemonstratorProfile, QAgent};
 use anyhow::{Context, Result};
 use clap::Args;
 use sim::Goal;
 
-use super::demo::rule;
+use super::demo::LearningArgs;
 use super::train::parse_goals;
 
 /// Arguments of `blockstack correct`.
@@ -36,16 +36,8 @@ pub struct CorrectArgs {
     /// Append every step to this JSON Lines file, as it happens.
     #[arg(long)]
     pub record: Option<PathBuf>,
-    /// After a correction, the demonstrated action is raised to at least the best other
-    /// action's value plus this margin.
-    #[arg(long, default_value_t = DEFAULT_MARGIN)]
-    pub margin: f64,
-    /// Learn only from corrections, not from the agent's own steps.
-    #[arg(long)]
-    pub corrections_only: bool,
-    /// Probability that the agent proposes a random action (the paper's test policy: 0.1).
-    #[arg(long, default_value_t = 0.1)]
-    pub epsilon: f64,
+    #[command(flatten)]
+    pub learning: LearningArgs,
 }
 
 /// Corrects, saves, and reports.
@@ -54,8 +46,8 @@ pub fn correct(args: CorrectArgs) -> Result<()> {
     let goals = parse_goals(args.goals.as_deref(), agent.blocks())?;
     let profile = DemonstratorProfile::preset(args.demonstrator)?;
     let config = CorrectionConfig {
-        rule: rule(args.margin, args.corrections_only)?,
-        epsilon: args.epsilon,
+        rule: args.learning.rule()?,
+        epsilon: args.learning.epsilon,
         model: Some(args.model.display().to_string()),
         ..CorrectionConfig::new(profile.clone(), goals.clone(), args.demos, args.seed)
     };

@@ -29,16 +29,8 @@ pub struct DemoArgs {
     /// Save the corrected model after every this many corrections (0: only on quitting).
     #[arg(long, default_value_t = 5)]
     pub save_every: u64,
-    /// After a correction, the demonstrated action is raised to at least the best other
-    /// action's value plus this margin.
-    #[arg(long, default_value_t = DEFAULT_MARGIN)]
-    pub margin: f64,
-    /// Learn only from corrections, not from the agent's own steps.
-    #[arg(long)]
-    pub corrections_only: bool,
-    /// Probability that the agent proposes a random action (the paper's test policy: 0.1).
-    #[arg(long, default_value_t = 0.1)]
-    pub epsilon: f64,
+    #[command(flatten)]
+    pub learning: LearningArgs,
     /// Seed of the starts and of the agent's random proposals.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -52,14 +44,32 @@ pub fn default_out(model: &Path) -> PathBuf {
     model.with_file_name(format!("{stem}.corrected.json"))
 }
 
-/// The rule the flags describe.
-pub fn rule(margin: f64, corrections_only: bool) -> Result<CorrectionRule> {
-    let rule = CorrectionRule {
-        margin,
-        learn_agent_steps: !corrections_only,
-    };
-    rule.validate()?;
-    Ok(rule)
+/// How the agent proposes and learns during a correction session: the flags `demo` and
+/// `correct` share.
+#[derive(Debug, Args)]
+pub struct LearningArgs {
+    /// After a correction, the demonstrated action is raised to at least the best other
+    /// action's value plus this margin.
+    #[arg(long, default_value_t = DEFAULT_MARGIN)]
+    pub margin: f64,
+    /// Learn only from corrections, not from the agent's own steps.
+    #[arg(long)]
+    pub corrections_only: bool,
+    /// Probability that the agent proposes a random action (the paper's test policy: 0.1).
+    #[arg(long, default_value_t = 0.1)]
+    pub epsilon: f64,
+}
+
+impl LearningArgs {
+    /// The learning rule the flags describe.
+    pub fn rule(&self) -> Result<CorrectionRule> {
+        let rule = CorrectionRule {
+            margin: self.margin,
+            learn_agent_steps: !self.corrections_only,
+        };
+        rule.validate()?;
+        Ok(rule)
+    }
 }
 
 /// Runs the terminal UI, then says what was saved.
@@ -71,11 +81,11 @@ pub fn demo(args: DemoArgs) -> Result<()> {
     let world = SessionWorld::of(&agent);
     let session = CorrectionSession::new(
         agent,
-        rule(args.margin, args.corrections_only)?,
+        args.learning.rule()?,
         world,
         goals,
         args.seed,
-        args.epsilon,
+        args.learning.epsilon,
         "person",
         Some(&args.model.display().to_string()),
         record,

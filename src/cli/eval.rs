@@ -9,6 +9,7 @@ use clap::Args;
 use serde::Serialize;
 use sim::{Backend, Env, EnvConfig, Goal, GoalSpec, RewardModel};
 
+use super::run::RunReport;
 use super::train::parse_goals;
 
 /// Arguments of `blockstack eval`.
@@ -56,15 +57,8 @@ struct GoalReport {
 /// The machine-readable result: the fields of `run --json`, per-goal figures, no timings.
 #[derive(Debug, Serialize)]
 struct EvalReport {
-    agent: String,
-    blocks: usize,
-    goal: Option<String>,
-    grid: String,
-    horizon: u32,
-    backend: String,
-    seed: u64,
     #[serde(flatten)]
-    summary: Summary,
+    run: RunReport,
     #[serde(flatten)]
     optimality: Optimality,
     /// Mean steps over every episode, a failure counted as the horizon (as the paper's
@@ -108,14 +102,16 @@ pub fn eval(args: EvalArgs) -> Result<()> {
         all_optimal.extend(optimal);
     }
     let report = EvalReport {
-        agent: model.name(),
-        blocks: model.blocks(),
-        goal: Some(goals.iter().map(Goal::to_string).collect::<Vec<_>>().join(":")),
-        grid: model.grid().to_string(),
-        horizon: args.horizon,
-        backend: backend.to_string(),
-        seed: args.seed,
-        summary: Summary::of(&all),
+        run: RunReport {
+            agent: model.name(),
+            blocks: model.blocks(),
+            goal: Some(goals.iter().map(Goal::to_string).collect::<Vec<_>>().join(":")),
+            grid: model.grid().to_string(),
+            horizon: args.horizon,
+            backend: backend.to_string(),
+            seed: args.seed,
+            summary: Summary::of(&all),
+        },
         optimality: Optimality::of(&all, &all_optimal),
         mean_steps_failures_as_horizon: optimality::mean_steps_failures_as_horizon(&all, args.horizon),
         model: args.model.display().to_string(),
@@ -131,9 +127,10 @@ pub fn eval(args: EvalArgs) -> Result<()> {
 }
 
 fn print_report(r: &EvalReport) {
+    let run = &r.run;
     println!(
         "agent {} from {}, {} blocks, grid {}, horizon {}, {} backend, seed {}, epsilon {}",
-        r.agent, r.model, r.blocks, r.grid, r.horizon, r.backend, r.seed, r.epsilon
+        run.agent, r.model, run.blocks, run.grid, run.horizon, run.backend, run.seed, r.epsilon
     );
     let fmt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.2}"));
     println!(
@@ -156,7 +153,7 @@ fn print_report(r: &EvalReport) {
     for g in &r.per_goal {
         line(&g.goal, &g.summary, &g.optimality, g.mean_steps_failures_as_horizon);
     }
-    line("all", &r.summary, &r.optimality, r.mean_steps_failures_as_horizon);
+    line("all", &run.summary, &r.optimality, r.mean_steps_failures_as_horizon);
     println!("steps, optimum and ratio are over the episodes that reached the goal; the optimum is the");
     println!("exact solver's shortest plan from each start; the last column counts a failure as the horizon H");
 }

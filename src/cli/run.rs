@@ -53,18 +53,19 @@ pub struct RunArgs {
     pub epsilon: f64,
 }
 
-/// The machine-readable result of a run: no timings, so two runs compare equal.
+/// The machine-readable result of a run: no timings, so two runs compare equal. `eval
+/// --json` holds the same fields and more.
 #[derive(Debug, Serialize)]
-struct RunReport {
-    agent: String,
-    blocks: usize,
-    goal: Option<String>,
-    grid: String,
-    horizon: u32,
-    backend: String,
-    seed: u64,
+pub(super) struct RunReport {
+    pub agent: String,
+    pub blocks: usize,
+    pub goal: Option<String>,
+    pub grid: String,
+    pub horizon: u32,
+    pub backend: String,
+    pub seed: u64,
     #[serde(flatten)]
-    summary: Summary,
+    pub summary: Summary,
 }
 
 /// Plays the episodes and prints the summary.
