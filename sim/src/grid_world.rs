@@ -1,6 +1,6 @@
 //! The pure occupancy-grid backend: the reference model, and what planners search over.
 
-use crate::error::{Result, SimError};
+use crate::error::Result;
 use crate::grid::{Cell, Direction, Grid};
 use crate::occupancy::Occupancy;
 use crate::state::{BlockId, State};
@@ -89,16 +89,9 @@ impl World for GridWorld {
         }
     }
 
-    fn place(&mut self, state: &State) -> Result<()> {
-        if state.block_count() != self.block_count() {
-            return Err(SimError::BlockCountMismatch {
-                expected: self.block_count(),
-                what: "the state",
-                found: state.block_count(),
-            });
-        }
-        *self = GridWorld::new(self.grid, *state)?;
-        Ok(())
+    fn put(&mut self, state: &State) {
+        self.state = *state;
+        self.occupancy = Occupancy::of(self.grid, state);
     }
 
     #[inline]

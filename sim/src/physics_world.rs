@@ -29,7 +29,7 @@
 use rapier2d::parry::query::{DefaultQueryDispatcher, ShapeCastOptions};
 use rapier2d::prelude::*;
 
-use crate::error::{Result, SimError};
+use crate::error::Result;
 use crate::grid::{Cell, Direction, Grid};
 use crate::state::{BlockId, MAX_BLOCKS, State};
 use crate::world::World;
@@ -219,20 +219,11 @@ impl World for PhysicsWorld {
         true
     }
 
-    fn place(&mut self, state: &State) -> Result<()> {
-        if state.block_count() != self.block_count() {
-            return Err(SimError::BlockCountMismatch {
-                expected: self.block_count(),
-                what: "the state",
-                found: state.block_count(),
-            });
-        }
-        state.check_fits(self.grid)?;
+    fn put(&mut self, state: &State) {
         for (i, &cell) in state.cells().iter().enumerate() {
             self.teleport(BlockId(i as u8), cell);
         }
         self.held = state.held_block();
-        Ok(())
     }
 
     fn state(&self) -> State {

@@ -50,9 +50,24 @@ pub trait World {
     /// and not occupied); returns whether it moved.
     fn try_move(&mut self, block: BlockId, dir: Direction) -> bool;
 
+    /// Puts every block where `state` says and holds what it holds; `state` has been
+    /// checked to fit this world. Callers use [`World::place`], which checks.
+    fn put(&mut self, state: &State);
+
     /// Puts every block where `state` says and holds what it holds; an error if `state`
     /// does not fit this world (block count, grid bounds).
-    fn place(&mut self, state: &State) -> Result<()>;
+    fn place(&mut self, state: &State) -> Result<()> {
+        if state.block_count() != self.block_count() {
+            return Err(SimError::BlockCountMismatch {
+                expected: self.block_count(),
+                what: "the state",
+                found: state.block_count(),
+            });
+        }
+        state.check_fits(self.grid())?;
+        self.put(state);
+        Ok(())
+    }
 
     /// The whole logical state, read back from the backend.
     fn state(&self) -> State;

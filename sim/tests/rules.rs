@@ -153,3 +153,28 @@ fn a_state_rejects_overlaps_and_missing_held_blocks() {
         Err(SimError::CellOutsideGrid { .. })
     ));
 }
+
+#[test]
+fn placing_a_state_that_does_not_fit_is_an_error_and_changes_nothing() {
+    let start = state(&[(1, 1), (5, 5)], None);
+    let three = state(&[(0, 0), (1, 0), (2, 0)], None);
+    let outside = State::new(&[Cell::new(0, 0), Cell::new(0, 7)], None).unwrap();
+    both(Grid::default(), start, |w| {
+        assert!(matches!(
+            w.place(&three),
+            Err(SimError::BlockCountMismatch {
+                expected: 2,
+                found: 3,
+                ..
+            })
+        ));
+        assert!(matches!(
+            w.place(&outside),
+            Err(SimError::CellOutsideGrid { x: 0, y: 7, .. })
+        ));
+        assert_eq!(w.state(), start);
+        let moved = state(&[(6, 6), (0, 0)], Some(1));
+        w.place(&moved).unwrap();
+        assert_eq!(w.state(), moved);
+    });
+}

@@ -5,10 +5,9 @@
 use agent::{Assist, QAgent};
 use sim::Goal;
 
-use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, play_replicates};
+use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, play_replicates, steps_box_plot};
 use super::text::{fewer_or_more, num, significance};
 use super::{Context, Drawing, Experiment, Figure, HORIZON, Result, Scale, Setting, paper};
-use crate::plots::{Arm, BoxPlot};
 
 /// The arms, in the paper's order.
 const ASSISTS: [Assist; 3] = [
@@ -95,26 +94,13 @@ pub(super) fn run(ctx: &Context) -> Result<(Experiment, QAgent)> {
     let figure = Figure::new(
         "e5-steps",
         "Steps per game of each arm (a failure at 1000), with the paper's mean".into(),
-        Drawing::Boxes(BoxPlot {
-            title: "E5 (Table I): oracle assistance in training".into(),
-            y_label: "steps to goal (failures at 1000)".into(),
-            arms: arms
-                .iter()
-                .zip(paper::TABLE_I.rows)
-                .map(|(a, p)| Arm {
-                    name: a.name.clone(),
-                    steps: a.steps.clone(),
-                    reference: p.mean_steps,
-                })
-                .collect(),
-            reference_label: "paper's mean".into(),
-            log_scale: true,
-            note: format!(
-                "{} agents per arm, each {} (the same games for every arm).",
-                ctx.scale.replicates,
-                suite.describe()
-            ),
-        }),
+        Drawing::Boxes(steps_box_plot(
+            "E5 (Table I): oracle assistance in training".into(),
+            &arms,
+            paper::TABLE_I.rows,
+            ctx.scale.replicates,
+            &suite,
+        )),
     );
     let mut tests = tests.into_iter();
     let rows = arms

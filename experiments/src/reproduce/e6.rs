@@ -8,10 +8,9 @@ use agent::{CorrectionConfig, DemonstratorProfile, QAgent};
 use rayon::prelude::*;
 use sim::Goal;
 
-use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, play_replicates};
+use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, play_replicates, steps_box_plot};
 use super::text::{num, significance};
 use super::{Context, Drawing, Experiment, Figure, HORIZON, Result, Scale, Setting, goals, paper};
-use crate::plots::{Arm, BoxPlot};
 
 /// The simulated demonstrators, by preset number.
 const DEMONSTRATORS: [u8; 3] = [1, 2, 3];
@@ -124,26 +123,13 @@ pub(super) fn run(ctx: &Context) -> Result<Experiment> {
         figures.push(Figure::new(
             stem,
             format!("{title}: steps per game of each agent (a failure at 1000), with the paper's mean"),
-            Drawing::Boxes(BoxPlot {
-                title: format!("E6 ({}): {}", theirs.source, title.to_lowercase()),
-                y_label: "steps to goal (failures at 1000)".into(),
-                arms: arms
-                    .iter()
-                    .zip(theirs.rows)
-                    .map(|(a, p)| Arm {
-                        name: a.name.clone(),
-                        steps: a.steps.clone(),
-                        reference: p.mean_steps,
-                    })
-                    .collect(),
-                reference_label: "paper's mean".into(),
-                log_scale: true,
-                note: format!(
-                    "{} agents per arm, each {} (the same games for every arm).",
-                    ctx.scale.replicates,
-                    suite.describe()
-                ),
-            }),
+            Drawing::Boxes(steps_box_plot(
+                format!("E6 ({}): {}", theirs.source, title.to_lowercase()),
+                &arms,
+                theirs.rows,
+                ctx.scale.replicates,
+                &suite,
+            )),
         ));
         let mut tests = tests.into_iter();
         let rows = arms

@@ -533,16 +533,7 @@ fn smirnov_sf(n: u64, x: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Asserts `got` is within relative tolerance `rel` of SciPy's `want`.
-    fn assert_close(got: f64, want: f64, rel: f64, what: &str) {
-        let err = if got == want {
-            0.0
-        } else {
-            (got - want).abs() / want.abs().max(f64::MIN_POSITIVE)
-        };
-        assert!(err <= rel, "{what}: got {got:e}, scipy {want:e} (rel err {err:e})");
-    }
+    use crate::stats::fixtures::assert_close;
 
     #[test]
     fn kstwo_sf_matches_scipy() {

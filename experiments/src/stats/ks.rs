@@ -225,19 +225,9 @@ fn outer_prob_inside(m: usize, n: usize, g: usize, h: usize) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::stats::fixtures::{STEPS_8, STEPS_200, STEPS_300, STEPS_500_A, STEPS_500_B};
+    use crate::stats::fixtures::{STEPS_8, STEPS_200, STEPS_300, STEPS_500_A, STEPS_500_B, assert_close};
     use proptest::prelude::*;
     use std::time::{Duration, Instant};
-
-    /// Asserts `got` is within relative tolerance `rel` of SciPy's `want`.
-    fn assert_close(got: f64, want: f64, rel: f64, what: &str) {
-        let err = if got == want {
-            0.0
-        } else {
-            (got - want).abs() / want.abs().max(f64::MIN_POSITIVE)
-        };
-        assert!(err <= rel, "{what}: got {got:e}, scipy {want:e} (rel err {err:e})");
-    }
 
     /// Checks against SciPy's statistic and p-value. Exact cases run the
     /// same float recursions as SciPy, so 1e-9 relative is generous. The

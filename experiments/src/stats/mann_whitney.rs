@@ -127,20 +127,10 @@ fn asymptotic_p(u: f64, n1: usize, n2: usize, ties: &[usize]) -> f64 {
 mod tests {
     use super::*;
     use crate::stats::fixtures::{
-        DISTINCT_8, DISTINCT_300, STEPS_8, STEPS_200, STEPS_250, STEPS_300, STEPS_500_A, STEPS_500_B,
+        DISTINCT_8, DISTINCT_300, STEPS_8, STEPS_200, STEPS_250, STEPS_300, STEPS_500_A, STEPS_500_B, assert_close,
     };
     use proptest::prelude::*;
     use std::time::{Duration, Instant};
-
-    /// Asserts `got` is within relative tolerance `rel` of SciPy's `want`.
-    fn assert_close(got: f64, want: f64, rel: f64, what: &str) {
-        let err = if got == want {
-            0.0
-        } else {
-            (got - want).abs() / want.abs().max(f64::MIN_POSITIVE)
-        };
-        assert!(err <= rel, "{what}: got {got:e}, scipy {want:e} (rel err {err:e})");
-    }
 
     /// Checks a result against SciPy's statistic and p-value, to 1e-9
     /// relative everywhere: exact p-values are ratios of exactly counted

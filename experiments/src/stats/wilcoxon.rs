@@ -216,18 +216,8 @@ fn asymptotic_p(r_plus: f64, count: usize, ties: &[usize], correction: bool) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::stats::fixtures::{D_60, PAIRED_A, PAIRED_B};
+    use crate::stats::fixtures::{D_60, PAIRED_A, PAIRED_B, assert_close};
     use proptest::prelude::*;
-
-    /// Asserts `got` is within relative tolerance `rel` of SciPy's `want`.
-    fn assert_close(got: f64, want: f64, rel: f64, what: &str) {
-        let err = if got == want {
-            0.0
-        } else {
-            (got - want).abs() / want.abs().max(f64::MIN_POSITIVE)
-        };
-        assert!(err <= rel, "{what}: got {got:e}, scipy {want:e} (rel err {err:e})");
-    }
 
     /// Checks a result against SciPy's statistic and p-value.
     ///
