@@ -7,5 +7,6 @@ pub mod cli;
 pub mod tui;
 
 pub use agent;
+pub use experiments;
 pub use oracle;
 pub use sim;
