@@ -2,7 +2,7 @@
 //!
 //! - [`Policy`]: what every agent offers; [`RandomPolicy`] is the paper's baseline.
 //! - [`rollout`]: the episode loop every command and experiment shares, with its
-//!   [`Summary`](rollout::Summary) of failures and steps to goal.
+//!   [`Summary`] of failures and steps to goal.
 //! - [`QAgent`]: tabular Q-learning over one of the [`repr`] state representations, trained
 //!   by [`train`](train::train) / [`Trainer`], saved and loaded as [`model`] files.
 //! - [`optimality`]: steps taken against the exact solver's shortest plans.
