@@ -400,6 +400,36 @@ where
         .collect()
 }
 
+/// A log-scale box plot of each arm's steps per game (a failure counted as the horizon),
+/// each arm marked with the mean of the paper's matching row: E5's and E6's pictures.
+pub fn steps_box_plot(
+    title: String,
+    arms: &[ArmResult],
+    paper: &[PaperRow],
+    replicates: usize,
+    suite: &Suite,
+) -> BoxPlot {
+    BoxPlot {
+        title,
+        y_label: "steps to goal (failures at 1000)".into(),
+        arms: arms
+            .iter()
+            .zip(paper)
+            .map(|(a, p)| Arm {
+                name: a.name.clone(),
+                steps: a.steps.clone(),
+                reference: p.mean_steps,
+            })
+            .collect(),
+        reference_label: "paper's mean".into(),
+        log_scale: true,
+        note: format!(
+            "{replicates} agents per arm, each {} (the same games for every arm).",
+            suite.describe()
+        ),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -463,35 +493,5 @@ mod tests {
         for (r, &v) in random.iter().zip(&arm.steps) {
             assert_eq!(v, if r.reached_goal { f64::from(r.steps) } else { 3.0 });
         }
-    }
-}
-
-/// A log-scale box plot of each arm's steps per game (a failure counted as the horizon),
-/// each arm marked with the mean of the paper's matching row: E5's and E6's pictures.
-pub fn steps_box_plot(
-    title: String,
-    arms: &[ArmResult],
-    paper: &[PaperRow],
-    replicates: usize,
-    suite: &Suite,
-) -> BoxPlot {
-    BoxPlot {
-        title,
-        y_label: "steps to goal (failures at 1000)".into(),
-        arms: arms
-            .iter()
-            .zip(paper)
-            .map(|(a, p)| Arm {
-                name: a.name.clone(),
-                steps: a.steps.clone(),
-                reference: p.mean_steps,
-            })
-            .collect(),
-        reference_label: "paper's mean".into(),
-        log_scale: true,
-        note: format!(
-            "{replicates} agents per arm, each {} (the same games for every arm).",
-            suite.describe()
-        ),
     }
 }
