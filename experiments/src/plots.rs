@@ -555,6 +555,35 @@ where
         .bold_line_style(RGBColor(220, 220, 220));
 }
 
+/// A chart with one category per name along x over the value axis `y`, its mesh drawn in
+/// the house style with `y_label`: the frame bar charts and box plots share.
+fn category_chart<'a, DB, Y>(
+    area: &'a DrawingArea<DB, Shift>,
+    names: Vec<String>,
+    y: Y,
+    y_label: &str,
+) -> DrawResult<ChartContext<'a, DB, Cartesian2d<Categories, Y::CoordDescType>>, DB>
+where
+    DB: DrawingBackend,
+    Y: plotters::coord::ranged1d::AsRangedCoord<Value = f64>,
+    Y::CoordDescType: plotters::coord::ranged1d::ValueFormatter<f64>,
+{
+    let mut chart = ChartBuilder::on(area)
+        .margin_left(10)
+        .margin_right(25)
+        .margin_top(10)
+        .x_label_area_size(45)
+        .y_label_area_size(80)
+        .build_cartesian_2d(Categories(names), y)?;
+    let mut mesh = chart.configure_mesh();
+    style_mesh(&mut mesh);
+    mesh.disable_x_mesh()
+        .y_desc(y_label)
+        .y_label_formatter(&|v| number_label(*v))
+        .draw()?;
+    Ok(chart)
+}
+
 #[cfg(test)]
 mod test_support {
     //! Helpers shared by the plot tests.

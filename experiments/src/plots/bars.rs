@@ -8,8 +8,8 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::{
-    Categories, Chart, ChartFiles, FONT_FAMILY, Frame, INK, Mark, PlotError, REFERENCE, Result, TICK_PX, check_value,
-    diamond, number_label, series_colour, style_mesh, write_chart,
+    Chart, ChartFiles, FONT_FAMILY, Frame, INK, Mark, PlotError, REFERENCE, Result, TICK_PX, category_chart,
+    check_value, diamond, number_label, series_colour, write_chart,
 };
 
 /// One bar: a named value, with an optional interval and second value.
@@ -140,20 +140,8 @@ impl BarDrawing<'_> {
         let plot_area = self.frame.draw(root)?;
         let bars = &self.chart.bars;
         let n = bars.len();
-        let x = Categories(bars.iter().map(|b| b.name.clone()).collect());
-        let mut chart = ChartBuilder::on(&plot_area)
-            .margin_left(10)
-            .margin_right(25)
-            .margin_top(10)
-            .x_label_area_size(45)
-            .y_label_area_size(80)
-            .build_cartesian_2d(x, y)?;
-        let mut mesh = chart.configure_mesh();
-        style_mesh(&mut mesh);
-        mesh.disable_x_mesh()
-            .y_desc(self.chart.y_label.as_str())
-            .y_label_formatter(&|v| number_label(*v))
-            .draw()?;
+        let names = bars.iter().map(|b| b.name.clone()).collect();
+        let mut chart = category_chart(&plot_area, names, y, &self.chart.y_label)?;
 
         let half = 0.32;
         let drawn = |b: &&Bar| !log || b.value > 0.0;

@@ -8,8 +8,8 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::{
-    Categories, Chart, ChartFiles, FONT_FAMILY, Frame, INK, Mark, PlotError, REFERENCE, Result, TICK_PX, check_value,
-    diamond, number_label, series_colour, style_mesh, write_chart,
+    Chart, ChartFiles, FONT_FAMILY, Frame, INK, Mark, PlotError, REFERENCE, Result, TICK_PX, category_chart,
+    check_value, diamond, series_colour, write_chart,
 };
 
 /// One arm of a comparison: a named sample of per-episode step counts.
@@ -202,20 +202,8 @@ impl BoxChart<'_> {
         let log = self.plot.log_scale && floor > 0.0;
         let at = |v: f64| if log { v.max(floor) } else { v };
         let plot_area = self.frame.draw(root)?;
-        let x = Categories(self.plot.arms.iter().map(|a| a.name.clone()).collect());
-        let mut chart = ChartBuilder::on(&plot_area)
-            .margin_left(10)
-            .margin_right(25)
-            .margin_top(10)
-            .x_label_area_size(45)
-            .y_label_area_size(80)
-            .build_cartesian_2d(x, y)?;
-        let mut mesh = chart.configure_mesh();
-        style_mesh(&mut mesh);
-        mesh.disable_x_mesh()
-            .y_desc(self.plot.y_label.as_str())
-            .y_label_formatter(&|v| number_label(*v))
-            .draw()?;
+        let names = self.plot.arms.iter().map(|a| a.name.clone()).collect();
+        let mut chart = category_chart(&plot_area, names, y, &self.plot.y_label)?;
 
         let boxes = || {
             self.boxes
