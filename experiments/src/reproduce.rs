@@ -338,6 +338,16 @@ pub(crate) struct Context<'a> {
     progress: &'a dyn ProgressSink,
 }
 
+/// The paper's learner as the report names it: representation, reward and the
+/// hyper-parameters of `config`.
+fn paper_learner(config: &TrainConfig) -> String {
+    let p = &config.params;
+    format!(
+        "chasing representation, paper reward, alpha {}, gamma {}, epsilon {}",
+        p.alpha, p.gamma, p.epsilon
+    )
+}
+
 impl Context<'_> {
     /// The paper's learner on `goals`, replicate `r`'s seed.
     fn paper_config(&self, goals: &[Goal], r: usize) -> TrainConfig {

@@ -5,7 +5,7 @@ use sim::Goal;
 
 use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, mean_of, play_replicates};
 use super::text::{num, significance};
-use super::{Context, Experiment, HORIZON, Result, Scale, Setting, paper};
+use super::{Context, Experiment, HORIZON, Result, Scale, Setting, paper, paper_learner};
 
 /// The test epsilons the paper reports.
 const EPSILONS: [f64; 2] = [0.01, 0.05];
@@ -91,9 +91,10 @@ pub(super) fn run(ctx: &Context) -> Result<Experiment> {
             Setting {
                 name: "learner".into(),
                 value: format!(
-                    "the paper's: chasing representation, paper reward, alpha {}, gamma {}, epsilon {}, {} training \
+                    "the paper's: {}, {} training \
                      games on goals 0,1 and 1,0 in turn, physics backend",
-                    config.params.alpha, config.params.gamma, config.params.epsilon, config.games
+                    paper_learner(&config),
+                    config.games
                 ),
             },
             Setting {

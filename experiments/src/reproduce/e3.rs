@@ -6,7 +6,7 @@ use agent::{QAgent, RandomPolicy};
 
 use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, mean_of, play_replicates};
 use super::text::{num, p_value, significance};
-use super::{Context, Experiment, HORIZON, Result, Scale, Setting, goals, paper};
+use super::{Context, Experiment, HORIZON, Result, Scale, Setting, goals, paper, paper_learner};
 
 /// Jobs reported: the trainings and their suites, the random agent's and ours (twice).
 pub(super) fn jobs(scale: &Scale) -> u64 {
@@ -111,11 +111,9 @@ pub(super) fn run(ctx: &Context, ours: &QAgent) -> Result<Experiment> {
             Setting {
                 name: "paper's learner".into(),
                 value: format!(
-                    "chasing representation, paper reward, alpha {}, gamma {}, epsilon {}, {} training games on \
+                    "{}, {} training games on \
                      0,1,2 1,0,2 2,0,1 0,2,1 in turn, physics backend; {} agents, training seeds {:?}",
-                    config.params.alpha,
-                    config.params.gamma,
-                    config.params.epsilon,
+                    paper_learner(&config),
                     config.games,
                     ctx.scale.replicates,
                     ctx.seeds.training

@@ -8,7 +8,9 @@ use sim::Goal;
 use super::arms::{ArmResult, Goals, Suite};
 use super::e3::ours_description;
 use super::text::num;
-use super::{Context, Curve, CurvePoint, Drawing, Experiment, Figure, HORIZON, Result, Scale, Setting, paper};
+use super::{
+    Context, Curve, CurvePoint, Drawing, Experiment, Figure, HORIZON, Result, Scale, Setting, paper, paper_learner,
+};
 use crate::plots::{LearningCurve, LearningPoint};
 
 /// Jobs reported: a training stretch and a suite per point, per replicate of the paper's
@@ -121,9 +123,11 @@ pub(super) fn paper_curve(ctx: &Context) -> Result<Curve> {
     let config = ctx.paper_config(&all, 0);
     Ok(Curve {
         learner: format!(
-            "the paper's: chasing representation, paper reward, alpha {}, gamma {}, epsilon {}, on all six goals in \
+            "the paper's: {}, on all six goals in \
              turn; {} agents, training seeds {:?}",
-            config.params.alpha, config.params.gamma, config.params.epsilon, ctx.scale.replicates, ctx.seeds.training
+            paper_learner(&config),
+            ctx.scale.replicates,
+            ctx.seeds.training
         ),
         suite: suite.describe(),
         points: points(schedule, &per_point, &suite.optimum()?),

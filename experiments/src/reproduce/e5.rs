@@ -7,7 +7,7 @@ use sim::Goal;
 
 use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, play_replicates, steps_box_plot};
 use super::text::{fewer_or_more, num, significance};
-use super::{Context, Drawing, Experiment, Figure, HORIZON, Result, Scale, Setting, paper};
+use super::{Context, Drawing, Experiment, Figure, HORIZON, Result, Scale, Setting, paper, paper_learner};
 
 /// The arms, in the paper's order.
 const ASSISTS: [Assist; 3] = [
@@ -121,11 +121,9 @@ pub(super) fn run(ctx: &Context) -> Result<(Experiment, QAgent)> {
             Setting {
                 name: "learner".into(),
                 value: format!(
-                    "the paper's: chasing representation, paper reward, alpha {}, gamma {}, epsilon {}, {} training \
+                    "the paper's: {}, {} training \
                      games on all six goals in turn, physics backend; {} agents per arm, training seeds {:?}",
-                    config.params.alpha,
-                    config.params.gamma,
-                    config.params.epsilon,
+                    paper_learner(&config),
                     config.games,
                     ctx.scale.replicates,
                     ctx.seeds.training

@@ -10,7 +10,7 @@ use sim::Goal;
 
 use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, play_replicates, steps_box_plot};
 use super::text::{num, significance};
-use super::{Context, Drawing, Experiment, Figure, HORIZON, Result, Scale, Setting, goals, paper};
+use super::{Context, Drawing, Experiment, Figure, HORIZON, Result, Scale, Setting, goals, paper, paper_learner};
 
 /// The simulated demonstrators, by preset number.
 const DEMONSTRATORS: [u8; 3] = [1, 2, 3];
@@ -176,12 +176,10 @@ pub(super) fn run(ctx: &Context) -> Result<Experiment> {
             Setting {
                 name: "baseline".into(),
                 value: format!(
-                    "the paper's learner (chasing representation, paper reward, alpha {}, gamma {}, epsilon {}) \
+                    "the paper's learner ({}) \
                      trained {} games on the demonstrated goals {shown_text} in turn, physics backend; {} agents, \
                      training seeds {:?}",
-                    config.params.alpha,
-                    config.params.gamma,
-                    config.params.epsilon,
+                    paper_learner(&config),
                     config.games,
                     ctx.scale.replicates,
                     ctx.seeds.training
