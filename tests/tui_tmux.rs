@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 use agent::DemoRecord;
 
 mod common;
-use common::{BIN, path};
+use common::{BIN, blockstack, path, scratch, stderr};
 
 /// A tmux server of our own (its socket in the test's folder), killed when dropped.
 struct Tmux {
@@ -82,30 +82,20 @@ fn tmux_missing() -> bool {
     Command::new("tmux").arg("-V").output().is_err()
 }
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("blockstack-tui-tmux-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 fn train(dir: &Path) -> PathBuf {
     let out = dir.join("base.json");
-    let o = Command::new(BIN)
-        .args([
-            "train",
-            "--goals",
-            "1,0,2",
-            "--games",
-            "300",
-            "--backend",
-            "grid",
-            "--out",
-            path(&out),
-        ])
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = blockstack(&[
+        "train",
+        "--goals",
+        "1,0,2",
+        "--games",
+        "300",
+        "--backend",
+        "grid",
+        "--out",
+        path(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
     out
 }
 
@@ -189,20 +179,17 @@ fn a_person_corrects_the_agent_in_the_terminal_and_quits() {
     );
     // Replaying the recording gives the model the session saved on quitting.
     let replayed = dir.join("replayed.json");
-    let o = Command::new(BIN)
-        .args([
-            "learn-from-demos",
-            path(&demos),
-            "--model",
-            path(&base),
-            "--out",
-            path(&replayed),
-            "--on-bad-line",
-            "fail",
-        ])
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = blockstack(&[
+        "learn-from-demos",
+        path(&demos),
+        "--model",
+        path(&base),
+        "--out",
+        path(&replayed),
+        "--on-bad-line",
+        "fail",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(std::fs::read(&corrected).unwrap(), std::fs::read(&replayed).unwrap());
 }
 
