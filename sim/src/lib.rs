@@ -47,7 +47,7 @@ pub use error::{Result, SimError};
 pub use goal::Goal;
 pub use grid::{Cell, Direction, Grid, MAX_CELLS};
 pub use grid_world::GridWorld;
-pub use observation::{Observation, Planes};
+pub use observation::{Observation, Pixels, Planes};
 pub use occupancy::Occupancy;
 pub use physics_world::PhysicsWorld;
 pub use reward::RewardModel;

@@ -1,5 +1,6 @@
-//! What an environment shows its agent: the full state as a typed struct, and two views of
-//! it for learners that want arrays.
+//! What an environment shows its agent: the full state as a typed struct, and views of it
+//! for learners that want arrays: one-hot planes (blocks by id, or by place in the goal)
+//! and the paper's 100 x 100 pixel screen.
 
 use crate::goal::Goal;
 use crate::grid::{Cell, Grid};
@@ -74,5 +75,208 @@ impl Planes {
 
     fn at_mut(&mut self, c: Cell, channel: usize) -> &mut u8 {
         &mut self.data[(usize::from(c.x) * self.height + usize::from(c.y)) * self.channels + channel]
+    }
+}
+
+/// Side of the square [`Observation::pixels`] image, as in the paper.
+pub const PIXELS_SIDE: usize = 100;
+
+/// Side of a cell in the paper's screen (50 px blocks on a 350 x 350 screen).
+const PAPER_CELL: usize = 50;
+
+/// The colour of the held block in [`Observation::pixels`] (the paper's: white).
+pub const PIXELS_HELD: [u8; 3] = [255, 255, 255];
+
+/// The background of the goal image in [`Observation::pixels`] (the paper's gray).
+pub const PIXELS_GOAL_BACKGROUND: [u8; 3] = [50, 50, 50];
+
+/// An RGB image stored row by row from the top, 3 bytes per pixel:
+/// `data[(row * width + column) * 3 + channel]`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Pixels {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// The bytes, `width * height * 3` of them.
+    pub data: Vec<u8>,
+}
+
+impl Pixels {
+    /// The colour at `(column, row)`, row 0 at the top.
+    pub fn rgb(&self, column: usize, row: usize) -> [u8; 3] {
+        let i = (row * self.width + column) * 3;
+        [self.data[i], self.data[i + 1], self.data[i + 2]]
+    }
+}
+
+impl Observation {
+    /// The planes of [`Observation::planes`] with blocks named by their place in the goal
+    /// (as the `role` table does): plane `p < N` marks the cell of the block at place `p`
+    /// (0 = bottom), plane `N` the held block's cell. Every goal becomes the same picture
+    /// problem, so one network serves every goal.
+    pub fn role_planes(&self) -> Planes {
+        let (w, h, n) = (self.grid.width(), self.grid.height(), self.state.block_count());
+        let mut planes = Planes {
+            width: w,
+            height: h,
+            channels: n + 1,
+            data: vec![0; w * h * (n + 1)],
+        };
+        for (place, &b) in self.goal.order().iter().enumerate() {
+            *planes.at_mut(self.state.cell(b), place) = 1;
+        }
+        if let Some(b) = self.held_block() {
+            *planes.at_mut(self.state.cell(b), n) = 1;
+        }
+        planes
+    }
+
+    /// The paper's DQN input (section III-C1), [`PIXELS_SIDE`] pixels square, 3 channels.
+    ///
+    /// The authors' screen (their `BlockWorld`): 50-pixel cells on a black background, each
+    /// block a square of its colour ([`crate::render::colour`]), the held block white, and
+    /// the goal as a small picture in the top-right corner: a gray square a fifth of the
+    /// screen wide, drawn over the grid (a block in the top-right cell is hidden under it,
+    /// as on the authors' screen), holding the goal stack in blocks a tenth of its side,
+    /// centred, bottom block two block-sides above the square's bottom edge. That screen is
+    /// scaled to 100 x 100 with bilinear interpolation (OpenCV's default, which the authors
+    /// used), so a goal block covers about 2 x 2 pixels. A grid of another size is scaled the
+    /// same way to the same square.
+    pub fn pixels(&self) -> Pixels {
+        let (w, h) = (self.grid.width(), self.grid.height());
+        let (sw, sh) = (w * PAPER_CELL, h * PAPER_CELL);
+        let mut screen = vec![[0u8; 3]; sw * sh];
+        let mut fill = |x: usize, y: usize, fw: usize, fh: usize, rgb: [u8; 3]| {
+            for row in y..(y + fh).min(sh) {
+                for px in &mut screen[row * sw + x.min(sw)..row * sw + (x + fw).min(sw)] {
+                    *px = rgb;
+                }
+            }
+        };
+        for (i, &c) in self.blocks().iter().enumerate() {
+            let b = BlockId(i as u8);
+            let rgb = if self.held_block() == Some(b) {
+                PIXELS_HELD
+            } else {
+                crate::render::colour(b)
+            };
+            // Screen rows grow downward, grid rows upward.
+            fill(
+                usize::from(c.x) * PAPER_CELL,
+                (h - 1 - usize::from(c.y)) * PAPER_CELL,
+                PAPER_CELL,
+                PAPER_CELL,
+                rgb,
+            );
+        }
+        let side = sw / 5;
+        let block = (side / 10).max(1);
+        let (gx, left) = (sw - side, (side - block) / 2);
+        fill(gx, 0, side, side, PIXELS_GOAL_BACKGROUND);
+        let bottom = side.saturating_sub(2 * block);
+        for (place, &b) in self.goal.order().iter().enumerate() {
+            if let Some(y) = bottom.checked_sub(block * place) {
+                fill(gx + left, y, block, block, crate::render::colour(b));
+            }
+        }
+        Pixels {
+            width: PIXELS_SIDE,
+            height: PIXELS_SIDE,
+            data: bilinear(&screen, sw, sh, PIXELS_SIDE, PIXELS_SIDE),
+        }
+    }
+}
+
+/// `src` (`sw x sh` pixels) resized to `dw x dh` by bilinear interpolation with OpenCV's
+/// pixel-centre convention (`cv2.resize`'s default `INTER_LINEAR`), rounded to bytes.
+fn bilinear(src: &[[u8; 3]], sw: usize, sh: usize, dw: usize, dh: usize) -> Vec<u8> {
+    // For each destination coordinate: the two source indices and the second's weight.
+    let taps = |d: usize, s: usize| -> Vec<(usize, usize, f32)> {
+        let scale = s as f32 / d as f32;
+        (0..d)
+            .map(|i| {
+                let x = ((i as f32 + 0.5) * scale - 0.5).max(0.0);
+                let x0 = (x.floor() as usize).min(s - 1);
+                let x1 = (x0 + 1).min(s - 1);
+                (x0, x1, x - x0 as f32)
+            })
+            .collect()
+    };
+    let (xs, ys) = (taps(dw, sw), taps(dh, sh));
+    let mut out = Vec::with_capacity(dw * dh * 3);
+    for &(y0, y1, fy) in &ys {
+        for &(x0, x1, fx) in &xs {
+            for ch in 0..3 {
+                let at = |x: usize, y: usize| f32::from(src[y * sw + x][ch]);
+                let top = at(x0, y0) * (1.0 - fx) + at(x1, y0) * fx;
+                let low = at(x0, y1) * (1.0 - fx) + at(x1, y1) * fx;
+                out.push((top * (1.0 - fy) + low * fy).round() as u8);
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Goal 1,0,2 on 7 x 7: block 1 at (0, 0), block 0 held at (3, 3), block 2 at (6, 6),
+    /// the top-right cell, under the goal picture.
+    fn hand_built() -> Observation {
+        let cells = [Cell::new(3, 3), Cell::new(0, 0), Cell::new(6, 6)];
+        Observation {
+            grid: Grid::default(),
+            state: State::new(&cells, Some(BlockId(0))).unwrap(),
+            goal: "1,0,2".parse().unwrap(),
+        }
+    }
+
+    #[test]
+    fn role_planes_name_blocks_by_their_place_in_the_goal() {
+        let p = hand_built().role_planes();
+        assert_eq!((p.width, p.height, p.channels), (7, 7, 4));
+        // Place 0 is block 1, place 1 block 0 (held), place 2 block 2.
+        assert_eq!(p.get(0, 0, 0), 1);
+        assert_eq!(p.get(3, 3, 1), 1);
+        assert_eq!(p.get(6, 6, 2), 1);
+        assert_eq!(p.get(3, 3, 3), 1);
+        assert_eq!(p.data.iter().map(|&v| u32::from(v)).sum::<u32>(), 4);
+    }
+
+    #[test]
+    fn pixels_are_the_papers_screen_scaled_to_100_by_100() {
+        let obs = hand_built();
+        let px = obs.pixels();
+        assert_eq!((px.width, px.height, px.data.len()), (100, 100, 100 * 100 * 3));
+        // 350 px scaled to 100: a cell is 100/7 pixels; sample the middle of cells.
+        let centre = |x: usize, y: usize| {
+            let c = |i: usize| ((i as f32 + 0.5) * 100.0 / 7.0) as usize;
+            px.rgb(c(x), c(6 - y))
+        };
+        assert_eq!(centre(3, 3), PIXELS_HELD, "the held block is white");
+        assert_eq!(centre(0, 0), crate::render::colour(BlockId(1)));
+        assert_eq!(centre(5, 0), [0, 0, 0], "the background is black");
+        // The goal picture: the top-right fifth of the screen (20 x 20 pixels), gray,
+        // drawn over block 2's cell; its blocks are 7 screen pixels = 2 image pixels.
+        assert_eq!(px.rgb(81, 1), PIXELS_GOAL_BACKGROUND);
+        assert_eq!(px.rgb(98, 18), PIXELS_GOAL_BACKGROUND);
+        // Goal blocks, bottom first, at screen rows 56, 49, 42 and columns 311-317.
+        let goal_pixel = |place: usize| px.rgb(90, ((56 - 7 * place) as f32 + 3.5) as usize * 100 / 350);
+        for (place, &b) in obs.goal.order().iter().enumerate() {
+            assert_eq!(goal_pixel(place), crate::render::colour(b), "goal place {place}");
+        }
+        // The picture hides block 2 (the top-right cell) whole, as on the authors' screen.
+        assert_eq!(centre(6, 6), PIXELS_GOAL_BACKGROUND);
+        assert_eq!(centre(6, 5), [0, 0, 0]);
+        // Nothing held: the block shows its own colour.
+        let mut dropped = obs;
+        dropped.state = dropped.state.with_held(None).unwrap();
+        assert_eq!(
+            dropped.pixels().rgb(50, 50),
+            crate::render::colour(BlockId(0)),
+            "block 0 at the centre"
+        );
     }
 }
