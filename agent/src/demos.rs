@@ -24,7 +24,8 @@
 //!
 //! # Replay
 //!
-//! [`Replay`] applies the recorded steps to an agent with the recorded rule, in file order:
+//! [`Replay`] applies the recorded steps to an agent with the recorded rule, in file order
+//! (any [`DemoLearner`]; the tabular agent is one):
 //! started from the same model, it ends with the same table as the live session. A line
 //! that cannot be used (not JSON, an unknown field, a step before any episode line, a state
 //! that does not fit, a line cut off by a kill) is an error naming its line number; the
@@ -351,9 +352,30 @@ impl From<AgentError> for LineError {
     }
 }
 
-/// Applies recorded sessions to an agent, line by line (module docs).
-pub struct Replay<'a> {
-    agent: &'a mut QAgent,
+/// What a replay hands the recorded steps to: the tabular agent, or any other learner (the
+/// neural crate collects them as demonstrations).
+pub trait DemoLearner {
+    /// An error unless a world of `blocks` blocks on `grid` is the learner's.
+    fn check_world(&self, grid: Grid, blocks: usize) -> Result<()>;
+
+    /// Learns from one recorded step, by the session's `rule`.
+    fn learn(&mut self, rule: &CorrectionRule, step: &Experience) -> Result<()>;
+}
+
+impl DemoLearner for QAgent {
+    fn check_world(&self, grid: Grid, blocks: usize) -> Result<()> {
+        QAgent::check_world(self, grid, blocks)
+    }
+
+    fn learn(&mut self, rule: &CorrectionRule, step: &Experience) -> Result<()> {
+        rule.learn(self, step).map(|_| ())
+    }
+}
+
+/// Applies recorded sessions to a learner (by default a [`QAgent`]), line by line (module
+/// docs).
+pub struct Replay<'a, L: ?Sized = QAgent> {
+    agent: &'a mut L,
     policy: BadLines,
     name: String,
     /// The current session's grid and rule.
@@ -363,9 +385,9 @@ pub struct Replay<'a> {
     report: ReplayReport,
 }
 
-impl<'a> Replay<'a> {
+impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
     /// A replay into `agent`; `name` (the file's) is used in errors.
-    pub fn new(agent: &'a mut QAgent, policy: BadLines, name: &str) -> Self {
+    pub fn new(agent: &'a mut L, policy: BadLines, name: &str) -> Self {
         Replay {
             agent,
             policy,
@@ -476,7 +498,7 @@ impl<'a> Replay<'a> {
                     Some((k, goal)) if k == s.episode => goal,
                     _ => return Err(no_header(&format!("a step of episode {}", s.episode), "episode")),
                 };
-                let blocks = self.agent.blocks();
+                let blocks = goal.block_count();
                 let obs = Observation {
                     grid,
                     state: s.state.state(grid)?,
@@ -486,6 +508,16 @@ impl<'a> Replay<'a> {
                     state: s.next.state(grid)?,
                     ..obs
                 };
+                for state in [&obs.state, &next.state] {
+                    if state.block_count() != blocks {
+                        return Err(AgentError::from(sim::SimError::BlockCountMismatch {
+                            expected: blocks,
+                            what: "a recorded state",
+                            found: state.block_count(),
+                        })
+                        .into());
+                    }
+                }
                 let action = Action::parse(&s.action, blocks).map_err(AgentError::from)?;
                 Action::parse(&s.proposed, blocks).map_err(AgentError::from)?;
                 if !s.reward.is_finite() {
@@ -494,8 +526,8 @@ impl<'a> Replay<'a> {
                         fatal: false,
                     });
                 }
-                rule.learn(
-                    self.agent,
+                self.agent.learn(
+                    &rule,
                     &Experience {
                         obs,
                         action,
@@ -526,7 +558,7 @@ fn no_header(what: &str, header: &str) -> LineError {
 }
 
 /// Replays the recording at `path` into `agent` (module docs).
-pub fn learn_from_file(agent: &mut QAgent, path: &Path, policy: BadLines) -> Result<ReplayReport> {
+pub fn learn_from_file<L: DemoLearner + ?Sized>(agent: &mut L, path: &Path, policy: BadLines) -> Result<ReplayReport> {
     let file = File::open(path).map_err(|e| demos_error(path, &e.to_string()))?;
     let mut replay = Replay::new(agent, policy, &path.display().to_string());
     replay.read(std::io::BufReader::new(file))?;

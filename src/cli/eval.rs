@@ -3,19 +3,20 @@
 use std::path::PathBuf;
 
 use agent::optimality::{self, Optimality};
-use agent::{EpisodeResult, QAgent, Summary};
+use agent::{EpisodeResult, Summary};
 use anyhow::Result;
 use clap::Args;
 use serde::Serialize;
-use sim::{Backend, Env, EnvConfig, Goal, GoalSpec, RewardModel};
+use sim::{Backend, Env, EnvConfig, Goal, GoalSpec};
 
+use super::model::Model;
 use super::run::RunReport;
 use super::train::parse_goals;
 
 /// Arguments of `blockstack eval`.
 #[derive(Debug, Args)]
 pub struct EvalArgs {
-    /// The model file to evaluate.
+    /// The model file to evaluate: a tabular agent (`train`) or a network (`dqn`).
     #[arg(long)]
     pub model: PathBuf,
     /// Goals to evaluate on, separated by ':', e.g. 2,1,0:1,2,0 (default: every goal).
@@ -71,13 +72,10 @@ struct EvalReport {
 
 /// Evaluates the model and prints the figures.
 pub fn eval(args: EvalArgs) -> Result<()> {
-    let model = QAgent::load(&args.model)?;
+    let model = Model::load(&args.model)?;
     let goals = parse_goals(args.goals.as_deref(), model.blocks())?;
     let backend: Backend = args.backend.parse()?;
-    let reward = model.training().map_or_else(
-        || RewardModel::from_name("sparse").expect("a known model"),
-        |t| t.reward,
-    );
+    let reward = model.reward();
     let (mut all, mut all_optimal): (Vec<EpisodeResult>, Vec<u32>) = (Vec::new(), Vec::new());
     let mut per_goal = Vec::new();
     for goal in &goals {
@@ -90,7 +88,7 @@ pub fn eval(args: EvalArgs) -> Result<()> {
             backend,
         })?;
         let mut policy = model.policy(args.epsilon)?;
-        let results = agent::play(&mut env, &mut policy, args.episodes, args.seed, None)?;
+        let results = agent::play(&mut env, policy.as_mut(), args.episodes, args.seed, None)?;
         let optimal = optimality::optimal_steps(model.grid(), &results)?;
         per_goal.push(GoalReport {
             goal: goal.to_string(),

@@ -5,8 +5,10 @@ use clap::{Parser, Subcommand};
 
 mod correct;
 mod demo;
+mod dqn;
 mod eval;
 mod learn_from_demos;
+mod model;
 mod render;
 mod reproduce;
 mod run;
@@ -44,6 +46,8 @@ pub enum Command {
     Correct(correct::CorrectArgs),
     /// Apply a recorded demonstration session to a model, headless.
     LearnFromDemos(learn_from_demos::LearnFromDemosArgs),
+    /// Train a deep Q-network (DQN, or DQfD from demonstrations) and save it as a network file.
+    Dqn(Box<dqn::DqnArgs>),
 }
 
 /// Carries out `cli`'s command.
@@ -58,5 +62,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Demo(args) => demo::demo(args),
         Command::Correct(args) => correct::correct(args),
         Command::LearnFromDemos(args) => learn_from_demos::learn_from_demos(args),
+        Command::Dqn(args) => dqn::dqn(*args),
     }
 }

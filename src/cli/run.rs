@@ -8,8 +8,9 @@ use serde::Serialize;
 use sim::trajectory::TrajectoryWriter;
 use sim::{Env, GoalSpec};
 
-use agent::{ExactPolicy, OraclePolicy, Policy, QAgent, RandomPolicy, Summary};
+use agent::{ExactPolicy, OraclePolicy, Policy, RandomPolicy, Summary};
 
+use super::model::Model;
 use super::world::WorldArgs;
 
 /// Which agent plays.
@@ -23,6 +24,8 @@ pub enum AgentKind {
     Exact,
     /// A trained tabular Q-learner, read from --model.
     Q,
+    /// A trained network, read from --model (see `blockstack dqn`).
+    Dqn,
 }
 
 /// Arguments of `blockstack run`.
@@ -45,10 +48,10 @@ pub struct RunArgs {
     /// Print the result as one JSON object.
     #[arg(long)]
     pub json: bool,
-    /// The model file the `q` agent plays (see `blockstack train`).
-    #[arg(long, required_if_eq("agent", "q"))]
+    /// The model file the `q` or `dqn` agent plays (see `blockstack train`, `blockstack dqn`).
+    #[arg(long, required_if_eq_any([("agent", "q"), ("agent", "dqn")]))]
     pub model: Option<PathBuf>,
-    /// The `q` agent's probability of a random action (the paper's test policy: 0.1).
+    /// The `q` or `dqn` agent's probability of a random action (the paper's test policy: 0.1).
     #[arg(long, default_value_t = 0.1)]
     pub epsilon: f64,
 }
@@ -71,20 +74,29 @@ pub(super) struct RunReport {
 /// Plays the episodes and prints the summary.
 pub fn run(args: RunArgs) -> Result<()> {
     let config = args.world.config()?;
-    let q_agent = match (args.agent, &args.model) {
-        (AgentKind::Q, Some(path)) => {
-            let q = QAgent::load(path)?;
-            q.check_world(config.grid, config.blocks)?;
-            Some(q)
+    let model = match (args.agent, &args.model) {
+        (AgentKind::Q | AgentKind::Dqn, Some(path)) => {
+            let model = Model::load(path)?;
+            match (args.agent, &model) {
+                (AgentKind::Q, Model::Q(_)) | (AgentKind::Dqn, Model::Dqn(_)) => {}
+                _ => anyhow::bail!(
+                    "{} holds a {} model, not what --agent {} plays",
+                    path.display(),
+                    model.name(),
+                    if args.agent == AgentKind::Q { "q" } else { "dqn" }
+                ),
+            }
+            model.check_world(config.grid, config.blocks)?;
+            Some(model)
         }
         _ => None,
     };
-    let mut policy: Box<dyn Policy + '_> = match (args.agent, &q_agent) {
+    let mut policy: Box<dyn Policy + '_> = match (args.agent, &model) {
         (AgentKind::Random, _) => Box::new(RandomPolicy),
         (AgentKind::Oracle, _) => Box::new(OraclePolicy::new(config.grid)),
         (AgentKind::Exact, _) => Box::new(ExactPolicy::new(config.grid)),
-        (AgentKind::Q, Some(q)) => Box::new(q.policy(args.epsilon)?),
-        (AgentKind::Q, None) => anyhow::bail!("--agent q needs --model FILE"),
+        (AgentKind::Q | AgentKind::Dqn, Some(m)) => m.policy(args.epsilon)?,
+        (AgentKind::Q | AgentKind::Dqn, None) => anyhow::bail!("--agent q and --agent dqn need --model FILE"),
     };
     let mut env = Env::new(config)?;
     let mut trajectory = args.trajectory.as_deref().map(TrajectoryWriter::create).transpose()?;

@@ -1,0 +1,487 @@
+//! Everything that defines a training run, and the presets.
+//!
+//! # Presets
+//!
+//! - `paper`: the paper's DQN as section III-C and the authors' code describe it: pixels, the
+//!   paper network with batch normalisation, buffer 1000, batch 64, RMSprop at 1e-4, MSE
+//!   loss, the sparse reward, the target network refreshed every 3 training games (the
+//!   paper's "every n epochs", n = 3 or 5), epsilon 0.1 throughout and gamma 0.1 (both from
+//!   the authors' `DQN.py`; the paper gives neither), every action allowed (no mask), no
+//!   demonstrations.
+//! - `paper-dqfd`: the same with the paper's DQfD stage: pre-training on demonstrations
+//!   (here 500 of the exact solver's, where the paper had people's) with the large-margin
+//!   loss, then self-play with the demonstrations kept in the buffer.
+//! - `dqn-planes`: ours without demonstrations: the small network on centred planes, Adam at
+//!   1e-3, Huber loss, double DQN, gamma 0.95, the sparse reward, a 100,000-step buffer, the
+//!   target refreshed every 500 gradient steps, epsilon from 1 to 0.05 over the first half,
+//!   actions that change nothing masked, gradients clipped at norm 10.
+//! - `dqfd-planes` (the recommended recipe): `dqn-planes` with DQfD (Hester et al. 2018):
+//!   2,000 exact-solver demonstrations, 20,000 pre-training steps with the 1-step and
+//!   10-step TD losses, the large-margin loss (margin 0.8) and L2 1e-5, then self-play with
+//!   a quarter of every batch drawn from the demonstrations and epsilon from 0.1 to 0.01.
+//!
+//! Why each of our choices, measured, is in the E8 section of `blockstack reproduce --only
+//! E8 --long`'s report.
+
+use std::fmt;
+
+use serde::{Deserialize, Serialize};
+use sim::{Backend, EnvConfig, Goal, GoalSpec, Grid, RewardModel};
+
+use crate::error::{NeuralError, Result};
+use crate::input::ObsKind;
+use crate::net::{NetConfig, NetKind};
+use crate::optim::OptimizerKind;
+
+/// Where demonstrations come from.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DemoSource {
+    /// None.
+    #[default]
+    None,
+    /// That many episodes of the exact solver (shortest plans) from seeded starts.
+    Exact(u64),
+    /// That many episodes of the centroid + A* oracle from seeded starts.
+    Oracle(u64),
+    /// A recording: `blockstack-demos` JSON Lines, or a trajectory file.
+    File(String),
+}
+
+impl fmt::Display for DemoSource {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            DemoSource::None => f.write_str("none"),
+            DemoSource::Exact(k) => write!(f, "exact:{k}"),
+            DemoSource::Oracle(k) => write!(f, "oracle:{k}"),
+            DemoSource::File(path) => write!(f, "file:{path}"),
+        }
+    }
+}
+
+impl std::str::FromStr for DemoSource {
+    type Err = NeuralError;
+
+    /// Reads `none`, `exact:K` or `oracle:K`.
+    fn from_str(text: &str) -> Result<DemoSource> {
+        let bad = || {
+            NeuralError::Config(format!(
+                "unknown demonstrations {text:?}: write exact:K or oracle:K (K episodes), or none"
+            ))
+        };
+        if text == "none" {
+            return Ok(DemoSource::None);
+        }
+        let (kind, count) = text.split_once(':').ok_or_else(bad)?;
+        let count: u64 = count.parse().map_err(|_| bad())?;
+        match kind {
+            "exact" => Ok(DemoSource::Exact(count)),
+            "oracle" => Ok(DemoSource::Oracle(count)),
+            _ => Err(bad()),
+        }
+    }
+}
+
+/// Which losses train the network.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LossKind {
+    /// The 1-step TD loss only; demonstrations, if any, are only data in the buffer.
+    Dqn,
+    /// DQfD: the 1-step and n-step TD losses, the large-margin loss on demonstrated actions,
+    /// and L2 on the weights.
+    Dqfd,
+}
+
+impl fmt::Display for LossKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            LossKind::Dqn => "dqn",
+            LossKind::Dqfd => "dqfd",
+        })
+    }
+}
+
+impl std::str::FromStr for LossKind {
+    type Err = NeuralError;
+
+    fn from_str(text: &str) -> Result<LossKind> {
+        match text {
+            "dqn" => Ok(LossKind::Dqn),
+            "dqfd" => Ok(LossKind::Dqfd),
+            _ => Err(NeuralError::Config(format!("unknown loss {text:?}: choose dqfd or dqn"))),
+        }
+    }
+}
+
+/// How a TD error is penalised.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum TdLoss {
+    /// Huber (smooth L1, threshold 1).
+    Huber,
+    /// Mean squared error.
+    Mse,
+}
+
+impl std::str::FromStr for TdLoss {
+    type Err = NeuralError;
+
+    fn from_str(text: &str) -> Result<TdLoss> {
+        match text {
+            "huber" => Ok(TdLoss::Huber),
+            "mse" => Ok(TdLoss::Mse),
+            _ => Err(NeuralError::Config(format!("unknown TD loss {text:?}: choose huber or mse"))),
+        }
+    }
+}
+
+/// When the target network is refreshed from the online one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum TargetEvery {
+    /// Every that many gradient steps.
+    Steps(u64),
+    /// Every that many training games (the paper's "epochs").
+    Games(u64),
+}
+
+/// Epsilon falls linearly from `start` to `end` over the first `steps` environment steps of
+/// self-play, and stays at `end`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Epsilon {
+    /// At the first step.
+    pub start: f64,
+    /// From `steps` on.
+    pub end: f64,
+    /// Length of the fall.
+    pub steps: u64,
+}
+
+impl Epsilon {
+    /// Epsilon after `step` environment steps.
+    pub fn at(&self, step: u64) -> f64 {
+        if step >= self.steps {
+            self.end
+        } else {
+            self.start + (self.end - self.start) * step as f64 / self.steps as f64
+        }
+    }
+}
+
+/// A training run: the world, the network, the learner, the budget and the seed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DqnConfig {
+    /// The grid.
+    pub grid: Grid,
+    /// Number of blocks.
+    pub blocks: usize,
+    /// Goals trained on, in turn (game `k` plays `goals[k % len]`).
+    pub goals: Vec<Goal>,
+    /// The network (its kind says which observation it reads).
+    pub net: NetConfig,
+    /// The reward model the learner learns from.
+    pub reward: RewardModel,
+    /// Steps before a training game is cut off.
+    pub horizon: u32,
+    /// The world backend of the training games.
+    pub backend: Backend,
+    /// Seed of the weights, starts, demonstrations and every random choice.
+    pub seed: u64,
+    /// Environment steps of self-play.
+    pub steps: u64,
+    /// Gradient steps on the demonstrations alone, before self-play.
+    pub pretrain_steps: u64,
+    /// Where demonstrations come from.
+    pub demos: DemoSource,
+    /// Which losses.
+    pub loss: LossKind,
+    /// How a TD error is penalised.
+    pub td_loss: TdLoss,
+    /// The optimiser.
+    pub optimizer: OptimizerKind,
+    /// Its learning rate.
+    pub lr: f64,
+    /// The discount factor.
+    pub gamma: f64,
+    /// The agent's transitions the replay buffer holds.
+    pub buffer: usize,
+    /// Transitions per gradient step.
+    pub batch: usize,
+    /// Environment steps per gradient step in self-play.
+    pub train_every: u64,
+    /// The agent's transitions in the buffer before self-play learning begins.
+    pub learning_starts: u64,
+    /// When the target network is refreshed.
+    pub target_every: TargetEvery,
+    /// The exploration schedule.
+    pub epsilon: Epsilon,
+    /// Double DQN: the online network chooses the next action, the target values it.
+    pub double: bool,
+    /// Clip the gradients' global norm to this.
+    pub clip_norm: Option<f64>,
+    /// `n` of the n-step TD loss (DQfD).
+    pub n_step: usize,
+    /// The large-margin loss's margin `l(a_E, a)` for `a != a_E` (DQfD).
+    pub margin: f64,
+    /// Weight of the n-step TD loss (DQfD).
+    pub lambda_n_step: f64,
+    /// Weight of the large-margin loss (DQfD).
+    pub lambda_margin: f64,
+    /// Weight of the L2 penalty on the weights (DQfD).
+    pub l2: f64,
+    /// Share of every self-play batch drawn from the demonstrations.
+    pub demo_share: f64,
+    /// Leave actions that change nothing out of every choice ([`crate::mask`]).
+    pub mask_noops: bool,
+}
+
+/// The preset names, in the order the CLI lists them.
+pub const PRESETS: [&str; 4] = ["paper", "paper-dqfd", "dqn-planes", "dqfd-planes"];
+
+impl DqnConfig {
+    /// The paper's DQN (module docs) on `blocks` blocks, every goal.
+    pub fn paper(blocks: usize) -> Result<DqnConfig> {
+        Ok(DqnConfig {
+            grid: Grid::default(),
+            blocks,
+            goals: Goal::all(blocks)?,
+            net: NetConfig::paper(),
+            reward: RewardModel::from_name("sparse")?,
+            horizon: sim::DEFAULT_HORIZON,
+            backend: Backend::Grid,
+            seed: 1,
+            steps: 100_000,
+            pretrain_steps: 0,
+            demos: DemoSource::None,
+            loss: LossKind::Dqn,
+            td_loss: TdLoss::Mse,
+            optimizer: OptimizerKind::Rmsprop,
+            lr: 1e-4,
+            gamma: 0.1,
+            buffer: 1000,
+            batch: 64,
+            train_every: 1,
+            learning_starts: 64,
+            target_every: TargetEvery::Games(3),
+            epsilon: Epsilon {
+                start: 0.1,
+                end: 0.1,
+                steps: 0,
+            },
+            double: false,
+            clip_norm: None,
+            n_step: 10,
+            margin: agent::correction::DEFAULT_MARGIN,
+            lambda_n_step: 1.0,
+            lambda_margin: 1.0,
+            l2: 1e-5,
+            demo_share: 0.25,
+            mask_noops: false,
+        })
+    }
+
+    /// A preset by name ([`PRESETS`]) for `blocks` blocks.
+    pub fn preset(name: &str, blocks: usize) -> Result<DqnConfig> {
+        let paper = DqnConfig::paper(blocks)?;
+        match name {
+            "paper" => Ok(paper),
+            "paper-dqfd" => Ok(DqnConfig {
+                demos: DemoSource::Exact(500),
+                loss: LossKind::Dqfd,
+                pretrain_steps: 5_000,
+                ..paper
+            }),
+            "dqn-planes" => Ok(DqnConfig::dqn_planes(paper)),
+            "dqfd-planes" => Ok(DqnConfig {
+                steps: 150_000,
+                pretrain_steps: 20_000,
+                demos: DemoSource::Exact(2_000),
+                loss: LossKind::Dqfd,
+                learning_starts: 1_000,
+                epsilon: Epsilon {
+                    start: 0.1,
+                    end: 0.01,
+                    steps: 50_000,
+                },
+                ..DqnConfig::dqn_planes(paper)
+            }),
+            _ => Err(NeuralError::Config(format!(
+                "unknown preset {name:?}: choose {}",
+                PRESETS.join(", ")
+            ))),
+        }
+    }
+
+    fn dqn_planes(paper: DqnConfig) -> DqnConfig {
+        DqnConfig {
+            net: NetConfig::small(),
+            steps: 300_000,
+            td_loss: TdLoss::Huber,
+            optimizer: OptimizerKind::Adam,
+            lr: 1e-3,
+            gamma: 0.95,
+            buffer: 100_000,
+            learning_starts: 5_000,
+            target_every: TargetEvery::Steps(500),
+            epsilon: Epsilon {
+                start: 1.0,
+                end: 0.05,
+                steps: 150_000,
+            },
+            double: true,
+            clip_norm: Some(10.0),
+            mask_noops: true,
+            ..paper
+        }
+    }
+
+    /// The observation the network reads.
+    pub fn obs(&self) -> ObsKind {
+        self.net.obs()
+    }
+
+    /// The environment a game on `goal` is played in.
+    pub fn env_config(&self, goal: Goal) -> EnvConfig {
+        EnvConfig {
+            grid: self.grid,
+            blocks: self.blocks,
+            goal: GoalSpec::Fixed(goal),
+            horizon: self.horizon,
+            reward: self.reward,
+            backend: self.backend,
+        }
+    }
+
+    /// A one-line description for reports: network, losses, demonstrations, budget.
+    pub fn describe(&self) -> String {
+        let net = match self.net.kind {
+            NetKind::Paper => format!(
+                "paper network on pixels{}",
+                if self.net.batch_norm { "" } else { " without batch norm" }
+            ),
+            NetKind::Small => format!("small network ({} x 2) on centred planes", self.net.hidden),
+            NetKind::Mlp => format!("MLP ({} x 2) on absolute planes", self.net.hidden),
+        };
+        format!(
+            "{net}; {} loss, {} reward, gamma {}, {} lr {}, buffer {}, batch {}; demonstrations {}{}; {} self-play steps{}",
+            self.loss,
+            self.reward,
+            self.gamma,
+            self.optimizer,
+            self.lr,
+            self.buffer,
+            self.batch,
+            self.demos,
+            if self.pretrain_steps > 0 {
+                format!(", {} pre-training steps", self.pretrain_steps)
+            } else {
+                String::new()
+            },
+            self.steps,
+            if self.mask_noops { "; no-op actions masked" } else { "" }
+        )
+    }
+
+    /// An error naming the first setting that cannot work.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |what: String| Err(NeuralError::Config(what));
+        self.net.validate(self.obs())?;
+        if self.goals.is_empty() {
+            return bad("no goals to train on".into());
+        }
+        for goal in &self.goals {
+            self.env_config(*goal).validate()?;
+        }
+        if self.batch == 0 {
+            return bad("the batch must hold at least 1 transition".into());
+        }
+        if self.buffer == 0 {
+            return bad("the buffer must hold at least 1 transition".into());
+        }
+        if self.train_every == 0 {
+            return bad("train-every must be at least 1 step".into());
+        }
+        if !(self.lr > 0.0 && self.lr.is_finite()) {
+            return bad(format!("the learning rate {} is not a positive number", self.lr));
+        }
+        if !(0.0..=1.0).contains(&self.gamma) {
+            return bad(format!("gamma {} is not in [0, 1]", self.gamma));
+        }
+        for (name, e) in [("start", self.epsilon.start), ("end", self.epsilon.end)] {
+            if !(0.0..=1.0).contains(&e) {
+                return bad(format!("epsilon {name} {e} is not in [0, 1]"));
+            }
+        }
+        if !(0.0..=1.0).contains(&self.demo_share) {
+            return bad(format!("the demonstration share {} is not in [0, 1]", self.demo_share));
+        }
+        if !(self.margin.is_finite() && self.margin >= 0.0) {
+            return bad(format!("the margin {} is not a finite number at least 0", self.margin));
+        }
+        for (name, v) in [
+            ("the n-step weight", self.lambda_n_step),
+            ("the margin weight", self.lambda_margin),
+            ("the L2 weight", self.l2),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return bad(format!("{name} {v} is not a finite number at least 0"));
+            }
+        }
+        if self.n_step == 0 {
+            return bad("n-step must be at least 1".into());
+        }
+        if let Some(c) = self.clip_norm {
+            if !(c > 0.0 && c.is_finite()) {
+                return bad(format!("the gradient clip {c} is not a positive number"));
+            }
+        }
+        match self.target_every {
+            TargetEvery::Steps(0) | TargetEvery::Games(0) => bad("the target network must be refreshed every 1 or more".into()),
+            _ => Ok(()),
+        }?;
+        if self.pretrain_steps > 0 && self.demos == DemoSource::None {
+            return bad("pre-training needs demonstrations (--demos or --demos-file)".into());
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_preset_is_valid_and_the_paper_is_the_papers() {
+        for name in PRESETS {
+            DqnConfig::preset(name, 3).unwrap().validate().unwrap();
+        }
+        let p = DqnConfig::preset("paper", 3).unwrap();
+        assert_eq!((p.buffer, p.batch, p.lr, p.obs()), (1000, 64, 1e-4, ObsKind::Pixels));
+        assert_eq!(p.optimizer, OptimizerKind::Rmsprop);
+        assert_eq!(p.reward.name(), "sparse");
+        assert!(DqnConfig::preset("nope", 3).is_err());
+    }
+
+    #[test]
+    fn demonstration_sources_read_and_print() {
+        for text in ["none", "exact:10", "oracle:3"] {
+            assert_eq!(text.parse::<DemoSource>().unwrap().to_string(), text);
+        }
+        for bad in ["exact", "exact:x", "people:3"] {
+            assert!(bad.parse::<DemoSource>().is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn epsilon_falls_linearly_then_stays() {
+        let e = Epsilon {
+            start: 1.0,
+            end: 0.1,
+            steps: 10,
+        };
+        assert_eq!((e.at(0), e.at(5), e.at(10), e.at(99)), (1.0, 0.55, 0.1, 0.1));
+    }
+}

@@ -1,0 +1,223 @@
+//! What a network sees: an observation of `sim` turned into a vector of bytes, which a batch
+//! turns into floats.
+//!
+//! The observations themselves come from `sim` ([`sim::Observation::pixels`],
+//! [`sim::Observation::role_planes`]); this module only lays them out for a network and adds
+//! the one input transform of the small network, centring (below).
+//!
+//! # Layouts
+//!
+//! Every input is a `rows x columns x channels` array, channel fastest, stored as bytes
+//! (pixels 0-255, planes 0/1) and scaled to `[0, 1]` floats in a batch:
+//!
+//! - `pixels`: the paper's 100 x 100 RGB screen, rows from the top.
+//! - `planes`: the role planes, `W x H x (N + 1)`, "rows" are grid columns `x`.
+//! - centred planes (the small network's input): the role planes moved so that the bottom
+//!   block of the goal sits at the centre of a `(2W - 1) x (2H - 1)` canvas, plus one plane
+//!   marking the canvas cells that lie inside the grid. Every cell of the grid lands on the
+//!   canvas wherever the bottom block stands. The task is nearly translation-invariant (a
+//!   stack can stand anywhere); centred, two states that differ only by a shift of every
+//!   block look the same except for where the walls are, so what a network learns at one
+//!   place serves every place. An absolute layout makes it learn every place separately.
+
+use std::fmt;
+
+use serde::{Deserialize, Serialize};
+use sim::observation::PIXELS_SIDE;
+use sim::{Grid, Observation};
+
+use crate::error::{NeuralError, Result};
+
+/// Which view of the world a network sees.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ObsKind {
+    /// The role planes (one channel per goal place, plus the held block).
+    Planes,
+    /// The paper's 100 x 100 RGB screen.
+    Pixels,
+}
+
+impl ObsKind {
+    /// The name it is chosen by.
+    pub fn name(self) -> &'static str {
+        match self {
+            ObsKind::Planes => "planes",
+            ObsKind::Pixels => "pixels",
+        }
+    }
+}
+
+impl fmt::Display for ObsKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for ObsKind {
+    type Err = NeuralError;
+
+    fn from_str(text: &str) -> Result<ObsKind> {
+        match text {
+            "planes" => Ok(ObsKind::Planes),
+            "pixels" => Ok(ObsKind::Pixels),
+            _ => Err(NeuralError::Config(format!(
+                "unknown observation {text:?}: choose planes or pixels"
+            ))),
+        }
+    }
+}
+
+/// How observations of one world are laid out for one network.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct InputSpec {
+    /// The view.
+    pub kind: ObsKind,
+    /// Planes centred on the goal's bottom block (module docs); planes only.
+    pub centred: bool,
+    /// The grid.
+    pub grid: Grid,
+    /// Number of blocks.
+    pub blocks: usize,
+}
+
+impl InputSpec {
+    /// The layout; an error for centred pixels.
+    pub fn new(kind: ObsKind, centred: bool, grid: Grid, blocks: usize) -> Result<InputSpec> {
+        if centred && kind == ObsKind::Pixels {
+            return Err(NeuralError::Config("only planes can be centred".into()));
+        }
+        Ok(InputSpec {
+            kind,
+            centred,
+            grid,
+            blocks,
+        })
+    }
+
+    /// `(rows, columns, channels)`.
+    pub fn shape(&self) -> (usize, usize, usize) {
+        let (w, h, n) = (self.grid.width(), self.grid.height(), self.blocks);
+        match (self.kind, self.centred) {
+            (ObsKind::Pixels, _) => (PIXELS_SIDE, PIXELS_SIDE, 3),
+            (ObsKind::Planes, false) => (w, h, n + 1),
+            (ObsKind::Planes, true) => (2 * w - 1, 2 * h - 1, n + 2),
+        }
+    }
+
+    /// Values per input.
+    pub fn len(&self) -> usize {
+        let (r, c, ch) = self.shape();
+        r * c * ch
+    }
+
+    /// Whether the input is empty (never: every layout has cells).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The factor that turns a byte into the network's float.
+    pub fn scale(&self) -> f32 {
+        match self.kind {
+            ObsKind::Pixels => 1.0 / 255.0,
+            ObsKind::Planes => 1.0,
+        }
+    }
+
+    /// An error unless `obs` is of this layout's world.
+    pub fn check(&self, obs: &Observation) -> Result<()> {
+        if obs.grid != self.grid || obs.state.block_count() != self.blocks || obs.goal.block_count() != self.blocks {
+            return Err(NeuralError::Mismatch(format!(
+                "the network plays {} blocks on a {} grid, the world has {} blocks on a {} grid",
+                self.blocks,
+                self.grid,
+                obs.state.block_count(),
+                obs.grid
+            )));
+        }
+        Ok(())
+    }
+
+    /// Appends the input of `obs` (of this layout's world) to `out`.
+    pub fn encode(&self, obs: &Observation, out: &mut Vec<u8>) {
+        match (self.kind, self.centred) {
+            (ObsKind::Pixels, _) => out.extend_from_slice(&obs.pixels().data),
+            (ObsKind::Planes, false) => out.extend_from_slice(&obs.role_planes().data),
+            (ObsKind::Planes, true) => self.encode_centred(obs, out),
+        }
+    }
+
+    fn encode_centred(&self, obs: &Observation, out: &mut Vec<u8>) {
+        let (w, h) = (self.grid.width() as i64, self.grid.height() as i64);
+        let (rows, cols, channels) = self.shape();
+        let start = out.len();
+        out.resize(start + rows * cols * channels, 0);
+        let canvas = &mut out[start..];
+        let anchor = obs.state.cell(obs.goal.block_at_place(0));
+        // Canvas coordinates of grid cell (x, y): shifted so the anchor is at (w-1, h-1).
+        let (dx, dy) = (w - 1 - i64::from(anchor.x), h - 1 - i64::from(anchor.y));
+        let at = |x: i64, y: i64, ch: usize| (((x + dx) * (2 * h - 1) + (y + dy)) as usize) * channels + ch;
+        let planes = obs.role_planes();
+        for x in 0..w {
+            for y in 0..h {
+                for ch in 0..planes.channels {
+                    canvas[at(x, y, ch)] = planes.get(x as usize, y as usize, ch);
+                }
+                canvas[at(x, y, channels - 1)] = 1;
+            }
+        }
+    }
+
+    /// The inputs of `observations` as floats, one row each.
+    pub fn batch(&self, observations: &[&Observation]) -> Vec<f32> {
+        let mut bytes = Vec::with_capacity(observations.len() * self.len());
+        for obs in observations {
+            self.encode(obs, &mut bytes);
+        }
+        let scale = self.scale();
+        bytes.into_iter().map(|b| f32::from(b) * scale).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use sim::{BlockId, Cell, State};
+
+    fn obs(cells: [Cell; 3], held: Option<u8>) -> Observation {
+        Observation {
+            grid: Grid::default(),
+            state: State::new(&cells, held.map(BlockId)).unwrap(),
+            goal: "2,0,1".parse().unwrap(),
+        }
+    }
+
+    #[test]
+    fn centred_planes_are_the_same_for_shifted_states_but_for_the_walls() {
+        let spec = InputSpec::new(ObsKind::Planes, true, Grid::default(), 3).unwrap();
+        assert_eq!(spec.shape(), (13, 13, 5));
+        let a = obs([Cell::new(1, 2), Cell::new(3, 3), Cell::new(1, 1)], Some(0));
+        let b = obs([Cell::new(2, 3), Cell::new(4, 4), Cell::new(2, 2)], Some(0));
+        let (mut ea, mut eb) = (Vec::new(), Vec::new());
+        spec.encode(&a, &mut ea);
+        spec.encode(&b, &mut eb);
+        assert_eq!(ea.len(), spec.len());
+        let blocks_only = |e: &[u8]| e.chunks(5).map(|c| c[..4].to_vec()).collect::<Vec<_>>();
+        assert_eq!(blocks_only(&ea), blocks_only(&eb), "the blocks look the same");
+        assert_ne!(ea, eb, "the walls do not");
+        // The bottom block of the goal (block 2) is at the canvas centre, on plane 0.
+        assert_eq!(ea[(6 * 13 + 6) * 5], 1);
+        // 49 canvas cells are inside the grid.
+        assert_eq!(ea.chunks(5).filter(|c| c[4] == 1).count(), 49);
+    }
+
+    #[test]
+    fn pixels_cannot_be_centred_and_batches_scale_to_unit_floats() {
+        assert!(InputSpec::new(ObsKind::Pixels, true, Grid::default(), 3).is_err());
+        let spec = InputSpec::new(ObsKind::Pixels, false, Grid::default(), 3).unwrap();
+        let o = obs([Cell::new(1, 2), Cell::new(3, 3), Cell::new(1, 1)], None);
+        let batch = spec.batch(&[&o, &o]);
+        assert_eq!(batch.len(), 2 * 30_000);
+        assert!(batch.iter().all(|v| (0.0..=1.0).contains(v)));
+    }
+}

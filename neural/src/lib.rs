@@ -1,0 +1,37 @@
+//! The neural learner: deep Q-learning from the paper's pixels or from planes, and DQfD
+//! (deep Q-learning from demonstrations, Hester et al. 2018): the paper's Approach 1
+//! (section III-C) rebuilt, and made to learn.
+//!
+//! - [`input`]: what a network sees: `sim`'s pixel and plane views laid out as bytes.
+//! - [`net`]: the Q-networks, the paper's convolutional one and our small one.
+//! - [`mask`]: which actions may be chosen, and the masked argmax every choice goes through.
+//! - [`replay`], [`learner`], [`optim`]: experience replay with n-step returns; one gradient
+//!   step of the DQN and DQfD losses; RMSprop and Adam.
+//! - [`demos`]: demonstrations from the exact solver, the oracle, or a recording.
+//! - [`config`], [`train`]: a run's settings and presets, and the trainer.
+//! - [`model`], [`file`]: a trained network ([`Dqn`]), played through [`agent::Policy`] (so
+//!   `agent::play`, rollouts and evaluation serve it unchanged), saved and read as a
+//!   safetensors file.
+//!
+//! Everything runs on the CPU with candle; every random draw comes from the config's seed.
+
+pub mod config;
+pub mod demos;
+pub mod error;
+pub mod file;
+pub mod input;
+pub mod learner;
+pub mod mask;
+pub mod model;
+pub mod net;
+pub mod optim;
+pub mod replay;
+pub mod train;
+
+pub use config::{DemoSource, DqnConfig, Epsilon, LossKind, PRESETS, TargetEvery, TdLoss};
+pub use error::{NeuralError, Result};
+pub use input::ObsKind;
+pub use model::{Dqn, DqnPolicy, TrainReport};
+pub use net::{NetConfig, NetKind};
+pub use optim::OptimizerKind;
+pub use train::{Phase, Progress, Trainer, train};

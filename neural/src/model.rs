@@ -1,0 +1,204 @@
+//! A trained network with its training config: played through [`agent::Policy`], saved and
+//! read as a network file ([`crate::file`], format [`FORMAT`]).
+
+use std::path::Path;
+
+use agent::Policy;
+use serde::{Deserialize, Serialize};
+use sim::seeding::SimRng;
+use sim::{Action, Grid, Observation};
+
+use crate::config::DqnConfig;
+use crate::error::{NeuralError, Result};
+use crate::file::{self, Header};
+use crate::mask::{ActionSet, masked_argmax};
+use crate::net::QNet;
+
+/// The format name of a network file.
+pub const FORMAT: &str = "blockstack-dqn";
+
+/// The network file version this build writes and reads.
+pub const VERSION: u32 = 1;
+
+/// Totals of a training run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrainReport {
+    /// Demonstrated episodes loaded.
+    pub demo_episodes: u64,
+    /// Their transitions, kept in the buffer.
+    pub demo_transitions: u64,
+    /// Gradient steps of pre-training.
+    pub pretrain_steps: u64,
+    /// Self-play games begun.
+    pub games: u64,
+    /// Of those, games that reached the goal.
+    pub successes: u64,
+    /// Self-play environment steps.
+    pub steps: u64,
+    /// Gradient steps in all (pre-training included).
+    pub gradient_steps: u64,
+}
+
+/// A network and how it was trained.
+pub struct Dqn {
+    net: QNet,
+    config: DqnConfig,
+    report: TrainReport,
+}
+
+impl Dqn {
+    /// A network with its config and report (the trainer's).
+    pub fn new(net: QNet, config: DqnConfig, report: TrainReport) -> Dqn {
+        Dqn { net, config, report }
+    }
+
+    /// The network.
+    pub fn net(&self) -> &QNet {
+        &self.net
+    }
+
+    /// The training config.
+    pub fn config(&self) -> &DqnConfig {
+        &self.config
+    }
+
+    /// The training totals.
+    pub fn report(&self) -> &TrainReport {
+        &self.report
+    }
+
+    /// The grid it plays on.
+    pub fn grid(&self) -> Grid {
+        self.config.grid
+    }
+
+    /// The number of blocks it plays with.
+    pub fn blocks(&self) -> usize {
+        self.config.blocks
+    }
+
+    /// A short name for reports: `dqn-<network>`.
+    pub fn name(&self) -> String {
+        format!("dqn-{}", self.config.net.kind)
+    }
+
+    /// An error unless a world of `blocks` blocks on `grid` is the network's.
+    pub fn check_world(&self, grid: Grid, blocks: usize) -> Result<()> {
+        if grid != self.config.grid || blocks != self.config.blocks {
+            return Err(NeuralError::Mismatch(format!(
+                "the network plays {} blocks on a {} grid, the world has {blocks} blocks on a {grid} grid",
+                self.config.blocks, self.config.grid
+            )));
+        }
+        Ok(())
+    }
+
+    /// Q-values of `obs`, in action-index order.
+    pub fn q_values(&self, obs: &Observation) -> Result<Vec<f32>> {
+        let spec = self.net.input();
+        spec.check(obs)?;
+        Ok(self.net.q_values(spec.batch(&[obs]))?.remove(0))
+    }
+
+    /// The allowed action (masked as in training) with the highest Q-value.
+    pub fn greedy_action(&self, obs: &Observation) -> Result<Action> {
+        let q = self.q_values(obs)?;
+        let allowed = ActionSet::allowed(obs, self.config.mask_noops);
+        let a = masked_argmax(&q, allowed).expect("some action is always allowed");
+        Ok(Action::from_index(a, self.config.blocks)?)
+    }
+
+    /// The network as a [`Policy`]: a uniformly random allowed action with probability
+    /// `epsilon`, the greedy one otherwise.
+    pub fn policy(&self, epsilon: f64) -> Result<DqnPolicy<'_>> {
+        agent::qlearning::check_epsilon(epsilon)?;
+        Ok(DqnPolicy { dqn: self, epsilon })
+    }
+
+    /// Writes the network file, atomically.
+    pub fn save(&self, path: &Path) -> Result<()> {
+        let header = Header {
+            format: FORMAT.into(),
+            version: VERSION,
+            metadata: [
+                ("config".to_string(), to_json(&self.config)),
+                ("report".to_string(), to_json(&self.report)),
+            ]
+            .into_iter()
+            .collect(),
+        };
+        let tensors = self
+            .net
+            .tensors()
+            .map(|(name, v)| -> Result<_> {
+                Ok((name.clone(), v.dims().to_vec(), v.as_tensor().flatten_all()?.to_vec1::<f32>()?))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        file::write(path, &header, &tensors)
+    }
+
+    /// Reads a network file; an error saying what is wrong if it is missing, truncated,
+    /// corrupt, of another format or version, or if its tensors do not fit its config.
+    pub fn load(path: &Path) -> Result<Dqn> {
+        let fail = |reason: String| NeuralError::Model {
+            path: path.display().to_string(),
+            reason,
+        };
+        let (header, tensors) = file::read(path, FORMAT, VERSION)?;
+        let field = |key: &str| {
+            header
+                .metadata
+                .get(key)
+                .ok_or_else(|| fail(format!("its metadata has no {key}")))
+        };
+        let config: DqnConfig = serde_json::from_str(field("config")?)
+            .map_err(|e| fail(format!("its training config does not read ({e})")))?;
+        let report: TrainReport = serde_json::from_str(field("report")?)
+            .map_err(|e| fail(format!("its training report does not read ({e})")))?;
+        config
+            .validate()
+            .map_err(|e| fail(format!("its training config is not valid: {e}")))?;
+        let input = config.net.input(config.grid, config.blocks)?;
+        let net = QNet::new(config.net, input, &mut sim::seeding::rng(0))?;
+        let expected = net.tensors().count();
+        if tensors.len() != expected {
+            return Err(fail(format!(
+                "it holds {} tensors, and its {} network has {expected}",
+                tensors.len(),
+                config.net.kind
+            )));
+        }
+        for (name, shape, values) in tensors {
+            net.set_tensor(&name, &shape, values).map_err(|e| fail(e.to_string()))?;
+        }
+        Ok(Dqn { net, config, report })
+    }
+}
+
+/// A metadata entry: a config or a report as JSON (both always serialise).
+fn to_json<T: Serialize>(value: &T) -> String {
+    serde_json::to_string(value).expect("configs and reports serialise")
+}
+
+/// A trained network playing without learning. Borrows the network.
+pub struct DqnPolicy<'a> {
+    dqn: &'a Dqn,
+    epsilon: f64,
+}
+
+impl Policy for DqnPolicy<'_> {
+    fn name(&self) -> String {
+        self.dqn.name()
+    }
+
+    fn act(&mut self, obs: &Observation, rng: &mut SimRng) -> agent::Result<Action> {
+        use rand::RngExt;
+        if self.epsilon > 0.0 && rng.random_bool(self.epsilon) {
+            let allowed = ActionSet::allowed(obs, self.dqn.config.mask_noops);
+            let a = allowed.random(rng).expect("some action is always allowed");
+            return Ok(Action::from_index(a, self.dqn.config.blocks)?);
+        }
+        Ok(self.dqn.greedy_action(obs)?)
+    }
+}

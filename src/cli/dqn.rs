@@ -1,0 +1,259 @@
+//! `blockstack dqn`: train a deep Q-network (DQN, or DQfD from demonstrations) and save it.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use neural::{DemoSource, DqnConfig, LossKind, NetKind, ObsKind, OptimizerKind, Phase, Progress, TdLoss};
+use sim::{Backend, Grid, RewardModel};
+
+use super::train::parse_goals;
+
+/// Arguments of `blockstack dqn`. Every setting starts from a preset and may be changed.
+#[derive(Debug, Args)]
+pub struct DqnArgs {
+    /// Start from this preset: paper (the paper's DQN on pixels), paper-dqfd (the same with
+    /// DQfD on 500 exact-solver demonstrations), dqn-planes (ours, no demonstrations),
+    /// dqfd-planes (ours with DQfD: the recommended recipe). Default: from --obs and --loss.
+    #[arg(long)]
+    pub preset: Option<String>,
+    /// What the network sees: planes or pixels (default: the preset's, else planes).
+    #[arg(long)]
+    pub obs: Option<ObsKind>,
+    /// The network: paper (pixels), small (centred planes), mlp (absolute planes).
+    #[arg(long)]
+    pub net: Option<NetKind>,
+    /// The losses: dqfd (with demonstrations) or dqn (default: dqfd when demonstrations
+    /// are given).
+    #[arg(long)]
+    pub loss: Option<LossKind>,
+    /// Number of blocks.
+    #[arg(long, default_value_t = 3)]
+    pub blocks: usize,
+    /// Goals to train on, separated by ':', e.g. 0,1,2:1,0,2 (default: every goal).
+    #[arg(long)]
+    pub goals: Option<String>,
+    /// Grid size, WxH.
+    #[arg(long, default_value = "7x7")]
+    pub grid: String,
+    /// Environment steps of self-play.
+    #[arg(long)]
+    pub steps: Option<u64>,
+    /// Gradient steps on the demonstrations alone, before self-play.
+    #[arg(long)]
+    pub pretrain: Option<u64>,
+    /// Demonstrations from a planner: exact:K or oracle:K (K episodes), or none.
+    #[arg(long, conflicts_with = "demos_file")]
+    pub demos: Option<DemoSource>,
+    /// Demonstrations from a recording: blockstack-demos JSON Lines (`demo`/`correct
+    /// --record`) or a trajectory file (`run --trajectory`).
+    #[arg(long)]
+    pub demos_file: Option<PathBuf>,
+    /// Reward model: sparse, dense, paper or step-cost.
+    #[arg(long)]
+    pub reward: Option<String>,
+    /// Discount factor.
+    #[arg(long)]
+    pub gamma: Option<f64>,
+    /// Learning rate.
+    #[arg(long)]
+    pub lr: Option<f64>,
+    /// Optimiser: rmsprop or adam.
+    #[arg(long)]
+    pub optimizer: Option<OptimizerKind>,
+    /// TD loss: huber or mse.
+    #[arg(long)]
+    pub td_loss: Option<TdLoss>,
+    /// Transitions the replay buffer holds.
+    #[arg(long)]
+    pub buffer: Option<usize>,
+    /// Transitions per gradient step.
+    #[arg(long)]
+    pub batch: Option<usize>,
+    /// Units of each hidden layer.
+    #[arg(long)]
+    pub hidden: Option<usize>,
+    /// Double DQN: true or false.
+    #[arg(long)]
+    pub double: Option<bool>,
+    /// Leave actions that change nothing out of every choice: true or false.
+    #[arg(long)]
+    pub mask_noops: Option<bool>,
+    /// Batch normalisation in the paper network: true or false.
+    #[arg(long)]
+    pub batch_norm: Option<bool>,
+    /// The large-margin loss's margin.
+    #[arg(long)]
+    pub margin: Option<f64>,
+    /// Share of every self-play batch drawn from the demonstrations.
+    #[arg(long)]
+    pub demo_share: Option<f64>,
+    /// Steps before a training game is cut off.
+    #[arg(long)]
+    pub horizon: Option<u32>,
+    /// World backend of the training games: grid (default; the same rules, faster) or physics.
+    #[arg(long)]
+    pub backend: Option<String>,
+    /// Seed of the weights, starts, demonstrations and every random choice.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Where to write the network.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+impl DqnArgs {
+    /// The training config these arguments describe.
+    pub fn config(&self) -> Result<DqnConfig> {
+        let demos = match (&self.demos, &self.demos_file) {
+            (_, Some(path)) => Some(DemoSource::File(path.display().to_string())),
+            (Some(d), None) => Some(d.clone()),
+            (None, None) => None,
+        };
+        let preset = match &self.preset {
+            Some(p) => p.clone(),
+            None => {
+                let obs = self.obs.or(self.net.map(|n| neural::NetConfig { kind: n, ..neural::NetConfig::small() }.obs()));
+                let dqfd = match self.loss {
+                    Some(loss) => loss == LossKind::Dqfd,
+                    None => demos.as_ref().is_some_and(|d| *d != DemoSource::None),
+                };
+                match (obs.unwrap_or(ObsKind::Planes), dqfd) {
+                    (ObsKind::Pixels, false) => "paper",
+                    (ObsKind::Pixels, true) => "paper-dqfd",
+                    (ObsKind::Planes, false) => "dqn-planes",
+                    (ObsKind::Planes, true) => "dqfd-planes",
+                }
+                .into()
+            }
+        };
+        let mut c = DqnConfig::preset(&preset, self.blocks)?;
+        c.grid = self.grid.parse::<Grid>()?;
+        c.goals = parse_goals(self.goals.as_deref(), self.blocks)?;
+        c.seed = self.seed;
+        if let Some(kind) = self.net {
+            c.net = match kind {
+                NetKind::Paper => neural::NetConfig::paper(),
+                _ => neural::NetConfig {
+                    kind,
+                    ..neural::NetConfig::small()
+                },
+            };
+        } else if let Some(obs) = self.obs {
+            if obs != c.obs() {
+                c.net = match obs {
+                    ObsKind::Pixels => neural::NetConfig::paper(),
+                    ObsKind::Planes => neural::NetConfig::small(),
+                };
+            }
+        }
+        if let Some(d) = demos {
+            if d == DemoSource::None {
+                c.pretrain_steps = 0;
+            }
+            c.demos = d;
+        }
+        macro_rules! set {
+            ($($field:ident = $value:expr),* $(,)?) => {
+                $(if let Some(v) = $value { c.$field = v; })*
+            };
+        }
+        set!(
+            loss = self.loss,
+            steps = self.steps,
+            pretrain_steps = self.pretrain,
+            gamma = self.gamma,
+            lr = self.lr,
+            optimizer = self.optimizer,
+            td_loss = self.td_loss,
+            buffer = self.buffer,
+            batch = self.batch,
+            double = self.double,
+            mask_noops = self.mask_noops,
+            margin = self.margin,
+            demo_share = self.demo_share,
+            horizon = self.horizon,
+        );
+        if let Some(r) = &self.reward {
+            c.reward = RewardModel::from_name(r)?;
+        }
+        if let Some(b) = &self.backend {
+            c.backend = b.parse::<Backend>()?;
+        }
+        if let Some(h) = self.hidden {
+            c.net.hidden = h;
+        }
+        if let Some(bn) = self.batch_norm {
+            c.net.batch_norm = bn;
+        }
+        c.validate()?;
+        Ok(c)
+    }
+}
+
+/// How often the progress bar is redrawn, in steps.
+const DRAW_EVERY: u64 = 100;
+
+/// Trains, showing a progress bar on a terminal, and saves the network.
+pub fn dqn(args: DqnArgs) -> Result<()> {
+    let config = args.config()?;
+    // Before minutes of work, not after.
+    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        anyhow::ensure!(dir.is_dir(), "cannot write {}: the folder {} does not exist", args.out.display(), dir.display());
+    }
+    let clock = Instant::now();
+    let trainer = neural::Trainer::new(config.clone())?;
+    let demo_seconds = clock.elapsed().as_secs_f64();
+    // Hidden by indicatif itself when stderr is not a terminal.
+    let bar = ProgressBar::new(config.pretrain_steps);
+    bar.set_style(
+        ProgressStyle::with_template("{prefix} {bar:30} {pos}/{len}  {msg}  [{elapsed_precise}, eta {eta}]")
+            .expect("a valid template"),
+    );
+    let mut phase = Phase::Pretrain;
+    bar.set_prefix("pre-training");
+    let mut stretch = (Instant::now(), 0u64);
+    let mut show = |p: &Progress| {
+        if p.phase != phase {
+            phase = p.phase;
+            bar.set_prefix("self-play");
+            bar.set_length(p.target);
+            stretch = (Instant::now(), p.done.saturating_sub(1));
+        }
+        if p.done % DRAW_EVERY == 0 || p.done == p.target {
+            bar.set_position(p.done);
+            let rate = (p.done - stretch.1) as f64 / stretch.0.elapsed().as_secs_f64().max(1e-9);
+            let unit = if p.phase == Phase::Pretrain { "gradient steps/s" } else { "steps/s" };
+            bar.set_message(match p.phase {
+                Phase::Pretrain => format!("loss {:.4} (margin {:.3})  {rate:.0} {unit}", p.loss.total, p.loss.margin),
+                Phase::SelfPlay => format!(
+                    "{} games, last {}: {:.0}% reached the goal, loss {:.4}, {rate:.0} {unit}",
+                    p.games,
+                    p.recent_games,
+                    100.0 * p.recent_success_rate(),
+                    p.loss.total
+                ),
+            });
+        }
+    };
+    let dqn = trainer.run(&mut show)?;
+    let seconds = clock.elapsed().as_secs_f64();
+    bar.finish_and_clear();
+    dqn.save(&args.out).with_context(|| "the network was trained but not saved")?;
+    let r = dqn.report();
+    println!("trained {}: {}", dqn.name(), config.describe());
+    println!(
+        "{} demonstrated episodes ({} transitions, {demo_seconds:.1} s to make), {} pre-training steps; \
+         {} self-play steps in {} games, {} reached the goal; {} gradient steps",
+        r.demo_episodes, r.demo_transitions, r.pretrain_steps, r.steps, r.games, r.successes, r.gradient_steps
+    );
+    println!(
+        "trained in {seconds:.1} s ({:.0} environment steps/s, {:.0} gradient steps/s)",
+        r.steps as f64 / (seconds - demo_seconds).max(1e-9),
+        r.gradient_steps as f64 / (seconds - demo_seconds).max(1e-9)
+    );
+    println!("saved {}", args.out.display());
+    Ok(())
+}
