@@ -1,0 +1,133 @@
+//! The learner end to end, at sizes that run in seconds: a tiny run learns, a network file
+//! gives back the same network, and the same seed gives the same weights.
+
+use agent::{RandomPolicy, Summary};
+use neural::{DemoSource, Dqn, DqnConfig, NetConfig, NetKind, Trainer};
+use sim::{Backend, Env, Goal};
+
+/// DQfD on 2 blocks with a small network: 150 exact demonstrations, then a little self-play.
+fn tiny(seed: u64) -> DqnConfig {
+    DqnConfig {
+        seed,
+        demos: DemoSource::Exact(150),
+        pretrain_steps: 400,
+        steps: 600,
+        learning_starts: 100,
+        net: NetConfig {
+            hidden: 64,
+            ..NetConfig::small()
+        },
+        ..DqnConfig::preset("dqfd-planes", 2).unwrap()
+    }
+}
+
+fn weights(dqn: &Dqn) -> Vec<Vec<f32>> {
+    dqn.net()
+        .tensors()
+        .map(|(_, v)| v.as_tensor().flatten_all().unwrap().to_vec1::<f32>().unwrap())
+        .collect()
+}
+
+/// Failures and mean steps (a failure counted as the horizon) over 40 seeded games of each
+/// goal, in the grid world, horizon 200.
+fn score(policy: &mut dyn agent::Policy) -> (usize, f64) {
+    let mut all = Vec::new();
+    for goal in Goal::all(2).unwrap() {
+        let mut env = Env::new(sim::EnvConfig {
+            backend: Backend::Grid,
+            horizon: 200,
+            ..sim::EnvConfig::with_goal(goal)
+        })
+        .unwrap();
+        all.extend(agent::play(&mut env, policy, 40, 77, None).unwrap());
+    }
+    let s = Summary::of(&all);
+    (s.failures, agent::optimality::mean_steps_failures_as_horizon(&all, 200))
+}
+
+#[test]
+fn a_tiny_run_lowers_its_loss_and_beats_random_play() {
+    let mut trainer = Trainer::new(tiny(3)).unwrap();
+    let mut losses = Vec::new();
+    trainer
+        .pretrain(400, &mut |p: &neural::Progress| losses.push(p.loss.total))
+        .unwrap();
+    let first: f32 = losses[..20].iter().sum::<f32>() / 20.0;
+    let last: f32 = losses[losses.len() - 20..].iter().sum::<f32>() / 20.0;
+    assert!(last < 0.75 * first, "the loss fell from {first} to {last}");
+    trainer.play(600, &mut |_: &neural::Progress| {}).unwrap();
+    let dqn = trainer.finish().unwrap();
+    let (random_failures, random_steps) = score(&mut RandomPolicy);
+    let (failures, steps) = score(&mut dqn.policy(0.0).unwrap());
+    assert!(
+        failures < random_failures && steps < 0.5 * random_steps,
+        "greedy: {failures} failures, {steps} mean steps; random: {random_failures}, {random_steps}"
+    );
+}
+
+#[test]
+fn the_same_seed_gives_the_same_weights_and_another_seed_others() {
+    let run = |seed| {
+        let config = DqnConfig {
+            pretrain_steps: 50,
+            steps: 150,
+            learning_starts: 50,
+            ..tiny(seed)
+        };
+        neural::train(config, &mut |_: &neural::Progress| {}).unwrap()
+    };
+    let (a, b, c) = (run(5), run(5), run(6));
+    assert_eq!(weights(&a), weights(&b));
+    assert_eq!(a.report(), b.report());
+    assert_ne!(weights(&a), weights(&c));
+}
+
+#[test]
+fn a_network_file_gives_back_the_same_network() {
+    let dir = std::env::temp_dir().join(format!("neural-roundtrip-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // The paper network, trained a few steps so its batch-norm statistics moved.
+    let config = DqnConfig {
+        demos: DemoSource::Exact(5),
+        pretrain_steps: 2,
+        steps: 0,
+        batch: 8,
+        loss: neural::LossKind::Dqfd,
+        ..DqnConfig::preset("paper", 2).unwrap()
+    };
+    assert_eq!(config.net.kind, NetKind::Paper);
+    for (name, config) in [("paper", config), ("small", tiny(1))] {
+        let trained = Trainer::new(DqnConfig {
+            pretrain_steps: 2,
+            steps: 0,
+            ..config
+        })
+        .unwrap()
+        .run(&mut |_: &neural::Progress| {})
+        .unwrap();
+        let path = dir.join(format!("{name}.safetensors"));
+        trained.save(&path).unwrap();
+        let loaded = Dqn::load(&path).unwrap();
+        assert_eq!(weights(&loaded), weights(&trained), "{name}");
+        assert_eq!(loaded.config(), trained.config());
+        assert_eq!(loaded.report(), trained.report());
+        let mut env = Env::new(sim::EnvConfig::with_goal("1,0".parse().unwrap())).unwrap();
+        let obs = env.reset(4);
+        assert_eq!(loaded.q_values(&obs).unwrap(), trained.q_values(&obs).unwrap());
+        // A 3-block world is refused by a 2-block network.
+        let mut three = Env::new(sim::EnvConfig::default()).unwrap();
+        assert!(loaded.q_values(&three.reset(1)).is_err());
+    }
+    // A file whose config names another network does not load.
+    let small = dir.join("small.safetensors");
+    let (header, tensors) = neural::file::read(&small, neural::model::FORMAT, neural::model::VERSION).unwrap();
+    let mut header = header;
+    let config = header.metadata["config"].replace("\"hidden\":64", "\"hidden\":32");
+    header.metadata.insert("config".into(), config);
+    header.metadata.remove("checksum");
+    let bad = dir.join("bad.safetensors");
+    neural::file::write(&bad, &header, &tensors).unwrap();
+    let err = Dqn::load(&bad).err().unwrap().to_string();
+    assert!(err.contains("bad.safetensors") && err.contains("does not fit"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
