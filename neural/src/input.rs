@@ -5,6 +5,14 @@
 //! [`sim::Observation::role_planes`]); this module only lays them out for a network and adds
 //! the one input transform of the small network, centring (below).
 //!
+//! # Output columns
+//!
+//! A network has one output per action. On planes, which name blocks by their place in the
+//! goal, a Pick output names a place too (as the `role` table's columns do): column `5 + p`
+//! picks the block at place `p` of the episode's goal, so one network serves every goal. On
+//! pixels, which show the blocks' colours, column `5 + i` picks block `i`. [`InputSpec::column`]
+//! and [`InputSpec::action`] translate.
+//!
 //! # Layouts
 //!
 //! Every input is a `rows x columns x channels` array, channel fastest, stored as bytes
@@ -24,9 +32,10 @@ use std::fmt;
 
 use serde::{Deserialize, Serialize};
 use sim::observation::PIXELS_SIDE;
-use sim::{Grid, Observation};
+use sim::{Action, Goal, Grid, Observation};
 
 use crate::error::{NeuralError, Result};
+use crate::mask::ActionSet;
 
 /// Which view of the world a network sees.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -168,6 +177,40 @@ impl InputSpec {
         }
     }
 
+    /// Whether Pick columns name goal places (planes) rather than block ids (pixels).
+    fn by_place(&self) -> bool {
+        self.kind == ObsKind::Planes
+    }
+
+    /// The output column of `action` under `goal` (module docs).
+    pub fn column(&self, goal: &Goal, action: Action) -> usize {
+        match action {
+            Action::Pick(b) if self.by_place() => 5 + goal.place_of(b),
+            a => a.index(),
+        }
+    }
+
+    /// The action of output column `column` (below `5 + N`) under `goal`.
+    pub fn action(&self, goal: &Goal, column: usize) -> Action {
+        match Action::from_index(column, self.blocks).expect("a column of this network") {
+            Action::Pick(_) if self.by_place() => Action::Pick(goal.block_at_place(column - 5)),
+            a => a,
+        }
+    }
+
+    /// The output columns of the actions allowed in `obs` ([`ActionSet::allowed`]).
+    pub fn allowed_columns(&self, obs: &Observation, mask_noops: bool) -> ActionSet {
+        let allowed = ActionSet::allowed(obs, mask_noops);
+        if !self.by_place() {
+            return allowed;
+        }
+        ActionSet::from_indices(
+            allowed
+                .iter()
+                .map(|a| self.column(&obs.goal, Action::from_index(a, self.blocks).expect("an allowed action"))),
+        )
+    }
+
     /// The inputs of `observations` as floats, one row each.
     pub fn batch(&self, observations: &[&Observation]) -> Vec<f32> {
         let mut bytes = Vec::with_capacity(observations.len() * self.len());
@@ -209,6 +252,26 @@ mod tests {
         assert_eq!(ea[(6 * 13 + 6) * 5], 1);
         // 49 canvas cells are inside the grid.
         assert_eq!(ea.chunks(5).filter(|c| c[4] == 1).count(), 49);
+    }
+
+    #[test]
+    fn pick_columns_name_goal_places_on_planes_and_blocks_on_pixels() {
+        let planes = InputSpec::new(ObsKind::Planes, true, Grid::default(), 3).unwrap();
+        let pixels = InputSpec::new(ObsKind::Pixels, false, Grid::default(), 3).unwrap();
+        let o = obs([Cell::new(1, 2), Cell::new(3, 3), Cell::new(1, 1)], Some(2));
+        // Goal 2,0,1: block 2 at place 0, block 0 at place 1, block 1 at place 2.
+        for (block, place) in [(2u8, 0usize), (0, 1), (1, 2)] {
+            let pick = sim::Action::Pick(BlockId(block));
+            assert_eq!(planes.column(&o.goal, pick), 5 + place);
+            assert_eq!(planes.action(&o.goal, 5 + place), pick);
+            assert_eq!(pixels.column(&o.goal, pick), 5 + usize::from(block));
+        }
+        assert_eq!(planes.column(&o.goal, sim::Action::Left), 2);
+        // Holding block 2 (place 0): the pick of place 0 changes nothing.
+        let cols: Vec<usize> = planes.allowed_columns(&o, true).iter().collect();
+        assert!(!cols.contains(&5) && cols.contains(&6) && cols.contains(&7), "{cols:?}");
+        let acts: Vec<usize> = pixels.allowed_columns(&o, true).iter().collect();
+        assert!(!acts.contains(&7) && acts.contains(&5), "{acts:?}");
     }
 
     #[test]

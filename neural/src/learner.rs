@@ -21,7 +21,7 @@ use serde::Serialize;
 
 use crate::config::{DqnConfig, LossKind, TdLoss};
 use crate::error::Result;
-use crate::mask::{ActionSet, masked_argmax, masked_max};
+use crate::mask::{masked_argmax, masked_max};
 use crate::net::{Mode, QNet};
 use crate::optim::Optimizer;
 use crate::replay::Transition;
@@ -98,7 +98,7 @@ impl Learner {
             Vec::new()
         };
         let value = |row: usize, obs: &sim::Observation| -> f32 {
-            let allowed = ActionSet::allowed(obs, config.mask_noops);
+            let allowed = spec.allowed_columns(obs, config.mask_noops);
             if config.double {
                 masked_argmax(&chooser_q[row], allowed).map_or(0.0, |a| target_q[row][a])
             } else {
@@ -126,7 +126,10 @@ impl Learner {
         let obs: Vec<_> = batch.iter().map(|t| &t.obs).collect();
         let x = Tensor::from_vec(spec.batch(&obs), (b, spec.len()), &Device::Cpu)?;
         let q = self.online.forward(&x, Mode::Train)?;
-        let taken: Vec<u32> = batch.iter().map(|t| t.action.index() as u32).collect();
+        let taken: Vec<u32> = batch
+            .iter()
+            .map(|t| spec.column(&t.obs.goal, t.action) as u32)
+            .collect();
         let taken = Tensor::from_vec(taken, (b, 1), &Device::Cpu)?;
         let q_taken = q.gather(&taken, 1)?.squeeze(1)?;
 
@@ -154,9 +157,10 @@ impl Learner {
                 let mut l = vec![0f32; b * actions];
                 let mut weight = vec![0f32; b];
                 for (i, t) in batch.iter().enumerate().filter(|(_, t)| t.expert) {
-                    let allowed = ActionSet::allowed(&t.obs, config.mask_noops);
+                    let allowed = spec.allowed_columns(&t.obs, config.mask_noops);
+                    let expert = spec.column(&t.obs.goal, t.action);
                     for a in 0..actions {
-                        l[i * actions + a] = if a == t.action.index() {
+                        l[i * actions + a] = if a == expert {
                             0.0
                         } else if allowed.contains(a) {
                             margin

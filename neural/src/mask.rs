@@ -53,6 +53,11 @@ impl ActionSet {
         ActionSet(set)
     }
 
+    /// The set of these indices (each below 32).
+    pub fn from_indices(indices: impl IntoIterator<Item = usize>) -> ActionSet {
+        ActionSet(indices.into_iter().fold(0, |set, a| set | 1 << a))
+    }
+
     /// Whether action index `a` is in the set.
     pub fn contains(self, a: usize) -> bool {
         a < 32 && self.0 & (1 << a) != 0

@@ -1,6 +1,7 @@
 //! A trained network with its training config: played through [`agent::Policy`], saved and
 //! read as a network file ([`crate::file`], format [`FORMAT`]).
 
+use std::collections::HashMap;
 use std::path::Path;
 
 use agent::Policy;
@@ -11,7 +12,7 @@ use sim::{Action, Grid, Observation};
 use crate::config::DqnConfig;
 use crate::error::{NeuralError, Result};
 use crate::file::{self, Header};
-use crate::mask::{ActionSet, masked_argmax};
+use crate::mask::ActionSet;
 use crate::net::QNet;
 
 /// The format name of a network file.
@@ -94,7 +95,8 @@ impl Dqn {
         Ok(())
     }
 
-    /// Q-values of `obs`, in action-index order.
+    /// Q-values of `obs`, by output column ([`crate::input`]: Pick columns name goal
+    /// places on planes).
     pub fn q_values(&self, obs: &Observation) -> Result<Vec<f32>> {
         let spec = self.net.input();
         spec.check(obs)?;
@@ -103,17 +105,19 @@ impl Dqn {
 
     /// The allowed action (masked as in training) with the highest Q-value.
     pub fn greedy_action(&self, obs: &Observation) -> Result<Action> {
-        let q = self.q_values(obs)?;
-        let allowed = ActionSet::allowed(obs, self.config.mask_noops);
-        let a = masked_argmax(&q, allowed).expect("some action is always allowed");
-        Ok(Action::from_index(a, self.config.blocks)?)
+        self.net.input().check(obs)?;
+        self.net.greedy_action(obs, self.config.mask_noops)
     }
 
     /// The network as a [`Policy`]: a uniformly random allowed action with probability
     /// `epsilon`, the greedy one otherwise.
     pub fn policy(&self, epsilon: f64) -> Result<DqnPolicy<'_>> {
         agent::qlearning::check_epsilon(epsilon)?;
-        Ok(DqnPolicy { dqn: self, epsilon })
+        Ok(DqnPolicy {
+            dqn: self,
+            epsilon,
+            greedy: HashMap::new(),
+        })
     }
 
     /// Writes the network file, atomically.
@@ -182,14 +186,24 @@ fn to_json<T: Serialize>(value: &T) -> String {
 }
 
 /// A trained network playing without learning. Borrows the network.
+///
+/// The greedy choice of each observation is remembered for the episode: the network is
+/// fixed and the argmax deterministic, so a state seen again gets the same action without a
+/// second forward pass. A greedy policy caught in a loop (the world is deterministic too)
+/// then costs a table look-up a step, not a network evaluation, until the horizon.
 pub struct DqnPolicy<'a> {
     dqn: &'a Dqn,
     epsilon: f64,
+    greedy: HashMap<Observation, Action>,
 }
 
 impl Policy for DqnPolicy<'_> {
     fn name(&self) -> String {
         self.dqn.name()
+    }
+
+    fn begin_episode(&mut self, _obs: &Observation) {
+        self.greedy.clear();
     }
 
     fn act(&mut self, obs: &Observation, rng: &mut SimRng) -> agent::Result<Action> {
@@ -199,6 +213,11 @@ impl Policy for DqnPolicy<'_> {
             let a = allowed.random(rng).expect("some action is always allowed");
             return Ok(Action::from_index(a, self.dqn.config.blocks)?);
         }
-        Ok(self.dqn.greedy_action(obs)?)
+        if let Some(&a) = self.greedy.get(obs) {
+            return Ok(a);
+        }
+        let a = self.dqn.greedy_action(obs)?;
+        self.greedy.insert(*obs, a);
+        Ok(a)
     }
 }

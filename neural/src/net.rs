@@ -405,6 +405,15 @@ impl QNet {
         Ok(self.forward(&x, Mode::Eval)?.detach().to_vec2::<f32>()?)
     }
 
+    /// The allowed action (see [`crate::mask`]) with the highest Q-value in `obs` (of this
+    /// network's world).
+    pub fn greedy_action(&self, obs: &sim::Observation, mask_noops: bool) -> Result<Action> {
+        let q = self.q_values(self.input.batch(&[obs]))?;
+        let allowed = self.input.allowed_columns(obs, mask_noops);
+        let column = crate::mask::masked_argmax(&q[0], allowed).expect("some action is always allowed");
+        Ok(self.input.action(&obs.goal, column))
+    }
+
     /// An independent copy (new variables with the same values).
     pub fn try_clone(&self) -> Result<QNet> {
         let mut rng = sim::seeding::rng(0);

@@ -17,7 +17,7 @@ use crate::config::{DqnConfig, TargetEvery};
 use crate::demos::{self, DemoEpisode};
 use crate::error::{NeuralError, Result};
 use crate::learner::{Learner, Losses};
-use crate::mask::{ActionSet, masked_argmax};
+use crate::mask::ActionSet;
 use crate::model::{Dqn, TrainReport};
 use crate::net::QNet;
 use crate::replay::{NStep, ReplayBuffer};
@@ -269,16 +269,13 @@ impl Trainer {
 
     /// Epsilon-greedy over the allowed actions.
     fn choose(&mut self, obs: &Observation) -> Result<Action> {
-        let allowed = ActionSet::allowed(obs, self.config.mask_noops);
         let epsilon = self.config.epsilon.at(self.report.steps);
-        let a = if epsilon > 0.0 && self.rng.random_bool(epsilon) {
-            allowed.random(&mut self.rng)
-        } else {
-            let spec = self.learner.online().input();
-            let q = self.learner.online().q_values(spec.batch(&[obs]))?;
-            masked_argmax(&q[0], allowed)
-        };
-        Ok(Action::from_index(a.expect("some action is always allowed"), self.config.blocks)?)
+        if epsilon > 0.0 && self.rng.random_bool(epsilon) {
+            let allowed = ActionSet::allowed(obs, self.config.mask_noops);
+            let a = allowed.random(&mut self.rng).expect("some action is always allowed");
+            return Ok(Action::from_index(a, self.config.blocks)?);
+        }
+        self.learner.online().greedy_action(obs, self.config.mask_noops)
     }
 }
 
