@@ -6,6 +6,7 @@
 //! | [`box_plot`] | steps per arm: boxes, whiskers, outliers, reference markers | E5, E6 |
 //! | [`bar_chart`] | one bar per agent, optional intervals, second values, optimum line | E7 |
 //! | [`episode_gif`] | one or more episodes side by side, animated | the demo |
+//! | [`curves_chart`] | several learners' curves against training, one line each | E8 |
 //!
 //! Every function is pure: it takes the data, validates it, and writes its files atomically
 //! (through [`sim::files::write_atomic`]). Charts are written twice, `<stem>.png` and
@@ -21,11 +22,13 @@
 
 mod bars;
 mod boxes;
+mod curves;
 mod episode;
 mod learning;
 
 pub use bars::{Bar, BarChart, Reference, bar_chart};
 pub use boxes::{Arm, BoxPlot, box_plot};
+pub use curves::{CurvesChart, Series, curves_chart};
 pub use episode::{EpisodeFrames, GifOptions, episode_gif, frame_indices};
 pub use learning::{LearningCurve, LearningPoint, learning_curve};
 
