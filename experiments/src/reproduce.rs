@@ -1,4 +1,4 @@
-//! The reproduction of the paper (SPEC section 9): experiments E1-E7, each beside the
+//! The reproduction of the paper (SPEC section 9): experiments E1-E8, each beside the
 //! paper's figures, with their statistical tests, pictures, a report and machine-readable
 //! results. `blockstack reproduce` is the command over it.
 //!
@@ -38,11 +38,13 @@ mod e4;
 mod e5;
 mod e6;
 mod e7;
+mod e8;
 pub mod paper;
 mod report;
 mod text;
 
 pub use arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome};
+pub use e8::Budget;
 pub use report::{ReportFiles, write_report};
 
 use agent::{QAgent, TrainConfig, Trained};
@@ -51,7 +53,7 @@ use serde::Serialize;
 use sim::Goal;
 use thiserror::Error;
 
-use crate::plots::{BarChart, BoxPlot, EpisodeFrames, LearningCurve, PlotError};
+use crate::plots::{BarChart, BoxPlot, CurvesChart, EpisodeFrames, LearningCurve, PlotError};
 use crate::stats::StatsError;
 
 /// The `format` field of `results.json`.
@@ -71,6 +73,9 @@ pub enum ReproduceError {
     /// The world refused something.
     #[error(transparent)]
     Sim(#[from] sim::SimError),
+    /// A network could not be trained or played (E8).
+    #[error(transparent)]
+    Neural(#[from] neural::NeuralError),
     /// The exact solver could not plan.
     #[error(transparent)]
     Oracle(#[from] oracle::OracleError),
@@ -94,12 +99,24 @@ pub enum ReproduceError {
 pub type Result<T, E = ReproduceError> = std::result::Result<T, E>;
 
 /// What the user chose.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
 pub struct Options {
     /// The seed everything derives from.
     pub seed: u64,
     /// Small counts (a check that the pipeline works), not the paper's.
     pub quick: bool,
+    /// E8's long budget: the pixel runs and the whole ablation ([`Budget::Long`]).
+    pub long: bool,
+    /// The experiments to run, by id ("E1" to "E8"); empty for all. E1-E7 share their
+    /// agents, so asking for any of them runs them all and reports the ones asked for.
+    pub only: Vec<String>,
+}
+
+impl Options {
+    /// Whether experiment `id` is asked for.
+    pub fn runs(&self, id: &str) -> bool {
+        self.only.is_empty() || self.only.iter().any(|o| o.eq_ignore_ascii_case(id))
+    }
 }
 
 /// How much is run: the paper's counts, or small ones with `--quick`.
@@ -261,6 +278,8 @@ pub enum Drawing {
     Bars(BarChart),
     /// An animated episode (GIF).
     Episode(Vec<EpisodeFrames>),
+    /// Several learners' curves on one chart (PNG and SVG).
+    Curves(CurvesChart),
 }
 
 /// A picture of the report.
@@ -327,7 +346,7 @@ pub struct Reproduction {
     pub seeds: Seeds,
     /// The paper's learner settings, as the paper states them.
     pub paper_settings: paper::PaperSettings,
-    /// E1 to E7, in order.
+    /// The experiments run, in order.
     pub experiments: Vec<Experiment>,
 }
 
@@ -387,18 +406,39 @@ fn goals(texts: &[&str]) -> Vec<Goal> {
         .collect()
 }
 
-/// Runs E1 to E7 with `options`, reporting progress to `progress`, on the current rayon
-/// pool.
+/// Runs the experiments `options` ask for, reporting progress to `progress`, on the
+/// current rayon pool.
 pub fn reproduce(options: &Options, progress: &dyn ProgressSink) -> Result<Reproduction> {
     reproduce_with(options, Scale::new(options.quick), progress)
 }
 
-/// Runs E1 to E7 with counts of one's own (each schedule in `scale` must have a point, and
-/// `replicates` must be at least 1).
+/// Runs the experiments `options` ask for with counts of one's own for E1-E7 (each schedule
+/// in `scale` must have a point, and `replicates` must be at least 1); E8's budget comes
+/// from `options`.
 pub fn reproduce_with(options: &Options, scale: Scale, progress: &dyn ProgressSink) -> Result<Reproduction> {
     let seeds = Seeds::new(options.seed, &scale);
-    progress.begin(scale.jobs());
+    let paper_part = ["E1", "E2", "E3", "E4", "E5", "E6", "E7"].iter().any(|id| options.runs(id));
+    let e8 = options.runs("E8").then(|| Budget::of(options));
+    progress.begin(if paper_part { scale.jobs() } else { 0 } + e8.map_or(0, e8::jobs));
     let ctx = Context { scale, seeds, progress };
+    let mut experiments = if paper_part { paper_experiments(&ctx)? } else { Vec::new() };
+    experiments.retain(|e| options.runs(&e.id));
+    if let Some(budget) = e8 {
+        experiments.push(e8::run(&ctx, budget)?);
+    }
+    Ok(Reproduction {
+        format: FORMAT,
+        version: VERSION,
+        options: options.clone(),
+        scale: ctx.scale,
+        seeds: ctx.seeds,
+        paper_settings: paper::SETTINGS,
+        experiments,
+    })
+}
+
+/// E1 to E7, which share their agents.
+fn paper_experiments(ctx: &Context) -> Result<Vec<Experiment>> {
     // Our learner trains for longest: it goes on one thread while the rest share the others.
     let (ours, rest) = rayon::join(
         || e4::train_ours(&ctx),
@@ -416,15 +456,7 @@ pub fn reproduce_with(options: &Options, scale: Scale, progress: &dyn ProgressSi
     let e3 = e3::run(&ctx, &ours)?;
     let e4 = e4::experiment(&ctx, paper_curve, ours_curve);
     let e7 = e7::run(&ctx, &paper_agent, &ours)?;
-    Ok(Reproduction {
-        format: FORMAT,
-        version: VERSION,
-        options: *options,
-        scale: ctx.scale,
-        seeds: ctx.seeds,
-        paper_settings: paper::SETTINGS,
-        experiments: vec![e1, e2, e3, e4, e5, e6, e7],
-    })
+    Ok(vec![e1, e2, e3, e4, e5, e6, e7])
 }
 
 #[cfg(test)]
@@ -467,7 +499,12 @@ mod tests {
     fn run(threads: usize) -> (Reproduction, u64, u64) {
         let count = Count::default();
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        let options = Options { seed: 5, quick: true };
+        let options = Options {
+            seed: 5,
+            quick: true,
+            long: false,
+            only: Vec::new(),
+        };
         let r = pool.install(|| reproduce_with(&options, tiny(), &count)).unwrap();
         (r, count.announced.into_inner(), count.done.into_inner())
     }
@@ -484,7 +521,7 @@ mod tests {
         assert_eq!(announced, tiny().jobs());
         assert_eq!(done, announced);
         let ids: Vec<&str> = one.experiments.iter().map(|e| e.id.as_str()).collect();
-        assert_eq!(ids, ["E1", "E2", "E3", "E4", "E5", "E6", "E7"]);
+        assert_eq!(ids, ["E1", "E2", "E3", "E4", "E5", "E6", "E7", "E8"]);
     }
 
     #[test]
@@ -512,7 +549,7 @@ mod tests {
         );
         let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&files.results).unwrap()).unwrap();
         assert_eq!(json["format"], FORMAT);
-        assert_eq!(json["experiments"].as_array().unwrap().len(), 7);
+        assert_eq!(json["experiments"].as_array().unwrap().len(), 8);
         // Every arm's figures and the paper's beside them.
         let e5 = &json["experiments"][4]["tables"][0]["rows"];
         assert_eq!(e5[0]["paper"]["failures"], 186);

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use super::arms::{ArmResult, Table, TestOutcome};
 use super::text::{ALPHA, failures, num, p_value};
 use super::{Curve, Drawing, Experiment, ReproduceError, Reproduction, Result};
-use crate::plots::{GifOptions, bar_chart, box_plot, episode_gif, learning_curve};
+use crate::plots::{GifOptions, bar_chart, box_plot, curves_chart, episode_gif, learning_curve};
 
 /// The files a report is made of.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -34,6 +34,7 @@ pub fn write_report(r: &Reproduction, dir: &Path) -> Result<ReportFiles> {
             Drawing::Learning(c) => pictures.extend(chart(learning_curve(c, &stem)?)),
             Drawing::Boxes(b) => pictures.extend(chart(box_plot(b, &stem)?)),
             Drawing::Bars(b) => pictures.extend(chart(bar_chart(b, &stem)?)),
+            Drawing::Curves(c) => pictures.extend(chart(curves_chart(c, &stem)?)),
             Drawing::Episode(frames) => {
                 let path = dir.join(&figure.files[0]);
                 episode_gif(frames, &GifOptions::default(), &path)?;
@@ -64,9 +65,15 @@ fn chart(files: crate::plots::ChartFiles) -> [PathBuf; 2] {
 pub fn markdown(r: &Reproduction) -> String {
     let mut md = String::new();
     let command = format!(
-        "blockstack reproduce --seed {}{}",
+        "blockstack reproduce --seed {}{}{}{}",
         r.options.seed,
-        if r.options.quick { " --quick" } else { "" }
+        if r.options.quick { " --quick" } else { "" },
+        if r.options.long { " --long" } else { "" },
+        if r.options.only.is_empty() {
+            String::new()
+        } else {
+            format!(" --only {}", r.options.only.join(","))
+        }
     );
     let _ = writeln!(md, "# The paper reproduced\n");
     let _ = writeln!(

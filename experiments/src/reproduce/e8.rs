@@ -1,0 +1,488 @@
+//! E8: the paper's Approach 1 (section III-C): a deep Q-network on the rendered screen, and
+//! DQfD from demonstrations, reproduced; then made to learn (ours); and an ablation that
+//! measures which of the paper's choices kept it from learning.
+//!
+//! Every arm is a `neural` training run with a fixed budget of steps (so the figures do not
+//! depend on the machine), tested greedily on the same seeded starts of every goal along
+//! the way (the learning curves) and at its end (the tables). The ablation starts from our
+//! recipe and puts back one of the paper's choices at a time: a choice that alone stops a
+//! working learner is one that kept the paper's from learning.
+//!
+//! Budgets: the default run (`blockstack reproduce`) trains our two plane arms only, small
+//! enough for the whole report to stay within minutes; `--long` adds the paper's pixel
+//! runs and the whole ablation, at the presets' full budgets; `--quick` checks the
+//! pipeline with tiny versions of the default arms. The report says which budget produced
+//! its figures.
+
+use neural::{DemoSource, DqnConfig, NetConfig, NetKind, OptimizerKind, TargetEvery, Trainer};
+use rayon::prelude::*;
+use serde::Serialize;
+use sim::{Goal, RewardModel};
+
+use super::arms::{ArmResult, Goals, Row, Suite, Table};
+use super::text::num;
+use super::{Context, Drawing, Experiment, Figure, HORIZON, Options, Result, Setting};
+use crate::plots::{CurvesChart, Series};
+
+/// How much E8 trains.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Budget {
+    /// Tiny runs: the pipeline works (`--quick`).
+    Quick,
+    /// The plane arms at a budget the default run affords.
+    Default,
+    /// Every arm at the presets' budgets: the pixel runs and the whole ablation (`--long`).
+    Long,
+}
+
+impl Budget {
+    /// The budget `options` ask for.
+    pub fn of(options: &Options) -> Budget {
+        if options.quick {
+            Budget::Quick
+        } else if options.long {
+            Budget::Long
+        } else {
+            Budget::Default
+        }
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            Budget::Quick => "quick",
+            Budget::Default => "default",
+            Budget::Long => "long",
+        }
+    }
+
+    /// Test games per goal at the end of every arm.
+    fn test_games(self) -> u64 {
+        match self {
+            Budget::Quick => 10,
+            Budget::Default | Budget::Long => 500,
+        }
+    }
+
+    /// Test games per goal at every point of a learning curve, and the number of points.
+    fn curve(self) -> (u64, usize) {
+        match self {
+            Budget::Quick => (3, 2),
+            Budget::Default => (30, 6),
+            Budget::Long => (50, 8),
+        }
+    }
+}
+
+/// Which part of E8 an arm belongs to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Part {
+    Paper,
+    Ours,
+    Ablation,
+}
+
+/// One training run.
+struct Arm {
+    name: String,
+    part: Part,
+    config: DqnConfig,
+}
+
+/// Scales a preset's budget: `fraction` of its self-play and pre-training steps and of its
+/// demonstrations (at least one of each that it has).
+fn scaled(mut c: DqnConfig, fraction: f64) -> DqnConfig {
+    let scale = |v: u64| if v == 0 { 0 } else { ((v as f64 * fraction).round() as u64).max(1) };
+    c.steps = scale(c.steps);
+    c.pretrain_steps = scale(c.pretrain_steps);
+    c.learning_starts = c.learning_starts.min(c.steps.max(1));
+    c.epsilon.steps = scale(c.epsilon.steps);
+    if let DemoSource::Exact(k) = c.demos {
+        c.demos = DemoSource::Exact(scale(k));
+    }
+    c
+}
+
+fn preset(name: &str, blocks: usize, seed: u64, fraction: f64) -> Result<DqnConfig> {
+    Ok(scaled(
+        DqnConfig {
+            seed,
+            ..DqnConfig::preset(name, blocks)?
+        },
+        fraction,
+    ))
+}
+
+/// The arms of `budget`, in the tables' order.
+fn arms(budget: Budget, seed: u64) -> Result<Vec<Arm>> {
+    let fraction = match budget {
+        Budget::Quick => 0.005,
+        Budget::Default => 0.4,
+        Budget::Long => 1.0,
+    };
+    let arm = |name: &str, part, config| Arm {
+        name: name.into(),
+        part,
+        config,
+    };
+    let ours3 = preset("dqfd-planes", 3, seed, fraction)?;
+    let mut arms = vec![
+        arm("ours: DQfD, planes, 3 blocks", Part::Ours, ours3.clone()),
+        arm(
+            "ours: DQN, planes, 2 blocks",
+            Part::Ours,
+            preset("dqn-planes", 2, seed, fraction)?,
+        ),
+    ];
+    if budget != Budget::Long {
+        return Ok(arms);
+    }
+    let pixel_fraction = 1.0;
+    let paper2 = preset("paper", 2, seed, pixel_fraction)?;
+    let paper_dqfd2 = preset("paper-dqfd", 2, seed, pixel_fraction)?;
+    // Our learner on the paper's pixels and network: what the screen costs.
+    let ours_pixels2 = DqnConfig {
+        net: NetConfig::paper(),
+        ..preset("dqfd-planes", 2, seed, pixel_fraction * 0.1)?
+    };
+    arms.extend([
+        arm("paper: DQN, pixels, 2 blocks", Part::Paper, paper2),
+        arm("paper: DQfD, pixels, 2 blocks", Part::Paper, paper_dqfd2),
+        arm("ours: DQN, planes, 3 blocks", Part::Ours, preset("dqn-planes", 3, seed, fraction)?),
+        arm(
+            "ours on pixels: DQfD, paper network, 2 blocks",
+            Part::Ours,
+            ours_pixels2.clone(),
+        ),
+    ]);
+    // The ablation: our recipe with one of the paper's choices put back.
+    let ablate = |name: &str, config: DqnConfig| arm(&format!("ours with {name}"), Part::Ablation, config);
+    let dense = RewardModel::from_name("dense")?;
+    arms.extend([
+        ablate("the paper's buffer (1000)", DqnConfig { buffer: 1000, ..ours3.clone() }),
+        ablate("the paper's dense reward", DqnConfig { reward: dense, ..ours3.clone() }),
+        ablate("the paper's gamma (0.1)", DqnConfig { gamma: 0.1, ..ours3.clone() }),
+        ablate(
+            "the paper's optimiser (RMSprop 1e-4)",
+            DqnConfig {
+                optimizer: OptimizerKind::Rmsprop,
+                lr: 1e-4,
+                ..ours3.clone()
+            },
+        ),
+        ablate(
+            "the paper's target refresh (every 3 games)",
+            DqnConfig {
+                target_every: TargetEvery::Games(3),
+                ..ours3.clone()
+            },
+        ),
+        ablate("every action allowed (no mask)", DqnConfig { mask_noops: false, ..ours3.clone() }),
+        ablate(
+            "no demonstrations",
+            DqnConfig {
+                demos: DemoSource::None,
+                pretrain_steps: 0,
+                ..preset("dqn-planes", 3, seed, fraction)?
+            },
+        ),
+        ablate(
+            "absolute planes (an MLP, not centred)",
+            DqnConfig {
+                net: NetConfig {
+                    kind: NetKind::Mlp,
+                    ..ours3.net
+                },
+                ..ours3.clone()
+            },
+        ),
+        ablate(
+            "pixels and the paper network, without batch norm, 2 blocks",
+            DqnConfig {
+                net: NetConfig {
+                    batch_norm: false,
+                    ..NetConfig::paper()
+                },
+                ..ours_pixels2
+            },
+        ),
+    ]);
+    Ok(arms)
+}
+
+/// Jobs reported: every point of every arm's curve, and its final test.
+pub(super) fn jobs(budget: Budget) -> u64 {
+    let arms = arms(budget, 0).map_or(0, |a| a.len());
+    (arms * (budget.curve().1 + 1)) as u64
+}
+
+/// One arm's results.
+struct Outcome {
+    /// The final test.
+    arm: ArmResult,
+    /// `(gradient steps, test results)` along training.
+    curve: Vec<(u64, ArmResult)>,
+    /// Gradient steps in all.
+    gradient_steps: u64,
+}
+
+/// The suite every arm of `blocks` blocks is tested on: each goal, `games` starts.
+fn suite(ctx: &Context, blocks: usize, games: u64) -> Result<Suite> {
+    Ok(Suite {
+        blocks,
+        goals: Goals::Each(Goal::all(blocks)?),
+        episodes: games,
+        seed: ctx.seeds.test,
+        horizon: HORIZON,
+    })
+}
+
+/// Trains `arm`, testing along the way and at the end.
+fn run_arm(ctx: &Context, arm: &Arm, budget: Budget) -> Result<Outcome> {
+    let c = &arm.config;
+    let (curve_games, points) = budget.curve();
+    let curve_suite = suite(ctx, c.blocks, curve_games)?;
+    let curve_optimum = curve_suite.optimum()?;
+    let test_suite = suite(ctx, c.blocks, budget.test_games())?;
+    let mut trainer = Trainer::new(c.clone())?;
+    let total = c.pretrain_steps + c.steps;
+    let mut done = 0;
+    let mut curve = Vec::with_capacity(points);
+    let quiet = &mut |_: &neural::Progress| {};
+    for i in 1..=points as u64 {
+        let until = total * i / points as u64;
+        let pre = until.min(c.pretrain_steps).saturating_sub(done.min(c.pretrain_steps));
+        trainer.pretrain(pre, quiet)?;
+        let play = until.saturating_sub(c.pretrain_steps) - done.saturating_sub(c.pretrain_steps);
+        trainer.play(play, quiet)?;
+        done = until;
+        let snapshot = trainer.snapshot()?;
+        let results = curve_suite.play(&mut snapshot.policy(0.0)?)?;
+        let steps = trainer.report().gradient_steps;
+        curve.push((
+            steps,
+            ArmResult::of(
+                format!("{} @ {steps}", arm.name),
+                c.describe(),
+                Some(0.0),
+                &[results],
+                &curve_optimum,
+                HORIZON,
+            ),
+        ));
+        ctx.progress.advance("E8");
+    }
+    let dqn = trainer.finish()?;
+    let results = test_suite.play(&mut dqn.policy(0.0)?)?;
+    ctx.progress.advance("E8");
+    Ok(Outcome {
+        arm: ArmResult::of(&arm.name, c.describe(), Some(0.0), &[results], &test_suite.optimum()?, HORIZON),
+        curve,
+        gradient_steps: dqn.report().gradient_steps,
+    })
+}
+
+/// Success in percent.
+fn success(a: &ArmResult) -> f64 {
+    100.0 * (1.0 - a.failure_rate())
+}
+
+/// Runs E8 at `budget`.
+pub(super) fn run(ctx: &Context, budget: Budget) -> Result<Experiment> {
+    let arms = arms(budget, ctx.seeds.ours)?;
+    let outcomes: Vec<Outcome> = arms
+        .par_iter()
+        .map(|a| run_arm(ctx, a, budget))
+        .collect::<Result<_>>()?;
+    let mut tables = Vec::new();
+    for (part, title) in [
+        (Part::Paper, "(a) The paper's DQN and DQfD on pixels"),
+        (Part::Ours, "(b) Ours"),
+        (Part::Ablation, "(c) Ablation: our recipe with one of the paper's choices put back"),
+    ] {
+        for blocks in [2, 3] {
+            let rows: Vec<Row> = arms
+                .iter()
+                .zip(&outcomes)
+                .filter(|(a, _)| a.part == part && a.config.blocks == blocks)
+                .map(|(_, o)| Row {
+                    ours: o.arm.clone(),
+                    paper: None,
+                    tests: Vec::new(),
+                })
+                .collect();
+            if !rows.is_empty() {
+                tables.push(Table {
+                    title: format!("{title}, {blocks} blocks"),
+                    suite: suite(ctx, blocks, budget.test_games())?.describe()
+                        + ", greedy (every arm's network after its whole budget)",
+                    paper: None,
+                    tests: Vec::new(),
+                    rows,
+                });
+            }
+        }
+    }
+    tables.push(Table {
+        title: "Learning curves: every arm along its training".into(),
+        suite: format!(
+            "{} starts per goal at each point (the first of the final tests' starts), greedy; \
+             \"@ N\" is the network after N gradient steps",
+            budget.curve().0
+        ),
+        paper: None,
+        tests: Vec::new(),
+        rows: outcomes
+            .iter()
+            .flat_map(|o| o.curve.iter().map(|(_, a)| Row {
+                ours: a.clone(),
+                paper: None,
+                tests: Vec::new(),
+            }))
+            .collect(),
+    });
+    let mut setup = vec![
+        Setting {
+            name: "budget".into(),
+            value: format!(
+                "{}: {}",
+                budget.name(),
+                match budget {
+                    Budget::Quick => "tiny runs that check the pipeline, not results",
+                    Budget::Default => "the plane arms at 40% of the presets' budgets (`reproduce --only E8 --long` runs every arm at full budget)",
+                    Budget::Long => "every arm at its preset's full budget",
+                }
+            ),
+        },
+        Setting {
+            name: "paper".into(),
+            value: "section III-C: pixels (100 x 100 x 3, goal image in a corner, held block white), two \
+                    convolutions with batch norm and two linear layers, buffer 1000, batch 64, RMSprop 1e-4, \
+                    MSE or Huber, sparse or dense reward, target every 3 or 5 epochs, DQfD pre-training on human \
+                    demonstrations; after 2-8 hours it \"didn't seem to learn anything apart from picking a block\""
+                .into(),
+        },
+        Setting {
+            name: "test".into(),
+            value: "every goal, the same seeded starts for every arm, horizon 1000, greedy (epsilon 0), \
+                    physics backend; the ratio is to the exact solver's shortest plan from each start"
+                .into(),
+        },
+    ];
+    for (a, o) in arms.iter().zip(&outcomes) {
+        setup.push(Setting {
+            name: a.name.clone(),
+            value: format!(
+                "{}; seed {}; {} gradient steps",
+                a.config.describe(),
+                a.config.seed,
+                o.gradient_steps
+            ),
+        });
+    }
+    let series = |part: Part| -> Vec<Series> {
+        arms.iter()
+            .zip(&outcomes)
+            .filter(|(a, _)| a.part == part || (part == Part::Ours && a.part == Part::Paper))
+            .map(|(a, o)| Series {
+                name: a.name.clone(),
+                points: o.curve.iter().map(|(s, r)| (*s as f64, success(r))).collect(),
+            })
+            .collect()
+    };
+    let chart = |title: &str, series: Vec<Series>| CurvesChart {
+        title: title.into(),
+        x_label: "gradient steps (pre-training included)".into(),
+        y_label: "reached the goal, greedy (%)".into(),
+        y_range: Some((0.0, 100.0)),
+        series,
+        note: format!(
+            "Each point: the network after that many gradient steps, greedy, on {} seeded starts of every goal \
+             (horizon 1000). Budget: {}.",
+            budget.curve().0,
+            budget.name()
+        ),
+    };
+    let mut figures = vec![Figure::new(
+        "e8-curves",
+        "Greedy success against training: the paper's configuration and ours".into(),
+        Drawing::Curves(chart("E8: the paper's DQN and ours", series(Part::Ours))),
+    )];
+    let ablation = series(Part::Ablation);
+    if !ablation.is_empty() {
+        figures.push(Figure::new(
+            "e8-ablation",
+            "Greedy success against training: our recipe with one of the paper's choices put back".into(),
+            Drawing::Curves(chart("E8: ablation", ablation)),
+        ));
+    }
+    let find = |name: &str| arms.iter().position(|a| a.name == name).map(|i| &outcomes[i].arm);
+    let figures_of = |a: Option<&ArmResult>| match a {
+        None => "-".to_string(),
+        Some(a) if a.mean_ratio_to_optimum.is_none() => format!("{:.1}%", success(a)),
+        Some(a) => format!(
+            "{:.1}% at {}x the optimum",
+            success(a),
+            num(a.mean_ratio_to_optimum, 3)
+        ),
+    };
+    let mut reading = format!(
+        "Ours (DQfD on centred planes) reaches {} on 3 blocks; DQN without demonstrations {} on 2 blocks",
+        figures_of(find("ours: DQfD, planes, 3 blocks")),
+        figures_of(find("ours: DQN, planes, 2 blocks")),
+    );
+    if let (Some(p), Some(d)) = (find("paper: DQN, pixels, 2 blocks"), find("paper: DQfD, pixels, 2 blocks")) {
+        reading += &format!(
+            "; the paper's configuration on pixels {} without and {} with DQfD on 2 blocks",
+            figures_of(Some(p)),
+            figures_of(Some(d))
+        );
+    }
+    let breaking: Vec<String> = arms
+        .iter()
+        .zip(&outcomes)
+        .filter(|(a, o)| a.part == Part::Ablation && success(&o.arm) < 90.0)
+        .map(|(a, o)| format!("{} ({:.0}%)", a.name.trim_start_matches("ours with "), success(&o.arm)))
+        .collect();
+    if arms.iter().any(|a| a.part == Part::Ablation) {
+        reading += &if breaking.is_empty() {
+            ". No single choice of the paper's, put back into our recipe, brought it below 90%".into()
+        } else {
+            format!(
+                ". Put back into our recipe alone, these choices of the paper's bring it below 90%: {}",
+                breaking.join(", ")
+            )
+        };
+    }
+    reading += &format!(" (budget: {}).", budget.name());
+    Ok(Experiment {
+        id: "E8".into(),
+        title: "Deep Q-learning from pixels and planes, and DQfD (section III-C)".into(),
+        setup,
+        tables,
+        curves: Vec::new(),
+        reading,
+        figures,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_arm_of_every_budget_is_a_valid_run() {
+        for budget in [Budget::Quick, Budget::Default, Budget::Long] {
+            let arms = arms(budget, 1).unwrap();
+            for a in &arms {
+                a.config.validate().unwrap_or_else(|e| panic!("{}: {e}", a.name));
+            }
+            let names: std::collections::HashSet<&str> = arms.iter().map(|a| a.name.as_str()).collect();
+            assert_eq!(names.len(), arms.len(), "names are unique");
+        }
+        let long = arms(Budget::Long, 1).unwrap();
+        assert!(long.iter().any(|a| a.part == Part::Paper && a.config.net.kind == NetKind::Paper));
+        assert!(long.iter().filter(|a| a.part == Part::Ablation).count() >= 5);
+        assert_eq!(arms(Budget::Quick, 1).unwrap().len(), arms(Budget::Default, 1).unwrap().len());
+    }
+}
