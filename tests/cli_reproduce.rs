@@ -20,7 +20,7 @@ fn quick_report() -> PathBuf {
     let o = blockstack(&["reproduce", "--quick", "--out", dir.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
     let out = String::from_utf8_lossy(&o.stdout);
-    assert!(out.contains("reproduced E1-E7"), "{out}");
+    assert!(out.contains("reproduced E1, E2, E3, E4, E5, E6, E7, E8"), "{out}");
     dir
 }
 
@@ -38,7 +38,7 @@ fn the_quick_report_holds_every_experiment() {
     assert_eq!(json["options"]["quick"], true);
     let experiments = json["experiments"].as_array().unwrap();
     let ids: Vec<&str> = experiments.iter().map(|e| e["id"].as_str().unwrap()).collect();
-    assert_eq!(ids, ["E1", "E2", "E3", "E4", "E5", "E6", "E7"]);
+    assert_eq!(ids, ["E1", "E2", "E3", "E4", "E5", "E6", "E7", "E8"]);
     for e in experiments {
         let id = e["id"].as_str().unwrap();
         assert!(readme.contains(&format!("## {id}: ")), "{id} has no section");
@@ -82,6 +82,13 @@ fn the_quick_report_holds_every_experiment() {
         assert!(dir.join(figure).is_file(), "{figure}");
     }
 
+    // E8 says which budget made its figures, and tests every arm on every goal.
+    let e8 = &experiments[7];
+    assert!(e8["setup"][0]["value"].as_str().unwrap().starts_with("quick"), "{}", e8["setup"][0]);
+    assert!(e8["reading"].as_str().unwrap().contains("(budget: quick)"));
+    for table in e8["tables"].as_array().unwrap() {
+        assert!(!table["rows"].as_array().unwrap().is_empty());
+    }
     // E1's random agent is `blockstack run` on the same starts.
     let seed = json["seeds"]["test"].as_u64().unwrap().to_string();
     let e1 = &experiments[0]["tables"][0]["rows"][0]["ours"];

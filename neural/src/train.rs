@@ -7,13 +7,14 @@
 //! on the same machine and number of threads (a matrix product's sums may be split
 //! differently on another thread count).
 
-use std::collections::VecDeque;
+use std::collections::{HashSet, VecDeque};
 
 use rand::RngExt;
 use sim::seeding::{self, SimRng, episode_seed};
-use sim::{Action, Env, Observation};
+use oracle::{ExactSolver, Oracle, Planner};
+use sim::{Action, Env, GridWorld, Observation, State, World};
 
-use crate::config::{DqnConfig, TargetEvery};
+use crate::config::{DemoSource, DqnConfig, TargetEvery};
 use crate::demos::{self, DemoEpisode};
 use crate::error::{NeuralError, Result};
 use crate::learner::{Learner, Losses};
@@ -84,6 +85,12 @@ pub struct Trainer {
     last_loss: Losses,
     /// Games when the target network was last refreshed.
     target_games: u64,
+    /// The states of the current game, to see it come back to one.
+    visited: HashSet<State>,
+    /// The rest of a demonstrator's plan that has taken over the current game, next last.
+    takeover: Vec<Action>,
+    /// Who corrects loops.
+    corrector: Box<dyn Planner + Send + Sync>,
 }
 
 impl Trainer {
@@ -125,7 +132,6 @@ impl Trainer {
         };
         Ok(Trainer {
             n_step: NStep::new(config.n_step, config.gamma),
-            config,
             learner,
             buffer,
             envs,
@@ -135,6 +141,13 @@ impl Trainer {
             current: None,
             last_loss: Losses::default(),
             target_games: 0,
+            visited: HashSet::new(),
+            takeover: Vec::new(),
+            corrector: match config.demos {
+                DemoSource::Oracle(_) => Box::new(Oracle::new(config.grid)),
+                _ => Box::new(ExactSolver::new(config.grid)),
+            },
+            config,
         })
     }
 
@@ -235,10 +248,18 @@ impl Trainer {
                 let i = (k % self.envs.len() as u64) as usize;
                 let obs = self.envs[i].reset(episode_seed(self.config.seed, k));
                 self.report.games += 1;
+                self.visited.clear();
+                self.takeover.clear();
                 (i, obs)
             }
         };
-        let action = self.choose(&obs)?;
+        if self.config.correct_loops && self.takeover.is_empty() && !self.visited.insert(obs.state) {
+            self.correct(&obs)?;
+        }
+        let action = match self.takeover.pop() {
+            Some(a) => a,
+            None => self.choose(&obs)?,
+        };
         let step = self.envs[env_index].step(action)?;
         self.report.steps += 1;
         let done = step.terminated || step.truncated;
@@ -264,6 +285,31 @@ impl Trainer {
         } else {
             self.current = Some((env_index, step.observation));
         }
+        Ok(())
+    }
+
+    /// The agent came back to `obs`: the demonstrator plans from there, its plan joins the
+    /// demonstrations, and it plays the rest of the game.
+    fn correct(&mut self, obs: &Observation) -> Result<()> {
+        let plan = self.corrector.plan(&obs.state, &obs.goal)?;
+        let mut world = GridWorld::new(obs.grid, obs.state)?;
+        let mut states = vec![obs.state];
+        for &a in &plan.actions {
+            world.act(a)?;
+            states.push(*world.state_ref());
+        }
+        let episode = DemoEpisode {
+            goal: obs.goal,
+            states,
+            expert: vec![true; plan.actions.len()],
+            actions: plan.actions,
+        };
+        for t in episode.transitions(self.config.grid, &self.config.reward, self.config.gamma, self.config.n_step) {
+            self.buffer.push_demo(t);
+        }
+        self.report.demo_transitions = self.buffer.demo_len() as u64;
+        self.report.corrections += 1;
+        self.takeover = episode.actions.into_iter().rev().collect();
         Ok(())
     }
 

@@ -141,6 +141,9 @@ impl DqnArgs {
                     ..neural::NetConfig::small()
                 },
             };
+            if let Some(obs) = self.obs {
+                c.net.validate(obs)?;
+            }
         } else if let Some(obs) = self.obs {
             if obs != c.obs() {
                 c.net = match obs {

@@ -1,0 +1,128 @@
+//! `blockstack dqn`, and `eval` / `run --agent dqn` playing its network files, end to end,
+//! with their answers to bad input.
+
+use std::path::{Path, PathBuf};
+
+mod common;
+use common::{blockstack, path, scratch, stderr, stdout};
+
+/// A tiny DQfD run on 2 blocks (seconds), saved under `name`.
+fn train(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {
+    let out = dir.join(name);
+    let mut args = vec![
+        "dqn",
+        "--blocks",
+        "2",
+        "--demos",
+        "exact:100",
+        "--pretrain",
+        "300",
+        "--steps",
+        "200",
+        "--hidden",
+        "64",
+        "--seed",
+        "4",
+        "--out",
+        path(&out),
+    ];
+    args.extend(extra);
+    let o = blockstack(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // Not a terminal: no progress bar, nothing on stderr.
+    assert_eq!(stderr(&o), "");
+    let text = stdout(&o);
+    assert!(text.contains("trained dqn-small") && text.contains("saved"), "{text}");
+    out
+}
+
+#[test]
+fn a_trained_network_is_evaluated_and_played_like_a_tabular_model() {
+    let dir = scratch("dqn-eval");
+    let net = train(&dir, "net.safetensors", &[]);
+    let o = blockstack(&[
+        "eval", "--model", path(&net), "--episodes", "20", "--epsilon", "0", "--backend", "grid", "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(v["agent"], "dqn-small");
+    assert_eq!(v["episodes"], 40);
+    assert_eq!(v["per_goal"].as_array().unwrap().len(), 2);
+    let o = blockstack(&[
+        "run", "--agent", "dqn", "--model", path(&net), "--blocks", "2", "--goal", "1,0", "--episodes", "5",
+        "--epsilon", "0", "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("\"agent\":\"dqn-small\""), "{}", stdout(&o));
+    // The same seed gives the same tensors, byte for byte (the file's metadata is a map
+    // that safetensors writes in no fixed order).
+    let again = train(&dir, "again.safetensors", &[]);
+    let tensors = |p: &Path| {
+        let bytes = std::fs::read(p).unwrap();
+        let header = u64::from_le_bytes(bytes[..8].try_into().unwrap()) as usize;
+        bytes[8 + header..].to_vec()
+    };
+    assert_eq!(tensors(&net), tensors(&again));
+}
+
+#[test]
+fn bad_files_and_arguments_are_one_line_and_status_2() {
+    let dir = scratch("dqn-bad");
+    let net = train(&dir, "net.safetensors", &["--loss", "dqn"]);
+    let mut bytes = std::fs::read(&net).unwrap();
+    let n = bytes.len();
+    bytes[n - 5] ^= 0x10;
+    let corrupt = dir.join("corrupt.safetensors");
+    std::fs::write(&corrupt, &bytes).unwrap();
+    let truncated = dir.join("truncated.safetensors");
+    std::fs::write(&truncated, &bytes[..n / 2]).unwrap();
+    for (file, says) in [(&corrupt, "checksum"), (&truncated, "truncated")] {
+        let o = blockstack(&["eval", "--model", path(file), "--episodes", "1"]);
+        assert_eq!(o.status.code(), Some(2));
+        let err = stderr(&o);
+        assert!(err.contains(says) && err.lines().count() == 1, "{err}");
+    }
+    // A network is not what --agent q plays, and a 2-block network does not play 3 blocks.
+    let o = blockstack(&["run", "--agent", "q", "--model", path(&net), "--blocks", "2"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("not what --agent q plays"), "{}", stderr(&o));
+    let o = blockstack(&["run", "--agent", "dqn", "--model", path(&net), "--blocks", "3"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("does not fit"), "{}", stderr(&o));
+    let x = dir.join("x.safetensors");
+    for (args, says) in [
+        (vec!["--preset", "nope"], "unknown preset"),
+        (vec!["--obs", "planes", "--net", "paper"], "reads pixels"),
+        (vec!["--demos", "people:3"], "exact:K"),
+        (vec!["--pretrain", "5", "--demos", "none"], "pre-training needs demonstrations"),
+    ] {
+        let mut all = vec!["dqn", "--out", path(&x)];
+        all.extend(args);
+        let o = blockstack(&all);
+        assert_eq!(o.status.code(), Some(2), "{all:?}");
+        assert!(stderr(&o).contains(says), "{all:?}: {}", stderr(&o));
+    }
+    assert!(!x.exists());
+}
+
+#[test]
+fn demonstrations_come_from_a_trajectory_file_too() {
+    let dir = scratch("dqn-demos-file");
+    let trajectory = dir.join("t.jsonl");
+    let o = blockstack(&[
+        "run", "--agent", "exact", "--blocks", "2", "--episodes", "30", "--backend", "grid", "--trajectory",
+        path(&trajectory),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = dir.join("net.safetensors");
+    let o = blockstack(&[
+        "dqn", "--blocks", "2", "--demos-file", path(&trajectory), "--pretrain", "50", "--steps", "50", "--hidden",
+        "32", "--out", path(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("30 demonstrated episodes"), "{}", stdout(&o));
+    let missing = dir.join("missing.jsonl");
+    let o = blockstack(&["dqn", "--blocks", "2", "--demos-file", path(&missing), "--out", path(&out)]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("missing.jsonl"), "{}", stderr(&o));
+}
