@@ -338,7 +338,7 @@ impl Env {
     fn begin(&mut self, start: State, keeps_goal_start: bool) -> Observation {
         self.steps = 0;
         self.previous_action = None;
-        let over = self.config.termination == Termination::Goal && !keeps_goal_start && self.goal.holds(&start);
+        let over = matches!(self.config.termination, Termination::Goal) && !keeps_goal_start && self.goal.holds(&start);
         self.phase = if over { Phase::Over } else { Phase::Running };
         self.observation()
     }
