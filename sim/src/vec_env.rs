@@ -16,7 +16,9 @@ use crate::observation::Observation;
 /// it is reset within that step: the returned `observation` is the new episode's first, the
 /// ended episode's last observation is in `info.final_observation`, and `reward`,
 /// `terminated` and `truncated` are those of the step that ended it. The next action
-/// therefore always applies to the observation just returned.
+/// therefore always applies to the observation just returned, and `info.action_mask` is
+/// always that observation's legal actions (the ended episode's are
+/// `info.final_observation`'s [`legal_actions`](Observation::legal_actions)).
 pub struct VecEnv {
     envs: Vec<Env>,
     /// `None` for one thread: the caller's thread steps the environments itself, which
@@ -64,8 +66,9 @@ impl VecEnv {
     }
 
     /// Steps environment `i` with `actions[i]`, resetting those whose episode ends (see
-    /// the type's docs). An error if the action count differs from the environment count,
-    /// or if any step fails (the first such error).
+    /// the type's docs). An error, before any environment steps, if the action count
+    /// differs from the environment count or if any environment would refuse its action
+    /// (the first such error; see [`Env::check_action`]).
     pub fn step(&mut self, actions: &[Action]) -> Result<Vec<Step>> {
         if actions.len() != self.envs.len() {
             return Err(SimError::ActionCountMismatch {
@@ -73,11 +76,15 @@ impl VecEnv {
                 actions: actions.len(),
             });
         }
+        for (env, &action) in self.envs.iter().zip(actions) {
+            env.check_action(action)?;
+        }
         let step = |(env, &action): (&mut Env, &Action)| {
             let mut step = env.step(action)?;
             if step.terminated || step.truncated {
                 step.info.final_observation = Some(step.observation);
                 step.observation = env.reset(None);
+                step.info.action_mask = step.observation.legal_actions();
             }
             Ok(step)
         };

@@ -86,6 +86,7 @@ pub fn eval(args: EvalArgs) -> Result<()> {
             horizon: args.horizon,
             reward,
             backend,
+            ..EnvConfig::default()
         })?;
         let mut policy = model.policy(args.epsilon)?;
         let results = agent::play(&mut env, policy.as_mut(), args.episodes, args.seed, None)?;
