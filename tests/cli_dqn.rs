@@ -41,7 +41,16 @@ fn a_trained_network_is_evaluated_and_played_like_a_tabular_model() {
     let dir = scratch("dqn-eval");
     let net = train(&dir, "net.safetensors", &[]);
     let o = blockstack(&[
-        "eval", "--model", path(&net), "--episodes", "20", "--epsilon", "0", "--backend", "grid", "--json",
+        "eval",
+        "--model",
+        path(&net),
+        "--episodes",
+        "20",
+        "--epsilon",
+        "0",
+        "--backend",
+        "grid",
+        "--json",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
@@ -49,8 +58,20 @@ fn a_trained_network_is_evaluated_and_played_like_a_tabular_model() {
     assert_eq!(v["episodes"], 40);
     assert_eq!(v["per_goal"].as_array().unwrap().len(), 2);
     let o = blockstack(&[
-        "run", "--agent", "dqn", "--model", path(&net), "--blocks", "2", "--goal", "1,0", "--episodes", "5",
-        "--epsilon", "0", "--json",
+        "run",
+        "--agent",
+        "dqn",
+        "--model",
+        path(&net),
+        "--blocks",
+        "2",
+        "--goal",
+        "1,0",
+        "--episodes",
+        "5",
+        "--epsilon",
+        "0",
+        "--json",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stdout(&o).contains("\"agent\":\"dqn-small\""), "{}", stdout(&o));
@@ -94,7 +115,10 @@ fn bad_files_and_arguments_are_one_line_and_status_2() {
         (vec!["--preset", "nope"], "unknown preset"),
         (vec!["--obs", "planes", "--net", "paper"], "reads pixels"),
         (vec!["--demos", "people:3"], "exact:K"),
-        (vec!["--pretrain", "5", "--demos", "none"], "pre-training needs demonstrations"),
+        (
+            vec!["--pretrain", "5", "--demos", "none"],
+            "pre-training needs demonstrations",
+        ),
     ] {
         let mut all = vec!["dqn", "--out", path(&x)];
         all.extend(args);
@@ -110,19 +134,47 @@ fn demonstrations_come_from_a_trajectory_file_too() {
     let dir = scratch("dqn-demos-file");
     let trajectory = dir.join("t.jsonl");
     let o = blockstack(&[
-        "run", "--agent", "exact", "--blocks", "2", "--episodes", "30", "--backend", "grid", "--trajectory",
+        "run",
+        "--agent",
+        "exact",
+        "--blocks",
+        "2",
+        "--episodes",
+        "30",
+        "--backend",
+        "grid",
+        "--trajectory",
         path(&trajectory),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let out = dir.join("net.safetensors");
     let o = blockstack(&[
-        "dqn", "--blocks", "2", "--demos-file", path(&trajectory), "--pretrain", "50", "--steps", "50", "--hidden",
-        "32", "--out", path(&out),
+        "dqn",
+        "--blocks",
+        "2",
+        "--demos-file",
+        path(&trajectory),
+        "--pretrain",
+        "50",
+        "--steps",
+        "50",
+        "--hidden",
+        "32",
+        "--out",
+        path(&out),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stdout(&o).contains("30 demonstrated episodes"), "{}", stdout(&o));
     let missing = dir.join("missing.jsonl");
-    let o = blockstack(&["dqn", "--blocks", "2", "--demos-file", path(&missing), "--out", path(&out)]);
+    let o = blockstack(&[
+        "dqn",
+        "--blocks",
+        "2",
+        "--demos-file",
+        path(&missing),
+        "--out",
+        path(&out),
+    ]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("missing.jsonl"), "{}", stderr(&o));
 }

@@ -84,7 +84,11 @@ fn the_quick_report_holds_every_experiment() {
 
     // E8 says which budget made its figures, and tests every arm on every goal.
     let e8 = &experiments[7];
-    assert!(e8["setup"][0]["value"].as_str().unwrap().starts_with("quick"), "{}", e8["setup"][0]);
+    assert!(
+        e8["setup"][0]["value"].as_str().unwrap().starts_with("quick"),
+        "{}",
+        e8["setup"][0]
+    );
     assert!(e8["reading"].as_str().unwrap().contains("(budget: quick)"));
     for table in e8["tables"].as_array().unwrap() {
         assert!(!table["rows"].as_array().unwrap().is_empty());

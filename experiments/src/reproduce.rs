@@ -417,11 +417,17 @@ pub fn reproduce(options: &Options, progress: &dyn ProgressSink) -> Result<Repro
 /// from `options`.
 pub fn reproduce_with(options: &Options, scale: Scale, progress: &dyn ProgressSink) -> Result<Reproduction> {
     let seeds = Seeds::new(options.seed, &scale);
-    let paper_part = ["E1", "E2", "E3", "E4", "E5", "E6", "E7"].iter().any(|id| options.runs(id));
+    let paper_part = ["E1", "E2", "E3", "E4", "E5", "E6", "E7"]
+        .iter()
+        .any(|id| options.runs(id));
     let e8 = options.runs("E8").then(|| Budget::of(options));
     progress.begin(if paper_part { scale.jobs() } else { 0 } + e8.map_or(0, e8::jobs));
     let ctx = Context { scale, seeds, progress };
-    let mut experiments = if paper_part { paper_experiments(&ctx)? } else { Vec::new() };
+    let mut experiments = if paper_part {
+        paper_experiments(&ctx)?
+    } else {
+        Vec::new()
+    };
     experiments.retain(|e| options.runs(&e.id));
     if let Some(budget) = e8 {
         experiments.push(e8::run(&ctx, budget)?);
@@ -441,21 +447,21 @@ pub fn reproduce_with(options: &Options, scale: Scale, progress: &dyn ProgressSi
 fn paper_experiments(ctx: &Context) -> Result<Vec<Experiment>> {
     // Our learner trains for longest: it goes on one thread while the rest share the others.
     let (ours, rest) = rayon::join(
-        || e4::train_ours(&ctx),
+        || e4::train_ours(ctx),
         || -> Result<_> {
-            let e1 = e1::run(&ctx)?;
-            let e2 = e2::run(&ctx)?;
-            let paper_curve = e4::paper_curve(&ctx)?;
-            let (e5, paper_agent) = e5::run(&ctx)?;
-            let e6 = e6::run(&ctx)?;
+            let e1 = e1::run(ctx)?;
+            let e2 = e2::run(ctx)?;
+            let paper_curve = e4::paper_curve(ctx)?;
+            let (e5, paper_agent) = e5::run(ctx)?;
+            let e6 = e6::run(ctx)?;
             Ok((e1, e2, paper_curve, e5, paper_agent, e6))
         },
     );
     let (ours, ours_curve): (QAgent, Curve) = ours?;
     let (e1, e2, paper_curve, e5, paper_agent, e6) = rest?;
-    let e3 = e3::run(&ctx, &ours)?;
-    let e4 = e4::experiment(&ctx, paper_curve, ours_curve);
-    let e7 = e7::run(&ctx, &paper_agent, &ours)?;
+    let e3 = e3::run(ctx, &ours)?;
+    let e4 = e4::experiment(ctx, paper_curve, ours_curve);
+    let e7 = e7::run(ctx, &paper_agent, &ours)?;
     Ok(vec![e1, e2, e3, e4, e5, e6, e7])
 }
 

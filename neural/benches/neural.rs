@@ -41,7 +41,9 @@ fn greedy(c: &mut Criterion) {
         let dqn = Trainer::new(config.clone()).unwrap().finish().unwrap();
         let mut env = Env::new(config.env_config(config.goals[0])).unwrap();
         let obs = env.reset(3);
-        group.bench_function(name, |b| b.iter(|| black_box(dqn.greedy_action(black_box(&obs)).unwrap())));
+        group.bench_function(name, |b| {
+            b.iter(|| black_box(dqn.greedy_action(black_box(&obs)).unwrap()))
+        });
     }
     group.finish();
 }

@@ -29,7 +29,7 @@
 use std::fmt;
 
 use serde::{Deserialize, Serialize};
-use sim::{Backend, EnvConfig, Goal, GoalSpec, Grid, RewardModel};
+use sim::{ActionProtocol, Backend, EnvConfig, Goal, GoalSpec, Grid, RewardModel};
 
 use crate::error::{NeuralError, Result};
 use crate::input::ObsKind;
@@ -112,7 +112,9 @@ impl std::str::FromStr for LossKind {
         match text {
             "dqn" => Ok(LossKind::Dqn),
             "dqfd" => Ok(LossKind::Dqfd),
-            _ => Err(NeuralError::Config(format!("unknown loss {text:?}: choose dqfd or dqn"))),
+            _ => Err(NeuralError::Config(format!(
+                "unknown loss {text:?}: choose dqfd or dqn"
+            ))),
         }
     }
 }
@@ -134,7 +136,9 @@ impl std::str::FromStr for TdLoss {
         match text {
             "huber" => Ok(TdLoss::Huber),
             "mse" => Ok(TdLoss::Mse),
-            _ => Err(NeuralError::Config(format!("unknown TD loss {text:?}: choose huber or mse"))),
+            _ => Err(NeuralError::Config(format!(
+                "unknown TD loss {text:?}: choose huber or mse"
+            ))),
         }
     }
 }
@@ -191,6 +195,9 @@ pub struct DqnConfig {
     pub horizon: u32,
     /// The world backend of the training games.
     pub backend: Backend,
+    /// The action protocol: which actions are legal (every choice is masked to them).
+    #[serde(default)]
+    pub protocol: ActionProtocol,
     /// Seed of the weights, starts, demonstrations and every random choice.
     pub seed: u64,
     /// Environment steps of self-play.
@@ -207,6 +214,9 @@ pub struct DqnConfig {
     pub optimizer: OptimizerKind,
     /// Its learning rate.
     pub lr: f64,
+    /// The learning rate at the end of the run: it falls linearly from `lr` over all the
+    /// run's gradient steps (pre-training and self-play); equal to `lr` for a constant rate.
+    pub lr_final: f64,
     /// The discount factor.
     pub gamma: f64,
     /// The agent's transitions the replay buffer holds.
@@ -260,6 +270,7 @@ impl DqnConfig {
             reward: RewardModel::from_name("sparse")?,
             horizon: sim::DEFAULT_HORIZON,
             backend: Backend::Grid,
+            protocol: ActionProtocol::Free,
             seed: 1,
             steps: 100_000,
             pretrain_steps: 0,
@@ -268,6 +279,7 @@ impl DqnConfig {
             td_loss: TdLoss::Mse,
             optimizer: OptimizerKind::Rmsprop,
             lr: 1e-4,
+            lr_final: 1e-4,
             gamma: 0.1,
             buffer: 1000,
             batch: 64,
@@ -315,7 +327,7 @@ impl DqnConfig {
                     end: 0.01,
                     steps: 15_000,
                 },
-                correct_loops: true,
+                correct_loops: false,
                 ..DqnConfig::dqn_planes(paper)
             }),
             _ => Err(NeuralError::Config(format!(
@@ -332,6 +344,7 @@ impl DqnConfig {
             td_loss: TdLoss::Huber,
             optimizer: OptimizerKind::Adam,
             lr: 1e-3,
+            lr_final: 1e-4,
             gamma: 0.95,
             buffer: 100_000,
             learning_starts: 5_000,
@@ -362,6 +375,8 @@ impl DqnConfig {
             horizon: self.horizon,
             reward: self.reward,
             backend: self.backend,
+            protocol: self.protocol,
+            ..EnvConfig::default()
         }
     }
 
@@ -376,12 +391,17 @@ impl DqnConfig {
             NetKind::Mlp => format!("MLP ({} x 2) on absolute planes", self.net.hidden),
         };
         format!(
-            "{net}; {} loss, {} reward, gamma {}, {} lr {}, buffer {}, batch {}; demonstrations {}{}; {} self-play steps{}",
+            "{net}; {} loss, {} reward, gamma {}, {} lr {}{}, buffer {}, batch {}; demonstrations {}{}; {} self-play steps{}",
             self.loss,
             self.reward,
             self.gamma,
             self.optimizer,
             self.lr,
+            if self.lr_final == self.lr {
+                String::new()
+            } else {
+                format!(" to {}", self.lr_final)
+            },
             self.buffer,
             self.batch,
             self.demos,
@@ -392,7 +412,11 @@ impl DqnConfig {
             },
             self.steps,
             if self.mask_noops { "; no-op actions masked" } else { "" },
-        ) + if self.correct_loops { "; loops corrected by the demonstrator" } else { "" }
+        ) + if self.correct_loops {
+            "; loops corrected by the demonstrator"
+        } else {
+            ""
+        }
     }
 
     /// An error naming the first setting that cannot work.
@@ -414,8 +438,10 @@ impl DqnConfig {
         if self.train_every == 0 {
             return bad("train-every must be at least 1 step".into());
         }
-        if !(self.lr > 0.0 && self.lr.is_finite()) {
-            return bad(format!("the learning rate {} is not a positive number", self.lr));
+        for lr in [self.lr, self.lr_final] {
+            if !(lr > 0.0 && lr.is_finite()) {
+                return bad(format!("the learning rate {lr} is not a positive number"));
+            }
         }
         if !(0.0..=1.0).contains(&self.gamma) {
             return bad(format!("gamma {} is not in [0, 1]", self.gamma));
@@ -449,9 +475,20 @@ impl DqnConfig {
             }
         }
         match self.target_every {
-            TargetEvery::Steps(0) | TargetEvery::Games(0) => bad("the target network must be refreshed every 1 or more".into()),
+            TargetEvery::Steps(0) | TargetEvery::Games(0) => {
+                bad("the target network must be refreshed every 1 or more".into())
+            }
             _ => Ok(()),
         }?;
+        if self.protocol != ActionProtocol::Free
+            && (self.correct_loops || matches!(self.demos, DemoSource::Exact(_) | DemoSource::Oracle(_)))
+        {
+            return bad(format!(
+                "the planners demonstrate in the free protocol (a pick may switch blocks), not the {} one: \
+                 drop their demonstrations and corrections, or choose the free protocol",
+                self.protocol
+            ));
+        }
         if self.pretrain_steps > 0 && self.demos == DemoSource::None {
             return bad("pre-training needs demonstrations (--demos or --demos-file)".into());
         }

@@ -26,7 +26,7 @@ use rayon::prelude::*;
 use sim::reward::Transition as RewardTransition;
 use sim::seeding::episode_seed;
 use sim::trajectory::Record;
-use sim::{Action, Cell, Env, Goal, Grid, GridWorld, Observation, RewardModel, State, World};
+use sim::{Action, Cell, Env, Goal, Grid, GridWorld, Observation, State, World};
 
 use crate::config::{DemoSource, DqnConfig};
 use crate::error::{NeuralError, Result};
@@ -48,13 +48,15 @@ pub struct DemoEpisode {
 impl DemoEpisode {
     /// The episode's transitions for a learner with `reward`, discount `gamma` and n-step
     /// `n` on `grid`.
-    pub fn transitions(&self, grid: Grid, reward: &RewardModel, gamma: f64, n: usize) -> Vec<Transition> {
-        let mut builder = NStep::new(n, gamma);
+    pub fn transitions(&self, config: &DqnConfig) -> Vec<Transition> {
+        let (grid, reward) = (config.grid, &config.reward);
+        let mut builder = NStep::new(config.n_step, config.gamma);
         let mut out = Vec::with_capacity(self.actions.len());
         let obs = |state: State| Observation {
             grid,
             state,
             goal: self.goal,
+            protocol: config.protocol,
         };
         for (k, &action) in self.actions.iter().enumerate() {
             let (before, after) = (&self.states[k], &self.states[k + 1]);
@@ -153,7 +155,8 @@ pub fn read(path: &Path, grid: Grid, blocks: usize) -> Result<Vec<DemoEpisode>> 
         }
         (Some("episode"), None) => {
             let file = std::fs::File::open(path).map_err(|e| fail(e.to_string()))?;
-            trajectory(std::io::BufReader::new(file), grid, blocks).map_err(|(line, reason)| fail(format!("line {line}: {reason}")))
+            trajectory(std::io::BufReader::new(file), grid, blocks)
+                .map_err(|(line, reason)| fail(format!("line {line}: {reason}")))
         }
         _ => Err(fail(
             "the first line is neither a blockstack-demos session nor a trajectory episode".into(),
@@ -201,7 +204,11 @@ impl DemoLearner for Collector {
 }
 
 /// The episodes of a trajectory file; an error is the line number and why.
-fn trajectory(input: impl BufRead, grid: Grid, blocks: usize) -> std::result::Result<Vec<DemoEpisode>, (usize, String)> {
+fn trajectory(
+    input: impl BufRead,
+    grid: Grid,
+    blocks: usize,
+) -> std::result::Result<Vec<DemoEpisode>, (usize, String)> {
     let mut episodes: Vec<DemoEpisode> = Vec::new();
     let mut world: Option<(u64, GridWorld)> = None;
     for (i, line) in input.lines().enumerate() {
@@ -254,7 +261,10 @@ fn trajectory(input: impl BufRead, grid: Grid, blocks: usize) -> std::result::Re
                 let recorded: Vec<Cell> = cells.iter().map(|&[x, y]| Cell::new(x, y)).collect();
                 let state = *w.state_ref();
                 if state.cells() != recorded.as_slice() || state.held_block().map(|b| b.0) != held {
-                    return Err((n, "the recorded state is not what the action leads to by the rules".into()));
+                    return Err((
+                        n,
+                        "the recorded state is not what the action leads to by the rules".into(),
+                    ));
                 }
                 let e = episodes.last_mut().expect("an episode line came first");
                 e.states.push(state);
@@ -268,10 +278,7 @@ fn trajectory(input: impl BufRead, grid: Grid, blocks: usize) -> std::result::Re
 
 /// Every transition of `episodes` for the learner of `config`.
 pub fn transitions(episodes: &[DemoEpisode], config: &DqnConfig) -> Vec<Transition> {
-    episodes
-        .iter()
-        .flat_map(|e| e.transitions(config.grid, &config.reward, config.gamma, config.n_step))
-        .collect()
+    episodes.iter().flat_map(|e| e.transitions(config)).collect()
 }
 
 /// Reads a `blockstack-demos` recording from `input` (errors name `name`): for tests and
@@ -308,7 +315,7 @@ mod tests {
             assert_eq!(e.goal, c.goals[k % c.goals.len()]);
             assert!(e.goal.holds(e.states.last().unwrap()));
             assert_eq!(e.actions.len() as u32, solver.distance(&e.states[0], &e.goal).unwrap());
-            let t = e.transitions(c.grid, &c.reward, c.gamma, c.n_step);
+            let t = e.transitions(&c);
             assert_eq!(t.len(), e.actions.len());
             assert!(t.last().unwrap().terminal && t.iter().all(|t| t.expert));
             assert_eq!(t.last().unwrap().reward, 10.0, "the sparse reward at the goal");

@@ -144,7 +144,9 @@ pub fn read(path: &Path, format: &str, version: u32) -> Result<(Header, Vec<Name
     }
     let expected: Option<u32> = header.metadata.get("checksum").and_then(|c| c.parse().ok());
     if expected != Some(checksum(out.iter().map(|(n, _, v)| (n.as_str(), v.as_slice())))) {
-        return Err(fail("the tensors do not match the file's checksum: the file is corrupt".into()));
+        return Err(fail(
+            "the tensors do not match the file's checksum: the file is corrupt".into(),
+        ));
     }
     Ok((header, out))
 }
@@ -192,7 +194,12 @@ mod tests {
         assert!(err(b"{\"format\":\"blockstack-q-agent\"}").contains("not a network file"));
         std::fs::write(&path, &good).unwrap();
         assert!(read(&path, "other", 2).unwrap_err().to_string().contains("not other"));
-        assert!(read(&path, "test-format", 1).unwrap_err().to_string().contains("version 2"));
+        assert!(
+            read(&path, "test-format", 1)
+                .unwrap_err()
+                .to_string()
+                .contains("version 2")
+        );
         assert!(peek(&dir.join("missing")).is_none());
         std::fs::remove_dir_all(&dir).unwrap();
     }

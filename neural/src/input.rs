@@ -204,11 +204,12 @@ impl InputSpec {
         if !self.by_place() {
             return allowed;
         }
-        ActionSet::from_indices(
-            allowed
-                .iter()
-                .map(|a| self.column(&obs.goal, Action::from_index(a, self.blocks).expect("an allowed action"))),
-        )
+        ActionSet::from_indices(allowed.iter().map(|a| {
+            self.column(
+                &obs.goal,
+                Action::from_index(a, self.blocks).expect("an allowed action"),
+            )
+        }))
     }
 
     /// The inputs of `observations` as floats, one row each.
@@ -231,6 +232,7 @@ mod tests {
         Observation {
             grid: Grid::default(),
             state: State::new(&cells, held.map(BlockId)).unwrap(),
+            protocol: sim::ActionProtocol::Free,
             goal: "2,0,1".parse().unwrap(),
         }
     }

@@ -73,6 +73,11 @@ impl Learner {
         self.gradient_steps
     }
 
+    /// Changes the learning rate of the next steps.
+    pub fn set_lr(&mut self, lr: f64) {
+        self.optimizer.set_lr(lr);
+    }
+
     /// Copies the online network into the target network.
     pub fn refresh_target(&mut self) -> Result<()> {
         self.target.copy_from(&self.online)
@@ -181,7 +186,8 @@ impl Learner {
         losses.total = total.to_scalar::<f32>()?;
         let grads = total.backward()?;
         let l2 = if dqfd { config.l2 } else { 0.0 };
-        self.optimizer.step(self.online.params(), &grads, l2, config.clip_norm)?;
+        self.optimizer
+            .step(self.online.params(), &grads, l2, config.clip_norm)?;
         self.gradient_steps += 1;
         Ok(losses)
     }
@@ -219,12 +225,17 @@ mod tests {
         // Zero every weight; the last bias alone sets Q(s, .) = b for every s.
         let q = [1.0f32, 2.0, 0.5, -1.0, 0.0, 0.3, 0.1];
         for (name, v) in net.params() {
-            let values = if name == "linear3.bias" { q.to_vec() } else { vec![0.0; v.elem_count()] };
-            net.set_tensor(name, &v.dims().to_vec(), values).unwrap();
+            let values = if name == "linear3.bias" {
+                q.to_vec()
+            } else {
+                vec![0.0; v.elem_count()]
+            };
+            net.set_tensor(name, v.dims(), values).unwrap();
         }
         let obs = Observation {
             grid: Grid::default(),
             state: State::new(&[Cell::new(2, 2), Cell::new(4, 4)], Some(BlockId(0))).unwrap(),
+            protocol: sim::ActionProtocol::Free,
             goal: Goal::identity(2).unwrap(),
         };
         // The expert took Left (index 2): J = max(1 + .8, 2 + .8, 0.5, -1 + .8, .8, 1.1, .9) - 0.5
@@ -261,7 +272,13 @@ mod tests {
             .unwrap();
         assert!((j.to_scalar::<f32>().unwrap() - 2.3).abs() < 1e-6);
         let grads = j.backward().unwrap();
-        let bias = &learner.online.params().iter().find(|(n, _)| n == "linear3.bias").unwrap().1;
+        let bias = &learner
+            .online
+            .params()
+            .iter()
+            .find(|(n, _)| n == "linear3.bias")
+            .unwrap()
+            .1;
         let g = grads.get(bias.as_tensor()).unwrap().to_vec1::<f32>().unwrap();
         assert_eq!(g, vec![0.0, 1.0, -1.0, 0.0, 0.0, 0.0, 0.0]);
         // The learner's own step reports the same margin loss (and the TD loss of a terminal

@@ -2,8 +2,9 @@
 //!
 //! Two things restrict the actions, both decided by `sim`'s rules, never re-implemented here:
 //!
-//! - **Legal actions** of the world's action protocol. The world this crate trains in lets
-//!   every action be taken (SPEC section 2), so every action is legal.
+//! - **Legal actions** of the world's action protocol ([`sim::ActionProtocol`]):
+//!   [`Observation::legal_actions`]. In SPEC's world every action is legal; under the
+//!   paper's protocol only picks with nothing held, only moves and drop while holding.
 //! - **Actions that change nothing** ([`sim::Effect::Blocked`], [`sim::Effect::NothingHeld`],
 //!   [`sim::Effect::Unchanged`]: a move with nothing held, a move into a wall or a block, a
 //!   pick of the block already held, a drop with nothing held), found by trying each action
@@ -23,18 +24,12 @@ use sim::{Action, Effect, GridWorld, Observation, World};
 pub struct ActionSet(u32);
 
 impl ActionSet {
-    /// Every action of a world of `blocks` blocks.
-    pub fn all(blocks: usize) -> ActionSet {
-        let n = Action::count(blocks);
-        ActionSet(if n >= 32 { u32::MAX } else { (1u32 << n) - 1 })
-    }
-
     /// The actions allowed in `obs`: the legal ones, less those that change nothing when
-    /// `mask_noops` is set. Never empty: some action always changes something (a pick with
-    /// nothing held, a drop while holding).
+    /// `mask_noops` is set. Never empty: under either protocol some legal action changes
+    /// something (a pick with nothing held, a drop while holding).
     pub fn allowed(obs: &Observation, mask_noops: bool) -> ActionSet {
         let blocks = obs.state.block_count();
-        let legal = ActionSet::all(blocks);
+        let legal = ActionSet(obs.legal_actions().bits());
         if !mask_noops {
             return legal;
         }
@@ -129,9 +124,10 @@ mod tests {
         let obs = Observation {
             grid: Grid::default(),
             state: State::new(&[Cell::new(0, 0), Cell::new(1, 0)], Some(BlockId(0))).unwrap(),
+            protocol: sim::ActionProtocol::Free,
             goal: "0,1".parse().unwrap(),
         };
-        assert_eq!(ActionSet::allowed(&obs, false), ActionSet::all(2));
+        assert_eq!(ActionSet::allowed(&obs, false).len(), 7);
         let allowed: Vec<usize> = ActionSet::allowed(&obs, true).iter().collect();
         // Up, Drop, Pick(1); not Down/Left (wall), Right (block 1), Pick(0) (held).
         assert_eq!(allowed, vec![0, 4, 6]);
@@ -141,6 +137,16 @@ mod tests {
         };
         // Nothing held: only the picks change anything.
         assert_eq!(ActionSet::allowed(&free, true).iter().collect::<Vec<_>>(), vec![5, 6]);
+        // The paper's protocol: holding, only moves and drop are legal (Pick(1) is not).
+        let paper = Observation {
+            protocol: sim::ActionProtocol::Paper,
+            ..obs
+        };
+        assert_eq!(
+            ActionSet::allowed(&paper, false).iter().collect::<Vec<_>>(),
+            vec![0, 1, 2, 3, 4]
+        );
+        assert_eq!(ActionSet::allowed(&paper, true).iter().collect::<Vec<_>>(), vec![0, 4]);
     }
 
     proptest! {

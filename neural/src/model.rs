@@ -138,7 +138,11 @@ impl Dqn {
             .net
             .tensors()
             .map(|(name, v)| -> Result<_> {
-                Ok((name.clone(), v.dims().to_vec(), v.as_tensor().flatten_all()?.to_vec1::<f32>()?))
+                Ok((
+                    name.clone(),
+                    v.dims().to_vec(),
+                    v.as_tensor().flatten_all()?.to_vec1::<f32>()?,
+                ))
             })
             .collect::<Result<Vec<_>>>()?;
         file::write(path, &header, &tensors)

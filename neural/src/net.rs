@@ -277,7 +277,11 @@ impl QNet {
                 conv.channels_out = out;
                 let bound = 1.0 / (conv.patch as f32).sqrt();
                 let name = format!("conv{}", i + 1);
-                let weight = net.param(&format!("{name}.weight"), uniform(rng, conv.patch * out, bound), &[conv.patch, out])?;
+                let weight = net.param(
+                    &format!("{name}.weight"),
+                    uniform(rng, conv.patch * out, bound),
+                    &[conv.patch, out],
+                )?;
                 let bias = net.param(&format!("{name}.bias"), uniform(rng, out, bound), &[out])?;
                 let norm = if config.batch_norm {
                     Some(BatchNorm {
@@ -307,7 +311,11 @@ impl QNet {
             let (fan_in, out) = (w[0], w[1]);
             let bound = 1.0 / (fan_in as f32).sqrt();
             let name = format!("linear{}", i + 1);
-            let weight = net.param(&format!("{name}.weight"), uniform(rng, fan_in * out, bound), &[fan_in, out])?;
+            let weight = net.param(
+                &format!("{name}.weight"),
+                uniform(rng, fan_in * out, bound),
+                &[fan_in, out],
+            )?;
             let bias = net.param(&format!("{name}.bias"), uniform(rng, out, bound), &[out])?;
             net.layers.push(Layer::Linear {
                 weight,
@@ -459,8 +467,10 @@ fn batch_norm(y: &Tensor, bn: &BatchNorm, mode: Mode) -> Result<Tensor> {
             let unbiased = if rows > 1.0 { rows / (rows - 1.0) } else { 1.0 };
             let m = mean.detach().squeeze(0)?;
             let v = (var.detach().squeeze(0)? * unbiased)?;
-            bn.running_mean.set(&((bn.running_mean.as_tensor() * (1.0 - BN_MOMENTUM))? + (m * BN_MOMENTUM)?)?)?;
-            bn.running_var.set(&((bn.running_var.as_tensor() * (1.0 - BN_MOMENTUM))? + (v * BN_MOMENTUM)?)?)?;
+            bn.running_mean
+                .set(&((bn.running_mean.as_tensor() * (1.0 - BN_MOMENTUM))? + (m * BN_MOMENTUM)?)?)?;
+            bn.running_var
+                .set(&((bn.running_var.as_tensor() * (1.0 - BN_MOMENTUM))? + (v * BN_MOMENTUM)?)?)?;
             (mean, var)
         }
         Mode::Eval => (
@@ -510,7 +520,11 @@ mod tests {
         assert_eq!(shapes[8], ("linear1.weight".into(), vec![11 * 11 * 32, 256]));
         assert_eq!(shapes[10], ("linear2.weight".into(), vec![256, 8]));
         assert_eq!(net.buffers().len(), 4);
-        assert!((1_000_000..1_010_000).contains(&net.parameter_count()), "{}", net.parameter_count());
+        assert!(
+            (1_000_000..1_010_000).contains(&net.parameter_count()),
+            "{}",
+            net.parameter_count()
+        );
         assert!(paper(false).buffers().is_empty());
     }
 

@@ -74,7 +74,14 @@ impl Optimizer {
             .iter()
             .map(|(_, v)| {
                 let n = v.elem_count();
-                (vec![0.0; n], if kind == OptimizerKind::Adam { vec![0.0; n] } else { Vec::new() })
+                (
+                    vec![0.0; n],
+                    if kind == OptimizerKind::Adam {
+                        vec![0.0; n]
+                    } else {
+                        Vec::new()
+                    },
+                )
             })
             .collect();
         Optimizer {
@@ -83,6 +90,11 @@ impl Optimizer {
             state,
             steps: 0,
         }
+    }
+
+    /// Changes the learning rate of the next steps.
+    pub fn set_lr(&mut self, lr: f64) {
+        self.lr = lr as f32;
     }
 
     /// One update of `params` from `grads`: adds `2 * l2 * w` to each gradient (an L2 term

@@ -208,6 +208,7 @@ mod tests {
         Observation {
             grid: Grid::default(),
             state: State::new(&[Cell::new(x % 7, 0), Cell::new(x % 7, 3)], None).unwrap(),
+            protocol: sim::ActionProtocol::Free,
             goal: Goal::identity(2).unwrap(),
         }
     }
@@ -224,10 +225,16 @@ mod tests {
         assert!(n.push(obs(0), Action::Up, 1.0, obs(1), false, true).is_none());
         assert!(n.push(obs(1), Action::Up, 2.0, obs(2), false, true).is_none());
         let t = n.push(obs(2), Action::Up, 4.0, obs(3), false, true).unwrap();
-        assert_eq!((t.n_step.rewards, t.n_step.steps, t.n_step.terminal), (1.0 + 1.0 + 1.0, 3, false));
+        assert_eq!(
+            (t.n_step.rewards, t.n_step.steps, t.n_step.terminal),
+            (1.0 + 1.0 + 1.0, 3, false)
+        );
         assert_eq!(t.n_step.last, obs(3));
         let t = n.push(obs(3), Action::Up, 8.0, obs(4), true, true).unwrap();
-        assert_eq!((t.n_step.rewards, t.n_step.steps, t.n_step.terminal), (2.0 + 2.0 + 2.0, 3, true));
+        assert_eq!(
+            (t.n_step.rewards, t.n_step.steps, t.n_step.terminal),
+            (2.0 + 2.0 + 2.0, 3, true)
+        );
         let rest = n.finish();
         assert_eq!(rest.len(), 2);
         assert_eq!((rest[0].n_step.rewards, rest[0].n_step.steps), (4.0 + 4.0, 2));

@@ -9,9 +9,9 @@
 
 use std::collections::{HashSet, VecDeque};
 
+use oracle::{ExactSolver, Oracle, Planner};
 use rand::RngExt;
 use sim::seeding::{self, SimRng, episode_seed};
-use oracle::{ExactSolver, Oracle, Planner};
 use sim::{Action, Env, GridWorld, Observation, State, World};
 
 use crate::config::{DemoSource, DqnConfig, TargetEvery};
@@ -197,7 +197,9 @@ impl Trainer {
             self.env_step()?;
             let learning = self.buffer.agent_len() as u64 >= self.config.learning_starts.max(1);
             if learning && self.report.steps % self.config.train_every == 0 {
-                let batch = self.buffer.sample(self.config.batch, self.config.demo_share, &mut self.rng);
+                let batch = self
+                    .buffer
+                    .sample(self.config.batch, self.config.demo_share, &mut self.rng);
                 self.last_loss = self.learner.step(&batch, &self.config)?;
                 self.after_gradient_step()?;
             }
@@ -214,10 +216,25 @@ impl Trainer {
 
     /// A copy of the network as it is now, to evaluate while training goes on.
     pub fn snapshot(&self) -> Result<Dqn> {
-        Ok(Dqn::new(self.learner.online().try_clone()?, self.config.clone(), self.report()))
+        Ok(Dqn::new(
+            self.learner.online().try_clone()?,
+            self.config.clone(),
+            self.report(),
+        ))
+    }
+
+    /// The learning rate after `done` gradient steps: linear from `lr` to `lr_final` over
+    /// the run's planned gradient steps.
+    fn learning_rate(&self, done: u64) -> f64 {
+        let c = &self.config;
+        let planned = c.pretrain_steps + c.steps.saturating_sub(c.learning_starts) / c.train_every;
+        let t = (done as f64 / planned.max(1) as f64).min(1.0);
+        c.lr + (c.lr_final - c.lr) * t
     }
 
     fn after_gradient_step(&mut self) -> Result<()> {
+        let lr = self.learning_rate(self.learner.gradient_steps());
+        self.learner.set_lr(lr);
         if let TargetEvery::Steps(n) = self.config.target_every {
             if self.learner.gradient_steps() % n == 0 {
                 self.learner.refresh_target()?;
@@ -263,7 +280,14 @@ impl Trainer {
         let step = self.envs[env_index].step(action)?;
         self.report.steps += 1;
         let done = step.terminated || step.truncated;
-        if let Some(t) = self.n_step.push(obs, action, step.reward as f32, step.observation, step.terminated, false) {
+        if let Some(t) = self.n_step.push(
+            obs,
+            action,
+            step.reward as f32,
+            step.observation,
+            step.terminated,
+            false,
+        ) {
             self.buffer.push(t);
         }
         if done {
@@ -304,7 +328,7 @@ impl Trainer {
             expert: vec![true; plan.actions.len()],
             actions: plan.actions,
         };
-        for t in episode.transitions(self.config.grid, &self.config.reward, self.config.gamma, self.config.n_step) {
+        for t in episode.transitions(&self.config) {
             self.buffer.push_demo(t);
         }
         self.report.demo_transitions = self.buffer.demo_len() as u64;

@@ -218,10 +218,15 @@ fn bilinear(src: &[[u8; 3]], sw: usize, sh: usize, dw: usize, dh: usize) -> Vec<
     let mut out = Vec::with_capacity(dw * dh * 3);
     for &(y0, y1, fy) in &ys {
         for &(x0, x1, fx) in &xs {
+            let [a, b, c, d] = [
+                src[y0 * sw + x0],
+                src[y0 * sw + x1],
+                src[y1 * sw + x0],
+                src[y1 * sw + x1],
+            ];
             for ch in 0..3 {
-                let at = |x: usize, y: usize| f32::from(src[y * sw + x][ch]);
-                let top = at(x0, y0) * (1.0 - fx) + at(x1, y0) * fx;
-                let low = at(x0, y1) * (1.0 - fx) + at(x1, y1) * fx;
+                let top = f32::from(a[ch]) * (1.0 - fx) + f32::from(b[ch]) * fx;
+                let low = f32::from(c[ch]) * (1.0 - fx) + f32::from(d[ch]) * fx;
                 out.push((top * (1.0 - fy) + low * fy).round() as u8);
             }
         }
@@ -241,6 +246,7 @@ mod tests {
             grid: Grid::default(),
             state: State::new(&cells, Some(BlockId(0))).unwrap(),
             goal: "1,0,2".parse().unwrap(),
+            protocol: ActionProtocol::Free,
         }
     }
 

@@ -57,9 +57,12 @@ pub struct DqnArgs {
     /// Discount factor.
     #[arg(long)]
     pub gamma: Option<f64>,
-    /// Learning rate.
+    /// Learning rate (the final rate follows in the preset's proportion unless --lr-final says).
     #[arg(long)]
     pub lr: Option<f64>,
+    /// Learning rate at the end of the run (it falls linearly from --lr).
+    #[arg(long)]
+    pub lr_final: Option<f64>,
     /// Optimiser: rmsprop or adam.
     #[arg(long)]
     pub optimizer: Option<OptimizerKind>,
@@ -96,6 +99,10 @@ pub struct DqnArgs {
     /// World backend of the training games: grid (default; the same rules, faster) or physics.
     #[arg(long)]
     pub backend: Option<String>,
+    /// Action protocol: free (every action legal; default) or paper (pick only with nothing
+    /// held, move or drop only while holding). Every choice is masked to the legal actions.
+    #[arg(long)]
+    pub protocol: Option<String>,
     /// Seed of the weights, starts, demonstrations and every random choice.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -115,7 +122,13 @@ impl DqnArgs {
         let preset = match &self.preset {
             Some(p) => p.clone(),
             None => {
-                let obs = self.obs.or(self.net.map(|n| neural::NetConfig { kind: n, ..neural::NetConfig::small() }.obs()));
+                let obs = self.obs.or(self.net.map(|n| {
+                    neural::NetConfig {
+                        kind: n,
+                        ..neural::NetConfig::small()
+                    }
+                    .obs()
+                }));
                 let dqfd = match self.loss {
                     Some(loss) => loss == LossKind::Dqfd,
                     None => demos.as_ref().is_some_and(|d| *d != DemoSource::None),
@@ -168,7 +181,6 @@ impl DqnArgs {
             steps = self.steps,
             pretrain_steps = self.pretrain,
             gamma = self.gamma,
-            lr = self.lr,
             optimizer = self.optimizer,
             td_loss = self.td_loss,
             buffer = self.buffer,
@@ -179,11 +191,21 @@ impl DqnArgs {
             demo_share = self.demo_share,
             horizon = self.horizon,
         );
+        if let Some(lr) = self.lr {
+            c.lr_final *= lr / c.lr;
+            c.lr = lr;
+        }
+        if let Some(lr) = self.lr_final {
+            c.lr_final = lr;
+        }
         if let Some(r) = &self.reward {
             c.reward = RewardModel::from_name(r)?;
         }
         if let Some(b) = &self.backend {
             c.backend = b.parse::<Backend>()?;
+        }
+        if let Some(p) = &self.protocol {
+            c.protocol = p.parse::<sim::ActionProtocol>()?;
         }
         if let Some(h) = self.hidden {
             c.net.hidden = h;
@@ -204,7 +226,12 @@ pub fn dqn(args: DqnArgs) -> Result<()> {
     let config = args.config()?;
     // Before minutes of work, not after.
     if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        anyhow::ensure!(dir.is_dir(), "cannot write {}: the folder {} does not exist", args.out.display(), dir.display());
+        anyhow::ensure!(
+            dir.is_dir(),
+            "cannot write {}: the folder {} does not exist",
+            args.out.display(),
+            dir.display()
+        );
     }
     let clock = Instant::now();
     let trainer = neural::Trainer::new(config.clone())?;
@@ -228,9 +255,16 @@ pub fn dqn(args: DqnArgs) -> Result<()> {
         if p.done % DRAW_EVERY == 0 || p.done == p.target {
             bar.set_position(p.done);
             let rate = (p.done - stretch.1) as f64 / stretch.0.elapsed().as_secs_f64().max(1e-9);
-            let unit = if p.phase == Phase::Pretrain { "gradient steps/s" } else { "steps/s" };
+            let unit = if p.phase == Phase::Pretrain {
+                "gradient steps/s"
+            } else {
+                "steps/s"
+            };
             bar.set_message(match p.phase {
-                Phase::Pretrain => format!("loss {:.4} (margin {:.3})  {rate:.0} {unit}", p.loss.total, p.loss.margin),
+                Phase::Pretrain => format!(
+                    "loss {:.4} (margin {:.3})  {rate:.0} {unit}",
+                    p.loss.total, p.loss.margin
+                ),
                 Phase::SelfPlay => format!(
                     "{} games, last {}: {:.0}% reached the goal, loss {:.4}, {rate:.0} {unit}",
                     p.games,
@@ -244,7 +278,8 @@ pub fn dqn(args: DqnArgs) -> Result<()> {
     let dqn = trainer.run(&mut show)?;
     let seconds = clock.elapsed().as_secs_f64();
     bar.finish_and_clear();
-    dqn.save(&args.out).with_context(|| "the network was trained but not saved")?;
+    dqn.save(&args.out)
+        .with_context(|| "the network was trained but not saved")?;
     let r = dqn.report();
     println!("trained {}: {}", dqn.name(), config.describe());
     println!(

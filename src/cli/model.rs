@@ -11,7 +11,7 @@ use sim::{Grid, RewardModel};
 /// A trained agent read from a model file.
 pub enum Model {
     /// A tabular Q-agent (`blockstack train`).
-    Q(QAgent),
+    Q(Box<QAgent>),
     /// A network (`blockstack dqn`).
     Dqn(Box<Dqn>),
 }
@@ -23,7 +23,7 @@ impl Model {
     pub fn load(path: &Path) -> Result<Model> {
         match neural::file::peek(path) {
             Some(header) if header.format == neural::model::FORMAT => Ok(Model::Dqn(Box::new(Dqn::load(path)?))),
-            _ => Ok(Model::Q(QAgent::load(path)?)),
+            _ => Ok(Model::Q(Box::new(QAgent::load(path)?))),
         }
     }
 

@@ -92,7 +92,13 @@ struct Arm {
 /// Scales a preset's budget: `fraction` of its self-play and pre-training steps and of its
 /// demonstrations (at least one of each that it has).
 fn scaled(mut c: DqnConfig, fraction: f64) -> DqnConfig {
-    let scale = |v: u64| if v == 0 { 0 } else { ((v as f64 * fraction).round() as u64).max(1) };
+    let scale = |v: u64| {
+        if v == 0 {
+            0
+        } else {
+            ((v as f64 * fraction).round() as u64).max(1)
+        }
+    };
     c.steps = scale(c.steps);
     c.pretrain_steps = scale(c.pretrain_steps);
     c.learning_starts = c.learning_starts.min(c.steps.max(1));
@@ -148,7 +154,11 @@ fn arms(budget: Budget, seed: u64) -> Result<Vec<Arm>> {
     arms.extend([
         arm("paper: DQN, pixels, 2 blocks", Part::Paper, paper2),
         arm("paper: DQfD, pixels, 2 blocks", Part::Paper, paper_dqfd2),
-        arm("ours: DQN, planes, 3 blocks", Part::Ours, preset("dqn-planes", 3, seed, fraction)?),
+        arm(
+            "ours: DQN, planes, 3 blocks",
+            Part::Ours,
+            preset("dqn-planes", 3, seed, fraction)?,
+        ),
         arm(
             "ours on pixels: DQfD, paper network, 2 blocks",
             Part::Ours,
@@ -159,14 +169,33 @@ fn arms(budget: Budget, seed: u64) -> Result<Vec<Arm>> {
     let ablate = |name: &str, config: DqnConfig| arm(&format!("ours with {name}"), Part::Ablation, config);
     let dense = RewardModel::from_name("dense")?;
     arms.extend([
-        ablate("the paper's buffer (1000)", DqnConfig { buffer: 1000, ..ours3.clone() }),
-        ablate("the paper's dense reward", DqnConfig { reward: dense, ..ours3.clone() }),
-        ablate("the paper's gamma (0.1)", DqnConfig { gamma: 0.1, ..ours3.clone() }),
+        ablate(
+            "the paper's buffer (1000)",
+            DqnConfig {
+                buffer: 1000,
+                ..ours3.clone()
+            },
+        ),
+        ablate(
+            "the paper's dense reward",
+            DqnConfig {
+                reward: dense,
+                ..ours3.clone()
+            },
+        ),
+        ablate(
+            "the paper's gamma (0.1)",
+            DqnConfig {
+                gamma: 0.1,
+                ..ours3.clone()
+            },
+        ),
         ablate(
             "the paper's optimiser (RMSprop 1e-4)",
             DqnConfig {
                 optimizer: OptimizerKind::Rmsprop,
                 lr: 1e-4,
+                lr_final: 1e-4,
                 ..ours3.clone()
             },
         ),
@@ -177,7 +206,13 @@ fn arms(budget: Budget, seed: u64) -> Result<Vec<Arm>> {
                 ..ours3.clone()
             },
         ),
-        ablate("every action allowed (no mask)", DqnConfig { mask_noops: false, ..ours3.clone() }),
+        ablate(
+            "every action allowed (no mask)",
+            DqnConfig {
+                mask_noops: false,
+                ..ours3.clone()
+            },
+        ),
         ablate(
             "no demonstrations",
             DqnConfig {
@@ -276,7 +311,14 @@ fn run_arm(ctx: &Context, arm: &Arm, budget: Budget) -> Result<Outcome> {
     let results = test_suite.play(&mut dqn.policy(0.0)?)?;
     ctx.progress.advance("E8");
     Ok(Outcome {
-        arm: ArmResult::of(&arm.name, c.describe(), Some(0.0), &[results], &test_suite.optimum()?, HORIZON),
+        arm: ArmResult::of(
+            &arm.name,
+            c.describe(),
+            Some(0.0),
+            &[results],
+            &test_suite.optimum()?,
+            HORIZON,
+        ),
         curve,
         gradient_steps: dqn.report().gradient_steps,
     })
@@ -298,7 +340,10 @@ pub(super) fn run(ctx: &Context, budget: Budget) -> Result<Experiment> {
     for (part, title) in [
         (Part::Paper, "(a) The paper's DQN and DQfD on pixels"),
         (Part::Ours, "(b) Ours"),
-        (Part::Ablation, "(c) Ablation: our recipe with one of the paper's choices put back"),
+        (
+            Part::Ablation,
+            "(c) Ablation: our recipe with one of the paper's choices put back",
+        ),
     ] {
         for blocks in [2, 3] {
             let rows: Vec<Row> = arms
@@ -334,11 +379,13 @@ pub(super) fn run(ctx: &Context, budget: Budget) -> Result<Experiment> {
         tests: Vec::new(),
         rows: outcomes
             .iter()
-            .flat_map(|o| o.curve.iter().map(|(_, a)| Row {
-                ours: a.clone(),
-                paper: None,
-                tests: Vec::new(),
-            }))
+            .flat_map(|o| {
+                o.curve.iter().map(|(_, a)| Row {
+                    ours: a.clone(),
+                    paper: None,
+                    tests: Vec::new(),
+                })
+            })
             .collect(),
     });
     let mut setup = vec![
@@ -349,7 +396,8 @@ pub(super) fn run(ctx: &Context, budget: Budget) -> Result<Experiment> {
                 budget.name(),
                 match budget {
                     Budget::Quick => "tiny runs that check the pipeline, not results",
-                    Budget::Default => "the plane arms at 40% of the presets' budgets (`reproduce --only E8 --long` runs every arm at full budget)",
+                    Budget::Default =>
+                        "the plane arms at 40% of the presets' budgets (`reproduce --only E8 --long` runs every arm at full budget)",
                     Budget::Long => "every arm at its preset's full budget",
                 }
             ),
@@ -420,18 +468,17 @@ pub(super) fn run(ctx: &Context, budget: Budget) -> Result<Experiment> {
     let figures_of = |a: Option<&ArmResult>| match a {
         None => "-".to_string(),
         Some(a) if a.mean_ratio_to_optimum.is_none() => format!("{:.1}%", success(a)),
-        Some(a) => format!(
-            "{:.1}% at {}x the optimum",
-            success(a),
-            num(a.mean_ratio_to_optimum, 3)
-        ),
+        Some(a) => format!("{:.1}% at {}x the optimum", success(a), num(a.mean_ratio_to_optimum, 3)),
     };
     let mut reading = format!(
         "Ours (DQfD on centred planes) reaches {} on 3 blocks; DQN without demonstrations {} on 2 blocks",
         figures_of(find("ours: DQfD, planes, 3 blocks")),
         figures_of(find("ours: DQN, planes, 2 blocks")),
     );
-    if let (Some(p), Some(d)) = (find("paper: DQN, pixels, 2 blocks"), find("paper: DQfD, pixels, 2 blocks")) {
+    if let (Some(p), Some(d)) = (
+        find("paper: DQN, pixels, 2 blocks"),
+        find("paper: DQfD, pixels, 2 blocks"),
+    ) {
         reading += &format!(
             "; the paper's configuration on pixels {} without and {} with DQfD on 2 blocks",
             figures_of(Some(p)),
@@ -481,8 +528,14 @@ mod tests {
             assert_eq!(names.len(), arms.len(), "names are unique");
         }
         let long = arms(Budget::Long, 1).unwrap();
-        assert!(long.iter().any(|a| a.part == Part::Paper && a.config.net.kind == NetKind::Paper));
+        assert!(
+            long.iter()
+                .any(|a| a.part == Part::Paper && a.config.net.kind == NetKind::Paper)
+        );
         assert!(long.iter().filter(|a| a.part == Part::Ablation).count() >= 5);
-        assert_eq!(arms(Budget::Quick, 1).unwrap().len(), arms(Budget::Default, 1).unwrap().len());
+        assert_eq!(
+            arms(Budget::Quick, 1).unwrap().len(),
+            arms(Budget::Default, 1).unwrap().len()
+        );
     }
 }
