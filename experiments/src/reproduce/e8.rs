@@ -131,9 +131,12 @@ fn arms(budget: Budget, seed: u64) -> Result<Vec<Arm>> {
         part,
         config,
     };
-    let ours3 = preset("dqfd-planes", 3, seed, fraction)?;
     let mut arms = vec![
-        arm("ours: DQfD, planes, 3 blocks", Part::Ours, ours3.clone()),
+        arm(
+            "ours: DQfD, planes, 3 blocks",
+            Part::Ours,
+            preset("dqfd-planes", 3, seed, fraction)?,
+        ),
         arm(
             "ours: DQN, planes, 2 blocks",
             Part::Ours,
@@ -143,21 +146,31 @@ fn arms(budget: Budget, seed: u64) -> Result<Vec<Arm>> {
     if budget != Budget::Long {
         return Ok(arms);
     }
-    let pixel_fraction = 1.0;
-    let paper2 = preset("paper", 2, seed, pixel_fraction)?;
-    let paper_dqfd2 = preset("paper-dqfd", 2, seed, pixel_fraction)?;
-    // Our learner on the paper's pixels and network: what the screen costs.
+    let paper2 = preset("paper", 2, seed, 1.0)?;
+    let paper_dqfd2 = preset("paper-dqfd", 2, seed, 1.0)?;
+    // Our learner on the paper's pixels and network, at the paper-dqfd budget: what the
+    // screen and the network cost.
     let ours_pixels2 = DqnConfig {
         net: NetConfig::paper(),
-        ..preset("dqfd-planes", 2, seed, pixel_fraction * 0.1)?
+        demos: DemoSource::Exact(500),
+        pretrain_steps: 3_000,
+        steps: 3_000,
+        epsilon: neural::Epsilon {
+            start: 0.1,
+            end: 0.01,
+            steps: 1_500,
+        },
+        ..preset("dqfd-planes", 2, seed, 1.0)?
     };
+    // The ablation's runs: half our recipe's budget each, to fit the hour.
+    let ours3 = preset("dqfd-planes", 3, seed, 0.5)?;
     arms.extend([
         arm("paper: DQN, pixels, 2 blocks", Part::Paper, paper2),
         arm("paper: DQfD, pixels, 2 blocks", Part::Paper, paper_dqfd2),
         arm(
             "ours: DQN, planes, 3 blocks",
             Part::Ours,
-            preset("dqn-planes", 3, seed, fraction)?,
+            preset("dqn-planes", 3, seed, 0.5)?,
         ),
         arm(
             "ours on pixels: DQfD, paper network, 2 blocks",
@@ -218,7 +231,7 @@ fn arms(budget: Budget, seed: u64) -> Result<Vec<Arm>> {
             DqnConfig {
                 demos: DemoSource::None,
                 pretrain_steps: 0,
-                ..preset("dqn-planes", 3, seed, fraction)?
+                ..preset("dqn-planes", 3, seed, 0.1)?
             },
         ),
         ablate(
