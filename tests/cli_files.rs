@@ -540,3 +540,67 @@ fn a_signal_mid_run_leaves_no_temporary_file() {
         assert!(listing(&dir).is_empty(), "{signal}: {:?}", listing(&dir));
     }
 }
+
+#[test]
+fn standard_output_as_a_destination_carries_the_data_alone() {
+    let dir = scratch("stdout-data");
+    // The trajectory on standard output, the report on standard error.
+    let o = blockstack(&[
+        "run",
+        "--goal",
+        "1,0,2",
+        "--episodes",
+        "2",
+        "--seed",
+        "7",
+        "--backend",
+        "grid",
+        "--json",
+        "--trajectory",
+        "-",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let file = dir.join("t.jsonl");
+    let to_file = blockstack(&[
+        "run",
+        "--goal",
+        "1,0,2",
+        "--episodes",
+        "2",
+        "--seed",
+        "7",
+        "--backend",
+        "grid",
+        "--json",
+        "--trajectory",
+        path(&file),
+    ]);
+    assert_eq!(stdout(&o), fs::read_to_string(&file).unwrap());
+    assert_eq!(stderr(&o), stdout(&to_file), "the report moved to standard error");
+    // A model on standard output is the file's bytes.
+    let model = dir.join("m.safetensors");
+    let train = |out: &str| blockstack(&["train", "--games", "30", "--backend", "grid", "--out", out]);
+    let piped = train("-");
+    assert!(piped.status.success(), "{}", stderr(&piped));
+    assert!(train(path(&model)).status.success());
+    assert!(piped.stdout == fs::read(&model).unwrap(), "the same model");
+    // Two outputs cannot share it, and demo draws on the terminal.
+    for args in [
+        vec![
+            "correct",
+            "--model",
+            path(&model),
+            "--demonstrator",
+            "1",
+            "--out",
+            "-",
+            "--record",
+            "-",
+        ],
+        vec!["demo", "--model", path(&model), "--out", "-"],
+    ] {
+        let o = blockstack(&args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        assert!(stderr(&o).contains("standard output (-)"), "{}", stderr(&o));
+    }
+}

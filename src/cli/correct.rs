@@ -46,6 +46,7 @@ pub struct CorrectArgs {
 pub fn correct(args: CorrectArgs) -> Result<()> {
     let out = OutputPath::check(&args.out)?;
     let record = args.record.as_deref().map(OutputPath::check).transpose()?;
+    super::stdout::claim_for_data(&[Some(&out), record.as_ref()])?;
     refuse_same_file(&args.out, &args.model).context("--out and --model")?;
     if let Some(record) = &args.record {
         refuse_same_file(record, &args.model).context("--record and --model")?;

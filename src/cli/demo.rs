@@ -77,8 +77,11 @@ impl LearningArgs {
 /// Runs the terminal UI, then says what was saved.
 pub fn demo(args: DemoArgs) -> Result<()> {
     let out = args.out.clone().unwrap_or_else(|| default_out(&args.model));
-    OutputPath::check(&out)?;
     let record = args.record.as_deref().map(OutputPath::check).transpose()?;
+    anyhow::ensure!(
+        !OutputPath::check(&out)?.is_stdout() && !record.as_ref().is_some_and(OutputPath::is_stdout),
+        "demo draws on the terminal, so its --out and --record cannot be standard output (-): give file names"
+    );
     refuse_same_file(&out, &args.model).context("--out and --model")?;
     if let Some(record) = &args.record {
         refuse_same_file(record, &args.model).context("--record and --model")?;

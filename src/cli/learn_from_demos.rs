@@ -32,6 +32,7 @@ pub struct LearnFromDemosArgs {
 /// Replays, saves, and reports.
 pub fn learn_from_demos(args: LearnFromDemosArgs) -> Result<()> {
     let out = OutputPath::check(&args.out)?;
+    super::stdout::claim_for_data(&[Some(&out)])?;
     refuse_same_file(&args.out, &args.demos).context("--out and the recording")?;
     refuse_same_file(&args.out, &args.model).context("--out and --model")?;
     let mut agent = QAgent::load(&args.model)?;

@@ -35,6 +35,7 @@ pub struct RenderArgs {
 /// Draws the start state of `reset(seed)`.
 pub fn render(args: RenderArgs) -> Result<()> {
     let out = args.out.as_deref().map(OutputPath::check).transpose()?;
+    stdout::claim_for_data(&[out.as_ref()])?;
     let config = args.world.config()?;
     if let Some(out) = &out {
         render::PictureFormat::of(out.path())?;

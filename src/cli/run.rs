@@ -74,6 +74,7 @@ pub(super) struct RunReport {
 /// Plays the episodes and prints the summary.
 pub fn run(args: RunArgs) -> Result<()> {
     let trajectory_out = args.trajectory.as_deref().map(OutputPath::check).transpose()?;
+    super::stdout::claim_for_data(&[trajectory_out.as_ref()])?;
     if let (Some(out), Some(model)) = (&args.trajectory, &args.model) {
         files::refuse_same_file(out, model).context("--trajectory and --model")?;
     }

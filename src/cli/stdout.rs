@@ -5,22 +5,56 @@
 //! `main` like any other: a closed pipe ends the command quietly with status 0
 //! ([`is_closed_pipe`]), any other failure with one line and status 2. Commands print
 //! after their files are written, so a closed pipe never costs a model.
+//!
+//! A command whose output file is `-` (standard output: `run --trajectory -`) keeps
+//! standard output for that data and prints its own report on standard error
+//! ([`claim_for_data`]); at most one of its outputs may be `-`.
 
 use std::fmt::Display;
 use std::io::{self, Write};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::{Context, Result};
+use files::OutputPath;
 
 const CONTEXT: &str = "cannot write to standard output";
 
+/// Whether standard output carries a command's data, so reports go to standard error.
+static CARRIES_DATA: AtomicBool = AtomicBool::new(false);
+
+/// Checks a command's outputs before its work: if one of them is standard output, the
+/// command's report goes to standard error from now on; two of them cannot both be.
+pub fn claim_for_data(outputs: &[Option<&OutputPath>]) -> Result<()> {
+    let on_stdout = outputs.iter().flatten().filter(|o| o.is_stdout()).count();
+    anyhow::ensure!(
+        on_stdout <= 1,
+        "only one output can be standard output (-): give the others file names"
+    );
+    if on_stdout == 1 {
+        CARRIES_DATA.store(true, Ordering::Relaxed);
+    }
+    Ok(())
+}
+
+/// Where reports go, and what a failure to write them is called.
+fn report() -> (Box<dyn Write>, &'static str) {
+    if CARRIES_DATA.load(Ordering::Relaxed) {
+        (Box::new(io::stderr()), "cannot write to standard error")
+    } else {
+        (Box::new(io::stdout()), CONTEXT)
+    }
+}
+
 /// Prints `text` and a newline.
 pub fn line(text: impl Display) -> Result<()> {
-    writeln!(io::stdout(), "{text}").context(CONTEXT)
+    let (mut out, context) = report();
+    writeln!(out, "{text}").context(context)
 }
 
 /// Prints `text` as it is.
 pub fn text(text: &str) -> Result<()> {
-    io::stdout().write_all(text.as_bytes()).context(CONTEXT)
+    let (mut out, context) = report();
+    out.write_all(text.as_bytes()).context(context)
 }
 
 /// Flushes standard output: its last bytes may still be buffered when a command ends.

@@ -117,7 +117,8 @@ impl TrainArgs {
 
 /// Trains, showing a progress bar on a terminal, and saves the model.
 pub fn train(args: TrainArgs) -> Result<()> {
-    files::OutputPath::check(&args.out)?;
+    let out = files::OutputPath::check(&args.out)?;
+    super::stdout::claim_for_data(&[Some(&out)])?;
     let config = args.config()?;
     // Hidden by indicatif itself when stderr is not a terminal.
     let bar = ProgressBar::new(config.games);
