@@ -277,8 +277,7 @@ impl Container {
             return Err(too_large());
         }
         let n = n as usize;
-        bytes.resize(8 + n, 0);
-        let got = read_up_to(&mut reader, &mut bytes[8..]).map_err(io_fail)?;
+        let got = read_more(&mut reader, &mut bytes, n as u64).map_err(io_fail)?;
         if got == 0 {
             return Err(fail(ReadProblem::Truncated(format!(
                 "it ends after the length of its header ({n} bytes)"
@@ -312,8 +311,7 @@ impl Container {
             return Err(too_large());
         }
         let data_start = 8 + n;
-        bytes.resize(data_start + data_len as usize, 0);
-        let got = read_up_to(&mut reader, &mut bytes[data_start..]).map_err(io_fail)?;
+        let got = read_more(&mut reader, &mut bytes, data_len).map_err(io_fail)?;
         if got < data_len as usize {
             return Err(fail(ReadProblem::Truncated(format!(
                 "its tensors take {data_len} bytes, and it ends after {got}"
@@ -423,6 +421,15 @@ impl Container {
             data: Cow::Borrowed(&self.bytes[self.data_start + start..self.data_start + end]),
         })
     }
+}
+
+/// Appends up to `len` bytes of `reader` to `bytes`, stopping early where the input ends;
+/// how many were read. Memory grows with what arrives, not with what a header declares.
+fn read_more(reader: &mut impl Read, bytes: &mut Vec<u8>, len: u64) -> io::Result<usize> {
+    let before = bytes.len();
+    bytes.reserve(len.min(1 << 26) as usize);
+    reader.take(len).read_to_end(bytes)?;
+    Ok(bytes.len() - before)
 }
 
 /// Fills `buf` from `reader` until it is full or the input ends; how many bytes were read.

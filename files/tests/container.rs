@@ -250,6 +250,22 @@ fn a_file_larger_than_the_bound_is_refused_before_its_tensors_are_read() {
     ));
 }
 
+#[test]
+fn a_header_that_promises_more_than_the_file_holds_is_truncated() {
+    // 500 MB declared, a few bytes present: refused as truncated, without reserving the
+    // declared size first.
+    let header = br#"{"t":{"dtype":"U8","shape":[500000000],"data_offsets":[0,500000000]}}"#;
+    let mut bytes = (header.len() as u64).to_le_bytes().to_vec();
+    bytes.extend_from_slice(header);
+    bytes.extend_from_slice(&[0; 16]);
+    let expect = Expect {
+        max_bytes: 1 << 30,
+        ..EXPECT
+    };
+    let err = Container::read_from(&bytes[..], "x", &expect).unwrap_err().to_string();
+    assert!(err.contains("truncated") && err.contains("500000000"), "{err}");
+}
+
 proptest! {
     /// A file cut anywhere is refused, and as truncated.
     #[test]
