@@ -262,6 +262,12 @@ impl Container {
         if got == 0 {
             return Err(fail(ReadProblem::Truncated("it is empty".into())));
         }
+        // A header length is below 2^27: its last four bytes are zero.
+        if got > 4 && bytes[4..got].iter().any(|&b| b != 0) {
+            return Err(fail(ReadProblem::NotSafetensors(
+                "its first bytes are not the length of a header".into(),
+            )));
+        }
         if got < 8 {
             return Err(fail(ReadProblem::Truncated(format!(
                 "it ends after {got} bytes, inside the 8-byte length of its header"

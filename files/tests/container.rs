@@ -147,6 +147,7 @@ fn files_that_are_not_containers_are_refused_with_the_reason() {
     assert!(matches!(problem(json_model), ReadProblem::NotSafetensors(_)));
     assert!(matches!(problem(&[0u8; 4096]), ReadProblem::NotSafetensors(_)));
     assert!(matches!(problem(b"hello, world\n"), ReadProblem::NotSafetensors(_)));
+    assert!(matches!(problem(b"garbage"), ReadProblem::NotSafetensors(_)));
     assert!(matches!(problem(b""), ReadProblem::Truncated(_)));
     let mut not_json = 8u64.to_le_bytes().to_vec();
     not_json.extend(b"{garbage");
