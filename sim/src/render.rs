@@ -287,6 +287,7 @@ mod tests {
             grid,
             state: State::new(&cells, Some(BlockId(0))).unwrap(),
             goal: Goal::from_indices(&(0..blocks).collect::<Vec<_>>()).unwrap(),
+            protocol: crate::ActionProtocol::Free,
         }
     }
 
