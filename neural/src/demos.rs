@@ -137,10 +137,13 @@ pub fn read(path: &Path, grid: Grid, blocks: usize) -> Result<Vec<DemoEpisode>> 
         path: path.display().to_string(),
         reason,
     };
-    let file = std::fs::File::open(path).map_err(|e| fail(e.to_string()))?;
-    let mut reader = std::io::BufReader::new(file);
+    let open = || -> Result<_> {
+        let file = files::open_bounded(path, agent::demos::MAX_RECORDING_BYTES, "a recording")
+            .map_err(|e| fail(e.to_string()))?;
+        Ok(std::io::BufReader::new(file))
+    };
     let mut first = String::new();
-    reader.read_line(&mut first).map_err(|e| fail(e.to_string()))?;
+    open()?.read_line(&mut first).map_err(|e| fail(e.to_string()))?;
     let value: serde_json::Value = serde_json::from_str(first.trim())
         .map_err(|e| fail(format!("line 1 is not JSON ({e}): is this a recording?")))?;
     match (value["type"].as_str(), value["format"].as_str()) {
@@ -154,9 +157,7 @@ pub fn read(path: &Path, grid: Grid, blocks: usize) -> Result<Vec<DemoEpisode>> 
             Ok(collector.episodes)
         }
         (Some("episode"), None) => {
-            let file = std::fs::File::open(path).map_err(|e| fail(e.to_string()))?;
-            trajectory(std::io::BufReader::new(file), grid, blocks)
-                .map_err(|(line, reason)| fail(format!("line {line}: {reason}")))
+            trajectory(open()?, grid, blocks).map_err(|(line, reason)| fail(format!("line {line}: {reason}")))
         }
         _ => Err(fail(
             "the first line is neither a blockstack-demos session nor a trajectory episode".into(),
@@ -331,7 +332,8 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("neural-demos-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("t.jsonl");
-        let mut writer = sim::trajectory::TrajectoryWriter::create(&path).unwrap();
+        let out = files::OutputPath::check(&path).unwrap();
+        let mut writer = sim::trajectory::TrajectoryWriter::create(&out).unwrap();
         let results = agent::play(&mut env, &mut policy, 3, 9, Some(&mut writer)).unwrap();
         writer.finish().unwrap();
         let episodes = read(&path, c.grid, 3).unwrap();

@@ -11,6 +11,9 @@ pub enum NeuralError {
     /// The world refused something (bad config, action, state).
     #[error(transparent)]
     Sim(#[from] sim::SimError),
+    /// A file could not be written (or a destination is refused).
+    #[error(transparent)]
+    Files(#[from] files::FilesError),
     /// A planner could not plan a demonstration.
     #[error(transparent)]
     Oracle(#[from] oracle::OracleError),

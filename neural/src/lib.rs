@@ -9,16 +9,15 @@
 //!   step of the DQN and DQfD losses; RMSprop and Adam.
 //! - [`demos`]: demonstrations from the exact solver, the oracle, or a recording.
 //! - [`config`], [`train`]: a run's settings and presets, and the trainer.
-//! - [`model`], [`file`]: a trained network ([`Dqn`]), played through [`agent::Policy`] (so
+//! - [`model`]: a trained network ([`Dqn`]), played through [`agent::Policy`] (so
 //!   `agent::play`, rollouts and evaluation serve it unchanged), saved and read as a
-//!   safetensors file.
+//!   network file in the project's model container (`files::container`).
 //!
 //! Everything runs on the CPU with candle; every random draw comes from the config's seed.
 
 pub mod config;
 pub mod demos;
 pub mod error;
-pub mod file;
 pub mod input;
 pub mod learner;
 pub mod mask;

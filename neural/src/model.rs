@@ -1,8 +1,23 @@
 //! A trained network with its training config: played through [`agent::Policy`], saved and
-//! read as a network file ([`crate::file`], format [`FORMAT`]).
+//! read as a network file.
+//!
+//! # Network files
+//!
+//! The project's model container (`files::container`: safetensors with blockstack's
+//! metadata and a CRC-32), format [`FORMAT`] version [`VERSION`]: one `F32` tensor per
+//! parameter and per batch-normalisation statistic, named as [`QNet::tensors`] names them
+//! (`conv1.weight`, `linear2.bias`, `conv1.bn.running_mean`, ...; a convolution's weight is
+//! `[k * k * channels in, channels out]`, a linear layer's `[in, out]`), and as metadata
+//! `{"config": the DqnConfig, "report": the TrainReport}`. A reader refuses a file that is
+//! missing, too large ([`MAX_NETWORK_BYTES`]), truncated, corrupt, of another format or
+//! version, or whose tensors do not fit the network its config describes, each with a
+//! message that says which.
 
 use std::collections::HashMap;
 use std::path::Path;
+
+use files::container::{Container, Expect, Tensor};
+use files::{FilesError, OutputPath};
 
 use agent::Policy;
 use serde::{Deserialize, Serialize};
@@ -11,7 +26,6 @@ use sim::{Action, Grid, Observation};
 
 use crate::config::DqnConfig;
 use crate::error::{NeuralError, Result};
-use crate::file::{self, Header};
 use crate::mask::ActionSet;
 use crate::net::QNet;
 
@@ -20,6 +34,16 @@ pub const FORMAT: &str = "blockstack-dqn";
 
 /// The network file version this build writes and reads.
 pub const VERSION: u32 = 1;
+
+/// The largest network file read: far above the paper network's 4 MB.
+pub const MAX_NETWORK_BYTES: u64 = 1 << 30;
+
+const EXPECT: Expect<'static> = Expect {
+    format: FORMAT,
+    version: VERSION,
+    max_bytes: MAX_NETWORK_BYTES,
+    what: "a network file",
+};
 
 /// Totals of a training run.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -122,73 +146,85 @@ impl Dqn {
         })
     }
 
-    /// Writes the network file, atomically.
+    /// Writes the network file (module docs) through the project's output helper:
+    /// atomically for a regular file.
     pub fn save(&self, path: &Path) -> Result<()> {
-        let header = Header {
-            format: FORMAT.into(),
-            version: VERSION,
-            metadata: [
-                ("config".to_string(), to_json(&self.config)),
-                ("report".to_string(), to_json(&self.report)),
-            ]
-            .into_iter()
-            .collect(),
-        };
-        let tensors = self
+        let out = OutputPath::check(path)?;
+        let values = self
             .net
             .tensors()
             .map(|(name, v)| -> Result<_> {
                 Ok((
-                    name.clone(),
+                    name.as_str(),
                     v.dims().to_vec(),
                     v.as_tensor().flatten_all()?.to_vec1::<f32>()?,
                 ))
             })
             .collect::<Result<Vec<_>>>()?;
-        file::write(path, &header, &tensors)
+        let tensors: Vec<(&str, Tensor<'_>)> = values
+            .iter()
+            .map(|(name, shape, v)| {
+                (
+                    *name,
+                    Tensor::from_values(shape, v).expect("a variable's shape fits its values"),
+                )
+            })
+            .collect();
+        let metadata = Metadata {
+            config: self.config.clone(),
+            report: self.report,
+        };
+        files::container::write(&out, FORMAT, VERSION, &metadata, &tensors)?;
+        Ok(())
     }
 
-    /// Reads a network file; an error saying what is wrong if it is missing, truncated,
-    /// corrupt, of another format or version, or if its tensors do not fit its config.
+    /// Reads a network file; an error saying what is wrong if it is missing, too large,
+    /// truncated, corrupt, of another format or version, or if its tensors do not fit its
+    /// config.
     pub fn load(path: &Path) -> Result<Dqn> {
         let fail = |reason: String| NeuralError::Model {
             path: path.display().to_string(),
             reason,
         };
-        let (header, tensors) = file::read(path, FORMAT, VERSION)?;
-        let field = |key: &str| {
-            header
-                .metadata
-                .get(key)
-                .ok_or_else(|| fail(format!("its metadata has no {key}")))
-        };
-        let config: DqnConfig = serde_json::from_str(field("config")?)
-            .map_err(|e| fail(format!("its training config does not read ({e})")))?;
-        let report: TrainReport = serde_json::from_str(field("report")?)
-            .map_err(|e| fail(format!("its training report does not read ({e})")))?;
+        let container = Container::read(path, &EXPECT).map_err(|e| match e {
+            FilesError::Read { problem, .. } => fail(problem.to_string()),
+            other => fail(other.to_string()),
+        })?;
+        let Metadata { config, report } = container
+            .metadata()
+            .map_err(|e| fail(format!("the file is corrupt: its metadata does not read ({e})")))?;
         config
             .validate()
             .map_err(|e| fail(format!("its training config is not valid: {e}")))?;
         let input = config.net.input(config.grid, config.blocks)?;
         let net = QNet::new(config.net, input, &mut sim::seeding::rng(0))?;
+        let names = container.names();
         let expected = net.tensors().count();
-        if tensors.len() != expected {
+        if names.len() != expected {
             return Err(fail(format!(
                 "it holds {} tensors, and its {} network has {expected}",
-                tensors.len(),
+                names.len(),
                 config.net.kind
             )));
         }
-        for (name, shape, values) in tensors {
-            net.set_tensor(&name, &shape, values).map_err(|e| fail(e.to_string()))?;
+        for name in names {
+            let tensor = container.tensor(&name).expect("a name of the container");
+            let values = tensor
+                .values::<f32>()
+                .ok_or_else(|| fail(format!("tensor {name} is {:?}, not F32", tensor.dtype())))?;
+            net.set_tensor(&name, tensor.shape(), values)
+                .map_err(|e| fail(e.to_string()))?;
         }
         Ok(Dqn { net, config, report })
     }
 }
 
-/// A metadata entry: a config or a report as JSON (both always serialise).
-fn to_json<T: Serialize>(value: &T) -> String {
-    serde_json::to_string(value).expect("configs and reports serialise")
+/// The JSON metadata of a network file.
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Metadata {
+    config: DqnConfig,
+    report: TrainReport,
 }
 
 /// A trained network playing without learning. Borrows the network.

@@ -120,13 +120,24 @@ fn a_network_file_gives_back_the_same_network() {
     }
     // A file whose config names another network does not load.
     let small = dir.join("small.safetensors");
-    let (header, tensors) = neural::file::read(&small, neural::model::FORMAT, neural::model::VERSION).unwrap();
-    let mut header = header;
-    let config = header.metadata["config"].replace("\"hidden\":64", "\"hidden\":32");
-    header.metadata.insert("config".into(), config);
-    header.metadata.remove("checksum");
+    let expect = files::Expect {
+        format: neural::model::FORMAT,
+        version: neural::model::VERSION,
+        max_bytes: neural::model::MAX_NETWORK_BYTES,
+        what: "a network file",
+    };
+    let container = files::Container::read(&small, &expect).unwrap();
+    let metadata: serde_json::Value = container.metadata().unwrap();
+    let metadata: serde_json::Value =
+        serde_json::from_str(&metadata.to_string().replace("\"hidden\":64", "\"hidden\":32")).unwrap();
+    let names = container.names();
+    let tensors: Vec<(&str, files::Tensor<'_>)> = names
+        .iter()
+        .map(|n| (n.as_str(), container.tensor(n).unwrap()))
+        .collect();
+    let bytes = files::container::to_bytes(neural::model::FORMAT, neural::model::VERSION, &metadata, &tensors).unwrap();
     let bad = dir.join("bad.safetensors");
-    neural::file::write(&bad, &header, &tensors).unwrap();
+    std::fs::write(&bad, bytes).unwrap();
     let err = Dqn::load(&bad).err().unwrap().to_string();
     assert!(err.contains("bad.safetensors") && err.contains("does not fit"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();

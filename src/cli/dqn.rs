@@ -9,6 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use neural::{DemoSource, DqnConfig, LossKind, NetKind, ObsKind, OptimizerKind, Phase, Progress, TdLoss};
 use sim::{Backend, Grid, RewardModel};
 
+use super::stdout::line;
 use super::train::parse_goals;
 
 /// Arguments of `blockstack dqn`. Every setting starts from a preset and may be changed.
@@ -223,16 +224,13 @@ const DRAW_EVERY: u64 = 100;
 
 /// Trains, showing a progress bar on a terminal, and saves the network.
 pub fn dqn(args: DqnArgs) -> Result<()> {
-    let config = args.config()?;
     // Before minutes of work, not after.
-    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        anyhow::ensure!(
-            dir.is_dir(),
-            "cannot write {}: the folder {} does not exist",
-            args.out.display(),
-            dir.display()
-        );
+    let out = files::OutputPath::check(&args.out)?;
+    super::stdout::claim_for_data(&[Some(&out)])?;
+    if let Some(demos) = &args.demos_file {
+        files::refuse_same_file(&args.out, demos).context("--out and --demos-file")?;
     }
+    let config = args.config()?;
     let clock = Instant::now();
     let trainer = neural::Trainer::new(config.clone())?;
     let demo_seconds = clock.elapsed().as_secs_f64();
@@ -281,17 +279,23 @@ pub fn dqn(args: DqnArgs) -> Result<()> {
     dqn.save(&args.out)
         .with_context(|| "the network was trained but not saved")?;
     let r = dqn.report();
-    println!("trained {}: {}", dqn.name(), config.describe());
-    println!(
+    line(format_args!("trained {}: {}", dqn.name(), config.describe()))?;
+    line(format_args!(
         "{} demonstrated episodes ({} transitions, {demo_seconds:.1} s to make), {} pre-training steps; \
-         {} self-play steps in {} games, {} reached the goal; {} gradient steps",
-        r.demo_episodes, r.demo_transitions, r.pretrain_steps, r.steps, r.games, r.successes, r.gradient_steps
-    );
-    println!(
+         {} self-play steps in {} games, {} reached the goal, {} taken over from a loop; {} gradient steps",
+        r.demo_episodes,
+        r.demo_transitions,
+        r.pretrain_steps,
+        r.steps,
+        r.games,
+        r.successes,
+        r.corrections,
+        r.gradient_steps
+    ))?;
+    line(format_args!(
         "trained in {seconds:.1} s ({:.0} environment steps/s, {:.0} gradient steps/s)",
         r.steps as f64 / (seconds - demo_seconds).max(1e-9),
         r.gradient_steps as f64 / (seconds - demo_seconds).max(1e-9)
-    );
-    println!("saved {}", args.out.display());
-    Ok(())
+    ))?;
+    line(format_args!("saved {}", args.out.display()))
 }

@@ -17,12 +17,12 @@ pub enum Model {
 }
 
 impl Model {
-    /// Reads the model file at `path`, whichever kind it is: a network file names its
-    /// format in its metadata; anything else is read as a tabular model (whose reader says
-    /// what is wrong with a file that is neither).
+    /// Reads the model file at `path`, whichever kind it is: the container names its
+    /// format in its header; anything that is not a network file is read as a tabular model
+    /// (whose reader says what is wrong with a file that is neither).
     pub fn load(path: &Path) -> Result<Model> {
-        match neural::file::peek(path) {
-            Some(header) if header.format == neural::model::FORMAT => Ok(Model::Dqn(Box::new(Dqn::load(path)?))),
+        match files::container::format_of(path, neural::model::MAX_NETWORK_BYTES) {
+            Some(format) if format == neural::model::FORMAT => Ok(Model::Dqn(Box::new(Dqn::load(path)?))),
             _ => Ok(Model::Q(Box::new(QAgent::load(path)?))),
         }
     }

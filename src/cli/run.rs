@@ -2,8 +2,9 @@
 
 use std::path::PathBuf;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
+use files::OutputPath;
 use serde::Serialize;
 use sim::trajectory::TrajectoryWriter;
 use sim::{Env, GoalSpec};
@@ -11,6 +12,7 @@ use sim::{Env, GoalSpec};
 use agent::{ExactPolicy, OraclePolicy, Policy, RandomPolicy, Summary};
 
 use super::model::Model;
+use super::stdout::line;
 use super::world::WorldArgs;
 
 /// Which agent plays.
@@ -42,7 +44,8 @@ pub struct RunArgs {
     /// Base seed: episode k starts from seed episode_seed(seed, k).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Write every episode, step by step, to this file as JSON Lines.
+    /// Write every episode, step by step, to this file as JSON Lines (`-`: standard
+    /// output).
     #[arg(long)]
     pub trajectory: Option<PathBuf>,
     /// Print the result as one JSON object.
@@ -73,6 +76,11 @@ pub(super) struct RunReport {
 
 /// Plays the episodes and prints the summary.
 pub fn run(args: RunArgs) -> Result<()> {
+    let trajectory_out = args.trajectory.as_deref().map(OutputPath::check).transpose()?;
+    super::stdout::claim_for_data(&[trajectory_out.as_ref()])?;
+    if let (Some(out), Some(model)) = (&args.trajectory, &args.model) {
+        files::refuse_same_file(out, model).context("--trajectory and --model")?;
+    }
     let config = args.world.config()?;
     let model = match (args.agent, &args.model) {
         (AgentKind::Q | AgentKind::Dqn, Some(path)) => {
@@ -99,7 +107,7 @@ pub fn run(args: RunArgs) -> Result<()> {
         (AgentKind::Q | AgentKind::Dqn, None) => anyhow::bail!("--agent q and --agent dqn need --model FILE"),
     };
     let mut env = Env::new(config)?;
-    let mut trajectory = args.trajectory.as_deref().map(TrajectoryWriter::create).transpose()?;
+    let mut trajectory = trajectory_out.as_ref().map(TrajectoryWriter::create).transpose()?;
     let results = agent::play(&mut env, policy.as_mut(), args.episodes, args.seed, trajectory.as_mut())?;
     if let Some(t) = trajectory {
         t.finish()?;
@@ -118,16 +126,15 @@ pub fn run(args: RunArgs) -> Result<()> {
         summary: Summary::of(&results),
     };
     if args.json {
-        println!("{}", serde_json::to_string(&report)?);
+        line(serde_json::to_string(&report)?)
     } else {
-        print_report(&report);
+        print_report(&report)
     }
-    Ok(())
 }
 
-fn print_report(r: &RunReport) {
+fn print_report(r: &RunReport) -> Result<()> {
     let s = &r.summary;
-    println!(
+    line(format_args!(
         "agent {}, {} blocks, goal {}, grid {}, horizon {}, {} backend, seed {}",
         r.agent,
         r.blocks,
@@ -136,10 +143,10 @@ fn print_report(r: &RunReport) {
         r.horizon,
         r.backend,
         r.seed
-    );
-    println!("episodes      {}", s.episodes);
-    println!("failures      {}", s.failures);
+    ))?;
+    line(format_args!("episodes      {}", s.episodes))?;
+    line(format_args!("failures      {}", s.failures))?;
     let fmt = |v: Option<f64>| v.map_or("- (no episode reached the goal)".to_string(), |v| format!("{v:.2}"));
-    println!("mean steps    {}", fmt(s.mean_steps));
-    println!("median steps  {}", fmt(s.median_steps));
+    line(format_args!("mean steps    {}", fmt(s.mean_steps)))?;
+    line(format_args!("median steps  {}", fmt(s.median_steps)))
 }
