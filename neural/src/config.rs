@@ -20,9 +20,9 @@
 //!   10,000 exact-solver demonstrations, 30,000 pre-training steps with the 1-step and
 //!   10-step TD losses, the large-margin loss (margin 0.8) and L2 1e-5, then 30,000 steps of
 //!   self-play with a quarter of every batch drawn from the demonstrations, epsilon from 0.1
-//!   to 0.01, and loops corrected: when the agent comes back to a state of the same game,
-//!   the exact solver demonstrates from there (the paper's demonstrators correcting the
-//!   agent, section VI-C, as DQfD data).
+//!   to 0.01, the learning rate falling from 1e-3 to 1e-4, and loops corrected: the first
+//!   time a game comes back to a state it was in, the exact solver demonstrates from there
+//!   (the paper's demonstrators correcting the agent, section VI-C, as DQfD data).
 //!
 //! Why each of our choices, measured, is in the E8 section of `blockstack reproduce --only
 //! E8 --long`'s report.
@@ -250,10 +250,10 @@ pub struct DqnConfig {
     pub demo_share: f64,
     /// Leave actions that change nothing out of every choice ([`crate::mask`]).
     pub mask_noops: bool,
-    /// Corrections in self-play: when the agent comes back to a state it was already in
-    /// during the game (it is going round in circles), a demonstrator (the planner of
-    /// [`DqnConfig::demos`]; the exact solver for a recording or none) plans from there, its
-    /// plan joins the demonstrations, and it plays the rest of the game.
+    /// Corrections in self-play: the first time in a game that the agent comes back to a
+    /// state it was already in (it is going round in circles), a demonstrator (the planner
+    /// of [`DqnConfig::demos`]; the exact solver for a recording or none) plans from there
+    /// and its plan joins the demonstrations; the agent plays on.
     pub correct_loops: bool,
 }
 
@@ -331,7 +331,7 @@ impl DqnConfig {
                     end: 0.01,
                     steps: 15_000,
                 },
-                correct_loops: false,
+                correct_loops: true,
                 ..DqnConfig::dqn_planes(paper)
             }),
             _ => Err(NeuralError::Config(format!(

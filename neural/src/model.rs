@@ -63,7 +63,7 @@ pub struct TrainReport {
     pub steps: u64,
     /// Gradient steps in all (pre-training included).
     pub gradient_steps: u64,
-    /// Self-play games a demonstrator took over from a loop ([`DqnConfig::correct_loops`]).
+    /// Demonstrations from a loop of a self-play game ([`DqnConfig::correct_loops`]).
     pub corrections: u64,
 }
 

@@ -87,8 +87,8 @@ pub struct Trainer {
     target_games: u64,
     /// The states of the current game, to see it come back to one.
     visited: HashSet<State>,
-    /// The rest of a demonstrator's plan that has taken over the current game, next last.
-    takeover: Vec<Action>,
+    /// Whether a demonstrator has demonstrated from a loop of the current game.
+    corrected: bool,
     /// Who corrects loops.
     corrector: Box<dyn Planner + Send + Sync>,
 }
@@ -142,7 +142,7 @@ impl Trainer {
             last_loss: Losses::default(),
             target_games: 0,
             visited: HashSet::new(),
-            takeover: Vec::new(),
+            corrected: false,
             corrector: match config.demos {
                 DemoSource::Oracle(_) => Box::new(Oracle::new(config.grid)),
                 _ => Box::new(ExactSolver::new(config.grid)),
@@ -266,17 +266,15 @@ impl Trainer {
                 let obs = self.envs[i].reset(episode_seed(self.config.seed, k));
                 self.report.games += 1;
                 self.visited.clear();
-                self.takeover.clear();
+                self.corrected = false;
                 (i, obs)
             }
         };
-        if self.config.correct_loops && self.takeover.is_empty() && !self.visited.insert(obs.state) {
+        if self.config.correct_loops && !self.visited.insert(obs.state) && !self.corrected {
             self.correct(&obs)?;
+            self.corrected = true;
         }
-        let action = match self.takeover.pop() {
-            Some(a) => a,
-            None => self.choose(&obs)?,
-        };
+        let action = self.choose(&obs)?;
         let step = self.envs[env_index].step(action)?;
         self.report.steps += 1;
         let done = step.terminated || step.truncated;
@@ -312,8 +310,8 @@ impl Trainer {
         Ok(())
     }
 
-    /// The agent came back to `obs`: the demonstrator plans from there, its plan joins the
-    /// demonstrations, and it plays the rest of the game.
+    /// The agent came back to `obs`: the demonstrator plans from there and its plan joins
+    /// the demonstrations; the agent plays on.
     fn correct(&mut self, obs: &Observation) -> Result<()> {
         let plan = self.corrector.plan(&obs.state, &obs.goal)?;
         let mut world = GridWorld::new(obs.grid, obs.state)?;
@@ -333,7 +331,6 @@ impl Trainer {
         }
         self.report.demo_transitions = self.buffer.demo_len() as u64;
         self.report.corrections += 1;
-        self.takeover = episode.actions.into_iter().rev().collect();
         Ok(())
     }
 

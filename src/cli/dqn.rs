@@ -282,7 +282,7 @@ pub fn dqn(args: DqnArgs) -> Result<()> {
     line(format_args!("trained {}: {}", dqn.name(), config.describe()))?;
     line(format_args!(
         "{} demonstrated episodes ({} transitions, {demo_seconds:.1} s to make), {} pre-training steps; \
-         {} self-play steps in {} games, {} reached the goal, {} taken over from a loop; {} gradient steps",
+         {} self-play steps in {} games, {} reached the goal; {} demonstrations from a loop; {} gradient steps",
         r.demo_episodes,
         r.demo_transitions,
         r.pretrain_steps,
