@@ -10,10 +10,16 @@
 //!           "rows":[[key,[q0,...,q7]],...],"checksum":1234567890}}
 //! ```
 //!
+//! A model of the `paper-code` schedule also has `"schedule":"paper-code"` and, in its
+//! table, `"seen":[[key,bits],...]`: the keys with entries ever written and those entries
+//! as bits (bit `c` for column `c`), by increasing key. Both are absent for the `spec`
+//! schedule, so a SPEC model file is written as before.
+//!
 //! `rows` holds only the rows that differ from `initial`, by increasing key; values are
 //! written as the exact decimal of each `f32`, so a load gives back the same bits.
 //! `checksum` is the CRC-32 of every row's key (8 bytes, little-endian) followed by its
-//! values (4 bytes each, little-endian), in file order: a flipped digit anywhere in the
+//! values (4 bytes each, little-endian), in file order, then (when the table keeps them)
+//! every seen entry's key (8 bytes) and bits (4 bytes): a flipped digit anywhere in the
 //! table is caught. A reader refuses a file of another format or version, a truncated or
 //! corrupt file, and a table that does not fit its representation, each with a message
 //! that says which.
@@ -29,6 +35,7 @@ use crate::error::{AgentError, Result};
 use crate::qlearning::{QAgent, QParams};
 use crate::qtable::QTable;
 use crate::repr::{Repr, ReprKind, Representation};
+use crate::schedule::Schedule;
 use crate::train::TrainConfig;
 
 /// The `format` field of every model file.
@@ -53,7 +60,13 @@ struct ModelOut<'a> {
     repr: ReprKind,
     params: &'a QParams,
     training: Option<&'a TrainConfig>,
+    #[serde(skip_serializing_if = "is_spec")]
+    schedule: Schedule,
     table: TableOut<'a>,
+}
+
+fn is_spec(schedule: &Schedule) -> bool {
+    *schedule == Schedule::Spec
 }
 
 #[derive(Serialize)]
@@ -62,6 +75,8 @@ struct TableOut<'a> {
     columns: usize,
     initial: f64,
     rows: Vec<RowOut<'a>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    seen: Option<Vec<(u64, u32)>>,
     checksum: u32,
 }
 
@@ -98,6 +113,8 @@ struct ModelIn {
     repr: ReprKind,
     params: QParams,
     training: Option<TrainConfig>,
+    #[serde(default)]
+    schedule: Schedule,
     table: TableIn,
 }
 
@@ -108,17 +125,24 @@ struct TableIn {
     columns: usize,
     initial: f32,
     rows: Vec<(u64, Vec<f32>)>,
+    #[serde(default)]
+    seen: Option<Vec<(u64, u32)>>,
     checksum: u32,
 }
 
 /// The CRC-32 of the rows, as the module documentation defines it.
-fn checksum<'a>(rows: impl Iterator<Item = (u64, &'a [f32])>) -> u32 {
+fn checksum<'a>(rows: impl Iterator<Item = (u64, &'a [f32])>, seen: Option<&[(u64, u32)]>) -> u32 {
     let mut h = crc32fast::Hasher::new();
     for (key, values) in rows {
         h.update(&key.to_le_bytes());
         for v in values {
             h.update(&v.to_le_bytes());
         }
+    }
+    // Then each seen entry's key and bits, when the table keeps them.
+    for &(key, bits) in seen.into_iter().flatten() {
+        h.update(&key.to_le_bytes());
+        h.update(&bits.to_le_bytes());
     }
     h.finalize()
 }
@@ -128,6 +152,7 @@ impl QAgent {
     pub fn save(&self, path: &Path) -> Result<()> {
         let table = self.table();
         let written = table.written_rows();
+        let seen = table.tracks_seen().then(|| table.seen_entries());
         let model = ModelOut {
             format: MODEL_FORMAT,
             version: MODEL_VERSION,
@@ -136,12 +161,14 @@ impl QAgent {
             repr: self.kind(),
             params: self.params(),
             training: self.training(),
+            schedule: self.schedule(),
             table: TableOut {
                 keys: table.key_count(),
                 columns: table.columns(),
                 initial: f64::from(table.initial()),
-                checksum: checksum(written.iter().copied()),
+                checksum: checksum(written.iter().copied(), seen.as_deref()),
                 rows: written.into_iter().map(|(k, r)| RowOut(k, r)).collect(),
+                seen,
             },
         };
         let mut out = AtomicWriter::create(path)?;
@@ -197,7 +224,7 @@ impl QAgent {
         }
         let model: ModelIn = serde_json::from_str(text).map_err(json_error)?;
         let t = model.table;
-        if checksum(t.rows.iter().map(|(k, r)| (*k, &r[..]))) != t.checksum {
+        if checksum(t.rows.iter().map(|(k, r)| (*k, &r[..])), t.seen.as_deref()) != t.checksum {
             return Err(fail(
                 "the table does not match its checksum: the file is corrupt".into(),
             ));
@@ -217,7 +244,18 @@ impl QAgent {
                 Action::count(model.blocks)
             )));
         }
-        let mut table = QTable::new(t.keys, t.columns, t.initial);
+        if t.seen.is_some() != model.schedule.tracks_seen() {
+            return Err(fail(format!(
+                "the file is inconsistent: a model of the {} schedule {} its seen entries",
+                model.schedule,
+                if t.seen.is_some() { "does not keep" } else { "must keep" }
+            )));
+        }
+        let mut table = if model.schedule.tracks_seen() {
+            QTable::tracking_seen(t.keys, t.columns, t.initial)
+        } else {
+            QTable::new(t.keys, t.columns, t.initial)
+        };
         let mut previous = None;
         for (key, values) in &t.rows {
             if *key >= t.keys || values.len() != t.columns || previous.is_some_and(|p| p >= *key) {
@@ -229,7 +267,28 @@ impl QAgent {
             table.row_mut(*key).copy_from_slice(values);
             previous = Some(*key);
         }
+        let mut previous = None;
+        for &(key, bits) in t.seen.iter().flatten() {
+            if key >= t.keys || bits >> t.columns != 0 || previous.is_some_and(|p| p >= key) {
+                return Err(fail(format!(
+                    "the table is corrupt: seen entries {bits:#b} of key {key} do not fit a table of {} keys and {} columns in key order",
+                    t.keys, t.columns
+                )));
+            }
+            for c in 0..t.columns {
+                if bits & (1 << c) != 0 {
+                    table.mark_seen(key, c);
+                }
+            }
+            previous = Some(key);
+        }
         if let Some(training) = &model.training {
+            if training.schedule != model.schedule {
+                return Err(fail(format!(
+                    "the file is inconsistent: the agent learns by the {} schedule, its training config says {}",
+                    model.schedule, training.schedule
+                )));
+            }
             if training.repr != model.repr || training.blocks != model.blocks || training.grid != model.grid {
                 return Err(fail(format!(
                     "the file is inconsistent: the agent is {} for {} blocks on {}, its training config says {} for {} blocks on {}",
@@ -244,6 +303,7 @@ impl QAgent {
             model.params,
             table,
             model.training,
+            model.schedule,
         )
     }
 }

@@ -46,7 +46,7 @@ pub fn correct(args: CorrectArgs) -> Result<()> {
     let goals = parse_goals(args.goals.as_deref(), agent.blocks())?;
     let profile = DemonstratorProfile::preset(args.demonstrator)?;
     let config = CorrectionConfig {
-        rule: args.learning.rule()?,
+        rule: Some(args.learning.rule()?),
         epsilon: args.learning.epsilon,
         model: Some(args.model.display().to_string()),
         ..CorrectionConfig::new(profile.clone(), goals.clone(), args.demos, args.seed)

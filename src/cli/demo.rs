@@ -64,7 +64,7 @@ impl LearningArgs {
     /// The learning rule the flags describe.
     pub fn rule(&self) -> Result<CorrectionRule> {
         let rule = CorrectionRule {
-            margin: self.margin,
+            margin: Some(self.margin),
             learn_agent_steps: !self.corrections_only,
         };
         rule.validate()?;

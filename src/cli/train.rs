@@ -107,6 +107,7 @@ impl TrainArgs {
             backward_replay: self.backward_replay,
             final_replay: self.final_replay,
             assist: self.assist,
+            ..TrainConfig::paper(Vec::new())
         };
         config.validate()?;
         Ok(config)
