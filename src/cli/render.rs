@@ -7,6 +7,7 @@ use clap::Args;
 use sim::Env;
 use sim::render::{self, Colour};
 
+use super::profile::{ProfileArg, Rules, StartArg};
 use super::world::WorldArgs;
 
 /// Arguments of `blockstack render`.
@@ -14,6 +15,10 @@ use super::world::WorldArgs;
 pub struct RenderArgs {
     #[command(flatten)]
     pub world: WorldArgs,
+    #[command(flatten)]
+    pub profile: ProfileArg,
+    #[command(flatten)]
+    pub start: StartArg,
     /// The seed of the start state (as `reset(seed)` draws it).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -30,7 +35,9 @@ pub struct RenderArgs {
 
 /// Draws the start state of `reset(seed)`.
 pub fn render(args: RenderArgs) -> Result<()> {
-    let mut env = Env::new(args.world.config()?)?;
+    let rules =
+        Rules::of(sim::Profile::Spec).overridden(args.profile, None, args.start.start, args.world.reward.as_deref())?;
+    let mut env = Env::new(args.world.config(&rules)?)?;
     let obs = env.reset(args.seed);
     if let Some(path) = &args.out {
         anyhow::ensure!(
