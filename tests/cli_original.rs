@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{blockstack, path, scratch, stderr, stdout};
+use common::{blockstack, model_metadata, path, scratch, stderr, stdout};
 
 fn json(args: &[&str]) -> serde_json::Value {
     let o = blockstack(args);
@@ -14,7 +14,7 @@ fn json(args: &[&str]) -> serde_json::Value {
 
 /// Trains the paper's learner as coded for a few short games on the grid backend.
 fn train_original(dir: &Path) -> PathBuf {
-    let out = dir.join("original.json");
+    let out = dir.join("original.safetensors");
     let o = blockstack(&[
         "train",
         "--profile",
@@ -139,7 +139,7 @@ fn the_oracles_play_as_chosen() {
 fn a_model_trained_under_original_evaluates_under_original_by_default() {
     let dir = scratch("model");
     let model = train_original(&dir);
-    let file: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
+    let file = model_metadata(&model);
     assert_eq!(file["repr"], "chasing-code");
     assert_eq!(file["schedule"], "paper-code");
     let t = &file["training"];
@@ -196,7 +196,7 @@ fn a_model_trained_under_original_evaluates_under_original_by_default() {
 #[test]
 fn train_flags_override_the_profile_part_by_part() {
     let dir = scratch("override");
-    let out = dir.join("m.json");
+    let out = dir.join("m.safetensors");
     let o = blockstack(&[
         "train",
         "--profile",
@@ -215,7 +215,7 @@ fn train_flags_override_the_profile_part_by_part() {
         path(&out),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let file: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let file = model_metadata(&out);
     let t = &file["training"];
     assert_eq!(file["repr"], "chasing");
     assert_eq!(
@@ -235,12 +235,12 @@ fn train_flags_override_the_profile_part_by_part() {
     // The profile's own defaults: 100 games of up to 5000 steps.
     let o = blockstack(&["train", "--profile", "original", "--games", "0", "--out", path(&out)]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let file: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let file = model_metadata(&out);
     assert_eq!(file["training"]["horizon"], 5000);
     // Without a profile nothing changed: the paper's learner in our world.
     let o = blockstack(&["train", "--games", "0", "--out", path(&out)]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let file: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let file = model_metadata(&out);
     let t = &file["training"];
     assert_eq!(
         (
@@ -264,7 +264,7 @@ fn train_flags_override_the_profile_part_by_part() {
 fn corrections_under_original_use_the_plain_update_and_the_authors_goals() {
     let dir = scratch("correct");
     let model = train_original(&dir);
-    let (out, record) = (dir.join("corrected.json"), dir.join("demos.jsonl"));
+    let (out, record) = (dir.join("corrected.safetensors"), dir.join("demos.jsonl"));
     let o = blockstack(&[
         "correct",
         "--model",
@@ -304,7 +304,7 @@ fn corrections_under_original_use_the_plain_update_and_the_authors_goals() {
         serde_json::from_str(std::fs::read_to_string(&record).unwrap().lines().next().unwrap()).unwrap();
     assert_eq!(first["rule"]["margin"], serde_json::Value::Null);
     // learn-from-demos replays it to the same table.
-    let replayed = dir.join("replayed.json");
+    let replayed = dir.join("replayed.safetensors");
     let o = blockstack(&[
         "learn-from-demos",
         path(&record),

@@ -122,13 +122,15 @@ impl CorrectionRule {
         }
     }
 
-    /// An error unless the margin, if any, is finite and not negative.
+    /// An error unless the margin, if any, is at least 0 and fits the table's floats
+    /// ([`crate::qlearning::check_fits_table`]).
     pub fn validate(&self) -> Result<()> {
         match self.margin {
-            Some(m) if !(m.is_finite() && m >= 0.0) => Err(AgentError::Config(format!(
+            None => Ok(()),
+            Some(m) if m >= 0.0 => crate::qlearning::check_fits_table("the margin", m),
+            Some(m) => Err(AgentError::Config(format!(
                 "the margin {m} is not a finite number at least 0"
             ))),
-            _ => Ok(()),
         }
     }
 

@@ -71,13 +71,21 @@ impl QTable {
     /// A table like [`QTable::new`]'s that also remembers which entries were ever written
     /// (at most 32 columns, as every world has).
     pub fn tracking_seen(key_count: u64, columns: usize, initial: f32) -> QTable {
-        debug_assert!(columns <= 32);
         let mut table = QTable::new(key_count, columns, initial);
-        table.seen = Some(match table.store {
-            Store::Dense(_) => Seen::Dense(vec![0; key_count as usize]),
-            Store::Sparse { .. } => Seen::Sparse(HashMap::new()),
-        });
+        table.track_seen();
         table
+    }
+
+    /// From now on, remembers which entries are written (none is seen yet); nothing for a
+    /// table that does already.
+    pub(crate) fn track_seen(&mut self) {
+        debug_assert!(self.columns <= 32);
+        if self.seen.is_none() {
+            self.seen = Some(match self.store {
+                Store::Dense(_) => Seen::Dense(vec![0; self.key_count as usize]),
+                Store::Sparse { .. } => Seen::Sparse(HashMap::new()),
+            });
+        }
     }
 
     /// Whether the table remembers which entries were written.
@@ -136,6 +144,20 @@ impl QTable {
                 out.sort_unstable_by_key(|&(k, _)| k);
                 out
             }
+        }
+    }
+
+    /// A dense table whose row `k` is `values[k * columns..(k + 1) * columns]` (as
+    /// [`QTable::new`] would make it dense: `key_count * columns <= DENSE_LIMIT`, and
+    /// `values` holds exactly that many).
+    pub(crate) fn from_dense(key_count: u64, columns: usize, initial: f32, values: Vec<f32>) -> QTable {
+        debug_assert!(key_count * columns as u64 <= DENSE_LIMIT && values.len() as u64 == key_count * columns as u64);
+        QTable {
+            key_count,
+            columns,
+            initial,
+            store: Store::Dense(values),
+            seen: None,
         }
     }
 

@@ -177,7 +177,7 @@ fn temp_path(name: &str) -> PathBuf {
 #[test]
 fn a_model_trained_under_original_remembers_its_world_and_seen_entries() {
     let trained = agent::train(&small_original(&["0,1,2", "1,0,2"], 5, 9), None).unwrap();
-    let path = temp_path("original.json");
+    let path = temp_path("original.safetensors");
     trained.agent.save(&path).unwrap();
     let loaded = QAgent::load(&path).unwrap();
     assert_eq!(loaded, trained.agent, "values and seen entries");

@@ -9,7 +9,7 @@
 //! - [`Env`]: a Gymnasium-style environment (`reset`, `step`) over either backend, with the
 //!   reward models of [`reward`]; [`VecEnv`] steps many in parallel.
 //! - [`render`] draws the world as text or pictures; [`trajectory`] writes episodes as
-//!   JSON Lines.
+//!   JSON Lines. Both write their files through the `files` crate's output helper.
 //!
 //! # Two worlds: `spec` and `original`
 //!
@@ -49,7 +49,6 @@ pub mod action;
 pub mod coded_state;
 pub mod env;
 pub mod error;
-pub mod files;
 pub mod goal;
 pub mod grid;
 pub mod grid_world;

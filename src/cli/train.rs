@@ -11,6 +11,8 @@ use sim::{Backend, Goal, Grid, Profile, RewardModel};
 
 use super::profile::{PlayRulesArgs, ProfileArg};
 
+use super::stdout::line;
+
 /// Arguments of `blockstack train`.
 #[derive(Debug, Args)]
 pub struct TrainArgs {
@@ -90,7 +92,7 @@ pub struct TrainArgs {
     /// World backend: physics (rapier2d) or grid (occupancy model).
     #[arg(long, default_value = "physics")]
     pub backend: String,
-    /// Where to write the trained model.
+    /// Where to write the trained model (a .safetensors file; checked before training).
     #[arg(long)]
     pub out: PathBuf,
 }
@@ -161,6 +163,8 @@ impl TrainArgs {
 
 /// Trains, showing a progress bar on a terminal, and saves the model.
 pub fn train(args: TrainArgs) -> Result<()> {
+    let out = files::OutputPath::check(&args.out)?;
+    super::stdout::claim_for_data(&[Some(&out)])?;
     let config = args.config()?;
     // Hidden by indicatif itself when stderr is not a terminal.
     let bar = ProgressBar::new(config.games);
@@ -189,7 +193,7 @@ pub fn train(args: TrainArgs) -> Result<()> {
         .with_context(|| "the agent was trained but not saved")?;
     let r = trained.report;
     let goals: Vec<String> = config.goals.iter().map(Goal::to_string).collect();
-    println!(
+    line(format_args!(
         "trained {} with the {} reward on {} ({} blocks, {} grid, {} backend, seed {})",
         trained.agent.name(),
         config.reward,
@@ -198,12 +202,12 @@ pub fn train(args: TrainArgs) -> Result<()> {
         config.grid,
         config.backend,
         config.seed
-    );
-    println!(
+    ))?;
+    line(format_args!(
         "profile {}: protocol {}, start {}, schedule {}, games of up to {} steps",
         config.profile, config.protocol, config.start, config.schedule, config.horizon
-    );
-    println!(
+    ))?;
+    line(format_args!(
         "{} games, {} reached the goal, {} steps; {} steps chosen by the {} oracle (assistance {}, oscillation by {}); {} final replay sweeps",
         r.games,
         r.successes,
@@ -213,8 +217,7 @@ pub fn train(args: TrainArgs) -> Result<()> {
         config.assist,
         config.oscillation,
         r.replay_sweeps
-    );
-    println!("trained in {seconds:.1} s");
-    println!("saved {}", args.out.display());
-    Ok(())
+    ))?;
+    line(format_args!("trained in {seconds:.1} s"))?;
+    line(format_args!("saved {}", args.out.display()))
 }
