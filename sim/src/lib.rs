@@ -7,7 +7,8 @@
 //!   [`PhysicsWorld`], rapier2d rigid bodies moved by a controller that asks rapier's
 //!   collision detection whether each move is free.
 //! - [`Env`]: a Gymnasium-style environment (`reset`, `step`) over either backend, with the
-//!   reward models of [`reward`]; [`VecEnv`] steps many in parallel.
+//!   reward models of [`reward`]; [`VecEnv`] steps many in parallel, with either of
+//!   Gymnasium's autoreset modes.
 //! - [`render`] draws the world as text or pictures; [`trajectory`] writes episodes as
 //!   JSON Lines.
 //!
@@ -52,5 +53,5 @@ pub use occupancy::Occupancy;
 pub use physics_world::PhysicsWorld;
 pub use reward::RewardModel;
 pub use state::{BlockId, MAX_BLOCKS, MIN_BLOCKS, State};
-pub use vec_env::VecEnv;
+pub use vec_env::{Autoreset, VecEnv, VecStep};
 pub use world::{Effect, World};
