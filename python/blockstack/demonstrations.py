@@ -15,7 +15,7 @@ Ready for behaviour cloning (``observations`` -> ``actions``) or DQfD (add
 from __future__ import annotations
 
 import os
-from typing import Tuple, Union
+from typing import Optional, Tuple, Union
 
 from blockstack import _native
 from blockstack._goal import Goal, goal_text
@@ -29,7 +29,7 @@ def demonstrations(
     obs: str = "planes",
     goal: Goal = None,
     grid: Tuple[int, int] = (7, 7),
-    reward: str = "sparse",
+    reward: Optional[str] = None,
     backend: str = "physics",
     max_episode_steps: int = 1000,
     profile: str = "spec",

@@ -32,7 +32,8 @@ class StackEnv(gym.Env):
       pixels do (the frame draws it); ``planes`` does not carry it, so with a drawn goal
       use ``state`` or read ``info["goal"]``.
     - ``grid``: ``(width, height)``, default ``(7, 7)``.
-    - ``reward``: ``sparse`` (+10 at the goal), ``dense``, ``paper`` or ``step-cost``.
+    - ``reward``: ``sparse`` (+10 at the goal), ``dense``, ``paper`` or ``step-cost``;
+      ``None`` (the default) takes the profile's (``sparse`` in ``spec``).
     - ``backend``: ``physics`` (rapier2d) or ``grid`` (the occupancy model); same rules.
     - ``obs``: ``planes``, ``state`` or ``pixels`` (see :mod:`blockstack.spaces`).
     - ``profile``: ``spec`` (the world of the SPEC).
@@ -61,7 +62,7 @@ class StackEnv(gym.Env):
         blocks: int = 3,
         goal: Goal = None,
         grid: Tuple[int, int] = (7, 7),
-        reward: str = "sparse",
+        reward: Optional[str] = None,
         backend: str = "physics",
         obs: str = "planes",
         profile: str = "spec",

@@ -56,7 +56,7 @@ class StackVectorEnv(VectorEnv):
         blocks: int = 3,
         goal: Goal = None,
         grid: Tuple[int, int] = (7, 7),
-        reward: str = "sparse",
+        reward: Optional[str] = None,
         backend: str = "physics",
         obs: str = "planes",
         profile: str = "spec",

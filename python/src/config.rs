@@ -30,13 +30,14 @@ impl ObsKind {
     }
 }
 
-/// The world an environment is made of, from the Python keyword arguments.
+/// The world an environment is made of, from the Python keyword arguments (`reward`
+/// `None`: the profile's).
 #[allow(clippy::too_many_arguments)]
 pub fn env_config(
     blocks: usize,
     goal: Option<&str>,
     grid: (usize, usize),
-    reward: &str,
+    reward: Option<&str>,
     backend: &str,
     horizon: u32,
     profile: &str,
@@ -50,7 +51,11 @@ pub fn env_config(
             None => GoalSpec::Random,
         },
         horizon,
-        reward: RewardModel::from_name(reward).or_value_error()?,
+        // The profile's reward unless one is named.
+        reward: match reward {
+            Some(name) => RewardModel::from_name(name).or_value_error()?,
+            None => RewardModel::default(),
+        },
         backend: backend.parse::<Backend>().or_value_error()?,
     };
     config.validate().or_value_error()?;

@@ -157,7 +157,7 @@ fn encode<'py>(
 /// episode of each step), `action_masks` (int8, `(T, 5 + N)`, the legal actions in each
 /// observation).
 #[pyfunction]
-#[pyo3(signature = (episodes, expert="exact", blocks=3, seed=0, obs="planes", goal=None, grid=(7, 7), reward="sparse", backend="physics", horizon=1000, profile="spec"))]
+#[pyo3(signature = (episodes, expert="exact", blocks=3, seed=0, obs="planes", goal=None, grid=(7, 7), reward=None, backend="physics", horizon=1000, profile="spec"))]
 #[allow(clippy::too_many_arguments)]
 pub fn demonstrations<'py>(
     py: Python<'py>,
@@ -168,7 +168,7 @@ pub fn demonstrations<'py>(
     obs: &str,
     goal: Option<&str>,
     grid: (usize, usize),
-    reward: &str,
+    reward: Option<&str>,
     backend: &str,
     horizon: u32,
     profile: &str,

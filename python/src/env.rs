@@ -72,13 +72,13 @@ impl NativeEnv {
     /// An environment of the given world; a `ValueError` with the crate's message for a
     /// config that cannot make one.
     #[new]
-    #[pyo3(signature = (blocks=3, goal=None, grid=(7, 7), reward="sparse", backend="physics", horizon=1000, profile="spec", obs="planes"))]
+    #[pyo3(signature = (blocks=3, goal=None, grid=(7, 7), reward=None, backend="physics", horizon=1000, profile="spec", obs="planes"))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         blocks: usize,
         goal: Option<&str>,
         grid: (usize, usize),
-        reward: &str,
+        reward: Option<&str>,
         backend: &str,
         horizon: u32,
         profile: &str,

@@ -243,7 +243,7 @@ impl NativeVecEnv {
     /// `num_envs` environments of one world, stepped on `threads` threads (1: on the
     /// caller's thread; 0: one per core), with autoreset `next-step` or `same-step`.
     #[new]
-    #[pyo3(signature = (num_envs, blocks=3, goal=None, grid=(7, 7), reward="sparse", backend="physics", horizon=1000, profile="spec", obs="planes", threads=1, autoreset="next-step"))]
+    #[pyo3(signature = (num_envs, blocks=3, goal=None, grid=(7, 7), reward=None, backend="physics", horizon=1000, profile="spec", obs="planes", threads=1, autoreset="next-step"))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -251,7 +251,7 @@ impl NativeVecEnv {
         blocks: usize,
         goal: Option<&str>,
         grid: (usize, usize),
-        reward: &str,
+        reward: Option<&str>,
         backend: &str,
         horizon: u32,
         profile: &str,
