@@ -6,8 +6,18 @@
 Collects expert episodes with ``blockstack.demonstrations`` (``planes`` observations, one
 fixed goal), fits an MLP to the expert's actions with cross-entropy, then plays the
 network greedily (illegal actions masked with ``info["action_mask"]``) from 200 unseen
-seeded starts and reports successes and steps against the shortest plan.
-RESULT (filled in from a run here): see the README's Python section.
+seeded starts and reports successes and steps against the shortest plan. Its output here
+(torch 2.15 on CPU, 2 cores shared with other builds; 5 min 28 s wall in all):
+
+    2000 expert episodes, 20284 steps, in 0.2 s
+    epoch 10: loss 0.1599
+    epoch 20: loss 0.0236
+    epoch 30: loss 0.0081
+    greedy: 135/200 reached the goal, mean steps 1.084x the shortest plan
+    took 321.5 s (319.0 s collecting and training)
+
+An MLP on absolute positions has to learn every placement separately; more episodes or a
+translation-invariant network do better.
 """
 
 import argparse

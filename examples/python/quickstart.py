@@ -5,7 +5,11 @@
 
 Plays 20 episodes of 3 blocks with random legal actions and the same 20 starts with the
 exact solver's actions (``env.unwrapped.expert_action()``), and prints successes and mean
-steps. Result here (2 cores, shared): see RESULT below.
+steps. Its output here (commit of 2026-12-01, 2 shared cores):
+
+          random: 1/20 reached the goal, mean 985.0 steps per episode
+    exact expert: 20/20 reached the goal, mean 9.6 steps per episode
+    took 0.67 s
 """
 
 import time

@@ -140,13 +140,18 @@ def main(argv=None) -> int:
             return 2
     finally:
         ray.shutdown()
-    columns = table(rows, list(config["sweep"]))
+    swept = list(config["sweep"])
+    columns = table(rows, swept)
     write_csv(args.out, rows, columns)
+    # On screen, flags every run shares go on one line; the CSV keeps every column.
+    shared = [c for c in columns if c not in swept and c != "train_seconds" and len({_cell(r.get(c)) for r in rows}) == 1]
+    print("every run: " + ", ".join(f"{c}={_cell(rows[0].get(c))}" for c in shared))
+    shown = [c for c in columns if c not in shared]
     out = io.StringIO()
-    w = csv.writer(out, delimiter="\t")
-    w.writerow(columns)
+    w = csv.writer(out, delimiter="\t", lineterminator="\n")
+    w.writerow(shown)
     for row in rows:
-        w.writerow([_cell(row.get(c)) for c in columns])
+        w.writerow([_cell(row.get(c)) for c in shown])
     print(out.getvalue(), end="")
     print(f"wrote {args.out}")
     return 0

@@ -124,6 +124,8 @@ class StackVectorEnv(VectorEnv):
 
     def reset(self, *, seed: Union[int, Sequence[Optional[int]], None] = None, options: Optional[dict] = None):
         n = self.num_envs
+        if options:
+            raise ValueError(f"StackVectorEnv.reset takes no options (given {sorted(options)}): reset with seeds only")
         if seed is None:
             seeds = [None] * n
         elif isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):

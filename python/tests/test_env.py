@@ -194,3 +194,25 @@ def test_bad_seeds_are_value_errors():
     for seed in (-1, 1.5, 2**64):
         with pytest.raises(ValueError, match="seed"):
             env.reset(seed=seed)
+
+
+@pytest.mark.parametrize("profile", ["spec"])
+@pytest.mark.parametrize("backend", ["physics", "grid"])
+def test_the_action_mask_is_the_set_of_actions_the_rust_rules_accept(profile, backend):
+    env = blockstack.StackEnv(profile=profile, backend=backend, obs="state", goal="0,1,2")
+    probe = blockstack.StackEnv(profile=profile, backend=backend, obs="state", goal="0,1,2")
+    rng = np.random.default_rng(5)
+    _, info = env.reset(seed=8)
+    for _ in range(60):
+        cells, held, goal = env.state()
+        for action in range(env.action_space.n):
+            probe.reset(options={"cells": cells, "held": held, "goal": goal})
+            try:
+                probe.step(action)
+                accepted = True
+            except ValueError:
+                accepted = False
+            assert accepted == bool(info["action_mask"][action]), (cells, held, action)
+        _, _, terminated, truncated, info = env.step(int(rng.choice(np.flatnonzero(info["action_mask"]))))
+        if terminated or truncated:
+            _, info = env.reset()

@@ -138,3 +138,5 @@ def test_bad_vector_arguments_are_value_errors():
         StackVectorEnv(2, reward="shiny")
     with pytest.raises(ValueError, match="3 seeds given for 2"):
         StackVectorEnv(2).reset(seed=[1, 2, 3])
+    with pytest.raises(ValueError, match="takes no options"):
+        StackVectorEnv(2).reset(options={"reset_mask": np.ones(2, dtype=bool)})
