@@ -11,7 +11,7 @@ use std::hint::black_box;
 
 use agent::{QAgent, QParams, ReprKind, TrainConfig, Trainer};
 use criterion::{BatchSize, BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use sim::{Action, Backend, BlockId, Cell, Grid, Observation, State};
+use sim::{Action, ActionProtocol, Backend, BlockId, Cell, Grid, Observation, State};
 
 fn q_update(c: &mut Criterion) {
     let grid = Grid::default();
@@ -25,6 +25,7 @@ fn q_update(c: &mut Criterion) {
         grid,
         state: State::new(&cells, held).unwrap(),
         goal,
+        protocol: ActionProtocol::Free,
     };
     let before = obs([Cell::new(1, 1), Cell::new(4, 0), Cell::new(6, 6)], Some(BlockId(2)));
     let after = obs([Cell::new(1, 1), Cell::new(4, 0), Cell::new(5, 6)], Some(BlockId(2)));

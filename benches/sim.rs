@@ -1,13 +1,15 @@
 //! Step throughput of the two backends, environment resets, and the vectorised env.
 //!
 //! `cargo bench --bench sim`. Actions are drawn up front from a seeded generator so the
-//! timing is of the world, not of the generator.
+//! timing is of the world, not of the generator. `env_step` is the SPEC world;
+//! `env_step_original` the `original` profile (paper protocol, `paper-code` reward), whose
+//! actions are chosen among the legal ones of each step's mask.
 
 use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use rand::RngExt;
-use sim::{Action, Backend, Env, EnvConfig, Grid, GridWorld, PhysicsWorld, VecEnv, World};
+use sim::{Action, Backend, Env, EnvConfig, Grid, GridWorld, PhysicsWorld, Profile, VecEnv, World};
 
 /// Random actions of a world with `blocks` blocks.
 fn random_actions(blocks: usize, count: usize) -> Vec<Action> {
@@ -84,6 +86,38 @@ fn env_step(c: &mut Criterion) {
     group.finish();
 }
 
+fn env_step_original(c: &mut Criterion) {
+    // The step of the paper's world: the legality check, the mask, and the reward computed
+    // from the authors' state tuple before and after.
+    let mut group = c.benchmark_group("env_step_original");
+    group.throughput(Throughput::Elements(1));
+    let mut rng = sim::seeding::rng(42);
+    // Draws below 15, a multiple of both 3 (picks) and 5 (moves and drop): uniform choices.
+    let draws: Vec<usize> = (0..1 << 16).map(|_| rng.random_range(0..15)).collect();
+    for backend in [Backend::Grid, Backend::Physics] {
+        let mut env = Env::new(EnvConfig {
+            backend,
+            ..EnvConfig::for_profile(Profile::Original)
+        })
+        .unwrap();
+        let mut legal = env.reset(1).legal_actions();
+        let mut i = 0;
+        group.bench_function(BenchmarkId::new(backend.to_string(), 3), |b| {
+            b.iter(|| {
+                i = (i + 1) & 0xFFFF;
+                let action = legal.nth(draws[i] % legal.count()).unwrap();
+                let step = env.step(action).unwrap();
+                legal = step.info.action_mask;
+                if step.terminated || step.truncated {
+                    legal = env.reset(None).legal_actions();
+                }
+                black_box(step.reward)
+            })
+        });
+    }
+    group.finish();
+}
+
 fn reset(c: &mut Criterion) {
     let mut group = c.benchmark_group("reset");
     for backend in [Backend::Grid, Backend::Physics] {
@@ -125,5 +159,5 @@ fn vec_step(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, world_step, env_step, reset, vec_step);
+criterion_group!(benches, world_step, env_step, env_step_original, reset, vec_step);
 criterion_main!(benches);

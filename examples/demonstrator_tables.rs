@@ -124,6 +124,7 @@ fn play(agent: &QAgent, table: &Table, args: &Args) -> Result<Vec<EpisodeResult>
         horizon: HORIZON,
         reward,
         backend: Backend::Physics,
+        ..EnvConfig::default()
     })?;
     Ok(agent::play(
         &mut env,

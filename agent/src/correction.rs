@@ -385,6 +385,7 @@ fn env_config(agent: &QAgent, world: &SessionWorld, goal: Goal) -> EnvConfig {
         horizon: world.horizon,
         reward: world.reward,
         backend: world.backend,
+        ..EnvConfig::default()
     }
 }
 

@@ -36,7 +36,7 @@ use std::io::{BufRead, Write};
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
-use sim::{Action, Cell, Goal, Grid, Observation, State, Step};
+use sim::{Action, ActionProtocol, Cell, Goal, Grid, Observation, State, Step};
 
 use crate::correction::{CorrectionRule, Experience};
 use crate::error::{AgentError, Result};
@@ -481,6 +481,7 @@ impl<'a> Replay<'a> {
                     grid,
                     state: s.state.state(grid)?,
                     goal,
+                    protocol: ActionProtocol::Free,
                 };
                 let next = Observation {
                     state: s.next.state(grid)?,

@@ -223,6 +223,7 @@ impl TrainConfig {
             horizon: self.horizon,
             reward: self.reward,
             backend: self.backend,
+            ..EnvConfig::default()
         }
     }
 }

@@ -4,7 +4,10 @@ use std::path::PathBuf;
 
 use agent::{AgentError, Assist, Policy, Progress, QAgent, QParams, ReprKind, TrainConfig, Trainer};
 use sim::seeding::rng;
-use sim::{Action, Backend, BlockId, Cell, Env, EnvConfig, Goal, GoalSpec, Grid, Observation, RewardModel, State};
+use sim::{
+    Action, ActionProtocol, Backend, BlockId, Cell, Env, EnvConfig, Goal, GoalSpec, Grid, Observation, RewardModel,
+    State,
+};
 
 fn goal(text: &str) -> Goal {
     text.parse().unwrap()
@@ -95,7 +98,12 @@ fn greedy_choice_breaks_ties_at_random_and_follows_the_table() {
     let g = goal("0,1,2");
     let mut q = QAgent::new(ReprKind::Role, grid, 3, QParams::default()).unwrap();
     let state = State::new(&[Cell::new(3, 0), Cell::new(3, 1), Cell::new(3, 3)], None).unwrap();
-    let obs = Observation { grid, state, goal: g };
+    let obs = Observation {
+        grid,
+        state,
+        goal: g,
+        protocol: ActionProtocol::Free,
+    };
     let mut r = rng(5);
     let seen: std::collections::HashSet<Action> = (0..200).map(|_| q.greedy_action(&obs, &mut r).unwrap()).collect();
     assert_eq!(seen.len(), 8, "all-equal values: every action is chosen sometimes");
@@ -119,6 +127,7 @@ fn a_trained_agent_finishes_an_easy_stack() {
         grid,
         state: State::new(&cells, Some(BlockId(2))).unwrap(),
         goal: goal("0,1,2"),
+        protocol: ActionProtocol::Free,
     };
     let free = Observation {
         state: held.state.with_held(None).unwrap(),
@@ -133,6 +142,7 @@ fn a_trained_agent_finishes_an_easy_stack() {
         state: State::new(&[Cell::new(3, 3), Cell::new(3, 0), Cell::new(3, 1)], Some(BlockId(0))).unwrap(),
         goal: goal("1,2,0"),
         grid,
+        protocol: ActionProtocol::Free,
     };
     assert_eq!(q.greedy_action(&unseen, &mut r).unwrap(), Action::Down);
 }
@@ -277,6 +287,7 @@ fn bad_configs_are_errors_not_panics() {
         grid: Grid::default(),
         state: State::new(&[Cell::new(0, 0), Cell::new(1, 1)], None).unwrap(),
         goal: goal("0,1"),
+        protocol: ActionProtocol::Free,
     };
     assert!(matches!(q.key(&two), Err(AgentError::ModelMismatch(_))));
     let mut r = rng(0);

@@ -44,10 +44,11 @@ def demonstrations(
     )
 
 
-def read_recording(path: Union[str, os.PathLike], obs: str = "planes") -> dict:
+def read_recording(path: Union[str, os.PathLike], obs: str = "planes", profile: str = "spec") -> dict:
     """A recording the CLI wrote, as the arrays :func:`demonstrations` gives.
 
     Reads trajectory files (``blockstack run --trajectory FILE``) and demonstration
     recordings (``blockstack demo`` / ``correct --record FILE``); the lines tell which.
+    Recordings do not name their world: ``action_masks`` follow ``profile``'s protocol.
     """
-    return _native.read_recording(os.fspath(path), obs)
+    return _native.read_recording(os.fspath(path), obs, profile)

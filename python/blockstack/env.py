@@ -36,7 +36,12 @@ class StackEnv(gym.Env):
       ``None`` (the default) takes the profile's (``sparse`` in ``spec``).
     - ``backend``: ``physics`` (rapier2d) or ``grid`` (the occupancy model); same rules.
     - ``obs``: ``planes``, ``state`` or ``pixels`` (see :mod:`blockstack.spaces`).
-    - ``profile``: ``spec`` (the world of the SPEC).
+    - ``profile``: ``spec`` (the world of the SPEC: every action legal) or ``original`` (the
+      paper's world as its authors coded it: their action protocol, nothing held: picks
+      only, holding: moves and drop only; their start rule; the ``paper-code`` reward).
+      An illegal action is a ``ValueError`` that changes nothing; ``info["action_mask"]``
+      says which are legal. (``gymnasium.utils.env_checker.check_env`` steps random
+      actions, so it passes in ``spec`` only.)
     - ``render_mode``: ``None``, ``rgb_array`` (the frame) or ``ansi`` (text).
     - ``max_episode_steps``: the horizon: an episode that has not reached the goal after
       this many steps is truncated, by the Rust environment itself. (``gymnasium.make``
@@ -48,8 +53,8 @@ class StackEnv(gym.Env):
     step for step; ``reset()`` continues the environment's generator. ``np_random`` is
     seeded with the same ``s`` for whatever else draws from it.
 
-    ``info`` of ``reset`` and ``step``: ``action_mask`` (int8, 1 for every legal action;
-    every action is legal in the ``spec`` world), ``blocked`` (a held block's move was
+    ``info`` of ``reset`` and ``step``: ``action_mask`` (int8, 1 for every legal action,
+    from the Rust ``ActionMask``; all ones in the ``spec`` world), ``blocked`` (a held block's move was
     stopped), ``pairs_in_place`` (goal pairs standing), ``goal`` (int64, bottom to top).
     ``reset(options={"cells": [(x, y), ...], "held": i, "goal": "1,0,2"})`` starts from a
     given state instead.

@@ -1,7 +1,7 @@
 //! Python arguments into the crates' configs, checked by the crates themselves.
 
 use pyo3::prelude::*;
-use sim::{Backend, EnvConfig, Goal, GoalSpec, Grid, RewardModel};
+use sim::{Backend, EnvConfig, Goal, GoalSpec, Grid, Profile, RewardModel};
 
 use crate::boundary::{OrValueError, value_error};
 
@@ -30,8 +30,9 @@ impl ObsKind {
     }
 }
 
-/// The world an environment is made of, from the Python keyword arguments (`reward`
-/// `None`: the profile's).
+/// The world an environment is made of, from the Python keyword arguments: the profile's
+/// world (its action protocol, start rule and reward) with the given grid, blocks, goal,
+/// horizon and backend, and the given reward if one is named.
 #[allow(clippy::too_many_arguments)]
 pub fn env_config(
     blocks: usize,
@@ -42,7 +43,8 @@ pub fn env_config(
     horizon: u32,
     profile: &str,
 ) -> PyResult<EnvConfig> {
-    check_profile(profile)?;
+    let profile = self::profile(profile)?;
+    let defaults = EnvConfig::for_profile(profile);
     let config = EnvConfig {
         grid: Grid::new(grid.0, grid.1).or_value_error()?,
         blocks,
@@ -54,23 +56,18 @@ pub fn env_config(
         // The profile's reward unless one is named.
         reward: match reward {
             Some(name) => RewardModel::from_name(name).or_value_error()?,
-            None => RewardModel::default(),
+            None => defaults.reward,
         },
         backend: backend.parse::<Backend>().or_value_error()?,
+        ..defaults
     };
     config.validate().or_value_error()?;
     Ok(config)
 }
 
-/// The profiles this build knows. Seam: `sim::Profile` (issue 9) is not in `sim` yet;
-/// until it is, only the SPEC world exists and `original` is refused by name.
-fn check_profile(profile: &str) -> PyResult<()> {
-    match profile {
-        "spec" => Ok(()),
-        _ => Err(value_error(format!(
-            "cannot read profile from {profile:?}: this build has only the spec profile"
-        ))),
-    }
+/// The profile called `name` (`spec` or `original`; `sim::Profile`).
+pub fn profile(name: &str) -> PyResult<Profile> {
+    name.parse::<Profile>().or_value_error()
 }
 
 /// A goal from Python: text such as `"1,0,2"` or a sequence of block ids.

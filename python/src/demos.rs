@@ -12,10 +12,10 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sim::seeding::episode_seed;
 use sim::trajectory::Record;
-use sim::{Action, BlockId, Cell, Env, Goal, Grid, Observation, State};
+use sim::{Action, ActionProtocol, BlockId, Cell, Env, Goal, Grid, Observation, State};
 
 use crate::boundary::{OrValueError, guard, value_error};
-use crate::config::{ObsKind, env_config};
+use crate::config::{self, ObsKind, env_config};
 use crate::observe;
 
 /// Steps of episodes, column by column.
@@ -111,6 +111,7 @@ fn encode<'py>(
         ObsKind::Pixels => {
             let sample = Observation {
                 grid,
+                protocol: ActionProtocol::default(),
                 state: State::new(&(0..blocks).map(|i| grid.cell_at(i)).collect::<Vec<Cell>>(), None)
                     .or_value_error()?,
                 goal: Goal::identity(blocks).or_value_error()?,
@@ -225,10 +226,13 @@ fn read_text(path: &std::path::Path) -> PyResult<String> {
 
 /// A recording read line by line.
 struct Reader {
+    /// The protocol the masks are computed under (recordings do not say).
+    protocol: ActionProtocol,
     grid: Option<Grid>,
     blocks: Option<usize>,
-    /// The current episode: its number, goal, and the observation before its next step.
-    episode: Option<(u64, Goal, Observation, bool)>,
+    /// The current episode: its number, the observation before its next step, and whether
+    /// that step is its first.
+    episode: Option<(u64, Observation, bool)>,
     columns: Columns,
 }
 
@@ -244,11 +248,11 @@ impl Reader {
         self.blocks = Some(start.block_count());
         self.episode = Some((
             episode,
-            goal,
             Observation {
                 grid,
                 state: start,
                 goal,
+                protocol: self.protocol,
             },
             true,
         ));
@@ -266,7 +270,7 @@ impl Reader {
         truncated: bool,
         before: Option<State>,
     ) -> Result<(), String> {
-        let Some((number, goal, obs, first)) = self.episode.as_mut() else {
+        let Some((number, obs, first)) = self.episode.as_mut() else {
             return Err("a step before any episode line".into());
         };
         if *number != episode {
@@ -275,11 +279,7 @@ impl Reader {
         if let Some(before) = before {
             obs.state = before;
         }
-        let next = Observation {
-            grid: obs.grid,
-            state: after,
-            goal: *goal,
-        };
+        let next = Observation { state: after, ..*obs };
         self.columns
             .push(episode, *obs, action, reward, next, terminated, truncated, *first);
         *obs = next;
@@ -296,13 +296,16 @@ fn state_of(blocks: &[[u8; 2]], held: Option<u8>) -> Result<State, String> {
 /// Reads a recording the CLI wrote into the arrays [`demonstrations`] gives: a trajectory
 /// file (`blockstack run --trajectory`) or a demonstration recording (`blockstack demo` /
 /// `correct --record`); the format is told by its lines. A line that does not read is an
-/// error naming its number.
+/// error naming its number. Recordings do not name the world they were played in: the
+/// `action_masks` are those of `profile`'s action protocol.
 #[pyfunction]
-#[pyo3(signature = (path, obs="planes"))]
-pub fn read_recording<'py>(py: Python<'py>, path: PathBuf, obs: &str) -> PyResult<Bound<'py, PyDict>> {
+#[pyo3(signature = (path, obs="planes", profile="spec"))]
+pub fn read_recording<'py>(py: Python<'py>, path: PathBuf, obs: &str, profile: &str) -> PyResult<Bound<'py, PyDict>> {
     let kind = ObsKind::parse(obs)?;
+    let protocol = config::profile(profile)?.protocol();
     let text = read_text(&path)?;
     let mut reader = Reader {
+        protocol,
         grid: None,
         blocks: None,
         episode: None,

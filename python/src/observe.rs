@@ -19,11 +19,13 @@ pub fn frame_shape(obs: &Observation) -> (usize, usize) {
     (frame.height() as usize, frame.width() as usize)
 }
 
-/// Writes the legal actions of `obs` into `out`, 1 legal and 0 not, one per action index.
-/// Seam: `sim`'s action protocol (issue 9) is not in `sim` yet; until it is, the SPEC
-/// world's protocol holds, in which every action is legal in every state.
-pub fn write_action_mask(_obs: &Observation, out: &mut [i8]) {
-    out.fill(1);
+/// Writes the legal actions of `obs` (under its environment's action protocol) into
+/// `out`, 1 legal and 0 not, one per action index.
+pub fn write_action_mask(obs: &Observation, out: &mut [i8]) {
+    let mask = obs.legal_actions();
+    for (i, byte) in out.iter_mut().enumerate() {
+        *byte = i8::from(mask.contains_index(i));
+    }
 }
 
 /// The observation of kind `kind` as a fresh Python object: an array for `planes` and

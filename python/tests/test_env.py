@@ -196,7 +196,7 @@ def test_bad_seeds_are_value_errors():
             env.reset(seed=seed)
 
 
-@pytest.mark.parametrize("profile", ["spec"])
+@pytest.mark.parametrize("profile", ["spec", "original"])
 @pytest.mark.parametrize("backend", ["physics", "grid"])
 def test_the_action_mask_is_the_set_of_actions_the_rust_rules_accept(profile, backend):
     env = blockstack.StackEnv(profile=profile, backend=backend, obs="state", goal="0,1,2")
@@ -210,9 +210,23 @@ def test_the_action_mask_is_the_set_of_actions_the_rust_rules_accept(profile, ba
             try:
                 probe.step(action)
                 accepted = True
-            except ValueError:
+            except ValueError as e:
+                assert "not legal" in str(e) or "illegal" in str(e), e
                 accepted = False
             assert accepted == bool(info["action_mask"][action]), (cells, held, action)
         _, _, terminated, truncated, info = env.step(int(rng.choice(np.flatnonzero(info["action_mask"]))))
         if terminated or truncated:
             _, info = env.reset()
+
+
+def test_the_original_profile_masks_by_the_papers_protocol():
+    env = blockstack.StackEnv(profile="original", obs="state", goal="0,1,2")
+    obs, info = env.reset(seed=3)
+    # Nothing held: only the picks.
+    assert info["action_mask"].tolist() == [0, 0, 0, 0, 0, 1, 1, 1]
+    _, _, _, _, info = env.step(5)
+    # Holding: the moves and drop only.
+    assert info["action_mask"].tolist() == [1, 1, 1, 1, 1, 0, 0, 0]
+    with pytest.raises(ValueError) as e:
+        env.step(6)
+    assert "paper" in str(e.value)

@@ -42,7 +42,8 @@ fn main() -> Result<(), sim::SimError> {
             &sim::Observation {
                 grid,
                 state: physics.state(),
-                goal: env.goal()
+                goal: env.goal(),
+                protocol: sim::ActionProtocol::Free,
             },
             sim::render::Colour::Never
         )

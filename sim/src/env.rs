@@ -2,7 +2,6 @@
 
 use std::fmt;
 
-use rand::RngExt;
 use serde::{Deserialize, Serialize};
 
 use crate::action::Action;
@@ -12,9 +11,13 @@ use crate::grid::{Cell, Grid};
 use crate::grid_world::GridWorld;
 use crate::observation::Observation;
 use crate::physics_world::PhysicsWorld;
+use crate::profile::Profile;
+use crate::protocol::{ActionMask, ActionProtocol};
 use crate::reward::{RewardModel, Transition};
 use crate::seeding::{self, SimRng};
+use crate::start::StartRule;
 use crate::state::{BlockId, MAX_BLOCKS, MIN_BLOCKS, State};
+use crate::termination::Termination;
 use crate::world::{Effect, World};
 
 /// The default episode length limit.
@@ -82,6 +85,15 @@ pub struct EnvConfig {
     pub reward: RewardModel,
     /// The backend (default physics).
     pub backend: Backend,
+    /// Which actions are legal in a state (default `free`: all of them).
+    #[serde(default)]
+    pub protocol: ActionProtocol,
+    /// How a reset places the blocks (default `uniform`).
+    #[serde(default)]
+    pub start: StartRule,
+    /// What ends an episode before the horizon (default: the goal holds).
+    #[serde(default)]
+    pub termination: Termination,
 }
 
 impl Default for EnvConfig {
@@ -93,6 +105,9 @@ impl Default for EnvConfig {
             horizon: DEFAULT_HORIZON,
             reward: RewardModel::default(),
             backend: Backend::Physics,
+            protocol: ActionProtocol::default(),
+            start: StartRule::default(),
+            termination: Termination::default(),
         }
     }
 }
@@ -104,6 +119,22 @@ impl EnvConfig {
             blocks: goal.block_count(),
             goal: GoalSpec::Fixed(goal),
             ..Self::default()
+        }
+    }
+
+    /// The default config with `profile`'s protocol, start rule and reward.
+    pub fn for_profile(profile: Profile) -> Self {
+        Self::default().with_profile(profile)
+    }
+
+    /// This config with `profile`'s protocol, start rule and reward; everything else
+    /// (grid, blocks, goal, horizon, backend, termination) stays.
+    pub fn with_profile(self, profile: Profile) -> Self {
+        Self {
+            protocol: profile.protocol(),
+            start: profile.start_rule(),
+            reward: profile.reward(),
+            ..self
         }
     }
 
@@ -141,7 +172,7 @@ impl EnvConfig {
         if self.horizon == 0 {
             return Err(SimError::ZeroHorizon);
         }
-        Ok(())
+        self.start.check_fits(self.grid, self.blocks)
     }
 }
 
@@ -156,6 +187,10 @@ pub struct Info {
     pub pairs_in_place: usize,
     /// Steps taken in this episode, this one included.
     pub steps: u32,
+    /// The legal actions in the step's observation (the state after the step; with a
+    /// [`VecEnv`](crate::VecEnv) that reset this environment, the next episode's first), as
+    /// Gymnasium users read `info["action_mask"]`.
+    pub action_mask: ActionMask,
     /// With a [`VecEnv`](crate::VecEnv) that reset this environment after this step: the
     /// last observation of the episode that ended (the step's `observation` is then the
     /// next episode's first). `None` otherwise.
@@ -169,9 +204,10 @@ pub struct Step {
     pub observation: Observation,
     /// The reward of the action.
     pub reward: f64,
-    /// The goal holds after the action.
+    /// The episode ended by its termination rule: by default, the goal holds after the
+    /// action.
     pub terminated: bool,
-    /// The horizon was reached without the goal.
+    /// The horizon was reached without the episode terminating.
     pub truncated: bool,
     /// Extra facts.
     pub info: Info,
@@ -212,6 +248,11 @@ enum Phase {
 /// Seeding follows Gymnasium: `reset(seed)` re-seeds the environment's generator, and
 /// `reset(None)` continues from where it was (from seed 0 if it was never seeded), so a
 /// sequence of episodes is fixed by the first seed.
+///
+/// The config's [`ActionProtocol`] decides which actions are legal ([`Env::legal_actions`],
+/// `info.action_mask`); under a restricting protocol an illegal action is an error that
+/// changes nothing. Its [`StartRule`] places the blocks at each reset, and its
+/// [`Termination`] decides which step ends an episode.
 #[derive(Clone)]
 pub struct Env {
     config: EnvConfig,
@@ -221,6 +262,9 @@ pub struct Env {
     steps: u32,
     phase: Phase,
     previous_action: Option<Action>,
+    /// The protocol's legal actions with nothing held (`[0]`) and with a block held
+    /// (`[1]`): a protocol looks at nothing else, so a step looks its masks up.
+    legal: [ActionMask; 2],
 }
 
 impl Env {
@@ -248,11 +292,16 @@ impl Env {
             steps: 0,
             phase: Phase::NotReset,
             previous_action: None,
+            legal: [
+                config.protocol.legal_when(None, config.blocks),
+                config.protocol.legal_when(Some(BlockId(0)), config.blocks),
+            ],
         })
     }
 
-    /// Starts an episode: draws the goal (if the config says so) and a start state in which
-    /// the goal does not hold, both from the generator, re-seeded first when `seed` is given.
+    /// Starts an episode: draws the goal (if the config says so), then a start by the
+    /// config's [`StartRule`] (by default one in which the goal does not hold), both from the
+    /// generator, re-seeded first when `seed` is given.
     pub fn reset(&mut self, seed: impl Into<Option<u64>>) -> Observation {
         if let Some(seed) = seed.into() {
             self.rng = seeding::rng(seed);
@@ -260,15 +309,16 @@ impl Env {
         if let GoalSpec::Random = self.config.goal {
             self.goal = Goal::random(self.config.blocks, &mut self.rng).expect("the config was validated");
         }
-        let start = random_start(self.config.grid, &self.goal, &mut self.rng);
+        let start = self.config.start.draw(self.config.grid, &self.goal, &mut self.rng);
         // Drawn for this world's grid and block count: it fits without a check.
         self.world.world_mut().put(&start);
-        self.begin(start)
+        self.begin(start, self.config.start.keeps_goal_starts())
     }
 
     /// Starts an episode from a given state and goal (for planners, tests, and experiments
     /// that replay recorded starts); the state may hold a block. An error if either does not
-    /// fit the world.
+    /// fit the world. Under [`Termination::Goal`] a state in which the goal holds starts an
+    /// episode that is already over.
     pub fn reset_to(&mut self, state: State, goal: Goal) -> Result<Observation> {
         if goal.block_count() != self.config.blocks {
             return Err(SimError::BlockCountMismatch {
@@ -279,30 +329,32 @@ impl Env {
         }
         self.world.world_mut().place(&state)?;
         self.goal = goal;
-        Ok(self.begin(state))
+        Ok(self.begin(state, false))
     }
 
-    /// Starts the episode whose start the world already shows.
-    fn begin(&mut self, start: State) -> Observation {
+    /// Starts the episode whose start the world already shows. Under
+    /// [`Termination::Goal`], a start meeting the goal is over at once unless
+    /// `keeps_goal_start` (then its first step ends it).
+    fn begin(&mut self, start: State, keeps_goal_start: bool) -> Observation {
         self.steps = 0;
         self.previous_action = None;
-        self.phase = if self.goal.holds(&start) {
-            Phase::Over
-        } else {
-            Phase::Running
-        };
+        let over = matches!(self.config.termination, Termination::Goal) && !keeps_goal_start && self.goal.holds(&start);
+        self.phase = if over { Phase::Over } else { Phase::Running };
         self.observation()
     }
 
-    /// Takes one action. An error if the episode has not started or has ended, or if the
-    /// action names a block that does not exist.
+    /// Takes one action. An error, with nothing changed (no step counted), if the episode
+    /// has not started or has ended, if the action names a block that does not exist, or if
+    /// the config's action protocol forbids it in the current state
+    /// ([`SimError::IllegalAction`]).
     pub fn step(&mut self, action: Action) -> Result<Step> {
-        match self.phase {
-            Phase::NotReset => return Err(SimError::NotReset),
-            Phase::Over => return Err(SimError::EpisodeOver),
-            Phase::Running => {}
-        }
+        self.check_running()?;
         let before = self.world.world().state();
+        // Under `free` every action that exists is legal, and `act` refuses one that does
+        // not before changing anything: the SPEC world's step pays for no check.
+        if !matches!(self.config.protocol, ActionProtocol::Free) {
+            self.check_legal(before.held_block(), action)?;
+        }
         let effect = self.world.world_mut().act(action)?;
         let after = self.world.world().state();
         self.steps += 1;
@@ -315,7 +367,9 @@ impl Env {
             after: &after,
         };
         let reward = self.config.reward.reward(&transition);
-        let terminated = self.goal.holds(&after);
+        let pairs_in_place = self.goal.pairs_in_place(&after);
+        let goal_holds = pairs_in_place + 1 == self.goal.block_count();
+        let terminated = self.config.termination.ends(reward, goal_holds);
         let truncated = !terminated && self.steps >= self.config.horizon;
         self.previous_action = Some(action);
         if terminated || truncated {
@@ -326,6 +380,7 @@ impl Env {
                 grid: self.config.grid,
                 state: after,
                 goal: self.goal,
+                protocol: self.config.protocol,
             },
             reward,
             terminated,
@@ -333,11 +388,46 @@ impl Env {
             info: Info {
                 effect,
                 blocked: effect == Effect::Blocked,
-                pairs_in_place: self.goal.pairs_in_place(&after),
+                pairs_in_place,
                 steps: self.steps,
+                action_mask: self.legal_for(after.held_block()),
                 final_observation: None,
             },
         })
+    }
+
+    /// `Ok` if [`Env::step`] would take `action` now; otherwise the error it would return
+    /// (episode not started or over, no such block, illegal under the action protocol).
+    pub fn check_action(&self, action: Action) -> Result<()> {
+        self.check_running()?;
+        self.check_legal(self.held_block(), action)
+    }
+
+    /// An error unless an episode is running.
+    #[inline]
+    fn check_running(&self) -> Result<()> {
+        match self.phase {
+            Phase::NotReset => Err(SimError::NotReset),
+            Phase::Over => Err(SimError::EpisodeOver),
+            Phase::Running => Ok(()),
+        }
+    }
+
+    /// An error unless `action` exists and the protocol allows it with `held` in hand.
+    #[inline]
+    fn check_legal(&self, held: Option<BlockId>, action: Action) -> Result<()> {
+        if self.legal_for(held).contains(action) {
+            Ok(())
+        } else {
+            // The protocol names what is wrong: no such block, or an illegal action.
+            self.config.protocol.check_when(held, self.config.blocks, action)
+        }
+    }
+
+    /// The legal actions with `held` in hand.
+    #[inline]
+    fn legal_for(&self, held: Option<BlockId>) -> ActionMask {
+        self.legal[usize::from(held.is_some())]
     }
 
     /// Takes the action with index `index` (SPEC section 2's table); an error for an index
@@ -352,7 +442,13 @@ impl Env {
             grid: self.config.grid,
             state: self.state(),
             goal: self.goal,
+            protocol: self.config.protocol,
         }
+    }
+
+    /// The legal actions in the current state, by the config's action protocol.
+    pub fn legal_actions(&self) -> ActionMask {
+        self.legal_for(self.held_block())
     }
 
     /// The current state, read back from the backend.
@@ -388,25 +484,5 @@ impl Env {
     /// The block held now, if any.
     pub fn held_block(&self) -> Option<BlockId> {
         self.world.world().held_block()
-    }
-}
-
-/// Blocks on distinct cells drawn uniformly, nothing held, the goal not holding.
-fn random_start(grid: Grid, goal: &Goal, rng: &mut SimRng) -> State {
-    let n = goal.block_count();
-    let mut cells = [Cell::default(); MAX_BLOCKS];
-    loop {
-        let mut k = 0;
-        while k < n {
-            let c = grid.cell_at(rng.random_range(0..grid.cell_count()));
-            if !cells[..k].contains(&c) {
-                cells[k] = c;
-                k += 1;
-            }
-        }
-        let state = State::new(&cells[..n], None).expect("distinct cells");
-        if !goal.holds(&state) {
-            return state;
-        }
     }
 }

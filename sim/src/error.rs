@@ -2,6 +2,11 @@
 
 use thiserror::Error;
 
+use crate::action::Action;
+use crate::protocol::ActionProtocol;
+use crate::start::StartRule;
+use crate::state::BlockId;
+
 /// Everything that can go wrong when building or driving a world.
 ///
 /// Every variant names the offending value, so a caller can turn it into one clear line
@@ -73,6 +78,44 @@ pub enum SimError {
         index: usize,
         /// How many blocks the world has.
         blocks: usize,
+    },
+    /// An action the environment's action protocol forbids in the current state.
+    #[error(
+        "{action} is not legal under the {protocol} action protocol while {}: {}",
+        held_text(*.held),
+        .protocol.allowed(.held.is_some())
+    )]
+    IllegalAction {
+        /// The action given.
+        action: Action,
+        /// The block held when it was given.
+        held: Option<BlockId>,
+        /// The protocol that forbids it.
+        protocol: ActionProtocol,
+    },
+    /// A buffer for an action mask whose length is not the world's number of actions.
+    #[error("an action mask needs a buffer of {expected} bytes (5 + blocks), not {found}")]
+    MaskLength {
+        /// `5 + N`.
+        expected: usize,
+        /// The buffer's length.
+        found: usize,
+    },
+    /// A start rule whose cells cannot hold every block of the world.
+    #[error(
+        "the {rule} start rule places blocks on {cells} cells of the {width}x{height} grid, too few for {blocks} blocks: use a larger grid, fewer blocks or the uniform start rule"
+    )]
+    StartDoesNotFit {
+        /// The start rule.
+        rule: StartRule,
+        /// Cells the rule draws from.
+        cells: usize,
+        /// Blocks to place.
+        blocks: usize,
+        /// Grid width.
+        width: usize,
+        /// Grid height.
+        height: usize,
     },
     /// A block id outside `0..blocks`.
     #[error("block {block} does not exist: the blocks are 0..{blocks}")]
@@ -149,6 +192,14 @@ pub enum SimError {
         /// The system's reason.
         reason: String,
     },
+}
+
+/// "nothing is held" or "block 2 is held".
+fn held_text(held: Option<BlockId>) -> String {
+    match held {
+        None => "nothing is held".into(),
+        Some(b) => format!("block {b} is held"),
+    }
 }
 
 /// Shorthand for results whose error is a [`SimError`].

@@ -12,6 +12,28 @@
 //! - [`render`] draws the world as text or pictures; [`trajectory`] writes episodes as
 //!   JSON Lines.
 //!
+//! # Two worlds: `spec` and `original`
+//!
+//! SPEC.md is our world. The paper's experiments ran in the world its authors coded
+//! (`../shared/ORIGINAL.md`, with file:line citations of their repository), which differs
+//! in rules that an [`EnvConfig`] can switch one by one, or all at once with a [`Profile`]
+//! ([`EnvConfig::for_profile`]):
+//!
+//! - [`ActionProtocol`] ([`protocol`]): `free` (SPEC, every action legal) or `paper` (nothing
+//!   held: only Pick; holding: only the moves and Drop). The legal actions are an
+//!   [`ActionMask`]: [`Env::legal_actions`], `info.action_mask`,
+//!   [`Observation::legal_actions`]. An illegal action is an error that changes nothing.
+//! - [`StartRule`] ([`start`]): `uniform` (SPEC) or `paper` (the 6 x 6 corner leaving out
+//!   the right column and the bottom row, a start meeting the goal kept).
+//! - [`Termination`] ([`termination`]): at the goal (SPEC), or at a step reward above a
+//!   threshold (the authors' training games: above 70).
+//! - The reward `paper-code` ([`reward::PaperCode`]), computed from the authors' state
+//!   tuple [`CodedState`] ([`coded_state`]), beside `paper`, our reading of the paper's
+//!   prose.
+//!
+//! The defaults are the SPEC's: a config that names none of these is the SPEC world, and
+//! its seeded runs are the same as before these rules existed.
+//!
 //! ```
 //! use sim::{Action, Backend, Env, EnvConfig, Goal};
 //!
@@ -25,6 +47,7 @@
 //! ```
 
 pub mod action;
+pub mod coded_state;
 pub mod env;
 pub mod error;
 pub mod files;
@@ -34,15 +57,20 @@ pub mod grid_world;
 pub mod observation;
 pub mod occupancy;
 pub mod physics_world;
+pub mod profile;
+pub mod protocol;
 pub mod render;
 pub mod reward;
 pub mod seeding;
+pub mod start;
 pub mod state;
+pub mod termination;
 pub mod trajectory;
 pub mod vec_env;
 pub mod world;
 
 pub use action::Action;
+pub use coded_state::CodedState;
 pub use env::{Backend, DEFAULT_HORIZON, Env, EnvConfig, GoalSpec, Info, Step};
 pub use error::{Result, SimError};
 pub use goal::Goal;
@@ -51,7 +79,11 @@ pub use grid_world::GridWorld;
 pub use observation::{Observation, Planes};
 pub use occupancy::Occupancy;
 pub use physics_world::PhysicsWorld;
+pub use profile::Profile;
+pub use protocol::{ActionMask, ActionProtocol};
 pub use reward::RewardModel;
+pub use start::StartRule;
 pub use state::{BlockId, MAX_BLOCKS, MIN_BLOCKS, State};
+pub use termination::Termination;
 pub use vec_env::{Autoreset, VecEnv, VecStep};
 pub use world::{Effect, World};

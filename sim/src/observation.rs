@@ -3,9 +3,11 @@
 
 use crate::goal::Goal;
 use crate::grid::{Cell, Grid};
+use crate::protocol::{ActionMask, ActionProtocol};
 use crate::state::{BlockId, State};
 
-/// The full observation: grid, every block's cell, the held block, and the goal.
+/// The full observation: grid, every block's cell, the held block, the goal, and the
+/// action protocol that says which actions are legal.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Observation {
     /// The grid.
@@ -14,6 +16,9 @@ pub struct Observation {
     pub state: State,
     /// The goal of the episode.
     pub goal: Goal,
+    /// The environment's action protocol: a policy handed this observation chooses among
+    /// [`Observation::legal_actions`].
+    pub protocol: ActionProtocol,
 }
 
 impl Observation {
@@ -25,6 +30,12 @@ impl Observation {
     /// The held block, if any.
     pub fn held_block(&self) -> Option<BlockId> {
         self.state.held_block()
+    }
+
+    /// The actions legal in this state under the environment's protocol.
+    #[inline]
+    pub fn legal_actions(&self) -> ActionMask {
+        self.protocol.legal_actions(&self.state)
     }
 
     /// A `W x H x (N + 1)` one-hot array: plane `i < N` marks block `i`'s cell, plane `N`

@@ -1,4 +1,4 @@
-//! Reward models (SPEC section 5). Each is a named type whose fields are its constants;
+//! Reward models (SPEC section 5, and `paper-code`, the authors' code). Each is a named type whose fields are its constants;
 //! [`RewardModel`] picks one by name.
 
 use std::fmt;
@@ -6,6 +6,7 @@ use std::fmt;
 use serde::{Deserialize, Serialize};
 
 use crate::action::Action;
+use crate::coded_state::CodedState;
 use crate::error::{Result, SimError};
 use crate::goal::Goal;
 use crate::grid::Grid;
@@ -164,6 +165,87 @@ impl Paper {
     }
 }
 
+/// `paper-code`: the reward as the authors coded it (ORIGINAL.md, "Reward as coded"; their
+/// `BlockWorld_t.py:104-159`, `get_sparse_reward_for_state_pramodith` plus
+/// `get_reward_for_state_action_pramodith`), where `paper` is our reading of their prose.
+/// Per step, the sum of:
+///
+/// - a move term, when the same block is held before and after the step: `closer` if the
+///   `d` of its pair (the first entry of the [`CodedState`]) fell, 0 if equal, `farther` if
+///   it grew. Pick and Drop change the held block and get 0.
+/// - if the [`CodedState`] changed: `pair_in_place` times the number of goal pairs in place
+///   after the step, when that number is above 0 (paid on **every** state-changing step
+///   while pairs stand, not once). If it did not change (a blocked move): `unchanged`.
+/// - `drop_far` for a Drop of a block whose pair's `d` exceeds `drop_far_above` squared
+///   pixels (5000: not stacked, beside, or diagonally above).
+///
+/// The paper's "+5 per adjacent pair" never fires in their code (a 55 px^2 threshold no
+/// two blocks meet) and there is no "pick then drop" penalty; neither is here. Under the
+/// `free` protocol, which the authors' agents never used, the same definitions apply to
+/// our tuple: an action that changes nothing (a move or a Drop with nothing held, a Pick of
+/// the held block) gets `unchanged`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PaperCode {
+    /// The held pair's `d` fell (+1).
+    pub closer: f64,
+    /// The held pair's `d` grew (-5).
+    pub farther: f64,
+    /// Per goal pair in place, on a step that changed the tuple (+50).
+    pub pair_in_place: f64,
+    /// A step that left the tuple as it was (-0.1).
+    pub unchanged: f64,
+    /// A Drop of a block whose pair's `d` exceeds `drop_far_above` (-0.1).
+    pub drop_far: f64,
+    /// Squared pixels above which a Drop is far (5000).
+    pub drop_far_above: u32,
+}
+
+impl Default for PaperCode {
+    fn default() -> Self {
+        Self {
+            closer: 1.0,
+            farther: -5.0,
+            pair_in_place: 50.0,
+            unchanged: -0.1,
+            drop_far: -0.1,
+            drop_far_above: 5000,
+        }
+    }
+}
+
+impl PaperCode {
+    fn reward(&self, t: &Transition) -> f64 {
+        let before = CodedState::of(t.grid, t.goal, t.before);
+        let after = CodedState::of(t.grid, t.goal, t.after);
+        let mut r = 0.0;
+        if let (Some(d0), Some(d1)) = (before.held_distance(), after.held_distance()) {
+            if before.held == after.held {
+                r += match d1.cmp(&d0) {
+                    std::cmp::Ordering::Less => self.closer,
+                    std::cmp::Ordering::Greater => self.farther,
+                    std::cmp::Ordering::Equal => 0.0,
+                };
+            }
+        }
+        if before == after {
+            r += self.unchanged;
+        } else {
+            let pairs = t.goal.pairs_in_place(t.after);
+            if pairs > 0 {
+                r += self.pair_in_place * pairs as f64;
+            }
+        }
+        if t.action == Action::Drop {
+            if let Some(d) = before.held_distance() {
+                if d > self.drop_far_above {
+                    r += self.drop_far;
+                }
+            }
+        }
+        r
+    }
+}
+
 /// `step-cost`: `cost` every step, 0 on the step that reaches the goal; maximising it is
 /// finding a shortest plan.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -196,6 +278,8 @@ pub enum RewardModel {
     Paper(Paper),
     /// See [`StepCost`].
     StepCost(StepCost),
+    /// See [`PaperCode`].
+    PaperCode(PaperCode),
 }
 
 impl Default for RewardModel {
@@ -207,7 +291,7 @@ impl Default for RewardModel {
 
 impl RewardModel {
     /// The names the models are chosen by.
-    pub const NAMES: [&'static str; 4] = ["sparse", "dense", "paper", "step-cost"];
+    pub const NAMES: [&'static str; 5] = ["sparse", "dense", "paper", "step-cost", "paper-code"];
 
     /// The model called `name`, with the SPEC's constants.
     pub fn from_name(name: &str) -> Result<RewardModel> {
@@ -216,6 +300,7 @@ impl RewardModel {
             "dense" => RewardModel::Dense(Dense::default()),
             "paper" => RewardModel::Paper(Paper::default()),
             "step-cost" => RewardModel::StepCost(StepCost::default()),
+            "paper-code" => RewardModel::PaperCode(PaperCode::default()),
             _ => {
                 return Err(SimError::Parse {
                     what: "reward model",
@@ -233,6 +318,7 @@ impl RewardModel {
             RewardModel::Dense(_) => "dense",
             RewardModel::Paper(_) => "paper",
             RewardModel::StepCost(_) => "step-cost",
+            RewardModel::PaperCode(_) => "paper-code",
         }
     }
 
@@ -243,6 +329,7 @@ impl RewardModel {
             RewardModel::Dense(m) => m.reward(t),
             RewardModel::Paper(m) => m.reward(t),
             RewardModel::StepCost(m) => m.reward(t),
+            RewardModel::PaperCode(m) => m.reward(t),
         }
     }
 }

@@ -14,7 +14,9 @@ pub enum Autoreset {
     /// `SAME_STEP`: the step that ends an episode also resets the environment. It returns
     /// the new episode's first observation, the ended episode's last one in
     /// `info.final_observation`, and the reward and flags of the step that ended it; the
-    /// next action applies to the observation just returned.
+    /// next action applies to the observation just returned, and `info.action_mask` is that
+    /// observation's legal actions (the ended episode's are `info.final_observation`'s
+    /// [`legal_actions`](Observation::legal_actions)).
     #[default]
     SameStep,
     /// `NEXT_STEP` (Gymnasium's default): the step that ends an episode returns its last
@@ -169,7 +171,8 @@ impl VecEnv {
     /// results into its own buffers does so in parallel, with nothing collected in between.
     ///
     /// Nothing is stepped unless every environment can be: an error first if the action
-    /// count differs from the environment count, or if an environment has not been reset.
+    /// count differs from the environment count, or if an environment would refuse its
+    /// action (the first such error; see [`Env::check_action`]).
     ///
     /// # Panics
     ///
@@ -187,11 +190,12 @@ impl VecEnv {
             });
         }
         assert_eq!(slots.len(), self.len(), "one slot per environment");
-        let stuck = (0..self.len()).find(|&i| self.envs[i].is_over() && !self.ended[i]);
-        if let Some(i) = stuck {
-            // An environment whose episode is not running refuses the step, touching
-            // nothing, with the error that says why (not reset, or over).
-            self.envs[i].step(actions[i])?;
+        // Every environment that takes its action must accept it (running, the block
+        // exists, legal under the protocol); one about to reset ignores its action.
+        for ((env, &action), &ended) in self.envs.iter().zip(actions).zip(&self.ended) {
+            if !ended {
+                env.check_action(action)?;
+            }
         }
         let mode = self.autoreset;
         let step = |(((env, &action), ended), slot): (((&mut Env, &Action), &mut bool), &mut T)| -> Result<()> {
@@ -205,6 +209,7 @@ impl VecEnv {
                         Autoreset::SameStep => {
                             step.info.final_observation = Some(step.observation);
                             step.observation = env.reset(None);
+                            step.info.action_mask = step.observation.legal_actions();
                         }
                         Autoreset::NextStep => *ended = true,
                     }

@@ -2,48 +2,88 @@
 //! step, and every body sits on its cell centre after every step.
 
 use proptest::prelude::*;
-use sim::{Action, Backend, Env, EnvConfig, Goal, GoalSpec, Grid, GridWorld, PhysicsWorld, RewardModel, World};
+use sim::{
+    Action, ActionProtocol, Backend, Env, EnvConfig, Goal, GoalSpec, Grid, GridWorld, PhysicsWorld, RewardModel,
+    StartRule, Termination, World,
+};
 
 /// Tolerance on a body's distance from its cell centre.
 const CENTRE_TOLERANCE: f32 = 1e-4;
 
-fn config(width: usize, height: usize, blocks: usize, reward: &str, backend: Backend) -> EnvConfig {
+/// The rules an environment of the proptest plays by.
+#[derive(Clone, Copy, Debug)]
+struct Rules {
+    reward: &'static str,
+    protocol: ActionProtocol,
+    start: StartRule,
+    termination: Termination,
+}
+
+fn config(width: usize, height: usize, blocks: usize, rules: Rules, backend: Backend) -> EnvConfig {
     EnvConfig {
         grid: Grid::new(width, height).unwrap(),
         blocks,
         goal: GoalSpec::Random,
         horizon: 60,
-        reward: RewardModel::from_name(reward).unwrap(),
+        reward: RewardModel::from_name(rules.reward).unwrap(),
         backend,
+        protocol: rules.protocol,
+        start: rules.start,
+        termination: rules.termination,
     }
+}
+
+fn rules() -> impl Strategy<Value = Rules> {
+    (
+        prop::sample::select(RewardModel::NAMES.to_vec()),
+        prop::sample::select(vec![ActionProtocol::Free, ActionProtocol::Paper]),
+        prop::sample::select(vec![StartRule::Uniform, StartRule::Paper]),
+        prop::sample::select(vec![Termination::Goal, Termination::paper_training()]),
+    )
+        .prop_map(|(reward, protocol, start, termination)| Rules {
+            reward,
+            protocol,
+            start,
+            termination,
+        })
 }
 
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(256))]
 
-    /// Random grids, block counts, reward models and action sequences (every action,
-    /// blocked moves included, across episode boundaries): the two backends give the same
-    /// observations, rewards, effects and episode ends.
+    /// Random grids, block counts, rules (reward model, action protocol, start rule,
+    /// termination) and action sequences (blocked moves included, across episode
+    /// boundaries): the two backends give the same observations, rewards, effects, masks
+    /// and episode ends. Each drawn number picks among the *legal* actions of the state, so
+    /// under `free` it is every action and under `paper` the protocol's.
     #[test]
     fn envs_agree_step_for_step(
         width in 2usize..=9,
         height in 2usize..=9,
         blocks in 2usize..=8,
-        reward in prop::sample::select(RewardModel::NAMES.to_vec()),
+        rules in rules(),
         seed in any::<u64>(),
         actions in prop::collection::vec(0usize..13, 1..300),
     ) {
         prop_assume!(blocks < width * height && blocks <= height);
-        let mut physics = Env::new(config(width, height, blocks, reward, Backend::Physics)).unwrap();
-        let mut grid = Env::new(config(width, height, blocks, reward, Backend::Grid)).unwrap();
-        prop_assert_eq!(physics.reset(seed), grid.reset(seed));
+        prop_assume!(rules.start.check_fits(Grid::new(width, height).unwrap(), blocks).is_ok());
+        let mut physics = Env::new(config(width, height, blocks, rules, Backend::Physics)).unwrap();
+        let mut grid = Env::new(config(width, height, blocks, rules, Backend::Grid)).unwrap();
+        let first = physics.reset(seed);
+        prop_assert_eq!(first, grid.reset(seed));
+        let mut legal = first.legal_actions();
         for &a in &actions {
-            let a = a % Action::count(blocks);
-            let p = physics.step_index(a).unwrap();
-            let g = grid.step_index(a).unwrap();
+            prop_assert_eq!(legal, physics.legal_actions());
+            let action = legal.nth(a % legal.count()).unwrap();
+            let p = physics.step(action).unwrap();
+            let g = grid.step(action).unwrap();
             prop_assert_eq!(p, g);
+            prop_assert_eq!(p.info.action_mask, p.observation.legal_actions());
+            legal = p.info.action_mask;
             if p.terminated || p.truncated {
-                prop_assert_eq!(physics.reset(None), grid.reset(None));
+                let next = physics.reset(None);
+                prop_assert_eq!(next, grid.reset(None));
+                legal = next.legal_actions();
             }
         }
     }

@@ -88,6 +88,7 @@ pub fn eval(args: EvalArgs) -> Result<()> {
             horizon: args.horizon,
             reward,
             backend,
+            ..EnvConfig::default()
         })?;
         let mut policy = model.policy(args.epsilon)?;
         let results = agent::play(&mut env, &mut policy, args.episodes, args.seed, None)?;

@@ -44,6 +44,7 @@ impl WorldArgs {
             horizon: self.horizon,
             reward,
             backend,
+            ..EnvConfig::default()
         };
         config.validate()?;
         Ok(config)
