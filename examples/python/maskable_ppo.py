@@ -33,16 +33,18 @@ def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--steps", type=int, default=200_000)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--profile", default="spec", help="spec, or original (the paper's protocol: a real mask)")
     args = parser.parse_args()
+    kwargs = dict(KWARGS, profile=args.profile)
     clock = time.perf_counter()
-    envs = make_vec_env("blockstack/Stack-v0", n_envs=8, seed=args.seed, env_kwargs=KWARGS)
+    envs = make_vec_env("blockstack/Stack-v0", n_envs=8, seed=args.seed, env_kwargs=kwargs)
     # The planes are 0/1, not image bytes: no scaling by 255.
     model = MaskablePPO("MlpPolicy", envs, seed=args.seed, n_steps=256, batch_size=256, gamma=0.99,
                         policy_kwargs={"normalize_images": False}, verbose=0)
     model.learn(total_timesteps=args.steps)
     train_seconds = time.perf_counter() - clock
 
-    env = gym.make("blockstack/Stack-v0", **KWARGS)
+    env = gym.make("blockstack/Stack-v0", **kwargs)
     successes, ratios = 0, []
     for k in range(200):
         obs, info = env.reset(seed=blockstack.episode_seed(args.seed + 1000, k))
