@@ -4,7 +4,7 @@
 
 Prints one table: (a) ``blockstack/Stack-v0`` through ``gymnasium.make``, one env, random
 legal actions; (b) the same through ``gymnasium.vector.SyncVectorEnv`` of 64; (c)
-``StackVectorEnv`` with 64, 1024 and 4096 envs on 1 and 2 threads (``copy=False``: the
+``StackVectorEnv`` with 64, 256, 1024 and 4096 envs on 1 and 2 threads (``copy=False``: the
 buffers are read in place, as PufferLib-style trainers do); (d) MiniGrid-Empty-8x8 and
 FrozenLake through (a) and (b). Every row uses the physics backend and ``planes``
 observations unless it says otherwise; actions are drawn uniformly from the legal ones
@@ -104,7 +104,7 @@ def main() -> None:
     print(f"  {'environment':<34} {'path':<36} {'env-steps/s':>14}")
     row("blockstack/Stack-v0", "gymnasium.make, 1 env", single(stack, s))
     row("blockstack/Stack-v0", "SyncVectorEnv, 64 envs", sync(stack, 64, s))
-    sizes = [64, 1024] if args.quick else [64, 1024, 4096]
+    sizes = [64, 256, 1024] if args.quick else [64, 256, 1024, 4096]
     for num_envs in sizes:
         for threads in (1, 2):
             row("blockstack/Stack-v0", f"StackVectorEnv, {num_envs} envs, {threads} thr", native(num_envs, threads, s))

@@ -30,6 +30,13 @@ _MODES = {AutoresetMode.NEXT_STEP: "next-step", AutoresetMode.SAME_STEP: "same-s
 _INFO_KEYS = ("action_mask", "blocked", "pairs_in_place", "goal")
 
 
+def _cores() -> int:
+    """The cores this process may run on."""
+    if hasattr(os, "sched_getaffinity"):
+        return len(os.sched_getaffinity(0))
+    return os.cpu_count() or 1
+
+
 class StackVectorEnv(VectorEnv):
     """``num_envs`` blockstack environments of one world, stepped together in Rust.
 
@@ -73,7 +80,7 @@ class StackVectorEnv(VectorEnv):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"cannot read render mode from {render_mode!r}: choose None or rgb_array")
         if threads is None:
-            threads = 1 if num_envs < PARALLEL_FROM_ENVS else (os.cpu_count() or 1)
+            threads = 1 if num_envs < PARALLEL_FROM_ENVS else _cores()
         steps = max_episode_steps if horizon is None else horizon
         self._native = _native.NativeVecEnv(
             num_envs, blocks, goal_text(goal), tuple(grid), reward, backend, steps, profile, obs, threads, _MODES[mode]
