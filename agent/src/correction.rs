@@ -65,10 +65,11 @@ impl Default for CorrectionRule {
 }
 
 impl CorrectionRule {
-    /// An error unless the margin is finite and not negative.
+    /// An error unless the margin is at least 0 and fits the table's floats
+    /// ([`crate::qlearning::check_fits_table`]).
     pub fn validate(&self) -> Result<()> {
-        if self.margin.is_finite() && self.margin >= 0.0 {
-            Ok(())
+        if self.margin >= 0.0 {
+            crate::qlearning::check_fits_table("the margin", self.margin)
         } else {
             Err(AgentError::Config(format!(
                 "the margin {} is not a finite number at least 0",

@@ -55,10 +55,21 @@ impl QParams {
             return bad("gamma", self.gamma, "[0, 1]");
         }
         check_epsilon(self.epsilon)?;
-        if !self.initial_q.is_finite() {
-            return bad("the initial Q-value", self.initial_q, "the finite numbers");
-        }
+        check_fits_table("the initial Q-value", self.initial_q)
+    }
+}
+
+/// An error unless `value` is a finite number that the table's 32-bit floats hold (at most
+/// `f32::MAX` in size): a value beyond it would become infinite in the table and could not
+/// be saved. `what` names it in the error.
+pub fn check_fits_table(what: &str, value: f64) -> Result<()> {
+    if value.is_finite() && value.abs() <= f64::from(f32::MAX) {
         Ok(())
+    } else {
+        Err(AgentError::Config(format!(
+            "{what} {value:e} does not fit the Q-table's 32-bit floats: use a finite value of at most {:e} in size",
+            f32::MAX
+        )))
     }
 }
 

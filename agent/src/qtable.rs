@@ -49,6 +49,19 @@ impl QTable {
         }
     }
 
+    /// A dense table whose row `k` is `values[k * columns..(k + 1) * columns]` (as
+    /// [`QTable::new`] would make it dense: `key_count * columns <= DENSE_LIMIT`, and
+    /// `values` holds exactly that many).
+    pub(crate) fn from_dense(key_count: u64, columns: usize, initial: f32, values: Vec<f32>) -> QTable {
+        debug_assert!(key_count * columns as u64 <= DENSE_LIMIT && values.len() as u64 == key_count * columns as u64);
+        QTable {
+            key_count,
+            columns,
+            initial,
+            store: Store::Dense(values),
+        }
+    }
+
     /// Number of keys (rows that may exist).
     pub fn key_count(&self) -> u64 {
         self.key_count

@@ -37,10 +37,10 @@ import csv
 import io
 import itertools
 import json
-import os
 import sys
-import tempfile
 from typing import Any, Dict, List
+
+from blockstack import _native
 
 
 def read_config(path: str) -> Dict[str, Dict[str, Any]]:
@@ -94,18 +94,12 @@ def table(rows: List[Dict[str, Any]], swept: List[str]) -> List[str]:
 
 
 def write_csv(path: str, rows: List[Dict[str, Any]], columns: List[str]) -> None:
-    """Writes the rows atomically: the file appears complete or not at all."""
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(dir=folder, prefix=".sweep-", suffix=".csv")
-    try:
-        with os.fdopen(fd, "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=columns)
-            w.writeheader()
-            w.writerows(rows)
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise
+    """Writes the rows through the Rust ``files`` crate: atomically, complete or not at all."""
+    out = io.StringIO()
+    w = csv.DictWriter(out, fieldnames=columns, lineterminator="\n")
+    w.writeheader()
+    w.writerows(rows)
+    _native.write_output(path, out.getvalue().encode())
 
 
 def main(argv=None) -> int:
@@ -116,15 +110,16 @@ def main(argv=None) -> int:
     parser.add_argument("--out", default="sweep-results.csv", help="the CSV table to write")
     args = parser.parse_args(argv)
     try:
+        config = read_config(args.config)
+        all_runs = runs(config)
+        _native.check_output(args.out)  # before any run, not after all of them
+    except (OSError, ValueError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    try:
         import ray
     except ImportError:
         print("the sweep runs on Ray: pip install 'blockstack[ray]'", file=sys.stderr)
-        return 2
-    try:
-        config = read_config(args.config)
-        all_runs = runs(config)
-    except (OSError, ValueError) as e:
-        print(f"error: {e}", file=sys.stderr)
         return 2
     if args.address:
         ray.init(address=args.address, logging_level="ERROR")

@@ -2,9 +2,10 @@
 //! CLI wrote (trajectories of `run --trajectory`, demonstration sessions of `demo` /
 //! `correct --record`) read back into the same arrays.
 
+use std::io::Read;
 use std::path::PathBuf;
 
-use agent::demos::DemoRecord;
+use agent::demos::{DemoRecord, MAX_RECORDING_BYTES};
 use agent::rollout::policy_rng;
 use agent::{ExactPolicy, OraclePolicy, Policy};
 use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods};
@@ -218,10 +219,15 @@ pub fn demonstrations<'py>(
     columns.into_dict(py, kind, config.grid, blocks)
 }
 
-/// Reads a file as text. Seam: the bounded reader of the `files` crate (issue 10) is not
-/// in the workspace yet; this is the one place that reads input files here.
+/// Reads a recording as text, through `files`' bounded reader: a recording of either kind
+/// is refused past `agent::demos::MAX_RECORDING_BYTES`, before memory grows past it.
 fn read_text(path: &std::path::Path) -> PyResult<String> {
-    std::fs::read_to_string(path).map_err(|e| value_error(format!("cannot read {}: {e}", path.display())))
+    let mut text = String::new();
+    files::open_bounded(path, MAX_RECORDING_BYTES, "a recording")
+        .or_value_error()?
+        .read_to_string(&mut text)
+        .map_err(|e| value_error(format!("cannot read {}: {e}", path.display())))?;
+    Ok(text)
 }
 
 /// A recording read line by line.

@@ -10,6 +10,7 @@
 //! - [`planning`]: the exact solver and the oracle (`blockstack.solve`).
 //! - [`demos`]: expert demonstrations and recorded episodes as arrays.
 //! - [`training`]: the tabular trainer, in-process (`blockstack.train`, the Ray sweep).
+//! - [`output`]: files written through the `files` crate (the sweep's table).
 //!
 //! Errors: every error of the crates reaches Python as `ValueError` with the crate's own
 //! message; a panic (a bug) is caught at the boundary and raised as `RuntimeError`, so
@@ -22,6 +23,7 @@ mod config;
 mod demos;
 mod env;
 mod observe;
+mod output;
 mod planning;
 mod training;
 mod vector;
@@ -36,6 +38,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(demos::read_recording, m)?)?;
     m.add_function(wrap_pyfunction!(training::train, m)?)?;
     m.add_function(wrap_pyfunction!(config::episode_seed, m)?)?;
+    m.add_function(wrap_pyfunction!(output::check_output, m)?)?;
+    m.add_function(wrap_pyfunction!(output::write_output, m)?)?;
     m.add("REWARDS", sim::RewardModel::NAMES.to_vec())?;
     Ok(())
 }

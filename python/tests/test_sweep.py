@@ -47,3 +47,10 @@ def test_a_small_sweep_runs_on_a_local_ray_with_two_cpus(tmp_path):
                                  seed=int(row["seed"]), gamma=float(row["gamma"]))
         assert int(row["successes"]) == alone["successes"]
         assert int(row["eval_failures"]) == alone["eval_failures"]
+
+
+def test_an_unwritable_table_is_refused_before_any_run(tmp_path, capsys):
+    config = tmp_path / "c.json"
+    config.write_text(json.dumps({"train": {"games": 5}, "sweep": {"seed": [1]}}))
+    assert sweep.main([str(config), "--out", str(tmp_path / "missing" / "r.csv")]) == 2
+    assert "does not exist" in capsys.readouterr().err

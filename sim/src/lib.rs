@@ -10,7 +10,7 @@
 //!   reward models of [`reward`]; [`VecEnv`] steps many in parallel, with either of
 //!   Gymnasium's autoreset modes.
 //! - [`render`] draws the world as text or pictures; [`trajectory`] writes episodes as
-//!   JSON Lines.
+//!   JSON Lines. Both write their files through the `files` crate's output helper.
 //!
 //! # Two worlds: `spec` and `original`
 //!
@@ -50,7 +50,6 @@ pub mod action;
 pub mod coded_state;
 pub mod env;
 pub mod error;
-pub mod files;
 pub mod goal;
 pub mod grid;
 pub mod grid_world;

@@ -6,9 +6,11 @@ use agent::correction::CorrectionConfig;
 use agent::{DemoWriter, DemonstratorProfile, QAgent};
 use anyhow::{Context, Result};
 use clap::Args;
+use files::{OutputPath, refuse_same_file};
 use sim::Goal;
 
 use super::demo::LearningArgs;
+use super::stdout::line;
 use super::train::parse_goals;
 
 /// Arguments of `blockstack correct`.
@@ -33,7 +35,7 @@ pub struct CorrectArgs {
     /// Where to write the corrected model.
     #[arg(long)]
     pub out: PathBuf,
-    /// Append every step to this JSON Lines file, as it happens.
+    /// Append every step to this JSON Lines file, as it happens (in place, line by line).
     #[arg(long)]
     pub record: Option<PathBuf>,
     #[command(flatten)]
@@ -42,6 +44,14 @@ pub struct CorrectArgs {
 
 /// Corrects, saves, and reports.
 pub fn correct(args: CorrectArgs) -> Result<()> {
+    let out = OutputPath::check(&args.out)?;
+    let record = args.record.as_deref().map(OutputPath::check).transpose()?;
+    super::stdout::claim_for_data(&[Some(&out), record.as_ref()])?;
+    refuse_same_file(&args.out, &args.model).context("--out and --model")?;
+    if let Some(record) = &args.record {
+        refuse_same_file(record, &args.model).context("--record and --model")?;
+        refuse_same_file(record, &args.out).context("--record and --out")?;
+    }
     let agent = QAgent::load(&args.model)?;
     let goals = parse_goals(args.goals.as_deref(), agent.blocks())?;
     let profile = DemonstratorProfile::preset(args.demonstrator)?;
@@ -51,15 +61,15 @@ pub fn correct(args: CorrectArgs) -> Result<()> {
         model: Some(args.model.display().to_string()),
         ..CorrectionConfig::new(profile.clone(), goals.clone(), args.demos, args.seed)
     };
-    let record = args.record.as_deref().map(DemoWriter::append).transpose()?;
+    let record = record.as_ref().map(DemoWriter::append).transpose()?;
     let corrected = agent::correct(agent, &config, record)?;
     corrected
         .agent
-        .save(&args.out)
+        .save(out.path())
         .context("the agent was corrected but not saved")?;
     let r = corrected.report;
     let goals: Vec<String> = goals.iter().map(Goal::to_string).collect();
-    println!(
+    line(format_args!(
         "demonstrator {} ({}) gave {} demonstrations on {} (seed {}): {} steps, {} corrections, {} reached the goal",
         args.demonstrator,
         profile.name,
@@ -69,10 +79,10 @@ pub fn correct(args: CorrectArgs) -> Result<()> {
         r.steps,
         r.corrections,
         r.successes
-    );
-    println!("saved {}", args.out.display());
+    ))?;
+    line(format_args!("saved {}", args.out.display()))?;
     if let Some(path) = &args.record {
-        println!("recorded to {}", path.display());
+        line(format_args!("recorded to {}", path.display()))?;
     }
     Ok(())
 }

@@ -6,7 +6,9 @@ use agent::correction::{CorrectionRule, CorrectionSession, DEFAULT_MARGIN, Sessi
 use agent::{DemoWriter, QAgent};
 use anyhow::{Context, Result};
 use clap::Args;
+use files::{OutputPath, refuse_same_file};
 
+use super::stdout::line;
 use super::train::parse_goals;
 use crate::tui::{self, app::DemoApp, app::SavePolicy};
 
@@ -23,7 +25,7 @@ pub struct DemoArgs {
     #[arg(long)]
     pub record: Option<PathBuf>,
     /// Where to save the corrected model (default: the model's name with `.corrected`
-    /// before `.json`).
+    /// before `.safetensors`).
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Save the corrected model after every this many corrections (0: only on quitting).
@@ -36,12 +38,12 @@ pub struct DemoArgs {
     pub seed: u64,
 }
 
-/// `agent.json` -> `agent.corrected.json`.
+/// `agent.safetensors` -> `agent.corrected.safetensors`.
 pub fn default_out(model: &Path) -> PathBuf {
     let stem = model
         .file_stem()
         .map_or("model".into(), |s| s.to_string_lossy().into_owned());
-    model.with_file_name(format!("{stem}.corrected.json"))
+    model.with_file_name(format!("{stem}.corrected.{}", agent::model::MODEL_EXTENSION))
 }
 
 /// How the agent proposes and learns during a correction session: the flags `demo` and
@@ -74,10 +76,20 @@ impl LearningArgs {
 
 /// Runs the terminal UI, then says what was saved.
 pub fn demo(args: DemoArgs) -> Result<()> {
+    let out = args.out.clone().unwrap_or_else(|| default_out(&args.model));
+    let record = args.record.as_deref().map(OutputPath::check).transpose()?;
+    anyhow::ensure!(
+        !OutputPath::check(&out)?.is_stdout() && !record.as_ref().is_some_and(OutputPath::is_stdout),
+        "demo draws on the terminal, so its --out and --record cannot be standard output (-): give file names"
+    );
+    refuse_same_file(&out, &args.model).context("--out and --model")?;
+    if let Some(record) = &args.record {
+        refuse_same_file(record, &args.model).context("--record and --model")?;
+        refuse_same_file(record, &out).context("--record and --out")?;
+    }
     let agent = QAgent::load(&args.model)?;
     let goals = parse_goals(args.goals.as_deref(), agent.blocks())?;
-    let out = args.out.clone().unwrap_or_else(|| default_out(&args.model));
-    let record = args.record.as_deref().map(DemoWriter::append).transpose()?;
+    let record = record.as_ref().map(DemoWriter::append).transpose()?;
     let world = SessionWorld::of(&agent);
     let session = CorrectionSession::new(
         agent,
@@ -105,15 +117,15 @@ pub fn demo(args: DemoArgs) -> Result<()> {
     }
     outcome?;
     let (_, _, report) = app.finish();
-    println!(
+    line(format_args!(
         "{} episodes, {} steps, {} corrections; corrected model saved to {}",
         report.episodes,
         report.steps,
         report.corrections,
         out.display()
-    );
+    ))?;
     if let Some(path) = &args.record {
-        println!("recorded to {}", path.display());
+        line(format_args!("recorded to {}", path.display()))?;
     }
     Ok(())
 }

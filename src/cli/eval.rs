@@ -10,6 +10,7 @@ use serde::Serialize;
 use sim::{Backend, Env, EnvConfig, Goal, GoalSpec, RewardModel};
 
 use super::run::RunReport;
+use super::stdout::line;
 use super::train::parse_goals;
 
 /// Arguments of `blockstack eval`.
@@ -120,26 +121,25 @@ pub fn eval(args: EvalArgs) -> Result<()> {
         per_goal,
     };
     if args.json {
-        println!("{}", serde_json::to_string(&report)?);
+        line(serde_json::to_string(&report)?)
     } else {
-        print_report(&report);
+        print_report(&report)
     }
-    Ok(())
 }
 
-fn print_report(r: &EvalReport) {
+fn print_report(r: &EvalReport) -> Result<()> {
     let run = &r.run;
-    println!(
+    line(format_args!(
         "agent {} from {}, {} blocks, grid {}, horizon {}, {} backend, seed {}, epsilon {}",
         run.agent, r.model, run.blocks, run.grid, run.horizon, run.backend, run.seed, r.epsilon
-    );
+    ))?;
     let fmt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.2}"));
-    println!(
+    line(format_args!(
         "{:<10} {:>8} {:>8} {:>10} {:>12} {:>12} {:>10} {:>14}",
         "goal", "episodes", "failures", "mean steps", "median steps", "mean optimum", "mean ratio", "mean, fail=H"
-    );
-    let line = |name: &str, s: &Summary, o: &Optimality, with_failures: f64| {
-        println!(
+    ))?;
+    let row = |name: &str, s: &Summary, o: &Optimality, with_failures: f64| {
+        line(format_args!(
             "{:<10} {:>8} {:>8} {:>10} {:>12} {:>12} {:>10} {:>14.2}",
             name,
             s.episodes,
@@ -149,12 +149,12 @@ fn print_report(r: &EvalReport) {
             fmt(o.mean_optimal_steps),
             o.mean_ratio_to_optimum.map_or("-".to_string(), |v| format!("{v:.4}")),
             with_failures
-        );
+        ))
     };
     for g in &r.per_goal {
-        line(&g.goal, &g.summary, &g.optimality, g.mean_steps_failures_as_horizon);
+        row(&g.goal, &g.summary, &g.optimality, g.mean_steps_failures_as_horizon)?;
     }
-    line("all", &run.summary, &r.optimality, r.mean_steps_failures_as_horizon);
-    println!("steps, optimum and ratio are over the episodes that reached the goal; the optimum is the");
-    println!("exact solver's shortest plan from each start; the last column counts a failure as the horizon H");
+    row("all", &run.summary, &r.optimality, r.mean_steps_failures_as_horizon)?;
+    line("steps, optimum and ratio are over the episodes that reached the goal; the optimum is the")?;
+    line("exact solver's shortest plan from each start; the last column counts a failure as the horizon H")
 }

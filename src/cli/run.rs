@@ -2,14 +2,16 @@
 
 use std::path::PathBuf;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
+use files::OutputPath;
 use serde::Serialize;
 use sim::trajectory::TrajectoryWriter;
 use sim::{Env, GoalSpec};
 
 use agent::{ExactPolicy, OraclePolicy, Policy, QAgent, RandomPolicy, Summary};
 
+use super::stdout::line;
 use super::world::WorldArgs;
 
 /// Which agent plays.
@@ -39,7 +41,8 @@ pub struct RunArgs {
     /// Base seed: episode k starts from seed episode_seed(seed, k).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Write every episode, step by step, to this file as JSON Lines.
+    /// Write every episode, step by step, to this file as JSON Lines (`-`: standard
+    /// output).
     #[arg(long)]
     pub trajectory: Option<PathBuf>,
     /// Print the result as one JSON object.
@@ -70,6 +73,11 @@ pub(super) struct RunReport {
 
 /// Plays the episodes and prints the summary.
 pub fn run(args: RunArgs) -> Result<()> {
+    let trajectory_out = args.trajectory.as_deref().map(OutputPath::check).transpose()?;
+    super::stdout::claim_for_data(&[trajectory_out.as_ref()])?;
+    if let (Some(out), Some(model)) = (&args.trajectory, &args.model) {
+        files::refuse_same_file(out, model).context("--trajectory and --model")?;
+    }
     let config = args.world.config()?;
     let q_agent = match (args.agent, &args.model) {
         (AgentKind::Q, Some(path)) => {
@@ -87,7 +95,7 @@ pub fn run(args: RunArgs) -> Result<()> {
         (AgentKind::Q, None) => anyhow::bail!("--agent q needs --model FILE"),
     };
     let mut env = Env::new(config)?;
-    let mut trajectory = args.trajectory.as_deref().map(TrajectoryWriter::create).transpose()?;
+    let mut trajectory = trajectory_out.as_ref().map(TrajectoryWriter::create).transpose()?;
     let results = agent::play(&mut env, policy.as_mut(), args.episodes, args.seed, trajectory.as_mut())?;
     if let Some(t) = trajectory {
         t.finish()?;
@@ -106,16 +114,15 @@ pub fn run(args: RunArgs) -> Result<()> {
         summary: Summary::of(&results),
     };
     if args.json {
-        println!("{}", serde_json::to_string(&report)?);
+        line(serde_json::to_string(&report)?)
     } else {
-        print_report(&report);
+        print_report(&report)
     }
-    Ok(())
 }
 
-fn print_report(r: &RunReport) {
+fn print_report(r: &RunReport) -> Result<()> {
     let s = &r.summary;
-    println!(
+    line(format_args!(
         "agent {}, {} blocks, goal {}, grid {}, horizon {}, {} backend, seed {}",
         r.agent,
         r.blocks,
@@ -124,10 +131,10 @@ fn print_report(r: &RunReport) {
         r.horizon,
         r.backend,
         r.seed
-    );
-    println!("episodes      {}", s.episodes);
-    println!("failures      {}", s.failures);
+    ))?;
+    line(format_args!("episodes      {}", s.episodes))?;
+    line(format_args!("failures      {}", s.failures))?;
     let fmt = |v: Option<f64>| v.map_or("- (no episode reached the goal)".to_string(), |v| format!("{v:.2}"));
-    println!("mean steps    {}", fmt(s.mean_steps));
-    println!("median steps  {}", fmt(s.median_steps));
+    line(format_args!("mean steps    {}", fmt(s.mean_steps)))?;
+    line(format_args!("median steps  {}", fmt(s.median_steps)))
 }

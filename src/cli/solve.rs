@@ -6,6 +6,8 @@ use oracle::{ExactSolver, Oracle};
 use serde::Serialize;
 use sim::{BlockId, Cell, Goal, Grid, State};
 
+use super::stdout::line;
+
 /// Which planner solves.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum SolverKind {
@@ -85,15 +87,15 @@ pub fn solve(args: SolveArgs) -> Result<()> {
             actions: plan.actions.iter().map(|a| a.index()).collect(),
             solver: args.solver.name(),
         };
-        println!("{}", serde_json::to_string(&report)?);
+        line(serde_json::to_string(&report)?)?;
     } else {
-        println!(
+        line(format_args!(
             "{} plan, goal {goal}, grid {grid}: {} actions",
             args.solver.name(),
             plan.len()
-        );
+        ))?;
         if !plan.is_empty() {
-            println!("{plan}");
+            line(&plan)?;
         }
     }
     Ok(())

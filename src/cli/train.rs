@@ -9,6 +9,8 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use sim::{Backend, Goal, Grid, RewardModel};
 
+use super::stdout::line;
+
 /// Arguments of `blockstack train`.
 #[derive(Debug, Args)]
 pub struct TrainArgs {
@@ -66,7 +68,7 @@ pub struct TrainArgs {
     /// World backend: physics (rapier2d) or grid (occupancy model).
     #[arg(long, default_value = "physics")]
     pub backend: String,
-    /// Where to write the trained model.
+    /// Where to write the trained model (a .safetensors file; checked before training).
     #[arg(long)]
     pub out: PathBuf,
 }
@@ -115,6 +117,8 @@ impl TrainArgs {
 
 /// Trains, showing a progress bar on a terminal, and saves the model.
 pub fn train(args: TrainArgs) -> Result<()> {
+    let out = files::OutputPath::check(&args.out)?;
+    super::stdout::claim_for_data(&[Some(&out)])?;
     let config = args.config()?;
     // Hidden by indicatif itself when stderr is not a terminal.
     let bar = ProgressBar::new(config.games);
@@ -143,7 +147,7 @@ pub fn train(args: TrainArgs) -> Result<()> {
         .with_context(|| "the agent was trained but not saved")?;
     let r = trained.report;
     let goals: Vec<String> = config.goals.iter().map(Goal::to_string).collect();
-    println!(
+    line(format_args!(
         "trained {} with the {} reward on {} ({} blocks, {} grid, {} backend, seed {})",
         trained.agent.name(),
         config.reward,
@@ -152,12 +156,11 @@ pub fn train(args: TrainArgs) -> Result<()> {
         config.grid,
         config.backend,
         config.seed
-    );
-    println!(
+    ))?;
+    line(format_args!(
         "{} games, {} reached the goal, {} steps; {} steps chosen by the oracle (assistance {}); {} final replay sweeps",
         r.games, r.successes, r.steps, r.assisted_steps, config.assist, r.replay_sweeps
-    );
-    println!("trained in {seconds:.1} s");
-    println!("saved {}", args.out.display());
-    Ok(())
+    ))?;
+    line(format_args!("trained in {seconds:.1} s"))?;
+    line(format_args!("saved {}", args.out.display()))
 }

@@ -303,7 +303,7 @@ pub(crate) mod tests {
         DemoApp::new(
             session,
             SavePolicy {
-                path: dir.join("corrected.json"),
+                path: dir.join("corrected.safetensors"),
                 every: 2,
             },
         )
@@ -364,7 +364,7 @@ pub(crate) mod tests {
     fn the_model_is_saved_every_n_corrections_and_on_quit() {
         let dir = tempdir();
         let mut app = app(&dir);
-        let path = dir.join("corrected.json");
+        let path = dir.join("corrected.safetensors");
         app.handle(Command::Override(Action::Pick(BlockId(0)))).unwrap();
         assert!(!path.exists());
         app.handle(Command::Override(Action::Up)).unwrap();
