@@ -13,6 +13,7 @@ mod dqn;
 mod eval;
 mod learn_from_demos;
 mod model;
+mod profile;
 mod render;
 mod reproduce;
 mod run;

@@ -6,7 +6,9 @@ use std::path::Path;
 use agent::{Policy, QAgent};
 use anyhow::Result;
 use neural::Dqn;
-use sim::{Grid, RewardModel};
+use sim::{Grid, Profile, RewardModel};
+
+use super::profile::Rules;
 
 /// A trained agent read from a model file.
 pub enum Model {
@@ -51,14 +53,25 @@ impl Model {
         }
     }
 
-    /// The reward it was trained with (sparse when the file does not say).
-    pub fn reward(&self) -> RewardModel {
+    /// The reward it was trained with, when the file says.
+    pub fn training_reward(&self) -> Option<RewardModel> {
         match self {
-            Model::Q(q) => q.training().map_or_else(
-                || RewardModel::from_name("sparse").expect("a known model"),
-                |t| t.reward,
-            ),
-            Model::Dqn(d) => d.config().reward,
+            Model::Q(q) => q.training().map(|t| t.reward),
+            Model::Dqn(d) => Some(d.config().reward),
+        }
+    }
+
+    /// The rules of the world it was trained in: a tabular model's
+    /// ([`Rules::of_model`]); a network's protocol and reward in the `spec` profile's world
+    /// (`blockstack dqn` trains there, from uniform starts).
+    pub fn rules(&self) -> Rules {
+        match self {
+            Model::Q(q) => Rules::of_model(q),
+            Model::Dqn(d) => Rules {
+                protocol: d.config().protocol,
+                reward: d.config().reward,
+                ..Rules::of(Profile::Spec)
+            },
         }
     }
 

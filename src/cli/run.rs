@@ -9,18 +9,20 @@ use serde::Serialize;
 use sim::trajectory::TrajectoryWriter;
 use sim::{Env, GoalSpec};
 
-use agent::{ExactPolicy, OraclePolicy, Policy, RandomPolicy, Summary};
+use agent::optimality::mean_steps_failures_as_horizon;
+use agent::{ExactPolicy, LearnerProfile, OracleKind, OraclePolicy, PaperOraclePolicy, Policy, RandomPolicy, Summary};
 
 use super::model::Model;
+use super::profile::{PlayRulesArgs, ProfileArg, Rules};
 use super::stdout::line;
 use super::world::WorldArgs;
 
 /// Which agent plays.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum AgentKind {
-    /// Uniformly random actions.
+    /// Uniformly random legal actions.
     Random,
-    /// The centroid + A* oracle.
+    /// An oracle: ours (centroid + A*) or the paper's (--oracle).
     Oracle,
     /// The exact solver: shortest plans.
     Exact,
@@ -38,6 +40,14 @@ pub struct RunArgs {
     pub agent: AgentKind,
     #[command(flatten)]
     pub world: WorldArgs,
+    #[command(flatten)]
+    pub profile: ProfileArg,
+    #[command(flatten)]
+    pub play: PlayRulesArgs,
+    /// The oracle `--agent oracle` plays: astar (ours) or paper (the authors' greedy walker)
+    /// [default: the profile's: astar under spec, paper under original]
+    #[arg(long)]
+    pub oracle: Option<OracleKind>,
     /// Episodes to play.
     #[arg(long, default_value_t = 100)]
     pub episodes: u64,
@@ -54,8 +64,9 @@ pub struct RunArgs {
     /// The model file the `q` or `dqn` agent plays (see `blockstack train`, `blockstack dqn`).
     #[arg(long, required_if_eq_any([("agent", "q"), ("agent", "dqn")]))]
     pub model: Option<PathBuf>,
-    /// The `q` or `dqn` agent's probability of a random action (the paper's test policy: 0.1).
-    #[arg(long, default_value_t = 0.1)]
+    /// The `q` or `dqn` agent's probability of a random legal action (the paper's test
+    /// policy: 0.1).
+    #[arg(long, default_value_t = agent::profile::TEST_EPSILON)]
     pub epsilon: f64,
 }
 
@@ -70,8 +81,42 @@ pub(super) struct RunReport {
     pub horizon: u32,
     pub backend: String,
     pub seed: u64,
+    pub profile: String,
+    pub protocol: String,
+    pub start: String,
     #[serde(flatten)]
     pub summary: Summary,
+    /// Mean steps over every episode, a failure counted as the horizon (how the paper's
+    /// figures read: 847.7 = 0.7 x 1000 + 0.3 x 492).
+    pub mean_steps_failures_as_horizon: f64,
+}
+
+impl RunReport {
+    /// The report of `results`, played by `agent` in the world of `config` under `rules`
+    /// with base seed `seed`; `goal` names the goals played (`None`: drawn per episode).
+    pub fn new(
+        agent: String,
+        config: &sim::EnvConfig,
+        rules: &Rules,
+        goal: Option<String>,
+        seed: u64,
+        results: &[agent::EpisodeResult],
+    ) -> RunReport {
+        RunReport {
+            agent,
+            blocks: config.blocks,
+            goal,
+            grid: config.grid.to_string(),
+            horizon: config.horizon,
+            backend: config.backend.to_string(),
+            seed,
+            profile: rules.profile.to_string(),
+            protocol: config.protocol.to_string(),
+            start: config.start.to_string(),
+            summary: Summary::of(results),
+            mean_steps_failures_as_horizon: mean_steps_failures_as_horizon(results, config.horizon),
+        }
+    }
 }
 
 /// Plays the episodes and prints the summary.
@@ -81,7 +126,6 @@ pub fn run(args: RunArgs) -> Result<()> {
     if let (Some(out), Some(model)) = (&args.trajectory, &args.model) {
         files::refuse_same_file(out, model).context("--trajectory and --model")?;
     }
-    let config = args.world.config()?;
     let model = match (args.agent, &args.model) {
         (AgentKind::Q | AgentKind::Dqn, Some(path)) => {
             let model = Model::load(path)?;
@@ -94,14 +138,24 @@ pub fn run(args: RunArgs) -> Result<()> {
                     if args.agent == AgentKind::Q { "q" } else { "dqn" }
                 ),
             }
-            model.check_world(config.grid, config.blocks)?;
             Some(model)
         }
         _ => None,
     };
+    // A model's own world unless the command line says otherwise.
+    let base = model.as_ref().map_or(Rules::of(sim::Profile::Spec), Model::rules);
+    let rules = base.played(args.profile, args.play, args.world.reward.as_deref())?;
+    let config = args.world.config(&rules)?;
+    if let Some(m) = &model {
+        m.check_world(config.grid, config.blocks)?;
+    }
+    let oracle = args.oracle.unwrap_or(LearnerProfile::of(rules.profile).oracle);
     let mut policy: Box<dyn Policy + '_> = match (args.agent, &model) {
         (AgentKind::Random, _) => Box::new(RandomPolicy),
-        (AgentKind::Oracle, _) => Box::new(OraclePolicy::new(config.grid)),
+        (AgentKind::Oracle, _) => match oracle {
+            OracleKind::Astar => Box::new(OraclePolicy::new(config.grid)),
+            OracleKind::Paper => Box::new(PaperOraclePolicy::new(config.grid)),
+        },
         (AgentKind::Exact, _) => Box::new(ExactPolicy::new(config.grid)),
         (AgentKind::Q | AgentKind::Dqn, Some(m)) => m.policy(args.epsilon)?,
         (AgentKind::Q | AgentKind::Dqn, None) => anyhow::bail!("--agent q and --agent dqn need --model FILE"),
@@ -112,19 +166,11 @@ pub fn run(args: RunArgs) -> Result<()> {
     if let Some(t) = trajectory {
         t.finish()?;
     }
-    let report = RunReport {
-        agent: policy.name(),
-        blocks: config.blocks,
-        goal: match config.goal {
-            GoalSpec::Fixed(g) => Some(g.to_string()),
-            GoalSpec::Random => None,
-        },
-        grid: config.grid.to_string(),
-        horizon: config.horizon,
-        backend: config.backend.to_string(),
-        seed: args.seed,
-        summary: Summary::of(&results),
+    let goal = match config.goal {
+        GoalSpec::Fixed(g) => Some(g.to_string()),
+        GoalSpec::Random => None,
     };
+    let report = RunReport::new(policy.name(), &config, &rules, goal, args.seed, &results);
     if args.json {
         line(serde_json::to_string(&report)?)
     } else {
@@ -135,18 +181,25 @@ pub fn run(args: RunArgs) -> Result<()> {
 fn print_report(r: &RunReport) -> Result<()> {
     let s = &r.summary;
     line(format_args!(
-        "agent {}, {} blocks, goal {}, grid {}, horizon {}, {} backend, seed {}",
+        "agent {}, {} blocks, goal {}, grid {}, horizon {}, {} backend, seed {}; profile {} (protocol {}, start {})",
         r.agent,
         r.blocks,
         r.goal.as_deref().unwrap_or("random"),
         r.grid,
         r.horizon,
         r.backend,
-        r.seed
+        r.seed,
+        r.profile,
+        r.protocol,
+        r.start
     ))?;
     line(format_args!("episodes      {}", s.episodes))?;
     line(format_args!("failures      {}", s.failures))?;
     let fmt = |v: Option<f64>| v.map_or("- (no episode reached the goal)".to_string(), |v| format!("{v:.2}"));
     line(format_args!("mean steps    {}", fmt(s.mean_steps)))?;
-    line(format_args!("median steps  {}", fmt(s.median_steps)))
+    line(format_args!("median steps  {}", fmt(s.median_steps)))?;
+    line(format_args!(
+        "mean steps, a failure counted as the horizon  {:.2}",
+        r.mean_steps_failures_as_horizon
+    ))
 }
