@@ -40,10 +40,13 @@ mod e6;
 mod e7;
 pub mod paper;
 mod report;
+mod spread;
 mod text;
 
-pub use arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome};
+pub use arms::{ArmResult, Goals, Measured, Row, Rules, Suite, Table, TestOutcome};
+pub use e1::{Decomposition, Gap, WorldArm};
 pub use report::{ReportFiles, write_report};
+pub use spread::{PaperInside, Placement, Spread};
 
 use agent::{QAgent, TrainConfig, Trained};
 use rayon::prelude::*;
@@ -107,8 +110,10 @@ pub struct Options {
 pub struct Scale {
     /// Agents trained (with different seeds) per learner arm of E2-E6.
     pub replicates: usize,
-    /// E1's games (the paper's 100).
+    /// E1's games per replicate (the paper's 100).
     pub e1_games: u64,
+    /// E1's replicates: sets of `e1_games` games of their own, in each world.
+    pub e1_replicates: usize,
     /// Test games of E2, E4's points, E5 and each table of E6 (the paper's 500), and of each
     /// goal in E7.
     pub test_games: u64,
@@ -139,6 +144,7 @@ impl Scale {
             Scale {
                 replicates: 2,
                 e1_games: 100,
+                e1_replicates: 5,
                 test_games: 100,
                 e3_games_per_goal: 50,
                 paper_games,
@@ -151,6 +157,7 @@ impl Scale {
             Scale {
                 replicates: 5,
                 e1_games: 100,
+                e1_replicates: 20,
                 test_games: 500,
                 e3_games_per_goal: 50,
                 paper_games,
@@ -306,6 +313,10 @@ pub struct Experiment {
     pub tables: Vec<Table>,
     /// Its learning curves (E4).
     pub curves: Vec<Curve>,
+    /// The gap between the two worlds, rule by rule (E1).
+    pub decomposition: Option<Decomposition>,
+    /// Where the paper's own figures cannot hold, each computed from them (E3's p-value).
+    pub paper_notes: Vec<String>,
     /// One line saying what the figures show, computed from them.
     pub reading: String,
     /// Its pictures.
@@ -454,6 +465,7 @@ mod tests {
         Scale {
             replicates: 2,
             e1_games: 6,
+            e1_replicates: 2,
             test_games: 6,
             e3_games_per_goal: 3,
             paper_games: 60,
@@ -516,7 +528,27 @@ mod tests {
         // Every arm's figures and the paper's beside them.
         let e5 = &json["experiments"][4]["tables"][0]["rows"];
         assert_eq!(e5[0]["paper"]["failures"], 186);
-        assert!(e5[2]["tests"][0]["p_value"].as_f64().is_some());
+        assert!(e5[2]["spec"]["tests"][0]["p_value"].as_f64().is_some());
+        // E1: the paper's figure, ours in both worlds, where the paper's lies against each
+        // world's replicates, and the gap rule by rule.
+        let e1 = &json["experiments"][0];
+        let row = &e1["tables"][0]["rows"][0];
+        for world in ["original", "spec"] {
+            assert_eq!(row[world]["arm"]["replicates"], 2, "{world}");
+            let inside = &row[world]["paper_inside"]["failure_rate"];
+            assert_eq!(inside["paper"], 0.04);
+            assert!(inside["inside"].is_boolean());
+        }
+        assert!(
+            readme.contains("| random | - | 4 / 100 |"),
+            "E1's row with the paper's figure first"
+        );
+        let worlds = e1["decomposition"]["worlds"].as_array().unwrap();
+        assert_eq!(worlds.len(), 4);
+        let gap = &e1["decomposition"]["gaps"][1];
+        let parts =
+            gap["protocol"].as_f64().unwrap() + gap["start"].as_f64().unwrap() + gap["interaction"].as_f64().unwrap();
+        assert!((parts - gap["gap"].as_f64().unwrap()).abs() < 1e-9);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

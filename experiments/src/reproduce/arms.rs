@@ -1,12 +1,15 @@
-//! What every experiment is made of: seeded test suites that every arm plays, the figures
-//! of an arm, the tests between arms, and tables of arms beside the paper's rows.
+//! What every experiment is made of: seeded test suites that every arm plays in a world
+//! (the paper's as coded, or ours), the figures of an arm, the tests between arms, and
+//! tables of arms: the paper's figure, ours in the paper's world and ours in the SPEC world
+//! side by side.
 
 use agent::optimality::mean_steps_failures_as_horizon;
 use agent::{EpisodeResult, Policy, Summary};
 use serde::Serialize;
-use sim::{Env, EnvConfig, Goal, GoalSpec, Grid, Observation};
+use sim::{ActionProtocol, Env, EnvConfig, Goal, GoalSpec, Grid, Observation, Profile, StartRule};
 
 use super::paper::{PaperRow, PaperTable};
+use super::spread::PaperInside;
 use super::{ProgressSink, Result};
 use crate::plots::{Arm, BoxPlot};
 use crate::stats::{self, Method, TestResult};
@@ -18,6 +21,44 @@ pub enum Goals {
     Each(Vec<Goal>),
     /// A goal drawn with each start (uniformly, from the start's seed).
     Drawn,
+}
+
+/// The rules of `sim` a suite's games are played under that differ between the paper's
+/// world as its authors coded it and ours: which actions are legal, and how a game starts.
+/// (The reward does not change what a trained agent does in a test game, and test games end
+/// at the goal in both worlds.)
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
+pub struct Rules {
+    /// Which actions are legal in a state.
+    pub protocol: ActionProtocol,
+    /// How a game's start is drawn.
+    pub start: StartRule,
+}
+
+impl Rules {
+    /// The rules of `profile`'s world.
+    pub const fn of(profile: Profile) -> Rules {
+        Rules {
+            protocol: profile.protocol(),
+            start: profile.start_rule(),
+        }
+    }
+
+    /// The profile whose world these rules are, if any (E1 also plays worlds between the two).
+    pub fn profile(self) -> Option<Profile> {
+        [Profile::Original, Profile::Spec]
+            .into_iter()
+            .find(|&p| Rules::of(p) == self)
+    }
+
+    /// "the original world", "the SPEC world", or "protocol paper, start rule uniform".
+    pub fn describe(self) -> String {
+        match self.profile() {
+            Some(Profile::Original) => "the original world".into(),
+            Some(Profile::Spec) => "the SPEC world".into(),
+            None => format!("protocol {}, start rule {}", self.protocol.name(), self.start.name()),
+        }
+    }
 }
 
 /// A set of test games, fixed by a seed: every arm of a comparison plays the same suite,
@@ -39,6 +80,8 @@ pub struct Suite {
     pub seed: u64,
     /// Steps before a game counts as failed.
     pub horizon: u32,
+    /// The world's rules.
+    pub rules: Rules,
 }
 
 impl Suite {
@@ -53,6 +96,8 @@ impl Suite {
             blocks: self.blocks,
             goal,
             horizon: self.horizon,
+            protocol: self.rules.protocol,
+            start: self.rules.start,
             ..EnvConfig::default()
         };
         let specs: Vec<GoalSpec> = match &self.goals {
@@ -109,16 +154,22 @@ impl Suite {
     }
 
     /// The length of a shortest plan from every game's start (the exact solver's), in
-    /// [`Suite::play`]'s order.
+    /// [`Suite::play`]'s order; none (no ratio to the optimum) in a world whose protocol the
+    /// solver does not plan under. A start that already meets the goal (the paper's start
+    /// rule keeps them) takes one action: the game ends on its first.
     pub fn optimum(&self) -> Result<Vec<u32>> {
+        if self.rules.protocol != ActionProtocol::Free {
+            return Ok(Vec::new());
+        }
         let solver = oracle::ExactSolver::new(self.grid());
         self.starts()?
             .iter()
-            .map(|obs| Ok(solver.distance(&obs.state, &obs.goal)?))
+            .map(|obs| Ok(solver.distance(&obs.state, &obs.goal)?.max(1)))
             .collect()
     }
 
-    /// A short description: "500 games, goal drawn per game, starts seed 1001".
+    /// A short description: "500 games, goal drawn per game, starts seed 1001" (the world
+    /// is the table column's).
     pub fn describe(&self) -> String {
         let goals = match &self.goals {
             Goals::Each(goals) if goals.len() == 1 => format!("{} games of goal {}", self.episodes, goals[0]),
@@ -188,7 +239,7 @@ pub struct ArmResult {
 
 impl ArmResult {
     /// The figures of `replicates` (each one agent's results on the same suite, whose
-    /// shortest plans are `optimum`).
+    /// shortest plans are `optimum`; empty for none).
     pub fn of(
         name: impl Into<String>,
         agent: impl Into<String>,
@@ -197,10 +248,38 @@ impl ArmResult {
         optimum: &[u32],
         horizon: u32,
     ) -> ArmResult {
-        let all: Vec<EpisodeResult> = replicates.iter().flatten().copied().collect();
         let optimal: Vec<u32> = replicates.iter().flat_map(|_| optimum.iter().copied()).collect();
+        Self::of_games(name, agent, test_epsilon, replicates, &optimal, horizon)
+    }
+
+    /// The figures of one policy's `games`, cut into replicates of `per_replicate` games in
+    /// order (E1: each replicate a set of the paper's number of games of its own); `optimum`
+    /// holds each game's shortest plan (empty for none).
+    pub fn of_sets(
+        name: impl Into<String>,
+        agent: impl Into<String>,
+        games: &[EpisodeResult],
+        per_replicate: usize,
+        optimum: &[u32],
+        horizon: u32,
+    ) -> ArmResult {
+        let replicates: Vec<Vec<EpisodeResult>> = games.chunks(per_replicate.max(1)).map(<[_]>::to_vec).collect();
+        Self::of_games(name, agent, None, &replicates, optimum, horizon)
+    }
+
+    /// The figures of `replicates`, whose games' shortest plans are `optimal`, replicate
+    /// after replicate (empty for none).
+    fn of_games(
+        name: impl Into<String>,
+        agent: impl Into<String>,
+        test_epsilon: Option<f64>,
+        replicates: &[Vec<EpisodeResult>],
+        optimal: &[u32],
+        horizon: u32,
+    ) -> ArmResult {
+        let all: Vec<EpisodeResult> = replicates.iter().flatten().copied().collect();
         let summary = Summary::of(&all);
-        let optimality = agent::optimality::Optimality::of(&all, &optimal);
+        let optimality = agent::optimality::Optimality::of(&all, optimal);
         let failures_per_replicate: Vec<usize> = replicates.iter().map(|r| Summary::of(r).failures).collect();
         ArmResult {
             name: name.into(),
@@ -225,6 +304,25 @@ impl ArmResult {
     /// The share of games that failed, in `[0, 1]`.
     pub fn failure_rate(&self) -> f64 {
         self.failures / self.games.max(1) as f64
+    }
+
+    /// Each replicate's share of games that failed.
+    pub fn failure_rate_per_replicate(&self) -> Vec<f64> {
+        self.failures_per_replicate
+            .iter()
+            .map(|&f| f as f64 / self.games.max(1) as f64)
+            .collect()
+    }
+
+    /// Each replicate's mean steps, a failure counted as the horizon.
+    pub fn mean_steps_failures_at_horizon_per_replicate(&self) -> Vec<f64> {
+        if self.games == 0 {
+            return Vec::new();
+        }
+        self.steps
+            .chunks(self.games)
+            .map(|c| c.iter().sum::<f64>() / c.len() as f64)
+            .collect()
     }
 }
 
@@ -342,23 +440,86 @@ fn per_agent(arm: &ArmResult, base: &ArmResult, test: impl Fn(&[f64], &[f64]) ->
         .collect()
 }
 
-/// One row of a table: our arm, the paper's if it has one, and our tests.
+/// One world's measurement of an arm: its figures, its tests (in the order of
+/// [`Table::tests`], `None` where a test does not apply), and where the paper's figures
+/// fall against its replicates.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Row {
-    /// Ours.
-    pub ours: ArmResult,
-    /// The paper's.
-    pub paper: Option<PaperRow>,
-    /// Our tests, in the order of [`Table::tests`]; `None` where a test does not apply.
+pub struct Measured {
+    /// The arm's figures.
+    pub arm: ArmResult,
+    /// Its tests.
     pub tests: Vec<Option<TestOutcome>>,
+    /// The paper's figures against the spread of this arm's replicates, for a row the paper
+    /// has.
+    pub paper_inside: Option<PaperInside>,
 }
 
-/// A table of arms, ours beside the paper's.
+/// One row of a table: the paper's arm, ours in the paper's world as coded (`original`), and
+/// ours in the SPEC world (`spec`); a row may lack any of them (E7 and our learner exist in
+/// the SPEC world only).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Row {
+    /// The arm's name.
+    pub name: String,
+    /// The paper's.
+    pub paper: Option<PaperRow>,
+    /// Ours under the `original` profile.
+    pub original: Option<Measured>,
+    /// Ours in the SPEC world.
+    pub spec: Option<Measured>,
+}
+
+impl Row {
+    /// A row of `paper`'s arm (if any) and ours in each world, each arm with its tests;
+    /// the name is the first arm's.
+    pub fn new(
+        paper: Option<PaperRow>,
+        original: Option<(ArmResult, Vec<Option<TestOutcome>>)>,
+        spec: Option<(ArmResult, Vec<Option<TestOutcome>>)>,
+    ) -> Row {
+        let measured = |m: Option<(ArmResult, Vec<Option<TestOutcome>>)>| {
+            m.map(|(arm, tests)| Measured {
+                paper_inside: paper.as_ref().and_then(|p| PaperInside::of(p, &arm)),
+                arm,
+                tests,
+            })
+        };
+        let (original, spec) = (measured(original), measured(spec));
+        let name = original
+            .iter()
+            .chain(&spec)
+            .map(|m| m.arm.name.clone())
+            .next()
+            .or_else(|| paper.map(|p| p.arm.to_string()))
+            .unwrap_or_default();
+        Row {
+            name,
+            paper,
+            original,
+            spec,
+        }
+    }
+
+    /// A row of the SPEC world only, beside the paper's arm if any.
+    pub fn spec(paper: Option<PaperRow>, arm: ArmResult, tests: Vec<Option<TestOutcome>>) -> Row {
+        Row::new(paper, None, Some((arm, tests)))
+    }
+
+    /// The measurement in `profile`'s world.
+    pub fn in_world(&self, profile: Profile) -> Option<&Measured> {
+        match profile {
+            Profile::Original => self.original.as_ref(),
+            Profile::Spec => self.spec.as_ref(),
+        }
+    }
+}
+
+/// A table of arms, the paper's beside ours in each world.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Table {
     /// The table's title.
     pub title: String,
-    /// The games every arm played.
+    /// The games every arm played, per world: "original: ...", "spec: ...".
     pub suite: String,
     /// The paper's table this one reproduces, if any.
     pub paper: Option<PaperTable>,
@@ -371,7 +532,15 @@ pub struct Table {
 impl Table {
     /// The row named `name`.
     pub fn row(&self, name: &str) -> Option<&Row> {
-        self.rows.iter().find(|r| r.ours.name == name)
+        self.rows.iter().find(|r| r.name == name)
+    }
+
+    /// The worlds some row was measured in, the paper's first.
+    pub fn worlds(&self) -> Vec<Profile> {
+        [Profile::Original, Profile::Spec]
+            .into_iter()
+            .filter(|&p| self.rows.iter().any(|r| r.in_world(p).is_some()))
+            .collect()
     }
 }
 
@@ -441,6 +610,7 @@ mod tests {
             episodes: 4,
             seed: 9,
             horizon: 1000,
+            rules: Rules::of(Profile::Spec),
         }
     }
 

@@ -1,9 +1,9 @@
 //! E2: the paper's Q-learner with 2 blocks, tested with epsilon 0.01 and 0.05 (paper
 //! section VI-A).
 
-use sim::Goal;
+use sim::{Goal, Profile};
 
-use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, mean_of, play_replicates};
+use super::arms::{ArmResult, Goals, Row, Rules, Suite, Table, TestOutcome, mean_of, play_replicates};
 use super::text::{num, significance};
 use super::{Context, Experiment, HORIZON, Result, Scale, Setting, paper, paper_learner};
 
@@ -25,6 +25,7 @@ pub(super) fn run(ctx: &Context) -> Result<Experiment> {
         episodes: ctx.scale.test_games,
         seed: ctx.seeds.test,
         horizon: HORIZON,
+        rules: Rules::of(Profile::Spec),
     };
     let optimum = suite.optimum()?;
     let mut arms = Vec::new();
@@ -72,16 +73,8 @@ pub(super) fn run(ctx: &Context) -> Result<Experiment> {
         num(a.mean_ratio_to_optimum, 1),
     );
     let rows = vec![
-        Row {
-            ours: arms[0].clone(),
-            paper: Some(paper::E2.rows[0]),
-            tests: vec![None],
-        },
-        Row {
-            ours: arms[1].clone(),
-            paper: Some(paper::E2.rows[1]),
-            tests: vec![Some(test)],
-        },
+        Row::spec(Some(paper::E2.rows[0]), arms[0].clone(), vec![None]),
+        Row::spec(Some(paper::E2.rows[1]), arms[1].clone(), vec![Some(test)]),
     ];
     let config = ctx.paper_config(&goals, 0);
     Ok(Experiment {
@@ -128,6 +121,8 @@ pub(super) fn run(ctx: &Context) -> Result<Experiment> {
             rows,
         }],
         curves: Vec::new(),
+        decomposition: None,
+        paper_notes: Vec::new(),
         reading,
         figures: Vec::new(),
     })

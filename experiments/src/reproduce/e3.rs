@@ -3,8 +3,9 @@
 //! VI-B1). Our learner, trained on one goal only, is tested on the same games.
 
 use agent::{QAgent, RandomPolicy};
+use sim::Profile;
 
-use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, mean_of, play_replicates};
+use super::arms::{ArmResult, Goals, Row, Rules, Suite, Table, TestOutcome, mean_of, play_replicates};
 use super::text::{num, p_value, significance};
 use super::{Context, Experiment, HORIZON, Result, Scale, Setting, goals, paper, paper_learner};
 
@@ -23,6 +24,7 @@ pub(super) fn run(ctx: &Context, ours: &QAgent) -> Result<Experiment> {
         episodes: ctx.scale.e3_games_per_goal,
         seed: ctx.seeds.test,
         horizon: HORIZON,
+        rules: Rules::of(Profile::Spec),
     };
     let optimum = suite.optimum()?;
     let eps = ctx.test_epsilon();
@@ -82,28 +84,16 @@ pub(super) fn run(ctx: &Context, ours: &QAgent) -> Result<Experiment> {
     );
     let config = ctx.paper_config(&train_goals, 0);
     let mut rows = vec![
-        Row {
-            ours: q,
-            paper: Some(theirs[0]),
-            tests: vec![Some(ks_q)],
-        },
-        Row {
-            ours: random,
-            paper: Some(theirs[1]),
-            tests: vec![None],
-        },
+        Row::spec(Some(theirs[0]), q, vec![Some(ks_q)]),
+        Row::spec(Some(theirs[1]), random, vec![None]),
     ];
     let mut ours_arms = ours_arms.into_iter();
-    rows.push(Row {
-        ours: ours_arms.next().expect("two arms"),
-        paper: None,
-        tests: vec![Some(ks_ours)],
-    });
-    rows.push(Row {
-        ours: ours_arms.next().expect("two arms"),
-        paper: None,
-        tests: vec![None],
-    });
+    rows.push(Row::spec(
+        None,
+        ours_arms.next().expect("two arms"),
+        vec![Some(ks_ours)],
+    ));
+    rows.push(Row::spec(None, ours_arms.next().expect("two arms"), vec![None]));
     Ok(Experiment {
         id: "E3".into(),
         title: "Unseen goals".into(),
@@ -150,9 +140,55 @@ pub(super) fn run(ctx: &Context, ours: &QAgent) -> Result<Experiment> {
             rows,
         }],
         curves: Vec::new(),
+        decomposition: None,
+        paper_notes: vec![paper_ks_note()?],
         reading,
         figures: Vec::new(),
     })
+}
+
+/// The largest p-value the paper's own E3 counts allow, and the smallest distance between
+/// the two empirical distributions behind it.
+///
+/// Whatever the successes' steps, the share of games that ended before the horizon is the
+/// learner's successes against the random agent's (30% against 3% in the paper), so the two
+/// empirical distributions differ by at least the difference of the failure shares just
+/// below the horizon. The two-sample test's p-value only falls as that distance grows; the
+/// least separated samples the counts allow (every success at one same step count, every
+/// failure at the horizon) give the largest p-value, which is what this returns.
+pub(super) fn paper_ks_bound() -> Result<crate::stats::TestResult> {
+    let [learner, random] = [paper::E3.rows[0], paper::E3.rows[1]];
+    let sample = |row: paper::PaperRow| -> Vec<f64> {
+        let (failures, games) = (row.failures.unwrap_or(0), row.games.unwrap_or(0));
+        (0..games)
+            .map(|k| {
+                if k < failures {
+                    f64::from(HORIZON)
+                } else {
+                    f64::from(HORIZON) / 2.0
+                }
+            })
+            .collect()
+    };
+    Ok(crate::stats::ks_2samp(&sample(learner), &sample(random))?)
+}
+
+/// The note on the paper's own KS p-value, from [`paper_ks_bound`].
+fn paper_ks_note() -> Result<String> {
+    let bound = paper_ks_bound()?;
+    let [learner, random] = [paper::E3.rows[0], paper::E3.rows[1]];
+    Ok(format!(
+        "The paper's KS p = {} cannot come from its own samples: with {} against {} failures of {} games, the two \
+         empirical distributions differ by at least {:.2} at {HORIZON} steps (the shares of games won before it), \
+         and the exact two-sample test on the least separated samples those counts allow gives p = {}: no samples \
+         with the paper's counts give a larger p.",
+        p_value(learner.p_value.unwrap_or_default()),
+        learner.failures.unwrap_or_default(),
+        random.failures.unwrap_or_default(),
+        learner.games.unwrap_or_default(),
+        bound.statistic,
+        p_value(bound.p_value),
+    ))
 }
 
 /// What our learner is, from its recorded training.
@@ -180,5 +216,21 @@ pub(super) fn ours_description(ours: &QAgent) -> String {
             )
         }
         None => ours.name(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_papers_counts_bound_its_ks_p_value() {
+        // ORIGINAL.md: 70 against 97 failures of 100 differ by at least 0.27, so p <= 0.0013.
+        let bound = paper_ks_bound().unwrap();
+        assert!((bound.statistic - 0.27).abs() < 1e-12, "{}", bound.statistic);
+        assert!(bound.p_value < 0.0014 && bound.p_value > 0.0005, "{}", bound.p_value);
+        assert!(bound.p_value < paper::E3.rows[0].p_value.unwrap() / 50.0);
+        let note = paper_ks_note().unwrap();
+        assert!(note.contains("at least 0.27 at 1000 steps"), "{note}");
     }
 }

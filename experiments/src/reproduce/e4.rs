@@ -3,9 +3,9 @@
 
 use agent::{QAgent, TrainConfig, Trainer};
 use rayon::prelude::*;
-use sim::Goal;
+use sim::{Goal, Profile};
 
-use super::arms::{ArmResult, Goals, Suite};
+use super::arms::{ArmResult, Goals, Rules, Suite};
 use super::e3::ours_description;
 use super::text::num;
 use super::{
@@ -27,6 +27,7 @@ fn suite(ctx: &Context) -> Suite {
         episodes: ctx.scale.test_games,
         seed: ctx.seeds.test,
         horizon: HORIZON,
+        rules: Rules::of(Profile::Spec),
     }
 }
 
@@ -245,6 +246,8 @@ pub(super) fn experiment(ctx: &Context, paper_learner: Curve, ours: Curve) -> Ex
         ],
         tables: Vec::new(),
         curves: vec![paper_learner, ours],
+        decomposition: None,
+        paper_notes: Vec::new(),
         reading,
         figures,
     }

@@ -3,9 +3,9 @@
 //! none.
 
 use agent::{Assist, QAgent};
-use sim::Goal;
+use sim::{Goal, Profile};
 
-use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, play_replicates, steps_box_plot};
+use super::arms::{ArmResult, Goals, Row, Rules, Suite, Table, TestOutcome, play_replicates, steps_box_plot};
 use super::text::{fewer_or_more, num, significance};
 use super::{Context, Drawing, Experiment, Figure, HORIZON, Result, Scale, Setting, paper, paper_learner};
 
@@ -31,6 +31,7 @@ pub(super) fn run(ctx: &Context) -> Result<(Experiment, QAgent)> {
         episodes: ctx.scale.test_games,
         seed: ctx.seeds.test,
         horizon: HORIZON,
+        rules: Rules::of(Profile::Spec),
     };
     let optimum = suite.optimum()?;
     let eps = ctx.test_epsilon();
@@ -107,11 +108,7 @@ pub(super) fn run(ctx: &Context) -> Result<(Experiment, QAgent)> {
         .into_iter()
         .zip(paper::TABLE_I.rows)
         .enumerate()
-        .map(|(i, (ours, &theirs))| Row {
-            ours,
-            paper: Some(theirs),
-            tests: vec![if i == 0 { None } else { tests.next() }],
-        })
+        .map(|(i, (ours, &theirs))| Row::spec(Some(theirs), ours, vec![if i == 0 { None } else { tests.next() }]))
         .collect();
     let config = ctx.paper_config(&all, 0);
     let experiment = Experiment {
@@ -161,6 +158,8 @@ pub(super) fn run(ctx: &Context) -> Result<(Experiment, QAgent)> {
             rows,
         }],
         curves: Vec::new(),
+        decomposition: None,
+        paper_notes: Vec::new(),
         reading,
         figures: vec![figure],
     };

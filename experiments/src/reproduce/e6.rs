@@ -6,9 +6,9 @@
 
 use agent::{CorrectionConfig, DemonstratorProfile, QAgent};
 use rayon::prelude::*;
-use sim::Goal;
+use sim::{Goal, Profile};
 
-use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, play_replicates, steps_box_plot};
+use super::arms::{ArmResult, Goals, Measured, Row, Rules, Suite, Table, TestOutcome, play_replicates, steps_box_plot};
 use super::text::{num, significance};
 use super::{Context, Drawing, Experiment, Figure, HORIZON, Result, Scale, Setting, goals, paper, paper_learner};
 
@@ -82,6 +82,7 @@ pub(super) fn run(ctx: &Context) -> Result<Experiment> {
             episodes: ctx.scale.test_games,
             seed: ctx.seeds.test,
             horizon: HORIZON,
+            rules: Rules::of(Profile::Spec),
         };
         let optimum = suite.optimum()?;
         let base = play_replicates(
@@ -136,11 +137,7 @@ pub(super) fn run(ctx: &Context) -> Result<Experiment> {
             .into_iter()
             .zip(theirs.rows)
             .enumerate()
-            .map(|(i, (ours, &p))| Row {
-                ours,
-                paper: Some(p),
-                tests: vec![if i == 0 { None } else { tests.next() }],
-            })
+            .map(|(i, (ours, &p))| Row::spec(Some(p), ours, vec![if i == 0 { None } else { tests.next() }]))
             .collect();
         tables.push(Table {
             title: title.into(),
@@ -217,6 +214,8 @@ pub(super) fn run(ctx: &Context) -> Result<Experiment> {
         ],
         tables,
         curves: Vec::new(),
+        decomposition: None,
+        paper_notes: Vec::new(),
         reading,
         figures,
     })
@@ -248,15 +247,16 @@ fn tally_text((better, significant, worse, n): (usize, usize, usize, usize)) -> 
     format!("{better} of {n} better, {significant} significantly{worse}")
 }
 
-/// Our table's tally, then the paper's.
-fn tallies(t: &Table) -> (String, String) {
+/// Our table's tally in `world`, then the paper's.
+fn tallies(t: &Table, world: Profile) -> (String, String) {
     let ours: Vec<(f64, Option<f64>)> = t
         .rows
         .iter()
-        .map(|r| {
+        .filter_map(|r| r.in_world(world))
+        .map(|m| {
             (
-                r.ours.mean_steps_failures_at_horizon,
-                r.tests.first().cloned().flatten().map(|x| x.p_value),
+                m.arm.mean_steps_failures_at_horizon,
+                m.tests.first().cloned().flatten().map(|x| x.p_value),
             )
         })
         .collect();
@@ -282,30 +282,35 @@ fn tallies(t: &Table) -> (String, String) {
 /// The reading: how the corrected agents fared against the baseline on all goals, and on
 /// the unseen ones (mean steps with a failure counted as 1000; significance by Wilcoxon).
 fn reading(tables: &[Table]) -> String {
+    let world = Profile::Spec;
     let all = &tables[0];
+    fn in_world(r: &Row, world: Profile) -> &Measured {
+        r.in_world(world).expect("every row has the world")
+    }
     let best = all.rows[1..]
         .iter()
+        .map(|r| in_world(r, world))
         .min_by(|a, b| {
-            a.ours
+            a.arm
                 .mean_steps_failures_at_horizon
-                .total_cmp(&b.ours.mean_steps_failures_at_horizon)
+                .total_cmp(&b.arm.mean_steps_failures_at_horizon)
         })
         .expect("demonstrators");
-    let (ours_all, paper_all) = tallies(all);
+    let (ours_all, paper_all) = tallies(all, world);
     let unseen: Vec<String> = tables[1..]
         .iter()
         .map(|t| {
-            let (ours, theirs) = tallies(t);
+            let (ours, theirs) = tallies(t, world);
             format!("{}: {ours} (paper: {theirs})", t.title.to_lowercase())
         })
         .collect();
     format!(
         "Corrected agents against the baseline's mean steps on all goals: {ours_all} (paper: {paper_all}); the \
          best, {}, failed {} games per {} against the baseline's {}, {}. On the goals no one demonstrated, {}.",
-        best.ours.name,
-        num(Some(best.ours.failures), 1),
-        best.ours.games,
-        num(Some(all.rows[0].ours.failures), 1),
+        best.arm.name,
+        num(Some(best.arm.failures), 1),
+        best.arm.games,
+        num(Some(in_world(&all.rows[0], world).arm.failures), 1),
         best.tests[0]
             .as_ref()
             .map_or("not tested".into(), |t| significance(t.p_value)),

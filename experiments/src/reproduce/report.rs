@@ -4,9 +4,10 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use super::arms::{ArmResult, Table, TestOutcome};
-use super::text::{ALPHA, failures, num, p_value};
-use super::{Curve, Drawing, Experiment, ReproduceError, Reproduction, Result};
+use super::arms::{ArmResult, Measured, Table, TestOutcome};
+use super::spread::Spread;
+use super::text::{ALPHA, failures, num, p_value, verdict};
+use super::{Curve, Decomposition, Drawing, Experiment, ReproduceError, Reproduction, Result};
 use crate::plots::{GifOptions, bar_chart, box_plot, episode_gif, learning_curve};
 
 /// The files a report is made of.
@@ -71,10 +72,12 @@ pub fn markdown(r: &Reproduction) -> String {
     let _ = writeln!(md, "# The paper reproduced\n");
     let _ = writeln!(
         md,
-        "Written by `{command}`: every experiment of SPEC section 9 on the paper's world (7 x 7 grid, horizon {}, \
-         rapier2d physics), ours beside the figures of \"Interactive Robot Learning\" section VI. Every figure \
-         below is computed by the run; the paper's come from `experiments::reproduce::paper`. The same figures, \
-         and more, are in [`results.json`](results.json).{}\n",
+        "Written by `{command}`: every experiment of SPEC section 9 on the paper's 7 x 7 grid (horizon {}, rapier2d \
+         physics), the figures of \"Interactive Robot Learning\" section VI beside ours in two worlds: `original`, \
+         the paper's world as its authors coded it (their action protocol, start rule, reward, representation and \
+         schedule), and `spec`, ours (SPEC.md). E1-E6 are run in both; E7 and our own learner in the SPEC world. \
+         Every figure below is computed by the run; the paper's come from `experiments::reproduce::paper`. The same \
+         figures, and more, are in [`results.json`](results.json).{}\n",
         r.paper_settings.horizon,
         if r.options.quick {
             " **Quick run:** small counts to check the pipeline, not the paper's; run without `--quick` for \
@@ -108,6 +111,21 @@ pub fn markdown(r: &Reproduction) -> String {
              agents with the same seed.",
             r.scale.replicates, r.seeds.training
         ),
+        "**Worlds.** Each figure of the paper stands beside ours in the `original` world (the paper's, as coded) \
+         and in the `spec` world (ours): columns \"paper\", \"original\", \"spec\"."
+            .into(),
+        format!(
+            "**Spread.** A replicate repeats the paper's experiment once (a learner arm: one agent, its own training \
+             seed; E1: one set of the paper's 100 games). The spread of a figure is its range over our replicates, \
+             smallest to largest, printed in brackets; the paper's figure is *inside* when it lies in that range. \
+             Were the paper's figure one more draw of ours, it would land inside the range of R replicates with \
+             probability (R - 1) / (R + 1): {}% for the {} agents of a learner arm, {}% for E1's {} sets of games. \
+             Failures are compared as shares of the games played.",
+            coverage(r.scale.replicates),
+            r.scale.replicates,
+            coverage(r.scale.e1_replicates),
+            r.scale.e1_replicates
+        ),
         "**Steps.** The paper's mean steps count a failed game as the horizon (1000); \"mean steps*\" is that \
          figure. Beside it: the mean and median over the games that reached the goal, and their mean ratio to \
          the shortest plan from the same start (the exact solver's). Tests compare steps with a failure at 1000."
@@ -128,6 +146,12 @@ pub fn markdown(r: &Reproduction) -> String {
         experiment(&mut md, e);
     }
     md
+}
+
+/// The chance, in whole percent, that one more draw lands inside the range of `replicates`
+/// draws ([`Spread::coverage`]).
+fn coverage(replicates: usize) -> String {
+    format!("{:.0}", 100.0 * Spread::coverage_of(replicates))
 }
 
 /// The GitHub anchor of a section headed "E1: title".
@@ -152,8 +176,14 @@ fn experiment(md: &mut String, e: &Experiment) {
     for t in &e.tables {
         table(md, t);
     }
+    if let Some(d) = &e.decomposition {
+        decomposition(md, d);
+    }
     for c in &e.curves {
         curve(md, c);
+    }
+    for note in &e.paper_notes {
+        let _ = writeln!(md, "\n**The paper's own figures.** {note}");
     }
     let _ = writeln!(md, "\n**Reading.** {}", e.reading);
     for f in &e.figures {
@@ -177,8 +207,24 @@ fn epsilon(arm: &ArmResult) -> String {
     }
 }
 
+/// A test's cell: its p-value, and for how many agents alone p is below [`ALPHA`].
+fn test_cell(test: Option<&TestOutcome>) -> String {
+    match test {
+        Some(x) if x.method == TestOutcome::IDENTICAL => "identical".into(),
+        Some(x) => match x.agents_below(ALPHA) {
+            Some((k, n)) => format!("{} ({k}/{n})", p_value(x.p_value)),
+            None => p_value(x.p_value),
+        },
+        None => "-".into(),
+    }
+}
+
+/// A table: the paper's figure, then ours in each world the table has, figure by figure.
+/// The median is shown only in a table of one world (it is in `results.json` for all).
 fn table(md: &mut String, t: &Table) {
+    let worlds = t.worlds();
     let paper = t.paper.is_some();
+    let paper_test = t.paper.and_then(|p| p.test);
     let _ = writeln!(md, "\n### {}\n", t.title);
     if let Some(p) = &t.paper {
         let _ = writeln!(md, "Paper: {}. Ours: {}.\n", p.source, t.suite);
@@ -186,60 +232,133 @@ fn table(md: &mut String, t: &Table) {
         let _ = writeln!(md, "{}.\n", t.suite);
     }
     let mut head = vec!["arm".to_string(), "ε".into()];
-    if paper {
-        head.push("failures, paper".into());
+    let mut group = |figure: &str, with_paper: bool| {
+        if with_paper && paper {
+            head.push(format!("{figure}, paper"));
+        }
+        head.extend(worlds.iter().map(|w| format!("{figure}, {w}")));
+    };
+    group("failures", true);
+    group("mean steps*", true);
+    group("mean, successes", false);
+    if worlds.len() == 1 {
+        group("median", false);
     }
-    head.push("failures, ours".into());
-    if paper {
-        head.push("mean steps*, paper".into());
-    }
-    head.extend([
-        "mean steps*, ours".into(),
-        "mean, successes".into(),
-        "median".into(),
-        "× optimum".into(),
-    ]);
-    if let Some(test) = t.paper.and_then(|p| p.test) {
+    group("× optimum", false);
+    if let Some(test) = paper_test {
         head.push(format!("p, paper ({test})"));
     }
-    head.extend(t.tests.iter().map(|name| format!("p, ours ({name})")));
+    for name in &t.tests {
+        head.extend(worlds.iter().map(|w| format!("p, {w} ({name})")));
+    }
+    if paper {
+        head.extend(worlds.iter().map(|w| format!("paper inside {w}'s spread")));
+    }
     let _ = writeln!(md, "| {} |", head.join(" | "));
     let _ = writeln!(md, "|{}|", vec!["---"; head.len()].join("|"));
     for row in &t.rows {
-        let a = &row.ours;
-        let mut cells = vec![a.name.clone(), epsilon(a)];
+        let measured: Vec<Option<&Measured>> = worlds.iter().map(|&w| row.in_world(w)).collect();
+        let each = |f: &dyn Fn(&ArmResult) -> String| -> Vec<String> {
+            measured.iter().map(|m| m.map_or("-".into(), |m| f(&m.arm))).collect()
+        };
+        let mut cells = vec![
+            row.name.clone(),
+            measured.iter().flatten().next().map_or("-".into(), |m| epsilon(&m.arm)),
+        ];
         if paper {
             cells.push(row.paper.map_or("-".into(), |p| match (p.failures, p.games) {
                 (Some(f), Some(n)) => format!("{f} / {n}"),
                 _ => "-".into(),
             }));
         }
-        cells.push(format!(
-            "{} / {}",
-            failures(&a.failures_per_replicate, a.failures),
-            a.games
-        ));
+        cells.extend(each(&|a| {
+            format!("{} / {}", failures(&a.failures_per_replicate, a.failures), a.games)
+        }));
         if paper {
             cells.push(row.paper.map_or("-".into(), |p| num(p.mean_steps, 2)));
         }
-        cells.extend([
-            steps(Some(a.mean_steps_failures_at_horizon)),
-            steps(a.mean_steps),
-            num(a.median_steps, 1),
-            num(a.mean_ratio_to_optimum, 3),
-        ]);
-        if t.paper.and_then(|p| p.test).is_some() {
+        cells.extend(each(&|a| steps_spread(a)));
+        cells.extend(each(&|a| steps(a.mean_steps)));
+        if worlds.len() == 1 {
+            cells.extend(each(&|a| num(a.median_steps, 1)));
+        }
+        cells.extend(each(&|a| num(a.mean_ratio_to_optimum, 3)));
+        if paper_test.is_some() {
             cells.push(row.paper.and_then(|p| p.p_value).map_or("-".into(), p_value));
         }
-        cells.extend(row.tests.iter().map(|test| match test {
-            Some(x) if x.method == TestOutcome::IDENTICAL => "identical".into(),
-            Some(x) => match x.agents_below(ALPHA) {
-                Some((k, n)) => format!("{} ({k}/{n})", p_value(x.p_value)),
-                None => p_value(x.p_value),
-            },
-            None => "-".into(),
-        }));
+        for i in 0..t.tests.len() {
+            cells.extend(
+                measured
+                    .iter()
+                    .map(|m| test_cell(m.and_then(|m| m.tests.get(i)).and_then(Option::as_ref))),
+            );
+        }
+        if paper {
+            cells.extend(measured.iter().map(|m| {
+                m.and_then(|m| m.paper_inside.as_ref())
+                    .map_or("-".into(), |inside| verdict(inside).to_string())
+            }));
+        }
         let _ = writeln!(md, "| {} |", cells.join(" | "));
+    }
+}
+
+/// Mean steps*, with the range over replicates when there are several.
+fn steps_spread(a: &ArmResult) -> String {
+    let mean = steps(Some(a.mean_steps_failures_at_horizon));
+    match Spread::of(&a.mean_steps_failures_at_horizon_per_replicate()) {
+        Some(s) if s.replicates > 1 => format!("{mean} ({:.0}-{:.0})", s.low, s.high),
+        _ => mean,
+    }
+}
+
+/// E1's worlds, one rule switched at a time, and each figure's gap taken apart.
+fn decomposition(md: &mut String, d: &Decomposition) {
+    let _ = writeln!(md, "\n### The gap between the worlds, one rule at a time\n");
+    let _ = writeln!(
+        md,
+        "| world | protocol | start rule | failures | mean steps* | mean, successes |\n|---|---|---|---|---|---|"
+    );
+    for w in &d.worlds {
+        let a = &w.arm;
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} / {} | {} | {} |",
+            w.world,
+            w.rules.protocol.name(),
+            w.rules.start.name(),
+            failures(&a.failures_per_replicate, a.failures),
+            a.games,
+            steps_spread(a),
+            steps(a.mean_steps)
+        );
+    }
+    let _ = writeln!(
+        md,
+        "\n| figure | SPEC world | original world | gap | protocol alone | start rule alone | the two together |\n\
+         |---|---|---|---|---|---|---|"
+    );
+    for g in &d.gaps {
+        let value = |v: f64| num(Some(v), 1);
+        let part = |v: f64| format!("{v:+.1}");
+        let share = |v: f64| {
+            format!(
+                "{}{}",
+                part(v),
+                g.share(v).map_or(String::new(), |s| format!(" ({s:.0}%)"))
+            )
+        };
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} | {} | {} |",
+            g.figure,
+            value(g.spec),
+            value(g.original),
+            part(g.gap),
+            share(g.protocol),
+            share(g.start),
+            share(g.interaction)
+        );
     }
 }
 
