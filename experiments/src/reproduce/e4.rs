@@ -11,7 +11,7 @@ use super::text::num;
 use super::{
     Context, Curve, CurvePoint, Drawing, Experiment, Figure, HORIZON, Result, Scale, Setting, paper, paper_learner,
 };
-use crate::plots::{LearningCurve, LearningPoint};
+use crate::plots::{LearningCurve, LearningPoint, LearningSeries, SeriesStyle};
 
 /// Jobs reported: a training stretch and a suite per point, per replicate of the paper's
 /// learner and for ours.
@@ -135,22 +135,63 @@ pub(super) fn paper_curve(ctx: &Context) -> Result<Curve> {
     })
 }
 
-/// The picture of `curve`.
+/// The picture of `curve`, one learner in the SPEC world.
 fn learning(title: &str, curve: &Curve, note: String) -> LearningCurve {
     LearningCurve {
         title: title.into(),
-        test_episodes: curve.points.first().map_or(1, |p| p.test_games.max(1)),
-        points: curve
-            .points
-            .iter()
-            .map(|p| LearningPoint {
-                games: p.games,
-                failures: (p.failure_rate * p.test_games as f64).round() as usize,
-                mean_steps: p.mean_steps,
-            })
-            .collect(),
+        steps_label: "mean steps to goal over successful games".into(),
+        series: vec![LearningSeries {
+            name: format!(
+                "failures and mean steps over {} test games",
+                curve.points.first().map_or(0, |p| p.test_games)
+            ),
+            style: SeriesStyle::Line,
+            colour: 0,
+            points: curve
+                .points
+                .iter()
+                .map(|p| LearningPoint {
+                    games: p.games,
+                    failure_rate: p.failure_rate,
+                    failure_range: None,
+                    mean_steps: p.mean_steps,
+                    steps_range: None,
+                })
+                .collect(),
+        }],
         note,
     }
+}
+
+/// The paper's Fig. 3 in words, from [`paper::FIG3`].
+fn fig3_text() -> String {
+    let curves: Vec<String> = paper::FIG3
+        .iter()
+        .map(|c| {
+            let points: Vec<String> = c
+                .points
+                .iter()
+                .map(|p| format!("{} after {} games", p.failures, p.games))
+                .collect();
+            format!(
+                "at test epsilon {}: {} failures of {} (mean steps* {})",
+                c.test_epsilon,
+                points.join(", "),
+                c.test_games,
+                c.points
+                    .iter()
+                    .map(|p| p.mean_steps.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        })
+        .collect();
+    format!(
+        "{}; training games of up to {} steps; {}",
+        paper::FIG3[0].source,
+        paper::FIG3[0].training_game_steps,
+        curves.join("; ")
+    )
 }
 
 /// E4 from the two curves.
@@ -191,8 +232,7 @@ pub(super) fn experiment(ctx: &Context, paper_learner: Curve, ours: Curve) -> Ex
         num(ours.points.last().and_then(|p| p.mean_steps), 2),
     );
     let note = format!(
-        "{} Test policy: random action with probability {}. Failures are out of all test games of all agents.",
-        paper::FIG3,
+        "Test policy: random action with probability {}. Failures are out of all test games of all agents.",
         ctx.test_epsilon()
     );
     let figures = vec![
@@ -241,7 +281,7 @@ pub(super) fn experiment(ctx: &Context, paper_learner: Curve, ours: Curve) -> Ex
             },
             Setting {
                 name: "paper".into(),
-                value: paper::FIG3.into(),
+                value: fig3_text(),
             },
         ],
         tables: Vec::new(),
