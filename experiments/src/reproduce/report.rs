@@ -142,10 +142,58 @@ pub fn markdown(r: &Reproduction) -> String {
     ] {
         let _ = writeln!(md, "- {line}");
     }
+    summary(&mut md, r);
     for e in &r.experiments {
         experiment(&mut md, e);
     }
     md
+}
+
+/// Every row the paper has, its figures beside ours in each world and the readings of the
+/// spread: the report's overview (and the README's Results table).
+fn summary(md: &mut String, r: &Reproduction) {
+    let _ = writeln!(md, "\n## The paper's figures beside ours\n");
+    let _ = writeln!(
+        md,
+        "Every row of the paper's tables: its failures and mean steps*, ours in the `original` and the `spec` \
+         world (mean over replicates, and the range), and whether the paper's figures lie inside the spread of \
+         each world's replicates.\n"
+    );
+    let _ = writeln!(
+        md,
+        "| | table | arm | failures, paper | failures, original | failures, spec | mean steps*, paper | mean steps*, \
+         original | mean steps*, spec | paper inside original's spread | paper inside spec's spread |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|"
+    );
+    for e in &r.experiments {
+        for t in &e.tables {
+            for row in t.rows.iter().filter(|row| row.paper.is_some()) {
+                let mut cells = vec![e.id.clone(), t.title.clone(), row.name.clone()];
+                let paper = row.paper.expect("filtered");
+                let worlds = [row.original.as_ref(), row.spec.as_ref()];
+                cells.push(match (paper.failures, paper.games) {
+                    (Some(f), Some(n)) => format!("{f} / {n}"),
+                    _ => "-".into(),
+                });
+                cells.extend(worlds.iter().map(|m| {
+                    m.map_or("-".into(), |m| {
+                        format!(
+                            "{} / {}",
+                            failures(&m.arm.failures_per_replicate, m.arm.failures),
+                            m.arm.games
+                        )
+                    })
+                }));
+                cells.push(num(paper.mean_steps, 2));
+                cells.extend(worlds.iter().map(|m| m.map_or("-".into(), |m| steps_spread(&m.arm))));
+                cells.extend(worlds.iter().map(|m| {
+                    m.and_then(|m| m.paper_inside.as_ref())
+                        .map_or("-".into(), |inside| verdict(inside).to_string())
+                }));
+                let _ = writeln!(md, "| {} |", cells.join(" | "));
+            }
+        }
+    }
 }
 
 /// The chance, in whole percent, that one more draw lands inside the range of `replicates`
