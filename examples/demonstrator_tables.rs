@@ -15,8 +15,8 @@
 //! The baseline is the paper's learner trained on the demonstrated goals:
 //!
 //! ```text
-//! blockstack train --repr chasing --reward paper --goals 0,1,2:1,0,2:2,1,0:1,2,0 --out baseline.json
-//! cargo run --release --example demonstrator_tables -- baseline.json
+//! blockstack train --repr chasing --reward paper --goals 0,1,2:1,0,2:2,1,0:1,2,0 --out baseline.safetensors
+//! cargo run --release --example demonstrator_tables -- baseline.safetensors
 //! ```
 
 use std::path::PathBuf;
@@ -105,7 +105,9 @@ fn args() -> Result<Args> {
         }
     }
     if args.model.as_os_str().is_empty() {
-        bail!("usage: demonstrator_tables BASELINE.json [--seed 3] [--eval-seed 2] [--episodes 500] [--seeds 10]");
+        bail!(
+            "usage: demonstrator_tables BASELINE.safetensors [--seed 3] [--eval-seed 2] [--episodes 500] [--seeds 10]"
+        );
     }
     Ok(args)
 }

@@ -8,5 +8,6 @@ pub mod tui;
 
 pub use agent;
 pub use experiments;
+pub use files;
 pub use oracle;
 pub use sim;

@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{blockstack, path, scratch, stderr, stdout};
+use common::{blockstack, model_metadata, path, scratch, stderr, stdout};
 
 /// Trains the role learner on one goal, on the grid backend (quick), and returns the model.
 fn train_role(dir: &Path, name: &str, games: &str) -> PathBuf {
@@ -43,7 +43,7 @@ fn train_role(dir: &Path, name: &str, games: &str) -> PathBuf {
 #[test]
 fn train_then_eval_on_unseen_goals() {
     let dir = scratch("train-eval");
-    let model = train_role(&dir, "role.json", "30000");
+    let model = train_role(&dir, "role.safetensors", "30000");
     let eval_json = || {
         let words = "eval --goals 2,1,0:1,2,0 --episodes 100 --seed 2 --epsilon 0 --backend grid --json";
         let mut args: Vec<&str> = words.split(' ').collect();
@@ -97,15 +97,19 @@ fn train_then_eval_on_unseen_goals() {
 #[test]
 fn the_same_seed_trains_the_same_model_file() {
     let dir = scratch("same-seed");
-    let a = train_role(&dir, "a.json", "500");
-    let b = train_role(&dir, "b.json", "500");
-    assert_eq!(std::fs::read(a).unwrap(), std::fs::read(b).unwrap());
+    let a = train_role(&dir, "a.safetensors", "500");
+    let b = train_role(&dir, "b.safetensors", "500");
+    // Compared whole, without printing megabytes on a failure.
+    assert!(
+        std::fs::read(a).unwrap() == std::fs::read(b).unwrap(),
+        "the model files differ"
+    );
 }
 
 #[test]
 fn run_plays_a_q_model_and_writes_trajectories() {
     let dir = scratch("run-q");
-    let model = train_role(&dir, "role.json", "3000");
+    let model = train_role(&dir, "role.safetensors", "3000");
     let trajectory = dir.join("t.jsonl");
     let o = blockstack(&[
         "run",
@@ -136,7 +140,7 @@ fn run_plays_a_q_model_and_writes_trajectories() {
 #[test]
 fn the_paper_learner_trains_with_its_defaults() {
     let dir = scratch("paper");
-    let out = dir.join("paper.json");
+    let out = dir.join("paper.safetensors");
     let o = blockstack(&[
         "train",
         "--goals",
@@ -149,7 +153,7 @@ fn the_paper_learner_trains_with_its_defaults() {
         path(&out),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let model: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let model = model_metadata(&out);
     assert_eq!(model["repr"], "chasing");
     assert_eq!(model["params"]["gamma"], 0.1);
     assert_eq!(model["training"]["reward"]["model"], "paper");
@@ -159,19 +163,22 @@ fn the_paper_learner_trains_with_its_defaults() {
 #[test]
 fn bad_models_and_arguments_are_one_line_errors() {
     let dir = scratch("bad");
-    let model = train_role(&dir, "role.json", "50");
+    let model = train_role(&dir, "role.safetensors", "50");
     let check = |args: &[&str], needle: &str| {
         let o = blockstack(args);
         assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
         let err = stderr(&o);
         assert!(err.contains(needle), "{args:?}: {err}");
     };
-    let text = std::fs::read_to_string(&model).unwrap();
-    let truncated = dir.join("truncated.json");
-    std::fs::write(&truncated, &text[..text.len() - 10]).unwrap();
+    let bytes = std::fs::read(&model).unwrap();
+    let truncated = dir.join("truncated.safetensors");
+    std::fs::write(&truncated, &bytes[..bytes.len() - 10]).unwrap();
     check(&["eval", "--model", path(&truncated)], "truncated");
     check(&["run", "--agent", "q", "--model", path(&truncated)], "truncated");
-    check(&["eval", "--model", path(&dir.join("missing.json"))], "missing.json");
+    check(
+        &["eval", "--model", path(&dir.join("missing.safetensors"))],
+        "missing.safetensors",
+    );
     check(
         &["run", "--agent", "q", "--model", path(&model), "--blocks", "4"],
         "4 blocks",
@@ -179,10 +186,10 @@ fn bad_models_and_arguments_are_one_line_errors() {
     check(&["run", "--agent", "q"], "--model");
     check(&["eval", "--model", path(&model), "--goals", "0,1"], "goal 0,1");
     check(&["eval", "--model", path(&model), "--epsilon", "2"], "epsilon 2");
-    let out = dir.join("x.json");
+    let out = dir.join("x.safetensors");
     check(
         &["train", "--repr", "deep", "--out", path(&out)],
-        "choose raw, pairwise, chasing or role",
+        "choose raw, pairwise, chasing, chasing-code or role",
     );
     check(&["train", "--alpha", "0", "--out", path(&out)], "alpha 0");
     check(
@@ -196,7 +203,7 @@ fn bad_models_and_arguments_are_one_line_errors() {
             "--games",
             "1",
             "--out",
-            path(&dir.join("no-such-dir").join("m.json")),
+            path(&dir.join("no-such-dir").join("m.safetensors")),
         ],
         "cannot write",
     );

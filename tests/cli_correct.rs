@@ -12,7 +12,7 @@ use common::{blockstack, path, scratch, stderr};
 
 /// The paper's learner, briefly trained on two goals on the grid backend.
 fn train(dir: &Path) -> PathBuf {
-    let out = dir.join("base.json");
+    let out = dir.join("base.safetensors");
     let o = blockstack(&[
         "train",
         "--goals",
@@ -33,9 +33,9 @@ fn replaying_a_recorded_correction_session_gives_the_same_model() {
     let dir = scratch("replay");
     let base = train(&dir);
     let (live, demos, replayed) = (
-        dir.join("live.json"),
+        dir.join("live.safetensors"),
         dir.join("demos.jsonl"),
-        dir.join("replayed.json"),
+        dir.join("replayed.safetensors"),
     );
     for demonstrator in ["1", "3"] {
         let o = blockstack(&[
@@ -103,7 +103,7 @@ fn a_killed_session_leaves_a_recording_whose_complete_lines_all_parse() {
             "--seed",
             "9",
             "--out",
-            path(&dir.join("never.json")),
+            path(&dir.join("never.safetensors")),
             "--record",
             path(&demos),
         ])
@@ -128,7 +128,7 @@ fn a_killed_session_leaves_a_recording_whose_complete_lines_all_parse() {
         steps += usize::from(matches!(record, DemoRecord::Step(_)));
     }
     assert!(steps > 1000);
-    assert!(!dir.join("never.json").exists());
+    assert!(!dir.join("never.safetensors").exists());
     // The recording is usable as it is: a cut-off last line, if any, is skipped and named.
     let o = blockstack(&[
         "learn-from-demos",
@@ -136,7 +136,7 @@ fn a_killed_session_leaves_a_recording_whose_complete_lines_all_parse() {
         "--model",
         path(&base),
         "--out",
-        path(&dir.join("from-killed.json")),
+        path(&dir.join("from-killed.safetensors")),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     if complete.len() < text.len() {
@@ -160,7 +160,7 @@ fn malformed_lines_are_skipped_by_number_or_stop_the_command() {
         "--demos",
         "2",
         "--out",
-        path(&dir.join("live.json")),
+        path(&dir.join("live.safetensors")),
         "--record",
         path(&demos),
     ]);
@@ -170,7 +170,7 @@ fn malformed_lines_are_skipped_by_number_or_stop_the_command() {
     lines[3] = "this is not json".into();
     lines[4] = lines[4].replace("\"type\":", "\"tpye\":");
     std::fs::write(&demos, lines.join("\n") + "\n").unwrap();
-    let out = dir.join("out.json");
+    let out = dir.join("out.safetensors");
     let o = blockstack(&[
         "learn-from-demos",
         path(&demos),

@@ -150,7 +150,7 @@ fn a_report_directory_that_cannot_be_made_fails_at_once() {
     assert_eq!(o.status.code(), Some(2));
     let err = stderr(&o);
     assert!(
-        err.contains("cannot make the report directory") && err.lines().count() == 1,
+        err.contains("cannot make the folder") && err.lines().count() == 1,
         "{err}"
     );
     let o = blockstack(&["reproduce", "--jobs", "0"]);

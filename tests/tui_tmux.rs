@@ -83,7 +83,7 @@ fn tmux_missing() -> bool {
 }
 
 fn train(dir: &Path) -> PathBuf {
-    let out = dir.join("base.json");
+    let out = dir.join("base.safetensors");
     let o = blockstack(&[
         "train",
         "--goals",
@@ -126,7 +126,7 @@ fn a_person_corrects_the_agent_in_the_terminal_and_quits() {
     }
     let dir = scratch("session");
     let base = train(&dir);
-    let (demos, corrected) = (dir.join("demos.jsonl"), dir.join("corrected.json"));
+    let (demos, corrected) = (dir.join("demos.jsonl"), dir.join("corrected.safetensors"));
     let tmux = Tmux::new(&dir);
     tmux.start(
         "demo",
@@ -178,7 +178,7 @@ fn a_person_corrects_the_agent_in_the_terminal_and_quits() {
         [format!("pick {pick}").as_str(), "right"]
     );
     // Replaying the recording gives the model the session saved on quitting.
-    let replayed = dir.join("replayed.json");
+    let replayed = dir.join("replayed.safetensors");
     let o = blockstack(&[
         "learn-from-demos",
         path(&demos),
@@ -209,7 +209,7 @@ fn a_demo_killed_mid_episode_leaves_whole_lines() {
             "exec {BIN} demo --model {} --record {} --out {} --seed 8",
             path(&base),
             path(&demos),
-            path(&dir.join("corrected.json"))
+            path(&dir.join("corrected.safetensors"))
         ),
     );
     tmux.wait_for("demo", "the grid", |s| s.contains("world"));

@@ -20,7 +20,15 @@
 //!   learner needs, so any complete line can be learnt from on its own.
 //!
 //! Every line is written with one write and flushed at once: a session that is killed loses
-//! at most the line being written, and every complete line parses.
+//! at most the line being written, and every complete line parses. So a recording is
+//! appended to in place ([`files::OutputPath::append`]), not written through a temporary
+//! file as whole-file outputs are: a temporary file would lose the whole session on a kill.
+//! The destination is still checked like any output (a missing folder or a directory is
+//! refused before the session starts; a FIFO or `-` receives the lines as they come).
+//!
+//! A recording is read through a bound ([`MAX_RECORDING_BYTES`], and
+//! [`MAX_LINE_BYTES`] for one line), so that a device or a huge file given as a recording
+//! is refused, never read until memory runs out.
 //!
 //! # Replay
 //!
@@ -31,10 +39,10 @@
 //! caller's [`BadLines`] policy says whether to report it and go on or to stop. A file of
 //! another format or version is always refused.
 
-use std::fs::{File, OpenOptions};
-use std::io::{BufRead, Write};
+use std::io::{BufRead, Read, Write};
 use std::path::{Path, PathBuf};
 
+use files::{Output, OutputPath};
 use serde::{Deserialize, Serialize};
 use sim::{Action, ActionProtocol, Cell, Goal, Grid, Observation, State, Step};
 
@@ -47,6 +55,13 @@ pub const DEMOS_FORMAT: &str = "blockstack-demos";
 
 /// The recording format version this build writes and reads.
 pub const DEMOS_VERSION: u32 = 1;
+
+/// The largest recording read: 1 GiB, some three million steps.
+pub const MAX_RECORDING_BYTES: u64 = 1 << 30;
+
+/// The longest line of a recording: 64 KiB (a step line of 16 blocks takes well under
+/// 1 KiB).
+pub const MAX_LINE_BYTES: u64 = 1 << 16;
 
 /// A state as recorded: every block's cell `[x, y]` by block id, and the held block.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -231,22 +246,18 @@ impl<S: DemoSink> DemoSink for Option<S> {
 
 /// Writes a recording as JSON Lines, one write and one flush per line.
 #[derive(Debug)]
-pub struct DemoWriter<W: Write = File> {
+pub struct DemoWriter<W: Write = Output> {
     out: W,
     path: PathBuf,
 }
 
-impl DemoWriter<File> {
-    /// Opens `path` to append to (creating it if missing): an earlier recording is kept.
-    pub fn append(path: &Path) -> Result<Self> {
-        let out = OpenOptions::new()
-            .create(true)
-            .append(true)
-            .open(path)
-            .map_err(|e| demos_error(path, &format!("cannot open it to append: {e}")))?;
+impl DemoWriter<Output> {
+    /// Opens `out` to append to (a regular file is created if missing; an earlier
+    /// recording is kept), in place (module docs).
+    pub fn append(out: &OutputPath) -> Result<Self> {
         Ok(DemoWriter {
-            out,
-            path: path.to_path_buf(),
+            out: out.append()?,
+            path: out.path().to_path_buf(),
         })
     }
 }
@@ -274,7 +285,7 @@ impl<W: Write> DemoSink for DemoWriter<W> {
         self.out
             .write_all(text.as_bytes())
             .and_then(|()| self.out.flush())
-            .map_err(|e| demos_error(&self.path, &format!("cannot write: {e}")))
+            .map_err(|e| files::FilesError::write(&self.path, &e).into())
     }
 }
 
@@ -377,16 +388,29 @@ impl<'a> Replay<'a> {
     }
 
     /// Applies every line of `input`; with [`BadLines::Fail`], stops at the first bad line.
+    /// A line longer than [`MAX_LINE_BYTES`] stops the replay whatever the policy: the
+    /// input is not a recording.
     pub fn read(&mut self, input: impl BufRead) -> Result<()> {
         let mut input = input;
         let mut buf = Vec::new();
         loop {
             buf.clear();
-            let n = input
+            let n = (&mut input)
+                .take(MAX_LINE_BYTES + 1)
                 .read_until(b'\n', &mut buf)
                 .map_err(|e| demos_error(Path::new(&self.name), &format!("cannot read: {e}")))?;
             if n == 0 {
                 return Ok(());
+            }
+            if n as u64 > MAX_LINE_BYTES {
+                self.report.lines += 1;
+                return self.bad(LineError {
+                    reason: format!(
+                        "the line is longer than {}, the longest a recording line can be: is this a recording?",
+                        files::Bytes(MAX_LINE_BYTES)
+                    ),
+                    fatal: true,
+                });
             }
             let complete = buf.last() == Some(&b'\n');
             match std::str::from_utf8(&buf) {
@@ -526,9 +550,10 @@ fn no_header(what: &str, header: &str) -> LineError {
     }
 }
 
-/// Replays the recording at `path` into `agent` (module docs).
+/// Replays the recording at `path` into `agent` (module docs), reading at most
+/// [`MAX_RECORDING_BYTES`].
 pub fn learn_from_file(agent: &mut QAgent, path: &Path, policy: BadLines) -> Result<ReplayReport> {
-    let file = File::open(path).map_err(|e| demos_error(path, &e.to_string()))?;
+    let file = files::open_bounded(path, MAX_RECORDING_BYTES, "a recording")?;
     let mut replay = Replay::new(agent, policy, &path.display().to_string());
     replay.read(std::io::BufReader::new(file))?;
     Ok(replay.finish())

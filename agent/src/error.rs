@@ -20,6 +20,17 @@ pub enum AgentError {
         /// What is wrong with it.
         reason: String,
     },
+    /// A model that cannot be saved (its table holds a value a file cannot keep).
+    #[error("cannot save model {path}: {reason}")]
+    ModelSave {
+        /// The file.
+        path: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A file's destination or reading failed (names the file).
+    #[error(transparent)]
+    Files(#[from] files::FilesError),
     /// A model used with a world (or for a purpose) it was not made for.
     #[error("the model does not fit: {0}")]
     ModelMismatch(String),

@@ -1,6 +1,5 @@
-//! The Q-learner: its update, what training teaches it, determinism, and model files.
-
-use std::path::PathBuf;
+//! The Q-learner: its update, what training teaches it, and determinism (model files:
+//! `tests/model.rs`).
 
 use agent::{AgentError, Assist, Policy, Progress, QAgent, QParams, ReprKind, TrainConfig, Trainer};
 use sim::seeding::rng;
@@ -11,13 +10,6 @@ use sim::{
 
 fn goal(text: &str) -> Goal {
     text.parse().unwrap()
-}
-
-/// A file path in a fresh folder of the system's temporary directory.
-fn temp_path(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("agent-test-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
 }
 
 /// Our role + step-cost learner, on the grid backend (quick enough for tests).
@@ -293,83 +285,6 @@ fn bad_configs_are_errors_not_panics() {
     let mut r = rng(0);
     assert!(q.policy(1.5).is_err());
     assert!(q.choose_action(&two, 0.0, &mut r).is_err());
-}
-
-#[test]
-fn save_and_load_give_back_the_same_agent() {
-    // Dense (role, 3 blocks) and hashed (role, 4 blocks) tables.
-    for (goals, games) in [(vec!["2,0,1"], 3000), (vec!["3,1,0,2"], 300)] {
-        let trained = agent::train(&role_config(&goals, games, 7), None).unwrap();
-        let path = temp_path(&format!("round-trip-{}.json", goals[0]));
-        trained.agent.save(&path).unwrap();
-        let loaded = QAgent::load(&path).unwrap();
-        assert_eq!(loaded.table().is_dense(), goals[0].len() == 5);
-        assert_eq!(loaded, trained.agent);
-        assert_eq!(loaded.training(), trained.agent.training());
-    }
-    // Values that are not short decimals survive exactly.
-    let config = TrainConfig {
-        games: 200,
-        backend: Backend::Grid,
-        ..TrainConfig::paper(vec![goal("0,1,2")])
-    };
-    let paper = agent::train(&config, None).unwrap().agent;
-    let path = temp_path("paper.json");
-    paper.save(&path).unwrap();
-    assert_eq!(QAgent::load(&path).unwrap(), paper);
-}
-
-/// A saved model's text, and a function that writes a variant and loads it.
-fn model_text() -> (String, impl Fn(&str, &str) -> String) {
-    let trained = agent::train(&role_config(&["0,1,2"], 200, 2), None).unwrap();
-    let path = temp_path("model.json");
-    trained.agent.save(&path).unwrap();
-    let text = std::fs::read_to_string(&path).unwrap();
-    let load = |name: &str, contents: &str| {
-        let p = temp_path(name);
-        std::fs::write(&p, contents).unwrap();
-        let err = QAgent::load(&p).expect_err("the file is refused");
-        let message = err.to_string();
-        assert!(message.contains(&p.display().to_string()), "{message}");
-        message
-    };
-    (text, load)
-}
-
-#[test]
-fn bad_model_files_are_clear_errors() {
-    let (text, load) = model_text();
-    assert!(load("truncated.json", &text[..text.len() / 2]).contains("truncated"));
-    assert!(load("empty.json", "").contains("truncated"));
-    assert!(load("garbage.json", "\u{1}\u{2}not json").contains("not valid JSON"));
-    assert!(load("other.json", r#"{"hello": 1}"#).contains("not a blockstack model file"));
-    let newer = text.replacen("\"version\":1", "\"version\":2", 1);
-    assert!(load("newer.json", &newer).contains("version 2"));
-    // A changed digit inside the table.
-    let at = text.find("[-1.0").expect("a row value of -1");
-    let flipped = format!("{}[-3.0{}", &text[..at], &text[at + 5..]);
-    assert!(load("flipped.json", &flipped).contains("checksum"));
-    // A table of another shape than its representation's.
-    let reshaped = text.replacen("\"repr\":\"role\"", "\"repr\":\"chasing\"", 1);
-    assert!(load("reshaped.json", &reshaped).contains("but a chasing table for 3 blocks"));
-    // Shapes are checked against the representation before anything is allocated.
-    let empty = |blocks: usize, columns: u64| {
-        format!(
-            r#"{{"format":"blockstack-q-agent","version":1,"grid":{{"width":7,"height":7}},"blocks":{blocks},"repr":"role","params":{{"alpha":1.0,"gamma":0.1,"epsilon":0.1,"initial_q":0.0}},"training":null,"table":{{"keys":470596,"columns":{columns},"initial":0.0,"rows":[],"checksum":0}}}}"#
-        )
-    };
-    let fine = temp_path("empty.json");
-    std::fs::write(&fine, empty(3, 8)).unwrap();
-    assert!(QAgent::load(&fine).is_ok());
-    assert!(load("huge.json", &empty(3, 1_000_000_000_000)).contains("1000000000000 columns"));
-    assert!(load("blocks.json", &empty(40, 45)).contains("40 blocks is not allowed"));
-    let missing = temp_path("no-such-model.json");
-    assert!(
-        QAgent::load(&missing)
-            .unwrap_err()
-            .to_string()
-            .contains("no-such-model.json")
-    );
 }
 
 #[test]

@@ -8,7 +8,7 @@
 //! | [`episode_gif`] | one or more episodes side by side, animated | the demo |
 //!
 //! Every function is pure: it takes the data, validates it, and writes its files atomically
-//! (through [`sim::files::write_atomic`]). Charts are written twice, `<stem>.png` and
+//! (through the output helper, [`files::write`]). Charts are written twice, `<stem>.png` and
 //! `<stem>.svg`, and the paths come back in [`ChartFiles`]. Odd data (an empty list, a
 //! non-finite value, a count above its total) is a [`PlotError`], never a panic; a single
 //! point or all-equal values give a picture with a padded axis.
@@ -96,7 +96,7 @@ pub enum PlotError {
     },
     /// Writing a file failed.
     #[error(transparent)]
-    Write(#[from] sim::SimError),
+    Write(#[from] files::FilesError),
 }
 
 /// Shorthand for results whose error is a [`PlotError`].
@@ -142,11 +142,11 @@ fn write_chart(chart: &impl Chart, stem: &Path) -> Result<ChartFiles> {
         path: files.png.display().to_string(),
         reason,
     })?;
-    sim::files::write_atomic(&files.png, &png)?;
+    files::write(&files.png, &png)?;
 
     let mut svg = String::new();
     render(chart, SVGBackend::with_string(&mut svg, (w, h)), &files.svg)?;
-    sim::files::write_atomic(&files.svg, svg.as_bytes())?;
+    files::write(&files.svg, svg.as_bytes())?;
     Ok(files)
 }
 

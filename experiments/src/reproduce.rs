@@ -91,6 +91,9 @@ pub enum ReproduceError {
         /// Why.
         reason: String,
     },
+    /// The report's folder or one of its files could not be written.
+    #[error(transparent)]
+    Files(#[from] files::FilesError),
 }
 
 /// Shorthand for results whose error is a [`ReproduceError`].

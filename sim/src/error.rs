@@ -184,14 +184,33 @@ pub enum SimError {
         /// The system's reason.
         reason: String,
     },
-    /// Writing a file (trajectory, picture) failed.
-    #[error("cannot write {path}: {reason}")]
-    Write {
+    /// A picture larger than [`crate::render::MAX_PICTURE_SIDE`] a side or
+    /// [`crate::render::MAX_PICTURE_PIXELS`] in all.
+    #[error(
+        "a picture with {cell}-pixel cells would be {width}x{height} pixels, larger than {max_side} a side or {max_pixels} pixels in all: use smaller cells"
+    )]
+    PictureTooLarge {
+        /// Pixels per cell asked for.
+        cell: u32,
+        /// The picture's width.
+        width: u64,
+        /// The picture's height.
+        height: u64,
+        /// The largest side allowed.
+        max_side: u64,
+        /// The most pixels allowed.
+        max_pixels: u64,
+    },
+    /// A picture file whose name does not say a format blockstack writes.
+    #[error("cannot write a picture to {path}: name it .png or .jpg (or .jpeg)")]
+    PictureFormat {
         /// The path.
         path: String,
-        /// The system's reason.
-        reason: String,
     },
+    /// Reading or writing a file (trajectory, picture) failed, or its destination cannot
+    /// be written.
+    #[error(transparent)]
+    Files(#[from] files::FilesError),
 }
 
 /// "nothing is held" or "block 2 is held".

@@ -7,9 +7,10 @@
 //!   [`PhysicsWorld`], rapier2d rigid bodies moved by a controller that asks rapier's
 //!   collision detection whether each move is free.
 //! - [`Env`]: a Gymnasium-style environment (`reset`, `step`) over either backend, with the
-//!   reward models of [`reward`]; [`VecEnv`] steps many in parallel.
+//!   reward models of [`reward`]; [`VecEnv`] steps many in parallel, with either of
+//!   Gymnasium's autoreset modes.
 //! - [`render`] draws the world as text or pictures; [`trajectory`] writes episodes as
-//!   JSON Lines.
+//!   JSON Lines. Both write their files through the `files` crate's output helper.
 //!
 //! # Two worlds: `spec` and `original`
 //!
@@ -49,7 +50,6 @@ pub mod action;
 pub mod coded_state;
 pub mod env;
 pub mod error;
-pub mod files;
 pub mod goal;
 pub mod grid;
 pub mod grid_world;
@@ -84,5 +84,5 @@ pub use reward::RewardModel;
 pub use start::StartRule;
 pub use state::{BlockId, MAX_BLOCKS, MIN_BLOCKS, State};
 pub use termination::Termination;
-pub use vec_env::VecEnv;
+pub use vec_env::{Autoreset, VecEnv, VecStep};
 pub use world::{Effect, World};

@@ -1,15 +1,19 @@
-//! Pictures of the world: ASCII for terminals, RGB frames and PNG files.
+//! Pictures of the world: ASCII for terminals, RGB frames, and PNG or JPEG files.
 //!
 //! Both show every block in its colour, mark the held block, and draw the goal as a small
-//! stack in the top-right corner, as the paper's screen does.
+//! stack in the top-right corner, as the paper's screen does. A picture file's format is
+//! the one its name says ([`PictureFormat::of`]); a picture is at most
+//! [`MAX_PICTURE_SIDE`] pixels a side and [`MAX_PICTURE_PIXELS`] in all, so that no cell
+//! size asks for gigabytes.
 
 use std::fmt::Write as _;
 use std::path::Path;
 
+use files::OutputPath;
 use image::{Rgb, RgbImage};
 
-use crate::error::Result;
-use crate::files::{self, write_error};
+use crate::error::{Result, SimError};
+use crate::grid::Grid;
 use crate::observation::Observation;
 use crate::state::{BlockId, MAX_BLOCKS};
 
@@ -113,8 +117,41 @@ pub fn ascii(obs: &Observation, colour: Colour) -> String {
     out
 }
 
+/// The largest side of a picture, in pixels.
+pub const MAX_PICTURE_SIDE: u64 = 16_384;
+
+/// The most pixels in a picture (2^25: 96 MiB of RGB).
+pub const MAX_PICTURE_PIXELS: u64 = 1 << 25;
+
+/// The size in pixels of [`frame`]'s picture of `blocks` blocks on `grid` with `cell`
+/// pixels per cell; an error if it is larger than [`MAX_PICTURE_SIDE`] a side or
+/// [`MAX_PICTURE_PIXELS`] in all.
+pub fn picture_size(grid: Grid, blocks: usize, cell: u32) -> Result<(u32, u32)> {
+    let (w, h, n, cell) = (
+        grid.width() as u64,
+        grid.height() as u64,
+        blocks as u64,
+        u64::from(cell),
+    );
+    let mini = (cell / 3).max(3);
+    let (margin, pad) = (2 * mini, mini / 2);
+    let width = w * cell + margin + 2 * pad;
+    let height = (h * cell).max(n * mini + 2 * pad);
+    if width > MAX_PICTURE_SIDE || height > MAX_PICTURE_SIDE || width * height > MAX_PICTURE_PIXELS {
+        return Err(SimError::PictureTooLarge {
+            cell: cell as u32,
+            width,
+            height,
+            max_side: MAX_PICTURE_SIDE,
+            max_pixels: MAX_PICTURE_PIXELS,
+        });
+    }
+    Ok((width as u32, height as u32))
+}
+
 /// The world as an RGB image, `cell` pixels per cell, with the goal stack in a margin at
-/// the top-right corner.
+/// the top-right corner. Every grid fits the bounds at [`CELL_PIXELS`]; check a cell size
+/// given by a person with [`picture_size`] first ([`save_picture`] does).
 pub fn frame(obs: &Observation, cell: u32) -> RgbImage {
     let (w, h) = (obs.grid.width() as u32, obs.grid.height() as u32);
     let n = obs.goal.block_count() as u32;
@@ -176,13 +213,57 @@ pub fn frame(obs: &Observation, cell: u32) -> RgbImage {
     img
 }
 
-/// Writes [`frame`] of `obs` to `path` as a PNG, atomically.
-pub fn save_png(obs: &Observation, path: &Path, cell: u32) -> Result<()> {
-    let mut bytes = Vec::new();
-    frame(obs, cell)
-        .write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)
-        .map_err(|e| write_error(path, &e))?;
-    files::write_atomic(path, &bytes)
+/// The file formats a picture is written in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PictureFormat {
+    /// PNG, lossless.
+    Png,
+    /// JPEG, quality 90.
+    Jpeg,
+}
+
+impl PictureFormat {
+    /// The format `path`'s extension names (`.png`, `.jpg` or `.jpeg`, any case); PNG for
+    /// `-` (standard output); an error for any other name.
+    pub fn of(path: &Path) -> Result<PictureFormat> {
+        if path.as_os_str() == files::STDOUT {
+            return Ok(PictureFormat::Png);
+        }
+        let extension = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
+        match extension.as_deref() {
+            Some("png") => Ok(PictureFormat::Png),
+            Some("jpg" | "jpeg") => Ok(PictureFormat::Jpeg),
+            _ => Err(SimError::PictureFormat {
+                path: path.display().to_string(),
+            }),
+        }
+    }
+
+    /// The bytes of `img` in this format.
+    pub fn encode(self, img: &RgbImage) -> std::result::Result<Vec<u8>, image::ImageError> {
+        let mut bytes = Vec::new();
+        match self {
+            PictureFormat::Png => img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)?,
+            PictureFormat::Jpeg => {
+                image::codecs::jpeg::JpegEncoder::new_with_quality(&mut bytes, 90).encode_image(img)?
+            }
+        }
+        Ok(bytes)
+    }
+}
+
+/// Writes [`frame`] of `obs` to `out` in the format its name says ([`PictureFormat::of`]),
+/// through the output helper (atomically for a regular file); an error, before drawing,
+/// if the picture would be too large ([`picture_size`]).
+pub fn save_picture(obs: &Observation, out: &OutputPath, cell: u32) -> Result<()> {
+    let format = PictureFormat::of(out.path())?;
+    picture_size(obs.grid, obs.goal.block_count(), cell)?;
+    let bytes = format.encode(&frame(obs, cell)).map_err(|e| files::FilesError::Write {
+        path: out.path().display().to_string(),
+        reason: e.to_string(),
+        kind: std::io::ErrorKind::InvalidData,
+    })?;
+    Ok(out.write(&bytes)?)
 }
 
 fn fill(img: &mut RgbImage, x: u32, y: u32, w: u32, h: u32, rgb: [u8; 3]) {
@@ -190,5 +271,78 @@ fn fill(img: &mut RgbImage, x: u32, y: u32, w: u32, h: u32, rgb: [u8; 3]) {
         for xx in x..(x + w).min(img.width()) {
             img.put_pixel(xx, yy, Rgb(rgb));
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{BlockId, Cell, Goal, State};
+
+    fn observation(grid: Grid, blocks: usize) -> Observation {
+        let cells: Vec<Cell> = (0..blocks)
+            .map(|i| Cell::new((i % grid.width()) as u8, (i / grid.width()) as u8))
+            .collect();
+        Observation {
+            grid,
+            state: State::new(&cells, Some(BlockId(0))).unwrap(),
+            goal: Goal::from_indices(&(0..blocks).collect::<Vec<_>>()).unwrap(),
+            protocol: crate::ActionProtocol::Free,
+        }
+    }
+
+    #[test]
+    fn every_grid_fits_the_picture_bounds_at_the_default_cell_size() {
+        for w in 1..=255 {
+            for h in (1..=255).filter(|h| w * h <= crate::MAX_CELLS) {
+                let grid = Grid::new(w, h).unwrap();
+                let blocks = crate::MAX_BLOCKS.min(w * h - 1).min(h);
+                if blocks < crate::MIN_BLOCKS {
+                    continue;
+                }
+                let size = picture_size(grid, blocks, CELL_PIXELS).unwrap();
+                if (w, h) == (7, 7) || (w, h) == (255, 1) || (w, h) == (16, 16) {
+                    assert_eq!(frame(&observation(grid, blocks), CELL_PIXELS).dimensions(), size);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_huge_cell_size_is_refused_before_drawing() {
+        let err = picture_size(Grid::default(), 3, 100_000).unwrap_err().to_string();
+        assert!(
+            err.contains("100000-pixel cells") && err.contains("use smaller cells"),
+            "{err}"
+        );
+        assert!(picture_size(Grid::default(), 3, 600).is_ok());
+        assert!(picture_size(Grid::new(16, 16).unwrap(), 3, 1000).is_err());
+    }
+
+    #[test]
+    fn a_picture_is_written_in_the_format_its_name_says() {
+        let dir = std::env::temp_dir().join(format!("sim-render-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let obs = observation(Grid::default(), 3);
+        for (name, format) in [
+            ("w.png", image::ImageFormat::Png),
+            ("w.JPG", image::ImageFormat::Jpeg),
+            ("w.jpeg", image::ImageFormat::Jpeg),
+        ] {
+            let path = dir.join(name);
+            save_picture(&obs, &OutputPath::check(&path).unwrap(), 20).unwrap();
+            let bytes = std::fs::read(&path).unwrap();
+            assert_eq!(image::guess_format(&bytes).unwrap(), format, "{name}");
+            let img = image::load_from_memory(&bytes).unwrap();
+            assert_eq!((img.width(), img.height()), frame(&obs, 20).dimensions());
+        }
+        for name in ["w.bmp", "w", "w.png.txt"] {
+            let path = dir.join(name);
+            let err = save_picture(&obs, &OutputPath::check(&path).unwrap(), 20).unwrap_err();
+            assert!(err.to_string().contains(".png or .jpg"), "{err}");
+            assert!(!path.exists());
+        }
+        assert_eq!(PictureFormat::of(Path::new("-")).unwrap(), PictureFormat::Png);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

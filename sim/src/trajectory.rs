@@ -11,13 +11,12 @@
 //! change of the format's version in this documentation.
 
 use std::io::Write;
-use std::path::Path;
 
+use files::{Output, OutputPath};
 use serde::{Deserialize, Serialize};
 
 use crate::env::Step;
 use crate::error::Result;
-use crate::files::{AtomicWriter, write_error};
 use crate::goal::Goal;
 use crate::grid::Grid;
 use crate::state::State;
@@ -95,27 +94,27 @@ impl Record {
     }
 }
 
-/// Writes a trajectory file, atomically: it appears under its name once complete.
+/// Writes a trajectory file through the output helper: a regular file appears under its
+/// name once complete (and not at all if the run fails or is killed); a FIFO, a device or
+/// `-` (standard output) receives the lines as they come.
 pub struct TrajectoryWriter {
-    out: AtomicWriter,
+    out: Output,
 }
 
 impl TrajectoryWriter {
-    /// Starts a trajectory file at `path`.
-    pub fn create(path: &Path) -> Result<Self> {
-        Ok(Self {
-            out: AtomicWriter::create(path)?,
-        })
+    /// Starts a trajectory file at `out` (checked before the run began).
+    pub fn create(out: &OutputPath) -> Result<Self> {
+        Ok(Self { out: out.create()? })
     }
 
     /// Appends one record.
     pub fn write(&mut self, record: &Record) -> Result<()> {
         let line = serde_json::to_string(record).expect("records serialise");
-        writeln!(self.out, "{line}").map_err(|e| write_error(self.out.path(), &e))
+        writeln!(self.out, "{line}").map_err(|e| self.out.error(&e).into())
     }
 
     /// Completes the file.
     pub fn finish(self) -> Result<()> {
-        self.out.commit()
+        Ok(self.out.commit()?)
     }
 }

@@ -6,10 +6,13 @@ use agent::correction::CorrectionConfig;
 use agent::{DemoWriter, DemonstratorProfile, QAgent};
 use anyhow::{Context, Result};
 use clap::Args;
+use files::{OutputPath, refuse_same_file};
 use sim::Goal;
 
 use super::demo::LearningArgs;
-use super::train::parse_goals;
+use super::demo::demonstration_goals;
+use super::profile::session_world;
+use super::stdout::line;
 
 /// Arguments of `blockstack correct`.
 #[derive(Debug, Args)]
@@ -24,7 +27,8 @@ pub struct CorrectArgs {
     /// Demonstrations (episodes) to give.
     #[arg(long, default_value_t = 10)]
     pub demos: u64,
-    /// Goals to demonstrate on, in turn, separated by ':' (default: every goal).
+    /// Goals to demonstrate on, in turn, separated by ':' [default: every goal; under the
+    /// original profile the authors' four, 0,1,2:2,1,0:1,2,0:1,0,2]
     #[arg(long)]
     pub goals: Option<String>,
     /// Seed of the starts, the agent's proposals and the demonstrator's choices.
@@ -33,7 +37,7 @@ pub struct CorrectArgs {
     /// Where to write the corrected model.
     #[arg(long)]
     pub out: PathBuf,
-    /// Append every step to this JSON Lines file, as it happens.
+    /// Append every step to this JSON Lines file, as it happens (in place, line by line).
     #[arg(long)]
     pub record: Option<PathBuf>,
     #[command(flatten)]
@@ -42,24 +46,35 @@ pub struct CorrectArgs {
 
 /// Corrects, saves, and reports.
 pub fn correct(args: CorrectArgs) -> Result<()> {
+    let out = OutputPath::check(&args.out)?;
+    let record = args.record.as_deref().map(OutputPath::check).transpose()?;
+    super::stdout::claim_for_data(&[Some(&out), record.as_ref()])?;
+    refuse_same_file(&args.out, &args.model).context("--out and --model")?;
+    if let Some(record) = &args.record {
+        refuse_same_file(record, &args.model).context("--record and --model")?;
+        refuse_same_file(record, &args.out).context("--record and --out")?;
+    }
     let agent = QAgent::load(&args.model)?;
-    let goals = parse_goals(args.goals.as_deref(), agent.blocks())?;
     let profile = DemonstratorProfile::preset(args.demonstrator)?;
+    let l = &args.learning;
+    let (world, rules_of) = session_world(&agent, l.profile, l.play, l.reward.as_deref())?;
+    let goals = demonstration_goals(args.goals.as_deref(), agent.blocks(), rules_of)?;
     let config = CorrectionConfig {
-        rule: args.learning.rule()?,
-        epsilon: args.learning.epsilon,
+        rule: Some(l.rule(rules_of)?),
+        world: Some(world),
+        epsilon: l.epsilon,
         model: Some(args.model.display().to_string()),
         ..CorrectionConfig::new(profile.clone(), goals.clone(), args.demos, args.seed)
     };
-    let record = args.record.as_deref().map(DemoWriter::append).transpose()?;
+    let record = record.as_ref().map(DemoWriter::append).transpose()?;
     let corrected = agent::correct(agent, &config, record)?;
     corrected
         .agent
-        .save(&args.out)
+        .save(out.path())
         .context("the agent was corrected but not saved")?;
     let r = corrected.report;
     let goals: Vec<String> = goals.iter().map(Goal::to_string).collect();
-    println!(
+    line(format_args!(
         "demonstrator {} ({}) gave {} demonstrations on {} (seed {}): {} steps, {} corrections, {} reached the goal",
         args.demonstrator,
         profile.name,
@@ -69,10 +84,10 @@ pub fn correct(args: CorrectArgs) -> Result<()> {
         r.steps,
         r.corrections,
         r.successes
-    );
-    println!("saved {}", args.out.display());
+    ))?;
+    line(format_args!("saved {}", args.out.display()))?;
     if let Some(path) = &args.record {
-        println!("recorded to {}", path.display());
+        line(format_args!("recorded to {}", path.display()))?;
     }
     Ok(())
 }

@@ -1,12 +1,16 @@
 //! `blockstack learn-from-demos`: apply a recorded demonstration session to a model,
 //! headless.
 
+use std::io::Write;
 use std::path::PathBuf;
 
 use agent::QAgent;
 use agent::demos::{BadLines, learn_from_file};
 use anyhow::{Context, Result};
 use clap::Args;
+use files::{OutputPath, refuse_same_file};
+
+use super::stdout::line;
 
 /// Arguments of `blockstack learn-from-demos`.
 #[derive(Debug, Args)]
@@ -27,15 +31,23 @@ pub struct LearnFromDemosArgs {
 
 /// Replays, saves, and reports.
 pub fn learn_from_demos(args: LearnFromDemosArgs) -> Result<()> {
+    let out = OutputPath::check(&args.out)?;
+    super::stdout::claim_for_data(&[Some(&out)])?;
+    refuse_same_file(&args.out, &args.demos).context("--out and the recording")?;
+    refuse_same_file(&args.out, &args.model).context("--out and --model")?;
     let mut agent = QAgent::load(&args.model)?;
     let report = learn_from_file(&mut agent, &args.demos, args.on_bad_line)?;
-    for bad in &report.bad_lines {
-        eprintln!("{}:{}: skipped: {}", args.demos.display(), bad.line, bad.reason);
+    {
+        // Standard error may be gone: that must not cost the model.
+        let mut err = std::io::stderr().lock();
+        for bad in &report.bad_lines {
+            let _ = writeln!(err, "{}:{}: skipped: {}", args.demos.display(), bad.line, bad.reason);
+        }
     }
     agent
-        .save(&args.out)
+        .save(out.path())
         .context("the demonstrations were learnt but the model not saved")?;
-    println!(
+    line(format_args!(
         "learnt from {} steps ({} corrections) in {} episodes of {} sessions; {} of {} lines skipped",
         report.steps,
         report.corrections,
@@ -43,7 +55,6 @@ pub fn learn_from_demos(args: LearnFromDemosArgs) -> Result<()> {
         report.sessions,
         report.bad_lines.len(),
         report.lines
-    );
-    println!("saved {}", args.out.display());
-    Ok(())
+    ))?;
+    line(format_args!("saved {}", args.out.display()))
 }

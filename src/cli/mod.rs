@@ -1,5 +1,9 @@
 //! The command line: one module per subcommand. Errors come back as `anyhow` errors; the
 //! binary prints them as one line and exits with status 2.
+//!
+//! Every command that writes a file checks its destination (`files::OutputPath`) and
+//! refuses an output that is one of its inputs before any work starts, and prints through
+//! [`stdout`], never `println!`.
 
 use clap::{Parser, Subcommand};
 
@@ -7,12 +11,16 @@ mod correct;
 mod demo;
 mod eval;
 mod learn_from_demos;
+mod profile;
 mod render;
 mod reproduce;
 mod run;
 mod solve;
+pub mod stdout;
 mod train;
 mod world;
+
+pub use stdout::{flush_stdout, is_closed_pipe};
 
 /// blockstack: teach an agent to stack blocks in a physics-backed 2D world.
 #[derive(Debug, Parser)]

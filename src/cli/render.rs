@@ -4,9 +4,12 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
+use files::OutputPath;
 use sim::Env;
 use sim::render::{self, Colour};
 
+use super::profile::{ProfileArg, Rules, StartArg};
+use super::stdout;
 use super::world::WorldArgs;
 
 /// Arguments of `blockstack render`.
@@ -14,34 +17,49 @@ use super::world::WorldArgs;
 pub struct RenderArgs {
     #[command(flatten)]
     pub world: WorldArgs,
+    #[command(flatten)]
+    pub profile: ProfileArg,
+    #[command(flatten)]
+    pub start: StartArg,
     /// The seed of the start state (as `reset(seed)` draws it).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Write a PNG picture here.
+    /// Write a picture here, in the format its name says: .png, or .jpg / .jpeg (`-`: a
+    /// PNG on standard output).
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Print the world as text (the default when no --out is given).
     #[arg(long)]
     pub ascii: bool,
-    /// Pixels per cell in the PNG.
+    /// Pixels per cell in the picture (at least 4; the picture is at most 16384 pixels a
+    /// side and 2^25 pixels in all).
     #[arg(long, default_value_t = render::CELL_PIXELS)]
     pub cell: u32,
 }
 
 /// Draws the start state of `reset(seed)`.
 pub fn render(args: RenderArgs) -> Result<()> {
-    let mut env = Env::new(args.world.config()?)?;
-    let obs = env.reset(args.seed);
-    if let Some(path) = &args.out {
+    let out = args.out.as_deref().map(OutputPath::check).transpose()?;
+    stdout::claim_for_data(&[out.as_ref()])?;
+    let rules =
+        Rules::of(sim::Profile::Spec).overridden(args.profile, None, args.start.start, args.world.reward.as_deref())?;
+    let config = args.world.config(&rules)?;
+    if let Some(out) = &out {
+        render::PictureFormat::of(out.path())?;
         anyhow::ensure!(
             args.cell >= 4,
             "--cell {} is too small to draw: use at least 4 pixels",
             args.cell
         );
-        render::save_png(&obs, path, args.cell)?;
+        render::picture_size(config.grid, config.blocks, args.cell)?;
     }
-    if args.ascii || args.out.is_none() {
-        print!("{}", render::ascii(&obs, Colour::for_stdout()));
+    let mut env = Env::new(config)?;
+    let obs = env.reset(args.seed);
+    if let Some(out) = &out {
+        render::save_picture(&obs, out, args.cell)?;
+    }
+    if args.ascii || out.is_none() {
+        stdout::text(&render::ascii(&obs, Colour::for_stdout()))?;
     }
     Ok(())
 }

@@ -9,10 +9,13 @@ use clap::Args;
 use experiments::reproduce::{self, Options, ProgressSink};
 use indicatif::{ProgressBar, ProgressStyle};
 
+use super::stdout::line;
+
 /// Arguments of `blockstack reproduce`.
 #[derive(Debug, Args)]
 pub struct ReproduceArgs {
-    /// Directory to write the report to (README.md, results.json, pictures).
+    /// Directory to write the report to (README.md, results.json, pictures); made if
+    /// missing, checked to be writable before the run.
     #[arg(long, default_value = "report")]
     pub out: PathBuf,
     /// Small counts, to check the pipeline in a minute; not the paper's figures.
@@ -43,8 +46,7 @@ impl ProgressSink for Bar {
 /// Runs the experiments and writes the report.
 pub fn reproduce(args: ReproduceArgs) -> Result<()> {
     // Before minutes of work, not after.
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot make the report directory {}", args.out.display()))?;
+    files::prepare_folder(&args.out)?;
     let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(n) = args.jobs {
         pool = pool.num_threads(usize::from(n));
@@ -67,23 +69,22 @@ pub fn reproduce(args: ReproduceArgs) -> Result<()> {
     let sink = Bar(bar);
     let results = pool.install(|| reproduce::reproduce(&options, &sink))?;
     sink.0.finish_and_clear();
-    let files = reproduce::write_report(&results, &args.out)?;
-    println!(
+    let written = reproduce::write_report(&results, &args.out)?;
+    line(format_args!(
         "reproduced E1-E7 ({} run, seed {}, {} thread{}) in {:.0} s",
         if args.quick { "quick" } else { "full" },
         args.seed,
         pool.current_num_threads(),
         if pool.current_num_threads() == 1 { "" } else { "s" },
         clock.elapsed().as_secs_f64()
-    );
+    ))?;
     for e in &results.experiments {
-        println!("{}: {}", e.id, e.reading);
+        line(format_args!("{}: {}", e.id, e.reading))?;
     }
-    println!(
+    line(format_args!(
         "report: {} (results: {}, {} pictures)",
-        files.readme.display(),
-        files.results.display(),
-        files.pictures.len()
-    );
-    Ok(())
+        written.readme.display(),
+        written.results.display(),
+        written.pictures.len()
+    ))
 }

@@ -6,6 +6,8 @@ use oracle::{ExactSolver, Oracle};
 use serde::Serialize;
 use sim::{BlockId, Cell, Goal, Grid, State};
 
+use super::stdout::line;
+
 /// Which planner solves.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum SolverKind {
@@ -42,6 +44,11 @@ pub struct SolveArgs {
     /// The planner.
     #[arg(long, value_enum, default_value_t = SolverKind::Exact)]
     pub solver: SolverKind,
+    /// The action protocol the plan keeps to: free (every action legal) or paper (nothing
+    /// held: only pick; holding: only moves and drop); the exact plan is the shortest legal
+    /// one.
+    #[arg(long, default_value = "free")]
+    pub protocol: sim::ActionProtocol,
     /// Print the plan as one JSON object: {"length":L,"actions":[indices],"solver":"exact"}.
     #[arg(long)]
     pub json: bool,
@@ -76,8 +83,10 @@ pub fn solve(args: SolveArgs) -> Result<()> {
     let state = State::new(&cells, held).context("--start")?;
     let goal = Goal::parse(&args.goal, Some(state.block_count())).context("--goal")?;
     let plan = match args.solver {
-        SolverKind::Exact => ExactSolver::new(grid).solve(&state, &goal)?,
-        SolverKind::Oracle => Oracle::new(grid).plan(&state, &goal)?,
+        SolverKind::Exact => ExactSolver::new(grid)
+            .with_protocol(args.protocol)
+            .solve(&state, &goal)?,
+        SolverKind::Oracle => Oracle::new(grid).with_protocol(args.protocol).plan(&state, &goal)?,
     };
     if args.json {
         let report = SolveReport {
@@ -85,15 +94,15 @@ pub fn solve(args: SolveArgs) -> Result<()> {
             actions: plan.actions.iter().map(|a| a.index()).collect(),
             solver: args.solver.name(),
         };
-        println!("{}", serde_json::to_string(&report)?);
+        line(serde_json::to_string(&report)?)?;
     } else {
-        println!(
+        line(format_args!(
             "{} plan, goal {goal}, grid {grid}: {} actions",
             args.solver.name(),
             plan.len()
-        );
+        ))?;
         if !plan.is_empty() {
-            println!("{plan}");
+            line(&plan)?;
         }
     }
     Ok(())

@@ -33,6 +33,16 @@ pub fn scratch(name: &str) -> PathBuf {
     dir
 }
 
+/// The JSON metadata of a model file, read as any program could: the safetensors layout
+/// (8 bytes of header length, the JSON header) and blockstack's `metadata` entry in it.
+pub fn model_metadata(model: &Path) -> serde_json::Value {
+    let bytes = std::fs::read(model).expect("the model exists");
+    let n = u64::from_le_bytes(bytes[..8].try_into().unwrap()) as usize;
+    let header: serde_json::Value = serde_json::from_slice(&bytes[8..8 + n]).expect("a JSON header");
+    assert_eq!(header["__metadata__"]["format"], "blockstack-q-agent");
+    serde_json::from_str(header["__metadata__"]["metadata"].as_str().expect("metadata text")).expect("JSON metadata")
+}
+
 /// A path as a command-line argument.
 pub fn path(p: &Path) -> &str {
     p.to_str().expect("test paths are UTF-8")

@@ -112,7 +112,7 @@ pub fn episode_gif(episodes: &[EpisodeFrames], options: &GifOptions, path: &Path
         previous = Some(canvas);
     }
     encoder.into_inner().map_err(|e| encode_error(&e))?;
-    sim::files::write_atomic(path, &bytes)?;
+    files::write(path, &bytes)?;
     Ok(indices.len())
 }
 

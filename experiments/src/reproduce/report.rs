@@ -24,10 +24,7 @@ pub struct ReportFiles {
 /// Draws the pictures of `r` and writes them, `README.md` and `results.json` into `dir`
 /// (made if missing), each file atomically.
 pub fn write_report(r: &Reproduction, dir: &Path) -> Result<ReportFiles> {
-    std::fs::create_dir_all(dir).map_err(|e| ReproduceError::Write {
-        path: dir.display().to_string(),
-        reason: e.to_string(),
-    })?;
+    files::prepare_folder(dir)?;
     let mut pictures = Vec::new();
     for figure in r.experiments.iter().flat_map(|e| &e.figures) {
         let stem = dir.join(&figure.stem);
@@ -47,9 +44,9 @@ pub fn write_report(r: &Reproduction, dir: &Path) -> Result<ReportFiles> {
         path: results.display().to_string(),
         reason: e.to_string(),
     })?;
-    sim::files::write_atomic(&results, &json)?;
+    files::write(&results, &json)?;
     let readme = dir.join("README.md");
-    sim::files::write_atomic(&readme, markdown(r).as_bytes())?;
+    files::write(&readme, markdown(r).as_bytes())?;
     Ok(ReportFiles {
         readme,
         results,
