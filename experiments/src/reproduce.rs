@@ -48,10 +48,10 @@ pub use e1::{Decomposition, Gap, WorldArm};
 pub use report::{ReportFiles, write_report};
 pub use spread::{PaperInside, Placement, Spread};
 
-use agent::{QAgent, TrainConfig, Trained};
+use agent::{QAgent, Schedule, TrainConfig, Trained};
 use rayon::prelude::*;
 use serde::Serialize;
-use sim::Goal;
+use sim::{Goal, Profile};
 use thiserror::Error;
 
 use crate::plots::{BarChart, BoxPlot, EpisodeFrames, LearningCurve, PlotError};
@@ -113,6 +113,9 @@ pub struct Options {
 pub struct Scale {
     /// Agents trained (with different seeds) per learner arm of E2-E6.
     pub replicates: usize,
+    /// E4: agents behind the paper's learner's curve in the SPEC world (the first of the
+    /// training seeds; a long training, and no figure of the paper's to read against).
+    pub curve_replicates: usize,
     /// E1's games per replicate (the paper's 100).
     pub e1_games: u64,
     /// E1's replicates: sets of `e1_games` games of their own, in each world.
@@ -122,9 +125,15 @@ pub struct Scale {
     pub test_games: u64,
     /// E3's test games per unseen goal (the paper's 100 in all, over two goals).
     pub e3_games_per_goal: u64,
-    /// Training games of the paper's learner (not given in the paper; the preset of
-    /// [`TrainConfig::paper`]).
+    /// Training games of the paper's learner in the SPEC world (not given in the paper; the
+    /// preset of [`TrainConfig::paper`]).
     pub paper_games: u64,
+    /// Training games (of up to 5000 steps) of the paper's learner in the original world
+    /// (the preset of [`TrainConfig::original`]: the most of Fig. 3, and E3's).
+    pub original_games: u64,
+    /// E4: where the paper's learner is tested along its training in the original world,
+    /// in games (Fig. 3's points among them).
+    pub original_curve: Vec<u64>,
     /// Training games of our learner ([`TrainConfig::role_step_cost`]'s preset).
     pub ours_games: u64,
     /// E4: where the paper's learner is tested along its training, in games.
@@ -141,16 +150,20 @@ impl Scale {
     /// presets; the learning curves test at fractions and multiples of them.
     pub fn new(quick: bool) -> Scale {
         let paper_games = TrainConfig::paper(Vec::new()).games;
+        let original_games = TrainConfig::original(Vec::new()).games;
         let ours_games = TrainConfig::role_step_cost(Vec::new()).games;
         let at = |games: u64, per_mille: &[u64]| -> Vec<u64> { per_mille.iter().map(|m| games * m / 1000).collect() };
         if quick {
             Scale {
                 replicates: 2,
+                curve_replicates: 2,
                 e1_games: 100,
                 e1_replicates: 5,
                 test_games: 100,
                 e3_games_per_goal: 50,
                 paper_games,
+                original_games,
+                original_curve: at(original_games, &[50, 500, 1000]),
                 ours_games,
                 paper_curve: at(paper_games, &[0, 200, 1000]),
                 ours_curve: at(ours_games, &[0, 50, 200, 1000]),
@@ -158,17 +171,28 @@ impl Scale {
             }
         } else {
             Scale {
-                replicates: 5,
+                replicates: 20,
+                curve_replicates: 5,
                 e1_games: 100,
                 e1_replicates: 20,
                 test_games: 500,
                 e3_games_per_goal: 50,
                 paper_games,
+                original_games,
+                original_curve: at(original_games, &[0, 50, 100, 250, 500, 1000, 2000]),
                 ours_games,
                 paper_curve: at(paper_games, &[0, 100, 200, 400, 1000, 2000, 4000, 10_000]),
                 ours_curve: at(ours_games, &[0, 20, 50, 100, 200, 500, 1000]),
                 demos: paper::E6_DEMOS,
             }
+        }
+    }
+
+    /// Training games of the paper's learner in `world`.
+    pub fn paper_games(&self, world: Profile) -> u64 {
+        match world {
+            Profile::Spec => self.paper_games,
+            Profile::Original => self.original_games,
         }
     }
 
@@ -203,7 +227,9 @@ impl Seeds {
     /// The seeds derived from `seed` for `scale`.
     pub fn new(seed: u64, scale: &Scale) -> Seeds {
         Seeds {
-            training: (0..scale.replicates as u64).map(|r| seed.wrapping_add(r)).collect(),
+            training: (0..scale.replicates.max(scale.curve_replicates) as u64)
+                .map(|r| seed.wrapping_add(r))
+                .collect(),
             ours: seed,
             test: seed.wrapping_add(1000),
             demonstrations: (1..=3).map(|d| seed.wrapping_add(2000 + d)).collect(),
@@ -243,10 +269,31 @@ pub struct CurvePoint {
     pub failures: f64,
     /// Share of test games failed.
     pub failure_rate: f64,
+    /// The share of test games failed, replicate by replicate (`None` for one replicate).
+    pub failure_rate_spread: Option<Spread>,
     /// Mean steps, a failure counted as the horizon.
     pub mean_steps_failures_at_horizon: f64,
+    /// Mean steps*, replicate by replicate (`None` for one replicate).
+    pub mean_steps_failures_at_horizon_spread: Option<Spread>,
     /// Mean steps over the games that reached the goal.
     pub mean_steps: Option<f64>,
+}
+
+impl CurvePoint {
+    /// The point after `games` training games whose tests gave `arm`.
+    pub fn of(games: u64, arm: &ArmResult) -> CurvePoint {
+        let spread = |values: &[f64]| Spread::of(values).filter(|s| s.replicates > 1);
+        CurvePoint {
+            games,
+            test_games: arm.steps.len(),
+            failures: arm.failures,
+            failure_rate: arm.failure_rate(),
+            failure_rate_spread: spread(&arm.failure_rate_per_replicate()),
+            mean_steps_failures_at_horizon: arm.mean_steps_failures_at_horizon,
+            mean_steps_failures_at_horizon_spread: spread(&arm.mean_steps_failures_at_horizon_per_replicate),
+            mean_steps: arm.mean_steps,
+        }
+    }
 }
 
 /// A learner's learning curve.
@@ -254,6 +301,10 @@ pub struct CurvePoint {
 pub struct Curve {
     /// The learner.
     pub learner: String,
+    /// The world it learns and is tested in.
+    pub world: Profile,
+    /// The test-time probability of a random action.
+    pub test_epsilon: f64,
     /// The test games at every point.
     pub suite: String,
     /// The points, by training games.
@@ -352,24 +403,50 @@ pub(crate) struct Context<'a> {
     progress: &'a dyn ProgressSink,
 }
 
-/// The paper's learner as the report names it: representation, reward and the
+/// The worlds E1-E6 are run in: the paper's as coded, then ours.
+const WORLDS: [Profile; 2] = [Profile::Original, Profile::Spec];
+
+/// The paper's learner as the report names it: representation, reward, schedule and the
 /// hyper-parameters of `config`.
 fn paper_learner(config: &TrainConfig) -> String {
     let p = &config.params;
+    let schedule = match config.schedule {
+        Schedule::Spec => format!("training games of up to {} steps ended by the goal", config.horizon),
+        Schedule::PaperCode => format!(
+            "the authors' schedule: training games of up to {} steps on a goal drawn per game, ended by a step \
+             reward above 70, alpha lowered after step 4000, the update over seen entries",
+            config.horizon
+        ),
+    };
     format!(
-        "chasing representation, paper reward, alpha {}, gamma {}, epsilon {}",
-        p.alpha, p.gamma, p.epsilon
+        "{} representation, {} reward, alpha {}, gamma {}, epsilon {}, {schedule}",
+        config.repr,
+        config.reward.name(),
+        p.alpha,
+        p.gamma,
+        p.epsilon
     )
 }
 
 impl Context<'_> {
-    /// The paper's learner on `goals`, replicate `r`'s seed.
-    fn paper_config(&self, goals: &[Goal], r: usize) -> TrainConfig {
+    /// The paper's learner in `world` on `goals`, replicate `r`'s seed: the agent crate's
+    /// preset of that world ([`TrainConfig::for_profile`]) for the scale's games there.
+    fn paper_config(&self, world: Profile, goals: &[Goal], r: usize) -> TrainConfig {
         TrainConfig {
             seed: self.seeds.training[r],
-            games: self.scale.paper_games,
-            ..TrainConfig::paper(goals.to_vec())
+            games: self.scale.paper_games(world),
+            ..TrainConfig::for_profile(world, goals.to_vec())
         }
+    }
+
+    /// `f` in the original world and in the SPEC world, side by side on rayon's pool.
+    fn in_both_worlds<T, F>(&self, f: F) -> Result<(T, T)>
+    where
+        T: Send,
+        F: Fn(Profile) -> Result<T> + Sync,
+    {
+        let (original, spec) = rayon::join(|| f(Profile::Original), || f(Profile::Spec));
+        Ok((original?, spec?))
     }
 
     /// Trains every replicate of `config(r)` in parallel, one job each.
@@ -419,16 +496,16 @@ pub fn reproduce_with(options: &Options, scale: Scale, progress: &dyn ProgressSi
         || -> Result<_> {
             let e1 = e1::run(&ctx)?;
             let e2 = e2::run(&ctx)?;
-            let paper_curve = e4::paper_curve(&ctx)?;
+            let paper_curves = e4::paper_curves(&ctx)?;
             let (e5, paper_agent) = e5::run(&ctx)?;
             let e6 = e6::run(&ctx)?;
-            Ok((e1, e2, paper_curve, e5, paper_agent, e6))
+            Ok((e1, e2, paper_curves, e5, paper_agent, e6))
         },
     );
     let (ours, ours_curve): (QAgent, Curve) = ours?;
-    let (e1, e2, paper_curve, e5, paper_agent, e6) = rest?;
+    let (e1, e2, paper_curves, e5, paper_agent, e6) = rest?;
     let e3 = e3::run(&ctx, &ours)?;
-    let e4 = e4::experiment(&ctx, paper_curve, ours_curve);
+    let e4 = e4::experiment(&ctx, paper_curves, ours_curve);
     let e7 = e7::run(&ctx, &paper_agent, &ours)?;
     Ok(Reproduction {
         format: FORMAT,
@@ -467,11 +544,14 @@ mod tests {
     fn tiny() -> Scale {
         Scale {
             replicates: 2,
+            curve_replicates: 2,
             e1_games: 6,
             e1_replicates: 2,
             test_games: 6,
             e3_games_per_goal: 3,
             paper_games: 60,
+            original_games: 5,
+            original_curve: vec![0, 5],
             ours_games: 3000,
             paper_curve: vec![0, 60, 120],
             ours_curve: vec![0, 3000],

@@ -8,7 +8,7 @@ use agent::{EpisodeResult, Policy, Summary};
 use serde::Serialize;
 use sim::{ActionProtocol, Env, EnvConfig, Goal, GoalSpec, Grid, Observation, Profile, StartRule};
 
-use super::paper::{PaperRow, PaperTable};
+use super::paper::{MeanOver, PaperRow, PaperTable};
 use super::spread::PaperInside;
 use super::{ProgressSink, Result};
 use crate::plots::{Arm, BoxPlot};
@@ -85,6 +85,19 @@ pub struct Suite {
 }
 
 impl Suite {
+    /// `episodes` games per goal of `goals` with `blocks` blocks in `world`, starts from
+    /// `seed`, the paper's horizon.
+    pub fn in_world(world: Profile, blocks: usize, goals: Goals, episodes: u64, seed: u64) -> Suite {
+        Suite {
+            blocks,
+            goals,
+            episodes,
+            seed,
+            horizon: super::HORIZON,
+            rules: Rules::of(world),
+        }
+    }
+
     /// The grid every experiment plays on: the paper's 7 x 7.
     pub fn grid(&self) -> Grid {
         Grid::default()
@@ -153,18 +166,15 @@ impl Suite {
         Ok(starts)
     }
 
-    /// The length of a shortest plan from every game's start (the exact solver's), in
-    /// [`Suite::play`]'s order; none (no ratio to the optimum) in a world whose protocol the
-    /// solver does not plan under. A start that already meets the goal (the paper's start
-    /// rule keeps them) takes one action: the game ends on its first.
+    /// The length of a shortest plan from every game's start (the exact solver's, under the
+    /// suite's protocol), in [`Suite::play`]'s order: 0 from a start that already meets the
+    /// goal (the paper's start rule keeps them; such games have no ratio to the optimum, see
+    /// [`agent::optimality`]).
     pub fn optimum(&self) -> Result<Vec<u32>> {
-        if self.rules.protocol != ActionProtocol::Free {
-            return Ok(Vec::new());
-        }
-        let solver = oracle::ExactSolver::new(self.grid());
+        let solver = oracle::ExactSolver::new(self.grid()).with_protocol(self.rules.protocol);
         self.starts()?
             .iter()
-            .map(|obs| Ok(solver.distance(&obs.state, &obs.goal)?.max(1)))
+            .map(|obs| Ok(solver.distance(&obs.state, &obs.goal)?))
             .collect()
     }
 
@@ -223,8 +233,12 @@ pub struct ArmResult {
     /// Mean steps over every game of every replicate, a failure counted as the horizon
     /// (the paper's reading).
     pub mean_steps_failures_at_horizon: f64,
+    /// Each replicate's mean steps, a failure counted as the horizon.
+    pub mean_steps_failures_at_horizon_per_replicate: Vec<f64>,
     /// Mean steps over the games that reached the goal.
     pub mean_steps: Option<f64>,
+    /// Each replicate's mean steps over its games that reached the goal.
+    pub mean_steps_per_replicate: Vec<Option<f64>>,
     /// Median steps over the games that reached the goal.
     pub median_steps: Option<f64>,
     /// Mean over the games that reached the goal of steps / shortest plan.
@@ -252,19 +266,24 @@ impl ArmResult {
         Self::of_games(name, agent, test_epsilon, replicates, &optimal, horizon)
     }
 
-    /// The figures of one policy's `games`, cut into replicates of `per_replicate` games in
-    /// order (E1: each replicate a set of the paper's number of games of its own); `optimum`
-    /// holds each game's shortest plan (empty for none).
+    /// The figures of one policy's `games` (as [`Suite::play`] orders them: `runs` runs, one
+    /// per goal of the suite, of `per_replicate * R` games each), cut into `R` replicates
+    /// of `per_replicate` games of each run, in order: replicate `r` holds games
+    /// `r * per_replicate..(r + 1) * per_replicate` of every run (E1, E3: a replicate is a
+    /// set of the paper's number of games of its own). `optimum` holds each game's shortest
+    /// plan (empty for none).
     pub fn of_sets(
         name: impl Into<String>,
         agent: impl Into<String>,
         games: &[EpisodeResult],
+        runs: usize,
         per_replicate: usize,
         optimum: &[u32],
         horizon: u32,
     ) -> ArmResult {
-        let replicates: Vec<Vec<EpisodeResult>> = games.chunks(per_replicate.max(1)).map(<[_]>::to_vec).collect();
-        Self::of_games(name, agent, None, &replicates, optimum, horizon)
+        let replicates = regroup(games, runs, per_replicate);
+        let optimal: Vec<u32> = regroup(optimum, runs, per_replicate).concat();
+        Self::of_games(name, agent, None, &replicates, &optimal, horizon)
     }
 
     /// The figures of `replicates`, whose games' shortest plans are `optimal`, replicate
@@ -290,7 +309,12 @@ impl ArmResult {
             failures: failures_per_replicate.iter().sum::<usize>() as f64 / replicates.len().max(1) as f64,
             failures_per_replicate,
             mean_steps_failures_at_horizon: mean_steps_failures_as_horizon(&all, horizon),
+            mean_steps_failures_at_horizon_per_replicate: replicates
+                .iter()
+                .map(|r| mean_steps_failures_as_horizon(r, horizon))
+                .collect(),
             mean_steps: summary.mean_steps,
+            mean_steps_per_replicate: replicates.iter().map(|r| Summary::of(r).mean_steps).collect(),
             median_steps: summary.median_steps,
             mean_ratio_to_optimum: optimality.mean_ratio_to_optimum,
             mean_optimum: optimality.mean_optimal_steps,
@@ -313,17 +337,21 @@ impl ArmResult {
             .map(|&f| f as f64 / self.games.max(1) as f64)
             .collect()
     }
+}
 
-    /// Each replicate's mean steps, a failure counted as the horizon.
-    pub fn mean_steps_failures_at_horizon_per_replicate(&self) -> Vec<f64> {
-        if self.games == 0 {
-            return Vec::new();
-        }
-        self.steps
-            .chunks(self.games)
-            .map(|c| c.iter().sum::<f64>() / c.len() as f64)
-            .collect()
-    }
+/// `items` in `runs` equal runs, regrouped into sets of `per` items of each run: set `r`
+/// holds items `r * per..(r + 1) * per` of every run, run after run.
+fn regroup<T: Copy>(items: &[T], runs: usize, per: usize) -> Vec<Vec<T>> {
+    let run_length = items.len() / runs.max(1);
+    let sets = run_length / per.max(1);
+    (0..sets)
+        .map(|r| {
+            items
+                .chunks(run_length.max(1))
+                .flat_map(|run| run[r * per..(r + 1) * per].iter().copied())
+                .collect()
+        })
+        .collect()
 }
 
 /// Which test compared two arms, and what it found.
@@ -569,31 +597,33 @@ where
         .collect()
 }
 
-/// A log-scale box plot of each arm's steps per game (a failure counted as the horizon),
-/// each arm marked with the mean of the paper's matching row: E5's and E6's pictures.
-pub fn steps_box_plot(
-    title: String,
-    arms: &[ArmResult],
-    paper: &[PaperRow],
-    replicates: usize,
-    suite: &Suite,
-) -> BoxPlot {
+/// A log-scale box plot of each row's steps per game in each world (a failure counted as
+/// the horizon), each marked with the mean of the paper's row: E5's and E6's pictures.
+pub fn steps_box_plot(title: String, rows: &[Row], replicates: usize, suite: &Suite) -> BoxPlot {
+    let mut arms = Vec::new();
+    for profile in [Profile::Original, Profile::Spec] {
+        for row in rows {
+            if let Some(m) = row.in_world(profile) {
+                arms.push(Arm {
+                    name: format!("{}, {profile}", row.name),
+                    steps: m.arm.steps.clone(),
+                    reference: row
+                        .paper
+                        .filter(|p| p.mean_over == MeanOver::FailuresAtHorizon)
+                        .and_then(|p| p.mean_steps),
+                });
+            }
+        }
+    }
     BoxPlot {
         title,
         y_label: "steps to goal (failures at 1000)".into(),
-        arms: arms
-            .iter()
-            .zip(paper)
-            .map(|(a, p)| Arm {
-                name: a.name.clone(),
-                steps: a.steps.clone(),
-                reference: p.mean_steps,
-            })
-            .collect(),
+        arms,
         reference_label: "paper's mean".into(),
         log_scale: true,
         note: format!(
-            "{replicates} agents per arm, each {} (the same games for every arm).",
+            "{replicates} agents per arm, each {} (the same games for every arm of a world), in the original world \
+             (the paper's, as coded) and in the SPEC world (ours).",
             suite.describe()
         ),
     }
@@ -642,6 +672,28 @@ mod tests {
         assert_eq!(arm.mean_ratio_to_optimum, Some(1.0));
         assert_eq!((arm.replicates, arm.games, arm.failures), (2, 4, 0.0));
         assert_eq!(arm.steps.len(), 8);
+    }
+
+    #[test]
+    fn sets_take_the_same_share_of_every_run() {
+        // Two runs (goals) of three sets of two games.
+        let items: Vec<u32> = (0..12).collect();
+        assert_eq!(
+            regroup(&items, 2, 2),
+            vec![vec![0, 1, 6, 7], vec![2, 3, 8, 9], vec![4, 5, 10, 11]]
+        );
+        assert_eq!(
+            regroup(&items, 1, 4),
+            vec![vec![0, 1, 2, 3], vec![4, 5, 6, 7], vec![8, 9, 10, 11]]
+        );
+        let s = Suite {
+            episodes: 6,
+            ..suite(Goals::Each(vec!["0,1,2".parse().unwrap(), "2,1,0".parse().unwrap()]))
+        };
+        let played = s.play(&mut agent::RandomPolicy).unwrap();
+        let arm = ArmResult::of_sets("random", "random", &played, 2, 2, &s.optimum().unwrap(), 1000);
+        assert_eq!((arm.replicates, arm.games), (3, 4));
+        assert_eq!(arm.steps.len(), 12);
     }
 
     #[test]

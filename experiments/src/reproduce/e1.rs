@@ -122,6 +122,7 @@ pub(super) fn run(ctx: &Context) -> Result<Experiment> {
                 "random",
                 "uniformly random legal actions",
                 &results,
+                1,
                 per_replicate as usize,
                 &optimum,
                 HORIZON,

@@ -5,6 +5,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use super::arms::{ArmResult, Measured, Table, TestOutcome};
+use super::paper::MeanOver;
 use super::spread::Spread;
 use super::text::{ALPHA, failures, num, p_value, verdict};
 use super::{Curve, Decomposition, Drawing, Experiment, ReproduceError, Reproduction, Result};
@@ -152,14 +153,15 @@ fn summary(md: &mut String, r: &Reproduction) {
     let _ = writeln!(md, "\n## The paper's figures beside ours\n");
     let _ = writeln!(
         md,
-        "Every row of the paper's tables: its failures and mean steps*, ours in the `original` and the `spec` \
+        "Every row of the paper's tables: its failures and mean steps, ours in the `original` and the `spec` \
          world (mean over replicates, and the range), and whether the paper's figures lie inside the spread of \
-         each world's replicates.\n"
+         each world's replicates. Mean steps count a failure as 1000 (mean steps*), except where marked † (over \
+         the games that reached the goal: E2, as ORIGINAL.md reads the paper's).\n"
     );
     let _ = writeln!(
         md,
-        "| | table | arm | failures, paper | failures, original | failures, spec | mean steps*, paper | mean steps*, \
-         original | mean steps*, spec | paper inside original's spread | paper inside spec's spread |\n\
+        "| | table | arm | failures, paper | failures, original | failures, spec | mean steps, paper | mean steps, \
+         original | mean steps, spec | paper inside original's spread | paper inside spec's spread |\n\
          |---|---|---|---|---|---|---|---|---|---|---|"
     );
     for e in &r.experiments {
@@ -181,8 +183,17 @@ fn summary(md: &mut String, r: &Reproduction) {
                         )
                     })
                 }));
-                cells.push(num(paper.mean_steps, 2));
-                cells.extend(worlds.iter().map(|m| m.map_or("-".into(), |m| steps_spread(&m.arm))));
+                let mark = match paper.mean_over {
+                    MeanOver::FailuresAtHorizon => "",
+                    MeanOver::Successes => " †",
+                };
+                cells.push(format!("{}{mark}", num(paper.mean_steps, 2)));
+                cells.extend(worlds.iter().map(|m| {
+                    m.map_or("-".into(), |m| match paper.mean_over {
+                        MeanOver::FailuresAtHorizon => steps_spread(&m.arm),
+                        MeanOver::Successes => format!("{}{mark}", successes_spread(&m.arm)),
+                    })
+                }));
                 cells.extend(worlds.iter().map(|m| {
                     m.and_then(|m| m.paper_inside.as_ref())
                         .map_or("-".into(), |inside| verdict(inside).to_string())
@@ -268,7 +279,7 @@ fn test_cell(test: Option<&TestOutcome>) -> String {
 /// The median is shown only in a table of one world (it is in `results.json` for all).
 fn table(md: &mut String, t: &Table) {
     let worlds = t.worlds();
-    let paper = t.paper.is_some();
+    let paper = t.rows.iter().any(|r| r.paper.is_some());
     let paper_test = t.paper.and_then(|p| p.test);
     let _ = writeln!(md, "\n### {}\n", t.title);
     if let Some(p) = &t.paper {
@@ -276,16 +287,20 @@ fn table(md: &mut String, t: &Table) {
     } else {
         let _ = writeln!(md, "{}.\n", t.suite);
     }
+    // Which of the paper's means the table has: over every game (a failure at the
+    // horizon), over successes (E2's reading), or both.
+    let paper_mean = |over: MeanOver| t.rows.iter().any(|r| r.paper.is_some_and(|p| p.mean_over == over));
+    let (paper_star, paper_successes) = (paper_mean(MeanOver::FailuresAtHorizon), paper_mean(MeanOver::Successes));
     let mut head = vec!["arm".to_string(), "ε".into()];
     let mut group = |figure: &str, with_paper: bool| {
-        if with_paper && paper {
+        if with_paper {
             head.push(format!("{figure}, paper"));
         }
         head.extend(worlds.iter().map(|w| format!("{figure}, {w}")));
     };
-    group("failures", true);
-    group("mean steps*", true);
-    group("mean, successes", false);
+    group("failures", paper);
+    group("mean steps*", paper_star);
+    group("mean, successes", paper_successes);
     if worlds.len() == 1 {
         group("median", false);
     }
@@ -319,10 +334,18 @@ fn table(md: &mut String, t: &Table) {
         cells.extend(each(&|a| {
             format!("{} / {}", failures(&a.failures_per_replicate, a.failures), a.games)
         }));
-        if paper {
-            cells.push(row.paper.map_or("-".into(), |p| num(p.mean_steps, 2)));
+        let paper_mean = |over: MeanOver| {
+            row.paper
+                .filter(|p| p.mean_over == over)
+                .map_or("-".into(), |p| num(p.mean_steps, 2))
+        };
+        if paper_star {
+            cells.push(paper_mean(MeanOver::FailuresAtHorizon));
         }
         cells.extend(each(&|a| steps_spread(a)));
+        if paper_successes {
+            cells.push(paper_mean(MeanOver::Successes));
+        }
         cells.extend(each(&|a| steps(a.mean_steps)));
         if worlds.len() == 1 {
             cells.extend(each(&|a| num(a.median_steps, 1)));
@@ -351,9 +374,18 @@ fn table(md: &mut String, t: &Table) {
 /// Mean steps*, with the range over replicates when there are several.
 fn steps_spread(a: &ArmResult) -> String {
     let mean = steps(Some(a.mean_steps_failures_at_horizon));
-    match Spread::of(&a.mean_steps_failures_at_horizon_per_replicate()) {
+    match Spread::of(&a.mean_steps_failures_at_horizon_per_replicate) {
         Some(s) if s.replicates > 1 => format!("{mean} ({:.0}-{:.0})", s.low, s.high),
         _ => mean,
+    }
+}
+
+/// Mean steps over successes, with the range over replicates when there are several.
+fn successes_spread(a: &ArmResult) -> String {
+    let per_replicate: Vec<f64> = a.mean_steps_per_replicate.iter().flatten().copied().collect();
+    match Spread::of(&per_replicate) {
+        Some(s) if s.replicates > 1 => format!("{} ({:.0}-{:.0})", steps(a.mean_steps), s.low, s.high),
+        _ => steps(a.mean_steps),
     }
 }
 
@@ -408,21 +440,33 @@ fn decomposition(md: &mut String, d: &Decomposition) {
 }
 
 fn curve(md: &mut String, c: &Curve) {
-    let _ = writeln!(md, "\n### Learning curve: {}\n", c.learner);
+    let _ = writeln!(
+        md,
+        "\n### Learning curve, {} world, test epsilon {}: {}\n",
+        c.world, c.test_epsilon, c.learner
+    );
     let _ = writeln!(md, "Tested on: {}.\n", c.suite);
     let _ = writeln!(
         md,
-        "| training games | test games | failures (per agent) | failed | mean steps* | mean, successes |\n|---|---|---|---|---|---|"
+        "| training games | test games | failures (per agent) | failed (range over agents) | mean steps* (range) | mean, successes |\n|---|---|---|---|---|---|"
     );
+    // A range over the agents beside a figure, when there are several.
+    let range = |s: Option<Spread>, scale: f64, decimals: usize| {
+        s.map_or(String::new(), |s| {
+            format!(" ({:.decimals$}-{:.decimals$})", scale * s.low, scale * s.high)
+        })
+    };
     for p in &c.points {
         let _ = writeln!(
             md,
-            "| {} | {} | {} | {:.1}% | {} | {} |",
+            "| {} | {} | {} | {:.1}%{} | {}{} | {} |",
             p.games,
             p.test_games,
             num(Some(p.failures), 1),
             100.0 * p.failure_rate,
+            range(p.failure_rate_spread, 100.0, 0),
             steps(Some(p.mean_steps_failures_at_horizon)),
+            range(p.mean_steps_failures_at_horizon_spread, 1.0, 0),
             steps(p.mean_steps)
         );
     }

@@ -14,13 +14,14 @@
 //! coverage.
 //!
 //! Failures are compared as shares of the games played (the paper's failures of its games
-//! against each replicate's of its games), mean steps as the paper reads them, a failure
-//! counted as the horizon.
+//! against each replicate's of its games), mean steps over the games the paper's mean is
+//! over ([`MeanOver`]: a failure counted as the horizon in every table, the successes in
+//! E2).
 
 use serde::Serialize;
 
 use super::arms::ArmResult;
-use super::paper::PaperRow;
+use super::paper::{MeanOver, PaperRow};
 
 /// The range of one figure over our replicates.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -92,8 +93,10 @@ pub struct PaperInside {
     /// The share of games failed (the paper's failures over its games), if the paper gives
     /// both.
     pub failure_rate: Option<Placement>,
-    /// Mean steps, a failure counted as the horizon, if the paper gives a mean.
-    pub mean_steps_failures_at_horizon: Option<Placement>,
+    /// Mean steps, if the paper gives a mean, over the games `mean_over` says.
+    pub mean_steps: Option<Placement>,
+    /// Which games the means are over (the paper's reading).
+    pub mean_over: MeanOver,
 }
 
 impl PaperInside {
@@ -106,21 +109,21 @@ impl PaperInside {
             }
             _ => None,
         };
-        let mean_steps_failures_at_horizon = paper
-            .mean_steps
-            .and_then(|m| Placement::of(m, &arm.mean_steps_failures_at_horizon_per_replicate()));
-        (failure_rate.is_some() || mean_steps_failures_at_horizon.is_some()).then_some(PaperInside {
+        let ours: Vec<f64> = match paper.mean_over {
+            MeanOver::FailuresAtHorizon => arm.mean_steps_failures_at_horizon_per_replicate.clone(),
+            MeanOver::Successes => arm.mean_steps_per_replicate.iter().flatten().copied().collect(),
+        };
+        let mean_steps = paper.mean_steps.and_then(|m| Placement::of(m, &ours));
+        (failure_rate.is_some() || mean_steps.is_some()).then_some(PaperInside {
             failure_rate,
-            mean_steps_failures_at_horizon,
+            mean_steps,
+            mean_over: paper.mean_over,
         })
     }
 
     /// The placements there are: failure rate, then mean steps.
     pub fn placements(&self) -> impl Iterator<Item = Placement> + '_ {
-        self.failure_rate
-            .iter()
-            .chain(&self.mean_steps_failures_at_horizon)
-            .copied()
+        self.failure_rate.iter().chain(&self.mean_steps).copied()
     }
 
     /// Whether every figure of the paper lies inside our spread.
@@ -172,13 +175,24 @@ mod tests {
             failures: Some(failures),
             games: Some(4),
             mean_steps: Some(mean),
+            mean_over: MeanOver::FailuresAtHorizon,
             p_value: None,
         };
         let inside = PaperInside::of(&row(1, 300.0), &arm).unwrap();
         let f = inside.failure_rate.unwrap();
         assert_eq!((f.paper, f.spread.low, f.spread.high, f.inside), (0.25, 0.0, 0.5, true));
-        let m = inside.mean_steps_failures_at_horizon.unwrap();
+        let m = inside.mean_steps.unwrap();
         assert_eq!((m.spread.low, m.spread.high), (15.0, 505.0));
+        // Over successes (E2's reading): 10 and 15.
+        let successes = PaperRow {
+            failures: None,
+            mean_over: MeanOver::Successes,
+            ..row(0, 12.0)
+        };
+        let inside = PaperInside::of(&successes, &arm).unwrap();
+        assert_eq!(inside.failure_rate, None);
+        let m = inside.mean_steps.unwrap();
+        assert_eq!((m.spread.low, m.spread.high, m.inside), (10.0, 15.0, true));
         assert!(inside.all_inside());
         let outside = PaperInside::of(&row(3, 300.0), &arm).unwrap();
         assert!(!outside.failure_rate.unwrap().inside && !outside.all_inside());

@@ -4,6 +4,7 @@
 use sim::Profile;
 
 use super::arms::Row;
+use super::paper::MeanOver;
 use super::spread::{PaperInside, Placement};
 
 /// The significance level the readings use.
@@ -46,17 +47,6 @@ pub fn significance(p: f64) -> String {
     }
 }
 
-/// "fewer" / "more" / "as many", for failures or steps of `a` against `b`.
-pub fn fewer_or_more(a: f64, b: f64) -> &'static str {
-    if a < b {
-        "fewer"
-    } else if a > b {
-        "more"
-    } else {
-        "as many"
-    }
-}
-
 /// Failures per replicate: "171.4 (126-248)" for several, "171" for one.
 pub fn failures(per_replicate: &[usize], mean: f64) -> String {
     match (per_replicate.iter().min(), per_replicate.iter().max()) {
@@ -75,6 +65,15 @@ pub fn world_name(profile: Profile) -> &'static str {
     match profile {
         Profile::Original => "the original world",
         Profile::Spec => "the SPEC world",
+    }
+}
+
+/// What a mean over `over` is called in the report: "mean steps*" (a failure counted as
+/// the horizon) or "mean steps over successes".
+pub fn mean_name(over: MeanOver) -> &'static str {
+    match over {
+        MeanOver::FailuresAtHorizon => "mean steps*",
+        MeanOver::Successes => "mean steps over successes",
     }
 }
 
@@ -107,9 +106,10 @@ fn ranges(inside: &PaperInside) -> String {
             mark(&p)
         )
     });
-    let steps = inside.mean_steps_failures_at_horizon.map(|p| {
+    let steps = inside.mean_steps.map(|p| {
         format!(
-            "mean steps* {}-{}{}",
+            "{} {}-{}{}",
+            mean_name(inside.mean_over),
             num(Some(p.spread.low), 1),
             num(Some(p.spread.high), 1),
             mark(&p)
@@ -143,8 +143,8 @@ pub fn paper_against(row: &Row) -> String {
         .into_iter()
         .chain(
             first
-                .mean_steps_failures_at_horizon
-                .map(|p| format!("{} mean steps*", num(Some(p.paper), 2))),
+                .mean_steps
+                .map(|p| format!("{} {}", num(Some(p.paper), 2), mean_name(first.mean_over))),
         )
         .collect();
     let worlds: Vec<String> = placed
