@@ -8,6 +8,18 @@
 //!
 //! # How the experiments are run
 //!
+//! - **Two worlds.** The paper's figures were measured in the world its authors coded
+//!   (ORIGINAL.md), not the one SPEC.md describes. E1-E6 run in both: under the `original`
+//!   profile (the action protocol, start rule, reward, representation, schedule, oracle and
+//!   correction rule of the authors' code, from `sim::Profile` and the agent crate's
+//!   presets, [`TrainConfig::for_profile`]) and in the SPEC world; every row of a table puts
+//!   the paper's figure, ours under `original` and ours in the SPEC world side by side. E1
+//!   also plays the worlds between, one rule switched at a time ([`Decomposition`]). E7 and
+//!   our own learner are the SPEC world's.
+//! - **Spread.** Each of the paper's figures is placed against the range of our replicates
+//!   in each world ([`PaperInside`], [`Spread`]): inside or outside its range, and the
+//!   chance `(R - 1) / (R + 1)` that one more draw of ours would land inside the range of
+//!   `R`.
 //! - **Same starts for every arm.** Every arm of a comparison plays the same [`Suite`]:
 //!   game `k` starts from `reset(episode_seed(test seed, k))`, with the same goal, so the
 //!   paired tests (Wilcoxon) pair the same start, and an agent's random test actions come
@@ -15,9 +27,11 @@
 //! - **Replicates.** A learner's result depends a lot on its training seed (the paper's
 //!   learner fails 20% to 40% of games depending on it), so each learner arm of E2-E6 is
 //!   trained [`Scale::replicates`] times, with training seeds `seed, seed + 1, ...`, and
-//!   every replicate plays the whole suite. Failures are given per replicate (mean and
-//!   range), other figures over all games of all replicates, and a paired test pairs game
-//!   `k` of replicate `r` of both arms (the same start, agents of the same training seed).
+//!   every replicate plays the whole suite (E1's random agent: sets of the paper's 100
+//!   games, each its own starts; E3's random agent likewise). Failures are given per
+//!   replicate (mean and range), other figures over all games of all replicates, and a
+//!   paired test pairs game `k` of replicate `r` of both arms (the same start, agents of
+//!   the same training seed).
 //! - **Steps.** The paper's "average number of steps" counts a failed game as the horizon
 //!   (see [`paper`]); we print that figure beside the paper's, and also the mean and median
 //!   over the games that reached the goal, and their ratio to the shortest plan (the exact
