@@ -8,9 +8,10 @@ use agent::optimality::{self, Optimality};
 use agent::{Assist, EpisodeResult, QParams, ReprKind, Summary, TrainConfig};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use sim::{Backend, Env, EnvConfig, Goal, GoalSpec, Grid, RewardModel};
+use sim::{Backend, Env, Goal, Grid, RewardModel};
 
 use crate::boundary::{OrValueError, guard};
+use crate::config;
 
 /// Goals separated by `:` (`"0,1,2:1,0,2"`), as `blockstack train --goals` reads them, each
 /// with `blocks` blocks; every goal when `None`.
@@ -25,7 +26,8 @@ fn goals(text: Option<&str>, blocks: usize) -> PyResult<Vec<Goal>> {
 }
 
 /// Trains a tabular Q-learner as `blockstack train` does, with the same flags and
-/// defaults (the paper's learner), in this process, the GIL released. With
+/// defaults (the paper's learner of `profile`: `TrainConfig::for_profile`; a flag left
+/// `None` keeps the profile's value), in this process, the GIL released. With
 /// `eval_episodes > 0`, then plays it `eval_episodes` times on each of `eval_goals` (the
 /// training goals by default) from the starts `blockstack eval --seed EVAL_SEED` plays,
 /// as `eval` does. `out` saves the model file.
@@ -36,16 +38,16 @@ fn goals(text: Option<&str>, blocks: usize) -> PyResult<Vec<Goal>> {
 /// `eval_mean_steps_failures_as_horizon`, `eval_mean_optimal_steps`,
 /// `eval_mean_ratio_to_optimum` (`None` where no episode reached the goal).
 #[pyfunction]
-#[pyo3(signature = (*, blocks=3, grid="7x7", repr="chasing", reward="paper", goals=None, games=5000, seed=1, alpha=None, gamma=None, epsilon=None, initial_q=None, exploring_starts=false, backward_replay=false, final_replay=false, assist="none", horizon=1000, backend="physics", eval_episodes=0, eval_goals=None, eval_seed=2, eval_epsilon=0.1, out=None))]
+#[pyo3(signature = (*, blocks=3, grid="7x7", repr=None, reward=None, goals=None, games=None, seed=1, alpha=None, gamma=None, epsilon=None, initial_q=None, exploring_starts=false, backward_replay=false, final_replay=false, assist="none", horizon=None, backend="physics", eval_episodes=0, eval_goals=None, eval_seed=2, eval_epsilon=0.1, out=None, profile="spec"))]
 #[allow(clippy::too_many_arguments)]
 pub fn train<'py>(
     py: Python<'py>,
     blocks: usize,
     grid: &str,
-    repr: &str,
-    reward: &str,
+    repr: Option<&str>,
+    reward: Option<&str>,
     goals: Option<&str>,
-    games: u64,
+    games: Option<u64>,
     seed: u64,
     alpha: Option<f64>,
     gamma: Option<f64>,
@@ -55,35 +57,43 @@ pub fn train<'py>(
     backward_replay: bool,
     final_replay: bool,
     assist: &str,
-    horizon: u32,
+    horizon: Option<u32>,
     backend: &str,
     eval_episodes: u64,
     eval_goals: Option<&str>,
     eval_seed: u64,
     eval_epsilon: f64,
     out: Option<PathBuf>,
+    profile: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let defaults = QParams::default();
+    let base = TrainConfig::for_profile(config::profile(profile)?, self::goals(goals, blocks)?);
+    let defaults = base.params;
     let config = TrainConfig {
         grid: grid.parse::<Grid>().or_value_error()?,
         blocks,
-        repr: repr.parse::<ReprKind>().or_value_error()?,
-        reward: RewardModel::from_name(reward).or_value_error()?,
+        repr: match repr {
+            Some(name) => name.parse::<ReprKind>().or_value_error()?,
+            None => base.repr,
+        },
+        reward: match reward {
+            Some(name) => RewardModel::from_name(name).or_value_error()?,
+            None => base.reward,
+        },
         params: QParams {
             alpha: alpha.unwrap_or(defaults.alpha),
             gamma: gamma.unwrap_or(defaults.gamma),
             epsilon: epsilon.unwrap_or(defaults.epsilon),
             initial_q: initial_q.unwrap_or(defaults.initial_q),
         },
-        goals: self::goals(goals, blocks)?,
-        games,
+        games: games.unwrap_or(base.games),
         seed,
-        horizon,
+        horizon: horizon.unwrap_or(base.horizon),
         backend: backend.parse::<Backend>().or_value_error()?,
         exploring_starts,
         backward_replay,
         final_replay,
         assist: assist.parse::<Assist>().or_value_error()?,
+        ..base
     };
     config.validate().or_value_error()?;
     let eval_goals = match eval_goals {
@@ -100,14 +110,12 @@ pub fn train<'py>(
             if eval_episodes > 0 {
                 let model = &trained.agent;
                 for goal in &eval_goals {
-                    let mut env = Env::new(EnvConfig {
-                        goal: GoalSpec::Fixed(*goal),
-                        ..config.env_config(*goal)
-                    })
-                    .or_value_error()?;
+                    let mut env = Env::new(config.test_env_config(*goal, sim::DEFAULT_HORIZON)).or_value_error()?;
                     let mut policy = model.policy(eval_epsilon).or_value_error()?;
                     let played = agent::play(&mut env, &mut policy, eval_episodes, eval_seed, None).or_value_error()?;
-                    optimal.extend(optimality::optimal_steps(config.grid, &played).or_value_error()?);
+                    optimal.extend(
+                        optimality::optimal_steps_under(config.grid, config.protocol, &played).or_value_error()?,
+                    );
                     results.extend(played);
                 }
             }
@@ -118,6 +126,7 @@ pub fn train<'py>(
         })
     })?;
     let d = PyDict::new(py);
+    d.set_item("profile", config.profile.to_string())?;
     d.set_item("blocks", blocks)?;
     d.set_item("grid", config.grid.to_string())?;
     d.set_item("repr", config.repr.name())?;
@@ -150,7 +159,7 @@ pub fn train<'py>(
         d.set_item("eval_median_steps", summary.median_steps)?;
         d.set_item(
             "eval_mean_steps_failures_as_horizon",
-            optimality::mean_steps_failures_as_horizon(&results, horizon),
+            optimality::mean_steps_failures_as_horizon(&results, sim::DEFAULT_HORIZON),
         )?;
         d.set_item("eval_mean_optimal_steps", o.mean_optimal_steps)?;
         d.set_item("eval_mean_ratio_to_optimum", o.mean_ratio_to_optimum)?;

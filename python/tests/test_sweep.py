@@ -21,6 +21,15 @@ def test_train_runs_the_rust_trainer_in_process():
         blockstack.train(goals="0,0,1")
 
 
+def test_train_under_the_original_profile_takes_the_papers_learner_as_coded():
+    run = blockstack.train(profile="original", blocks=2, goals="0,1", games=3, seed=1, eval_episodes=5)
+    assert run["profile"] == "original"
+    assert run["repr"] == "chasing-code" and run["reward"] == "paper-code"
+    assert run["games"] == 3 and run["eval_episodes"] == 5
+    with pytest.raises(ValueError, match="profile"):
+        blockstack.train(profile="nope")
+
+
 def test_a_config_expands_to_every_combination(tmp_path):
     path = tmp_path / "c.json"
     path.write_text(json.dumps({"train": {"games": 5, "final-replay": True}, "sweep": {"seed": [1, 2], "gamma": [0.1, 0.9]}}))
