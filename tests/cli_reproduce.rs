@@ -48,8 +48,26 @@ fn the_quick_report_holds_every_experiment() {
         let curves = e["curves"].as_array().unwrap();
         assert!(!tables.is_empty() || !curves.is_empty(), "{id} has no figures");
         for row in tables.iter().flat_map(|t| t["rows"].as_array().unwrap()) {
-            assert!(row["ours"]["games"].as_u64().unwrap() > 0, "{id}");
-            assert!(row["ours"]["mean_steps_failures_at_horizon"].as_f64().is_some(), "{id}");
+            // E1-E6: each row of the paper's beside ours in both worlds (E4's Fig. 3 points in
+            // the original world alone), with where the paper's figures lie against each
+            // world's replicates; E7 and our learner's rows in the SPEC world alone.
+            let worlds: Vec<&str> = ["original", "spec"].into_iter().filter(|w| !row[w].is_null()).collect();
+            assert!(!worlds.is_empty(), "{id}: {row}");
+            for world in &worlds {
+                let arm = &row[world]["arm"];
+                assert!(arm["games"].as_u64().unwrap() > 0, "{id}");
+                assert!(arm["mean_steps_failures_at_horizon"].as_f64().is_some(), "{id}");
+                if !row["paper"].is_null() {
+                    let inside = &row[world]["paper_inside"];
+                    assert!(inside["mean_steps"]["inside"].is_boolean(), "{id} {world}: {inside}");
+                }
+            }
+            if !row["paper"].is_null() {
+                assert!(worlds.contains(&"original"), "{id}: the paper's row in its own world");
+                assert_eq!(worlds.len(), if id == "E4" { 1 } else { 2 }, "{id}");
+            } else {
+                assert_eq!(worlds, ["spec"], "{id}");
+            }
         }
         for figure in e["figures"].as_array().unwrap() {
             for file in figure["files"].as_array().unwrap() {
@@ -63,15 +81,19 @@ fn the_quick_report_holds_every_experiment() {
     // The paper's figures beside ours, and tests with p-values.
     let e5 = &experiments[4]["tables"][0]["rows"];
     assert_eq!(e5[0]["paper"]["failures"], 186);
-    let p = e5[2]["tests"][0]["p_value"].as_f64().unwrap();
+    let p = e5[2]["spec"]["tests"][0]["p_value"].as_f64().unwrap();
     assert!((0.0..=1.0).contains(&p));
     // E7: every agent on the same starts; the exact solver is the optimum.
     let e7 = experiments[6]["tables"][0]["rows"].as_array().unwrap();
     assert_eq!(e7.len(), 7);
-    let exact = e7.iter().find(|r| r["ours"]["name"] == "exact solver").unwrap();
-    assert_eq!(exact["ours"]["mean_ratio_to_optimum"], 1.0);
-    assert_eq!(exact["ours"]["failures"], 0.0);
+    let exact = &e7.iter().find(|r| r["name"] == "exact solver").unwrap()["spec"]["arm"];
+    assert_eq!(exact["mean_ratio_to_optimum"], 1.0);
+    assert_eq!(exact["failures"], 0.0);
+    assert!(readme.contains("## The paper's figures beside ours"));
+    let e4 = &experiments[3]["tables"][0]["rows"];
+    assert_eq!(e4[0]["paper"]["failures"], 71, "Fig. 3, 5 games, test epsilon 0.1");
     for figure in [
+        "e4-original.png",
         "e4-paper-learner.png",
         "e5-steps.png",
         "e6-all-goals.png",
@@ -93,27 +115,74 @@ fn the_quick_report_holds_every_experiment() {
     for table in e8["tables"].as_array().unwrap() {
         assert!(!table["rows"].as_array().unwrap().is_empty());
     }
-    // E1's random agent is `blockstack run` on the same starts.
+
+    // E1: the paper's figure, ours in both worlds, and where the paper's lies against the
+    // spread of each world's replicates, said in the reading.
+    let e1 = &experiments[0];
+    let row = &e1["tables"][0]["rows"][0];
+    assert_eq!(row["paper"]["mean_steps"], 263.55);
+    for world in ["original", "spec"] {
+        let inside = &row[world]["paper_inside"]["mean_steps"];
+        let (low, high) = (
+            inside["spread"]["low"].as_f64().unwrap(),
+            inside["spread"]["high"].as_f64().unwrap(),
+        );
+        assert_eq!(
+            inside["inside"].as_bool().unwrap(),
+            (low..=high).contains(&263.55),
+            "{world}"
+        );
+    }
+    let reading = e1["reading"].as_str().unwrap();
+    assert!(
+        reading.contains("spread of our 5 replicates in the original world"),
+        "{reading}"
+    );
+    assert!(reading.contains("the protocol alone accounts for"), "{reading}");
+    assert!(readme.contains("### The gap between the worlds, one rule at a time"));
+    // E3: the paper's own p-value against what its counts allow.
+    let notes = experiments[2]["paper_notes"].as_array().unwrap();
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.as_str().unwrap().contains("at least 0.27 at 1000 steps"))
+    );
+
+    // E1's random agent in each world is `blockstack run --profile` on the same starts.
     let seed = json["seeds"]["test"].as_u64().unwrap().to_string();
-    let e1 = &experiments[0]["tables"][0]["rows"][0]["ours"];
-    let games = e1["games"].as_u64().unwrap().to_string();
-    let o = blockstack(&[
-        "run",
-        "--agent",
-        "random",
-        "--blocks",
-        "2",
-        "--episodes",
-        &games,
-        "--seed",
-        &seed,
-        "--json",
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let run: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    assert_eq!(run["failures"].as_f64(), e1["failures"].as_f64());
-    assert_eq!(run["mean_steps"], e1["mean_steps"]);
-    assert_eq!(run["median_steps"], e1["median_steps"]);
+    for world in ["original", "spec"] {
+        let e1 = &row[world]["arm"];
+        let replicates = e1["replicates"].as_f64().unwrap();
+        let games = (e1["games"].as_u64().unwrap() * e1["replicates"].as_u64().unwrap()).to_string();
+        let o = blockstack(&[
+            "run",
+            "--profile",
+            world,
+            "--agent",
+            "random",
+            "--blocks",
+            "2",
+            "--episodes",
+            &games,
+            "--seed",
+            &seed,
+            "--json",
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let run: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(
+            run["failures"].as_f64(),
+            e1["failures"].as_f64().map(|f| f * replicates),
+            "{world}"
+        );
+        assert_eq!(run["mean_steps"], e1["mean_steps"], "{world}");
+        assert_eq!(run["median_steps"], e1["median_steps"], "{world}");
+        let (ours, theirs) = (
+            e1["mean_steps_failures_at_horizon"].as_f64().unwrap(),
+            run["mean_steps_failures_as_horizon"].as_f64().unwrap(),
+        );
+        assert!((ours - theirs).abs() < 1e-9, "{world}: {ours} against {theirs}");
+    }
 }
 
 #[test]

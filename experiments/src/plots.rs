@@ -2,7 +2,7 @@
 //!
 //! | function | picture | experiment |
 //! | --- | --- | --- |
-//! | [`learning_curve`] | failures and mean steps against training games, two panels | E4 |
+//! | [`learning_curve`] | failures and mean steps against training games, two panels, several series and reference values | E4 |
 //! | [`box_plot`] | steps per arm: boxes, whiskers, outliers, reference markers | E5, E6 |
 //! | [`bar_chart`] | one bar per agent, optional intervals, second values, optimum line | E7 |
 //! | [`episode_gif`] | one or more episodes side by side, animated | the demo |
@@ -30,7 +30,7 @@ pub use bars::{Bar, BarChart, Reference, bar_chart};
 pub use boxes::{Arm, BoxPlot, box_plot};
 pub use curves::{CurvesChart, Series, curves_chart};
 pub use episode::{EpisodeFrames, GifOptions, episode_gif, frame_indices};
-pub use learning::{LearningCurve, LearningPoint, learning_curve};
+pub use learning::{LearningCurve, LearningPoint, LearningSeries, SeriesStyle, learning_curve};
 
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
@@ -755,16 +755,23 @@ mod tests {
                 bar_chart(&bars, &dir.join("bars")).expect("bar chart");
                 let curve = LearningCurve {
                     title: "tiny".into(),
-                    test_episodes: 1,
-                    points: samples
-                        .iter()
-                        .enumerate()
-                        .map(|(i, &v)| LearningPoint {
-                            games: i as u64,
-                            failures: 0,
-                            mean_steps: Some(v),
-                        })
-                        .collect(),
+                    steps_label: "steps".into(),
+                    series: vec![LearningSeries {
+                        name: "a".into(),
+                        style: SeriesStyle::Line,
+                        colour: 0,
+                        points: samples
+                            .iter()
+                            .enumerate()
+                            .map(|(i, &v)| LearningPoint {
+                                games: i as u64,
+                                failure_rate: 0.0,
+                                failure_range: None,
+                                mean_steps: Some(v),
+                                steps_range: Some((v, v)),
+                            })
+                            .collect(),
+                    }],
                     note: String::new(),
                 };
                 learning_curve(&curve, &dir.join("curve")).expect("learning curve");
@@ -813,14 +820,26 @@ mod tests {
                 note: String::new(),
             };
             let _ = bar_chart(&bars, &dir.join("bars"));
-            let curve = LearningCurve {
-                title: "any".into(),
-                test_episodes: 10,
+            let series = |style, shift: f64| LearningSeries {
+                name: format!("{style:?}"),
+                style,
+                colour: 1,
                 points: values
                     .iter()
                     .enumerate()
-                    .map(|(i, &v)| LearningPoint { games: i as u64 * 100, failures: i % 11, mean_steps: Some(v) })
+                    .map(|(i, &v)| LearningPoint {
+                        games: i as u64 * 100,
+                        failure_rate: v / 1e3,
+                        failure_range: Some((v / 1e3, shift)),
+                        mean_steps: Some(v + shift),
+                        steps_range: Some((v, -v)),
+                    })
                     .collect(),
+            };
+            let curve = LearningCurve {
+                title: "any".into(),
+                steps_label: "steps".into(),
+                series: vec![series(SeriesStyle::Line, 0.5), series(SeriesStyle::Diamonds, -1.0)],
                 note: String::new(),
             };
             let _ = learning_curve(&curve, &dir.join("curve"));

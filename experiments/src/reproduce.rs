@@ -8,6 +8,18 @@
 //!
 //! # How the experiments are run
 //!
+//! - **Two worlds.** The paper's figures were measured in the world its authors coded
+//!   (ORIGINAL.md), not the one SPEC.md describes. E1-E6 run in both: under the `original`
+//!   profile (the action protocol, start rule, reward, representation, schedule, oracle and
+//!   correction rule of the authors' code, from `sim::Profile` and the agent crate's
+//!   presets, [`TrainConfig::for_profile`]) and in the SPEC world; every row of a table puts
+//!   the paper's figure, ours under `original` and ours in the SPEC world side by side. E1
+//!   also plays the worlds between, one rule switched at a time ([`Decomposition`]). E7 and
+//!   our own learner are the SPEC world's.
+//! - **Spread.** Each of the paper's figures is placed against the range of our replicates
+//!   in each world ([`PaperInside`], [`Spread`]): inside or outside its range, and the
+//!   chance `(R - 1) / (R + 1)` that one more draw of ours would land inside the range of
+//!   `R`.
 //! - **Same starts for every arm.** Every arm of a comparison plays the same [`Suite`]:
 //!   game `k` starts from `reset(episode_seed(test seed, k))`, with the same goal, so the
 //!   paired tests (Wilcoxon) pair the same start, and an agent's random test actions come
@@ -15,9 +27,11 @@
 //! - **Replicates.** A learner's result depends a lot on its training seed (the paper's
 //!   learner fails 20% to 40% of games depending on it), so each learner arm of E2-E6 is
 //!   trained [`Scale::replicates`] times, with training seeds `seed, seed + 1, ...`, and
-//!   every replicate plays the whole suite. Failures are given per replicate (mean and
-//!   range), other figures over all games of all replicates, and a paired test pairs game
-//!   `k` of replicate `r` of both arms (the same start, agents of the same training seed).
+//!   every replicate plays the whole suite (E1's random agent: sets of the paper's 100
+//!   games, each its own starts; E3's random agent likewise). Failures are given per
+//!   replicate (mean and range), other figures over all games of all replicates, and a
+//!   paired test pairs game `k` of replicate `r` of both arms (the same start, agents of
+//!   the same training seed).
 //! - **Steps.** The paper's "average number of steps" counts a failed game as the horizon
 //!   (see [`paper`]); we print that figure beside the paper's, and also the mean and median
 //!   over the games that reached the goal, and their ratio to the shortest plan (the exact
@@ -41,16 +55,19 @@ mod e7;
 mod e8;
 pub mod paper;
 mod report;
+mod spread;
 mod text;
 
-pub use arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome};
+pub use arms::{ArmResult, Goals, Measured, Row, Rules, Suite, Table, TestOutcome};
+pub use e1::{Decomposition, Gap, WorldArm};
 pub use e8::Budget;
 pub use report::{ReportFiles, write_report};
+pub use spread::{PaperInside, Placement, Spread};
 
-use agent::{QAgent, TrainConfig, Trained};
+use agent::{QAgent, Schedule, TrainConfig, Trained};
 use rayon::prelude::*;
 use serde::Serialize;
-use sim::Goal;
+use sim::{Goal, Profile};
 use thiserror::Error;
 
 use crate::plots::{BarChart, BoxPlot, CurvesChart, EpisodeFrames, LearningCurve, PlotError};
@@ -127,16 +144,27 @@ impl Options {
 pub struct Scale {
     /// Agents trained (with different seeds) per learner arm of E2-E6.
     pub replicates: usize,
-    /// E1's games (the paper's 100).
+    /// E4: agents behind the paper's learner's curve in the SPEC world (the first of the
+    /// training seeds; a long training, and no figure of the paper's to read against).
+    pub curve_replicates: usize,
+    /// E1's games per replicate (the paper's 100).
     pub e1_games: u64,
+    /// E1's replicates: sets of `e1_games` games of their own, in each world.
+    pub e1_replicates: usize,
     /// Test games of E2, E4's points, E5 and each table of E6 (the paper's 500), and of each
     /// goal in E7.
     pub test_games: u64,
     /// E3's test games per unseen goal (the paper's 100 in all, over two goals).
     pub e3_games_per_goal: u64,
-    /// Training games of the paper's learner (not given in the paper; the preset of
-    /// [`TrainConfig::paper`]).
+    /// Training games of the paper's learner in the SPEC world (not given in the paper; the
+    /// preset of [`TrainConfig::paper`]).
     pub paper_games: u64,
+    /// Training games (of up to 5000 steps) of the paper's learner in the original world
+    /// (the preset of [`TrainConfig::original`]: the most of Fig. 3, and E3's).
+    pub original_games: u64,
+    /// E4: where the paper's learner is tested along its training in the original world,
+    /// in games (Fig. 3's points among them).
+    pub original_curve: Vec<u64>,
     /// Training games of our learner ([`TrainConfig::role_step_cost`]'s preset).
     pub ours_games: u64,
     /// E4: where the paper's learner is tested along its training, in games.
@@ -153,15 +181,20 @@ impl Scale {
     /// presets; the learning curves test at fractions and multiples of them.
     pub fn new(quick: bool) -> Scale {
         let paper_games = TrainConfig::paper(Vec::new()).games;
+        let original_games = TrainConfig::original(Vec::new()).games;
         let ours_games = TrainConfig::role_step_cost(Vec::new()).games;
         let at = |games: u64, per_mille: &[u64]| -> Vec<u64> { per_mille.iter().map(|m| games * m / 1000).collect() };
         if quick {
             Scale {
                 replicates: 2,
+                curve_replicates: 2,
                 e1_games: 100,
+                e1_replicates: 5,
                 test_games: 100,
                 e3_games_per_goal: 50,
                 paper_games,
+                original_games,
+                original_curve: at(original_games, &[50, 500, 1000]),
                 ours_games,
                 paper_curve: at(paper_games, &[0, 200, 1000]),
                 ours_curve: at(ours_games, &[0, 50, 200, 1000]),
@@ -169,16 +202,28 @@ impl Scale {
             }
         } else {
             Scale {
-                replicates: 5,
+                replicates: 20,
+                curve_replicates: 5,
                 e1_games: 100,
+                e1_replicates: 20,
                 test_games: 500,
                 e3_games_per_goal: 50,
                 paper_games,
+                original_games,
+                original_curve: at(original_games, &[0, 50, 100, 250, 500, 1000, 2000]),
                 ours_games,
                 paper_curve: at(paper_games, &[0, 100, 200, 400, 1000, 2000, 4000, 10_000]),
                 ours_curve: at(ours_games, &[0, 20, 50, 100, 200, 500, 1000]),
                 demos: paper::E6_DEMOS,
             }
+        }
+    }
+
+    /// Training games of the paper's learner in `world`.
+    pub fn paper_games(&self, world: Profile) -> u64 {
+        match world {
+            Profile::Spec => self.paper_games,
+            Profile::Original => self.original_games,
         }
     }
 
@@ -213,7 +258,9 @@ impl Seeds {
     /// The seeds derived from `seed` for `scale`.
     pub fn new(seed: u64, scale: &Scale) -> Seeds {
         Seeds {
-            training: (0..scale.replicates as u64).map(|r| seed.wrapping_add(r)).collect(),
+            training: (0..scale.replicates.max(scale.curve_replicates) as u64)
+                .map(|r| seed.wrapping_add(r))
+                .collect(),
             ours: seed,
             test: seed.wrapping_add(1000),
             demonstrations: (1..=3).map(|d| seed.wrapping_add(2000 + d)).collect(),
@@ -253,10 +300,31 @@ pub struct CurvePoint {
     pub failures: f64,
     /// Share of test games failed.
     pub failure_rate: f64,
+    /// The share of test games failed, replicate by replicate (`None` for one replicate).
+    pub failure_rate_spread: Option<Spread>,
     /// Mean steps, a failure counted as the horizon.
     pub mean_steps_failures_at_horizon: f64,
+    /// Mean steps*, replicate by replicate (`None` for one replicate).
+    pub mean_steps_failures_at_horizon_spread: Option<Spread>,
     /// Mean steps over the games that reached the goal.
     pub mean_steps: Option<f64>,
+}
+
+impl CurvePoint {
+    /// The point after `games` training games whose tests gave `arm`.
+    pub fn of(games: u64, arm: &ArmResult) -> CurvePoint {
+        let spread = |values: &[f64]| Spread::of(values).filter(|s| s.replicates > 1);
+        CurvePoint {
+            games,
+            test_games: arm.steps.len(),
+            failures: arm.failures,
+            failure_rate: arm.failure_rate(),
+            failure_rate_spread: spread(&arm.failure_rate_per_replicate()),
+            mean_steps_failures_at_horizon: arm.mean_steps_failures_at_horizon,
+            mean_steps_failures_at_horizon_spread: spread(&arm.mean_steps_failures_at_horizon_per_replicate),
+            mean_steps: arm.mean_steps,
+        }
+    }
 }
 
 /// A learner's learning curve.
@@ -264,6 +332,10 @@ pub struct CurvePoint {
 pub struct Curve {
     /// The learner.
     pub learner: String,
+    /// The world it learns and is tested in.
+    pub world: Profile,
+    /// The test-time probability of a random action.
+    pub test_epsilon: f64,
     /// The test games at every point.
     pub suite: String,
     /// The points, by training games.
@@ -328,6 +400,10 @@ pub struct Experiment {
     pub tables: Vec<Table>,
     /// Its learning curves (E4).
     pub curves: Vec<Curve>,
+    /// The gap between the two worlds, rule by rule (E1).
+    pub decomposition: Option<Decomposition>,
+    /// Where the paper's own figures cannot hold, each computed from them (E3's p-value).
+    pub paper_notes: Vec<String>,
     /// One line saying what the figures show, computed from them.
     pub reading: String,
     /// Its pictures.
@@ -360,24 +436,50 @@ pub(crate) struct Context<'a> {
     progress: &'a dyn ProgressSink,
 }
 
-/// The paper's learner as the report names it: representation, reward and the
+/// The worlds E1-E6 are run in: the paper's as coded, then ours.
+const WORLDS: [Profile; 2] = [Profile::Original, Profile::Spec];
+
+/// The paper's learner as the report names it: representation, reward, schedule and the
 /// hyper-parameters of `config`.
 fn paper_learner(config: &TrainConfig) -> String {
     let p = &config.params;
+    let schedule = match config.schedule {
+        Schedule::Spec => format!("training games of up to {} steps ended by the goal", config.horizon),
+        Schedule::PaperCode => format!(
+            "the authors' schedule: training games of up to {} steps on a goal drawn per game, ended by a step \
+             reward above 70, alpha lowered after step 4000, the update over seen entries",
+            config.horizon
+        ),
+    };
     format!(
-        "chasing representation, paper reward, alpha {}, gamma {}, epsilon {}",
-        p.alpha, p.gamma, p.epsilon
+        "{} representation, {} reward, alpha {}, gamma {}, epsilon {}, {schedule}",
+        config.repr,
+        config.reward.name(),
+        p.alpha,
+        p.gamma,
+        p.epsilon
     )
 }
 
 impl Context<'_> {
-    /// The paper's learner on `goals`, replicate `r`'s seed.
-    fn paper_config(&self, goals: &[Goal], r: usize) -> TrainConfig {
+    /// The paper's learner in `world` on `goals`, replicate `r`'s seed: the agent crate's
+    /// preset of that world ([`TrainConfig::for_profile`]) for the scale's games there.
+    fn paper_config(&self, world: Profile, goals: &[Goal], r: usize) -> TrainConfig {
         TrainConfig {
             seed: self.seeds.training[r],
-            games: self.scale.paper_games,
-            ..TrainConfig::paper(goals.to_vec())
+            games: self.scale.paper_games(world),
+            ..TrainConfig::for_profile(world, goals.to_vec())
         }
+    }
+
+    /// `f` in the original world and in the SPEC world, side by side on rayon's pool.
+    fn in_both_worlds<T, F>(&self, f: F) -> Result<(T, T)>
+    where
+        T: Send,
+        F: Fn(Profile) -> Result<T> + Sync,
+    {
+        let (original, spec) = rayon::join(|| f(Profile::Original), || f(Profile::Spec));
+        Ok((original?, spec?))
     }
 
     /// Trains every replicate of `config(r)` in parallel, one job each.
@@ -454,16 +556,16 @@ fn paper_experiments(ctx: &Context) -> Result<Vec<Experiment>> {
         || -> Result<_> {
             let e1 = e1::run(ctx)?;
             let e2 = e2::run(ctx)?;
-            let paper_curve = e4::paper_curve(ctx)?;
+            let paper_curves = e4::paper_curves(ctx)?;
             let (e5, paper_agent) = e5::run(ctx)?;
             let e6 = e6::run(ctx)?;
-            Ok((e1, e2, paper_curve, e5, paper_agent, e6))
+            Ok((e1, e2, paper_curves, e5, paper_agent, e6))
         },
     );
     let (ours, ours_curve): (QAgent, Curve) = ours?;
-    let (e1, e2, paper_curve, e5, paper_agent, e6) = rest?;
+    let (e1, e2, paper_curves, e5, paper_agent, e6) = rest?;
     let e3 = e3::run(ctx, &ours)?;
-    let e4 = e4::experiment(ctx, paper_curve, ours_curve);
+    let e4 = e4::experiment(ctx, paper_curves, ours_curve);
     let e7 = e7::run(ctx, &paper_agent, &ours)?;
     Ok(vec![e1, e2, e3, e4, e5, e6, e7])
 }
@@ -494,10 +596,14 @@ mod tests {
     fn tiny() -> Scale {
         Scale {
             replicates: 2,
+            curve_replicates: 2,
             e1_games: 6,
+            e1_replicates: 2,
             test_games: 6,
             e3_games_per_goal: 3,
             paper_games: 60,
+            original_games: 5,
+            original_curve: vec![0, 5],
             ours_games: 3000,
             paper_curve: vec![0, 60, 120],
             ours_curve: vec![0, 3000],
@@ -562,7 +668,27 @@ mod tests {
         // Every arm's figures and the paper's beside them.
         let e5 = &json["experiments"][4]["tables"][0]["rows"];
         assert_eq!(e5[0]["paper"]["failures"], 186);
-        assert!(e5[2]["tests"][0]["p_value"].as_f64().is_some());
+        assert!(e5[2]["spec"]["tests"][0]["p_value"].as_f64().is_some());
+        // E1: the paper's figure, ours in both worlds, where the paper's lies against each
+        // world's replicates, and the gap rule by rule.
+        let e1 = &json["experiments"][0];
+        let row = &e1["tables"][0]["rows"][0];
+        for world in ["original", "spec"] {
+            assert_eq!(row[world]["arm"]["replicates"], 2, "{world}");
+            let inside = &row[world]["paper_inside"]["failure_rate"];
+            assert_eq!(inside["paper"], 0.04);
+            assert!(inside["inside"].is_boolean());
+        }
+        assert!(
+            readme.contains("| random | - | 4 / 100 |"),
+            "E1's row with the paper's figure first"
+        );
+        let worlds = e1["decomposition"]["worlds"].as_array().unwrap();
+        assert_eq!(worlds.len(), 4);
+        let gap = &e1["decomposition"]["gaps"][1];
+        let parts =
+            gap["protocol"].as_f64().unwrap() + gap["start"].as_f64().unwrap() + gap["interaction"].as_f64().unwrap();
+        assert!((parts - gap["gap"].as_f64().unwrap()).abs() < 1e-9);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

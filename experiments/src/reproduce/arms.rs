@@ -1,12 +1,15 @@
-//! What every experiment is made of: seeded test suites that every arm plays, the figures
-//! of an arm, the tests between arms, and tables of arms beside the paper's rows.
+//! What every experiment is made of: seeded test suites that every arm plays in a world
+//! (the paper's as coded, or ours), the figures of an arm, the tests between arms, and
+//! tables of arms: the paper's figure, ours in the paper's world and ours in the SPEC world
+//! side by side.
 
 use agent::optimality::mean_steps_failures_as_horizon;
 use agent::{EpisodeResult, Policy, Summary};
 use serde::Serialize;
-use sim::{Env, EnvConfig, Goal, GoalSpec, Grid, Observation};
+use sim::{ActionProtocol, Env, EnvConfig, Goal, GoalSpec, Grid, Observation, Profile, StartRule};
 
-use super::paper::{PaperRow, PaperTable};
+use super::paper::{MeanOver, PaperRow, PaperTable};
+use super::spread::PaperInside;
 use super::{ProgressSink, Result};
 use crate::plots::{Arm, BoxPlot};
 use crate::stats::{self, Method, TestResult};
@@ -18,6 +21,44 @@ pub enum Goals {
     Each(Vec<Goal>),
     /// A goal drawn with each start (uniformly, from the start's seed).
     Drawn,
+}
+
+/// The rules of `sim` a suite's games are played under that differ between the paper's
+/// world as its authors coded it and ours: which actions are legal, and how a game starts.
+/// (The reward does not change what a trained agent does in a test game, and test games end
+/// at the goal in both worlds.)
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
+pub struct Rules {
+    /// Which actions are legal in a state.
+    pub protocol: ActionProtocol,
+    /// How a game's start is drawn.
+    pub start: StartRule,
+}
+
+impl Rules {
+    /// The rules of `profile`'s world.
+    pub const fn of(profile: Profile) -> Rules {
+        Rules {
+            protocol: profile.protocol(),
+            start: profile.start_rule(),
+        }
+    }
+
+    /// The profile whose world these rules are, if any (E1 also plays worlds between the two).
+    pub fn profile(self) -> Option<Profile> {
+        [Profile::Original, Profile::Spec]
+            .into_iter()
+            .find(|&p| Rules::of(p) == self)
+    }
+
+    /// "the original world", "the SPEC world", or "protocol paper, start rule uniform".
+    pub fn describe(self) -> String {
+        match self.profile() {
+            Some(Profile::Original) => "the original world".into(),
+            Some(Profile::Spec) => "the SPEC world".into(),
+            None => format!("protocol {}, start rule {}", self.protocol.name(), self.start.name()),
+        }
+    }
 }
 
 /// A set of test games, fixed by a seed: every arm of a comparison plays the same suite,
@@ -39,9 +80,24 @@ pub struct Suite {
     pub seed: u64,
     /// Steps before a game counts as failed.
     pub horizon: u32,
+    /// The world's rules.
+    pub rules: Rules,
 }
 
 impl Suite {
+    /// `episodes` games per goal of `goals` with `blocks` blocks in `world`, starts from
+    /// `seed`, the paper's horizon.
+    pub fn in_world(world: Profile, blocks: usize, goals: Goals, episodes: u64, seed: u64) -> Suite {
+        Suite {
+            blocks,
+            goals,
+            episodes,
+            seed,
+            horizon: super::HORIZON,
+            rules: Rules::of(world),
+        }
+    }
+
     /// The grid every experiment plays on: the paper's 7 x 7.
     pub fn grid(&self) -> Grid {
         Grid::default()
@@ -53,6 +109,8 @@ impl Suite {
             blocks: self.blocks,
             goal,
             horizon: self.horizon,
+            protocol: self.rules.protocol,
+            start: self.rules.start,
             ..EnvConfig::default()
         };
         let specs: Vec<GoalSpec> = match &self.goals {
@@ -108,17 +166,20 @@ impl Suite {
         Ok(starts)
     }
 
-    /// The length of a shortest plan from every game's start (the exact solver's), in
-    /// [`Suite::play`]'s order.
+    /// The length of a shortest plan from every game's start (the exact solver's, under the
+    /// suite's protocol), in [`Suite::play`]'s order: 0 from a start that already meets the
+    /// goal (the paper's start rule keeps them; such games have no ratio to the optimum, see
+    /// [`agent::optimality`]).
     pub fn optimum(&self) -> Result<Vec<u32>> {
-        let solver = oracle::ExactSolver::new(self.grid());
+        let solver = oracle::ExactSolver::new(self.grid()).with_protocol(self.rules.protocol);
         self.starts()?
             .iter()
             .map(|obs| Ok(solver.distance(&obs.state, &obs.goal)?))
             .collect()
     }
 
-    /// A short description: "500 games, goal drawn per game, starts seed 1001".
+    /// A short description: "500 games, goal drawn per game, starts seed 1001" (the world
+    /// is the table column's).
     pub fn describe(&self) -> String {
         let goals = match &self.goals {
             Goals::Each(goals) if goals.len() == 1 => format!("{} games of goal {}", self.episodes, goals[0]),
@@ -172,8 +233,12 @@ pub struct ArmResult {
     /// Mean steps over every game of every replicate, a failure counted as the horizon
     /// (the paper's reading).
     pub mean_steps_failures_at_horizon: f64,
+    /// Each replicate's mean steps, a failure counted as the horizon.
+    pub mean_steps_failures_at_horizon_per_replicate: Vec<f64>,
     /// Mean steps over the games that reached the goal.
     pub mean_steps: Option<f64>,
+    /// Each replicate's mean steps over its games that reached the goal.
+    pub mean_steps_per_replicate: Vec<Option<f64>>,
     /// Median steps over the games that reached the goal.
     pub median_steps: Option<f64>,
     /// Mean over the games that reached the goal of steps / shortest plan.
@@ -188,7 +253,7 @@ pub struct ArmResult {
 
 impl ArmResult {
     /// The figures of `replicates` (each one agent's results on the same suite, whose
-    /// shortest plans are `optimum`).
+    /// shortest plans are `optimum`; empty for none).
     pub fn of(
         name: impl Into<String>,
         agent: impl Into<String>,
@@ -197,10 +262,43 @@ impl ArmResult {
         optimum: &[u32],
         horizon: u32,
     ) -> ArmResult {
-        let all: Vec<EpisodeResult> = replicates.iter().flatten().copied().collect();
         let optimal: Vec<u32> = replicates.iter().flat_map(|_| optimum.iter().copied()).collect();
+        Self::of_games(name, agent, test_epsilon, replicates, &optimal, horizon)
+    }
+
+    /// The figures of one policy's `games` (as [`Suite::play`] orders them: `runs` runs, one
+    /// per goal of the suite, of `per_replicate * R` games each), cut into `R` replicates
+    /// of `per_replicate` games of each run, in order: replicate `r` holds games
+    /// `r * per_replicate..(r + 1) * per_replicate` of every run (E1, E3: a replicate is a
+    /// set of the paper's number of games of its own). `optimum` holds each game's shortest
+    /// plan (empty for none).
+    pub fn of_sets(
+        name: impl Into<String>,
+        agent: impl Into<String>,
+        games: &[EpisodeResult],
+        runs: usize,
+        per_replicate: usize,
+        optimum: &[u32],
+        horizon: u32,
+    ) -> ArmResult {
+        let replicates = regroup(games, runs, per_replicate);
+        let optimal: Vec<u32> = regroup(optimum, runs, per_replicate).concat();
+        Self::of_games(name, agent, None, &replicates, &optimal, horizon)
+    }
+
+    /// The figures of `replicates`, whose games' shortest plans are `optimal`, replicate
+    /// after replicate (empty for none).
+    fn of_games(
+        name: impl Into<String>,
+        agent: impl Into<String>,
+        test_epsilon: Option<f64>,
+        replicates: &[Vec<EpisodeResult>],
+        optimal: &[u32],
+        horizon: u32,
+    ) -> ArmResult {
+        let all: Vec<EpisodeResult> = replicates.iter().flatten().copied().collect();
         let summary = Summary::of(&all);
-        let optimality = agent::optimality::Optimality::of(&all, &optimal);
+        let optimality = agent::optimality::Optimality::of(&all, optimal);
         let failures_per_replicate: Vec<usize> = replicates.iter().map(|r| Summary::of(r).failures).collect();
         ArmResult {
             name: name.into(),
@@ -211,7 +309,12 @@ impl ArmResult {
             failures: failures_per_replicate.iter().sum::<usize>() as f64 / replicates.len().max(1) as f64,
             failures_per_replicate,
             mean_steps_failures_at_horizon: mean_steps_failures_as_horizon(&all, horizon),
+            mean_steps_failures_at_horizon_per_replicate: replicates
+                .iter()
+                .map(|r| mean_steps_failures_as_horizon(r, horizon))
+                .collect(),
             mean_steps: summary.mean_steps,
+            mean_steps_per_replicate: replicates.iter().map(|r| Summary::of(r).mean_steps).collect(),
             median_steps: summary.median_steps,
             mean_ratio_to_optimum: optimality.mean_ratio_to_optimum,
             mean_optimum: optimality.mean_optimal_steps,
@@ -226,6 +329,29 @@ impl ArmResult {
     pub fn failure_rate(&self) -> f64 {
         self.failures / self.games.max(1) as f64
     }
+
+    /// Each replicate's share of games that failed.
+    pub fn failure_rate_per_replicate(&self) -> Vec<f64> {
+        self.failures_per_replicate
+            .iter()
+            .map(|&f| f as f64 / self.games.max(1) as f64)
+            .collect()
+    }
+}
+
+/// `items` in `runs` equal runs, regrouped into sets of `per` items of each run: set `r`
+/// holds items `r * per..(r + 1) * per` of every run, run after run.
+fn regroup<T: Copy>(items: &[T], runs: usize, per: usize) -> Vec<Vec<T>> {
+    let run_length = items.len() / runs.max(1);
+    let sets = run_length / per.max(1);
+    (0..sets)
+        .map(|r| {
+            items
+                .chunks(run_length.max(1))
+                .flat_map(|run| run[r * per..(r + 1) * per].iter().copied())
+                .collect()
+        })
+        .collect()
 }
 
 /// Which test compared two arms, and what it found.
@@ -342,23 +468,86 @@ fn per_agent(arm: &ArmResult, base: &ArmResult, test: impl Fn(&[f64], &[f64]) ->
         .collect()
 }
 
-/// One row of a table: our arm, the paper's if it has one, and our tests.
+/// One world's measurement of an arm: its figures, its tests (in the order of
+/// [`Table::tests`], `None` where a test does not apply), and where the paper's figures
+/// fall against its replicates.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Row {
-    /// Ours.
-    pub ours: ArmResult,
-    /// The paper's.
-    pub paper: Option<PaperRow>,
-    /// Our tests, in the order of [`Table::tests`]; `None` where a test does not apply.
+pub struct Measured {
+    /// The arm's figures.
+    pub arm: ArmResult,
+    /// Its tests.
     pub tests: Vec<Option<TestOutcome>>,
+    /// The paper's figures against the spread of this arm's replicates, for a row the paper
+    /// has.
+    pub paper_inside: Option<PaperInside>,
 }
 
-/// A table of arms, ours beside the paper's.
+/// One row of a table: the paper's arm, ours in the paper's world as coded (`original`), and
+/// ours in the SPEC world (`spec`); a row may lack any of them (E7 and our learner exist in
+/// the SPEC world only).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Row {
+    /// The arm's name.
+    pub name: String,
+    /// The paper's.
+    pub paper: Option<PaperRow>,
+    /// Ours under the `original` profile.
+    pub original: Option<Measured>,
+    /// Ours in the SPEC world.
+    pub spec: Option<Measured>,
+}
+
+impl Row {
+    /// A row of `paper`'s arm (if any) and ours in each world, each arm with its tests;
+    /// the name is the first arm's.
+    pub fn new(
+        paper: Option<PaperRow>,
+        original: Option<(ArmResult, Vec<Option<TestOutcome>>)>,
+        spec: Option<(ArmResult, Vec<Option<TestOutcome>>)>,
+    ) -> Row {
+        let measured = |m: Option<(ArmResult, Vec<Option<TestOutcome>>)>| {
+            m.map(|(arm, tests)| Measured {
+                paper_inside: paper.as_ref().and_then(|p| PaperInside::of(p, &arm)),
+                arm,
+                tests,
+            })
+        };
+        let (original, spec) = (measured(original), measured(spec));
+        let name = original
+            .iter()
+            .chain(&spec)
+            .map(|m| m.arm.name.clone())
+            .next()
+            .or_else(|| paper.map(|p| p.arm.to_string()))
+            .unwrap_or_default();
+        Row {
+            name,
+            paper,
+            original,
+            spec,
+        }
+    }
+
+    /// A row of the SPEC world only, beside the paper's arm if any.
+    pub fn spec(paper: Option<PaperRow>, arm: ArmResult, tests: Vec<Option<TestOutcome>>) -> Row {
+        Row::new(paper, None, Some((arm, tests)))
+    }
+
+    /// The measurement in `profile`'s world.
+    pub fn in_world(&self, profile: Profile) -> Option<&Measured> {
+        match profile {
+            Profile::Original => self.original.as_ref(),
+            Profile::Spec => self.spec.as_ref(),
+        }
+    }
+}
+
+/// A table of arms, the paper's beside ours in each world.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Table {
     /// The table's title.
     pub title: String,
-    /// The games every arm played.
+    /// The games every arm played, per world: "original: ...", "spec: ...".
     pub suite: String,
     /// The paper's table this one reproduces, if any.
     pub paper: Option<PaperTable>,
@@ -371,7 +560,15 @@ pub struct Table {
 impl Table {
     /// The row named `name`.
     pub fn row(&self, name: &str) -> Option<&Row> {
-        self.rows.iter().find(|r| r.ours.name == name)
+        self.rows.iter().find(|r| r.name == name)
+    }
+
+    /// The worlds some row was measured in, the paper's first.
+    pub fn worlds(&self) -> Vec<Profile> {
+        [Profile::Original, Profile::Spec]
+            .into_iter()
+            .filter(|&p| self.rows.iter().any(|r| r.in_world(p).is_some()))
+            .collect()
     }
 }
 
@@ -400,31 +597,33 @@ where
         .collect()
 }
 
-/// A log-scale box plot of each arm's steps per game (a failure counted as the horizon),
-/// each arm marked with the mean of the paper's matching row: E5's and E6's pictures.
-pub fn steps_box_plot(
-    title: String,
-    arms: &[ArmResult],
-    paper: &[PaperRow],
-    replicates: usize,
-    suite: &Suite,
-) -> BoxPlot {
+/// A log-scale box plot of each row's steps per game in each world (a failure counted as
+/// the horizon), each marked with the mean of the paper's row: E5's and E6's pictures.
+pub fn steps_box_plot(title: String, rows: &[Row], replicates: usize, suite: &Suite) -> BoxPlot {
+    let mut arms = Vec::new();
+    for profile in [Profile::Original, Profile::Spec] {
+        for row in rows {
+            if let Some(m) = row.in_world(profile) {
+                arms.push(Arm {
+                    name: format!("{}, {profile}", row.name),
+                    steps: m.arm.steps.clone(),
+                    reference: row
+                        .paper
+                        .filter(|p| p.mean_over == MeanOver::FailuresAtHorizon)
+                        .and_then(|p| p.mean_steps),
+                });
+            }
+        }
+    }
     BoxPlot {
         title,
         y_label: "steps to goal (failures at 1000)".into(),
-        arms: arms
-            .iter()
-            .zip(paper)
-            .map(|(a, p)| Arm {
-                name: a.name.clone(),
-                steps: a.steps.clone(),
-                reference: p.mean_steps,
-            })
-            .collect(),
+        arms,
         reference_label: "paper's mean".into(),
         log_scale: true,
         note: format!(
-            "{replicates} agents per arm, each {} (the same games for every arm).",
+            "{replicates} agents per arm, each {} (the same games for every arm of a world), in the original world \
+             (the paper's, as coded) and in the SPEC world (ours).",
             suite.describe()
         ),
     }
@@ -441,6 +640,7 @@ mod tests {
             episodes: 4,
             seed: 9,
             horizon: 1000,
+            rules: Rules::of(Profile::Spec),
         }
     }
 
@@ -472,6 +672,28 @@ mod tests {
         assert_eq!(arm.mean_ratio_to_optimum, Some(1.0));
         assert_eq!((arm.replicates, arm.games, arm.failures), (2, 4, 0.0));
         assert_eq!(arm.steps.len(), 8);
+    }
+
+    #[test]
+    fn sets_take_the_same_share_of_every_run() {
+        // Two runs (goals) of three sets of two games.
+        let items: Vec<u32> = (0..12).collect();
+        assert_eq!(
+            regroup(&items, 2, 2),
+            vec![vec![0, 1, 6, 7], vec![2, 3, 8, 9], vec![4, 5, 10, 11]]
+        );
+        assert_eq!(
+            regroup(&items, 1, 4),
+            vec![vec![0, 1, 2, 3], vec![4, 5, 6, 7], vec![8, 9, 10, 11]]
+        );
+        let s = Suite {
+            episodes: 6,
+            ..suite(Goals::Each(vec!["0,1,2".parse().unwrap(), "2,1,0".parse().unwrap()]))
+        };
+        let played = s.play(&mut agent::RandomPolicy).unwrap();
+        let arm = ArmResult::of_sets("random", "random", &played, 2, 2, &s.optimum().unwrap(), 1000);
+        assert_eq!((arm.replicates, arm.games), (3, 4));
+        assert_eq!(arm.steps.len(), 12);
     }
 
     #[test]

@@ -2,12 +2,12 @@
 //! oscillation, and on oscillation plus each step with probability 0.1; Wilcoxon against
 //! none.
 
-use agent::{Assist, QAgent};
-use sim::Goal;
+use agent::{Assist, OracleKind, Oscillation, QAgent};
+use sim::{Goal, Profile};
 
 use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, play_replicates, steps_box_plot};
-use super::text::{fewer_or_more, num, significance};
-use super::{Context, Drawing, Experiment, Figure, HORIZON, Result, Scale, Setting, paper, paper_learner};
+use super::text::{num, paper_against, significance, world_name};
+use super::{Context, Drawing, Experiment, Figure, HORIZON, Result, Scale, Setting, WORLDS, paper, paper_learner};
 
 /// The arms, in the paper's order.
 const ASSISTS: [Assist; 3] = [
@@ -16,22 +16,25 @@ const ASSISTS: [Assist; 3] = [
     Assist::OscillationOrChance { p: 0.1 },
 ];
 
-/// Jobs reported: a training and a suite per arm and replicate.
+/// Jobs reported: in each world, a training and a suite per arm and replicate.
 pub(super) fn jobs(scale: &Scale) -> u64 {
-    2 * (ASSISTS.len() * scale.replicates) as u64
+    2 * (WORLDS.len() * ASSISTS.len() * scale.replicates) as u64
 }
 
-/// Runs E5; also returns the first replicate of the unassisted learner (the paper's
-/// learner on all six goals), which E7 plays.
-pub(super) fn run(ctx: &Context) -> Result<(Experiment, QAgent)> {
+/// One world's E5: an arm per assistance, the tests against none, and the first
+/// unassisted agent.
+struct World {
+    arms: Vec<ArmResult>,
+    tests: Vec<TestOutcome>,
+    first_unassisted: QAgent,
+    suite: Suite,
+    learner: String,
+}
+
+/// Runs E5 in `world`.
+fn in_world(ctx: &Context, world: Profile) -> Result<World> {
     let all = Goal::all(3)?;
-    let suite = Suite {
-        blocks: 3,
-        goals: Goals::Drawn,
-        episodes: ctx.scale.test_games,
-        seed: ctx.seeds.test,
-        horizon: HORIZON,
-    };
+    let suite = Suite::in_world(world, 3, Goals::Drawn, ctx.scale.test_games, ctx.seeds.test);
     let optimum = suite.optimum()?;
     let eps = ctx.test_epsilon();
     let mut arms = Vec::new();
@@ -40,7 +43,7 @@ pub(super) fn run(ctx: &Context) -> Result<(Experiment, QAgent)> {
     for assist in ASSISTS {
         let trained = ctx.train_replicates("E5", |r| agent::TrainConfig {
             assist,
-            ..ctx.paper_config(&all, r)
+            ..ctx.paper_config(world, &all, r)
         })?;
         let (steps, by_oracle) = trained
             .iter()
@@ -70,100 +73,128 @@ pub(super) fn run(ctx: &Context) -> Result<(Experiment, QAgent)> {
         .skip(1)
         .map(|arm| TestOutcome::wilcoxon(arm, &arms[0]))
         .collect::<Result<Vec<_>>>()?;
-    let (none, both) = (&arms[0], &arms[2]);
-    let p_both = tests[1].p_value;
+    let config = ctx.paper_config(world, &all, 0);
+    let oracle = match config.oracle {
+        OracleKind::Paper => "the authors' greedy centroid oracle",
+        OracleKind::Astar => "the centroid + A* oracle",
+    };
+    let oscillation = match config.oscillation {
+        Oscillation::Actions => "the last six actions are one pair three times in a row",
+        Oscillation::Distances => "the last six pair distances of the authors' state alternate (period 2 or constant)",
+    };
+    Ok(World {
+        learner: format!(
+            "{}, {} training games on all six goals; {} agents per arm, training seeds {:?}; {oracle} chooses the \
+             action when {oscillation} (it chose {:.1}% of training steps), and that or, at any step, with \
+             probability 0.1 ({:.1}%)",
+            paper_learner(&config),
+            config.games,
+            ctx.scale.replicates,
+            ctx.seeds.training,
+            100.0 * assisted_share[1],
+            100.0 * assisted_share[2]
+        ),
+        arms,
+        tests,
+        first_unassisted: first_unassisted.expect("the unassisted arm has a replicate"),
+        suite,
+    })
+}
+
+/// Runs E5; also returns the first replicate of the unassisted learner of the SPEC world
+/// (the paper's learner on all six goals), which E7 plays.
+pub(super) fn run(ctx: &Context) -> Result<(Experiment, QAgent)> {
+    let (original, spec) = ctx.in_both_worlds(|w| in_world(ctx, w))?;
+    let rows: Vec<Row> = (0..ASSISTS.len())
+        .map(|i| {
+            let tests = |w: &World| vec![if i == 0 { None } else { Some(w.tests[i - 1].clone()) }];
+            Row::new(
+                Some(paper::TABLE_I.rows[i]),
+                Some((original.arms[i].clone(), tests(&original))),
+                Some((spec.arms[i].clone(), tests(&spec))),
+            )
+        })
+        .collect();
+    let world = |w: &World, profile: Profile| {
+        let (none, both) = (&w.arms[0], &w.arms[2]);
+        format!(
+            "in {} the learner with the oracle on oscillation + 0.1 failed {} games per {} against {} without \
+             help, mean steps* {} against {}, {}; on oscillation alone {} failures, {}",
+            world_name(profile),
+            num(Some(both.failures), 1),
+            both.games,
+            num(Some(none.failures), 1),
+            num(Some(both.mean_steps_failures_at_horizon), 1),
+            num(Some(none.mean_steps_failures_at_horizon), 1),
+            significance(w.tests[1].p_value),
+            num(Some(w.arms[1].failures), 1),
+            significance(w.tests[0].p_value),
+        )
+    };
+    let theirs = paper::TABLE_I.rows;
     let reading = format!(
-        "With the oracle on oscillation + 0.1 the learner failed {} games per {} against {} without help, {} \
-         (paper: {} against {}), mean steps {} against {} (paper: {} against {}); the difference is {} (paper: \
-         p = {}). Oscillation alone: {} failures, {}.",
-        num(Some(both.failures), 1),
-        both.games,
-        num(Some(none.failures), 1),
-        fewer_or_more(both.failures, none.failures),
-        num(paper::TABLE_I.rows[2].failures.map(f64::from), 0),
-        num(paper::TABLE_I.rows[0].failures.map(f64::from), 0),
-        num(Some(both.mean_steps_failures_at_horizon), 1),
-        num(Some(none.mean_steps_failures_at_horizon), 1),
-        num(paper::TABLE_I.rows[2].mean_steps, 1),
-        num(paper::TABLE_I.rows[0].mean_steps, 1),
-        significance(p_both),
-        num(paper::TABLE_I.rows[2].p_value, 3),
-        num(Some(arms[1].failures), 1),
-        significance(tests[0].p_value),
+        "The paper: {} and {} failures of {} with and without help (p = {}), {} on oscillation alone (p = {}); {}; \
+         {}. {} {}",
+        num(theirs[2].failures.map(f64::from), 0),
+        num(theirs[0].failures.map(f64::from), 0),
+        theirs[0].games.unwrap_or_default(),
+        num(theirs[2].p_value, 3),
+        num(theirs[1].failures.map(f64::from), 0),
+        num(theirs[1].p_value, 3),
+        world(&original, Profile::Original),
+        world(&spec, Profile::Spec),
+        paper_against(&rows[0]),
+        paper_against(&rows[2]),
     );
     let figure = Figure::new(
         "e5-steps",
-        "Steps per game of each arm (a failure at 1000), with the paper's mean".into(),
+        "Steps per game of each arm in each world (a failure at 1000), with the paper's mean".into(),
         Drawing::Boxes(steps_box_plot(
             "E5 (Table I): oracle assistance in training".into(),
-            &arms,
-            paper::TABLE_I.rows,
+            &rows,
             ctx.scale.replicates,
-            &suite,
+            &spec.suite,
         )),
     );
-    let mut tests = tests.into_iter();
-    let rows = arms
-        .into_iter()
-        .zip(paper::TABLE_I.rows)
-        .enumerate()
-        .map(|(i, (ours, &theirs))| Row {
-            ours,
-            paper: Some(theirs),
-            tests: vec![if i == 0 { None } else { tests.next() }],
-        })
-        .collect();
-    let config = ctx.paper_config(&all, 0);
+    let mut setup = Vec::new();
+    for (w, profile) in [(&original, Profile::Original), (&spec, Profile::Spec)] {
+        setup.push(Setting {
+            name: format!("learner, {profile}"),
+            value: w.learner.clone(),
+        });
+    }
+    setup.extend([
+        Setting {
+            name: "games".into(),
+            value: format!("{} (the paper's 500) in each world, per agent", spec.suite.describe()),
+        },
+        Setting {
+            name: "test policy".into(),
+            value: format!("random action with probability {} (the paper's)", ctx.test_epsilon()),
+        },
+        Setting {
+            name: "test".into(),
+            value: "Wilcoxon signed-rank against no assistance, paired by agent seed and start, steps with a failure \
+                    counted as 1000"
+                .into(),
+        },
+    ]);
     let experiment = Experiment {
         id: "E5".into(),
         title: "Oracle assistance in training (Table I)".into(),
-        setup: vec![
-            Setting {
-                name: "learner".into(),
-                value: format!(
-                    "the paper's: {}, {} training \
-                     games on all six goals in turn, physics backend; {} agents per arm, training seeds {:?}",
-                    paper_learner(&config),
-                    config.games,
-                    ctx.scale.replicates,
-                    ctx.seeds.training
-                ),
-            },
-            Setting {
-                name: "assistance".into(),
-                value: format!(
-                    "none; the oracle chooses the action when the last six actions are one pair three times in a \
-                     row (it chose {:.1}% of training steps); that or, at any step, with probability 0.1 ({:.1}%)",
-                    100.0 * assisted_share[1],
-                    100.0 * assisted_share[2]
-                ),
-            },
-            Setting {
-                name: "games".into(),
-                value: format!("{} (the paper's 500), per agent", suite.describe()),
-            },
-            Setting {
-                name: "test policy".into(),
-                value: format!("random action with probability {eps} (the paper's)"),
-            },
-            Setting {
-                name: "test".into(),
-                value: "Wilcoxon signed-rank against no assistance, paired by agent seed and start, steps with a \
-                        failure counted as 1000"
-                    .into(),
-            },
-        ],
+        setup,
         tables: vec![Table {
             title: "Oracle assistance in training".into(),
-            suite: suite.describe(),
+            suite: format!("{}, in each world", spec.suite.describe()),
             paper: Some(paper::TABLE_I),
             tests: vec!["Wilcoxon vs baseline".into()],
             rows,
         }],
         curves: Vec::new(),
+        decomposition: None,
+        paper_notes: Vec::new(),
         reading,
         figures: vec![figure],
     };
-    let paper_agent = first_unassisted.expect("the unassisted arm has a replicate");
-    Ok((experiment, paper_agent))
+    Ok((experiment, spec.first_unassisted))
 }

@@ -4,9 +4,9 @@
 
 use agent::{EpisodeResult, ExactPolicy, OraclePolicy, Policy, QAgent, RandomPolicy};
 use rayon::prelude::*;
-use sim::Goal;
+use sim::{Goal, Profile};
 
-use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, mean_of};
+use super::arms::{ArmResult, Goals, Row, Rules, Suite, Table, TestOutcome, mean_of};
 use super::e3::ours_description;
 use super::text::{num, significance};
 use super::{Context, Drawing, Experiment, Figure, HORIZON, Result, Scale, Setting};
@@ -76,6 +76,7 @@ pub(super) fn run(ctx: &Context, paper_agent: &QAgent, ours: &QAgent) -> Result<
         episodes: ctx.scale.test_games,
         seed: ctx.seeds.test,
         horizon: HORIZON,
+        rules: Rules::of(Profile::Spec),
     };
     let optimum = suite.optimum()?;
     let eps = ctx.test_epsilon();
@@ -138,11 +139,7 @@ pub(super) fn run(ctx: &Context, paper_agent: &QAgent, ours: &QAgent) -> Result<
                     .transpose()
             })
             .collect::<Result<Vec<_>>>()?;
-        rows.push(Row {
-            ours: arm.clone(),
-            paper: None,
-            tests,
-        });
+        rows.push(Row::spec(None, arm.clone(), tests));
     }
     // The best learner, by mean steps with failures at the horizon.
     let best = AGENTS
@@ -164,8 +161,10 @@ pub(super) fn run(ctx: &Context, paper_agent: &QAgent, ours: &QAgent) -> Result<
         &arms,
     )?;
     let (b, p, x) = (&arms[best], &arms[paper_index], &arms[exact]);
-    let to_paper = rows[best].tests[0]
+    let to_paper = rows[best]
+        .spec
         .as_ref()
+        .and_then(|m| m.tests[0].as_ref())
         .map_or_else(|| "not tested".into(), |t| significance(t.p_value));
     let reading = format!(
         "The best learner, {}, failed {} of {} games with mean {} steps, {}x the shortest plan (the exact solver: \
@@ -266,6 +265,8 @@ pub(super) fn run(ctx: &Context, paper_agent: &QAgent, ours: &QAgent) -> Result<
             rows,
         }],
         curves: Vec::new(),
+        decomposition: None,
+        paper_notes: Vec::new(),
         reading,
         figures,
     })

@@ -17,7 +17,7 @@
 use neural::{DemoSource, DqnConfig, NetConfig, NetKind, OptimizerKind, TargetEvery, Trainer};
 use rayon::prelude::*;
 use serde::Serialize;
-use sim::{Goal, RewardModel};
+use sim::{Goal, Profile, RewardModel};
 
 use super::arms::{ArmResult, Goals, Row, Suite, Table};
 use super::text::num;
@@ -276,13 +276,13 @@ struct Outcome {
 
 /// The suite every arm of `blocks` blocks is tested on: each goal, `games` starts.
 fn suite(ctx: &Context, blocks: usize, games: u64) -> Result<Suite> {
-    Ok(Suite {
+    Ok(Suite::in_world(
+        Profile::Spec,
         blocks,
-        goals: Goals::Each(Goal::all(blocks)?),
-        episodes: games,
-        seed: ctx.seeds.test,
-        horizon: HORIZON,
-    })
+        Goals::Each(Goal::all(blocks)?),
+        games,
+        ctx.seeds.test,
+    ))
 }
 
 /// Trains `arm`, testing along the way and at the end.
@@ -363,11 +363,7 @@ pub(super) fn run(ctx: &Context, budget: Budget) -> Result<Experiment> {
                 .iter()
                 .zip(&outcomes)
                 .filter(|(a, _)| a.part == part && a.config.blocks == blocks)
-                .map(|(_, o)| Row {
-                    ours: o.arm.clone(),
-                    paper: None,
-                    tests: Vec::new(),
-                })
+                .map(|(_, o)| Row::spec(None, o.arm.clone(), Vec::new()))
                 .collect();
             if !rows.is_empty() {
                 tables.push(Table {
@@ -392,13 +388,7 @@ pub(super) fn run(ctx: &Context, budget: Budget) -> Result<Experiment> {
         tests: Vec::new(),
         rows: outcomes
             .iter()
-            .flat_map(|o| {
-                o.curve.iter().map(|(_, a)| Row {
-                    ours: a.clone(),
-                    paper: None,
-                    tests: Vec::new(),
-                })
-            })
+            .flat_map(|o| o.curve.iter().map(|(_, a)| Row::spec(None, a.clone(), Vec::new())))
             .collect(),
     });
     let mut setup = vec![
@@ -521,6 +511,8 @@ pub(super) fn run(ctx: &Context, budget: Budget) -> Result<Experiment> {
         setup,
         tables,
         curves: Vec::new(),
+        decomposition: None,
+        paper_notes: Vec::new(),
         reading,
         figures,
     })

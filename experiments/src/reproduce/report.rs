@@ -4,9 +4,11 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use super::arms::{ArmResult, Table, TestOutcome};
-use super::text::{ALPHA, failures, num, p_value};
-use super::{Curve, Drawing, Experiment, ReproduceError, Reproduction, Result};
+use super::arms::{ArmResult, Measured, Table, TestOutcome};
+use super::paper::MeanOver;
+use super::spread::Spread;
+use super::text::{ALPHA, failures, num, p_value, verdict};
+use super::{Curve, Decomposition, Drawing, Experiment, ReproduceError, Reproduction, Result};
 use crate::plots::{GifOptions, bar_chart, box_plot, curves_chart, episode_gif, learning_curve};
 
 /// The files a report is made of.
@@ -75,10 +77,12 @@ pub fn markdown(r: &Reproduction) -> String {
     let _ = writeln!(md, "# The paper reproduced\n");
     let _ = writeln!(
         md,
-        "Written by `{command}`: every experiment of SPEC section 9 on the paper's world (7 x 7 grid, horizon {}, \
-         rapier2d physics), ours beside the figures of \"Interactive Robot Learning\" section VI. Every figure \
-         below is computed by the run; the paper's come from `experiments::reproduce::paper`. The same figures, \
-         and more, are in [`results.json`](results.json).{}\n",
+        "Written by `{command}`: every experiment of SPEC section 9 on the paper's 7 x 7 grid (horizon {}, rapier2d \
+         physics), the figures of \"Interactive Robot Learning\" section VI beside ours in two worlds: `original`, \
+         the paper's world as its authors coded it (their action protocol, start rule, reward, representation and \
+         schedule), and `spec`, ours (SPEC.md). E1-E6 are run in both; E7 and our own learner in the SPEC world. \
+         Every figure below is computed by the run; the paper's come from `experiments::reproduce::paper`. The same \
+         figures, and more, are in [`results.json`](results.json).{}\n",
         r.paper_settings.horizon,
         if r.options.quick {
             " **Quick run:** small counts to check the pipeline, not the paper's; run without `--quick` for \
@@ -112,6 +116,21 @@ pub fn markdown(r: &Reproduction) -> String {
              agents with the same seed.",
             r.scale.replicates, r.seeds.training
         ),
+        "**Worlds.** Each figure of the paper stands beside ours in the `original` world (the paper's, as coded) \
+         and in the `spec` world (ours): columns \"paper\", \"original\", \"spec\"."
+            .into(),
+        format!(
+            "**Spread.** A replicate repeats the paper's experiment once (a learner arm: one agent, its own training \
+             seed; E1: one set of the paper's 100 games). The spread of a figure is its range over our replicates, \
+             smallest to largest, printed in brackets; the paper's figure is *inside* when it lies in that range. \
+             Were the paper's figure one more draw of ours, it would land inside the range of R replicates with \
+             probability (R - 1) / (R + 1): {}% for the {} agents of a learner arm, {}% for E1's {} sets of games. \
+             Failures are compared as shares of the games played.",
+            coverage(r.scale.replicates),
+            r.scale.replicates,
+            coverage(r.scale.e1_replicates),
+            r.scale.e1_replicates
+        ),
         "**Steps.** The paper's mean steps count a failed game as the horizon (1000); \"mean steps*\" is that \
          figure. Beside it: the mean and median over the games that reached the goal, and their mean ratio to \
          the shortest plan from the same start (the exact solver's). Tests compare steps with a failure at 1000."
@@ -128,10 +147,74 @@ pub fn markdown(r: &Reproduction) -> String {
     ] {
         let _ = writeln!(md, "- {line}");
     }
+    summary(&mut md, r);
     for e in &r.experiments {
         experiment(&mut md, e);
     }
     md
+}
+
+/// Every row the paper has, its figures beside ours in each world and the readings of the
+/// spread: the report's overview (and the README's Results table).
+fn summary(md: &mut String, r: &Reproduction) {
+    let _ = writeln!(md, "\n## The paper's figures beside ours\n");
+    let _ = writeln!(
+        md,
+        "Every row of the paper's tables: its failures and mean steps, ours in the `original` and the `spec` \
+         world (mean over replicates, and the range), and whether the paper's figures lie inside the spread of \
+         each world's replicates. Mean steps count a failure as 1000 (mean steps*), except where marked † (over \
+         the games that reached the goal: E2, as ORIGINAL.md reads the paper's).\n"
+    );
+    let _ = writeln!(
+        md,
+        "| | table | arm | failures, paper | failures, original | failures, spec | mean steps, paper | mean steps, \
+         original | mean steps, spec | paper inside original's spread | paper inside spec's spread |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|"
+    );
+    for e in &r.experiments {
+        for t in &e.tables {
+            for row in t.rows.iter().filter(|row| row.paper.is_some()) {
+                let mut cells = vec![e.id.clone(), t.title.clone(), row.name.clone()];
+                let paper = row.paper.expect("filtered");
+                let worlds = [row.original.as_ref(), row.spec.as_ref()];
+                cells.push(match (paper.failures, paper.games) {
+                    (Some(f), Some(n)) => format!("{f} / {n}"),
+                    _ => "-".into(),
+                });
+                cells.extend(worlds.iter().map(|m| {
+                    m.map_or("-".into(), |m| {
+                        format!(
+                            "{} / {}",
+                            failures(&m.arm.failures_per_replicate, m.arm.failures),
+                            m.arm.games
+                        )
+                    })
+                }));
+                let mark = match paper.mean_over {
+                    MeanOver::FailuresAtHorizon => "",
+                    MeanOver::Successes => " †",
+                };
+                cells.push(format!("{}{mark}", num(paper.mean_steps, 2)));
+                cells.extend(worlds.iter().map(|m| {
+                    m.map_or("-".into(), |m| match paper.mean_over {
+                        MeanOver::FailuresAtHorizon => steps_spread(&m.arm),
+                        MeanOver::Successes => format!("{}{mark}", successes_spread(&m.arm)),
+                    })
+                }));
+                cells.extend(worlds.iter().map(|m| {
+                    m.and_then(|m| m.paper_inside.as_ref())
+                        .map_or("-".into(), |inside| verdict(inside).to_string())
+                }));
+                let _ = writeln!(md, "| {} |", cells.join(" | "));
+            }
+        }
+    }
+}
+
+/// The chance, in whole percent, that one more draw lands inside the range of `replicates`
+/// draws ([`Spread::coverage`]).
+fn coverage(replicates: usize) -> String {
+    format!("{:.0}", 100.0 * Spread::coverage_of(replicates))
 }
 
 /// The GitHub anchor of a section headed "E1: title".
@@ -156,8 +239,14 @@ fn experiment(md: &mut String, e: &Experiment) {
     for t in &e.tables {
         table(md, t);
     }
+    if let Some(d) = &e.decomposition {
+        decomposition(md, d);
+    }
     for c in &e.curves {
         curve(md, c);
+    }
+    for note in &e.paper_notes {
+        let _ = writeln!(md, "\n**The paper's own figures.** {note}");
     }
     let _ = writeln!(md, "\n**Reading.** {}", e.reading);
     for f in &e.figures {
@@ -181,88 +270,210 @@ fn epsilon(arm: &ArmResult) -> String {
     }
 }
 
+/// A test's cell: its p-value, and for how many agents alone p is below [`ALPHA`].
+fn test_cell(test: Option<&TestOutcome>) -> String {
+    match test {
+        Some(x) if x.method == TestOutcome::IDENTICAL => "identical".into(),
+        Some(x) => match x.agents_below(ALPHA) {
+            Some((k, n)) => format!("{} ({k}/{n})", p_value(x.p_value)),
+            None => p_value(x.p_value),
+        },
+        None => "-".into(),
+    }
+}
+
+/// A table: the paper's figure, then ours in each world the table has, figure by figure.
+/// The median is shown only in a table of one world (it is in `results.json` for all).
 fn table(md: &mut String, t: &Table) {
-    let paper = t.paper.is_some();
+    let worlds = t.worlds();
+    let paper = t.rows.iter().any(|r| r.paper.is_some());
+    let paper_test = t.paper.and_then(|p| p.test);
     let _ = writeln!(md, "\n### {}\n", t.title);
     if let Some(p) = &t.paper {
         let _ = writeln!(md, "Paper: {}. Ours: {}.\n", p.source, t.suite);
     } else {
         let _ = writeln!(md, "{}.\n", t.suite);
     }
+    // Which of the paper's means the table has: over every game (a failure at the
+    // horizon), over successes (E2's reading), or both.
+    let paper_mean = |over: MeanOver| t.rows.iter().any(|r| r.paper.is_some_and(|p| p.mean_over == over));
+    let (paper_star, paper_successes) = (paper_mean(MeanOver::FailuresAtHorizon), paper_mean(MeanOver::Successes));
     let mut head = vec!["arm".to_string(), "ε".into()];
-    if paper {
-        head.push("failures, paper".into());
+    let mut group = |figure: &str, with_paper: bool| {
+        if with_paper {
+            head.push(format!("{figure}, paper"));
+        }
+        head.extend(worlds.iter().map(|w| format!("{figure}, {w}")));
+    };
+    group("failures", paper);
+    group("mean steps*", paper_star);
+    group("mean, successes", paper_successes);
+    if worlds.len() == 1 {
+        group("median", false);
     }
-    head.push("failures, ours".into());
-    if paper {
-        head.push("mean steps*, paper".into());
-    }
-    head.extend([
-        "mean steps*, ours".into(),
-        "mean, successes".into(),
-        "median".into(),
-        "× optimum".into(),
-    ]);
-    if let Some(test) = t.paper.and_then(|p| p.test) {
+    group("× optimum", false);
+    if let Some(test) = paper_test {
         head.push(format!("p, paper ({test})"));
     }
-    head.extend(t.tests.iter().map(|name| format!("p, ours ({name})")));
+    for name in &t.tests {
+        head.extend(worlds.iter().map(|w| format!("p, {w} ({name})")));
+    }
+    if paper {
+        head.extend(worlds.iter().map(|w| format!("paper inside {w}'s spread")));
+    }
     let _ = writeln!(md, "| {} |", head.join(" | "));
     let _ = writeln!(md, "|{}|", vec!["---"; head.len()].join("|"));
     for row in &t.rows {
-        let a = &row.ours;
-        let mut cells = vec![a.name.clone(), epsilon(a)];
+        let measured: Vec<Option<&Measured>> = worlds.iter().map(|&w| row.in_world(w)).collect();
+        let each = |f: &dyn Fn(&ArmResult) -> String| -> Vec<String> {
+            measured.iter().map(|m| m.map_or("-".into(), |m| f(&m.arm))).collect()
+        };
+        let mut cells = vec![
+            row.name.clone(),
+            measured.iter().flatten().next().map_or("-".into(), |m| epsilon(&m.arm)),
+        ];
         if paper {
             cells.push(row.paper.map_or("-".into(), |p| match (p.failures, p.games) {
                 (Some(f), Some(n)) => format!("{f} / {n}"),
                 _ => "-".into(),
             }));
         }
-        cells.push(format!(
-            "{} / {}",
-            failures(&a.failures_per_replicate, a.failures),
-            a.games
-        ));
-        if paper {
-            cells.push(row.paper.map_or("-".into(), |p| num(p.mean_steps, 2)));
+        cells.extend(each(&|a| {
+            format!("{} / {}", failures(&a.failures_per_replicate, a.failures), a.games)
+        }));
+        let paper_mean = |over: MeanOver| {
+            row.paper
+                .filter(|p| p.mean_over == over)
+                .map_or("-".into(), |p| num(p.mean_steps, 2))
+        };
+        if paper_star {
+            cells.push(paper_mean(MeanOver::FailuresAtHorizon));
         }
-        cells.extend([
-            steps(Some(a.mean_steps_failures_at_horizon)),
-            steps(a.mean_steps),
-            num(a.median_steps, 1),
-            num(a.mean_ratio_to_optimum, 3),
-        ]);
-        if t.paper.and_then(|p| p.test).is_some() {
+        cells.extend(each(&|a| steps_spread(a)));
+        if paper_successes {
+            cells.push(paper_mean(MeanOver::Successes));
+        }
+        cells.extend(each(&|a| steps(a.mean_steps)));
+        if worlds.len() == 1 {
+            cells.extend(each(&|a| num(a.median_steps, 1)));
+        }
+        cells.extend(each(&|a| num(a.mean_ratio_to_optimum, 3)));
+        if paper_test.is_some() {
             cells.push(row.paper.and_then(|p| p.p_value).map_or("-".into(), p_value));
         }
-        cells.extend(row.tests.iter().map(|test| match test {
-            Some(x) if x.method == TestOutcome::IDENTICAL => "identical".into(),
-            Some(x) => match x.agents_below(ALPHA) {
-                Some((k, n)) => format!("{} ({k}/{n})", p_value(x.p_value)),
-                None => p_value(x.p_value),
-            },
-            None => "-".into(),
-        }));
+        for i in 0..t.tests.len() {
+            cells.extend(
+                measured
+                    .iter()
+                    .map(|m| test_cell(m.and_then(|m| m.tests.get(i)).and_then(Option::as_ref))),
+            );
+        }
+        if paper {
+            cells.extend(measured.iter().map(|m| {
+                m.and_then(|m| m.paper_inside.as_ref())
+                    .map_or("-".into(), |inside| verdict(inside).to_string())
+            }));
+        }
         let _ = writeln!(md, "| {} |", cells.join(" | "));
     }
 }
 
+/// Mean steps*, with the range over replicates when there are several.
+fn steps_spread(a: &ArmResult) -> String {
+    let mean = steps(Some(a.mean_steps_failures_at_horizon));
+    match Spread::of(&a.mean_steps_failures_at_horizon_per_replicate) {
+        Some(s) if s.replicates > 1 => format!("{mean} ({:.0}-{:.0})", s.low, s.high),
+        _ => mean,
+    }
+}
+
+/// Mean steps over successes, with the range over replicates when there are several.
+fn successes_spread(a: &ArmResult) -> String {
+    let per_replicate: Vec<f64> = a.mean_steps_per_replicate.iter().flatten().copied().collect();
+    match Spread::of(&per_replicate) {
+        Some(s) if s.replicates > 1 => format!("{} ({:.0}-{:.0})", steps(a.mean_steps), s.low, s.high),
+        _ => steps(a.mean_steps),
+    }
+}
+
+/// E1's worlds, one rule switched at a time, and each figure's gap taken apart.
+fn decomposition(md: &mut String, d: &Decomposition) {
+    let _ = writeln!(md, "\n### The gap between the worlds, one rule at a time\n");
+    let _ = writeln!(
+        md,
+        "| world | protocol | start rule | failures | mean steps* | mean, successes |\n|---|---|---|---|---|---|"
+    );
+    for w in &d.worlds {
+        let a = &w.arm;
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} / {} | {} | {} |",
+            w.world,
+            w.rules.protocol.name(),
+            w.rules.start.name(),
+            failures(&a.failures_per_replicate, a.failures),
+            a.games,
+            steps_spread(a),
+            steps(a.mean_steps)
+        );
+    }
+    let _ = writeln!(
+        md,
+        "\n| figure | SPEC world | original world | gap | protocol alone | start rule alone | the two together |\n\
+         |---|---|---|---|---|---|---|"
+    );
+    for g in &d.gaps {
+        let value = |v: f64| num(Some(v), 1);
+        let part = |v: f64| format!("{v:+.1}");
+        let share = |v: f64| {
+            format!(
+                "{}{}",
+                part(v),
+                g.share(v).map_or(String::new(), |s| format!(" ({s:.0}%)"))
+            )
+        };
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} | {} | {} |",
+            g.figure,
+            value(g.spec),
+            value(g.original),
+            part(g.gap),
+            share(g.protocol),
+            share(g.start),
+            share(g.interaction)
+        );
+    }
+}
+
 fn curve(md: &mut String, c: &Curve) {
-    let _ = writeln!(md, "\n### Learning curve: {}\n", c.learner);
+    let _ = writeln!(
+        md,
+        "\n### Learning curve, {} world, test epsilon {}: {}\n",
+        c.world, c.test_epsilon, c.learner
+    );
     let _ = writeln!(md, "Tested on: {}.\n", c.suite);
     let _ = writeln!(
         md,
-        "| training games | test games | failures (per agent) | failed | mean steps* | mean, successes |\n|---|---|---|---|---|---|"
+        "| training games | test games | failures (per agent) | failed (range over agents) | mean steps* (range) | mean, successes |\n|---|---|---|---|---|---|"
     );
+    // A range over the agents beside a figure, when there are several.
+    let range = |s: Option<Spread>, scale: f64, decimals: usize| {
+        s.map_or(String::new(), |s| {
+            format!(" ({:.decimals$}-{:.decimals$})", scale * s.low, scale * s.high)
+        })
+    };
     for p in &c.points {
         let _ = writeln!(
             md,
-            "| {} | {} | {} | {:.1}% | {} | {} |",
+            "| {} | {} | {} | {:.1}%{} | {}{} | {} |",
             p.games,
             p.test_games,
             num(Some(p.failures), 1),
             100.0 * p.failure_rate,
+            range(p.failure_rate_spread, 100.0, 0),
             steps(Some(p.mean_steps_failures_at_horizon)),
+            range(p.mean_steps_failures_at_horizon_spread, 1.0, 0),
             steps(p.mean_steps)
         );
     }
