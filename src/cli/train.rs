@@ -77,11 +77,8 @@ pub struct TrainArgs {
 /// of `blocks` blocks when `text` is `None`.
 pub fn parse_goals(text: Option<&str>, blocks: usize) -> Result<Vec<Goal>> {
     match text {
-        None => Ok(Goal::all(blocks)?),
-        Some(text) => text
-            .split(':')
-            .map(|g| Goal::parse(g, Some(blocks)).map_err(Into::into))
-            .collect(),
+        None => Goal::all(blocks).context("without --goals every goal is used"),
+        Some(text) => Ok(Goal::parse_list(text, blocks)?),
     }
 }
 
