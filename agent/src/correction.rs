@@ -11,13 +11,36 @@
 //!    correction `a = a_E`, the demonstrator's action. The agent's own steps are learnt from
 //!    too when [`CorrectionRule::learn_agent_steps`] is set (the default: the paper's table
 //!    "is updated during the demonstrations").
-//! 2. **Large margin** (corrections only), in the spirit of DQfD (Hester et al. 2018), whose
-//!    loss `max_a [Q(s,a) + l(a_E,a)] - Q(s,a_E)` is zero exactly when the demonstrator's
-//!    action beats every other by the margin `l`. A table can meet that directly: after the
-//!    update, `Q(s,a_E) <- max(Q(s,a_E), max_{a != a_E} Q(s,a) + margin)`. Only `Q(s,a_E)`
-//!    moves, and only upward, so the greedy action in `s` becomes `a_E` and stays so until
-//!    later learning says otherwise. The margin is [`CorrectionRule::margin`] (default
-//!    [`DEFAULT_MARGIN`], 0.8; 0 only breaks ties in `a_E`'s favour).
+//! 2. **Large margin** (corrections only, when the rule has a margin), in the spirit of
+//!    DQfD (Hester et al. 2018), whose loss `max_a [Q(s,a) + l(a_E,a)] - Q(s,a_E)` is zero
+//!    exactly when the demonstrator's action beats every other by the margin `l`. A table
+//!    can meet that directly: after the update, `Q(s,a_E) <- max(Q(s,a_E), max_{a != a_E}
+//!    Q(s,a) + margin)`. Only `Q(s,a_E)` moves, and only upward, so the greedy action in `s`
+//!    becomes `a_E` and stays so until later learning says otherwise. The margin is
+//!    [`CorrectionRule::margin`] (default [`DEFAULT_MARGIN`], 0.8; 0 only breaks ties in
+//!    `a_E`'s favour).
+//!
+//! The Q-update is the agent's own ([`QAgent::update`]): an agent trained under the
+//! `paper-code` schedule updates as the authors' code did.
+//!
+//! # As the authors coded it (the `original` profile)
+//!
+//! In the authors' code (ORIGINAL.md, "Demonstrations"; their
+//! `Demonstrations/Demonstrations.py:102-287`) the person's action simply replaces the
+//! agent's and gets the ordinary update, the same as the agent's own steps: no margin
+//! ([`CorrectionRule::as_coded`]), and the update of the `paper-code` schedule at the
+//! agent's alpha (1; their demonstrations lower it at no step). A demonstration runs until a
+//! step's reward is above 70 or for 5000 steps ([`SessionWorld::of`] a `paper-code` agent),
+//! on one goal, with the agent proposing at epsilon 0.1; what the agent learns carries over
+//! from one demonstration to the next. Their goals were `[0,1,2] [2,1,0] [1,2,0] [1,0,2]`
+//! ([`DEMONSTRATED_GOALS`]).
+//!
+//! Their people paused the agent, clicked a block and moved it with the arrows: a click
+//! picked that block even while another was held. The `paper` protocol lets no one pick
+//! while holding, so [`person_steps`] carries such a click out as the protocol's way of
+//! changing blocks: a Drop, then the Pick, two corrections. A move or Drop with nothing held
+//! is refused (their people had no Drop key and moved only a block they had clicked). The
+//! simulated demonstrators keep to the protocol by themselves.
 //!
 //! With the paper's `chasing` representation many world states share one table row, so a
 //! correction in one state changes the agent's choice in every state that looks the same to
@@ -32,24 +55,41 @@
 
 use serde::{Deserialize, Serialize};
 use sim::seeding::{SimRng, episode_seed};
-use sim::{Action, Backend, Env, EnvConfig, Goal, GoalSpec, Grid, Observation, RewardModel};
+use sim::{
+    Action, ActionProtocol, Backend, Env, EnvConfig, Goal, GoalSpec, Grid, Observation, Profile, RewardModel,
+    StartRule, Termination,
+};
 
 use crate::demonstrator::{Demonstrator, DemonstratorProfile};
 use crate::demos::{DemoRecord, DemoSink, EpisodeLine, SessionLine, StepLine};
 use crate::error::{AgentError, Result};
 use crate::qlearning::{QAgent, check_epsilon};
 use crate::rollout::policy_rng;
+use crate::schedule::Schedule;
 
 /// The default margin by which a demonstrator's action is made to beat every other.
 pub const DEFAULT_MARGIN: f64 = 0.8;
+
+/// The goals the authors' people demonstrated on (ORIGINAL.md, "Demonstrations"); the
+/// other two, `0,2,1` and `2,0,1`, were never demonstrated.
+pub const DEMONSTRATED_GOALS: [&str; 4] = ["0,1,2", "2,1,0", "1,2,0", "1,0,2"];
+
+/// The authors' demonstrated goals ([`DEMONSTRATED_GOALS`]).
+pub fn demonstrated_goals() -> Vec<Goal> {
+    DEMONSTRATED_GOALS
+        .iter()
+        .map(|g| g.parse().expect("a goal of three blocks"))
+        .collect()
+}
 
 /// How an agent learns from a demonstration session (module docs: the rule).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CorrectionRule {
     /// After a correction, `Q(s, a_E)` is raised to at least `max_{a != a_E} Q(s, a) +
-    /// margin`; finite and at least 0.
-    pub margin: f64,
+    /// margin`; finite and at least 0. `None` (written `null`): no margin, the plain
+    /// update alone, as the authors coded it.
+    pub margin: Option<f64>,
     /// Whether the agent's own (uncorrected) steps get the Q-update too.
     pub learn_agent_steps: bool,
 }
@@ -58,23 +98,39 @@ impl Default for CorrectionRule {
     /// Margin 0.8, learning from every step.
     fn default() -> Self {
         CorrectionRule {
-            margin: DEFAULT_MARGIN,
+            margin: Some(DEFAULT_MARGIN),
             learn_agent_steps: true,
         }
     }
 }
 
 impl CorrectionRule {
-    /// An error unless the margin is at least 0 and fits the table's floats
+    /// The rule of the authors' code: no margin, learning from every step.
+    pub const fn as_coded() -> Self {
+        CorrectionRule {
+            margin: None,
+            learn_agent_steps: true,
+        }
+    }
+
+    /// The rule of `profile`: ours (margin 0.8) under `spec`, [`CorrectionRule::as_coded`]
+    /// under `original`.
+    pub fn for_profile(profile: Profile) -> Self {
+        match profile {
+            Profile::Spec => CorrectionRule::default(),
+            Profile::Original => CorrectionRule::as_coded(),
+        }
+    }
+
+    /// An error unless the margin, if any, is at least 0 and fits the table's floats
     /// ([`crate::qlearning::check_fits_table`]).
     pub fn validate(&self) -> Result<()> {
-        if self.margin >= 0.0 {
-            crate::qlearning::check_fits_table("the margin", self.margin)
-        } else {
-            Err(AgentError::Config(format!(
-                "the margin {} is not a finite number at least 0",
-                self.margin
-            )))
+        match self.margin {
+            None => Ok(()),
+            Some(m) if m >= 0.0 => crate::qlearning::check_fits_table("the margin", m),
+            Some(m) => Err(AgentError::Config(format!(
+                "the margin {m} is not a finite number at least 0"
+            ))),
         }
     }
 
@@ -91,10 +147,9 @@ impl CorrectionRule {
         if corrected || self.learn_agent_steps {
             agent.update(&obs, action, reward, &next, terminated)?;
         }
-        if corrected {
-            raise_to_margin(agent, &obs, action, self.margin)
-        } else {
-            agent.q(&obs, action)
+        match self.margin {
+            Some(margin) if corrected => raise_to_margin(agent, &obs, action, margin),
+            _ => agent.q(&obs, action),
         }
     }
 }
@@ -110,7 +165,8 @@ pub struct Experience {
     pub reward: f64,
     /// The state it led to.
     pub next: Observation,
-    /// The goal holds in `next`.
+    /// The step ended the episode by its termination rule (the goal holds in `next`, or
+    /// under the authors' rule the reward was above 70).
     pub terminated: bool,
     /// A demonstrator chose `action`.
     pub corrected: bool,
@@ -144,24 +200,66 @@ pub struct SessionWorld {
     pub horizon: u32,
     /// The backend the episodes are played in.
     pub backend: Backend,
+    /// Which actions are legal (the agent's and the demonstrator's alike).
+    pub protocol: ActionProtocol,
+    /// How each episode's blocks are placed.
+    pub start: StartRule,
+    /// What ends an episode besides the horizon.
+    pub termination: Termination,
 }
 
 impl SessionWorld {
-    /// The world `agent` was trained in (its reward, horizon and backend), or the paper's
-    /// reward, horizon 1000 and physics for an agent that does not say.
+    /// The world `agent` was trained in (its reward, backend, protocol and start rule), or
+    /// the paper's reward and physics in our world for an agent that does not say. An
+    /// agent of the `spec` schedule plays episodes of 1000 steps that end at the goal; one
+    /// of `paper-code` plays the authors' demonstrations: up to 5000 steps (1000 with two
+    /// blocks), ended by a reward above 70.
     pub fn of(agent: &QAgent) -> SessionWorld {
+        let schedule = agent.schedule();
+        let (horizon, termination) = match schedule {
+            Schedule::Spec => (sim::DEFAULT_HORIZON, Termination::Goal),
+            Schedule::PaperCode => (schedule.game_steps(agent.blocks()), schedule.training_termination()),
+        };
         match agent.training() {
             Some(t) => SessionWorld {
                 reward: t.reward,
-                horizon: sim::DEFAULT_HORIZON,
+                horizon,
                 backend: t.backend,
+                protocol: t.protocol,
+                start: t.start,
+                termination,
             },
             None => SessionWorld {
                 reward: RewardModel::from_name("paper").expect("a known model"),
-                horizon: sim::DEFAULT_HORIZON,
+                horizon,
                 backend: Backend::Physics,
+                protocol: ActionProtocol::Free,
+                start: StartRule::Uniform,
+                termination,
             },
         }
+    }
+}
+
+/// A person's command as the steps the session's protocol allows (module docs): the
+/// action itself when it is legal in `obs`; under a protocol that forbids picking while
+/// holding, a pick of another block becomes a Drop and then the Pick, and a pick of the
+/// block held changes nothing (no step). Any other illegal action is the protocol's error,
+/// which names what is allowed.
+pub fn person_steps(obs: &Observation, action: Action) -> Result<Vec<Action>> {
+    let legal = obs.legal_actions();
+    if legal.contains(action) {
+        return Ok(vec![action]);
+    }
+    match (action, obs.held_block()) {
+        (Action::Pick(b), Some(h)) if b.index() < obs.state.block_count() && legal.contains(Action::Drop) => {
+            Ok(if b == h { Vec::new() } else { vec![Action::Drop, action] })
+        }
+        _ => Err(obs
+            .protocol
+            .check(&obs.state, action)
+            .expect_err("the protocol refuses an action its mask leaves out")
+            .into()),
     }
 }
 
@@ -385,7 +483,9 @@ fn env_config(agent: &QAgent, world: &SessionWorld, goal: Goal) -> EnvConfig {
         horizon: world.horizon,
         reward: world.reward,
         backend: world.backend,
-        ..EnvConfig::default()
+        protocol: world.protocol,
+        start: world.start,
+        termination: world.termination,
     }
 }
 
@@ -400,8 +500,9 @@ pub struct CorrectionConfig {
     pub demos: u64,
     /// The seed of the starts, the agent's proposals and the demonstrator's choices.
     pub seed: u64,
-    /// How the agent learns.
-    pub rule: CorrectionRule,
+    /// How the agent learns (`None`: the rule of the profile the agent was trained under,
+    /// [`CorrectionRule::for_profile`]).
+    pub rule: Option<CorrectionRule>,
     /// The agent's probability of a random proposal (the paper's test policy: 0.1).
     pub epsilon: f64,
     /// The world's reward, horizon and backend (`None`: [`SessionWorld::of`] the agent).
@@ -411,15 +512,15 @@ pub struct CorrectionConfig {
 }
 
 impl CorrectionConfig {
-    /// `demos` demonstrations by `demonstrator` on `goals`, seed `seed`, the default rule,
-    /// proposals with epsilon 0.1, in the agent's own world.
+    /// `demos` demonstrations by `demonstrator` on `goals`, seed `seed`, the rule of the
+    /// agent's profile, proposals with epsilon 0.1, in the agent's own world.
     pub fn new(demonstrator: DemonstratorProfile, goals: Vec<Goal>, demos: u64, seed: u64) -> Self {
         CorrectionConfig {
             demonstrator,
             goals,
             demos,
             seed,
-            rule: CorrectionRule::default(),
+            rule: None,
             epsilon: 0.1,
             world: None,
             model: None,
@@ -446,10 +547,13 @@ pub struct Corrected<S> {
 pub fn correct<S: DemoSink>(agent: QAgent, config: &CorrectionConfig, sink: S) -> Result<Corrected<S>> {
     config.demonstrator.validate()?;
     let world = config.world.unwrap_or_else(|| SessionWorld::of(&agent));
+    let rule = config
+        .rule
+        .unwrap_or_else(|| CorrectionRule::for_profile(agent.training().map_or(Profile::Spec, |t| t.profile)));
     let grid: Grid = agent.grid();
     let mut session = CorrectionSession::new(
         agent,
-        config.rule,
+        rule,
         world,
         config.goals.clone(),
         config.seed,
@@ -592,7 +696,7 @@ mod tests {
     fn a_negative_or_infinite_margin_is_refused() {
         for margin in [-0.1, f64::INFINITY, f64::NAN] {
             let rule = CorrectionRule {
-                margin,
+                margin: Some(margin),
                 ..CorrectionRule::default()
             };
             assert!(rule.validate().is_err());

@@ -16,6 +16,11 @@
 //!
 //! When it steps in it chooses its [`PlannerKind`]'s next action, except that with probability
 //! [`DemonstratorProfile::slip`] it presses a wrong key: a uniformly drawn other action.
+//!
+//! It plays by the observation's action protocol like the agent: its planners plan under it
+//! (shortest paths are shortest legal paths), and a wrong key is a uniformly drawn other
+//! *legal* action. Under `free` every action is legal and the draws are the same as before
+//! protocols existed.
 //! Its draws come from a generator of its own per episode (stream 2 of the episode's seed),
 //! so they never shift the starts or the agent's draws.
 //!
@@ -33,7 +38,7 @@ use oracle::Planner;
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
 use sim::seeding::SimRng;
-use sim::{Action, Goal, Grid, GridWorld, Observation, State, World};
+use sim::{Action, ActionProtocol, Goal, Grid, GridWorld, Observation, State, World};
 
 use crate::error::{AgentError, Result};
 
@@ -116,9 +121,9 @@ pub struct Demonstrator {
     rng: SimRng,
     /// The states of the episode so far, last one last (at most [`LOOP_WINDOW`] + 1).
     recent: Vec<State>,
-    /// Exact distances to the current goal, by state.
+    /// Exact distances to the current goal under the current protocol, by state.
     distances: HashMap<State, u32>,
-    goal: Option<Goal>,
+    goal: Option<(Goal, ActionProtocol)>,
 }
 
 impl Demonstrator {
@@ -147,15 +152,21 @@ impl Demonstrator {
         self.rng.set_stream(2);
         self.recent.clear();
         self.recent.push(obs.state);
-        if self.goal != Some(obs.goal) {
+        self.watch_goal(obs);
+    }
+
+    /// Forgets the distances when `obs` has another goal or protocol than those measured.
+    fn watch_goal(&mut self, obs: &Observation) {
+        if self.goal != Some((obs.goal, obs.protocol)) {
             self.distances.clear();
-            self.goal = Some(obs.goal);
+            self.goal = Some((obs.goal, obs.protocol));
         }
     }
 
     /// Looks at the agent's `proposed` action in `obs`: the action to take instead, or
     /// `None` to let the agent's stand.
     pub fn review(&mut self, obs: &Observation, proposed: Action) -> Result<Option<Action>> {
+        self.watch_goal(obs);
         if self.recent.last() != Some(&obs.state) {
             self.recent.push(obs.state);
             if self.recent.len() > LOOP_WINDOW + 1 {
@@ -173,8 +184,8 @@ impl Demonstrator {
         let after = *after.state_ref();
         let loops = notices_loops && self.recent.contains(&after);
         let off_path = looks && !obs.goal.holds(&after) && {
-            let now = self.distance(&obs.state, &obs.goal)?;
-            self.distance(&after, &obs.goal)? + 1 != now
+            let now = self.distance(&obs.state, obs)?;
+            self.distance(&after, obs)? + 1 != now
         };
         if !(takes_over || loops || off_path) {
             return Ok(None);
@@ -184,27 +195,40 @@ impl Demonstrator {
 
     /// The demonstrator's own action in `obs`: its planner's, or a slip.
     fn choose(&mut self, obs: &Observation) -> Result<Action> {
-        let planner: &dyn Planner = match self.profile.planner {
-            PlannerKind::Exact => &self.exact,
-            PlannerKind::Oracle => &self.oracle,
+        let planned = match self.profile.planner {
+            PlannerKind::Exact => self
+                .exact
+                .with_protocol(obs.protocol)
+                .next_action(&obs.state, &obs.goal)?,
+            PlannerKind::Oracle => self
+                .oracle
+                .with_protocol(obs.protocol)
+                .next_action(&obs.state, &obs.goal)?,
         };
-        let planned = planner.next_action(&obs.state, &obs.goal)?;
         if self.rng.random_bool(self.profile.slip) {
-            let n = Action::count(obs.state.block_count());
-            // A uniformly drawn action other than the planned one.
-            let k = self.rng.random_range(0..n - 1);
-            let index = if k >= planned.index() { k + 1 } else { k };
-            return Ok(Action::from_index(index, obs.state.block_count())?);
+            let legal = obs.legal_actions();
+            if legal.count() < 2 {
+                return Ok(planned);
+            }
+            // A uniformly drawn legal action other than the planned one (under `free`, by
+            // index, the draw made before protocols existed).
+            let at = legal
+                .indices()
+                .position(|i| i == planned.index())
+                .expect("planned actions are legal");
+            let k = self.rng.random_range(0..legal.count() - 1);
+            let pick = if k >= at { k + 1 } else { k };
+            return Ok(legal.nth(pick).expect("pick < the legal actions"));
         }
         Ok(planned)
     }
 
-    /// The exact distance from `state` to `goal`, remembered.
-    fn distance(&mut self, state: &State, goal: &Goal) -> Result<u32> {
+    /// The exact distance from `state` to the goal of `obs` under its protocol, remembered.
+    fn distance(&mut self, state: &State, obs: &Observation) -> Result<u32> {
         if let Some(&d) = self.distances.get(state) {
             return Ok(d);
         }
-        let d = self.exact.distance(state, goal)?;
+        let d = self.exact.with_protocol(obs.protocol).distance(state, &obs.goal)?;
         self.distances.insert(*state, d);
         Ok(d)
     }

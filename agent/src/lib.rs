@@ -9,6 +9,7 @@
 //! - [`correction`]: learning from a demonstrator's corrections, simulated [`demonstrator`]s,
 //!   and [`demos`] recordings and their replay.
 
+pub mod assist;
 pub mod correction;
 pub mod demonstrator;
 pub mod demos;
@@ -18,20 +19,25 @@ pub mod model;
 pub mod optimality;
 pub mod planner_policy;
 pub mod policy;
+pub mod profile;
 pub mod qlearning;
 pub mod qtable;
 pub mod repr;
 pub mod rollout;
+pub mod schedule;
 pub mod train;
 
+pub use assist::{Assist, OracleKind, Oscillation};
 pub use correction::{Corrected, CorrectionConfig, CorrectionRule, CorrectionSession, correct};
 pub use demonstrator::{Demonstrator, DemonstratorProfile};
 pub use demos::{BadLines, DemoRecord, DemoSink, DemoWriter};
 pub use error::{AgentError, Result};
-pub use planner_policy::{ExactPolicy, OraclePolicy, PlannerPolicy};
+pub use planner_policy::{ExactPolicy, OraclePolicy, PaperOraclePolicy, PlannerPolicy};
 pub use policy::{Policy, RandomPolicy};
+pub use profile::LearnerProfile;
 pub use qlearning::{QAgent, QParams, QPolicy};
 pub use qtable::QTable;
 pub use repr::{Repr, ReprKind, Representation};
 pub use rollout::{EpisodeResult, Summary, play, play_episode};
-pub use train::{Assist, Progress, TrainConfig, TrainReport, Trained, Trainer, train};
+pub use schedule::Schedule;
+pub use train::{Progress, TrainConfig, TrainReport, Trained, Trainer, train};

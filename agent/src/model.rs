@@ -19,6 +19,11 @@
 //! value, bit for bit (so `-0.0` is not an integer): I8, then I16, then F16, else F32. A
 //! step-cost learner's values are small integers, one byte each.
 //!
+//! A model of the `paper-code` schedule, whose table remembers which entries were ever
+//! written ([`Schedule`]), also has `seen_keys`, shape `[n]`, U32 (U64 when some key does
+//! not fit 32 bits), the keys with a seen entry, increasing; and `seen`, shape `[n]`, U32,
+//! those keys' seen columns as bits (bit `c` for column `c`). A `spec` model has neither.
+//!
 //! # Metadata
 //!
 //! ```text
@@ -28,6 +33,8 @@
 //!  "table":{"keys":470596,"columns":8,"initial":0.0}}
 //! ```
 //!
+//! A `paper-code` model's metadata also has `"schedule":"paper-code"` (absent: `spec`).
+//!
 //! # Checks
 //!
 //! A reader refuses, each with a message that says which: a file that is not a model
@@ -35,15 +42,16 @@
 //! that does not match, metadata that does not parse), a truncated one, a file larger than
 //! [`MAX_MODEL_BYTES`], a table whose shape does not fit its representation (checked
 //! before anything is allocated), keys out of order or range, values that are not finite,
-//! and a training config that contradicts the model (another representation, block count
-//! or grid; no goals; goals of another block count). A version-1 file (JSON, written by
+//! seen entries that a model of its schedule must not have or must have, or that do not fit
+//! the table, and a training config that contradicts the model (another representation,
+//! block count, grid or schedule; no goals; goals of another block count). A version-1 file (JSON, written by
 //! blockstack before this format) is recognised and named as such.
 //!
 //! # Identity
 //!
 //! [`QAgent::identity`] names what an agent has learnt: the first 64 bits of a SHA-256 over
-//! its representation, world, hyper-parameters, training config and every table row that
-//! differs from the initial value, as 16 hex digits. A saved model loads with the same
+//! its representation, world, hyper-parameters, training config, schedule, every table row
+//! that differs from the initial value and the seen entries, as 16 hex digits. A saved model loads with the same
 //! identity (the file keeps every value exactly), and any change to the table changes it.
 //! Demonstration recordings name the identity of the model a session started from, so
 //! that a replay can refuse another model.
@@ -63,6 +71,7 @@ use crate::error::{AgentError, Result};
 use crate::qlearning::{QAgent, QParams};
 use crate::qtable::{DENSE_LIMIT, QTable};
 use crate::repr::{Repr, ReprKind, Representation};
+use crate::schedule::Schedule;
 use crate::train::TrainConfig;
 
 /// The `format` of every model file.
@@ -94,7 +103,13 @@ struct Metadata {
     repr: ReprKind,
     params: QParams,
     training: Option<TrainConfig>,
+    #[serde(default, skip_serializing_if = "is_spec")]
+    schedule: Schedule,
     table: TableMeta,
+}
+
+fn is_spec(schedule: &Schedule) -> bool {
+    *schedule == Schedule::Spec
 }
 
 #[derive(Serialize, Deserialize)]
@@ -205,22 +220,43 @@ fn table_tensors(table: &QTable) -> std::result::Result<Vec<(&'static str, Tenso
     ])
 }
 
+/// The seen entries' tensors (module docs), for a table that tracks them.
+fn seen_tensors(table: &QTable) -> Vec<(&'static str, Tensor<'static>)> {
+    if !table.tracks_seen() {
+        return Vec::new();
+    }
+    let seen = table.seen_entries();
+    let n = [seen.len()];
+    let keys = if table.key_count() > 1 << 32 {
+        Tensor::from_values(&n, &seen.iter().map(|&(k, _)| k).collect::<Vec<u64>>())
+    } else {
+        Tensor::from_values(&n, &seen.iter().map(|&(k, _)| k as u32).collect::<Vec<u32>>())
+    };
+    let bits = Tensor::from_values(&n, &seen.iter().map(|&(_, b)| b).collect::<Vec<u32>>());
+    vec![
+        ("seen_keys", keys.expect("one key per entry")),
+        ("seen", bits.expect("one set of bits per key")),
+    ]
+}
+
 impl QAgent {
     /// Writes the agent to `path` as a model file (module docs), through the output
     /// helper: atomically for a regular file.
     pub fn save(&self, path: &Path) -> Result<()> {
         let out = OutputPath::check(path)?;
         let table = self.table();
-        let tensors = table_tensors(table).map_err(|reason| AgentError::ModelSave {
+        let mut tensors = table_tensors(table).map_err(|reason| AgentError::ModelSave {
             path: path.display().to_string(),
             reason,
         })?;
+        tensors.extend(seen_tensors(table));
         let metadata = Metadata {
             grid: self.grid(),
             blocks: self.blocks(),
             repr: self.kind(),
             params: *self.params(),
             training: self.training().cloned(),
+            schedule: self.schedule(),
             table: TableMeta {
                 keys: table.key_count(),
                 columns: table.columns(),
@@ -242,6 +278,7 @@ impl QAgent {
             self.blocks(),
             self.params(),
             self.training(),
+            self.schedule(),
             (table.key_count(), table.columns(), table.initial().to_bits()),
         ))
         .expect("the settings serialise");
@@ -253,6 +290,11 @@ impl QAgent {
             bytes.extend_from_slice(&key.to_le_bytes());
             bytes.extend(row.iter().flat_map(|v| v.to_bits().to_le_bytes()));
             hash.update(&bytes);
+        }
+        // What the paper-code schedule has seen changes what it learns next.
+        for (key, bits) in table.seen_entries() {
+            hash.update(key.to_le_bytes());
+            hash.update(bits.to_le_bytes());
         }
         hash.finalize()[..8].iter().map(|b| format!("{b:02x}")).collect()
     }
@@ -405,7 +447,17 @@ impl QAgent {
             }
             table
         };
-        QAgent::from_parts(meta.repr, meta.grid, meta.blocks, meta.params, table, meta.training)
+        let mut table = table;
+        read_seen(c, &meta, &mut table).map_err(corrupt)?;
+        QAgent::from_parts(
+            meta.repr,
+            meta.grid,
+            meta.blocks,
+            meta.params,
+            table,
+            meta.training,
+            meta.schedule,
+        )
     }
 }
 
@@ -418,9 +470,62 @@ fn read_problem(e: FilesError) -> String {
     }
 }
 
+/// Reads the seen entries of a `paper-code` model into `table` (a `spec` model has none);
+/// what is wrong with them otherwise.
+fn read_seen(c: &Container, meta: &Metadata, table: &mut QTable) -> std::result::Result<(), String> {
+    let (keys, bits) = (c.tensor("seen_keys"), c.tensor("seen"));
+    let tracks = meta.schedule.tracks_seen();
+    let (keys, bits) = match (keys, bits) {
+        (None, None) if !tracks => return Ok(()),
+        (Some(k), Some(b)) if tracks => (k, b),
+        _ if tracks => {
+            return Err(format!(
+                "a model of the {} schedule lacks its seen entries",
+                meta.schedule
+            ));
+        }
+        _ => return Err(format!("a model of the {} schedule has seen entries", meta.schedule)),
+    };
+    let keys: Vec<u64> = keys
+        .values::<u32>()
+        .map(|v| v.into_iter().map(u64::from).collect())
+        .or_else(|| keys.values::<u64>())
+        .ok_or_else(|| format!("\"seen_keys\" are {}, not U32 or U64", keys.dtype()))?;
+    let bits: Vec<u32> = bits
+        .values::<u32>()
+        .ok_or_else(|| format!("\"seen\" are {}, not U32", bits.dtype()))?;
+    if keys.len() != bits.len() {
+        return Err(format!(
+            "\"seen_keys\" has {} entries and \"seen\" {}",
+            keys.len(),
+            bits.len()
+        ));
+    }
+    table.track_seen();
+    let columns = meta.table.columns;
+    for (i, (&key, &b)) in keys.iter().zip(&bits).enumerate() {
+        if key >= meta.table.keys || (i > 0 && keys[i - 1] >= key) || u64::from(b) >> columns != 0 {
+            return Err(format!(
+                "seen entry {i} (key {key}, bits {b:#b}) does not fit a table of {} keys and {columns} columns in key order",
+                meta.table.keys
+            ));
+        }
+        for column in (0..columns).filter(|c| b & (1 << c) != 0) {
+            table.mark_seen(key, column);
+        }
+    }
+    Ok(())
+}
+
 /// The training config must describe the model it trained: same representation, block
 /// count and grid, and at least one goal, each of the model's block count.
 fn check_training(training: &TrainConfig, meta: &Metadata) -> std::result::Result<(), String> {
+    if training.schedule != meta.schedule {
+        return Err(format!(
+            "the file is inconsistent: the agent learns by the {} schedule, its training config says {}",
+            meta.schedule, training.schedule
+        ));
+    }
     if training.repr != meta.repr || training.blocks != meta.blocks || training.grid != meta.grid {
         return Err(format!(
             "the file is inconsistent: the agent is {} for {} blocks on {}, its training config says {} for {} blocks on {}",

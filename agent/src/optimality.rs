@@ -1,16 +1,28 @@
 //! How far played episodes are from the best possible: each start's shortest plan, found
 //! by the exact solver, against the steps taken.
+//!
+//! Under a restricting action protocol the yardstick is the shortest *legal* plan
+//! ([`optimal_steps_under`]). A start in which the goal already holds (the `paper` start
+//! rule keeps them) has a shortest plan of 0 actions; such episodes count in the mean
+//! optimum but have no ratio.
 
 use oracle::ExactSolver;
 use serde::Serialize;
-use sim::Grid;
+use sim::{ActionProtocol, Grid};
 
 use crate::error::Result;
 use crate::rollout::EpisodeResult;
 
-/// The length of a shortest plan from each episode's start to its goal, in order.
+/// The length of a shortest plan from each episode's start to its goal, in order (every
+/// action legal).
 pub fn optimal_steps(grid: Grid, results: &[EpisodeResult]) -> Result<Vec<u32>> {
-    let solver = ExactSolver::new(grid);
+    optimal_steps_under(grid, ActionProtocol::Free, results)
+}
+
+/// The length of a shortest plan legal under `protocol` from each episode's start to its
+/// goal, in order.
+pub fn optimal_steps_under(grid: Grid, protocol: ActionProtocol, results: &[EpisodeResult]) -> Result<Vec<u32>> {
+    let solver = ExactSolver::new(grid).with_protocol(protocol);
     results
         .iter()
         .map(|r| Ok(solver.distance(&r.start, &r.goal)?))
@@ -24,7 +36,7 @@ pub struct Optimality {
     /// the same episodes); `None` if no episode reached the goal.
     pub mean_optimal_steps: Option<f64>,
     /// Mean over the episodes of steps taken / shortest plan's length; `None` if no episode
-    /// reached the goal.
+    /// reached the goal (from a start where the goal did not hold already).
     pub mean_ratio_to_optimum: Option<f64>,
 }
 
@@ -39,9 +51,10 @@ impl Optimality {
             .map(|(r, &best)| (f64::from(r.steps), f64::from(best)))
             .collect();
         let n = reached.len() as f64;
+        let ratios: Vec<f64> = reached.iter().filter(|(_, b)| *b > 0.0).map(|(s, b)| s / b).collect();
         Optimality {
             mean_optimal_steps: (n > 0.0).then(|| reached.iter().map(|(_, b)| b).sum::<f64>() / n),
-            mean_ratio_to_optimum: (n > 0.0).then(|| reached.iter().map(|(s, b)| s / b).sum::<f64>() / n),
+            mean_ratio_to_optimum: (!ratios.is_empty()).then(|| ratios.iter().sum::<f64>() / ratios.len() as f64),
         }
     }
 }

@@ -1,10 +1,16 @@
-//! The planners as agents: the oracle and the exact solver play episodes like any policy.
+//! The planners as agents: the oracle and the exact solver play episodes like any policy,
+//! and so does the paper's greedy oracle.
 //!
-//! Each plans once from the episode's start and then follows its plan, replanning only if
-//! the world is not in the state the plan expects (say, a learner or a demonstrator took
-//! some actions in between).
+//! A planner plans once from the episode's start and then follows its plan, replanning only
+//! if the world is not in the state the plan expects (say, a learner or a demonstrator took
+//! some actions in between). It plans under the observation's action protocol, so every
+//! action it takes is legal (under `paper` the exact solver's plans are the shortest legal
+//! ones).
+//!
+//! [`PaperOraclePolicy`] plans nothing: it asks the authors' greedy walker
+//! ([`oracle::CentroidWalker`]) at every step.
 
-use oracle::{ExactSolver, Oracle, Plan, Planner};
+use oracle::{CentroidWalker, ExactSolver, Oracle, Plan, Planner};
 use sim::seeding::SimRng;
 use sim::{Action, Goal, Grid, GridWorld, Observation, State, World};
 
@@ -92,7 +98,7 @@ impl ExactPolicy {
     }
 }
 
-impl<P: Planner> Policy for PlannerPolicy<P> {
+impl<P: Planner + Clone> Policy for PlannerPolicy<P> {
     fn name(&self) -> String {
         self.planner.name().into()
     }
@@ -102,6 +108,10 @@ impl<P: Planner> Policy for PlannerPolicy<P> {
     }
 
     fn act(&mut self, obs: &Observation, _rng: &mut SimRng) -> Result<Action> {
+        if self.planner.protocol() != obs.protocol {
+            self.planner = self.planner.clone().with_protocol(obs.protocol);
+            self.cursor = PlanCursor::default();
+        }
         match self.cursor.next(obs) {
             Some(action) => Ok(action),
             None => {
@@ -109,6 +119,37 @@ impl<P: Planner> Policy for PlannerPolicy<P> {
                 self.cursor.follow(obs, plan)
             }
         }
+    }
+}
+
+/// The paper's oracle as a policy: the authors' greedy centroid walker, asked at every
+/// step, a random block when nothing is held (its draws come from the episode's policy
+/// generator). It can get stuck, as the authors' could.
+#[derive(Clone, Copy, Debug)]
+pub struct PaperOraclePolicy {
+    walker: CentroidWalker,
+}
+
+impl PaperOraclePolicy {
+    /// The paper's oracle for worlds on `grid`.
+    pub fn new(grid: Grid) -> Self {
+        Self {
+            walker: CentroidWalker::new(grid),
+        }
+    }
+}
+
+impl Policy for PaperOraclePolicy {
+    fn name(&self) -> String {
+        "paper-oracle".into()
+    }
+
+    fn begin_episode(&mut self, _obs: &Observation) {
+        self.walker.begin_episode();
+    }
+
+    fn act(&mut self, obs: &Observation, rng: &mut SimRng) -> Result<Action> {
+        Ok(self.walker.next_action(&obs.state, &obs.goal, rng)?)
     }
 }
 

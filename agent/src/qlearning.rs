@@ -3,9 +3,16 @@
 //!
 //! The update is `Q(s,a) <- (1 - alpha) Q(s,a) + alpha (r + gamma max_a' Q(s',a'))`, with
 //! `max_a' Q(s',a')` taken as 0 when `s'` ends the episode by reaching the goal (a
-//! truncated episode's last state is not terminal: its value still counts). Actions are
-//! chosen epsilon-greedily, ties between equal values broken uniformly at random by the
-//! caller's seeded generator.
+//! truncated episode's last state is not terminal: its value still counts). An agent of
+//! the [`Schedule::PaperCode`] schedule updates as the authors' code did instead (the
+//! [`schedule`](crate::schedule) module gives both rules).
+//!
+//! Actions are chosen epsilon-greedily *among the legal actions* of the observation
+//! ([`Observation::legal_actions`]): with probability epsilon a uniformly random legal
+//! action, otherwise a legal action of the highest value, ties broken uniformly at random
+//! by the caller's seeded generator. Under the `free` protocol every action is legal and
+//! the draws are the same as before protocols existed, so every seeded SPEC result is
+//! unchanged.
 
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
@@ -16,6 +23,7 @@ use crate::error::{AgentError, Result};
 use crate::policy::Policy;
 use crate::qtable::QTable;
 use crate::repr::{Repr, ReprKind, Representation};
+use crate::schedule::Schedule;
 use crate::train::TrainConfig;
 
 /// The learner's hyper-parameters.
@@ -96,15 +104,48 @@ pub struct QAgent {
     params: QParams,
     table: QTable,
     training: Option<TrainConfig>,
+    schedule: Schedule,
+}
+
+/// One step in table coordinates, as an update reads it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct TableStep {
+    /// The key of the state the action was taken in.
+    pub key: u64,
+    /// The action's column.
+    pub column: usize,
+    /// The reward.
+    pub reward: f64,
+    /// The next state's key; `None` when the step ended the episode by its termination rule.
+    pub next: Option<u64>,
+    /// The action was a Drop.
+    pub drop: bool,
 }
 
 impl QAgent {
-    /// An untrained agent with representation `kind` for `blocks` blocks on `grid`, every
-    /// Q-value at `params.initial_q`.
+    /// An untrained agent of the `spec` schedule with representation `kind` for `blocks`
+    /// blocks on `grid`, every Q-value at `params.initial_q`.
     pub fn new(kind: ReprKind, grid: Grid, blocks: usize, params: QParams) -> Result<QAgent> {
+        QAgent::with_schedule(kind, grid, blocks, params, Schedule::Spec)
+    }
+
+    /// An untrained agent that updates by `schedule`'s rule (its table remembers which
+    /// entries were written when the schedule reads them).
+    pub fn with_schedule(
+        kind: ReprKind,
+        grid: Grid,
+        blocks: usize,
+        params: QParams,
+        schedule: Schedule,
+    ) -> Result<QAgent> {
         params.validate()?;
         let repr = Repr::new(kind, grid, blocks)?;
-        let table = QTable::new(repr.key_count(), Action::count(blocks), params.initial_q as f32);
+        let (keys, columns, initial) = (repr.key_count(), Action::count(blocks), params.initial_q as f32);
+        let table = if schedule.tracks_seen() {
+            QTable::tracking_seen(keys, columns, initial)
+        } else {
+            QTable::new(keys, columns, initial)
+        };
         Ok(QAgent {
             repr,
             grid,
@@ -112,11 +153,13 @@ impl QAgent {
             params,
             table,
             training: None,
+            schedule,
         })
     }
 
     /// Reassembles an agent from its parts (a model file's, whose table the reader has
-    /// checked has the representation's shape).
+    /// checked has the representation's shape and tracks seen entries as the schedule
+    /// needs).
     pub(crate) fn from_parts(
         kind: ReprKind,
         grid: Grid,
@@ -124,12 +167,13 @@ impl QAgent {
         params: QParams,
         table: QTable,
         training: Option<TrainConfig>,
+        schedule: Schedule,
     ) -> Result<QAgent> {
         params.validate()?;
         let repr = Repr::new(kind, grid, blocks)?;
         debug_assert_eq!(
-            (table.key_count(), table.columns()),
-            (repr.key_count(), Action::count(blocks))
+            (table.key_count(), table.columns(), table.tracks_seen()),
+            (repr.key_count(), Action::count(blocks), schedule.tracks_seen())
         );
         Ok(QAgent {
             repr,
@@ -138,7 +182,13 @@ impl QAgent {
             params,
             table,
             training,
+            schedule,
         })
+    }
+
+    /// The schedule whose update rule the agent learns by.
+    pub fn schedule(&self) -> Schedule {
+        self.schedule
     }
 
     /// The representation.
@@ -268,31 +318,43 @@ impl QAgent {
         Ok(self.table.row(self.key(obs)?)[column])
     }
 
-    /// Sets Q(obs, action) to `value`.
+    /// Sets Q(obs, action) to `value` (and marks the entry seen, for a table that tracks
+    /// seen entries).
     pub fn set_q(&mut self, obs: &Observation, action: Action, value: f32) -> Result<()> {
         let column = self.column(&obs.goal, action)?;
         let key = self.key(obs)?;
         self.table.row_mut(key)[column] = value;
+        self.table.mark_seen(key, column);
         Ok(())
     }
 
-    /// The action with the highest Q-value in `obs`, ties broken uniformly at random.
-    pub fn greedy_action(&self, obs: &Observation, rng: &mut SimRng) -> Result<Action> {
-        let key = self.key(obs)?;
-        Ok(self.repr.action(&obs.goal, self.greedy_column(key, rng)))
+    /// The table columns of the actions legal in `obs`, as bits (bit `c`: column `c`).
+    #[inline]
+    pub(crate) fn legal_columns(&self, obs: &Observation) -> u32 {
+        self.repr.column_mask(&obs.goal, obs.legal_actions())
     }
 
-    /// With probability `epsilon` a uniformly random action, otherwise the greedy one: the
-    /// agent's proposal for `obs`.
+    /// The legal action with the highest Q-value in `obs`, ties broken uniformly at random.
+    pub fn greedy_action(&self, obs: &Observation, rng: &mut SimRng) -> Result<Action> {
+        let key = self.key(obs)?;
+        let column = self.greedy_column(key, self.legal_columns(obs), rng);
+        Ok(self.repr.action(&obs.goal, column))
+    }
+
+    /// With probability `epsilon` a uniformly random legal action, otherwise the greedy
+    /// legal one: the agent's proposal for `obs`.
     pub fn choose_action(&self, obs: &Observation, epsilon: f64, rng: &mut SimRng) -> Result<Action> {
         check_epsilon(epsilon)?;
         let key = self.key(obs)?;
-        Ok(self.repr.action(&obs.goal, self.choose_column(key, epsilon, rng)))
+        let column = self.choose_column(key, self.legal_columns(obs), epsilon, rng);
+        Ok(self.repr.action(&obs.goal, column))
     }
 
-    /// The Q-learning update for `action` taken in `obs`, which gave `reward` and led to
-    /// `next` (`terminated`: the goal holds in `next`). `action` may be any action, the
-    /// agent's or a demonstrator's. Returns the new Q(obs, action).
+    /// The Q-learning update, by the agent's schedule's rule (module docs), for `action`
+    /// taken in `obs`, which gave `reward` and led to `next` (`terminated`: the step ended
+    /// the episode by its termination rule: the goal, or under `paper-code` training a
+    /// reward above 70). `action` may be any action, the agent's or a demonstrator's; the
+    /// learning rate is the agent's alpha. Returns the new Q(obs, action).
     pub fn update(
         &mut self,
         obs: &Observation,
@@ -304,46 +366,94 @@ impl QAgent {
         let column = self.column(&obs.goal, action)?;
         let key = self.key(obs)?;
         let next_key = self.key(next)?;
-        Ok(self.update_key(key, column, reward, (!terminated).then_some(next_key)))
+        let step = TableStep {
+            key,
+            column,
+            reward,
+            next: (!terminated).then_some(next_key),
+            drop: action == Action::Drop,
+        };
+        Ok(self.learn(&step, self.params.alpha))
     }
 
-    /// The greedy column of row `key`, ties broken at random.
+    /// The greedy column of row `key` among the columns in `legal` (bits), ties broken at
+    /// random. With every column legal this is the draw the agent made before protocols
+    /// existed.
     #[inline]
-    pub(crate) fn greedy_column(&self, key: u64, rng: &mut SimRng) -> usize {
+    pub(crate) fn greedy_column(&self, key: u64, legal: u32, rng: &mut SimRng) -> usize {
         let row = self.table.row(key);
-        let max = row.iter().copied().fold(f32::NEG_INFINITY, f32::max);
-        let ties = row.iter().filter(|&&v| v == max).count();
+        let columns = || Columns(legal).filter(|&c| c < row.len());
+        let max = columns().map(|c| row[c]).fold(f32::NEG_INFINITY, f32::max);
+        let ties = columns().filter(|&c| row[c] == max).count();
         match ties {
-            1 => row.iter().position(|&v| v == max).expect("the maximum is in the row"),
+            1 => columns().find(|&c| row[c] == max).expect("the maximum is in the row"),
             // Only NaNs: nothing to prefer.
-            0 => rng.random_range(0..row.len()),
+            0 => {
+                let k = rng.random_range(0..columns().count());
+                columns().nth(k).expect("k < the legal columns")
+            }
             _ => {
                 let k = rng.random_range(0..ties);
-                row.iter()
-                    .enumerate()
-                    .filter(|&(_, &v)| v == max)
-                    .nth(k)
-                    .expect("k < ties")
-                    .0
+                columns().filter(|&c| row[c] == max).nth(k).expect("k < ties")
             }
         }
     }
 
-    /// Epsilon-greedy column of row `key`.
+    /// Epsilon-greedy column of row `key` among the columns in `legal` (bits).
     #[inline]
-    pub(crate) fn choose_column(&self, key: u64, epsilon: f64, rng: &mut SimRng) -> usize {
+    pub(crate) fn choose_column(&self, key: u64, legal: u32, epsilon: f64, rng: &mut SimRng) -> usize {
         if epsilon > 0.0 && rng.random_bool(epsilon) {
-            rng.random_range(0..self.table.columns())
+            let columns = Columns(legal).filter(|&c| c < self.table.columns());
+            let k = rng.random_range(0..columns.clone().count());
+            columns.clone().nth(k).expect("k < the legal columns")
         } else {
-            self.greedy_column(key, rng)
+            self.greedy_column(key, legal, rng)
         }
     }
 
-    /// The update on table coordinates; `next_key` is `None` when the next state is
-    /// terminal.
+    /// The update of one step by the agent's schedule, at learning rate `alpha`.
+    #[inline]
+    pub(crate) fn learn(&mut self, step: &TableStep, alpha: f64) -> f32 {
+        match self.schedule {
+            Schedule::Spec => self.update_key_at(step.key, step.column, step.reward, step.next, alpha),
+            Schedule::PaperCode => self.update_as_coded(step, alpha),
+        }
+    }
+
+    /// The authors' update ([`Schedule::PaperCode`]): the entry is marked seen, then moved
+    /// towards `r + gamma M`, `M` the best seen value of the next state (0 if none, or after
+    /// a Drop), or set to `(1 - alpha) Q + alpha r` at the step that ended the game.
+    fn update_as_coded(&mut self, step: &TableStep, alpha: f64) -> f32 {
+        let gamma = self.params.gamma;
+        self.table.mark_seen(step.key, step.column);
+        let q = f64::from(self.table.row(step.key)[step.column]);
+        let value = match step.next {
+            None => (1.0 - alpha) * q + alpha * step.reward,
+            Some(next) => {
+                let best = if step.drop {
+                    0.0
+                } else {
+                    self.table.seen_max(next).map_or(0.0, f64::from)
+                };
+                q + alpha * (step.reward + gamma * best - q)
+            }
+        };
+        let cell = &mut self.table.row_mut(step.key)[step.column];
+        *cell = value as f32;
+        *cell
+    }
+
+    /// The `spec` update on table coordinates at the agent's alpha; `next_key` is `None`
+    /// when the next state is terminal.
     #[inline]
     pub(crate) fn update_key(&mut self, key: u64, column: usize, reward: f64, next_key: Option<u64>) -> f32 {
-        let QParams { alpha, gamma, .. } = self.params;
+        self.update_key_at(key, column, reward, next_key, self.params.alpha)
+    }
+
+    /// The `spec` update at learning rate `alpha`.
+    #[inline]
+    fn update_key_at(&mut self, key: u64, column: usize, reward: f64, next_key: Option<u64>, alpha: f64) -> f32 {
+        let gamma = self.params.gamma;
         let future = next_key.map_or(0.0, |k| {
             f64::from(self.table.row(k).iter().copied().fold(f32::NEG_INFINITY, f32::max))
         });
@@ -363,6 +473,23 @@ impl QAgent {
     pub fn policy(&self, epsilon: f64) -> Result<QPolicy<'_>> {
         check_epsilon(epsilon)?;
         Ok(QPolicy { agent: self, epsilon })
+    }
+}
+
+/// The indices of the set bits of a column mask, in increasing order.
+#[derive(Clone, Copy)]
+struct Columns(u32);
+
+impl Iterator for Columns {
+    type Item = usize;
+
+    #[inline]
+    fn next(&mut self) -> Option<usize> {
+        (self.0 != 0).then(|| {
+            let c = self.0.trailing_zeros() as usize;
+            self.0 &= self.0 - 1;
+            c
+        })
     }
 }
 

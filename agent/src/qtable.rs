@@ -1,5 +1,11 @@
 //! The Q-table: one row of action values per key, dense where the keys can be indexed
 //! within a memory budget, a hash map of the rows met so far where not.
+//!
+//! A table may also remember which entries were ever written (*seen*): the authors'
+//! learner stored only the actions it had taken in a state and bootstrapped from the best
+//! of those ([`Schedule::PaperCode`](crate::schedule::Schedule::PaperCode)). A table made
+//! by [`QTable::new`] does not track them, and computes and stores exactly what it did
+//! before tracking existed; [`QTable::tracking_seen`] makes one that does.
 
 use std::collections::HashMap;
 
@@ -9,13 +15,25 @@ pub const DENSE_LIMIT: u64 = 1 << 24;
 
 /// Q-values, `columns` per key; rows never written read as `initial`.
 ///
-/// Two tables are equal when they hold the same values for every key, however stored.
+/// Two tables are equal when they hold the same values for every key, however stored, and
+/// the same seen entries (module docs).
 #[derive(Clone, Debug)]
 pub struct QTable {
     key_count: u64,
     columns: usize,
     initial: f32,
     store: Store,
+    /// The seen entries, when the table tracks them: per key, bit `c` for column `c`.
+    seen: Option<Seen>,
+}
+
+/// Which entries were ever written, laid out like the values.
+#[derive(Clone, Debug, PartialEq, Eq)]
+enum Seen {
+    /// Entry `k`: the seen columns of key `k`.
+    Dense(Vec<u32>),
+    /// The keys with a seen column.
+    Sparse(HashMap<u64, u32>),
 }
 
 #[derive(Clone, Debug)]
@@ -46,6 +64,86 @@ impl QTable {
             columns,
             initial,
             store,
+            seen: None,
+        }
+    }
+
+    /// A table like [`QTable::new`]'s that also remembers which entries were ever written
+    /// (at most 32 columns, as every world has).
+    pub fn tracking_seen(key_count: u64, columns: usize, initial: f32) -> QTable {
+        let mut table = QTable::new(key_count, columns, initial);
+        table.track_seen();
+        table
+    }
+
+    /// From now on, remembers which entries are written (none is seen yet); nothing for a
+    /// table that does already.
+    pub(crate) fn track_seen(&mut self) {
+        debug_assert!(self.columns <= 32);
+        if self.seen.is_none() {
+            self.seen = Some(match self.store {
+                Store::Dense(_) => Seen::Dense(vec![0; self.key_count as usize]),
+                Store::Sparse { .. } => Seen::Sparse(HashMap::new()),
+            });
+        }
+    }
+
+    /// Whether the table remembers which entries were written.
+    pub fn tracks_seen(&self) -> bool {
+        self.seen.is_some()
+    }
+
+    /// The seen columns of `key` as bits (bit `c`: column `c`); 0 for a table that does not
+    /// track them.
+    #[inline]
+    pub fn seen_columns(&self, key: u64) -> u32 {
+        match &self.seen {
+            None => 0,
+            Some(Seen::Dense(bits)) => bits[key as usize],
+            Some(Seen::Sparse(map)) => map.get(&key).copied().unwrap_or(0),
+        }
+    }
+
+    /// Marks the entry `(key, column)` seen (nothing for a table that does not track them).
+    #[inline]
+    pub fn mark_seen(&mut self, key: u64, column: usize) {
+        match &mut self.seen {
+            None => {}
+            Some(Seen::Dense(bits)) => bits[key as usize] |= 1 << column,
+            Some(Seen::Sparse(map)) => *map.entry(key).or_insert(0) |= 1 << column,
+        }
+    }
+
+    /// The largest value among the seen entries of `key`, `None` if none is seen.
+    #[inline]
+    pub fn seen_max(&self, key: u64) -> Option<f32> {
+        let mut bits = self.seen_columns(key);
+        let row = self.row(key);
+        let mut best: Option<f32> = None;
+        while bits != 0 {
+            let c = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            best = Some(best.map_or(row[c], |b| b.max(row[c])));
+        }
+        best
+    }
+
+    /// The keys with a seen entry and their seen columns, by increasing key (what a model
+    /// file keeps); empty for a table that does not track them.
+    pub fn seen_entries(&self) -> Vec<(u64, u32)> {
+        match &self.seen {
+            None => Vec::new(),
+            Some(Seen::Dense(bits)) => bits
+                .iter()
+                .enumerate()
+                .filter(|&(_, &b)| b != 0)
+                .map(|(k, &b)| (k as u64, b))
+                .collect(),
+            Some(Seen::Sparse(map)) => {
+                let mut out: Vec<(u64, u32)> = map.iter().filter(|&(_, &b)| b != 0).map(|(&k, &b)| (k, b)).collect();
+                out.sort_unstable_by_key(|&(k, _)| k);
+                out
+            }
         }
     }
 
@@ -59,6 +157,7 @@ impl QTable {
             columns,
             initial,
             store: Store::Dense(values),
+            seen: None,
         }
     }
 
@@ -143,5 +242,43 @@ impl PartialEq for QTable {
                 (Store::Dense(a), Store::Dense(b)) => a == b,
                 _ => self.written_rows() == other.written_rows(),
             }
+            && self.tracks_seen() == other.tracks_seen()
+            && self.seen_entries() == other.seen_entries()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn seen_entries_are_remembered_dense_and_sparse() {
+        // 100 keys x 8 columns is dense; 2^40 keys is not.
+        for keys in [100, 1 << 40] {
+            let mut t = QTable::tracking_seen(keys, 8, 0.0);
+            assert!(t.tracks_seen());
+            assert_eq!(t.seen_max(7), None);
+            t.row_mut(7)[3] = -2.0;
+            t.mark_seen(7, 3);
+            assert_eq!(t.seen_max(7), Some(-2.0), "the unseen zeros do not count");
+            t.mark_seen(7, 5);
+            assert_eq!(t.seen_max(7), Some(0.0));
+            t.mark_seen(2, 0);
+            assert_eq!(t.seen_entries(), vec![(2, 1), (7, (1 << 3) | (1 << 5))]);
+            assert_eq!(t.seen_columns(7), 0b10_1000);
+            let mut other = QTable::tracking_seen(keys, 8, 0.0);
+            other.row_mut(7)[3] = -2.0;
+            assert_ne!(t, other, "equal values, other seen entries");
+        }
+    }
+
+    #[test]
+    fn a_table_that_does_not_track_sees_nothing() {
+        let mut t = QTable::new(10, 6, 0.0);
+        t.mark_seen(3, 2);
+        assert!(!t.tracks_seen());
+        assert_eq!((t.seen_columns(3), t.seen_max(3)), (0, None));
+        assert!(t.seen_entries().is_empty());
+        assert_ne!(t, QTable::tracking_seen(10, 6, 0.0));
     }
 }

@@ -4,7 +4,8 @@
 //! maps the world's actions to table columns and back. The paper's three ([`Raw`],
 //! [`Pairwise`], [`Chasing`]) lose or keep different parts of the state; ours ([`Role`])
 //! keeps all of it but names blocks by their place in the goal, so every goal is the same
-//! problem.
+//! problem. [`ChasingCode`] is representation 3 as the authors coded it: their state tuple
+//! ([`sim::CodedState`]), one row per tuple.
 //!
 //! Keys are mixed-radix numbers of the representation's fields, so a key count is a product
 //! of field sizes; a representation whose key count would not fit in a `u64` cannot be
@@ -13,7 +14,8 @@
 use std::fmt;
 
 use serde::{Deserialize, Serialize};
-use sim::{Action, BlockId, Goal, Grid, MAX_BLOCKS, MIN_BLOCKS, State};
+use sim::coded_state::{CodedState, Distance, Horizontal, Vertical};
+use sim::{Action, ActionMask, BlockId, Goal, Grid, MAX_BLOCKS, MIN_BLOCKS, State};
 
 use crate::error::{AgentError, Result};
 
@@ -27,13 +29,21 @@ pub enum ReprKind {
     Pairwise,
     /// See [`Chasing`].
     Chasing,
+    /// See [`ChasingCode`].
+    ChasingCode,
     /// See [`Role`].
     Role,
 }
 
 impl ReprKind {
-    /// All four, in the order the SPEC lists them.
-    pub const ALL: [ReprKind; 4] = [ReprKind::Raw, ReprKind::Pairwise, ReprKind::Chasing, ReprKind::Role];
+    /// All five: the SPEC's four in its order, `chasing-code` after `chasing`.
+    pub const ALL: [ReprKind; 5] = [
+        ReprKind::Raw,
+        ReprKind::Pairwise,
+        ReprKind::Chasing,
+        ReprKind::ChasingCode,
+        ReprKind::Role,
+    ];
 
     /// The name it is chosen by on the command line and written under in model files.
     pub fn name(self) -> &'static str {
@@ -41,6 +51,7 @@ impl ReprKind {
             ReprKind::Raw => "raw",
             ReprKind::Pairwise => "pairwise",
             ReprKind::Chasing => "chasing",
+            ReprKind::ChasingCode => "chasing-code",
             ReprKind::Role => "role",
         }
     }
@@ -58,7 +69,7 @@ impl std::str::FromStr for ReprKind {
     fn from_str(text: &str) -> Result<ReprKind> {
         ReprKind::ALL.into_iter().find(|k| k.name() == text).ok_or_else(|| {
             AgentError::Config(format!(
-                "unknown representation {text:?}: choose raw, pairwise, chasing or role"
+                "unknown representation {text:?}: choose raw, pairwise, chasing, chasing-code or role"
             ))
         })
     }
@@ -365,6 +376,108 @@ impl Representation for Chasing {
     }
 }
 
+/// Representation 3 as the authors coded it (ORIGINAL.md, "State representation 3 as
+/// coded"): the key is the authors' state tuple [`CodedState`], `(d, D, (h, v, '-'), s,
+/// (lower, upper))`, and nothing else, so two states with equal tuples share a row and no
+/// goal is in the key. With nothing held the tuple is `((d of each goal pair), 0, ('-',
+/// '-', '-'), None, (None, None))`.
+///
+/// Every `d` is `625 (4 a^2 + b^2)` for a column difference `a` and an odd `b` (see
+/// [`sim::coded_state::pair_distance`]), so `d / 625` is an integer below
+/// `R = 4 (W - 1)^2 + (2H - 1)^2 + 1`, and `D / 625` below `(N - 1)(R - 1) + 1`. Keys `0..R^(N-1)` number
+/// the nothing-held tuples (each pair's `d / 625` a digit); the rest number the held ones
+/// by (held block, partner, whether the held block is the pair's lower one, `d / 625`,
+/// `D / 625`, heading). For 3 blocks on 7 x 7 that is about 21 million keys, most never
+/// met: the table keeps only the rows it meets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ChasingCode {
+    grid: Grid,
+    blocks: usize,
+    /// `R`: the values of `d / 625`.
+    distance_values: u64,
+    /// The values of `D / 625`.
+    total_values: u64,
+    /// `R^(N-1)`: the nothing-held keys, which come first.
+    nothing_held: u64,
+    key_count: u64,
+}
+
+/// `d / 625` and `D / 625`: every `d` is a multiple of this.
+const PAIR_DISTANCE_UNIT: u32 = 625;
+
+impl ChasingCode {
+    /// The representation of `blocks` blocks on `grid`.
+    pub fn new(grid: Grid, blocks: usize) -> Result<ChasingCode> {
+        let (w, h, n) = (grid.width() as u64, grid.height() as u64, blocks as u64);
+        let distance_values = 4 * (w - 1) * (w - 1) + (2 * h - 1) * (2 * h - 1) + 1;
+        let total_values = n.saturating_sub(1) * (distance_values - 1) + 1;
+        let nothing_held = (1..n).fold(KeySpace::new(), |s, _| s.field(distance_values));
+        let held = KeySpace::new()
+            .field(n)
+            .field(n.saturating_sub(1))
+            .field(2)
+            .field(distance_values)
+            .field(total_values)
+            .field(9);
+        let count = match (nothing_held.0, held.0) {
+            (Some(a), Some(b)) => KeySpace(a.checked_add(b)),
+            _ => KeySpace(None),
+        };
+        let key_count = count.count(ReprKind::ChasingCode, grid, blocks)?;
+        Ok(ChasingCode {
+            grid,
+            blocks,
+            distance_values,
+            total_values,
+            nothing_held: nothing_held.0.expect("below the key count"),
+            key_count,
+        })
+    }
+
+    /// The key of a tuple of this representation's world.
+    pub fn key_of(&self, tuple: &CodedState) -> u64 {
+        let unit = |d: u32| u64::from(d / PAIR_DISTANCE_UNIT);
+        match (&tuple.distance, tuple.held, tuple.pair) {
+            (Distance::Held(d), Some(s), Some((lower, upper))) => {
+                let partner = if s == lower { upper } else { lower };
+                // The partner's index among the other blocks.
+                let partner_slot = u64::from(partner.0) - u64::from(partner.0 > s.0);
+                let heading = match tuple.heading.horizontal {
+                    Horizontal::Left => 0,
+                    Horizontal::Right => 1,
+                    Horizontal::Level => 2,
+                } * 3
+                    + match tuple.heading.vertical {
+                        Vertical::Up => 0,
+                        Vertical::Down => 1,
+                        Vertical::Level => 2,
+                    };
+                let mut key = u64::from(s.0);
+                key = push(key, self.blocks as u64 - 1, partner_slot);
+                key = push(key, 2, u64::from(s == lower));
+                key = push(key, self.distance_values, unit(*d));
+                key = push(key, self.total_values, unit(tuple.total));
+                self.nothing_held + push(key, 9, heading)
+            }
+            (Distance::EachPair(list), ..) => list
+                .as_slice()
+                .iter()
+                .fold(0, |k, &d| push(k, self.distance_values, unit(d))),
+            _ => unreachable!("a held tuple has its distance and pair"),
+        }
+    }
+}
+
+impl Representation for ChasingCode {
+    fn key_count(&self) -> u64 {
+        self.key_count
+    }
+
+    fn key(&self, state: &State, goal: &Goal) -> u64 {
+        self.key_of(&CodedState::of(self.grid, goal, state))
+    }
+}
+
 /// Ours: every block's cell and the held block, with blocks named by their place in the
 /// goal (bottom, second, ...) instead of their id; a Pick column picks the block at a
 /// place. Every goal becomes the same problem (build `0, 1, ..., N-1` out of places), so
@@ -429,7 +542,7 @@ impl Representation for Role {
     }
 }
 
-/// Any of the four representations, chosen at run time, for a given grid and block count.
+/// Any of the representations, chosen at run time, for a given grid and block count.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Repr {
     /// See [`Raw`].
@@ -438,6 +551,8 @@ pub enum Repr {
     Pairwise(Pairwise),
     /// See [`Chasing`].
     Chasing(Chasing),
+    /// See [`ChasingCode`].
+    ChasingCode(ChasingCode),
     /// See [`Role`].
     Role(Role),
 }
@@ -450,6 +565,7 @@ impl Repr {
             ReprKind::Raw => Repr::Raw(Raw::new(grid, blocks)?),
             ReprKind::Pairwise => Repr::Pairwise(Pairwise::new(grid, blocks)?),
             ReprKind::Chasing => Repr::Chasing(Chasing::new(grid, blocks)?),
+            ReprKind::ChasingCode => Repr::ChasingCode(ChasingCode::new(grid, blocks)?),
             ReprKind::Role => Repr::Role(Role::new(grid, blocks)?),
         })
     }
@@ -460,7 +576,18 @@ impl Repr {
             Repr::Raw(_) => ReprKind::Raw,
             Repr::Pairwise(_) => ReprKind::Pairwise,
             Repr::Chasing(_) => ReprKind::Chasing,
+            Repr::ChasingCode(_) => ReprKind::ChasingCode,
             Repr::Role(_) => ReprKind::Role,
+        }
+    }
+
+    /// The table columns of the actions in `mask` under `goal`, as bits (bit `c`: column
+    /// `c`): the mask itself unless the representation renames blocks.
+    #[inline]
+    pub fn column_mask(&self, goal: &Goal, mask: ActionMask) -> u32 {
+        match self {
+            Repr::Role(r) => mask.iter().fold(0, |bits, a| bits | 1 << r.column(goal, a)),
+            _ => mask.bits(),
         }
     }
 }
@@ -471,6 +598,7 @@ impl Representation for Repr {
             Repr::Raw(r) => r.key_count(),
             Repr::Pairwise(r) => r.key_count(),
             Repr::Chasing(r) => r.key_count(),
+            Repr::ChasingCode(r) => r.key_count(),
             Repr::Role(r) => r.key_count(),
         }
     }
@@ -481,6 +609,7 @@ impl Representation for Repr {
             Repr::Raw(r) => r.key(state, goal),
             Repr::Pairwise(r) => r.key(state, goal),
             Repr::Chasing(r) => r.key(state, goal),
+            Repr::ChasingCode(r) => r.key(state, goal),
             Repr::Role(r) => r.key(state, goal),
         }
     }

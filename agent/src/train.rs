@@ -1,114 +1,40 @@
 //! Training a Q-learner headless: games against the world (physics by default), on a set
 //! of goals, fixed by a seed.
 //!
-//! Game `k` plays goal `goals[k % goals.len()]` from the start
-//! `reset(episode_seed(seed, k))`, and draws its exploration from
+//! Game `k` is reset with `episode_seed(seed, k)` and draws its exploration from
 //! [`policy_rng`]`(episode_seed(seed, k))`: the same config gives the same table, bit for
-//! bit. Nothing is printed: progress goes to an optional callback after every game.
+//! bit. Under the `spec` schedule it plays goal `goals[k % goals.len()]`; under
+//! `paper-code` its generator first draws the goal uniformly from `goals` (the
+//! [`schedule`](crate::schedule) module gives the rest of each schedule). Nothing is
+//! printed: progress goes to an optional callback after every game.
+//!
+//! A config names its world: the action protocol, the start rule and the reward, and the
+//! schedule's termination rule (a training game ends at the goal under `spec`, at a step
+//! reward above 70 under `paper-code`). [`TrainConfig::for_profile`] gives each profile's
+//! learner: the paper's learner in our world, or the paper's learner as its authors coded
+//! it.
 
 use std::collections::VecDeque;
-use std::fmt;
 
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
 use sim::seeding::episode_seed;
-use sim::{Action, Backend, BlockId, Env, EnvConfig, Goal, GoalSpec, Grid, RewardModel};
+use sim::{ActionProtocol, Backend, BlockId, Env, EnvConfig, Goal, GoalSpec, Grid, Profile, RewardModel, StartRule};
 
+use crate::assist::{Assist, OracleKind, Oscillation, OscillationWatch};
 use crate::error::{AgentError, Result};
 use crate::memory::ReplayMemory;
-use crate::qlearning::{QAgent, QParams};
-use crate::repr::ReprKind;
+use crate::profile::LearnerProfile;
+use crate::qlearning::{QAgent, QParams, TableStep};
+use crate::repr::{Repr, ReprKind};
 use crate::rollout::policy_rng;
+use crate::schedule::Schedule;
 
 /// Games the progress figures look back over.
 pub const RECENT_GAMES: usize = 100;
 
 /// The most sweeps of the final experience replay.
 pub const MAX_REPLAY_SWEEPS: u32 = 1000;
-
-/// When the oracle chooses the action during training (paper section VI-B2). The table
-/// learns from the executed action, whoever chose it.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "kebab-case")]
-pub enum Assist {
-    /// Never: the learner alone.
-    #[default]
-    None,
-    /// When the learner oscillates: the last six actions are one pair `a, b` (`a != b`)
-    /// three times in a row, the oracle chooses the next action.
-    Oscillation,
-    /// On oscillation as above, and besides at every step with probability `p`.
-    OscillationOrChance {
-        /// The probability of handing a step to the oracle (paper: 0.1).
-        p: f64,
-    },
-}
-
-impl Assist {
-    /// An error unless `p` is a probability.
-    pub fn validate(&self) -> Result<()> {
-        match self {
-            Assist::OscillationOrChance { p } if !(0.0..=1.0).contains(p) => Err(AgentError::Config(format!(
-                "the oracle's probability {p} is not in [0, 1]"
-            ))),
-            _ => Ok(()),
-        }
-    }
-}
-
-impl fmt::Display for Assist {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Assist::None => f.write_str("none"),
-            Assist::Oscillation => f.write_str("oscillation"),
-            Assist::OscillationOrChance { p } => write!(f, "oscillation+{p}"),
-        }
-    }
-}
-
-impl std::str::FromStr for Assist {
-    type Err = AgentError;
-
-    /// Reads `none`, `oscillation`, or `oscillation+P` (e.g. `oscillation+0.1`).
-    fn from_str(text: &str) -> Result<Assist> {
-        let bad = || {
-            AgentError::Config(format!(
-                "unknown assistance {text:?}: choose none, oscillation or oscillation+P (e.g. oscillation+0.1)"
-            ))
-        };
-        let assist = match text {
-            "none" => Assist::None,
-            "oscillation" => Assist::Oscillation,
-            _ => {
-                let p = text.strip_prefix("oscillation+").ok_or_else(bad)?;
-                Assist::OscillationOrChance {
-                    p: p.parse().map_err(|_| bad())?,
-                }
-            }
-        };
-        assist.validate()?;
-        Ok(assist)
-    }
-}
-
-/// The last six actions of a game, to spot oscillation.
-#[derive(Clone, Copy, Debug, Default)]
-struct RecentActions {
-    actions: [Option<Action>; 6],
-}
-
-impl RecentActions {
-    fn push(&mut self, action: Action) {
-        self.actions.rotate_left(1);
-        self.actions[5] = Some(action);
-    }
-
-    /// Whether the last six are `a, b, a, b, a, b` with `a != b`.
-    fn oscillating(&self) -> bool {
-        let h = &self.actions;
-        h[0].is_some() && h[0] != h[1] && h[0] == h[2] && h[2] == h[4] && h[1] == h[3] && h[3] == h[5]
-    }
-}
 
 /// Everything that defines a training run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -152,6 +78,26 @@ pub struct TrainConfig {
     pub final_replay: bool,
     /// When the oracle chooses the action instead of the learner.
     pub assist: Assist,
+    /// The profile the config was made from; the fields below are its parts, each of which
+    /// may have been set otherwise (what a model file remembers).
+    #[serde(default)]
+    pub profile: Profile,
+    /// Which actions are legal in the training games.
+    #[serde(default)]
+    pub protocol: ActionProtocol,
+    /// How the training games' blocks are placed.
+    #[serde(default)]
+    pub start: StartRule,
+    /// How games are laid out and the table updated (the [`schedule`](crate::schedule)
+    /// module).
+    #[serde(default)]
+    pub schedule: Schedule,
+    /// Which oracle assists.
+    #[serde(default)]
+    pub oracle: OracleKind,
+    /// How oscillation is spotted for [`Assist::Oscillation`].
+    #[serde(default)]
+    pub oscillation: Oscillation,
 }
 
 impl TrainConfig {
@@ -174,6 +120,46 @@ impl TrainConfig {
             backward_replay: false,
             final_replay: false,
             assist: Assist::None,
+            profile: Profile::Spec,
+            protocol: ActionProtocol::Free,
+            start: StartRule::Uniform,
+            schedule: Schedule::Spec,
+            oracle: OracleKind::Astar,
+            oscillation: Oscillation::Actions,
+        }
+    }
+
+    /// The paper's learner as its authors coded it (ORIGINAL.md, "The learner"), in their
+    /// world: `chasing-code` representation, `paper-code` reward, the `paper` action
+    /// protocol and start rule, the `paper-code` schedule (games of up to 5000 steps, 1000
+    /// with two blocks, each on a goal drawn from `goals`, ended by a reward above 70),
+    /// alpha 1, gamma 0.1, epsilon 0.1, physics, 100 games (the most of the paper's Fig. 3
+    /// and E3), seed 1; assistance, when asked for, by the authors' oracle on their
+    /// oscillation test.
+    pub fn original(goals: Vec<Goal>) -> TrainConfig {
+        let blocks = goals.first().map_or(3, Goal::block_count);
+        let parts = LearnerProfile::of(Profile::Original);
+        TrainConfig {
+            repr: parts.repr,
+            reward: parts.reward,
+            games: 100,
+            horizon: parts.schedule.game_steps(blocks),
+            profile: parts.profile,
+            protocol: parts.profile.protocol(),
+            start: parts.profile.start_rule(),
+            schedule: parts.schedule,
+            oracle: parts.oracle,
+            oscillation: parts.oscillation,
+            ..TrainConfig::paper(goals)
+        }
+    }
+
+    /// The paper's learner of `profile`: [`TrainConfig::paper`] in our world (`spec`),
+    /// [`TrainConfig::original`] in the authors' (`original`).
+    pub fn for_profile(profile: Profile, goals: Vec<Goal>) -> TrainConfig {
+        match profile {
+            Profile::Spec => TrainConfig::paper(goals),
+            Profile::Original => TrainConfig::original(goals),
         }
     }
 
@@ -205,16 +191,23 @@ impl TrainConfig {
     pub fn validate(&self) -> Result<()> {
         self.params.validate()?;
         self.assist.validate()?;
+        if self.schedule != Schedule::Spec && (self.backward_replay || self.final_replay) {
+            return Err(AgentError::Config(format!(
+                "backward and final replay belong to the spec schedule, not to {}",
+                self.schedule
+            )));
+        }
         if self.goals.is_empty() {
             return Err(AgentError::Config("no goals to train on".into()));
         }
         for goal in &self.goals {
             self.env_config(*goal).validate()?;
         }
-        QAgent::new(self.repr, self.grid, self.blocks, self.params).map(|_| ())
+        Repr::new(self.repr, self.grid, self.blocks).map(|_| ())
     }
 
-    /// The environment a game on `goal` is played in.
+    /// The environment a training game on `goal` is played in (its protocol, start rule,
+    /// reward, and the schedule's termination rule).
     pub fn env_config(&self, goal: Goal) -> EnvConfig {
         EnvConfig {
             grid: self.grid,
@@ -223,7 +216,20 @@ impl TrainConfig {
             horizon: self.horizon,
             reward: self.reward,
             backend: self.backend,
-            ..EnvConfig::default()
+            protocol: self.protocol,
+            start: self.start,
+            termination: self.schedule.training_termination(),
+        }
+    }
+
+    /// The environment the trained agent is tested in on `goal`: the training world (its
+    /// protocol, start rule, reward, backend), but games end at the goal, after at most
+    /// `horizon` steps (the paper's tests: 1000).
+    pub fn test_env_config(&self, goal: Goal, horizon: u32) -> EnvConfig {
+        EnvConfig {
+            horizon,
+            termination: sim::Termination::Goal,
+            ..self.env_config(goal)
         }
     }
 }
@@ -289,21 +295,22 @@ pub struct Trainer {
     /// Steps of the recent games, `None` for a game cut off.
     recent: VecDeque<Option<u32>>,
     /// The current game's transitions, for backward replay.
-    path: Vec<Transition>,
+    path: Vec<TableStep>,
     /// The oracle, when it assists.
-    oracle: Option<oracle::Oracle>,
+    oracle: Option<AssistingOracle>,
+    /// Oscillation seen in the current game.
+    watch: OscillationWatch,
     /// The last transition from every state-action, when the run ends with a replay.
     memory: Option<ReplayMemory>,
 }
 
-/// One step of a game, in table coordinates.
+/// The oracle that assists, as [`TrainConfig::oracle`] names it.
 #[derive(Clone, Copy, Debug)]
-struct Transition {
-    key: u64,
-    column: usize,
-    reward: f64,
-    /// `None` when the step reached the goal.
-    next: Option<u64>,
+enum AssistingOracle {
+    /// Ours, planning under the training protocol.
+    Astar(oracle::Oracle),
+    /// The authors' walker.
+    Paper(oracle::CentroidWalker),
 }
 
 impl Trainer {
@@ -311,7 +318,7 @@ impl Trainer {
     /// cannot train.
     pub fn new(config: TrainConfig) -> Result<Trainer> {
         config.validate()?;
-        let agent = QAgent::new(config.repr, config.grid, config.blocks, config.params)?;
+        let agent = QAgent::with_schedule(config.repr, config.grid, config.blocks, config.params, config.schedule)?;
         let memory = config
             .final_replay
             .then(|| ReplayMemory::new(agent.table().key_count(), agent.table().columns()));
@@ -326,7 +333,13 @@ impl Trainer {
             report: TrainReport::default(),
             recent: VecDeque::with_capacity(RECENT_GAMES),
             path: Vec::new(),
-            oracle: (config.assist != Assist::None).then(|| oracle::Oracle::new(config.grid)),
+            oracle: (config.assist != Assist::None).then(|| match config.oracle {
+                OracleKind::Astar => {
+                    AssistingOracle::Astar(oracle::Oracle::new(config.grid).with_protocol(config.protocol))
+                }
+                OracleKind::Paper => AssistingOracle::Paper(oracle::CentroidWalker::new(config.grid)),
+            }),
+            watch: OscillationWatch::new(config.oscillation),
             memory,
             config,
         })
@@ -375,13 +388,21 @@ impl Trainer {
         }
     }
 
-    /// Plays the next game and learns from every step; its steps if it reached the goal.
+    /// Plays the next game and learns from every step; the step at which the goal first
+    /// held, if it did.
     fn play_game(&mut self) -> Result<Option<u32>> {
         let k = self.report.games;
-        let env = &mut self.envs[(k % self.config.goals.len() as u64) as usize];
-        let agent = &mut self.agent;
         let seed = episode_seed(self.config.seed, k);
         let mut rng = policy_rng(seed);
+        let schedule = self.config.schedule;
+        let goals = self.config.goals.len();
+        let index = if schedule.draws_goal_per_game() {
+            rng.random_range(0..goals)
+        } else {
+            (k % goals as u64) as usize
+        };
+        let env = &mut self.envs[index];
+        let agent = &mut self.agent;
         let mut obs = env.reset(seed);
         if self.config.exploring_starts {
             let slot = rng.random_range(0..=self.config.blocks);
@@ -390,51 +411,69 @@ impl Trainer {
                 obs = env.reset_to(held, obs.goal)?;
             }
         }
-        let epsilon = agent.params().epsilon;
+        let QParams { alpha, epsilon, .. } = *agent.params();
         let mut key = agent.key_unchecked(&obs);
-        let mut reached = false;
+        let mut reached = None;
         let replay = self.config.backward_replay;
         let memory = &mut self.memory;
         let path = &mut self.path;
         path.clear();
-        let mut recent = RecentActions::default();
+        let watch = &mut self.watch;
+        watch.clear();
+        if let Some(AssistingOracle::Paper(walker)) = &mut self.oracle {
+            walker.begin_episode();
+        }
         let mut assisted = 0;
         while !env.is_over() {
             let by_oracle = match self.config.assist {
                 Assist::None => false,
-                Assist::Oscillation => recent.oscillating(),
-                Assist::OscillationOrChance { p } => recent.oscillating() || rng.random_bool(p),
+                Assist::Oscillation => {
+                    watch.see_state(&obs);
+                    watch.oscillating()
+                }
+                Assist::OscillationOrChance { p } => {
+                    watch.see_state(&obs);
+                    watch.oscillating() || rng.random_bool(p)
+                }
             };
-            let (action, column) = match &self.oracle {
+            let (action, column) = match &mut self.oracle {
                 Some(oracle) if by_oracle => {
                     assisted += 1;
-                    let action = oracle.next_action(&obs.state, &obs.goal)?;
+                    let action = match oracle {
+                        AssistingOracle::Astar(o) => o.next_action(&obs.state, &obs.goal)?,
+                        AssistingOracle::Paper(w) => w.next_action(&obs.state, &obs.goal, &mut rng)?,
+                    };
                     (action, agent.column(&obs.goal, action)?)
                 }
                 _ => {
-                    let column = agent.choose_column(key, epsilon, &mut rng);
+                    let column = agent.choose_column(key, agent.legal_columns(&obs), epsilon, &mut rng);
                     (agent.action_of_column(&obs.goal, column), column)
                 }
             };
-            recent.push(action);
+            watch.see_action(action);
+            let step_number = env.steps() + 1;
             let step = env.step(action)?;
             let next_key = agent.key_unchecked(&step.observation);
             let next = (!step.terminated).then_some(next_key);
-            agent.update_key(key, column, step.reward, next);
+            let t = TableStep {
+                key,
+                column,
+                reward: step.reward,
+                next,
+                drop: action == sim::Action::Drop,
+            };
+            agent.learn(&t, schedule.alpha_at(alpha, epsilon, step_number));
             if let Some(m) = memory.as_mut() {
                 m.remember(key, column, step.reward, next);
             }
             if replay {
-                path.push(Transition {
-                    key,
-                    column,
-                    reward: step.reward,
-                    next,
-                });
+                path.push(t);
             }
             key = next_key;
             obs = step.observation;
-            reached = step.terminated;
+            if reached.is_none() && step.info.pairs_in_place + 1 == self.config.blocks {
+                reached = Some(step_number);
+            }
         }
         for t in path.iter().rev() {
             agent.update_key(t.key, t.column, t.reward, t.next);
@@ -442,9 +481,9 @@ impl Trainer {
         let steps = env.steps();
         self.report.games += 1;
         self.report.steps += u64::from(steps);
-        self.report.successes += u64::from(reached);
+        self.report.successes += u64::from(reached.is_some());
         self.report.assisted_steps += assisted;
-        Ok(reached.then_some(steps))
+        Ok(reached)
     }
 
     /// Ends the run: the final replay if the config asks for it, then the agent, with the
@@ -511,29 +550,6 @@ pub fn train(config: &TrainConfig, progress: Option<&mut dyn FnMut(&Progress)>) 
 mod tests {
     use super::*;
 
-    fn recent(actions: &[Action]) -> RecentActions {
-        let mut r = RecentActions::default();
-        for &a in actions {
-            r.push(a);
-        }
-        r
-    }
-
-    #[test]
-    fn oscillation_is_one_pair_three_times_in_a_row() {
-        let (u, d, p, x) = (Action::Up, Action::Down, Action::Pick(BlockId(1)), Action::Drop);
-        assert!(recent(&[u, d, u, d, u, d]).oscillating());
-        assert!(recent(&[x, x, p, x, p, x, p, x]).oscillating());
-        assert!(!recent(&[u, d, u, d, u]).oscillating(), "only two and a half pairs");
-        assert!(!recent(&[u, d, u, d, u, u]).oscillating());
-        assert!(
-            !recent(&[u, u, u, u, u, u]).oscillating(),
-            "six moves one way are progress"
-        );
-        assert!(recent(&[x, u, d, u, d, u, d, u]).oscillating(), "d, u three times");
-        assert!(!recent(&[u, d, u, d, u, d, x]).oscillating(), "the window moved on");
-    }
-
     #[test]
     fn the_final_replay_leaves_every_remembered_value_consistent() {
         // After the replay, with alpha 1 every remembered transition satisfies the update's
@@ -556,20 +572,5 @@ mod tests {
             checked += 1;
         });
         assert!(checked > 10_000, "{checked}");
-    }
-
-    #[test]
-    fn assistance_reads_and_writes_its_names() {
-        for text in ["none", "oscillation", "oscillation+0.1", "oscillation+1"] {
-            let a: Assist = text.parse().unwrap();
-            assert_eq!(a.to_string().parse::<Assist>().unwrap(), a);
-        }
-        assert_eq!(
-            "oscillation+0.1".parse::<Assist>().unwrap(),
-            Assist::OscillationOrChance { p: 0.1 }
-        );
-        for bad in ["always", "oscillation+", "oscillation+x", "oscillation+1.5"] {
-            assert!(bad.parse::<Assist>().is_err(), "{bad}");
-        }
     }
 }

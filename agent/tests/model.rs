@@ -166,7 +166,7 @@ fn values_beyond_the_tables_floats_are_refused_up_front() {
     );
     // correct --margin 1e39.
     let rule = CorrectionRule {
-        margin: 1e39,
+        margin: Some(1e39),
         ..CorrectionRule::default()
     };
     assert!(rule.validate().unwrap_err().to_string().contains("32-bit floats"));

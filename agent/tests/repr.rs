@@ -184,5 +184,92 @@ fn representation_names_parse() {
         assert_eq!(k.name().parse::<ReprKind>().unwrap(), k);
     }
     let err = "roles".parse::<ReprKind>().unwrap_err();
-    assert!(err.to_string().contains("choose raw, pairwise, chasing or role"));
+    assert!(
+        err.to_string()
+            .contains("choose raw, pairwise, chasing, chasing-code or role")
+    );
+}
+
+/// The `chasing-code` key of a tuple, by the layout the representation documents, for 3
+/// blocks on 7 x 7: `R = 4 * 6^2 + 13^2 + 1 = 314` values of `d / 625`, `2 * 313 + 1 = 627`
+/// of `D / 625`, the `314^2` nothing-held keys first.
+fn held_key(held: u64, partner_slot: u64, held_is_lower: bool, d: u64, total: u64, heading: u64) -> u64 {
+    314 * 314 + (((((held * 2 + partner_slot) * 2 + u64::from(held_is_lower)) * 314 + d) * 627 + total) * 9 + heading)
+}
+
+#[test]
+fn chasing_code_keys_of_hand_computed_states() {
+    use sim::coded_state::pair_distance;
+    let grid = Grid::default();
+    let repr = Repr::new(ReprKind::ChasingCode, grid, 3).unwrap();
+    assert_eq!(repr.key_count(), 314 * 314 + 3 * 2 * 2 * 314 * 627 * 9);
+    let goal = Goal::from_indices(&[0, 1, 2]).unwrap();
+    let at = |x, y| Cell::new(x, y);
+    // Block 0 held at (3, 2), its pair (0, 1); block 2 far at (0, 6): d(1, 2) from block 1's
+    // cell to (0, 6).
+    let key = |one: Cell| {
+        let s = State::new(&[at(3, 2), one, at(0, 6)], Some(BlockId(0))).unwrap();
+        (
+            pair_distance(grid, at(3, 2), one),
+            pair_distance(grid, one, at(0, 6)),
+            repr.key(&s, &goal),
+        )
+    };
+    // Block 1 stacked on block 0: d = 625 (1 unit), straight above (heading '-', 'u': 2 * 3 + 0).
+    let (d, d12, k) = key(at(3, 3));
+    assert_eq!(d, 625);
+    assert_eq!(k, held_key(0, 0, true, 1, u64::from((d + d12) / 625), 2 * 3));
+    // Beside it: 3125 (5 units), to the right ('r', '-': 1 * 3 + 2).
+    let (d, d12, k) = key(at(4, 2));
+    assert_eq!(d, 3125);
+    assert_eq!(k, held_key(0, 0, true, 5, u64::from((d + d12) / 625), 3 + 2));
+    // Directly below it: 5625 (9 units), below ('-', 'd': 2 * 3 + 1).
+    let (d, d12, k) = key(at(3, 1));
+    assert_eq!(d, 5625);
+    assert_eq!(k, held_key(0, 0, true, 9, u64::from((d + d12) / 625), 2 * 3 + 1));
+    // Nothing held: each goal pair's d, bottom pair first, as base-314 digits.
+    let s = State::new(&[at(3, 2), at(3, 3), at(4, 3)], None).unwrap();
+    assert_eq!(repr.key(&s, &goal), 314 + 5);
+    // The top block held pairs with the block below it: block 2 held, pair (1, 2), block 2
+    // the upper one; partner 1 is the second of the other blocks (0, 1), to its left ('l',
+    // '-': 0 * 3 + 2).
+    let s = State::new(&[at(3, 2), at(3, 3), at(4, 3)], Some(BlockId(2))).unwrap();
+    assert_eq!(repr.key(&s, &goal), held_key(2, 1, false, 5, 1 + 5, 2));
+}
+
+#[test]
+fn chasing_code_shares_a_row_between_equal_tuples_and_names_no_goal() {
+    let grid = Grid::default();
+    let repr = Repr::new(ReprKind::ChasingCode, grid, 3).unwrap();
+    // The same configuration one column to the right: the same tuple, the same row.
+    let s = State::new(&[Cell::new(1, 1), Cell::new(2, 3), Cell::new(4, 0)], Some(BlockId(1))).unwrap();
+    let moved = State::new(&[Cell::new(2, 1), Cell::new(3, 3), Cell::new(5, 0)], Some(BlockId(1))).unwrap();
+    let goal = Goal::from_indices(&[2, 1, 0]).unwrap();
+    assert_eq!(repr.key(&s, &goal), repr.key(&moved, &goal));
+    // Another goal under which the tuple is the same: the same row. Goals 0,1,2 and 1,2,0
+    // both pair block 1 with block 2 above it; with the column 2, 0, 1 bottom to top,
+    // d(0, 1) = d(2, 0) = 625, so D is equal too.
+    let a = Goal::from_indices(&[0, 1, 2]).unwrap();
+    let b = Goal::from_indices(&[1, 2, 0]).unwrap();
+    let s = State::new(&[Cell::new(2, 2), Cell::new(2, 3), Cell::new(2, 1)], Some(BlockId(1))).unwrap();
+    let (ca, cb) = (sim::CodedState::of(grid, &a, &s), sim::CodedState::of(grid, &b, &s));
+    assert_eq!(ca, cb);
+    assert_eq!(repr.key(&s, &a), repr.key(&s, &b));
+    assert_ne!(a, b);
+}
+
+proptest! {
+    #[test]
+    fn chasing_code_keys_are_equal_exactly_when_the_tuples_are(
+        n in 2usize..5, w in 2usize..8, h in 4usize..8,
+        pa in prop::collection::vec(0usize..1000, 4), ha in 0usize..5, ga in 0usize..24,
+        pb in prop::collection::vec(0usize..1000, 4), hb in 0usize..5, gb in 0usize..24,
+    ) {
+        let grid = Grid::new(w, h).unwrap();
+        let repr = Repr::new(ReprKind::ChasingCode, grid, n).unwrap();
+        let (sa, goal_a) = (state_from(grid, n, &pa, ha), goal_from(n, ga));
+        let (sb, goal_b) = (state_from(grid, n, &pb, hb), goal_from(n, gb));
+        let (ta, tb) = (sim::CodedState::of(grid, &goal_a, &sa), sim::CodedState::of(grid, &goal_b, &sb));
+        prop_assert_eq!(ta == tb, repr.key(&sa, &goal_a) == repr.key(&sb, &goal_b), "{} / {}", ta, tb);
+    }
 }

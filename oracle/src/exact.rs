@@ -22,12 +22,22 @@
 //!
 //! # Actions searched
 //!
-//! Successors come from [`sim::World::act`] on a [`GridWorld`]. Only moves that move and
-//! picks of another block are searched: an action that changes nothing never shortens a
-//! plan, and a shortest plan never drops. Proof: a drop cannot be the last action (the
-//! goal does not depend on the held block, so it held one action earlier), and the next
-//! useful action after it is a pick, which reaches the same state with or without the
-//! drop; removing the drop gives a shorter plan.
+//! Successors come from [`sim::World::act`] on a [`GridWorld`], among the actions the
+//! solver's [`ActionProtocol`] allows ([`ExactSolver::with_protocol`]; `free` by default),
+//! so a plan is a shortest one *under that protocol*.
+//!
+//! - `free`: only moves that move and picks of another block are searched: an action that
+//!   changes nothing never shortens a plan, and a shortest plan never drops. Proof: a drop
+//!   cannot be the last action (the goal does not depend on the held block, so it held one
+//!   action earlier), and the next useful action after it is a pick, which reaches the
+//!   same state with or without the drop; removing the drop gives a shorter plan.
+//! - `paper` (nothing held: only picks; holding: only the moves and Drop): every pick with
+//!   nothing held, and, holding, the moves that move and Drop. Changing blocks costs a
+//!   Drop and a Pick.
+//!
+//! The heuristic stays admissible and consistent under `paper`: a plan legal under `paper`
+//! is a plan under `free` too (the same actions do the same there), so it is no shorter
+//! than the `free` optimum the heuristic bounds; and a Drop lowers no `h_P`.
 //!
 //! # How far it scales
 //!
@@ -50,7 +60,7 @@
 use std::cell::Cell as Counter;
 
 use pathfinding::directed::astar::astar;
-use sim::{Action, Effect, Goal, Grid, GridWorld, State, World};
+use sim::{Action, ActionProtocol, Effect, Goal, Grid, GridWorld, State, World};
 
 use crate::error::{OracleError, Result};
 use crate::placement::{self, check_problem};
@@ -86,6 +96,7 @@ pub struct SearchStats {
 pub struct ExactSolver {
     grid: Grid,
     budget: usize,
+    protocol: ActionProtocol,
 }
 
 impl ExactSolver {
@@ -94,7 +105,20 @@ impl ExactSolver {
         Self {
             grid,
             budget: DEFAULT_NODE_BUDGET,
+            protocol: ActionProtocol::Free,
         }
+    }
+
+    /// This solver planning under `protocol`: its plans take only actions the protocol
+    /// allows, and are shortest among such plans (module docs).
+    pub fn with_protocol(mut self, protocol: ActionProtocol) -> Self {
+        self.protocol = protocol;
+        self
+    }
+
+    /// The action protocol its plans obey.
+    pub fn protocol(&self) -> ActionProtocol {
+        self.protocol
     }
 
     /// This solver with a budget of `states`: the most states one search may store before
@@ -133,7 +157,7 @@ impl ExactSolver {
     /// A shortest plan and what the search did to find it.
     pub fn solve_with_stats(&self, state: &State, goal: &Goal) -> Result<(Plan, SearchStats)> {
         check_problem(self.grid, state, goal)?;
-        let grid = self.grid;
+        let (grid, protocol) = (self.grid, self.protocol);
         let expanded = Counter::new(0usize);
         let generated = Counter::new(0usize);
         let over_budget = || generated.get() > self.budget;
@@ -145,7 +169,7 @@ impl ExactSolver {
                     return Vec::new();
                 }
                 expanded.set(expanded.get() + 1);
-                let next = successors(grid, s);
+                let next = successors(grid, protocol, s);
                 generated.set(generated.get() + next.len());
                 next.into_iter().map(|(_, t)| (t, 1u32)).collect()
             },
@@ -173,7 +197,7 @@ impl ExactSolver {
         let actions = path
             .windows(2)
             .map(|w| {
-                successors(grid, &w[0])
+                successors(grid, protocol, &w[0])
                     .into_iter()
                     .find(|&(_, t)| t == w[1])
                     .map(|(a, _)| a)
@@ -192,23 +216,36 @@ impl Planner for ExactSolver {
     fn plan(&self, state: &State, goal: &Goal) -> Result<Plan> {
         self.solve(state, goal)
     }
+
+    fn protocol(&self) -> ActionProtocol {
+        self.protocol
+    }
+
+    fn with_protocol(self, protocol: ActionProtocol) -> Self {
+        ExactSolver::with_protocol(self, protocol)
+    }
 }
 
-/// The searched successors of `state`: moves of the held block that move it, and picks of
-/// every other block, each with the action that leads there.
-fn successors(grid: Grid, state: &State) -> Vec<(Action, State)> {
+/// The searched successors of `state` under `protocol` (module docs), each with the action
+/// that leads there: under `free`, moves of the held block that move it and picks of every
+/// other block; under `paper`, those of them the protocol allows, and Drop.
+fn successors(grid: Grid, protocol: ActionProtocol, state: &State) -> Vec<(Action, State)> {
     let world = GridWorld::new(grid, *state).expect("states reached by act fit the grid");
     let held = state.held_block();
     let moves = [Action::Up, Action::Down, Action::Left, Action::Right]
         .into_iter()
         .filter(|_| held.is_some());
     let picks = state.blocks().filter(|&b| Some(b) != held).map(Action::Pick);
+    let drop = (protocol == ActionProtocol::Paper && held.is_some()).then_some(Action::Drop);
+    let legal = protocol.legal_actions(state);
     moves
         .chain(picks)
+        .chain(drop)
+        .filter(|&a| legal.contains(a))
         .filter_map(|a| {
             let mut w = world;
             match w.act(a) {
-                Ok(Effect::Moved | Effect::Picked) => Some((a, *w.state_ref())),
+                Ok(Effect::Moved | Effect::Picked | Effect::Dropped) => Some((a, *w.state_ref())),
                 _ => None,
             }
         })

@@ -6,6 +6,15 @@
 //!   hand control to it mid-episode ([`Oracle::next_action`]).
 //! - [`ExactSolver`]: A* over the joint state with an admissible, consistent heuristic; its
 //!   plans are provably shortest, the yardstick for every "steps to goal" figure.
+//! - [`CentroidWalker`]: the paper's oracle as its authors coded it, a greedy walker
+//!   towards a stack laid around the blocks' centroid, with a random block when nothing is
+//!   held. It plans nothing and can get stuck; Table I of the paper assisted its learner
+//!   with it.
+//!
+//! Both planners plan under an action protocol ([`Planner::protocol`]; `free` unless
+//! [`ExactSolver::with_protocol`] / [`Oracle::with_protocol`] say otherwise): under `paper`
+//! their plans change blocks by a Drop and a Pick, and the exact solver's are the shortest
+//! such plans.
 //!
 //! How far each goes: the oracle plans 3 blocks in a few microseconds and 8 in tens, from
 //! any state; it is never shorter than the exact plan and is within a fraction of a percent
@@ -50,6 +59,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+pub mod centroid_walker;
 pub mod error;
 pub mod exact;
 pub mod gap;
@@ -58,7 +68,8 @@ mod placement;
 pub mod plan;
 mod route;
 
+pub use centroid_walker::{CentroidWalker, SweepOrder};
 pub use error::{OracleError, Result};
 pub use exact::{DEFAULT_NODE_BUDGET, ExactSolver, SearchStats};
 pub use oracle::{FALLBACK_NODE_BUDGET, Oracle};
-pub use plan::{Plan, Planner};
+pub use plan::{Plan, Planner, legalize};

@@ -47,16 +47,24 @@
 //! [`Oracle::next_action`] from any state reaches the goal in at most `plan(..).len()`
 //! steps, wherever control is handed over.
 //!
+//! # Under the `paper` action protocol
+//!
+//! [`Oracle::with_protocol`] makes its plans legal under a protocol: each rollout is made
+//! legal ([`legalize`]: under `paper` a Drop goes before each Pick taken while a block is
+//! held), and the shortest *legal* plan is kept. Rollouts never move with nothing held or
+//! pick the block they hold, so that is the only change; the tests replay the plans in an
+//! environment that refuses illegal actions.
+//!
 //! If the policy is stuck at every placement (it never is with 2 or 3 blocks on 7 x 7,
 //! which the tests check exhaustively), the oracle falls back on the exact solver with a
 //! small budget, and reports [`OracleError::OracleStuck`] if that runs out too.
 
-use sim::{Action, BlockId, Goal, Grid, GridWorld, State, World};
+use sim::{Action, ActionProtocol, BlockId, Goal, Grid, GridWorld, State, World};
 
 use crate::error::{OracleError, Result};
 use crate::exact::ExactSolver;
 use crate::placement::{Placement, check_problem};
-use crate::plan::{Plan, Planner};
+use crate::plan::{Plan, Planner, legalize};
 use crate::route;
 
 /// The budget of the exact search the oracle falls back on when its routing is stuck.
@@ -80,6 +88,7 @@ pub const FALLBACK_NODE_BUDGET: usize = 200_000;
 pub struct Oracle {
     grid: Grid,
     fallback: ExactSolver,
+    protocol: ActionProtocol,
 }
 
 impl Oracle {
@@ -88,7 +97,22 @@ impl Oracle {
         Self {
             grid,
             fallback: ExactSolver::new(grid).with_node_budget(FALLBACK_NODE_BUDGET),
+            protocol: ActionProtocol::Free,
         }
+    }
+
+    /// This oracle with plans legal under `protocol` (module docs).
+    pub fn with_protocol(self, protocol: ActionProtocol) -> Self {
+        Self {
+            fallback: self.fallback.with_protocol(protocol),
+            protocol,
+            ..self
+        }
+    }
+
+    /// The action protocol its plans obey.
+    pub fn protocol(&self) -> ActionProtocol {
+        self.protocol
     }
 
     /// The grid it plans on.
@@ -135,6 +159,7 @@ impl Oracle {
                     break;
                 }
                 if let Some(actions) = rollout(world, goal, placement, order) {
+                    let actions = legalize(&actions, state.held_block(), self.protocol);
                     if best.as_ref().is_none_or(|b| actions.len() < b.len()) {
                         best = Some(actions);
                     }
@@ -152,6 +177,14 @@ impl Planner for Oracle {
 
     fn plan(&self, state: &State, goal: &Goal) -> Result<Plan> {
         Oracle::plan(self, state, goal)
+    }
+
+    fn protocol(&self) -> ActionProtocol {
+        self.protocol
+    }
+
+    fn with_protocol(self, protocol: ActionProtocol) -> Self {
+        Oracle::with_protocol(self, protocol)
     }
 }
 

@@ -10,8 +10,9 @@ use files::{OutputPath, refuse_same_file};
 use sim::Goal;
 
 use super::demo::LearningArgs;
+use super::demo::demonstration_goals;
+use super::profile::session_world;
 use super::stdout::line;
-use super::train::parse_goals;
 
 /// Arguments of `blockstack correct`.
 #[derive(Debug, Args)]
@@ -26,7 +27,8 @@ pub struct CorrectArgs {
     /// Demonstrations (episodes) to give.
     #[arg(long, default_value_t = 10)]
     pub demos: u64,
-    /// Goals to demonstrate on, in turn, separated by ':' (default: every goal).
+    /// Goals to demonstrate on, in turn, separated by ':' [default: every goal; under the
+    /// original profile the authors' four, 0,1,2:2,1,0:1,2,0:1,0,2]
     #[arg(long)]
     pub goals: Option<String>,
     /// Seed of the starts, the agent's proposals and the demonstrator's choices.
@@ -53,11 +55,14 @@ pub fn correct(args: CorrectArgs) -> Result<()> {
         refuse_same_file(record, &args.out).context("--record and --out")?;
     }
     let agent = QAgent::load(&args.model)?;
-    let goals = parse_goals(args.goals.as_deref(), agent.blocks())?;
     let profile = DemonstratorProfile::preset(args.demonstrator)?;
+    let l = &args.learning;
+    let (world, rules_of) = session_world(&agent, l.profile, l.play, l.reward.as_deref())?;
+    let goals = demonstration_goals(args.goals.as_deref(), agent.blocks(), rules_of)?;
     let config = CorrectionConfig {
-        rule: args.learning.rule()?,
-        epsilon: args.learning.epsilon,
+        rule: Some(l.rule(rules_of)?),
+        world: Some(world),
+        epsilon: l.epsilon,
         model: Some(args.model.display().to_string()),
         ..CorrectionConfig::new(profile.clone(), goals.clone(), args.demos, args.seed)
     };

@@ -2,12 +2,14 @@
 
 use std::path::{Path, PathBuf};
 
-use agent::correction::{CorrectionRule, CorrectionSession, DEFAULT_MARGIN, SessionWorld};
+use agent::correction::{CorrectionRule, CorrectionSession};
 use agent::{DemoWriter, QAgent};
 use anyhow::{Context, Result};
 use clap::Args;
 use files::{OutputPath, refuse_same_file};
+use sim::Profile;
 
+use super::profile::{PlayRulesArgs, ProfileArg, session_world};
 use super::stdout::line;
 use super::train::parse_goals;
 use crate::tui::{self, app::DemoApp, app::SavePolicy};
@@ -18,7 +20,8 @@ pub struct DemoArgs {
     /// The trained model to watch and correct.
     #[arg(long)]
     pub model: PathBuf,
-    /// Goals to play, in turn, separated by ':', e.g. 0,1,2:1,0,2 (default: every goal).
+    /// Goals to play, in turn, separated by ':', e.g. 0,1,2:1,0,2 [default: every goal; under
+    /// the original profile the authors' four, 0,1,2:2,1,0:1,2,0:1,0,2]
     #[arg(long)]
     pub goals: Option<String>,
     /// Append every step of the session to this JSON Lines file, as it happens.
@@ -38,6 +41,15 @@ pub struct DemoArgs {
     pub seed: u64,
 }
 
+/// The goals of a correction session: `text`'s, else every goal of `blocks` blocks, or the
+/// authors' demonstrated goals under the original profile (with their 3 blocks).
+pub fn demonstration_goals(text: Option<&str>, blocks: usize, profile: Profile) -> Result<Vec<sim::Goal>> {
+    match (text, profile) {
+        (None, Profile::Original) if blocks == 3 => Ok(agent::correction::demonstrated_goals()),
+        _ => parse_goals(text, blocks),
+    }
+}
+
 /// `agent.safetensors` -> `agent.corrected.safetensors`.
 pub fn default_out(model: &Path) -> PathBuf {
     let stem = model
@@ -46,27 +58,52 @@ pub fn default_out(model: &Path) -> PathBuf {
     model.with_file_name(format!("{stem}.corrected.{}", agent::model::MODEL_EXTENSION))
 }
 
-/// How the agent proposes and learns during a correction session: the flags `demo` and
-/// `correct` share.
+/// How the agent proposes and learns during a correction session, and in which world: the
+/// flags `demo` and `correct` share.
 #[derive(Debug, Args)]
 pub struct LearningArgs {
     /// After a correction, the demonstrated action is raised to at least the best other
-    /// action's value plus this margin.
-    #[arg(long, default_value_t = DEFAULT_MARGIN)]
-    pub margin: f64,
+    /// action's value plus this margin; none: the plain update alone, as the authors coded
+    /// it [default: the profile's: 0.8 under spec, none under original]
+    #[arg(long, value_parser = parse_margin)]
+    pub margin: Option<Margin>,
     /// Learn only from corrections, not from the agent's own steps.
     #[arg(long)]
     pub corrections_only: bool,
-    /// Probability that the agent proposes a random action (the paper's test policy: 0.1).
-    #[arg(long, default_value_t = 0.1)]
+    /// Probability that the agent proposes a random legal action (the paper's test policy:
+    /// 0.1).
+    #[arg(long, default_value_t = agent::profile::TEST_EPSILON)]
     pub epsilon: f64,
+    #[command(flatten)]
+    pub profile: ProfileArg,
+    #[command(flatten)]
+    pub play: PlayRulesArgs,
+    /// The reward the agent learns from: sparse, dense, paper, step-cost or paper-code
+    /// [default: the one it was trained with, or the profile's]
+    #[arg(long)]
+    pub reward: Option<String>,
+}
+
+/// A `--margin`: a number, or none.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Margin(pub Option<f64>);
+
+/// Reads `--margin`: `none`, or a number.
+fn parse_margin(text: &str) -> Result<Margin, String> {
+    if text == "none" {
+        return Ok(Margin(None));
+    }
+    text.parse()
+        .map(|m| Margin(Some(m)))
+        .map_err(|_| format!("{text:?} is neither a number nor none"))
 }
 
 impl LearningArgs {
-    /// The learning rule the flags describe.
-    pub fn rule(&self) -> Result<CorrectionRule> {
+    /// The learning rule the flags describe, on the rule of `profile`.
+    pub fn rule(&self, profile: Profile) -> Result<CorrectionRule> {
+        let base = CorrectionRule::for_profile(profile);
         let rule = CorrectionRule {
-            margin: self.margin,
+            margin: self.margin.map_or(base.margin, |m| m.0),
             learn_agent_steps: !self.corrections_only,
         };
         rule.validate()?;
@@ -88,12 +125,13 @@ pub fn demo(args: DemoArgs) -> Result<()> {
         refuse_same_file(record, &out).context("--record and --out")?;
     }
     let agent = QAgent::load(&args.model)?;
-    let goals = parse_goals(args.goals.as_deref(), agent.blocks())?;
     let record = record.as_ref().map(DemoWriter::append).transpose()?;
-    let world = SessionWorld::of(&agent);
+    let l = &args.learning;
+    let (world, profile) = session_world(&agent, l.profile, l.play, l.reward.as_deref())?;
+    let goals = demonstration_goals(args.goals.as_deref(), agent.blocks(), profile)?;
     let session = CorrectionSession::new(
         agent,
-        args.learning.rule()?,
+        l.rule(profile)?,
         world,
         goals,
         args.seed,

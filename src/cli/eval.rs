@@ -7,8 +7,9 @@ use agent::{EpisodeResult, QAgent, Summary};
 use anyhow::Result;
 use clap::Args;
 use serde::Serialize;
-use sim::{Backend, Env, EnvConfig, Goal, GoalSpec, RewardModel};
+use sim::{Backend, Env, EnvConfig, Goal, GoalSpec, Termination};
 
+use super::profile::{PlayRulesArgs, ProfileArg, Rules};
 use super::run::RunReport;
 use super::stdout::line;
 use super::train::parse_goals;
@@ -28,8 +29,8 @@ pub struct EvalArgs {
     /// Base seed: episode k of every goal starts from seed episode_seed(seed, k).
     #[arg(long, default_value_t = 2)]
     pub seed: u64,
-    /// Probability of a random action (the paper's test policy: 0.1; 0 is greedy).
-    #[arg(long, default_value_t = 0.1)]
+    /// Probability of a random legal action (the paper's test policy: 0.1; 0 is greedy).
+    #[arg(long, default_value_t = agent::profile::TEST_EPSILON)]
     pub epsilon: f64,
     /// Steps before an episode is cut off.
     #[arg(long, default_value_t = sim::DEFAULT_HORIZON)]
@@ -40,6 +41,10 @@ pub struct EvalArgs {
     /// Print the result as one JSON object.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub profile: ProfileArg,
+    #[command(flatten)]
+    pub play: PlayRulesArgs,
 }
 
 /// One goal's figures.
@@ -55,16 +60,14 @@ struct GoalReport {
     mean_steps_failures_as_horizon: f64,
 }
 
-/// The machine-readable result: the fields of `run --json`, per-goal figures, no timings.
+/// The machine-readable result: the fields of `run --json` (with
+/// `mean_steps_failures_as_horizon`), per-goal figures, no timings.
 #[derive(Debug, Serialize)]
 struct EvalReport {
     #[serde(flatten)]
     run: RunReport,
     #[serde(flatten)]
     optimality: Optimality,
-    /// Mean steps over every episode, a failure counted as the horizon (as the paper's
-    /// figures seem to be: 847.7 = 0.7 x 1000 + 0.3 x 492).
-    mean_steps_failures_as_horizon: f64,
     model: String,
     epsilon: f64,
     per_goal: Vec<GoalReport>,
@@ -75,25 +78,33 @@ pub fn eval(args: EvalArgs) -> Result<()> {
     let model = QAgent::load(&args.model)?;
     let goals = parse_goals(args.goals.as_deref(), model.blocks())?;
     let backend: Backend = args.backend.parse()?;
-    let reward = model.training().map_or_else(
-        || RewardModel::from_name("sparse").expect("a known model"),
-        |t| t.reward,
-    );
+    // The model's own world (protocol, start rule) unless the command line says otherwise;
+    // the reward only sums up in trajectories, so it is the model's training reward.
+    let rules = Rules::of_model(&model).played(args.profile, args.play, None)?;
+    let reward = match (args.profile.profile, model.training()) {
+        (None, Some(t)) => t.reward,
+        _ => rules.reward,
+    };
     let (mut all, mut all_optimal): (Vec<EpisodeResult>, Vec<u32>) = (Vec::new(), Vec::new());
     let mut per_goal = Vec::new();
+    let mut config = None;
     for goal in &goals {
-        let mut env = Env::new(EnvConfig {
+        let goal_config = EnvConfig {
             grid: model.grid(),
             blocks: model.blocks(),
             goal: GoalSpec::Fixed(*goal),
             horizon: args.horizon,
             reward,
             backend,
-            ..EnvConfig::default()
-        })?;
+            protocol: rules.protocol,
+            start: rules.start,
+            termination: Termination::Goal,
+        };
+        let mut env = Env::new(goal_config)?;
+        config = Some(goal_config);
         let mut policy = model.policy(args.epsilon)?;
         let results = agent::play(&mut env, &mut policy, args.episodes, args.seed, None)?;
-        let optimal = optimality::optimal_steps(model.grid(), &results)?;
+        let optimal = optimality::optimal_steps_under(model.grid(), rules.protocol, &results)?;
         per_goal.push(GoalReport {
             goal: goal.to_string(),
             summary: Summary::of(&results),
@@ -103,19 +114,17 @@ pub fn eval(args: EvalArgs) -> Result<()> {
         all.extend(results);
         all_optimal.extend(optimal);
     }
+    let config = config.expect("at least one goal");
     let report = EvalReport {
-        run: RunReport {
-            agent: model.name(),
-            blocks: model.blocks(),
-            goal: Some(goals.iter().map(Goal::to_string).collect::<Vec<_>>().join(":")),
-            grid: model.grid().to_string(),
-            horizon: args.horizon,
-            backend: backend.to_string(),
-            seed: args.seed,
-            summary: Summary::of(&all),
-        },
+        run: RunReport::new(
+            model.name(),
+            &config,
+            &rules,
+            Some(goals.iter().map(Goal::to_string).collect::<Vec<_>>().join(":")),
+            args.seed,
+            &all,
+        ),
         optimality: Optimality::of(&all, &all_optimal),
-        mean_steps_failures_as_horizon: optimality::mean_steps_failures_as_horizon(&all, args.horizon),
         model: args.model.display().to_string(),
         epsilon: args.epsilon,
         per_goal,
@@ -130,8 +139,18 @@ pub fn eval(args: EvalArgs) -> Result<()> {
 fn print_report(r: &EvalReport) -> Result<()> {
     let run = &r.run;
     line(format_args!(
-        "agent {} from {}, {} blocks, grid {}, horizon {}, {} backend, seed {}, epsilon {}",
-        run.agent, r.model, run.blocks, run.grid, run.horizon, run.backend, run.seed, r.epsilon
+        "agent {} from {}, {} blocks, grid {}, horizon {}, {} backend, seed {}, epsilon {}; profile {} (protocol {}, start {})",
+        run.agent,
+        r.model,
+        run.blocks,
+        run.grid,
+        run.horizon,
+        run.backend,
+        run.seed,
+        r.epsilon,
+        run.profile,
+        run.protocol,
+        run.start
     ))?;
     let fmt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.2}"));
     line(format_args!(
@@ -154,7 +173,7 @@ fn print_report(r: &EvalReport) -> Result<()> {
     for g in &r.per_goal {
         row(&g.goal, &g.summary, &g.optimality, g.mean_steps_failures_as_horizon)?;
     }
-    row("all", &run.summary, &r.optimality, r.mean_steps_failures_as_horizon)?;
+    row("all", &run.summary, &r.optimality, run.mean_steps_failures_as_horizon)?;
     line("steps, optimum and ratio are over the episodes that reached the goal; the optimum is the")?;
-    line("exact solver's shortest plan from each start; the last column counts a failure as the horizon H")
+    line("exact solver's shortest legal plan from each start; the last column counts a failure as the horizon H")
 }

@@ -11,6 +11,7 @@ mod correct;
 mod demo;
 mod eval;
 mod learn_from_demos;
+mod profile;
 mod render;
 mod reproduce;
 mod run;

@@ -8,6 +8,7 @@ use files::OutputPath;
 use sim::Env;
 use sim::render::{self, Colour};
 
+use super::profile::{ProfileArg, Rules, StartArg};
 use super::stdout;
 use super::world::WorldArgs;
 
@@ -16,6 +17,10 @@ use super::world::WorldArgs;
 pub struct RenderArgs {
     #[command(flatten)]
     pub world: WorldArgs,
+    #[command(flatten)]
+    pub profile: ProfileArg,
+    #[command(flatten)]
+    pub start: StartArg,
     /// The seed of the start state (as `reset(seed)` draws it).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -36,7 +41,9 @@ pub struct RenderArgs {
 pub fn render(args: RenderArgs) -> Result<()> {
     let out = args.out.as_deref().map(OutputPath::check).transpose()?;
     stdout::claim_for_data(&[out.as_ref()])?;
-    let config = args.world.config()?;
+    let rules =
+        Rules::of(sim::Profile::Spec).overridden(args.profile, None, args.start.start, args.world.reward.as_deref())?;
+    let config = args.world.config(&rules)?;
     if let Some(out) = &out {
         render::PictureFormat::of(out.path())?;
         anyhow::ensure!(

@@ -9,17 +9,21 @@ use serde::Serialize;
 use sim::trajectory::TrajectoryWriter;
 use sim::{Env, GoalSpec};
 
-use agent::{ExactPolicy, OraclePolicy, Policy, QAgent, RandomPolicy, Summary};
+use agent::optimality::mean_steps_failures_as_horizon;
+use agent::{
+    ExactPolicy, LearnerProfile, OracleKind, OraclePolicy, PaperOraclePolicy, Policy, QAgent, RandomPolicy, Summary,
+};
 
+use super::profile::{PlayRulesArgs, ProfileArg, Rules};
 use super::stdout::line;
 use super::world::WorldArgs;
 
 /// Which agent plays.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum AgentKind {
-    /// Uniformly random actions.
+    /// Uniformly random legal actions.
     Random,
-    /// The centroid + A* oracle.
+    /// An oracle: ours (centroid + A*) or the paper's (--oracle).
     Oracle,
     /// The exact solver: shortest plans.
     Exact,
@@ -35,6 +39,14 @@ pub struct RunArgs {
     pub agent: AgentKind,
     #[command(flatten)]
     pub world: WorldArgs,
+    #[command(flatten)]
+    pub profile: ProfileArg,
+    #[command(flatten)]
+    pub play: PlayRulesArgs,
+    /// The oracle `--agent oracle` plays: astar (ours) or paper (the authors' greedy walker)
+    /// [default: the profile's: astar under spec, paper under original]
+    #[arg(long)]
+    pub oracle: Option<OracleKind>,
     /// Episodes to play.
     #[arg(long, default_value_t = 100)]
     pub episodes: u64,
@@ -51,8 +63,8 @@ pub struct RunArgs {
     /// The model file the `q` agent plays (see `blockstack train`).
     #[arg(long, required_if_eq("agent", "q"))]
     pub model: Option<PathBuf>,
-    /// The `q` agent's probability of a random action (the paper's test policy: 0.1).
-    #[arg(long, default_value_t = 0.1)]
+    /// The `q` agent's probability of a random legal action (the paper's test policy: 0.1).
+    #[arg(long, default_value_t = agent::profile::TEST_EPSILON)]
     pub epsilon: f64,
 }
 
@@ -67,8 +79,42 @@ pub(super) struct RunReport {
     pub horizon: u32,
     pub backend: String,
     pub seed: u64,
+    pub profile: String,
+    pub protocol: String,
+    pub start: String,
     #[serde(flatten)]
     pub summary: Summary,
+    /// Mean steps over every episode, a failure counted as the horizon (how the paper's
+    /// figures read: 847.7 = 0.7 x 1000 + 0.3 x 492).
+    pub mean_steps_failures_as_horizon: f64,
+}
+
+impl RunReport {
+    /// The report of `results`, played by `agent` in the world of `config` under `rules`
+    /// with base seed `seed`; `goal` names the goals played (`None`: drawn per episode).
+    pub fn new(
+        agent: String,
+        config: &sim::EnvConfig,
+        rules: &Rules,
+        goal: Option<String>,
+        seed: u64,
+        results: &[agent::EpisodeResult],
+    ) -> RunReport {
+        RunReport {
+            agent,
+            blocks: config.blocks,
+            goal,
+            grid: config.grid.to_string(),
+            horizon: config.horizon,
+            backend: config.backend.to_string(),
+            seed,
+            profile: rules.profile.to_string(),
+            protocol: config.protocol.to_string(),
+            start: config.start.to_string(),
+            summary: Summary::of(results),
+            mean_steps_failures_as_horizon: mean_steps_failures_as_horizon(results, config.horizon),
+        }
+    }
 }
 
 /// Plays the episodes and prints the summary.
@@ -78,18 +124,24 @@ pub fn run(args: RunArgs) -> Result<()> {
     if let (Some(out), Some(model)) = (&args.trajectory, &args.model) {
         files::refuse_same_file(out, model).context("--trajectory and --model")?;
     }
-    let config = args.world.config()?;
     let q_agent = match (args.agent, &args.model) {
-        (AgentKind::Q, Some(path)) => {
-            let q = QAgent::load(path)?;
-            q.check_world(config.grid, config.blocks)?;
-            Some(q)
-        }
+        (AgentKind::Q, Some(path)) => Some(QAgent::load(path)?),
         _ => None,
     };
+    // A model's own world unless the command line says otherwise.
+    let base = q_agent.as_ref().map_or(Rules::of(sim::Profile::Spec), Rules::of_model);
+    let rules = base.played(args.profile, args.play, args.world.reward.as_deref())?;
+    let config = args.world.config(&rules)?;
+    if let Some(q) = &q_agent {
+        q.check_world(config.grid, config.blocks)?;
+    }
+    let oracle = args.oracle.unwrap_or(LearnerProfile::of(rules.profile).oracle);
     let mut policy: Box<dyn Policy + '_> = match (args.agent, &q_agent) {
         (AgentKind::Random, _) => Box::new(RandomPolicy),
-        (AgentKind::Oracle, _) => Box::new(OraclePolicy::new(config.grid)),
+        (AgentKind::Oracle, _) => match oracle {
+            OracleKind::Astar => Box::new(OraclePolicy::new(config.grid)),
+            OracleKind::Paper => Box::new(PaperOraclePolicy::new(config.grid)),
+        },
         (AgentKind::Exact, _) => Box::new(ExactPolicy::new(config.grid)),
         (AgentKind::Q, Some(q)) => Box::new(q.policy(args.epsilon)?),
         (AgentKind::Q, None) => anyhow::bail!("--agent q needs --model FILE"),
@@ -100,19 +152,11 @@ pub fn run(args: RunArgs) -> Result<()> {
     if let Some(t) = trajectory {
         t.finish()?;
     }
-    let report = RunReport {
-        agent: policy.name(),
-        blocks: config.blocks,
-        goal: match config.goal {
-            GoalSpec::Fixed(g) => Some(g.to_string()),
-            GoalSpec::Random => None,
-        },
-        grid: config.grid.to_string(),
-        horizon: config.horizon,
-        backend: config.backend.to_string(),
-        seed: args.seed,
-        summary: Summary::of(&results),
+    let goal = match config.goal {
+        GoalSpec::Fixed(g) => Some(g.to_string()),
+        GoalSpec::Random => None,
     };
+    let report = RunReport::new(policy.name(), &config, &rules, goal, args.seed, &results);
     if args.json {
         line(serde_json::to_string(&report)?)
     } else {
@@ -123,18 +167,25 @@ pub fn run(args: RunArgs) -> Result<()> {
 fn print_report(r: &RunReport) -> Result<()> {
     let s = &r.summary;
     line(format_args!(
-        "agent {}, {} blocks, goal {}, grid {}, horizon {}, {} backend, seed {}",
+        "agent {}, {} blocks, goal {}, grid {}, horizon {}, {} backend, seed {}; profile {} (protocol {}, start {})",
         r.agent,
         r.blocks,
         r.goal.as_deref().unwrap_or("random"),
         r.grid,
         r.horizon,
         r.backend,
-        r.seed
+        r.seed,
+        r.profile,
+        r.protocol,
+        r.start
     ))?;
     line(format_args!("episodes      {}", s.episodes))?;
     line(format_args!("failures      {}", s.failures))?;
     let fmt = |v: Option<f64>| v.map_or("- (no episode reached the goal)".to_string(), |v| format!("{v:.2}"));
     line(format_args!("mean steps    {}", fmt(s.mean_steps)))?;
-    line(format_args!("median steps  {}", fmt(s.median_steps)))
+    line(format_args!("median steps  {}", fmt(s.median_steps)))?;
+    line(format_args!(
+        "mean steps, a failure counted as the horizon  {:.2}",
+        r.mean_steps_failures_as_horizon
+    ))
 }

@@ -44,6 +44,11 @@ pub struct SolveArgs {
     /// The planner.
     #[arg(long, value_enum, default_value_t = SolverKind::Exact)]
     pub solver: SolverKind,
+    /// The action protocol the plan keeps to: free (every action legal) or paper (nothing
+    /// held: only pick; holding: only moves and drop); the exact plan is the shortest legal
+    /// one.
+    #[arg(long, default_value = "free")]
+    pub protocol: sim::ActionProtocol,
     /// Print the plan as one JSON object: {"length":L,"actions":[indices],"solver":"exact"}.
     #[arg(long)]
     pub json: bool,
@@ -69,8 +74,10 @@ pub fn solve(args: SolveArgs) -> Result<()> {
     })?;
     let goal = Goal::parse(&args.goal, Some(state.block_count())).context("--goal")?;
     let plan = match args.solver {
-        SolverKind::Exact => ExactSolver::new(grid).solve(&state, &goal)?,
-        SolverKind::Oracle => Oracle::new(grid).plan(&state, &goal)?,
+        SolverKind::Exact => ExactSolver::new(grid)
+            .with_protocol(args.protocol)
+            .solve(&state, &goal)?,
+        SolverKind::Oracle => Oracle::new(grid).with_protocol(args.protocol).plan(&state, &goal)?,
     };
     if args.json {
         let report = SolveReport {

@@ -3,11 +3,13 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use agent::{Assist, QParams, ReprKind, TrainConfig};
+use agent::{Assist, OracleKind, Oscillation, QParams, ReprKind, Schedule, TrainConfig};
 use anyhow::{Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use sim::{Backend, Goal, Grid, RewardModel};
+use sim::{Backend, Goal, Grid, Profile, RewardModel};
+
+use super::profile::{PlayRulesArgs, ProfileArg};
 
 use super::stdout::line;
 
@@ -20,19 +22,40 @@ pub struct TrainArgs {
     /// Grid size, WxH.
     #[arg(long, default_value = "7x7")]
     pub grid: String,
-    /// State representation: raw, pairwise, chasing (the paper's) or role (ours).
-    #[arg(long, default_value = "chasing")]
-    pub repr: ReprKind,
-    /// Reward model: sparse, dense, paper or step-cost.
-    #[arg(long, default_value = "paper")]
-    pub reward: String,
+    #[command(flatten)]
+    pub profile: ProfileArg,
+    #[command(flatten)]
+    pub play: PlayRulesArgs,
+    /// State representation: raw, pairwise, chasing (the paper's prose), chasing-code (the
+    /// paper's code) or role (ours) [default: the profile's: chasing under spec,
+    /// chasing-code under original]
+    #[arg(long)]
+    pub repr: Option<ReprKind>,
+    /// Reward model: sparse, dense, paper, step-cost or paper-code [default: the profile's:
+    /// paper under spec, paper-code under original]
+    #[arg(long)]
+    pub reward: Option<String>,
+    /// Training schedule: spec (goals in turn, constant alpha) or paper-code (the authors':
+    /// a goal drawn per game, alpha decay after step 4000, bootstrap over seen actions,
+    /// games ended by a reward above 70) [default: the profile's]
+    #[arg(long)]
+    pub schedule: Option<Schedule>,
+    /// The oracle that assists: astar (ours) or paper (the authors' greedy walker)
+    /// [default: the profile's: astar under spec, paper under original]
+    #[arg(long)]
+    pub oracle: Option<OracleKind>,
+    /// How oscillation is spotted for --assist: actions (the same pair of actions three
+    /// times in a row) or distances (the authors': the last six pair distances of period 2)
+    /// [default: the profile's: actions under spec, distances under original]
+    #[arg(long)]
+    pub oscillation: Option<Oscillation>,
     /// Goals to train on, bottom to top, separated by ':', e.g. 0,1,2:1,0,2 (default: every
     /// goal).
     #[arg(long)]
     pub goals: Option<String>,
-    /// Training games (played on the goals in turn).
-    #[arg(long, default_value_t = 5000)]
-    pub games: u64,
+    /// Training games [default: 5000 under spec, 100 under original]
+    #[arg(long)]
+    pub games: Option<u64>,
     /// Seed of the starts and of every random choice.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -58,13 +81,14 @@ pub struct TrainArgs {
     /// after sweep, after the last game.
     #[arg(long)]
     pub final_replay: bool,
-    /// When the oracle chooses the action: none, oscillation (the same pair of actions three
-    /// times in a row), or oscillation+P (also at each step with probability P).
+    /// When the oracle chooses the action: none, oscillation (on oscillation, see
+    /// --oscillation), or oscillation+P (also at each step with probability P).
     #[arg(long, default_value = "none")]
     pub assist: Assist,
-    /// Steps before a training game is cut off.
-    #[arg(long, default_value_t = sim::DEFAULT_HORIZON)]
-    pub horizon: u32,
+    /// Steps before a training game is cut off [default: the schedule's: 1000 under spec,
+    /// 5000 (1000 with 2 blocks) under paper-code]
+    #[arg(long)]
+    pub horizon: Option<u32>,
     /// World backend: physics (rapier2d) or grid (occupancy model).
     #[arg(long, default_value = "physics")]
     pub backend: String,
@@ -83,29 +107,51 @@ pub fn parse_goals(text: Option<&str>, blocks: usize) -> Result<Vec<Goal>> {
 }
 
 impl TrainArgs {
-    /// The training config these arguments describe.
+    /// The training config these arguments describe: the profile's learner
+    /// ([`TrainConfig::for_profile`]), each part the command line names set as it says.
     pub fn config(&self) -> Result<TrainConfig> {
         let grid: Grid = self.grid.parse()?;
+        let profile = self.profile.profile.unwrap_or(Profile::Spec);
+        let goals = parse_goals(self.goals.as_deref(), self.blocks)?;
+        let base = TrainConfig::for_profile(profile, goals);
+        let schedule = self.schedule.unwrap_or(base.schedule);
+        // Without --horizon, games are as long as the schedule's (the profile's unless
+        // --schedule says otherwise).
+        let horizon = self.horizon.unwrap_or_else(|| {
+            if self.schedule.is_some() {
+                schedule.game_steps(self.blocks)
+            } else {
+                base.horizon
+            }
+        });
         let config = TrainConfig {
             grid,
             blocks: self.blocks,
-            repr: self.repr,
-            reward: RewardModel::from_name(&self.reward)?,
+            repr: self.repr.unwrap_or(base.repr),
+            reward: match &self.reward {
+                Some(name) => RewardModel::from_name(name)?,
+                None => base.reward,
+            },
             params: QParams {
                 alpha: self.alpha,
                 gamma: self.gamma,
                 epsilon: self.epsilon,
                 initial_q: self.initial_q,
             },
-            goals: parse_goals(self.goals.as_deref(), self.blocks)?,
-            games: self.games,
+            games: self.games.unwrap_or(base.games),
             seed: self.seed,
-            horizon: self.horizon,
+            horizon,
             backend: self.backend.parse::<Backend>()?,
             exploring_starts: self.exploring_starts,
             backward_replay: self.backward_replay,
             final_replay: self.final_replay,
             assist: self.assist,
+            protocol: self.play.protocol.unwrap_or(base.protocol),
+            start: self.play.start.start.unwrap_or(base.start),
+            schedule,
+            oracle: self.oracle.unwrap_or(base.oracle),
+            oscillation: self.oscillation.unwrap_or(base.oscillation),
+            ..base
         };
         config.validate()?;
         Ok(config)
@@ -155,8 +201,19 @@ pub fn train(args: TrainArgs) -> Result<()> {
         config.seed
     ))?;
     line(format_args!(
-        "{} games, {} reached the goal, {} steps; {} steps chosen by the oracle (assistance {}); {} final replay sweeps",
-        r.games, r.successes, r.steps, r.assisted_steps, config.assist, r.replay_sweeps
+        "profile {}: protocol {}, start {}, schedule {}, games of up to {} steps",
+        config.profile, config.protocol, config.start, config.schedule, config.horizon
+    ))?;
+    line(format_args!(
+        "{} games, {} reached the goal, {} steps; {} steps chosen by the {} oracle (assistance {}, oscillation by {}); {} final replay sweeps",
+        r.games,
+        r.successes,
+        r.steps,
+        r.assisted_steps,
+        config.oracle,
+        config.assist,
+        config.oscillation,
+        r.replay_sweeps
     ))?;
     line(format_args!("trained in {seconds:.1} s"))?;
     line(format_args!("saved {}", args.out.display()))

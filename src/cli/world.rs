@@ -2,9 +2,12 @@
 
 use anyhow::Result;
 use clap::Args;
-use sim::{Backend, EnvConfig, Goal, GoalSpec, Grid, RewardModel};
+use sim::{Backend, EnvConfig, Goal, GoalSpec, Grid};
 
-/// The world: grid, blocks, goal, horizon, reward, backend.
+use super::profile::Rules;
+
+/// The world: grid, blocks, goal, horizon, reward, backend (the rules a profile sets come
+/// with [`Rules`]).
 #[derive(Debug, Clone, Args)]
 pub struct WorldArgs {
     /// Number of blocks.
@@ -19,32 +22,35 @@ pub struct WorldArgs {
     /// Steps before an episode is cut off.
     #[arg(long, default_value_t = sim::DEFAULT_HORIZON)]
     pub horizon: u32,
-    /// Reward model: sparse, dense, paper or step-cost.
-    #[arg(long, default_value = "sparse")]
-    pub reward: String,
+    /// Reward model: sparse, dense, paper, step-cost or paper-code [default: the profile's:
+    /// sparse under spec, paper-code under original]
+    #[arg(long)]
+    pub reward: Option<String>,
     /// World backend: physics (rapier2d) or grid (occupancy model).
     #[arg(long, default_value = "physics")]
     pub backend: String,
 }
 
 impl WorldArgs {
-    /// The environment config these arguments describe, checked.
-    pub fn config(&self) -> Result<EnvConfig> {
+    /// The environment config these arguments describe under `rules` (whose reward is
+    /// already this command's), checked. Episodes end at the goal.
+    pub fn config(&self, rules: &Rules) -> Result<EnvConfig> {
         let grid: Grid = self.grid.parse()?;
         let goal = match &self.goal {
             Some(text) => GoalSpec::Fixed(Goal::parse(text, Some(self.blocks))?),
             None => GoalSpec::Random,
         };
-        let reward: RewardModel = self.reward.parse()?;
         let backend: Backend = self.backend.parse()?;
         let config = EnvConfig {
             grid,
             blocks: self.blocks,
             goal,
             horizon: self.horizon,
-            reward,
+            reward: rules.reward,
             backend,
-            ..EnvConfig::default()
+            protocol: rules.protocol,
+            start: rules.start,
+            termination: sim::Termination::Goal,
         };
         config.validate()?;
         Ok(config)

@@ -216,17 +216,35 @@ impl<S: DemoSink> DemoApp<S> {
                 );
             }
             Command::Override(action) => {
-                if self.session.is_over() {
-                    self.message = "The episode is over: n begins the next.".into();
-                } else {
-                    let proposed = self.session.proposal();
-                    self.take(Some(action))?;
-                    self.message = match proposed {
-                        Some(p) if p == action => format!("You confirmed {action}; the agent learnt it."),
-                        Some(p) => format!("You chose {action} instead of {p}; the agent learnt it."),
-                        None => format!("You chose {action}."),
-                    };
-                    self.describe_end();
+                match self.session.observation().filter(|_| !self.session.is_over()) {
+                    None => self.message = "The episode is over: n begins the next.".into(),
+                    Some(obs) => match agent::correction::person_steps(&obs, action) {
+                        Err(e) => self.message = format!("Not now: {e}."),
+                        Ok(steps) if steps.is_empty() => {
+                            self.message = format!("{action}: that block is held already.")
+                        }
+                        Ok(steps) => {
+                            let proposed = self.session.proposal();
+                            // Under the paper protocol a pick while holding is a Drop and
+                            // then the Pick: two corrections.
+                            for &step in &steps {
+                                if !self.session.is_over() {
+                                    self.take(Some(step))?;
+                                }
+                            }
+                            let done = steps
+                                .iter()
+                                .map(ToString::to_string)
+                                .collect::<Vec<_>>()
+                                .join(", then ");
+                            self.message = match proposed {
+                                Some(p) if steps == [p] => format!("You confirmed {action}; the agent learnt it."),
+                                Some(p) => format!("You chose {done} instead of {p}; the agent learnt it."),
+                                None => format!("You chose {done}."),
+                            };
+                            self.describe_end();
+                        }
+                    },
                 }
             }
             Command::NextEpisode => {
@@ -463,6 +481,54 @@ pub(crate) mod tests {
         let (_, records, _) = app.finish();
         let episodes = records.iter().filter(|r| matches!(r, DemoRecord::Episode(_))).count();
         assert_eq!(episodes, 2);
+    }
+
+    #[test]
+    fn under_the_paper_protocol_a_person_changes_blocks_by_a_drop_and_a_pick() {
+        let dir = tempdir();
+        let agent = QAgent::new(ReprKind::ChasingCode, Grid::default(), 3, QParams::default()).unwrap();
+        let world = SessionWorld {
+            protocol: sim::ActionProtocol::Paper,
+            ..SessionWorld::of(&agent)
+        };
+        let session = CorrectionSession::new(
+            agent,
+            CorrectionRule::as_coded(),
+            world,
+            vec!["0,1,2".parse().unwrap()],
+            7,
+            0.0,
+            "person",
+            None,
+            Vec::new(),
+        )
+        .unwrap();
+        let save = SavePolicy {
+            path: dir.join("corrected.json"),
+            every: 0,
+        };
+        let mut app = DemoApp::new(session, save).unwrap();
+        app.handle(Command::TogglePause).unwrap();
+        // Nothing held: a move is refused, with what is allowed.
+        app.handle(Command::Override(Action::Up)).unwrap();
+        assert!(app.message().contains("only pick N is allowed"), "{}", app.message());
+        assert_eq!(app.session().steps(), 0);
+        app.handle(Command::Override(Action::Pick(BlockId(1)))).unwrap();
+        app.handle(Command::Override(Action::Pick(BlockId(1)))).unwrap();
+        assert!(app.message().contains("held already"), "{}", app.message());
+        app.handle(Command::Override(Action::Pick(BlockId(2)))).unwrap();
+        assert_eq!(app.session().observation().unwrap().held_block(), Some(BlockId(2)));
+        assert_eq!(app.episode_corrections(), 3);
+        assert!(app.message().contains("drop, then pick 2"), "{}", app.message());
+        let (_, records, _) = app.finish();
+        let actions: Vec<String> = records
+            .iter()
+            .filter_map(|r| match r {
+                DemoRecord::Step(s) => Some(s.action.clone()),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(actions, ["pick 1", "drop", "pick 2"]);
     }
 
     /// A fresh directory under the target's temporary folder.

@@ -5,7 +5,7 @@
 
 use std::collections::VecDeque;
 
-use sim::{Action, BlockId, Cell, Goal, Grid, GridWorld, State, World};
+use sim::{Action, ActionProtocol, BlockId, Cell, Goal, Grid, GridWorld, State, World};
 
 /// Distances to the goal of every state of a small world, by breadth-first search from the
 /// states where the goal holds, over every action of the rules (drops and no-ops included).
@@ -21,7 +21,15 @@ pub struct BfsTable {
 pub const UNREACHABLE: u8 = u8::MAX;
 
 impl BfsTable {
+    /// Distances over every action (the `free` protocol).
     pub fn new(grid: Grid, goal: &Goal) -> Self {
+        Self::under(grid, goal, ActionProtocol::Free)
+    }
+
+    /// Distances over the actions `protocol` allows. Every legal action has a legal
+    /// inverse under both protocols (a Drop undoes a Pick made with nothing held and the
+    /// other way round; moves undo each other), so the graph stays undirected.
+    pub fn under(grid: Grid, goal: &Goal, protocol: ActionProtocol) -> Self {
         let blocks = goal.block_count();
         let size = grid.cell_count().pow(blocks as u32) * (blocks + 1);
         let mut table = BfsTable {
@@ -40,7 +48,7 @@ impl BfsTable {
         while let Some(state) = queue.pop_front() {
             let d = table.dist[table.index(&state)];
             let world = GridWorld::new(grid, state).unwrap();
-            for action in Action::all(blocks) {
+            for action in protocol.legal_actions(&state).iter() {
                 let mut w = world;
                 w.act(action).unwrap();
                 let i = table.index(w.state_ref());
