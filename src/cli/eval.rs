@@ -11,6 +11,7 @@ use sim::{Backend, Env, EnvConfig, Goal, GoalSpec, Termination};
 
 use super::profile::{PlayRulesArgs, ProfileArg, Rules};
 use super::run::RunReport;
+use super::solver_budget::SolverBudgetArg;
 use super::stdout::line;
 use super::train::parse_goals;
 
@@ -45,6 +46,8 @@ pub struct EvalArgs {
     pub profile: ProfileArg,
     #[command(flatten)]
     pub play: PlayRulesArgs,
+    #[command(flatten)]
+    pub budget: SolverBudgetArg,
 }
 
 /// One goal's figures.
@@ -88,6 +91,7 @@ pub fn eval(args: EvalArgs) -> Result<()> {
     let (mut all, mut all_optimal): (Vec<EpisodeResult>, Vec<u32>) = (Vec::new(), Vec::new());
     let mut per_goal = Vec::new();
     let mut config = None;
+    let solver = args.budget.solver(model.grid()).with_protocol(rules.protocol);
     for goal in &goals {
         let goal_config = EnvConfig {
             grid: model.grid(),
@@ -104,7 +108,7 @@ pub fn eval(args: EvalArgs) -> Result<()> {
         config = Some(goal_config);
         let mut policy = model.policy(args.epsilon)?;
         let results = agent::play(&mut env, &mut policy, args.episodes, args.seed, None)?;
-        let optimal = optimality::optimal_steps_under(model.grid(), rules.protocol, &results)?;
+        let optimal = optimality::optimal_steps_by(&solver, &results).map_err(|e| args.budget.explain(e))?;
         per_goal.push(GoalReport {
             goal: goal.to_string(),
             summary: Summary::of(&results),

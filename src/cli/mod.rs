@@ -16,6 +16,7 @@ mod render;
 mod reproduce;
 mod run;
 mod solve;
+mod solver_budget;
 pub mod stdout;
 mod train;
 mod world;

@@ -15,6 +15,7 @@ use agent::{
 };
 
 use super::profile::{PlayRulesArgs, ProfileArg, Rules};
+use super::solver_budget::SolverBudgetArg;
 use super::stdout::line;
 use super::world::WorldArgs;
 
@@ -66,6 +67,8 @@ pub struct RunArgs {
     /// The `q` agent's probability of a random legal action (the paper's test policy: 0.1).
     #[arg(long, default_value_t = agent::profile::TEST_EPSILON)]
     pub epsilon: f64,
+    #[command(flatten)]
+    pub budget: SolverBudgetArg,
 }
 
 /// The machine-readable result of a run: no timings, so two runs compare equal. `eval
@@ -119,6 +122,10 @@ impl RunReport {
 
 /// Plays the episodes and prints the summary.
 pub fn run(args: RunArgs) -> Result<()> {
+    anyhow::ensure!(
+        args.agent == AgentKind::Exact || args.budget.solver_budget.is_none(),
+        "--solver-budget is the exact solver's: it applies to --agent exact only"
+    );
     let trajectory_out = args.trajectory.as_deref().map(OutputPath::check).transpose()?;
     super::stdout::claim_for_data(&[trajectory_out.as_ref()])?;
     if let (Some(out), Some(model)) = (&args.trajectory, &args.model) {
@@ -142,13 +149,14 @@ pub fn run(args: RunArgs) -> Result<()> {
             OracleKind::Astar => Box::new(OraclePolicy::new(config.grid)),
             OracleKind::Paper => Box::new(PaperOraclePolicy::new(config.grid)),
         },
-        (AgentKind::Exact, _) => Box::new(ExactPolicy::new(config.grid)),
+        (AgentKind::Exact, _) => Box::new(ExactPolicy::with_planner(args.budget.solver(config.grid))),
         (AgentKind::Q, Some(q)) => Box::new(q.policy(args.epsilon)?),
         (AgentKind::Q, None) => anyhow::bail!("--agent q needs --model FILE"),
     };
     let mut env = Env::new(config)?;
     let mut trajectory = trajectory_out.as_ref().map(TrajectoryWriter::create).transpose()?;
-    let results = agent::play(&mut env, policy.as_mut(), args.episodes, args.seed, trajectory.as_mut())?;
+    let results = agent::play(&mut env, policy.as_mut(), args.episodes, args.seed, trajectory.as_mut())
+        .map_err(|e| args.budget.explain(e))?;
     if let Some(t) = trajectory {
         t.finish()?;
     }

@@ -2,10 +2,11 @@
 
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
-use oracle::{ExactSolver, Oracle};
+use oracle::Oracle;
 use serde::Serialize;
 use sim::{Goal, Grid, State};
 
+use super::solver_budget::SolverBudgetArg;
 use super::stdout::line;
 
 /// Which planner solves.
@@ -49,6 +50,8 @@ pub struct SolveArgs {
     /// one.
     #[arg(long, default_value = "free")]
     pub protocol: sim::ActionProtocol,
+    #[command(flatten)]
+    pub budget: SolverBudgetArg,
     /// Print the plan as one JSON object: {"length":L,"actions":[indices],"solver":"exact"}.
     #[arg(long)]
     pub json: bool,
@@ -73,10 +76,18 @@ pub fn solve(args: SolveArgs) -> Result<()> {
         }
     })?;
     let goal = Goal::parse(&args.goal, Some(state.block_count())).context("--goal")?;
+    anyhow::ensure!(
+        args.solver == SolverKind::Exact || args.budget.solver_budget.is_none(),
+        "--solver-budget is the exact solver's: it does not apply to --solver {}",
+        args.solver.name()
+    );
     let plan = match args.solver {
-        SolverKind::Exact => ExactSolver::new(grid)
+        SolverKind::Exact => args
+            .budget
+            .solver(grid)
             .with_protocol(args.protocol)
-            .solve(&state, &goal)?,
+            .solve(&state, &goal)
+            .map_err(|e| args.budget.explain(e))?,
         SolverKind::Oracle => Oracle::new(grid).with_protocol(args.protocol).plan(&state, &goal)?,
     };
     if args.json {
