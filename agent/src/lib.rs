@@ -4,12 +4,14 @@
 //! - [`rollout`]: the episode loop every command and experiment shares, with its
 //!   [`Summary`] of failures and steps to goal.
 //! - [`QAgent`]: tabular Q-learning over one of the [`repr`] state representations, trained
-//!   by [`train`](train::train) / [`Trainer`], saved and loaded as [`model`] files.
+//!   by [`train`](train::train) / [`Trainer`], saved and loaded as [`model`] files; a run
+//!   stopped and resumed through a [`checkpoint`] ends as if it had not stopped.
 //! - [`optimality`]: steps taken against the exact solver's shortest plans.
 //! - [`correction`]: learning from a demonstrator's corrections, simulated [`demonstrator`]s,
 //!   and [`demos`] recordings and their replay.
 
 pub mod assist;
+pub mod checkpoint;
 pub mod correction;
 pub mod demonstrator;
 pub mod demos;

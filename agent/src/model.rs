@@ -244,11 +244,18 @@ impl QAgent {
     /// helper: atomically for a regular file.
     pub fn save(&self, path: &Path) -> Result<()> {
         let out = OutputPath::check(path)?;
-        let table = self.table();
-        let mut tensors = table_tensors(table).map_err(|reason| AgentError::ModelSave {
+        let bytes = self.to_bytes().map_err(|reason| AgentError::ModelSave {
             path: path.display().to_string(),
             reason,
         })?;
+        Ok(out.write(&bytes)?)
+    }
+
+    /// The bytes of the agent's model file (module docs); an error saying why for a table
+    /// no file can keep.
+    pub fn to_bytes(&self) -> std::result::Result<Vec<u8>, String> {
+        let table = self.table();
+        let mut tensors = table_tensors(table)?;
         tensors.extend(seen_tensors(table));
         let metadata = Metadata {
             grid: self.grid(),
@@ -263,8 +270,7 @@ impl QAgent {
                 initial: f64::from(table.initial()),
             },
         };
-        files::container::write(&out, MODEL_FORMAT, MODEL_VERSION, &metadata, &tensors)?;
-        Ok(())
+        files::container::to_bytes(MODEL_FORMAT, MODEL_VERSION, &metadata, &tensors)
     }
 
     /// The agent's identity (module docs): 16 hex digits.

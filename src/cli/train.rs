@@ -3,9 +3,9 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use agent::{Assist, OracleKind, Oscillation, QParams, ReprKind, Schedule, TrainConfig};
+use agent::{Assist, OracleKind, Oscillation, QParams, ReprKind, Schedule, TrainConfig, Trainer};
 use anyhow::{Context, Result};
-use clap::Args;
+use clap::{ArgGroup, Args};
 use indicatif::{ProgressBar, ProgressStyle};
 use sim::{Backend, Goal, Grid, Profile, RewardModel};
 
@@ -13,8 +13,38 @@ use super::profile::{PlayRulesArgs, ProfileArg};
 
 use super::stdout::line;
 
+/// Games between two checkpoints unless `--checkpoint-every` says otherwise.
+const DEFAULT_CHECKPOINT_EVERY: u64 = 1000;
+
+/// The flags that set up a run, which `--resume` takes from its checkpoint instead.
+const RUN_FLAGS: [&str; 22] = [
+    "blocks",
+    "grid",
+    "profile",
+    "protocol",
+    "start",
+    "repr",
+    "reward",
+    "schedule",
+    "oracle",
+    "oscillation",
+    "goals",
+    "seed",
+    "alpha",
+    "gamma",
+    "epsilon",
+    "initial_q",
+    "exploring_starts",
+    "backward_replay",
+    "final_replay",
+    "assist",
+    "horizon",
+    "backend",
+];
+
 /// Arguments of `blockstack train`.
 #[derive(Debug, Args)]
+#[command(group(ArgGroup::new("checkpointing").args(["checkpoint", "resume"]).multiple(true)))]
 pub struct TrainArgs {
     /// Number of blocks.
     #[arg(long, default_value_t = 3)]
@@ -95,6 +125,20 @@ pub struct TrainArgs {
     /// Where to write the trained model (a .safetensors file; checked before training).
     #[arg(long)]
     pub out: PathBuf,
+    /// Write the run to this checkpoint file every --checkpoint-every games and when the
+    /// last game is played (atomically: a kill loses at most the games since the last one);
+    /// `train --resume FILE` continues it.
+    #[arg(long, value_name = "FILE")]
+    pub checkpoint: Option<PathBuf>,
+    /// Games between two checkpoints [default: 1000]
+    #[arg(long, value_name = "N", requires = "checkpointing", value_parser = clap::value_parser!(u64).range(1..))]
+    pub checkpoint_every: Option<u64>,
+    /// Continue the run in this checkpoint file, with its settings, to --games games in all
+    /// (default: the total it was started with); it goes on writing checkpoints to the same
+    /// file unless --checkpoint names another. The flags that set up a run are refused with it:
+    /// the checkpoint fixes them, so the run ends as if it had never stopped.
+    #[arg(long, value_name = "FILE", conflicts_with_all = RUN_FLAGS)]
+    pub resume: Option<PathBuf>,
 }
 
 /// Reads goals separated by ':' (e.g. `0,1,2:1,0,2`), each with `blocks` blocks; every goal
@@ -158,13 +202,31 @@ impl TrainArgs {
     }
 }
 
-/// Trains, showing a progress bar on a terminal, and saves the model.
+/// Trains (or resumes a checkpointed run), showing a progress bar on a terminal, writing
+/// checkpoints if asked, and saves the model.
 pub fn train(args: TrainArgs) -> Result<()> {
     let out = files::OutputPath::check(&args.out)?;
-    super::stdout::claim_for_data(&[Some(&out)])?;
-    let config = args.config()?;
+    let checkpoint_path = args.checkpoint.as_ref().or(args.resume.as_ref());
+    let checkpoint = checkpoint_path.map(files::OutputPath::check).transpose()?;
+    super::stdout::claim_for_data(&[Some(&out), checkpoint.as_ref()])?;
+    if let Some(path) = checkpoint_path {
+        files::refuse_same_file(&args.out, path)?;
+    }
+    let mut trainer = match &args.resume {
+        Some(path) => Trainer::resume(path)?,
+        None => Trainer::new(args.config()?)?,
+    };
+    let total = args.games.unwrap_or(trainer.config().games);
+    let played = trainer.report().games;
+    anyhow::ensure!(
+        total >= played,
+        "--games {total}: the checkpoint has played {played} games already; --games is the total, so ask for {played} or more"
+    );
+    trainer.set_games(total);
+    let config = trainer.config().clone();
     // Hidden by indicatif itself when stderr is not a terminal.
-    let bar = ProgressBar::new(config.games);
+    let bar = ProgressBar::new(total);
+    bar.set_position(played);
     bar.set_style(
         ProgressStyle::with_template("{bar:30} {pos}/{len} games  {msg}  [{elapsed_precise}, eta {eta}]")
             .expect("a valid template"),
@@ -181,7 +243,23 @@ pub fn train(args: TrainArgs) -> Result<()> {
         }
     };
     let clock = Instant::now();
-    let trained = agent::train(&config, Some(&mut show))?;
+    let every = args.checkpoint_every.unwrap_or(DEFAULT_CHECKPOINT_EVERY);
+    loop {
+        let played = trainer.report().games;
+        // Checkpoints fall on multiples of `every`, and on the last game.
+        let games = match &checkpoint {
+            Some(_) => (every - played % every).min(total - played),
+            None => total - played,
+        };
+        trainer.play_games(games, Some(&mut show))?;
+        if let Some(out) = &checkpoint {
+            trainer.write_checkpoint(out)?;
+        }
+        if trainer.report().games == total {
+            break;
+        }
+    }
+    let trained = trainer.finish();
     let seconds = clock.elapsed().as_secs_f64();
     bar.finish_and_clear();
     trained
@@ -216,5 +294,8 @@ pub fn train(args: TrainArgs) -> Result<()> {
         r.replay_sweeps
     ))?;
     line(format_args!("trained in {seconds:.1} s"))?;
+    if let Some(out) = &checkpoint {
+        line(format_args!("checkpoint {}", out.path().display()))?;
+    }
     line(format_args!("saved {}", args.out.display()))
 }
