@@ -1,6 +1,6 @@
-//! Bounds checked up front: too many goals, the exact solver's budget, and grids one cell
-//! wide, each answered in one line with exit status 2 (or, for the narrow grid, played
-//! through).
+//! Bounds checked up front: too many goals, the exact solver's budget, grids one cell wide
+//! (played through), and flags that do not apply, each answered in one line with exit
+//! status 2.
 
 mod common;
 use common::{blockstack, stderr, stdout};
@@ -81,7 +81,7 @@ fn the_exact_solver_budget_is_a_flag_named_when_it_runs_out() {
         ),
         (
             &["run", "--agent", "random", "--solver-budget", "9"],
-            "--agent exact only",
+            "--solver-budget does not apply to --agent random: it is for --agent exact only",
         ),
     ] {
         let o = blockstack(args);
@@ -112,5 +112,39 @@ fn the_oracle_plays_every_episode_on_a_grid_one_cell_wide() {
         let report: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("json");
         assert_eq!(report["episodes"], 200, "{report}");
         assert_eq!(report["failures"], 0, "{report}");
+    }
+}
+
+#[test]
+fn flags_that_do_not_apply_are_refused_naming_the_flag() {
+    for (args, message) in [
+        (&["render", "--horizon", "5"][..], "--horizon does not apply to render"),
+        (&["render", "--reward", "sparse"], "--reward does not apply to render"),
+        (
+            &["run", "--agent", "random", "--epsilon", "5"],
+            "--epsilon does not apply to --agent random: it is for --agent q only",
+        ),
+        (
+            &["run", "--agent", "oracle", "--model", "m.st"],
+            "--model does not apply to --agent oracle",
+        ),
+        (
+            &["run", "--agent", "exact", "--oracle", "paper"],
+            "--oracle does not apply to --agent exact",
+        ),
+    ] {
+        let o = blockstack(args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+        assert!(err.contains(message), "{args:?}: {err}");
+    }
+    // Where they apply, they are taken.
+    for args in [
+        &["render", "--seed", "3"][..],
+        &["run", "--agent", "random", "--horizon", "5", "--episodes", "2"],
+    ] {
+        let o = blockstack(args);
+        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
     }
 }
