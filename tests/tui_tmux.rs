@@ -2,7 +2,8 @@
 //! starts and shows the grid and the goal, an override key changes the state shown, `q`
 //! quits, the recording holds the corrections and replays to the saved model, a session
 //! killed with SIGKILL leaves a recording whose complete lines all parse, blocks 10 to 15
-//! are picked by their labels A to F, and the agent waits while the terminal is too small.
+//! are picked by their labels A to F, and the agent waits while the terminal is too small;
+//! and `eval`, `run` and `correct` draw a progress bar on a terminal, and none elsewhere.
 //!
 //! Skips, saying so, when tmux is not installed (`.ci/run` installs it).
 
@@ -331,4 +332,58 @@ fn blocks_past_9_are_picked_by_letter_and_a_small_terminal_stops_the_agent() {
     tmux.wait_for("demo", "the world again", |s| s.contains("world"));
     stepping(shown);
     tmux.keys("demo", &["q"]);
+}
+
+#[test]
+fn eval_run_and_correct_show_a_progress_bar_on_a_terminal_only() {
+    if tmux_missing() {
+        eprintln!("skipped: tmux is not installed");
+        return;
+    }
+    let dir = scratch("tmux-progress");
+    let model = train(&dir);
+    let out = dir.join("corrected.safetensors");
+    let tmux = Tmux::new(&dir);
+    // Keeps the server up while the sessions below come and go.
+    tmux.start("keep", "sleep 600");
+    for (session, args, bar) in [
+        (
+            "run",
+            vec!["run", "--agent", "random", "--episodes", "1000000"],
+            "/1000000 episodes",
+        ),
+        (
+            "eval",
+            vec!["eval", "--model", path(&model), "--episodes", "100000"],
+            "/1200000 episodes played and solved",
+        ),
+        (
+            "correct",
+            vec![
+                "correct",
+                "--model",
+                path(&model),
+                "--demonstrator",
+                "1",
+                "--demos",
+                "100000",
+                "--out",
+                path(&out),
+            ],
+            "/100000 demonstrations",
+        ),
+    ] {
+        let command = format!("{BIN} {}", args.join(" "));
+        tmux.start(session, &command);
+        tmux.wait_for(session, bar, |s| s.contains(bar));
+        let _ = tmux.run(&["kill-session", "-t", session]);
+        // Not on a terminal: no bar, nothing on stderr.
+        let short: Vec<&str> = args
+            .iter()
+            .map(|&a| if a.starts_with("1000") { "2" } else { a })
+            .collect();
+        let o = blockstack(&short);
+        assert!(o.status.success(), "{short:?}: {}", stderr(&o));
+        assert_eq!(stderr(&o), "", "{short:?}");
+    }
 }

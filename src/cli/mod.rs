@@ -12,6 +12,7 @@ mod demo;
 mod eval;
 mod learn_from_demos;
 mod profile;
+mod progress;
 mod render;
 mod reproduce;
 mod run;

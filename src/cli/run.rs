@@ -183,8 +183,17 @@ pub fn run(args: RunArgs) -> Result<()> {
     };
     let mut env = Env::new(config)?;
     let mut trajectory = trajectory_out.as_ref().map(TrajectoryWriter::create).transpose()?;
-    let results = agent::play(&mut env, policy.as_mut(), args.episodes, args.seed, trajectory.as_mut())
-        .map_err(|e| args.budget.explain(e))?;
+    let bar = super::progress::bar(args.episodes, "episodes");
+    let results = agent::rollout::play_observed(
+        &mut env,
+        policy.as_mut(),
+        args.episodes,
+        args.seed,
+        trajectory.as_mut(),
+        &mut |_| bar.inc(1),
+    )
+    .map_err(|e| args.budget.explain(e))?;
+    bar.finish_and_clear();
     if let Some(t) = trajectory {
         t.finish()?;
     }
