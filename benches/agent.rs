@@ -6,6 +6,10 @@
 //! of an agent already trained for the recipe's 100,000 games (short games), the regime
 //! most of a training run's games are played in. Both include the recipe's backward replay
 //! and the writes to the replay memory; the final replay is not timed here.
+//!
+//! `train_original/<backend>` plays the first 5 games of the paper's learner as its
+//! authors coded it (`TrainConfig::original`: `chasing-code` keys in a hashed table, the
+//! `paper-code` reward and schedule, games of up to 5000 steps), steps per second.
 
 use std::hint::black_box;
 
@@ -71,5 +75,32 @@ fn train_games(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, q_update, train_games);
+fn train_original(c: &mut Criterion) {
+    let mut group = c.benchmark_group("train_original");
+    let goals = sim::Goal::all(3).unwrap();
+    for backend in [Backend::Physics, Backend::Grid] {
+        let config = TrainConfig {
+            backend,
+            ..TrainConfig::original(goals.clone())
+        };
+        // The steps the first 5 games take, the same in every iteration (seeded).
+        let mut probe = Trainer::new(config.clone()).unwrap();
+        probe.play_games(5, None).unwrap();
+        group.throughput(Throughput::Elements(probe.report().steps));
+        group.sample_size(10);
+        group.bench_function(BenchmarkId::from_parameter(backend), |b| {
+            b.iter_batched(
+                || Trainer::new(config.clone()).unwrap(),
+                |mut trainer| {
+                    trainer.play_games(5, None).unwrap();
+                    trainer
+                },
+                BatchSize::PerIteration,
+            )
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, q_update, train_games, train_original);
 criterion_main!(benches);

@@ -1,14 +1,19 @@
 //! Agents that act in the blockstack world.
 //!
-//! - [`Policy`]: what every agent offers; [`RandomPolicy`] is the paper's baseline.
+//! - [`Policy`]: what every agent offers; [`RandomPolicy`] is the paper's baseline. Every
+//!   policy chooses among the legal actions of its observation (the world's action
+//!   protocol): the planners ([`planner_policy`]) plan under it, the Q-learners mask it.
 //! - [`rollout`]: the episode loop every command and experiment shares, with its
 //!   [`Summary`] of failures and steps to goal.
 //! - [`QAgent`]: tabular Q-learning over one of the [`repr`] state representations, trained
-//!   by [`train`](train::train) / [`Trainer`], saved and loaded as [`model`] files; a run
-//!   stopped and resumed through a [`checkpoint`] ends as if it had not stopped.
+//!   by [`train`](train::train) / [`Trainer`] on a [`schedule`], assisted by an oracle as
+//!   [`assist`] says, saved and loaded as [`model`] files; a run stopped and resumed
+//!   through a [`checkpoint`] ends as if it had not stopped.
 //! - [`optimality`]: steps taken against the exact solver's shortest plans.
 //! - [`correction`]: learning from a demonstrator's corrections, simulated [`demonstrator`]s,
 //!   and [`demos`] recordings and their replay.
+//! - [`profile`]: the learner-level parts of `sim::Profile`: ours (`spec`), or the paper's
+//!   learner, oracle and corrections as its authors coded them (`original`).
 
 pub mod assist;
 pub mod checkpoint;

@@ -382,6 +382,9 @@ impl QAgent {
     #[inline]
     pub(crate) fn greedy_column(&self, key: u64, legal: u32, rng: &mut SimRng) -> usize {
         let row = self.table.row(key);
+        if legal == all_columns(row.len()) {
+            return greedy_in(row, rng);
+        }
         let columns = || Columns(legal).filter(|&c| c < row.len());
         let max = columns().map(|c| row[c]).fold(f32::NEG_INFINITY, f32::max);
         let ties = columns().filter(|&c| row[c] == max).count();
@@ -403,7 +406,11 @@ impl QAgent {
     #[inline]
     pub(crate) fn choose_column(&self, key: u64, legal: u32, epsilon: f64, rng: &mut SimRng) -> usize {
         if epsilon > 0.0 && rng.random_bool(epsilon) {
-            let columns = Columns(legal).filter(|&c| c < self.table.columns());
+            let n = self.table.columns();
+            if legal == all_columns(n) {
+                return rng.random_range(0..n);
+            }
+            let columns = Columns(legal).filter(|&c| c < n);
             let k = rng.random_range(0..columns.clone().count());
             columns.clone().nth(k).expect("k < the legal columns")
         } else {
@@ -473,6 +480,34 @@ impl QAgent {
     pub fn policy(&self, epsilon: f64) -> Result<QPolicy<'_>> {
         check_epsilon(epsilon)?;
         Ok(QPolicy { agent: self, epsilon })
+    }
+}
+
+/// The mask of every one of `n` columns (`n` <= 32).
+#[inline]
+fn all_columns(n: usize) -> u32 {
+    u32::MAX.checked_shr(32 - n as u32).unwrap_or(0)
+}
+
+/// The greedy column of `row`, every column legal, ties broken at random: a column of the
+/// highest value, the `k`-th of `ties` equal ones for a uniform `k`.
+#[inline]
+fn greedy_in(row: &[f32], rng: &mut SimRng) -> usize {
+    let max = row.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+    let ties = row.iter().filter(|&&v| v == max).count();
+    match ties {
+        1 => row.iter().position(|&v| v == max).expect("the maximum is in the row"),
+        // Only NaNs: nothing to prefer.
+        0 => rng.random_range(0..row.len()),
+        _ => {
+            let k = rng.random_range(0..ties);
+            row.iter()
+                .enumerate()
+                .filter(|&(_, &v)| v == max)
+                .nth(k)
+                .expect("k < ties")
+                .0
+        }
     }
 }
 

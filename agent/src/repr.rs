@@ -586,7 +586,10 @@ impl Repr {
     #[inline]
     pub fn column_mask(&self, goal: &Goal, mask: ActionMask) -> u32 {
         match self {
-            Repr::Role(r) => mask.iter().fold(0, |bits, a| bits | 1 << r.column(goal, a)),
+            // Every action legal is every column, whatever the renaming.
+            Repr::Role(r) if mask.count() < mask.action_count() => {
+                mask.iter().fold(0, |bits, a| bits | 1 << r.column(goal, a))
+            }
             _ => mask.bits(),
         }
     }

@@ -456,7 +456,9 @@ impl Trainer {
                     (agent.action_of_column(&obs.goal, column), column)
                 }
             };
-            watch.see_action(action);
+            if self.config.assist != Assist::None {
+                watch.see_action(action);
+            }
             let step_number = env.steps() + 1;
             let step = env.step(action)?;
             let next_key = agent.key_unchecked(&step.observation);

@@ -377,3 +377,30 @@ fn a_training_config_that_contradicts_the_model_is_refused() {
     }));
     assert!(err.contains("training goal 1,0 has 2 blocks"), "{err}");
 }
+
+#[test]
+fn seen_entries_belong_to_paper_code_models_and_must_fit() {
+    let mut meta = role_meta();
+    meta["schedule"] = json!("paper-code");
+    let seen = |keys: &[u32], bits: &[u32]| {
+        let mut t = no_rows();
+        t.push(("seen_keys", Tensor::from_values(&[keys.len()], keys).unwrap()));
+        t.push(("seen", Tensor::from_values(&[bits.len()], bits).unwrap()));
+        t
+    };
+    let agent = QAgent::load(&crafted("seen.safetensors", &meta, &seen(&[3, 9], &[0b1, 0b1010_0000]))).unwrap();
+    assert_eq!(agent.schedule(), agent::Schedule::PaperCode);
+    assert_eq!(agent.table().seen_entries(), vec![(3, 1), (9, 0b1010_0000)]);
+    let err = refusal(&crafted("unseen.safetensors", &meta, &no_rows()));
+    assert!(err.contains("lacks its seen entries"), "{err}");
+    let err = refusal(&crafted("spec-seen.safetensors", &role_meta(), &seen(&[3], &[1])));
+    assert!(err.contains("spec schedule has seen entries"), "{err}");
+    let err = refusal(&crafted("bits.safetensors", &meta, &seen(&[3], &[1 << 8])));
+    assert!(err.contains("does not fit a table"), "{err}");
+    let err = refusal(&crafted("seen-order.safetensors", &meta, &seen(&[9, 3], &[1, 1])));
+    assert!(err.contains("in key order"), "{err}");
+    // The training config names the schedule the agent learns by.
+    meta["training"] = serde_json::to_value(TrainConfig::role_step_cost(vec![goal("0,1,2")])).unwrap();
+    let err = refusal(&crafted("schedule.safetensors", &meta, &seen(&[3], &[1])));
+    assert!(err.contains("learns by the paper-code schedule"), "{err}");
+}

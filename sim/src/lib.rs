@@ -7,7 +7,8 @@
 //!   [`PhysicsWorld`], rapier2d rigid bodies moved by a controller that asks rapier's
 //!   collision detection whether each move is free.
 //! - [`Env`]: a Gymnasium-style environment (`reset`, `step`) over either backend, with the
-//!   reward models of [`reward`]; [`VecEnv`] steps many in parallel.
+//!   reward models of [`reward`]; [`VecEnv`] steps many in parallel, with either of
+//!   Gymnasium's autoreset modes.
 //! - [`render`] draws the world as text or pictures; [`trajectory`] writes episodes as
 //!   JSON Lines. Both write their files through the `files` crate's output helper.
 //!
@@ -83,5 +84,5 @@ pub use reward::RewardModel;
 pub use start::StartRule;
 pub use state::{BlockId, MAX_BLOCKS, MIN_BLOCKS, State};
 pub use termination::Termination;
-pub use vec_env::VecEnv;
+pub use vec_env::{Autoreset, VecEnv, VecStep};
 pub use world::{Effect, World};

@@ -48,13 +48,31 @@ impl Observation {
             channels: n + 1,
             data: vec![0; w * h * (n + 1)],
         };
+        self.write_planes(&mut planes.data);
+        planes
+    }
+
+    /// Writes [`Observation::planes`]' values into `out` (laid out as [`Planes::data`]),
+    /// for callers that fill buffers of their own without allocating.
+    ///
+    /// # Panics
+    ///
+    /// Unless `out` holds `W * H * (N + 1)` values.
+    pub fn write_planes(&self, out: &mut [u8]) {
+        let (h, n) = (self.grid.height(), self.state.block_count());
+        assert_eq!(
+            out.len(),
+            self.grid.width() * h * (n + 1),
+            "a buffer of W x H x (N + 1) values"
+        );
+        out.fill(0);
+        let at = |c: Cell, channel: usize| (usize::from(c.x) * h + usize::from(c.y)) * (n + 1) + channel;
         for (i, &c) in self.blocks().iter().enumerate() {
-            *planes.at_mut(c, i) = 1;
+            out[at(c, i)] = 1;
         }
         if let Some(b) = self.held_block() {
-            *planes.at_mut(self.state.cell(b), n) = 1;
+            out[at(self.state.cell(b), n)] = 1;
         }
-        planes
     }
 
     /// The rendered frame as an RGB image (see [`crate::render`]).
@@ -81,9 +99,5 @@ impl Planes {
     /// The value at cell `(x, y)`, channel `channel`.
     pub fn get(&self, x: usize, y: usize, channel: usize) -> u8 {
         self.data[(x * self.height + y) * self.channels + channel]
-    }
-
-    fn at_mut(&mut self, c: Cell, channel: usize) -> &mut u8 {
-        &mut self.data[(usize::from(c.x) * self.height + usize::from(c.y)) * self.channels + channel]
     }
 }

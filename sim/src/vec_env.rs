@@ -7,23 +7,63 @@ use crate::env::{Env, EnvConfig, Step};
 use crate::error::{Result, SimError};
 use crate::observation::Observation;
 
+/// How a [`VecEnv`] starts the next episode of an environment whose episode ended: the
+/// two modes of Gymnasium 1.x's `AutoresetMode`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Autoreset {
+    /// `SAME_STEP`: the step that ends an episode also resets the environment. It returns
+    /// the new episode's first observation, the ended episode's last one in
+    /// `info.final_observation`, and the reward and flags of the step that ended it; the
+    /// next action applies to the observation just returned, and `info.action_mask` is that
+    /// observation's legal actions (the ended episode's are `info.final_observation`'s
+    /// [`legal_actions`](Observation::legal_actions)).
+    #[default]
+    SameStep,
+    /// `NEXT_STEP` (Gymnasium's default): the step that ends an episode returns its last
+    /// observation; the environment's next step ignores its action and resets it,
+    /// returning the new episode's first observation with reward 0 and neither flag set.
+    NextStep,
+}
+
+/// What one environment of a [`VecEnv`] did in a vectorised step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum VecStep {
+    /// It took its action (under [`Autoreset::SameStep`] a step that ended the episode has
+    /// already reset it: see [`Autoreset`]).
+    Stepped(Step),
+    /// Under [`Autoreset::NextStep`], its episode had ended: it ignored its action and
+    /// reset, continuing its generator; this is the new episode's first observation.
+    Reset(Observation),
+}
+
+impl VecStep {
+    /// The observation the agent acts on next.
+    pub fn observation(&self) -> &Observation {
+        match self {
+            VecStep::Stepped(step) => &step.observation,
+            VecStep::Reset(obs) => obs,
+        }
+    }
+}
+
+/// Environments per rayon task: below this a hand-off to another thread costs more than
+/// the steps it carries (a physics step takes about 0.15 us).
+const MIN_ENVS_PER_TASK: usize = 64;
+
 /// `M` environments of one config, stepped together on a rayon thread pool.
 ///
 /// Seeds: environment `i` is reset with `base_seed + i`, and each continues its own
 /// generator from there, so every environment plays its own fixed sequence of episodes.
 ///
-/// Autoreset: Gymnasium's **same-step** mode. When an environment's episode ends on a step,
-/// it is reset within that step: the returned `observation` is the new episode's first, the
-/// ended episode's last observation is in `info.final_observation`, and `reward`,
-/// `terminated` and `truncated` are those of the step that ended it. The next action
-/// therefore always applies to the observation just returned, and `info.action_mask` is
-/// always that observation's legal actions (the ended episode's are
-/// `info.final_observation`'s [`legal_actions`](Observation::legal_actions)).
+/// Autoreset: [`Autoreset::SameStep`] unless [`VecEnv::with_autoreset`] says otherwise.
 pub struct VecEnv {
     envs: Vec<Env>,
     /// `None` for one thread: the caller's thread steps the environments itself, which
     /// spares a hand-off to a pool thread and back on every step.
     pool: Option<rayon::ThreadPool>,
+    autoreset: Autoreset,
+    /// Under [`Autoreset::NextStep`]: whose episode ended on the last step.
+    ended: Vec<bool>,
 }
 
 impl VecEnv {
@@ -43,7 +83,23 @@ impl VecEnv {
                     })?,
             ),
         };
-        Ok(VecEnv { envs, pool })
+        Ok(VecEnv {
+            envs,
+            pool,
+            autoreset: Autoreset::default(),
+            ended: vec![false; count],
+        })
+    }
+
+    /// This vector environment with autoreset mode `mode`.
+    pub fn with_autoreset(mut self, mode: Autoreset) -> VecEnv {
+        self.autoreset = mode;
+        self
+    }
+
+    /// The autoreset mode.
+    pub fn autoreset(&self) -> Autoreset {
+        self.autoreset
     }
 
     /// Number of environments.
@@ -58,39 +114,128 @@ impl VecEnv {
 
     /// Resets environment `i` with seed `base_seed + i`; returns every first observation.
     pub fn reset(&mut self, base_seed: u64) -> Vec<Observation> {
-        let reset = |(i, env): (usize, &mut Env)| env.reset(base_seed.wrapping_add(i as u64));
+        let seeds: Vec<Option<u64>> = (0..self.len() as u64)
+            .map(|i| Some(base_seed.wrapping_add(i)))
+            .collect();
+        let mut out = vec![None; self.len()];
+        self.reset_with(&seeds, &mut out, |obs, slot| *slot = Some(*obs));
+        out.into_iter()
+            .map(|o| o.expect("every environment was reset"))
+            .collect()
+    }
+
+    /// Resets environment `i` with `seeds[i]` (`None` continues its generator, as
+    /// [`Env::reset`] does) and hands its first observation to `write` with `slots[i]`, on
+    /// the thread that reset it.
+    ///
+    /// # Panics
+    ///
+    /// Unless there is one seed and one slot per environment.
+    pub fn reset_with<T: Send>(
+        &mut self,
+        seeds: &[Option<u64>],
+        slots: &mut [T],
+        write: impl Fn(&Observation, &mut T) + Sync,
+    ) {
+        assert_eq!(seeds.len(), self.len(), "one seed per environment");
+        assert_eq!(slots.len(), self.len(), "one slot per environment");
+        self.ended.fill(false);
+        let reset = |((env, &seed), slot): ((&mut Env, &Option<u64>), &mut T)| write(&env.reset(seed), slot);
         match &self.pool {
-            None => self.envs.iter_mut().enumerate().map(reset).collect(),
-            Some(pool) => pool.install(|| self.envs.par_iter_mut().enumerate().map(reset).collect()),
+            None => self.envs.iter_mut().zip(seeds).zip(slots.iter_mut()).for_each(reset),
+            Some(pool) => pool.install(|| {
+                self.envs
+                    .par_iter_mut()
+                    .zip(seeds.par_iter())
+                    .zip(slots.par_iter_mut())
+                    .with_min_len(MIN_ENVS_PER_TASK)
+                    .for_each(reset)
+            }),
         }
     }
 
-    /// Steps environment `i` with `actions[i]`, resetting those whose episode ends (see
-    /// the type's docs). An error, before any environment steps, if the action count
-    /// differs from the environment count or if any environment would refuse its action
-    /// (the first such error; see [`Env::check_action`]).
-    pub fn step(&mut self, actions: &[Action]) -> Result<Vec<Step>> {
-        if actions.len() != self.envs.len() {
+    /// Steps environment `i` with `actions[i]`, resetting those whose episode ends as the
+    /// autoreset mode says. An error if the action count differs from the environment
+    /// count, or if any step fails (the first such error).
+    pub fn step(&mut self, actions: &[Action]) -> Result<Vec<VecStep>> {
+        let mut out = vec![None; self.len()];
+        self.step_with(actions, &mut out, |step, slot| *slot = Some(*step))?;
+        Ok(out
+            .into_iter()
+            .map(|s| s.expect("every environment was stepped"))
+            .collect())
+    }
+
+    /// Steps every environment as [`VecEnv::step`] does and hands environment `i`'s result
+    /// to `write` with `slots[i]`, on the thread that stepped it: a caller that copies
+    /// results into its own buffers does so in parallel, with nothing collected in between.
+    ///
+    /// Nothing is stepped unless every environment can be: an error first if the action
+    /// count differs from the environment count, or if an environment would refuse its
+    /// action (the first such error; see [`Env::check_action`]).
+    ///
+    /// # Panics
+    ///
+    /// Unless there is one slot per environment.
+    pub fn step_with<T: Send>(
+        &mut self,
+        actions: &[Action],
+        slots: &mut [T],
+        write: impl Fn(&VecStep, &mut T) + Sync,
+    ) -> Result<()> {
+        if actions.len() != self.len() {
             return Err(SimError::ActionCountMismatch {
-                envs: self.envs.len(),
+                envs: self.len(),
                 actions: actions.len(),
             });
         }
-        for (env, &action) in self.envs.iter().zip(actions) {
-            env.check_action(action)?;
-        }
-        let step = |(env, &action): (&mut Env, &Action)| {
-            let mut step = env.step(action)?;
-            if step.terminated || step.truncated {
-                step.info.final_observation = Some(step.observation);
-                step.observation = env.reset(None);
-                step.info.action_mask = step.observation.legal_actions();
+        assert_eq!(slots.len(), self.len(), "one slot per environment");
+        // Every environment that takes its action must accept it (running, the block
+        // exists, legal under the protocol); one about to reset ignores its action.
+        for ((env, &action), &ended) in self.envs.iter().zip(actions).zip(&self.ended) {
+            if !ended {
+                env.check_action(action)?;
             }
-            Ok(step)
+        }
+        let mode = self.autoreset;
+        let step = |(((env, &action), ended), slot): (((&mut Env, &Action), &mut bool), &mut T)| -> Result<()> {
+            let result = if *ended {
+                *ended = false;
+                VecStep::Reset(env.reset(None))
+            } else {
+                let mut step = env.step(action)?;
+                if step.terminated || step.truncated {
+                    match mode {
+                        Autoreset::SameStep => {
+                            step.info.final_observation = Some(step.observation);
+                            step.observation = env.reset(None);
+                            step.info.action_mask = step.observation.legal_actions();
+                        }
+                        Autoreset::NextStep => *ended = true,
+                    }
+                }
+                VecStep::Stepped(step)
+            };
+            write(&result, slot);
+            Ok(())
         };
         match &self.pool {
-            None => self.envs.iter_mut().zip(actions).map(step).collect(),
-            Some(pool) => pool.install(|| self.envs.par_iter_mut().zip(actions.par_iter()).map(step).collect()),
+            None => self
+                .envs
+                .iter_mut()
+                .zip(actions)
+                .zip(self.ended.iter_mut())
+                .zip(slots.iter_mut())
+                .try_for_each(step),
+            Some(pool) => pool.install(|| {
+                self.envs
+                    .par_iter_mut()
+                    .zip(actions.par_iter())
+                    .zip(self.ended.par_iter_mut())
+                    .zip(slots.par_iter_mut())
+                    .with_min_len(MIN_ENVS_PER_TASK)
+                    .try_for_each(step)
+            }),
         }
     }
 

@@ -1,7 +1,10 @@
 //! The environment: seeding, episode ends, rewards, observations, config errors, VecEnv.
 
 use sim::reward::{Dense, Paper, Sparse, StepCost, Transition};
-use sim::{Action, Backend, BlockId, Cell, Env, EnvConfig, Goal, GoalSpec, Grid, RewardModel, SimError, State, VecEnv};
+use sim::{
+    Action, Autoreset, Backend, BlockId, Cell, Env, EnvConfig, Goal, GoalSpec, Grid, RewardModel, SimError, State,
+    VecEnv, VecStep,
+};
 
 fn goal(text: &str) -> Goal {
     text.parse().unwrap()
@@ -303,6 +306,9 @@ fn vec_env_seeds_each_env_and_resets_in_the_same_step() {
         v.step(&drops).unwrap();
         let last = v.step(&drops).unwrap();
         for (i, s) in last.iter().enumerate() {
+            let VecStep::Stepped(s) = s else {
+                panic!("same-step autoreset never returns a bare reset")
+            };
             assert!(s.truncated);
             assert_eq!(s.info.final_observation.unwrap().state, first[i].state);
             // The returned observation starts the next episode: the env's generator continued.
@@ -315,4 +321,49 @@ fn vec_env_seeds_each_env_and_resets_in_the_same_step() {
             Err(SimError::ActionCountMismatch { envs: 4, actions: 3 })
         ));
     }
+}
+
+#[test]
+fn vec_env_in_next_step_mode_returns_the_last_observation_then_resets() {
+    let config = EnvConfig {
+        horizon: 2,
+        backend: Backend::Grid,
+        ..EnvConfig::with_goal(goal("0,1,2"))
+    };
+    for threads in [1, 2] {
+        let mut v = VecEnv::new(config, 3, threads)
+            .unwrap()
+            .with_autoreset(Autoreset::NextStep);
+        let mut solo: Vec<Env> = (0..3).map(|_| Env::new(config).unwrap()).collect();
+        let first = v.reset(4);
+        for (i, env) in solo.iter_mut().enumerate() {
+            assert_eq!(first[i], env.reset(4 + i as u64));
+        }
+        let picks = vec![Action::Pick(BlockId(1)); 3];
+        v.step(&picks).unwrap();
+        let ended = v.step(&[Action::Up, Action::Drop, Action::Left]).unwrap();
+        for (i, s) in ended.iter().enumerate() {
+            solo[i].step(picks[i]).unwrap();
+            let expected = solo[i].step([Action::Up, Action::Drop, Action::Left][i]).unwrap();
+            // The step that ends the episode returns its last observation, as a lone env does.
+            assert_eq!(*s, VecStep::Stepped(expected));
+            assert!(expected.truncated && expected.info.final_observation.is_none());
+        }
+        // The next step ignores its action (even a pick) and starts the next episode.
+        let reset = v.step(&picks).unwrap();
+        for (i, s) in reset.iter().enumerate() {
+            assert_eq!(*s, VecStep::Reset(solo[i].reset(None)));
+        }
+        let again = v.step(&picks).unwrap();
+        for (i, s) in again.iter().enumerate() {
+            assert_eq!(*s, VecStep::Stepped(solo[i].step(picks[i]).unwrap()));
+        }
+    }
+}
+
+#[test]
+fn vec_env_refuses_to_step_before_reset_and_steps_nothing() {
+    let mut v = VecEnv::new(EnvConfig::default(), 2, 1).unwrap();
+    assert_eq!(v.step(&[Action::Up, Action::Up]), Err(SimError::NotReset));
+    assert!(v.envs().iter().all(|e| e.steps() == 0));
 }

@@ -5,7 +5,7 @@
 use sim::reward::{PaperCode, Transition};
 use sim::{
     Action, ActionMask, ActionProtocol, Backend, BlockId, Cell, Env, EnvConfig, Goal, GoalSpec, Grid, Profile,
-    RewardModel, SimError, StartRule, State, Termination, VecEnv,
+    RewardModel, SimError, StartRule, State, Step, Termination, VecEnv, VecStep,
 };
 
 fn goal(text: &str) -> Goal {
@@ -364,6 +364,17 @@ fn paper_code_is_the_reward_of_the_original_profile_s_env() {
     }
 }
 
+/// The steps of a same-step `VecEnv`, which never returns a bare reset.
+fn stepped(steps: Vec<VecStep>) -> Vec<Step> {
+    steps
+        .into_iter()
+        .map(|s| match s {
+            VecStep::Stepped(step) => step,
+            VecStep::Reset(_) => panic!("same-step autoreset never returns a bare reset"),
+        })
+        .collect()
+}
+
 #[test]
 fn vec_env_masks_and_autoresets_under_paper() {
     let config = EnvConfig {
@@ -389,7 +400,7 @@ fn vec_env_masks_and_autoresets_under_paper() {
             }
         );
         assert!(v.envs().iter().all(|e| e.steps() == 0));
-        let picked = v.step(&[Action::Pick(BlockId(0)); 3]).unwrap();
+        let picked = stepped(v.step(&[Action::Pick(BlockId(0)); 3]).unwrap());
         for s in &picked {
             assert_eq!(s.info.action_mask, s.observation.legal_actions());
             assert_eq!(s.info.action_mask.count(), 5);
@@ -398,7 +409,7 @@ fn vec_env_masks_and_autoresets_under_paper() {
         // The third step reaches the horizon: each environment resets in the same step. The
         // mask is that of the new episode's first observation (nothing held: picks), while
         // the ended episode's last observation still holds block 0.
-        let last = v.step(&[Action::Down; 3]).unwrap();
+        let last = stepped(v.step(&[Action::Down; 3]).unwrap());
         for (i, s) in last.iter().enumerate() {
             assert!(s.truncated || s.terminated, "env {i}");
             let ended = s.info.final_observation.unwrap();

@@ -1,0 +1,50 @@
+"""blockstack: a physics-backed 2D block-stacking world for reinforcement learning.
+
+Importing the package registers ``blockstack/Stack-v0`` with Gymnasium::
+
+    import gymnasium as gym
+    import blockstack
+
+    env = gym.make("blockstack/Stack-v0", blocks=3, obs="planes")
+    obs, info = env.reset(seed=7)   # the start of the Rust ``Env::reset(7)``
+    obs, reward, terminated, truncated, info = env.step(env.unwrapped.expert_action())
+
+- :class:`StackEnv`: the Gymnasium environment (``gymnasium.make``).
+- :class:`blockstack.vector.StackVectorEnv`: a batch of environments stepped in one Rust
+  call into preallocated numpy arrays.
+- :func:`solve`: a shortest (or the oracle's) plan from any state.
+- :func:`demonstrations` and :func:`read_recording`: expert trajectories, and the CLI's
+  recordings, as dicts of numpy arrays.
+- :func:`train`: the Rust tabular trainer, in-process; ``python -m blockstack.sweep`` runs
+  grids of it on Ray.
+
+The world, its rules, rewards, planners and trainer are the Rust crates' (``sim``,
+``oracle``, ``agent``); this package only carries arguments in and arrays out. Every error
+they report is raised as ``ValueError`` with their message.
+"""
+
+from gymnasium.envs.registration import register, registry
+
+from blockstack._native import REWARDS, episode_seed, train
+from blockstack.demonstrations import demonstrations, read_recording
+from blockstack.env import StackEnv
+from blockstack.planning import solve
+
+__all__ = [
+    "REWARDS",
+    "StackEnv",
+    "demonstrations",
+    "episode_seed",
+    "read_recording",
+    "solve",
+    "train",
+]
+
+ENV_ID = "blockstack/Stack-v0"
+
+if ENV_ID not in registry:
+    register(
+        id=ENV_ID,
+        entry_point="blockstack.env:StackEnv",
+        vector_entry_point="blockstack.vector:StackVectorEnv",
+    )

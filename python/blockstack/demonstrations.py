@@ -1,0 +1,54 @@
+"""Expert trajectories and the CLI's recordings as dicts of numpy arrays.
+
+Both functions return the same keys, one row per step:
+
+- ``observations``, ``next_observations``: ``(T, *obs shape)`` arrays (dicts of arrays for
+  ``obs="state"``), the observation before and after each action;
+- ``actions`` (int64), ``rewards`` (float64), ``terminations``, ``truncations`` (bool);
+- ``episode_starts`` (bool, true at each episode's first step), ``episodes`` (int64);
+- ``action_masks`` (int8, ``(T, 5 + N)``, the legal actions in each observation).
+
+Ready for behaviour cloning (``observations`` -> ``actions``) or DQfD (add
+``next_observations``, ``rewards`` and ``terminations`` to a replay buffer).
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Optional, Tuple, Union
+
+from blockstack import _native
+from blockstack._goal import Goal, goal_text
+
+
+def demonstrations(
+    episodes: int,
+    expert: str = "exact",
+    blocks: int = 3,
+    seed: int = 0,
+    obs: str = "planes",
+    goal: Goal = None,
+    grid: Tuple[int, int] = (7, 7),
+    reward: Optional[str] = None,
+    backend: str = "physics",
+    max_episode_steps: int = 1000,
+    profile: str = "spec",
+) -> dict:
+    """``episodes`` episodes of an expert (``"exact"``: shortest plans; ``"oracle"``).
+
+    Episode ``k`` starts from ``reset(episode_seed(seed, k))``: the start that
+    ``blockstack run --seed SEED`` plays as its episode ``k``.
+    """
+    return _native.demonstrations(
+        episodes, expert, blocks, seed, obs, goal_text(goal), tuple(grid), reward, backend, max_episode_steps, profile
+    )
+
+
+def read_recording(path: Union[str, os.PathLike], obs: str = "planes", profile: str = "spec") -> dict:
+    """A recording the CLI wrote, as the arrays :func:`demonstrations` gives.
+
+    Reads trajectory files (``blockstack run --trajectory FILE``) and demonstration
+    recordings (``blockstack demo`` / ``correct --record FILE``); the lines tell which.
+    Recordings do not name their world: ``action_masks`` follow ``profile``'s protocol.
+    """
+    return _native.read_recording(os.fspath(path), obs, profile)

@@ -1,0 +1,26 @@
+"""Plans from any state, by the Rust exact solver or oracle."""
+
+from __future__ import annotations
+
+from typing import Optional, Sequence, Tuple
+
+from blockstack import _native
+from blockstack._goal import Goal
+
+
+def solve(
+    cells: Sequence[Tuple[int, int]],
+    goal: Goal,
+    held: Optional[int] = None,
+    grid: Tuple[int, int] = (7, 7),
+    solver: str = "exact",
+) -> list:
+    """A plan, as a list of action indices, from the state where block ``i`` stands on
+    ``cells[i]`` (``(x, y)``, ``y`` upward) with ``held`` held, to ``goal`` (bottom to top,
+    ``"1,0,2"`` or ``[1, 0, 2]``).
+
+    ``solver="exact"`` gives a shortest plan (A* over the joint state); ``"oracle"`` the
+    centroid + A* oracle's. An empty list when the goal holds already; ``ValueError`` for a
+    state or goal that does not fit the grid.
+    """
+    return _native.solve([tuple(c) for c in cells], goal, held, tuple(grid), solver)

@@ -1,0 +1,96 @@
+//! Python arguments into the crates' configs, checked by the crates themselves.
+
+use pyo3::prelude::*;
+use sim::{Backend, EnvConfig, Goal, GoalSpec, Grid, Profile, RewardModel};
+
+use crate::boundary::{OrValueError, value_error};
+
+/// What an environment shows its agent (the `obs` argument).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ObsKind {
+    /// [`sim::Observation::planes`]: `W x H x (N + 1)` one-hot `uint8` planes.
+    Planes,
+    /// Block cells, held block and goal, as integers.
+    State,
+    /// [`sim::Observation::rgb`]: the rendered frame, `uint8`, height x width x 3.
+    Pixels,
+}
+
+impl ObsKind {
+    /// The kind called `name`; a `ValueError` naming the choices otherwise.
+    pub fn parse(name: &str) -> PyResult<ObsKind> {
+        match name {
+            "planes" => Ok(ObsKind::Planes),
+            "state" => Ok(ObsKind::State),
+            "pixels" => Ok(ObsKind::Pixels),
+            _ => Err(value_error(format!(
+                "cannot read observation kind from {name:?}: choose planes, state or pixels"
+            ))),
+        }
+    }
+}
+
+/// The world an environment is made of, from the Python keyword arguments: the profile's
+/// world (its action protocol, start rule and reward) with the given grid, blocks, goal,
+/// horizon and backend, and the given reward if one is named.
+#[allow(clippy::too_many_arguments)]
+pub fn env_config(
+    blocks: usize,
+    goal: Option<&str>,
+    grid: (usize, usize),
+    reward: Option<&str>,
+    backend: &str,
+    horizon: u32,
+    profile: &str,
+) -> PyResult<EnvConfig> {
+    let profile = self::profile(profile)?;
+    let defaults = EnvConfig::for_profile(profile);
+    let config = EnvConfig {
+        grid: Grid::new(grid.0, grid.1).or_value_error()?,
+        blocks,
+        goal: match goal {
+            Some(text) => GoalSpec::Fixed(Goal::parse(text, Some(blocks)).or_value_error()?),
+            None => GoalSpec::Random,
+        },
+        horizon,
+        // The profile's reward unless one is named.
+        reward: match reward {
+            Some(name) => RewardModel::from_name(name).or_value_error()?,
+            None => defaults.reward,
+        },
+        backend: backend.parse::<Backend>().or_value_error()?,
+        ..defaults
+    };
+    config.validate().or_value_error()?;
+    Ok(config)
+}
+
+/// The profile called `name` (`spec` or `original`; `sim::Profile`).
+pub fn profile(name: &str) -> PyResult<Profile> {
+    name.parse::<Profile>().or_value_error()
+}
+
+/// A goal from Python: text such as `"1,0,2"` or a sequence of block ids.
+pub fn goal_from(goal: &Bound<'_, PyAny>, blocks: Option<usize>) -> PyResult<Goal> {
+    if let Ok(text) = goal.extract::<String>() {
+        return Goal::parse(&text, blocks).or_value_error();
+    }
+    let order: Vec<usize> = goal
+        .extract()
+        .map_err(|_| value_error("a goal is text such as \"1,0,2\" or a sequence of block ids, bottom to top"))?;
+    let g = Goal::from_indices(&order).or_value_error()?;
+    match blocks {
+        Some(n) if n != g.block_count() => Err(value_error(format!(
+            "goal {g} has {} blocks but the world has {n}",
+            g.block_count()
+        ))),
+        _ => Ok(g),
+    }
+}
+
+/// The seed of episode `index` of a run with seed `base`: `sim::seeding::episode_seed`,
+/// the seeds the CLI's `run --seed` resets its episodes with.
+#[pyfunction]
+pub fn episode_seed(base: u64, index: u64) -> u64 {
+    sim::seeding::episode_seed(base, index)
+}

@@ -1,0 +1,403 @@
+//! Demonstrations as arrays: expert episodes played by the planners, and recordings the
+//! CLI wrote (trajectories of `run --trajectory`, demonstration sessions of `demo` /
+//! `correct --record`) read back into the same arrays.
+
+use std::io::Read;
+use std::path::PathBuf;
+
+use agent::demos::{DemoRecord, MAX_RECORDING_BYTES};
+use agent::rollout::policy_rng;
+use agent::{ExactPolicy, OraclePolicy, Policy};
+use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use sim::seeding::episode_seed;
+use sim::trajectory::Record;
+use sim::{Action, ActionProtocol, BlockId, Cell, Env, Goal, Grid, Observation, State};
+
+use crate::boundary::{OrValueError, guard, value_error};
+use crate::config::{self, ObsKind, env_config};
+use crate::observe;
+
+/// Steps of episodes, column by column.
+#[derive(Default)]
+struct Columns {
+    observations: Vec<Observation>,
+    next_observations: Vec<Observation>,
+    actions: Vec<i64>,
+    rewards: Vec<f64>,
+    terminations: Vec<bool>,
+    truncations: Vec<bool>,
+    episode_starts: Vec<bool>,
+    episodes: Vec<i64>,
+}
+
+impl Columns {
+    #[allow(clippy::too_many_arguments)]
+    fn push(
+        &mut self,
+        episode: u64,
+        before: Observation,
+        action: Action,
+        reward: f64,
+        after: Observation,
+        terminated: bool,
+        truncated: bool,
+        first: bool,
+    ) {
+        self.observations.push(before);
+        self.next_observations.push(after);
+        self.actions.push(action.index() as i64);
+        self.rewards.push(reward);
+        self.terminations.push(terminated);
+        self.truncations.push(truncated);
+        self.episode_starts.push(first);
+        self.episodes.push(episode as i64);
+    }
+
+    /// The columns as a dict of numpy arrays, observations encoded as `kind` for a world of
+    /// `blocks` blocks on `grid`.
+    fn into_dict<'py>(self, py: Python<'py>, kind: ObsKind, grid: Grid, blocks: usize) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        d.set_item("observations", encode(py, kind, &self.observations, grid, blocks)?)?;
+        d.set_item(
+            "next_observations",
+            encode(py, kind, &self.next_observations, grid, blocks)?,
+        )?;
+        d.set_item("actions", PyArray1::from_vec(py, self.actions))?;
+        d.set_item("rewards", PyArray1::from_vec(py, self.rewards))?;
+        d.set_item("terminations", PyArray1::from_vec(py, self.terminations))?;
+        d.set_item("truncations", PyArray1::from_vec(py, self.truncations))?;
+        d.set_item("episode_starts", PyArray1::from_vec(py, self.episode_starts))?;
+        d.set_item("episodes", PyArray1::from_vec(py, self.episodes))?;
+        let actions = Action::count(blocks);
+        let masks = PyArray2::<i8>::zeros(py, [self.observations.len(), actions], false);
+        {
+            let mut rw = masks.readwrite();
+            let out = rw.as_slice_mut().expect("contiguous");
+            for (obs, row) in self.observations.iter().zip(out.chunks_mut(actions)) {
+                observe::write_action_mask(obs, row);
+            }
+        }
+        d.set_item("action_masks", masks)?;
+        Ok(d)
+    }
+}
+
+/// `observations` as one array `(T, *shape)` (a dict of such arrays for `state`).
+fn encode<'py>(
+    py: Python<'py>,
+    kind: ObsKind,
+    observations: &[Observation],
+    grid: Grid,
+    blocks: usize,
+) -> PyResult<Bound<'py, PyAny>> {
+    let t = observations.len();
+    let bytes = |shape: Vec<usize>, write: &dyn Fn(&Observation, &mut [u8])| -> Bound<'py, PyAny> {
+        let a = PyArrayDyn::<u8>::zeros(py, shape, false);
+        {
+            let mut rw = a.readwrite();
+            let out = rw.as_slice_mut().expect("contiguous");
+            let len = out.len() / t.max(1);
+            for (obs, chunk) in observations.iter().zip(out.chunks_mut(len.max(1))) {
+                write(obs, chunk);
+            }
+        }
+        a.into_any()
+    };
+    Ok(match kind {
+        ObsKind::Planes => bytes(vec![t, grid.width(), grid.height(), blocks + 1], &|o, out| {
+            o.write_planes(out)
+        }),
+        ObsKind::Pixels => {
+            let sample = Observation {
+                grid,
+                protocol: ActionProtocol::default(),
+                state: State::new(&(0..blocks).map(|i| grid.cell_at(i)).collect::<Vec<Cell>>(), None)
+                    .or_value_error()?,
+                goal: Goal::identity(blocks).or_value_error()?,
+            };
+            let (h, w) = observe::frame_shape(&sample);
+            bytes(vec![t, h, w, 3], &|o, out| out.copy_from_slice(o.rgb().as_raw()))
+        }
+        ObsKind::State => {
+            let cells = PyArrayDyn::<i64>::zeros(py, vec![t, blocks, 2], false);
+            let held = PyArray1::<i64>::zeros(py, t, false);
+            let goal = PyArray2::<i64>::zeros(py, [t, blocks], false);
+            {
+                let (mut c, mut h, mut g) = (cells.readwrite(), held.readwrite(), goal.readwrite());
+                let (c, h, g) = (
+                    c.as_slice_mut().expect("contiguous"),
+                    h.as_slice_mut().expect("contiguous"),
+                    g.as_slice_mut().expect("contiguous"),
+                );
+                for (i, obs) in observations.iter().enumerate() {
+                    observe::write_state(
+                        obs,
+                        &mut c[2 * blocks * i..2 * blocks * (i + 1)],
+                        &mut g[blocks * i..blocks * (i + 1)],
+                    );
+                    h[i] = observe::held_index(obs);
+                }
+            }
+            let d = PyDict::new(py);
+            d.set_item("blocks", cells)?;
+            d.set_item("held", held)?;
+            d.set_item("goal", goal)?;
+            d.into_any()
+        }
+    })
+}
+
+/// Expert episodes as arrays for behaviour cloning or DQfD: episode `k` starts from
+/// `reset(episode_seed(seed, k))`, the start `blockstack run --seed SEED` plays, and the
+/// expert (`exact`: shortest plans; `oracle`) acts until the goal holds.
+///
+/// Keys: `observations`, `next_observations` (`(T, *obs shape)`, or dicts of arrays for
+/// `state`), `actions` (int64), `rewards` (float64), `terminations`, `truncations`,
+/// `episode_starts` (bool, true at each episode's first step), `episodes` (int64, the
+/// episode of each step), `action_masks` (int8, `(T, 5 + N)`, the legal actions in each
+/// observation).
+#[pyfunction]
+#[pyo3(signature = (episodes, expert="exact", blocks=3, seed=0, obs="planes", goal=None, grid=(7, 7), reward=None, backend="physics", horizon=1000, profile="spec"))]
+#[allow(clippy::too_many_arguments)]
+pub fn demonstrations<'py>(
+    py: Python<'py>,
+    episodes: u64,
+    expert: &str,
+    blocks: usize,
+    seed: u64,
+    obs: &str,
+    goal: Option<&str>,
+    grid: (usize, usize),
+    reward: Option<&str>,
+    backend: &str,
+    horizon: u32,
+    profile: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let kind = ObsKind::parse(obs)?;
+    let config = env_config(blocks, goal, grid, reward, backend, horizon, profile)?;
+    let mut policy: Box<dyn Policy + Send> = match expert {
+        "exact" => Box::new(ExactPolicy::new(config.grid)),
+        "oracle" => Box::new(OraclePolicy::new(config.grid)),
+        _ => {
+            return Err(value_error(format!(
+                "cannot read expert from {expert:?}: choose exact or oracle"
+            )));
+        }
+    };
+    let columns = py.detach(|| {
+        guard(|| {
+            let mut env = Env::new(config).or_value_error()?;
+            let mut columns = Columns::default();
+            for k in 0..episodes {
+                let episode_seed = episode_seed(seed, k);
+                let mut obs = env.reset(episode_seed);
+                let mut rng = policy_rng(episode_seed);
+                policy.begin_episode(&obs);
+                let mut first = true;
+                while !env.is_over() {
+                    let action = policy.act(&obs, &mut rng).or_value_error()?;
+                    let step = env.step(action).or_value_error()?;
+                    columns.push(
+                        k,
+                        obs,
+                        action,
+                        step.reward,
+                        step.observation,
+                        step.terminated,
+                        step.truncated,
+                        first,
+                    );
+                    obs = step.observation;
+                    first = false;
+                }
+            }
+            Ok(columns)
+        })
+    })?;
+    columns.into_dict(py, kind, config.grid, blocks)
+}
+
+/// Reads a recording as text, through `files`' bounded reader: a recording of either kind
+/// is refused past `agent::demos::MAX_RECORDING_BYTES`, before memory grows past it.
+fn read_text(path: &std::path::Path) -> PyResult<String> {
+    let mut text = String::new();
+    files::open_bounded(path, MAX_RECORDING_BYTES, "a recording")
+        .or_value_error()?
+        .read_to_string(&mut text)
+        .map_err(|e| value_error(format!("cannot read {}: {e}", path.display())))?;
+    Ok(text)
+}
+
+/// A recording read line by line.
+struct Reader {
+    /// The protocol the masks are computed under (recordings do not say).
+    protocol: ActionProtocol,
+    grid: Option<Grid>,
+    blocks: Option<usize>,
+    /// The current episode: its number, the observation before its next step, and whether
+    /// that step is its first.
+    episode: Option<(u64, Observation, bool)>,
+    columns: Columns,
+}
+
+impl Reader {
+    fn begin(&mut self, episode: u64, grid: Grid, goal: Goal, start: State) -> Result<(), String> {
+        start.check_fits(grid).map_err(|e| e.to_string())?;
+        if goal.block_count() != start.block_count() {
+            return Err(format!(
+                "the goal {goal} and the start disagree on the number of blocks"
+            ));
+        }
+        self.grid = Some(grid);
+        self.blocks = Some(start.block_count());
+        self.episode = Some((
+            episode,
+            Observation {
+                grid,
+                state: start,
+                goal,
+                protocol: self.protocol,
+            },
+            true,
+        ));
+        Ok(())
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn step(
+        &mut self,
+        episode: u64,
+        action: Action,
+        after: State,
+        reward: f64,
+        terminated: bool,
+        truncated: bool,
+        before: Option<State>,
+    ) -> Result<(), String> {
+        let Some((number, obs, first)) = self.episode.as_mut() else {
+            return Err("a step before any episode line".into());
+        };
+        if *number != episode {
+            return Err(format!("a step of episode {episode} inside episode {number}"));
+        }
+        if let Some(before) = before {
+            obs.state = before;
+        }
+        let next = Observation { state: after, ..*obs };
+        self.columns
+            .push(episode, *obs, action, reward, next, terminated, truncated, *first);
+        *obs = next;
+        *first = false;
+        Ok(())
+    }
+}
+
+fn state_of(blocks: &[[u8; 2]], held: Option<u8>) -> Result<State, String> {
+    let cells: Vec<Cell> = blocks.iter().map(|&[x, y]| Cell::new(x, y)).collect();
+    State::new(&cells, held.map(BlockId)).map_err(|e| e.to_string())
+}
+
+/// Reads a recording the CLI wrote into the arrays [`demonstrations`] gives: a trajectory
+/// file (`blockstack run --trajectory`) or a demonstration recording (`blockstack demo` /
+/// `correct --record`); the format is told by its lines. A line that does not read is an
+/// error naming its number. Recordings do not name the world they were played in: the
+/// `action_masks` are those of `profile`'s action protocol.
+#[pyfunction]
+#[pyo3(signature = (path, obs="planes", profile="spec"))]
+pub fn read_recording<'py>(py: Python<'py>, path: PathBuf, obs: &str, profile: &str) -> PyResult<Bound<'py, PyDict>> {
+    let kind = ObsKind::parse(obs)?;
+    let protocol = config::profile(profile)?.protocol();
+    let text = read_text(&path)?;
+    let mut reader = Reader {
+        protocol,
+        grid: None,
+        blocks: None,
+        episode: None,
+        columns: Columns::default(),
+    };
+    for (number, line) in text.lines().enumerate() {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let outcome = if let Ok(record) = serde_json::from_str::<Record>(line) {
+            match record {
+                Record::Episode {
+                    episode,
+                    grid,
+                    goal,
+                    start,
+                    ..
+                } => Grid::new(grid[0], grid[1])
+                    .map_err(|e| e.to_string())
+                    .and_then(|g| reader.begin(episode, g, goal, state_of(&start, None)?)),
+                Record::Step {
+                    episode,
+                    action,
+                    blocks,
+                    held,
+                    reward,
+                    terminated,
+                    truncated,
+                    ..
+                } => {
+                    let n = blocks.len();
+                    Action::from_index(action, n).map_err(|e| e.to_string()).and_then(|a| {
+                        reader.step(
+                            episode,
+                            a,
+                            state_of(&blocks, held)?,
+                            reward,
+                            terminated,
+                            truncated,
+                            None,
+                        )
+                    })
+                }
+            }
+        } else {
+            match serde_json::from_str::<DemoRecord>(line) {
+                Ok(DemoRecord::Session(s)) => Grid::new(s.grid[0], s.grid[1])
+                    .map(|g| reader.grid = Some(g))
+                    .map_err(|e| e.to_string()),
+                Ok(DemoRecord::Episode(e)) => match reader.grid {
+                    None => Err("an episode line before the session line".into()),
+                    Some(grid) => e
+                        .start
+                        .state(grid)
+                        .map_err(|err| err.to_string())
+                        .and_then(|start| reader.begin(e.episode, grid, e.goal, start)),
+                },
+                Ok(DemoRecord::Step(s)) => {
+                    let read = || -> Result<(Action, State, State), String> {
+                        let grid = reader.grid.ok_or("a step line before the session line")?;
+                        let n = reader.blocks.ok_or("a step line before any episode line")?;
+                        Ok((
+                            Action::parse(&s.action, n).map_err(|e| e.to_string())?,
+                            s.state.state(grid).map_err(|e| e.to_string())?,
+                            s.next.state(grid).map_err(|e| e.to_string())?,
+                        ))
+                    };
+                    read().and_then(|(action, before, after)| {
+                        reader.step(
+                            s.episode,
+                            action,
+                            after,
+                            s.reward,
+                            s.terminated,
+                            s.truncated,
+                            Some(before),
+                        )
+                    })
+                }
+                Err(e) => Err(format!("neither a trajectory nor a demonstration line: {e}")),
+            }
+        };
+        outcome.map_err(|reason| value_error(format!("{} line {}: {reason}", path.display(), number + 1)))?;
+    }
+    let (Some(grid), Some(blocks)) = (reader.grid, reader.blocks) else {
+        return Err(value_error(format!("{} holds no episode", path.display())));
+    };
+    reader.columns.into_dict(py, kind, grid, blocks)
+}

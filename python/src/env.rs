@@ -1,0 +1,229 @@
+//! One environment: `sim::Env` with its observation kind, behind `blockstack.StackEnv`.
+
+use oracle::{ExactSolver, Oracle, Planner};
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyTuple};
+use sim::{Action, BlockId, Cell, Env, Observation, State};
+
+use crate::boundary::{OrValueError, guard, value_error};
+use crate::config::{ObsKind, env_config, goal_from};
+use crate::observe;
+
+/// One blockstack environment; the Gymnasium class `blockstack.StackEnv` wraps it.
+#[pyclass(module = "blockstack._native")]
+pub struct NativeEnv {
+    env: Env,
+    kind: ObsKind,
+}
+
+/// The index of `action`, one integer (a Python int, a numpy integer or a 0-d integer
+/// array) in `0..count`; a `ValueError` naming what is wrong otherwise.
+pub fn action_index(action: &Bound<'_, PyAny>, blocks: usize) -> PyResult<usize> {
+    let bad = || {
+        let shape = action
+            .getattr("shape")
+            .map_or_else(|_| String::new(), |s| format!(" of shape {s}"));
+        let dtype = action
+            .getattr("dtype")
+            .map_or_else(|_| String::new(), |d| format!(" and dtype {d}"));
+        let type_name = action
+            .get_type()
+            .name()
+            .map_or_else(|_| "?".to_string(), |n| n.to_string());
+        value_error(format!(
+            "an action is one integer (an int, a numpy integer or a 0-d integer array), not a {type_name}{shape}{dtype}"
+        ))
+    };
+    if action.is_instance_of::<PyBool>() {
+        return Err(bad());
+    }
+    let index: i64 = action.extract().map_err(|_| bad())?;
+    let index = usize::try_from(index).map_err(|_| {
+        value_error(format!(
+            "action {index} is out of range: with {blocks} blocks the actions are 0..{}",
+            Action::count(blocks)
+        ))
+    })?;
+    Action::from_index(index, blocks).or_value_error()?;
+    Ok(index)
+}
+
+impl NativeEnv {
+    fn planner_action(&self, planner: &dyn Planner) -> PyResult<usize> {
+        let obs = self.env.observation();
+        guard(|| Ok(planner.next_action(&obs.state, &obs.goal).or_value_error()?.index()))
+    }
+
+    fn obs_info<'py>(
+        &self,
+        py: Python<'py>,
+        obs: &Observation,
+        blocked: bool,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        Ok((
+            observe::to_python(py, self.kind, obs)?,
+            observe::info(py, obs, blocked)?.into_any(),
+        ))
+    }
+}
+
+#[pymethods]
+impl NativeEnv {
+    /// An environment of the given world; a `ValueError` with the crate's message for a
+    /// config that cannot make one.
+    #[new]
+    #[pyo3(signature = (blocks=3, goal=None, grid=(7, 7), reward=None, backend="physics", horizon=1000, profile="spec", obs="planes"))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        blocks: usize,
+        goal: Option<&str>,
+        grid: (usize, usize),
+        reward: Option<&str>,
+        backend: &str,
+        horizon: u32,
+        profile: &str,
+        obs: &str,
+    ) -> PyResult<Self> {
+        let kind = ObsKind::parse(obs)?;
+        let config = env_config(blocks, goal, grid, reward, backend, horizon, profile)?;
+        Ok(NativeEnv {
+            env: guard(|| Env::new(config).or_value_error())?,
+            kind,
+        })
+    }
+
+    /// Starts an episode, as `sim::Env::reset(seed)` does (`None` continues the generator);
+    /// `(observation, info)`.
+    #[pyo3(signature = (seed=None))]
+    fn reset<'py>(&mut self, py: Python<'py>, seed: Option<u64>) -> PyResult<Bound<'py, PyTuple>> {
+        let obs = guard(|| Ok(self.env.reset(seed)))?;
+        let (o, i) = self.obs_info(py, &obs, false)?;
+        PyTuple::new(py, [o, i])
+    }
+
+    /// Starts an episode from a given state: `cells` lists `(x, y)` by block id, `held` is
+    /// a block id or `None`, `goal` text or a sequence (the current goal if `None`).
+    #[pyo3(signature = (cells, held=None, goal=None))]
+    fn reset_to<'py>(
+        &mut self,
+        py: Python<'py>,
+        cells: Vec<(u8, u8)>,
+        held: Option<u8>,
+        goal: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyTuple>> {
+        let blocks = self.env.config().blocks;
+        let goal = match goal {
+            Some(g) => goal_from(g, Some(blocks))?,
+            None => self.env.goal(),
+        };
+        let state = state_from(&cells, held)?;
+        let obs = guard(|| self.env.reset_to(state, goal).or_value_error())?;
+        if self.env.is_over() {
+            return Err(value_error(format!(
+                "goal {goal} already holds in that state: an episode needs a start where it does not"
+            )));
+        }
+        let (o, i) = self.obs_info(py, &obs, false)?;
+        PyTuple::new(py, [o, i])
+    }
+
+    /// Takes one action; `(observation, reward, terminated, truncated, info)`.
+    fn step<'py>(&mut self, py: Python<'py>, action: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyTuple>> {
+        let index = action_index(action, self.env.config().blocks)?;
+        let step = guard(|| self.env.step_index(index).or_value_error())?;
+        let (o, i) = self.obs_info(py, &step.observation, step.info.blocked)?;
+        PyTuple::new(
+            py,
+            [
+                o,
+                step.reward.into_pyobject(py)?.into_any(),
+                PyBool::new(py, step.terminated).to_owned().into_any(),
+                PyBool::new(py, step.truncated).to_owned().into_any(),
+                i,
+            ],
+        )
+    }
+
+    /// The current observation, as `reset` and `step` return it.
+    fn observation<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        observe::to_python(py, self.kind, &self.env.observation())
+    }
+
+    /// The rendered frame, `uint8`, height x width x 3.
+    fn render_rgb<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        observe::to_python(py, ObsKind::Pixels, &self.env.observation())
+    }
+
+    /// The world as text, top row first (`sim::render::ascii`, no colour).
+    fn render_ansi(&self) -> String {
+        sim::render::ascii(&self.env.observation(), sim::render::Colour::Never)
+    }
+
+    /// The exact solver's next action from the current state: the first of a shortest plan.
+    fn expert_action(&self) -> PyResult<usize> {
+        self.planner_action(&ExactSolver::new(self.env.config().grid))
+    }
+
+    /// The oracle's next action from the current state.
+    fn oracle_action(&self) -> PyResult<usize> {
+        self.planner_action(&Oracle::new(self.env.config().grid))
+    }
+
+    /// The length of a shortest plan from the current state to the goal.
+    fn optimal_steps(&self) -> PyResult<u32> {
+        let obs = self.env.observation();
+        guard(|| {
+            ExactSolver::new(self.env.config().grid)
+                .distance(&obs.state, &obs.goal)
+                .or_value_error()
+        })
+    }
+
+    /// `(cells, held, goal)`: every block's `(x, y)`, the held block or `None`, the goal.
+    fn state(&self) -> (Vec<(u32, u32)>, Option<u32>, Vec<u32>) {
+        let obs = self.env.observation();
+        (
+            obs.blocks().iter().map(|c| (u32::from(c.x), u32::from(c.y))).collect(),
+            obs.held_block().map(|b| u32::from(b.0)),
+            obs.goal.order().iter().map(|b| u32::from(b.0)).collect(),
+        )
+    }
+
+    /// Number of blocks.
+    #[getter]
+    fn blocks(&self) -> usize {
+        self.env.config().blocks
+    }
+
+    /// `(width, height)`.
+    #[getter]
+    fn grid(&self) -> (usize, usize) {
+        let g = self.env.config().grid;
+        (g.width(), g.height())
+    }
+
+    /// Steps before an episode is truncated.
+    #[getter]
+    fn horizon(&self) -> u32 {
+        self.env.config().horizon
+    }
+
+    /// Steps taken in the current episode.
+    #[getter]
+    fn steps(&self) -> u32 {
+        self.env.steps()
+    }
+
+    /// The shape of the rendered frame, `(height, width, 3)`.
+    #[getter]
+    fn frame_shape(&self) -> (usize, usize, usize) {
+        let (h, w) = observe::frame_shape(&self.env.observation());
+        (h, w, 3)
+    }
+}
+
+/// A state from Python's cells and held block, checked by `sim`.
+pub fn state_from(cells: &[(u8, u8)], held: Option<u8>) -> PyResult<State> {
+    let cells: Vec<Cell> = cells.iter().map(|&(x, y)| Cell::new(x, y)).collect();
+    State::new(&cells, held.map(BlockId)).or_value_error()
+}

@@ -1,0 +1,45 @@
+//! `blockstack._native`: the Rust side of the Python package `blockstack`.
+//!
+//! A thin layer over the crates: every rule, reward, planner and trainer it reaches is the
+//! one in `sim`, `oracle` or `agent`; this crate only turns Python arguments into their
+//! configs and their results into numpy arrays.
+//!
+//! - [`env::NativeEnv`]: one environment, behind the Gymnasium class `blockstack.StackEnv`.
+//! - [`vector::NativeVecEnv`]: a batch stepped in one call with the GIL released, writing
+//!   into preallocated numpy arrays, behind `blockstack.vector.StackVectorEnv`.
+//! - [`planning`]: the exact solver and the oracle (`blockstack.solve`).
+//! - [`demos`]: expert demonstrations and recorded episodes as arrays.
+//! - [`training`]: the tabular trainer, in-process (`blockstack.train`, the Ray sweep).
+//! - [`output`]: files written through the `files` crate (the sweep's table).
+//!
+//! Errors: every error of the crates reaches Python as `ValueError` with the crate's own
+//! message; a panic (a bug) is caught at the boundary and raised as `RuntimeError`, so
+//! nothing unwinds into the interpreter.
+
+use pyo3::prelude::*;
+
+mod boundary;
+mod config;
+mod demos;
+mod env;
+mod observe;
+mod output;
+mod planning;
+mod training;
+mod vector;
+
+/// The module `blockstack._native`.
+#[pymodule]
+fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<env::NativeEnv>()?;
+    m.add_class::<vector::NativeVecEnv>()?;
+    m.add_function(wrap_pyfunction!(planning::solve, m)?)?;
+    m.add_function(wrap_pyfunction!(demos::demonstrations, m)?)?;
+    m.add_function(wrap_pyfunction!(demos::read_recording, m)?)?;
+    m.add_function(wrap_pyfunction!(training::train, m)?)?;
+    m.add_function(wrap_pyfunction!(config::episode_seed, m)?)?;
+    m.add_function(wrap_pyfunction!(output::check_output, m)?)?;
+    m.add_function(wrap_pyfunction!(output::write_output, m)?)?;
+    m.add("REWARDS", sim::RewardModel::NAMES.to_vec())?;
+    Ok(())
+}

@@ -1,0 +1,168 @@
+//! The tabular trainer in-process: one training run (and an optional evaluation) from the
+//! flags of `blockstack train`, for Python and the Ray sweep.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use agent::optimality::{self, Optimality};
+use agent::{Assist, EpisodeResult, QParams, ReprKind, Summary, TrainConfig};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use sim::{Backend, Env, Goal, Grid, RewardModel};
+
+use crate::boundary::{OrValueError, guard};
+use crate::config;
+
+/// Goals separated by `:` (`"0,1,2:1,0,2"`), as `blockstack train --goals` reads them, each
+/// with `blocks` blocks; every goal when `None`.
+fn goals(text: Option<&str>, blocks: usize) -> PyResult<Vec<Goal>> {
+    match text {
+        None => Goal::all(blocks).or_value_error(),
+        Some(text) => text
+            .split(':')
+            .map(|g| Goal::parse(g, Some(blocks)).or_value_error())
+            .collect(),
+    }
+}
+
+/// Trains a tabular Q-learner as `blockstack train` does, with the same flags and
+/// defaults (the paper's learner of `profile`: `TrainConfig::for_profile`; a flag left
+/// `None` keeps the profile's value), in this process, the GIL released. With
+/// `eval_episodes > 0`, then plays it `eval_episodes` times on each of `eval_goals` (the
+/// training goals by default) from the starts `blockstack eval --seed EVAL_SEED` plays,
+/// as `eval` does. `out` saves the model file.
+///
+/// Returns a dict: the config's flags, the training totals (`games`, `successes`,
+/// `steps`, `assisted_steps`, `replay_sweeps`, `train_seconds`) and, with an evaluation,
+/// `eval_episodes`, `eval_failures`, `eval_mean_steps`, `eval_median_steps`,
+/// `eval_mean_steps_failures_as_horizon`, `eval_mean_optimal_steps`,
+/// `eval_mean_ratio_to_optimum` (`None` where no episode reached the goal).
+#[pyfunction]
+#[pyo3(signature = (*, blocks=3, grid="7x7", repr=None, reward=None, goals=None, games=None, seed=1, alpha=None, gamma=None, epsilon=None, initial_q=None, exploring_starts=false, backward_replay=false, final_replay=false, assist="none", horizon=None, backend="physics", eval_episodes=0, eval_goals=None, eval_seed=2, eval_epsilon=0.1, out=None, profile="spec"))]
+#[allow(clippy::too_many_arguments)]
+pub fn train<'py>(
+    py: Python<'py>,
+    blocks: usize,
+    grid: &str,
+    repr: Option<&str>,
+    reward: Option<&str>,
+    goals: Option<&str>,
+    games: Option<u64>,
+    seed: u64,
+    alpha: Option<f64>,
+    gamma: Option<f64>,
+    epsilon: Option<f64>,
+    initial_q: Option<f64>,
+    exploring_starts: bool,
+    backward_replay: bool,
+    final_replay: bool,
+    assist: &str,
+    horizon: Option<u32>,
+    backend: &str,
+    eval_episodes: u64,
+    eval_goals: Option<&str>,
+    eval_seed: u64,
+    eval_epsilon: f64,
+    out: Option<PathBuf>,
+    profile: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let base = TrainConfig::for_profile(config::profile(profile)?, self::goals(goals, blocks)?);
+    let defaults = base.params;
+    let config = TrainConfig {
+        grid: grid.parse::<Grid>().or_value_error()?,
+        blocks,
+        repr: match repr {
+            Some(name) => name.parse::<ReprKind>().or_value_error()?,
+            None => base.repr,
+        },
+        reward: match reward {
+            Some(name) => RewardModel::from_name(name).or_value_error()?,
+            None => base.reward,
+        },
+        params: QParams {
+            alpha: alpha.unwrap_or(defaults.alpha),
+            gamma: gamma.unwrap_or(defaults.gamma),
+            epsilon: epsilon.unwrap_or(defaults.epsilon),
+            initial_q: initial_q.unwrap_or(defaults.initial_q),
+        },
+        games: games.unwrap_or(base.games),
+        seed,
+        horizon: horizon.unwrap_or(base.horizon),
+        backend: backend.parse::<Backend>().or_value_error()?,
+        exploring_starts,
+        backward_replay,
+        final_replay,
+        assist: assist.parse::<Assist>().or_value_error()?,
+        ..base
+    };
+    config.validate().or_value_error()?;
+    let eval_goals = match eval_goals {
+        Some(text) => self::goals(Some(text), blocks)?,
+        None => config.goals.clone(),
+    };
+    let (trained, seconds, evaluation) = py.detach(|| {
+        guard(|| {
+            let clock = Instant::now();
+            let trained = agent::train(&config, None).or_value_error()?;
+            let seconds = clock.elapsed().as_secs_f64();
+            let mut results: Vec<EpisodeResult> = Vec::new();
+            let mut optimal = Vec::new();
+            if eval_episodes > 0 {
+                let model = &trained.agent;
+                for goal in &eval_goals {
+                    let mut env = Env::new(config.test_env_config(*goal, sim::DEFAULT_HORIZON)).or_value_error()?;
+                    let mut policy = model.policy(eval_epsilon).or_value_error()?;
+                    let played = agent::play(&mut env, &mut policy, eval_episodes, eval_seed, None).or_value_error()?;
+                    optimal.extend(
+                        optimality::optimal_steps_under(config.grid, config.protocol, &played).or_value_error()?,
+                    );
+                    results.extend(played);
+                }
+            }
+            if let Some(path) = &out {
+                trained.agent.save(path).or_value_error()?;
+            }
+            Ok((trained, seconds, (results, optimal)))
+        })
+    })?;
+    let d = PyDict::new(py);
+    d.set_item("profile", config.profile.to_string())?;
+    d.set_item("blocks", blocks)?;
+    d.set_item("grid", config.grid.to_string())?;
+    d.set_item("repr", config.repr.name())?;
+    d.set_item("reward", config.reward.to_string())?;
+    d.set_item(
+        "goals",
+        config.goals.iter().map(Goal::to_string).collect::<Vec<_>>().join(":"),
+    )?;
+    d.set_item("seed", seed)?;
+    d.set_item("alpha", config.params.alpha)?;
+    d.set_item("gamma", config.params.gamma)?;
+    d.set_item("epsilon", config.params.epsilon)?;
+    d.set_item("initial_q", config.params.initial_q)?;
+    d.set_item("assist", config.assist.to_string())?;
+    d.set_item("backend", config.backend.to_string())?;
+    let r = trained.report;
+    d.set_item("games", r.games)?;
+    d.set_item("successes", r.successes)?;
+    d.set_item("steps", r.steps)?;
+    d.set_item("assisted_steps", r.assisted_steps)?;
+    d.set_item("replay_sweeps", r.replay_sweeps)?;
+    d.set_item("train_seconds", seconds)?;
+    let (results, optimal) = evaluation;
+    if !results.is_empty() {
+        let summary = Summary::of(&results);
+        let o = Optimality::of(&results, &optimal);
+        d.set_item("eval_episodes", summary.episodes)?;
+        d.set_item("eval_failures", summary.failures)?;
+        d.set_item("eval_mean_steps", summary.mean_steps)?;
+        d.set_item("eval_median_steps", summary.median_steps)?;
+        d.set_item(
+            "eval_mean_steps_failures_as_horizon",
+            optimality::mean_steps_failures_as_horizon(&results, sim::DEFAULT_HORIZON),
+        )?;
+        d.set_item("eval_mean_optimal_steps", o.mean_optimal_steps)?;
+        d.set_item("eval_mean_ratio_to_optimum", o.mean_ratio_to_optimum)?;
+    }
+    Ok(d)
+}

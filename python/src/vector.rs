@@ -1,0 +1,402 @@
+//! A batch of environments stepped in one call: `sim::VecEnv` with the GIL released,
+//! writing every result into numpy arrays allocated once, behind
+//! `blockstack.vector.StackVectorEnv`.
+
+use numpy::{
+    PyArray1, PyArray2, PyArrayDescrMethods, PyArrayDyn, PyArrayMethods, PyReadwriteArray1, PyReadwriteArray2,
+    PyReadwriteArrayDyn, PyUntypedArray, PyUntypedArrayMethods,
+};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use sim::{Action, Autoreset, Observation, VecEnv, VecStep};
+
+use crate::boundary::{OrValueError, guard, value_error};
+use crate::config::{ObsKind, env_config};
+use crate::observe;
+
+/// The observation buffer(s) of a batch: one array for `planes` and `pixels`, three for
+/// `state`.
+enum ObsBuffers {
+    /// `(num_envs, *shape)` bytes.
+    Bytes(Py<PyArrayDyn<u8>>),
+    /// Block cells `(num_envs, N, 2)`, held block `(num_envs,)`, goal `(num_envs, N)`.
+    State {
+        blocks: Py<PyArrayDyn<i64>>,
+        held: Py<PyArray1<i64>>,
+        goal: Py<PyArray2<i64>>,
+    },
+}
+
+/// One environment's part of the buffers, written on the thread that stepped it.
+struct Slot<'a> {
+    obs: ObsSlot<'a>,
+    reward: &'a mut f64,
+    terminated: &'a mut bool,
+    truncated: &'a mut bool,
+    mask: &'a mut [i8],
+    blocked: &'a mut bool,
+    pairs: &'a mut i64,
+    goal: &'a mut [i64],
+    /// Under same-step autoreset, the last observation of an episode that ended in this
+    /// step, and whether that step's move was blocked.
+    last: &'a mut Option<(Observation, bool)>,
+}
+
+enum ObsSlot<'a> {
+    Bytes(&'a mut [u8]),
+    State {
+        blocks: &'a mut [i64],
+        held: &'a mut i64,
+        goal: &'a mut [i64],
+    },
+}
+
+impl Slot<'_> {
+    fn write_obs(&mut self, kind: ObsKind, obs: &Observation) {
+        match &mut self.obs {
+            ObsSlot::Bytes(out) => match kind {
+                ObsKind::Planes => obs.write_planes(out),
+                _ => out.copy_from_slice(obs.rgb().as_raw()),
+            },
+            ObsSlot::State { blocks, held, goal } => {
+                observe::write_state(obs, blocks, goal);
+                **held = observe::held_index(obs);
+            }
+        }
+        observe::write_action_mask(obs, self.mask);
+        observe::write_goal(obs, self.goal);
+        *self.pairs = obs.goal.pairs_in_place(&obs.state) as i64;
+    }
+
+    fn write(&mut self, kind: ObsKind, result: &VecStep) {
+        *self.last = None;
+        match result {
+            VecStep::Reset(obs) => {
+                self.write_obs(kind, obs);
+                (*self.reward, *self.terminated, *self.truncated, *self.blocked) = (0.0, false, false, false);
+            }
+            VecStep::Stepped(step) => {
+                self.write_obs(kind, &step.observation);
+                *self.reward = step.reward;
+                *self.terminated = step.terminated;
+                *self.truncated = step.truncated;
+                *self.blocked = step.info.blocked;
+                if let Some(last) = step.info.final_observation {
+                    // The step's info is the reset's; the ended step's goes with its last
+                    // observation, as Gymnasium's same-step mode reports them.
+                    *self.blocked = false;
+                    *self.last = Some((last, step.info.blocked));
+                }
+            }
+        }
+    }
+}
+
+/// A batch of blockstack environments of one world; `blockstack.vector.StackVectorEnv`
+/// wraps it.
+#[pyclass(module = "blockstack._native")]
+pub struct NativeVecEnv {
+    vec: VecEnv,
+    kind: ObsKind,
+    blocks: usize,
+    obs: ObsBuffers,
+    rewards: Py<PyArray1<f64>>,
+    terminations: Py<PyArray1<bool>>,
+    truncations: Py<PyArray1<bool>>,
+    action_mask: Py<PyArray2<i8>>,
+    blocked: Py<PyArray1<bool>>,
+    pairs_in_place: Py<PyArray1<i64>>,
+    goal: Py<PyArray2<i64>>,
+    last: Vec<Option<(Observation, bool)>>,
+}
+
+/// Borrows of every buffer, alive while a batch call writes into them.
+struct Borrows<'py> {
+    obs: ObsBorrow<'py>,
+    rewards: PyReadwriteArray1<'py, f64>,
+    terminations: PyReadwriteArray1<'py, bool>,
+    truncations: PyReadwriteArray1<'py, bool>,
+    action_mask: PyReadwriteArray2<'py, i8>,
+    blocked: PyReadwriteArray1<'py, bool>,
+    pairs_in_place: PyReadwriteArray1<'py, i64>,
+    goal: PyReadwriteArray2<'py, i64>,
+}
+
+enum ObsBorrow<'py> {
+    Bytes(PyReadwriteArrayDyn<'py, u8>),
+    State {
+        blocks: PyReadwriteArrayDyn<'py, i64>,
+        held: PyReadwriteArray1<'py, i64>,
+        goal: PyReadwriteArray2<'py, i64>,
+    },
+}
+
+fn slice<'a, T: numpy::Element, D: numpy::ndarray::Dimension>(
+    a: &'a mut numpy::PyReadwriteArray<'_, T, D>,
+) -> &'a mut [T] {
+    a.as_slice_mut().expect("the buffers are allocated contiguous")
+}
+
+impl<'py> Borrows<'py> {
+    /// One slot per environment over these buffers.
+    fn slots<'a>(&'a mut self, last: &'a mut [Option<(Observation, bool)>], blocks: usize) -> Vec<Slot<'a>> {
+        let n = last.len();
+        let actions = Action::count(blocks);
+        let obs: Vec<ObsSlot<'a>> = match &mut self.obs {
+            ObsBorrow::Bytes(a) => {
+                let s = slice(a);
+                let len = s.len() / n.max(1);
+                s.chunks_mut(len.max(1)).map(ObsSlot::Bytes).collect()
+            }
+            ObsBorrow::State { blocks: b, held, goal } => slice(b)
+                .chunks_mut(2 * blocks)
+                .zip(slice(held).iter_mut())
+                .zip(slice(goal).chunks_mut(blocks))
+                .map(|((blocks, held), goal)| ObsSlot::State { blocks, held, goal })
+                .collect(),
+        };
+        obs.into_iter()
+            .zip(slice(&mut self.rewards).iter_mut())
+            .zip(slice(&mut self.terminations).iter_mut())
+            .zip(slice(&mut self.truncations).iter_mut())
+            .zip(slice(&mut self.action_mask).chunks_mut(actions))
+            .zip(slice(&mut self.blocked).iter_mut())
+            .zip(slice(&mut self.pairs_in_place).iter_mut())
+            .zip(slice(&mut self.goal).chunks_mut(blocks))
+            .zip(last.iter_mut())
+            .map(
+                |((((((((obs, reward), terminated), truncated), mask), blocked), pairs), goal), last)| Slot {
+                    obs,
+                    reward,
+                    terminated,
+                    truncated,
+                    mask,
+                    blocked,
+                    pairs,
+                    goal,
+                    last,
+                },
+            )
+            .collect()
+    }
+}
+
+impl NativeVecEnv {
+    fn borrow<'py>(&self, py: Python<'py>) -> Borrows<'py> {
+        Borrows {
+            obs: match &self.obs {
+                ObsBuffers::Bytes(a) => ObsBorrow::Bytes(a.bind(py).readwrite()),
+                ObsBuffers::State { blocks, held, goal } => ObsBorrow::State {
+                    blocks: blocks.bind(py).readwrite(),
+                    held: held.bind(py).readwrite(),
+                    goal: goal.bind(py).readwrite(),
+                },
+            },
+            rewards: self.rewards.bind(py).readwrite(),
+            terminations: self.terminations.bind(py).readwrite(),
+            truncations: self.truncations.bind(py).readwrite(),
+            action_mask: self.action_mask.bind(py).readwrite(),
+            blocked: self.blocked.bind(py).readwrite(),
+            pairs_in_place: self.pairs_in_place.bind(py).readwrite(),
+            goal: self.goal.bind(py).readwrite(),
+        }
+    }
+
+    /// The actions from a 1-D integer array with one action per environment, each in range.
+    fn actions(&self, actions: &Bound<'_, PyAny>) -> PyResult<Vec<Action>> {
+        let n = self.vec.len();
+        let array = actions.cast::<PyUntypedArray>().map_err(|_| {
+            value_error(format!(
+                "actions must be a numpy array of {n} integers, one per environment, not a {}",
+                actions.get_type().name().map_or_else(|_| "?".into(), |t| t.to_string())
+            ))
+        })?;
+        let kind = array.dtype().kind();
+        if array.ndim() != 1 || array.shape()[0] != n || !(kind == b'i' || kind == b'u') {
+            return Err(value_error(format!(
+                "actions must be an integer array of shape ({n},), one per environment; got dtype {} and shape {:?}",
+                array.dtype(),
+                array.shape()
+            )));
+        }
+        let as_i64 = array.call_method1("astype", ("int64",))?;
+        let values = as_i64.cast::<PyArray1<i64>>()?.readonly();
+        values
+            .as_array()
+            .iter()
+            .map(|&i| {
+                let index = usize::try_from(i).map_err(|_| {
+                    value_error(format!(
+                        "action {i} is out of range: with {} blocks the actions are 0..{}",
+                        self.blocks,
+                        Action::count(self.blocks)
+                    ))
+                })?;
+                Action::from_index(index, self.blocks).or_value_error()
+            })
+            .collect()
+    }
+}
+
+#[pymethods]
+impl NativeVecEnv {
+    /// `num_envs` environments of one world, stepped on `threads` threads (1: on the
+    /// caller's thread; 0: one per core), with autoreset `next-step` or `same-step`.
+    #[new]
+    #[pyo3(signature = (num_envs, blocks=3, goal=None, grid=(7, 7), reward=None, backend="physics", horizon=1000, profile="spec", obs="planes", threads=1, autoreset="next-step"))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        num_envs: usize,
+        blocks: usize,
+        goal: Option<&str>,
+        grid: (usize, usize),
+        reward: Option<&str>,
+        backend: &str,
+        horizon: u32,
+        profile: &str,
+        obs: &str,
+        threads: usize,
+        autoreset: &str,
+    ) -> PyResult<Self> {
+        let kind = ObsKind::parse(obs)?;
+        let mode = match autoreset {
+            "next-step" => Autoreset::NextStep,
+            "same-step" => Autoreset::SameStep,
+            _ => {
+                return Err(value_error(format!(
+                    "cannot read autoreset mode from {autoreset:?}: choose next-step or same-step"
+                )));
+            }
+        };
+        if num_envs == 0 {
+            return Err(value_error("a vector environment needs at least one environment"));
+        }
+        let config = env_config(blocks, goal, grid, reward, backend, horizon, profile)?;
+        let vec = guard(|| VecEnv::new(config, num_envs, threads).or_value_error())?.with_autoreset(mode);
+        let sample = vec.envs()[0].observation();
+        let (w, h, n) = (config.grid.width(), config.grid.height(), blocks);
+        let bytes = |shape: Vec<usize>| ObsBuffers::Bytes(PyArrayDyn::<u8>::zeros(py, shape, false).unbind());
+        let obs = match kind {
+            ObsKind::Planes => bytes(vec![num_envs, w, h, n + 1]),
+            ObsKind::Pixels => {
+                let (fh, fw) = observe::frame_shape(&sample);
+                bytes(vec![num_envs, fh, fw, 3])
+            }
+            ObsKind::State => ObsBuffers::State {
+                blocks: PyArrayDyn::<i64>::zeros(py, vec![num_envs, n, 2], false).unbind(),
+                held: PyArray1::<i64>::zeros(py, num_envs, false).unbind(),
+                goal: PyArray2::<i64>::zeros(py, [num_envs, n], false).unbind(),
+            },
+        };
+        Ok(NativeVecEnv {
+            vec,
+            kind,
+            blocks,
+            obs,
+            rewards: PyArray1::zeros(py, num_envs, false).unbind(),
+            terminations: PyArray1::zeros(py, num_envs, false).unbind(),
+            truncations: PyArray1::zeros(py, num_envs, false).unbind(),
+            action_mask: PyArray2::zeros(py, [num_envs, Action::count(blocks)], false).unbind(),
+            blocked: PyArray1::zeros(py, num_envs, false).unbind(),
+            pairs_in_place: PyArray1::zeros(py, num_envs, false).unbind(),
+            goal: PyArray2::zeros(py, [num_envs, blocks], false).unbind(),
+            last: vec![None; num_envs],
+        })
+    }
+
+    /// The buffers every call writes into, by name: `obs` (an array, or a dict of arrays
+    /// for `state`), `rewards`, `terminations`, `truncations`, `action_mask`, `blocked`,
+    /// `pairs_in_place`, `goal`.
+    fn buffers<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        match &self.obs {
+            ObsBuffers::Bytes(a) => d.set_item("obs", a.bind(py))?,
+            ObsBuffers::State { blocks, held, goal } => {
+                let o = PyDict::new(py);
+                o.set_item("blocks", blocks.bind(py))?;
+                o.set_item("held", held.bind(py))?;
+                o.set_item("goal", goal.bind(py))?;
+                d.set_item("obs", o)?;
+            }
+        }
+        d.set_item("rewards", self.rewards.bind(py))?;
+        d.set_item("terminations", self.terminations.bind(py))?;
+        d.set_item("truncations", self.truncations.bind(py))?;
+        d.set_item("action_mask", self.action_mask.bind(py))?;
+        d.set_item("blocked", self.blocked.bind(py))?;
+        d.set_item("pairs_in_place", self.pairs_in_place.bind(py))?;
+        d.set_item("goal", self.goal.bind(py))?;
+        Ok(d)
+    }
+
+    /// Resets environment `i` with `seeds[i]` (`None`: continue its generator), writing
+    /// first observations and infos into the buffers.
+    fn reset(&mut self, py: Python<'_>, seeds: Vec<Option<u64>>) -> PyResult<()> {
+        if seeds.len() != self.vec.len() {
+            return Err(value_error(format!(
+                "{} seeds given for {} environments: give one seed per environment, an int, or None",
+                seeds.len(),
+                self.vec.len()
+            )));
+        }
+        let mut borrows = self.borrow(py);
+        let mut slots = borrows.slots(&mut self.last, self.blocks);
+        let (vec, kind) = (&mut self.vec, self.kind);
+        py.detach(|| {
+            guard(|| {
+                vec.reset_with(&seeds, &mut slots, |obs, slot| {
+                    slot.write(kind, &VecStep::Reset(*obs));
+                });
+                Ok(())
+            })
+        })
+    }
+
+    /// Steps every environment with its action (a 1-D integer array), the GIL released,
+    /// writing the results into the buffers. Returns, under same-step autoreset, a list of
+    /// `(index, last observation, last info)` for the episodes that ended (empty
+    /// otherwise).
+    fn step<'py>(&mut self, py: Python<'py>, actions: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyList>> {
+        let actions = self.actions(actions)?;
+        {
+            let mut borrows = self.borrow(py);
+            let mut slots = borrows.slots(&mut self.last, self.blocks);
+            let (vec, kind) = (&mut self.vec, self.kind);
+            py.detach(|| {
+                guard(|| {
+                    vec.step_with(&actions, &mut slots, |result, slot| slot.write(kind, result))
+                        .or_value_error()
+                })
+            })?;
+        }
+        let ended = PyList::empty(py);
+        for (i, last) in self.last.iter().enumerate() {
+            if let Some((obs, blocked)) = last {
+                ended.append((
+                    i,
+                    observe::to_python(py, self.kind, obs)?,
+                    observe::info(py, obs, *blocked)?,
+                ))?;
+            }
+        }
+        Ok(ended)
+    }
+
+    /// Number of environments.
+    #[getter]
+    fn num_envs(&self) -> usize {
+        self.vec.len()
+    }
+
+    /// The rendered frame of environment `index`, `uint8`, height x width x 3.
+    fn render_rgb<'py>(&self, py: Python<'py>, index: usize) -> PyResult<Bound<'py, PyAny>> {
+        let env = self.vec.envs().get(index).ok_or_else(|| {
+            value_error(format!(
+                "environment {index} does not exist: there are {}",
+                self.vec.len()
+            ))
+        })?;
+        observe::to_python(py, ObsKind::Pixels, &env.observation())
+    }
+}
