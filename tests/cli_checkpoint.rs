@@ -177,6 +177,7 @@ fn checkpoint_misuse_is_one_line_and_exit_status_2() {
             "blockstack-q-agent file and not blockstack-train-checkpoint",
         ),
         (vec!["--checkpoint-every", "5"], "--checkpoint"),
+        (vec!["--checkpoint", "-"], "it must be a file"),
         (
             vec!["--checkpoint", path(&ck), "--checkpoint-every", "0"],
             "--checkpoint-every",

@@ -69,9 +69,9 @@ impl World {
     }
 
     /// Resets both with `seed`: the first observation, or the two that differ.
-    fn reset(&mut self, seed: u64) -> Result<Observation, (Observation, Observation)> {
+    fn reset(&mut self, seed: u64) -> Result<Observation, Box<(Observation, Observation)>> {
         let (p, g) = (self.physics.reset(seed), self.grid.reset(seed));
-        if p == g { Ok(p) } else { Err((p, g)) }
+        if p == g { Ok(p) } else { Err(Box::new((p, g))) }
     }
 
     /// Counts how `step` ended its episode.
@@ -142,7 +142,8 @@ fn main() -> Result<(), sim::SimError> {
         episodes += 1;
         let mut legal = match world.reset(episode_seed) {
             Ok(obs) => obs.legal_actions(),
-            Err((p, g)) => {
+            Err(pair) => {
+                let (p, g) = *pair;
                 disagreements += 1;
                 if disagreements <= SHOWN {
                     eprintln!(
@@ -169,7 +170,7 @@ fn main() -> Result<(), sim::SimError> {
                 }
                 continue 'run;
             }
-            if done.is_multiple_of(10_000_000) {
+            if done % 10_000_000 == 0 {
                 eprintln!(
                     "{done} steps, {disagreements} disagreements, {:.0} steps/s",
                     done as f64 / clock.elapsed().as_secs_f64()

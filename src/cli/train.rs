@@ -259,6 +259,10 @@ pub fn train(args: TrainArgs) -> Result<()> {
     let out = files::OutputPath::check(&args.out)?;
     let checkpoint_path = args.checkpoint.as_ref().or(args.resume.as_ref());
     let checkpoint = checkpoint_path.map(files::OutputPath::check).transpose()?;
+    anyhow::ensure!(
+        !checkpoint.as_ref().is_some_and(files::OutputPath::is_stdout),
+        "--checkpoint -: a checkpoint is written again every N games, so it must be a file"
+    );
     super::stdout::claim_for_data(&[Some(&out), checkpoint.as_ref()])?;
     if let Some(path) = checkpoint_path {
         files::refuse_same_file(&args.out, path)?;
