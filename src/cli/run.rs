@@ -15,6 +15,7 @@ use agent::{
 };
 
 use super::profile::{PlayRulesArgs, ProfileArg, Rules};
+use super::solver_budget::SolverBudgetArg;
 use super::stdout::line;
 use super::world::WorldArgs;
 
@@ -63,9 +64,12 @@ pub struct RunArgs {
     /// The model file the `q` agent plays (see `blockstack train`).
     #[arg(long, required_if_eq("agent", "q"))]
     pub model: Option<PathBuf>,
-    /// The `q` agent's probability of a random legal action (the paper's test policy: 0.1).
-    #[arg(long, default_value_t = agent::profile::TEST_EPSILON)]
-    pub epsilon: f64,
+    /// The `q` agent's probability of a random legal action [default: the paper's test
+    /// policy: 0.1]
+    #[arg(long)]
+    pub epsilon: Option<f64>,
+    #[command(flatten)]
+    pub budget: SolverBudgetArg,
 }
 
 /// The machine-readable result of a run: no timings, so two runs compare equal. `eval
@@ -117,8 +121,39 @@ impl RunReport {
     }
 }
 
+/// Refuses, naming the flag, a flag given for an agent that does not use it (it would be
+/// ignored, and the run would not be what was asked).
+fn check_agent_flags(args: &RunArgs) -> Result<()> {
+    let agent_flags = [
+        ("--model", args.model.is_some(), AgentKind::Q),
+        ("--epsilon", args.epsilon.is_some(), AgentKind::Q),
+        ("--oracle", args.oracle.is_some(), AgentKind::Oracle),
+        ("--solver-budget", args.budget.solver_budget.is_some(), AgentKind::Exact),
+    ];
+    for (flag, given, owner) in agent_flags {
+        anyhow::ensure!(
+            !given || args.agent == owner,
+            "{flag} does not apply to --agent {}: it is for --agent {} only",
+            args.agent.name(),
+            owner.name()
+        );
+    }
+    Ok(())
+}
+
+impl AgentKind {
+    /// The name `--agent` takes.
+    fn name(self) -> String {
+        self.to_possible_value()
+            .expect("no variant is skipped")
+            .get_name()
+            .to_string()
+    }
+}
+
 /// Plays the episodes and prints the summary.
 pub fn run(args: RunArgs) -> Result<()> {
+    check_agent_flags(&args)?;
     let trajectory_out = args.trajectory.as_deref().map(OutputPath::check).transpose()?;
     super::stdout::claim_for_data(&[trajectory_out.as_ref()])?;
     if let (Some(out), Some(model)) = (&args.trajectory, &args.model) {
@@ -142,13 +177,23 @@ pub fn run(args: RunArgs) -> Result<()> {
             OracleKind::Astar => Box::new(OraclePolicy::new(config.grid)),
             OracleKind::Paper => Box::new(PaperOraclePolicy::new(config.grid)),
         },
-        (AgentKind::Exact, _) => Box::new(ExactPolicy::new(config.grid)),
-        (AgentKind::Q, Some(q)) => Box::new(q.policy(args.epsilon)?),
+        (AgentKind::Exact, _) => Box::new(ExactPolicy::with_planner(args.budget.solver(config.grid))),
+        (AgentKind::Q, Some(q)) => Box::new(q.policy(args.epsilon.unwrap_or(agent::profile::TEST_EPSILON))?),
         (AgentKind::Q, None) => anyhow::bail!("--agent q needs --model FILE"),
     };
     let mut env = Env::new(config)?;
     let mut trajectory = trajectory_out.as_ref().map(TrajectoryWriter::create).transpose()?;
-    let results = agent::play(&mut env, policy.as_mut(), args.episodes, args.seed, trajectory.as_mut())?;
+    let bar = super::progress::bar(args.episodes, "episodes");
+    let results = agent::rollout::play_observed(
+        &mut env,
+        policy.as_mut(),
+        args.episodes,
+        args.seed,
+        trajectory.as_mut(),
+        &mut |_| bar.inc(1),
+    )
+    .map_err(|e| args.budget.explain(e))?;
+    bar.finish_and_clear();
     if let Some(t) = trajectory {
         t.finish()?;
     }
