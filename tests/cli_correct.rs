@@ -214,3 +214,105 @@ fn malformed_lines_are_skipped_by_number_or_stop_the_command() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("missing.jsonl"));
 }
+
+#[test]
+fn learn_from_demos_refuses_what_cannot_be_learnt_from() {
+    let dir = scratch("refusals");
+    let base = train(&dir);
+    let demos = dir.join("demos.jsonl");
+    let o = blockstack(&[
+        "correct",
+        "--model",
+        path(&base),
+        "--demonstrator",
+        "1",
+        "--demos",
+        "2",
+        "--out",
+        path(&dir.join("live.safetensors")),
+        "--record",
+        path(&demos),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let lines: Vec<String> = std::fs::read_to_string(&demos)
+        .unwrap()
+        .lines()
+        .map(String::from)
+        .collect();
+    // Another model: the same settings, fewer games.
+    let other = dir.join("other.safetensors");
+    let o = blockstack(&[
+        "train",
+        "--goals",
+        "0,1,2:1,0,2",
+        "--games",
+        "20",
+        "--backend",
+        "grid",
+        "--out",
+        path(&other),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let write = |name: &str, lines: &[String]| {
+        let file = dir.join(name);
+        std::fs::write(&file, lines.iter().map(|l| format!("{l}\n")).collect::<String>()).unwrap();
+        file
+    };
+    let empty = write("empty.jsonl", &[]);
+    // The fourth line (the second step) written twice.
+    let twice = write("twice.jsonl", &[&lines[..4], &lines[3..]].concat());
+    // The first step's next state with block 0 on another free cell, which no action gives.
+    let mut impossible = lines.clone();
+    let mut step: serde_json::Value = serde_json::from_str(&impossible[2]).unwrap();
+    let taken: Vec<serde_json::Value> = [&step["state"]["blocks"], &step["next"]["blocks"]]
+        .iter()
+        .flat_map(|b| b.as_array().unwrap().clone())
+        .collect();
+    let free = (0..7)
+        .flat_map(|x| (0..7).map(move |y| serde_json::json!([x, y])))
+        .find(|c| !taken.contains(c))
+        .unwrap();
+    step["next"]["blocks"][0] = free;
+    impossible[2] = step.to_string();
+    let impossible = write("impossible.jsonl", &impossible);
+    let out = dir.join("out.safetensors");
+    let cases: &[(&Path, &Path, &[&str], &str)] = &[
+        (&empty, &base, &[], "empty"),
+        (&base, &base, &[], "model file"),
+        (&demos, &other, &[], "identity"),
+        (&twice, &base, &["--on-bad-line", "fail"], "written twice"),
+        (&impossible, &base, &["--on-bad-line", "fail"], "rules"),
+    ];
+    for (recording, model, extra, needle) in cases {
+        let o = blockstack(
+            &[
+                &[
+                    "learn-from-demos",
+                    path(recording),
+                    "--model",
+                    path(model),
+                    "--out",
+                    path(&out),
+                ][..],
+                extra,
+            ]
+            .concat(),
+        );
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{needle}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{needle}: {err}");
+        assert!(err.contains(needle), "{needle}: {err}");
+        assert!(!out.exists(), "{needle}: nothing is written");
+    }
+    // Skipping, the line written twice is reported and the rest learnt.
+    let o = blockstack(&[
+        "learn-from-demos",
+        path(&twice),
+        "--model",
+        path(&base),
+        "--out",
+        path(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("twice.jsonl:5: skipped"), "{}", stderr(&o));
+}

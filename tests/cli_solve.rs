@@ -85,7 +85,11 @@ fn solve_rejects_bad_input_with_one_line_and_exit_2() {
             &["--start", "0,0;1,0;2,0", "--goal", "0,1,2", "--grid", "3x2"],
             "taller than the grid",
         ),
-        (&["--start", "0,0;1", "--goal", "0,1"], "cannot read cell \"1\""),
+        (&["--start", "0,0;1", "--goal", "0,1"], "cannot read cell from \"1\""),
+        (
+            &["--start", "0,0;1,0", "--goal", "0,1", "--held", "256"],
+            "block 256 does not exist",
+        ),
         (
             &["--start", "0,0;1,0", "--goal", "0,1", "--held", "5"],
             "block 5 does not exist",

@@ -1,7 +1,9 @@
 //! `blockstack demo` in a real terminal, driven through tmux (send-keys, capture-pane): it
 //! starts and shows the grid and the goal, an override key changes the state shown, `q`
-//! quits, the recording holds the corrections and replays to the saved model, and a
-//! session killed with SIGKILL leaves a recording whose complete lines all parse.
+//! quits, the recording holds the corrections and replays to the saved model, a session
+//! killed with SIGKILL leaves a recording whose complete lines all parse, blocks 10 to 15
+//! are picked by their labels A to F, and the agent waits while the terminal is too small;
+//! and `eval`, `run` and `correct` draw a progress bar on a terminal, and none elsewhere.
 //!
 //! Skips, saying so, when tmux is not installed (`.ci/run` installs it).
 
@@ -38,7 +40,20 @@ impl Tmux {
 
     /// Starts `command` in a detached 80 x 24 session named `session`.
     fn start(&self, session: &str, command: &str) {
-        let o = self.run(&["new-session", "-d", "-s", session, "-x", "80", "-y", "24", command]);
+        self.start_sized(session, (80, 24), command);
+    }
+
+    /// Starts `command` in a detached session of `size` (columns, rows).
+    fn start_sized(&self, session: &str, size: (u16, u16), command: &str) {
+        let (x, y) = (size.0.to_string(), size.1.to_string());
+        let o = self.run(&["new-session", "-d", "-s", session, "-x", &x, "-y", &y, command]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+
+    /// Resizes the session's window to `size` (columns, rows).
+    fn resize(&self, session: &str, size: (u16, u16)) {
+        let (x, y) = (size.0.to_string(), size.1.to_string());
+        let o = self.run(&["resize-window", "-t", session, "-x", &x, "-y", &y]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     }
 
@@ -233,4 +248,142 @@ fn a_demo_killed_mid_episode_leaves_whole_lines() {
             .count()
             >= 3
     );
+}
+
+#[test]
+fn blocks_past_9_are_picked_by_letter_and_a_small_terminal_stops_the_agent() {
+    if tmux_missing() {
+        eprintln!("SKIPPED: tmux is not installed, so the terminal UI cannot be driven (.ci/run installs it)");
+        return;
+    }
+    let dir = scratch("sixteen");
+    let model = dir.join("sixteen.safetensors");
+    let goal: Vec<String> = (0..16).map(|b| b.to_string()).collect();
+    let goal = goal.join(",");
+    let o = blockstack(&[
+        "train",
+        "--blocks",
+        "16",
+        "--grid",
+        "16x16",
+        "--goals",
+        &goal,
+        "--games",
+        "2",
+        "--horizon",
+        "20",
+        "--backend",
+        "grid",
+        "--out",
+        path(&model),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let demos = dir.join("demos.jsonl");
+    let tmux = Tmux::new(&dir);
+    // A 16 x 16 grid needs more than 80 columns.
+    let roomy = (100, 30);
+    tmux.start_sized(
+        "demo",
+        roomy,
+        &format!(
+            "exec {BIN} demo --model {} --goals {goal} --record {} --out {} --seed 2",
+            path(&model),
+            path(&demos),
+            path(&dir.join("corrected.safetensors"))
+        ),
+    );
+    tmux.wait_for("demo", "the grid and the help", |s| {
+        s.contains("world") && s.contains("0-9 A-F pick")
+    });
+    tmux.keys("demo", &["Space"]);
+    tmux.wait_for("demo", "the pause", |s| s.contains("PAUSED"));
+    for label in ["F", "A"] {
+        tmux.keys("demo", &[label]);
+        tmux.wait_for("demo", &format!("block {label} held"), |s| {
+            s.contains(&format!("held: {label}")) && s.contains(&format!("[{label}]"))
+        });
+    }
+    let picks: Vec<String> = records(&demos)
+        .iter()
+        .filter_map(|r| match r {
+            DemoRecord::Step(s) if s.correction => Some(s.action.clone()),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(picks, ["pick 15", "pick 10"]);
+    // Resumed at the fastest pace, the agent steps...
+    tmux.keys("demo", &["Space", "+", "+", "+", "+", "+", "+"]);
+    let stepping = |n: usize| {
+        let deadline = Instant::now() + Duration::from_secs(30);
+        while records(&demos).len() <= n {
+            assert!(Instant::now() < deadline, "the agent does not step");
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    };
+    stepping(records(&demos).len());
+    // ...and not while the terminal is too small to show the world.
+    tmux.resize("demo", (40, 10));
+    tmux.wait_for("demo", "the polite message", |s| s.contains("too small"));
+    std::thread::sleep(Duration::from_millis(300));
+    let shown = records(&demos).len();
+    std::thread::sleep(Duration::from_millis(1500));
+    assert_eq!(records(&demos).len(), shown, "the agent stepped behind the message");
+    tmux.resize("demo", roomy);
+    tmux.wait_for("demo", "the world again", |s| s.contains("world"));
+    stepping(shown);
+    tmux.keys("demo", &["q"]);
+}
+
+#[test]
+fn eval_run_and_correct_show_a_progress_bar_on_a_terminal_only() {
+    if tmux_missing() {
+        eprintln!("skipped: tmux is not installed");
+        return;
+    }
+    let dir = scratch("tmux-progress");
+    let model = train(&dir);
+    let out = dir.join("corrected.safetensors");
+    let tmux = Tmux::new(&dir);
+    // Keeps the server up while the sessions below come and go.
+    tmux.start("keep", "sleep 600");
+    for (session, args, bar) in [
+        (
+            "run",
+            vec!["run", "--agent", "random", "--episodes", "1000000"],
+            "/1000000 episodes",
+        ),
+        (
+            "eval",
+            vec!["eval", "--model", path(&model), "--episodes", "100000"],
+            "/1200000 episodes played and solved",
+        ),
+        (
+            "correct",
+            vec![
+                "correct",
+                "--model",
+                path(&model),
+                "--demonstrator",
+                "1",
+                "--demos",
+                "100000",
+                "--out",
+                path(&out),
+            ],
+            "/100000 demonstrations",
+        ),
+    ] {
+        let command = format!("{BIN} {}", args.join(" "));
+        tmux.start(session, &command);
+        tmux.wait_for(session, bar, |s| s.contains(bar));
+        let _ = tmux.run(&["kill-session", "-t", session]);
+        // Not on a terminal: no bar, nothing on stderr.
+        let short: Vec<&str> = args
+            .iter()
+            .map(|&a| if a.starts_with("1000") { "2" } else { a })
+            .collect();
+        let o = blockstack(&short);
+        assert!(o.status.success(), "{short:?}: {}", stderr(&o));
+        assert_eq!(stderr(&o), "", "{short:?}");
+    }
 }

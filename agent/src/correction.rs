@@ -338,8 +338,7 @@ impl<S: DemoSink> CorrectionSession<S> {
             env_config(&agent, &world, *goal).validate()?;
         }
         sink.record(&DemoRecord::Session(SessionLine::new(
-            agent.grid(),
-            agent.blocks(),
+            &agent,
             rule,
             demonstrator,
             model,

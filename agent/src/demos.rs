@@ -1,16 +1,18 @@
 //! Demonstration recordings: every step of a correction session as JSON Lines, written as it
 //! happens, and their replay.
 //!
-//! # Format (`blockstack-demos`, version 1)
+//! # Format (`blockstack-demos`, version 2)
 //!
 //! ```text
-//! {"type":"session","format":"blockstack-demos","version":1,"grid":[7,7],"blocks":3,"rule":{"margin":0.8,"learn_agent_steps":true},"demonstrator":"person","model":"agent.json"}
+//! {"type":"session","format":"blockstack-demos","version":2,"grid":[7,7],"blocks":3,"rule":{"margin":0.8,"learn_agent_steps":true},"demonstrator":"person","model":"agent.safetensors","model_id":"3f9c0a1b2d4e5f60"}
 //! {"type":"episode","episode":0,"seed":123,"goal":[0,1,2],"start":{"blocks":[[1,2],[4,0],[6,6]],"held":null}}
 //! {"type":"step","episode":0,"step":1,"state":{"blocks":[[1,2],[4,0],[6,6]],"held":null},"proposed":"drop","action":"pick 1","correction":true,"reward":0.0,"next":{"blocks":[[1,2],[4,0],[6,6]],"held":1},"terminated":false,"truncated":false}
 //! ```
 //!
 //! - A *session* line opens every session; a file may hold several sessions one after the
-//!   other (a recording is appended to, never overwritten). `rule` is how the agent learnt.
+//!   other (a recording is appended to, never overwritten). `rule` is how the agent learnt;
+//!   `model` the model file the session started from, when known, and `model_id` that
+//!   model's identity ([`QAgent::identity`]). Version 1 (before `model_id`) is still read.
 //! - An *episode* line opens every episode: its number in the session, the seed of its
 //!   start, its goal (bottom to top) and its start state.
 //! - A *step* line per executed action: the state before it, the agent's proposed action,
@@ -35,27 +37,45 @@
 //! [`Replay`] applies the recorded steps to an agent with the recorded rule, in file order
 //! (any [`DemoLearner`]; the tabular agent is one):
 //! started from the same model, it ends with the same table as the live session. A line
-//! that cannot be used (not JSON, an unknown field, a step before any episode line, a state
-//! that does not fit, a line cut off by a kill) is an error naming its line number; the
-//! caller's [`BadLines`] policy says whether to report it and go on or to stop. A file of
-//! another format or version is always refused.
+//! that cannot be used is an error naming its line number; the caller's [`BadLines`]
+//! policy says whether to report it and go on or to stop. Such a line is:
+//!
+//! - not JSON, an unknown field, a line cut off by a kill;
+//! - a step or episode before its session line, a step of another episode than the one
+//!   just opened, a state that does not fit the world;
+//! - a step that breaks the world's rules: its `next` is not what the rules
+//!   ([`sim::World::act`]) make of its `state` and `action`;
+//! - a step out of order: its number not above the last step's of its episode (a line
+//!   written twice), its `state` not the last step's `next` (or the episode's start), or a
+//!   step after one that ended the episode; an episode numbered not above the last;
+//! - with [`BadLines::Fail`] only, a gap: a step or episode number more than one past the
+//!   last. (Skipping a bad line leaves such a gap, so skipping accepts it.)
+//!
+//! Some problems end the replay whatever the policy, because nothing after them could be
+//! learnt from correctly: a file that does not begin with a session line (a model file, a
+//! trajectory file, an empty file), a session of another format or version, and a session
+//! recorded from another model than the agent being replayed into (its `model_id` is not
+//! the agent's identity at that point of the replay: sessions appended one after another
+//! each started from the model the previous one left). [`learn_from_file`] refuses a file
+//! from which no step was learnt.
 
 use std::io::{BufRead, Read, Write};
 use std::path::{Path, PathBuf};
 
 use files::{Output, OutputPath};
 use serde::{Deserialize, Serialize};
-use sim::{Action, ActionProtocol, Cell, Goal, Grid, Observation, State, Step};
+use sim::{Action, ActionProtocol, Cell, Goal, Grid, GridWorld, Observation, State, Step, World};
 
 use crate::correction::{CorrectionRule, Experience};
 use crate::error::{AgentError, Result};
-use crate::qlearning::QAgent;
+use crate::model::MODEL_FORMAT;
+use crate::qlearning::{QAgent, check_fits_table};
 
 /// The `format` field of every session line.
 pub const DEMOS_FORMAT: &str = "blockstack-demos";
 
-/// The recording format version this build writes and reads.
-pub const DEMOS_VERSION: u32 = 1;
+/// The recording format version this build writes (it reads this one and version 1).
+pub const DEMOS_VERSION: u32 = 2;
 
 /// The largest recording read: 1 GiB, some three million steps.
 pub const MAX_RECORDING_BYTES: u64 = 1 << 30;
@@ -110,19 +130,26 @@ pub struct SessionLine {
     pub demonstrator: String,
     /// The model file the session started from, when known.
     pub model: Option<String>,
+    /// The identity of the model the session started from ([`QAgent::identity`]); always
+    /// present from version 2.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model_id: Option<String>,
 }
 
 impl SessionLine {
-    /// The header of a session on `grid` with `blocks` blocks.
-    pub fn new(grid: Grid, blocks: usize, rule: CorrectionRule, demonstrator: &str, model: Option<&str>) -> Self {
+    /// The header of a session of `agent` (its grid, blocks and identity), loaded from the
+    /// file `model` when known.
+    pub fn new(agent: &QAgent, rule: CorrectionRule, demonstrator: &str, model: Option<&str>) -> Self {
+        let grid = agent.grid();
         SessionLine {
             format: DEMOS_FORMAT.into(),
             version: DEMOS_VERSION,
             grid: [grid.width(), grid.height()],
-            blocks,
+            blocks: agent.blocks(),
             rule,
             demonstrator: demonstrator.into(),
             model: model.map(Into::into),
+            model_id: Some(agent.identity()),
         }
     }
 }
@@ -338,6 +365,9 @@ pub struct ReplayReport {
     pub lines: usize,
     /// Sessions begun.
     pub sessions: usize,
+    /// Of those, sessions of version 1, which name no model identity: replayed without
+    /// checking that they started from the agent.
+    pub unchecked_sessions: usize,
     /// Episodes begun.
     pub episodes: usize,
     /// Steps learnt from.
@@ -354,13 +384,54 @@ struct LineError {
     fatal: bool,
 }
 
-impl From<AgentError> for LineError {
-    fn from(e: AgentError) -> Self {
+impl LineError {
+    fn bad(reason: impl Into<String>) -> Self {
         LineError {
-            reason: e.to_string(),
+            reason: reason.into(),
             fatal: false,
         }
     }
+
+    fn fatal(reason: impl Into<String>) -> Self {
+        LineError {
+            reason: reason.into(),
+            fatal: true,
+        }
+    }
+}
+
+impl From<AgentError> for LineError {
+    fn from(e: AgentError) -> Self {
+        LineError::bad(e.to_string())
+    }
+}
+
+impl From<sim::SimError> for LineError {
+    fn from(e: sim::SimError) -> Self {
+        LineError::bad(e.to_string())
+    }
+}
+
+/// The session being replayed.
+#[derive(Clone, Copy)]
+struct OpenSession {
+    grid: Grid,
+    rule: CorrectionRule,
+    /// The number of its last episode line used.
+    last_episode: Option<u64>,
+}
+
+/// The episode being replayed.
+#[derive(Clone, Copy)]
+struct OpenEpisode {
+    number: u64,
+    goal: Goal,
+    /// The number of its last step used (0 before the first).
+    last_step: u32,
+    /// Where that step left the world (the start before the first).
+    state: State,
+    /// That step ended the episode.
+    ended: bool,
 }
 
 /// What a replay hands the recorded steps to: the tabular agent, or any other learner (the
@@ -369,6 +440,11 @@ pub trait DemoLearner {
     /// An error unless a world of `blocks` blocks on `grid` is the learner's.
     fn check_world(&self, grid: Grid, blocks: usize) -> Result<()>;
 
+    /// The identity a session's `model_id` must match ([`QAgent::identity`]), or `None`
+    /// for a learner that takes any session's steps as demonstrations (it was not the
+    /// model the session corrected, so there is nothing to match).
+    fn identity(&self) -> Option<String>;
+
     /// Learns from one recorded step, by the session's `rule`.
     fn learn(&mut self, rule: &CorrectionRule, step: &Experience) -> Result<()>;
 }
@@ -376,6 +452,10 @@ pub trait DemoLearner {
 impl DemoLearner for QAgent {
     fn check_world(&self, grid: Grid, blocks: usize) -> Result<()> {
         QAgent::check_world(self, grid, blocks)
+    }
+
+    fn identity(&self) -> Option<String> {
+        Some(QAgent::identity(self))
     }
 
     fn learn(&mut self, rule: &CorrectionRule, step: &Experience) -> Result<()> {
@@ -389,10 +469,8 @@ pub struct Replay<'a, L: ?Sized = QAgent> {
     agent: &'a mut L,
     policy: BadLines,
     name: String,
-    /// The current session's grid and rule.
-    session: Option<(Grid, CorrectionRule)>,
-    /// The current episode's number and goal.
-    episode: Option<(u64, Goal)>,
+    session: Option<OpenSession>,
+    episode: Option<OpenEpisode>,
     report: ReplayReport,
 }
 
@@ -424,15 +502,18 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
             if n == 0 {
                 return Ok(());
             }
+            if self.report.lines == 0 && contains(&buf, MODEL_FORMAT.as_bytes()) {
+                self.report.lines += 1;
+                return self.bad(LineError::fatal(format!(
+                    "it is a model file ({MODEL_FORMAT}), not a recording: give the recording first and the model with --model"
+                )));
+            }
             if n as u64 > MAX_LINE_BYTES {
                 self.report.lines += 1;
-                return self.bad(LineError {
-                    reason: format!(
-                        "the line is longer than {}, the longest a recording line can be: is this a recording?",
-                        files::Bytes(MAX_LINE_BYTES)
-                    ),
-                    fatal: true,
-                });
+                return self.bad(LineError::fatal(format!(
+                    "the line is longer than {}, the longest a recording line can be: is this a recording?",
+                    files::Bytes(MAX_LINE_BYTES)
+                )));
             }
             let complete = buf.last() == Some(&b'\n');
             match std::str::from_utf8(&buf) {
@@ -444,18 +525,14 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
                         self.line(text)?;
                     } else {
                         self.report.lines += 1;
-                        self.bad(LineError {
-                            reason: "the line is cut off (no newline at its end: was the session killed?)".into(),
-                            fatal: false,
-                        })?;
+                        self.bad(LineError::bad(
+                            "the line is cut off (no newline at its end: was the session killed?)",
+                        ))?;
                     }
                 }
                 Err(_) => {
                     self.report.lines += 1;
-                    self.bad(LineError {
-                        reason: "the line is not UTF-8 text".into(),
-                        fatal: false,
-                    })?;
+                    self.bad(LineError::bad("the line is not UTF-8 text"))?;
                 }
             }
         }
@@ -473,9 +550,19 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
         }
     }
 
-    /// Reports (or fails on) a bad line, the current one.
+    /// Reports (or fails on) a bad line, the current one. Before the first session line
+    /// every bad line is fatal: the input is not a recording.
     fn bad(&mut self, e: LineError) -> Result<()> {
         let line = self.report.lines;
+        if self.report.sessions == 0 && !e.fatal {
+            return Err(demos_error(
+                Path::new(&self.name),
+                &format!(
+                    "line {line}: {}; a recording begins with a session line: is this a recording?",
+                    e.reason
+                ),
+            ));
+        }
         if e.fatal || self.policy == BadLines::Fail {
             return Err(demos_error(
                 Path::new(&self.name),
@@ -487,85 +574,176 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
     }
 
     fn apply(&mut self, text: &str) -> std::result::Result<(), LineError> {
-        let record: DemoRecord = serde_json::from_str(text).map_err(|e| LineError {
-            reason: format!("not a recording line ({e})"),
-            fatal: false,
-        })?;
+        let record: DemoRecord =
+            serde_json::from_str(text).map_err(|e| LineError::bad(format!("not a recording line ({e})")))?;
         match record {
-            DemoRecord::Session(s) => {
-                if s.format != DEMOS_FORMAT || s.version != DEMOS_VERSION {
-                    return Err(LineError {
-                        reason: format!(
-                            "it is {} version {}, and this blockstack reads {DEMOS_FORMAT} version {DEMOS_VERSION}",
-                            s.format, s.version
-                        ),
-                        fatal: true,
-                    });
+            DemoRecord::Session(s) => self.session(s),
+            DemoRecord::Episode(e) => self.episode(e),
+            DemoRecord::Step(s) => self.step(s),
+        }
+    }
+
+    fn session(&mut self, s: SessionLine) -> std::result::Result<(), LineError> {
+        if s.format != DEMOS_FORMAT || !(1..=DEMOS_VERSION).contains(&s.version) {
+            return Err(LineError::fatal(format!(
+                "it is {} version {}, and this blockstack reads {DEMOS_FORMAT} versions 1 to {DEMOS_VERSION}",
+                s.format, s.version
+            )));
+        }
+        let grid = Grid::new(s.grid[0], s.grid[1])?;
+        s.rule.validate()?;
+        // Nothing of a session for another world could be learnt.
+        self.agent
+            .check_world(grid, s.blocks)
+            .map_err(|e| LineError::fatal(e.to_string()))?;
+        match (&s.model_id, s.version) {
+            (_, 1) => self.report.unchecked_sessions += 1,
+            (None, _) => return Err(LineError::fatal("the session line names no model_id")),
+            (Some(_), _) if self.agent.identity().is_none() => {}
+            (Some(id), _) => {
+                let given = self.agent.identity().unwrap_or_default();
+                if *id != given {
+                    let file = s.model.as_deref().map_or(String::new(), |m| format!(" {m}"));
+                    return Err(LineError::fatal(format!(
+                        "the session was recorded from the model{file} with identity {id}, and the model it would be \
+                         learnt into has identity {given}: give the model the session started from{}",
+                        if self.report.sessions > 0 {
+                            " (a session appended after another starts from the model that one left)"
+                        } else {
+                            ""
+                        }
+                    )));
                 }
-                let grid = Grid::new(s.grid[0], s.grid[1]).map_err(AgentError::from)?;
-                s.rule.validate()?;
-                self.agent.check_world(grid, s.blocks)?;
-                self.session = Some((grid, s.rule));
-                self.episode = None;
-                self.report.sessions += 1;
-            }
-            DemoRecord::Episode(e) => {
-                let (grid, _) = self.session.ok_or_else(|| no_header("an episode", "session"))?;
-                e.start.state(grid)?;
-                self.agent.check_world(grid, e.goal.block_count())?;
-                self.episode = Some((e.episode, e.goal));
-                self.report.episodes += 1;
-            }
-            DemoRecord::Step(s) => {
-                let (grid, rule) = self.session.ok_or_else(|| no_header("a step", "session"))?;
-                let goal = match self.episode {
-                    Some((k, goal)) if k == s.episode => goal,
-                    _ => return Err(no_header(&format!("a step of episode {}", s.episode), "episode")),
-                };
-                let blocks = goal.block_count();
-                let obs = Observation {
-                    grid,
-                    state: s.state.state(grid)?,
-                    goal,
-                    protocol: ActionProtocol::Free,
-                };
-                let next = Observation {
-                    state: s.next.state(grid)?,
-                    ..obs
-                };
-                for state in [&obs.state, &next.state] {
-                    if state.block_count() != blocks {
-                        return Err(AgentError::from(sim::SimError::BlockCountMismatch {
-                            expected: blocks,
-                            what: "a recorded state",
-                            found: state.block_count(),
-                        })
-                        .into());
-                    }
-                }
-                let action = Action::parse(&s.action, blocks).map_err(AgentError::from)?;
-                Action::parse(&s.proposed, blocks).map_err(AgentError::from)?;
-                if !s.reward.is_finite() {
-                    return Err(LineError {
-                        reason: format!("the reward {} is not a finite number", s.reward),
-                        fatal: false,
-                    });
-                }
-                self.agent.learn(
-                    &rule,
-                    &Experience {
-                        obs,
-                        action,
-                        reward: s.reward,
-                        next,
-                        terminated: s.terminated,
-                        corrected: s.correction,
-                    },
-                )?;
-                self.report.steps += 1;
-                self.report.corrections += usize::from(s.correction);
             }
         }
+        self.session = Some(OpenSession {
+            grid,
+            rule: s.rule,
+            last_episode: None,
+        });
+        self.episode = None;
+        self.report.sessions += 1;
+        Ok(())
+    }
+
+    fn episode(&mut self, e: EpisodeLine) -> std::result::Result<(), LineError> {
+        let session = self.session.ok_or_else(|| no_header("an episode", "session"))?;
+        let start = e.start.state(session.grid)?;
+        self.agent.check_world(session.grid, e.goal.block_count())?;
+        check_blocks(&start, &e.goal)?;
+        match session.last_episode {
+            Some(last) if e.episode <= last => {
+                return Err(LineError::bad(format!(
+                    "episode {} begins after episode {last}: episodes go up one by one (a line written twice?)",
+                    e.episode
+                )));
+            }
+            Some(last) if e.episode > last + 1 && self.policy == BadLines::Fail => {
+                return Err(LineError::bad(format!(
+                    "episode {} begins after episode {last}: the episodes between are missing",
+                    e.episode
+                )));
+            }
+            None if e.episode != 0 && self.policy == BadLines::Fail => {
+                return Err(LineError::bad(format!(
+                    "the session's first episode is {}, not 0: episodes are missing",
+                    e.episode
+                )));
+            }
+            _ => {}
+        }
+        self.session = Some(OpenSession {
+            last_episode: Some(e.episode),
+            ..session
+        });
+        self.episode = Some(OpenEpisode {
+            number: e.episode,
+            goal: e.goal,
+            last_step: 0,
+            state: start,
+            ended: false,
+        });
+        self.report.episodes += 1;
+        Ok(())
+    }
+
+    fn step(&mut self, s: StepLine) -> std::result::Result<(), LineError> {
+        let session = self.session.ok_or_else(|| no_header("a step", "session"))?;
+        let episode = match self.episode {
+            Some(e) if e.number == s.episode => e,
+            _ => return Err(no_header(&format!("a step of episode {}", s.episode), "episode")),
+        };
+        if episode.ended {
+            return Err(LineError::bad(format!(
+                "step {} comes after step {}, which ended episode {}",
+                s.step, episode.last_step, episode.number
+            )));
+        }
+        if s.step <= episode.last_step {
+            return Err(LineError::bad(format!(
+                "step {} comes after step {} of episode {}: steps go up one by one (a line written twice?)",
+                s.step, episode.last_step, episode.number
+            )));
+        }
+        let follows = s.step == episode.last_step + 1;
+        if !follows && self.policy == BadLines::Fail {
+            return Err(LineError::bad(format!(
+                "step {} comes after step {} of episode {}: the steps between are missing",
+                s.step, episode.last_step, episode.number
+            )));
+        }
+        let blocks = episode.goal.block_count();
+        let obs = Observation {
+            grid: session.grid,
+            state: s.state.state(session.grid)?,
+            goal: episode.goal,
+            protocol: ActionProtocol::Free,
+        };
+        let next = Observation {
+            state: s.next.state(session.grid)?,
+            ..obs
+        };
+        check_blocks(&obs.state, &episode.goal)?;
+        check_blocks(&next.state, &episode.goal)?;
+        if follows && obs.state != episode.state {
+            return Err(LineError::bad(format!(
+                "the step's state is not the one the {} left",
+                if episode.last_step == 0 {
+                    "episode's start"
+                } else {
+                    "previous step"
+                }
+            )));
+        }
+        let action = Action::parse(&s.action, blocks)?;
+        Action::parse(&s.proposed, blocks)?;
+        let mut world = GridWorld::new(session.grid, obs.state)?;
+        world.act(action)?;
+        if world.state() != next.state {
+            return Err(LineError::bad(format!(
+                "the step breaks the world's rules: {action} does not lead from its state to its next state"
+            )));
+        }
+        check_fits_table("the reward", s.reward)?;
+        self.agent.learn(
+            &session.rule,
+            &Experience {
+                obs,
+                action,
+                reward: s.reward,
+                next,
+                terminated: s.terminated,
+                corrected: s.correction,
+            },
+        )?;
+        self.episode = Some(OpenEpisode {
+            last_step: s.step,
+            state: next.state,
+            ended: s.terminated || s.truncated,
+            ..episode
+        });
+        self.report.steps += 1;
+        self.report.corrections += usize::from(s.correction);
         Ok(())
     }
 
@@ -575,20 +753,46 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
     }
 }
 
-fn no_header(what: &str, header: &str) -> LineError {
-    LineError {
-        reason: format!("{what} before its {header} line"),
-        fatal: false,
+/// An error unless `state` has the goal's block count.
+fn check_blocks(state: &State, goal: &Goal) -> std::result::Result<(), LineError> {
+    if state.block_count() == goal.block_count() {
+        Ok(())
+    } else {
+        Err(AgentError::from(sim::SimError::BlockCountMismatch {
+            expected: goal.block_count(),
+            what: "a recorded state",
+            found: state.block_count(),
+        })
+        .into())
     }
 }
 
+/// Whether `needle` occurs in `haystack`.
+fn contains(haystack: &[u8], needle: &[u8]) -> bool {
+    haystack.windows(needle.len()).any(|w| w == needle)
+}
+
+fn no_header(what: &str, header: &str) -> LineError {
+    LineError::bad(format!("{what} before its {header} line"))
+}
+
 /// Replays the recording at `path` into `agent` (module docs), reading at most
-/// [`MAX_RECORDING_BYTES`].
+/// [`MAX_RECORDING_BYTES`]. An error if no step could be learnt from it (an empty file, a
+/// file of sessions without steps, or one whose every step was skipped).
 pub fn learn_from_file<L: DemoLearner + ?Sized>(agent: &mut L, path: &Path, policy: BadLines) -> Result<ReplayReport> {
     let file = files::open_bounded(path, MAX_RECORDING_BYTES, "a recording")?;
     let mut replay = Replay::new(agent, policy, &path.display().to_string());
     replay.read(std::io::BufReader::new(file))?;
-    Ok(replay.finish())
+    let report = replay.finish();
+    if report.steps == 0 {
+        let reason = match (report.sessions, report.bad_lines.len()) {
+            (0, _) => "it is empty: a recording holds a session line, then episodes and steps".to_string(),
+            (_, 0) => "it holds no step to learn from".to_string(),
+            (_, bad) => format!("none of its steps could be used ({bad} lines skipped)"),
+        };
+        return Err(demos_error(path, &reason));
+    }
+    Ok(report)
 }
 
 /// Replays recorded lines into `agent` (the lines of a `Vec<DemoRecord>` sink, say).
@@ -707,8 +911,7 @@ mod tests {
     fn semantic_errors_name_the_line() {
         let mut agent = QAgent::new(ReprKind::Chasing, Grid::default(), 3, QParams::default()).unwrap();
         let session = serde_json::to_string(&DemoRecord::Session(SessionLine::new(
-            Grid::default(),
-            3,
+            &agent,
             CorrectionRule::default(),
             "person",
             None,
@@ -734,9 +937,208 @@ mod tests {
             assert!(err.contains("line 2"), "{err}");
         }
         // Another version is refused even when skipping bad lines.
-        let other = session.replace("\"version\":1", "\"version\":2");
+        let other = session.replace("\"version\":2", "\"version\":3");
         let mut replay = Replay::new(&mut agent, BadLines::Skip, "x.jsonl");
         let err = replay.read(other.as_bytes()).unwrap_err().to_string();
-        assert!(err.contains("version 2"), "{err}");
+        assert!(err.contains("version 3"), "{err}");
+    }
+
+    /// A recording's lines, and the same lines with `edit` applied to line `i` (from 0).
+    fn edited(bytes: &[u8], i: usize, edit: impl Fn(&str) -> String) -> String {
+        let text = String::from_utf8(bytes.to_vec()).unwrap();
+        text.lines()
+            .enumerate()
+            .map(|(k, l)| if k == i { edit(l) } else { l.to_string() } + "\n")
+            .collect()
+    }
+
+    /// The replay of `text` into `base` with `policy`: the agent, or the error.
+    fn replay(base: &QAgent, text: &str, policy: BadLines) -> std::result::Result<(QAgent, ReplayReport), String> {
+        let mut agent = base.clone();
+        let mut replay = Replay::new(&mut agent, policy, "r.jsonl");
+        replay.read(text.as_bytes()).map_err(|e| e.to_string())?;
+        let report = replay.finish();
+        Ok((agent, report))
+    }
+
+    #[test]
+    fn a_recording_of_another_model_is_refused_whatever_the_policy() {
+        let base = trained();
+        let (_, bytes) = session(&base, 1, 2, 4);
+        let other = QAgent::new(ReprKind::Chasing, Grid::default(), 3, QParams::default()).unwrap();
+        assert_ne!(other.identity(), base.identity());
+        for policy in [BadLines::Skip, BadLines::Fail] {
+            let err = replay(&other, std::str::from_utf8(&bytes).unwrap(), policy).unwrap_err();
+            assert!(err.contains("line 1") && err.contains(&base.identity()), "{err}");
+            assert!(err.contains(&other.identity()), "{err}");
+        }
+        // The same model saved and loaded keeps its identity, and the recording replays.
+        let dir = std::env::temp_dir().join(format!("demos-identity-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("m.safetensors");
+        base.save(&file).unwrap();
+        let loaded = QAgent::load(&file).unwrap();
+        assert_eq!(loaded.identity(), base.identity());
+        assert!(replay(&loaded, std::str::from_utf8(&bytes).unwrap(), BadLines::Fail).is_ok());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_second_session_must_start_from_the_model_the_first_left() {
+        let base = trained();
+        let (after_first, first) = session(&base, 1, 2, 4);
+        // Appended: a second session from the corrected model replays; one from the base
+        // model again does not (its live session started elsewhere).
+        let (live, second) = session(&after_first, 2, 2, 5);
+        let (replayed, report) = replay(
+            &base,
+            &String::from_utf8([first.clone(), second].concat()).unwrap(),
+            BadLines::Fail,
+        )
+        .unwrap();
+        assert_eq!(report.sessions, 2);
+        assert_eq!(replayed, live);
+        let (_, again) = session(&base, 2, 2, 5);
+        let err = replay(
+            &base,
+            &String::from_utf8([first, again].concat()).unwrap(),
+            BadLines::Skip,
+        )
+        .unwrap_err();
+        assert!(err.contains("appended"), "{err}");
+    }
+
+    #[test]
+    fn steps_that_break_the_rules_or_the_order_are_bad_lines() {
+        let base = trained();
+        let (live, bytes) = session(&base, 1, 2, 4);
+        let text = std::str::from_utf8(&bytes).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        // Line 3 is the first step; line 4 the second.
+        let step = |i: usize| serde_json::from_str::<DemoRecord>(lines[i]).unwrap();
+        let DemoRecord::Step(first) = step(2) else {
+            panic!("line 3 is a step")
+        };
+        let moved = |l: &str| {
+            let DemoRecord::Step(mut s) = serde_json::from_str::<DemoRecord>(l).unwrap() else {
+                unreachable!()
+            };
+            // A next state the rules cannot give: a block jumps to a free far cell.
+            let free = (0..7u8)
+                .flat_map(|x| (0..7u8).map(move |y| [x, y]))
+                .find(|c| !s.next.blocks.contains(c) && !s.state.blocks.contains(c))
+                .unwrap();
+            s.next.blocks[0] = free;
+            serde_json::to_string(&DemoRecord::Step(s)).unwrap()
+        };
+        let cases: Vec<(String, &str)> = vec![
+            (edited(&bytes, 2, moved), "breaks the world's rules"),
+            // Line 3 written twice.
+            (
+                lines[..3].iter().chain(&lines[2..]).map(|l| format!("{l}\n")).collect(),
+                "written twice",
+            ),
+            // The first step left out: a gap.
+            (
+                lines[..2].iter().chain(&lines[3..]).map(|l| format!("{l}\n")).collect(),
+                "missing",
+            ),
+            // A state that is not where the last step left the world.
+            (
+                edited(&bytes, 3, |l| {
+                    let DemoRecord::Step(mut s) = serde_json::from_str::<DemoRecord>(l).unwrap() else {
+                        unreachable!()
+                    };
+                    s.state = first.state.clone();
+                    s.state.held = Some((first.state.held.unwrap_or(0) + 1) % 3);
+                    serde_json::to_string(&DemoRecord::Step(s)).unwrap()
+                }),
+                "previous step",
+            ),
+        ];
+        for (text, needle) in &cases {
+            let err = replay(&base, text, BadLines::Fail).unwrap_err();
+            assert!(err.contains(needle), "{needle}: {err}");
+        }
+        // Skipping: the line written twice is skipped and the rest gives the live table.
+        let (skipped, report) = replay(&base, &cases[1].0, BadLines::Skip).unwrap();
+        assert_eq!(report.bad_lines.iter().map(|b| b.line).collect::<Vec<_>>(), [4]);
+        assert_eq!(skipped, live);
+        // A gap is accepted when skipping (a skipped line leaves one).
+        assert!(replay(&base, &cases[2].0, BadLines::Skip).is_ok());
+    }
+
+    #[test]
+    fn a_reward_beyond_the_tables_floats_is_a_bad_line() {
+        let base = trained();
+        let (_, bytes) = session(&base, 1, 1, 4);
+        let text = edited(&bytes, 2, |l| {
+            let DemoRecord::Step(mut s) = serde_json::from_str::<DemoRecord>(l).unwrap() else {
+                unreachable!()
+            };
+            s.reward = 1e39;
+            serde_json::to_string(&DemoRecord::Step(s)).unwrap()
+        });
+        let err = replay(&base, &text, BadLines::Fail).unwrap_err();
+        assert!(err.contains("line 3") && err.contains("32-bit"), "{err}");
+    }
+
+    #[test]
+    fn what_is_not_a_recording_is_refused_at_its_first_line() {
+        let base = trained();
+        let dir = std::env::temp_dir().join(format!("demos-not-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let model = dir.join("m.safetensors");
+        base.save(&model).unwrap();
+        let trajectory = "{\"type\":\"episode\",\"episode\":0,\"seed\":1,\"grid\":[7,7],\"goal\":[0,1,2],\"horizon\":9,\"start\":[[0,0],[1,0],[2,0]]}\n";
+        let empty = dir.join("empty.jsonl");
+        std::fs::write(&empty, "").unwrap();
+        let traj = dir.join("t.jsonl");
+        std::fs::write(&traj, trajectory).unwrap();
+        for (path, needle) in [
+            (&model, "model file"),
+            (&traj, "begins with a session line"),
+            (&empty, "empty"),
+        ] {
+            for policy in [BadLines::Skip, BadLines::Fail] {
+                let mut agent = base.clone();
+                let err = learn_from_file(&mut agent, path, policy).unwrap_err().to_string();
+                assert!(err.contains(needle), "{}: {err}", path.display());
+            }
+        }
+        // Sessions without a step teach nothing: refused too.
+        let (_, bytes) = session(&base, 1, 1, 4);
+        let header: String = String::from_utf8(bytes)
+            .unwrap()
+            .lines()
+            .take(2)
+            .map(|l| format!("{l}\n"))
+            .collect();
+        let no_steps = dir.join("no-steps.jsonl");
+        std::fs::write(&no_steps, header).unwrap();
+        let mut agent = base.clone();
+        let err = learn_from_file(&mut agent, &no_steps, BadLines::Skip)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("no step"), "{err}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_version_1_session_is_replayed_unchecked() {
+        let base = trained();
+        let (live, bytes) = session(&base, 1, 2, 4);
+        let v1 = edited(&bytes, 0, |l| {
+            let DemoRecord::Session(mut s) = serde_json::from_str::<DemoRecord>(l).unwrap() else {
+                unreachable!()
+            };
+            s.version = 1;
+            s.model_id = None;
+            serde_json::to_string(&DemoRecord::Session(s)).unwrap()
+        });
+        assert!(!v1.contains("model_id"));
+        let (replayed, report) = replay(&base, &v1, BadLines::Fail).unwrap();
+        assert_eq!(report.unchecked_sessions, 1);
+        assert_eq!(replayed, live);
     }
 }

@@ -20,6 +20,14 @@ pub enum AgentError {
         /// What is wrong with it.
         reason: String,
     },
+    /// A training checkpoint that cannot be read or written.
+    #[error("checkpoint {path}: {reason}")]
+    Checkpoint {
+        /// The file.
+        path: String,
+        /// What is wrong.
+        reason: String,
+    },
     /// A model that cannot be saved (its table holds a value a file cannot keep).
     #[error("cannot save model {path}: {reason}")]
     ModelSave {

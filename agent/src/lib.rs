@@ -7,7 +7,8 @@
 //!   [`Summary`] of failures and steps to goal.
 //! - [`QAgent`]: tabular Q-learning over one of the [`repr`] state representations, trained
 //!   by [`train`](train::train) / [`Trainer`] on a [`schedule`], assisted by an oracle as
-//!   [`assist`] says, saved and loaded as [`model`] files.
+//!   [`assist`] says, saved and loaded as [`model`] files; a run stopped and resumed
+//!   through a [`checkpoint`] ends as if it had not stopped.
 //! - [`optimality`]: steps taken against the exact solver's shortest plans.
 //! - [`correction`]: learning from a demonstrator's corrections, simulated [`demonstrator`]s,
 //!   and [`demos`] recordings and their replay.
@@ -15,6 +16,7 @@
 //!   learner, oracle and corrections as its authors coded them (`original`).
 
 pub mod assist;
+pub mod checkpoint;
 pub mod correction;
 pub mod demonstrator;
 pub mod demos;

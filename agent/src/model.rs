@@ -47,6 +47,15 @@
 //! block count, grid or schedule; no goals; goals of another block count). A version-1 file (JSON, written by
 //! blockstack before this format) is recognised and named as such.
 //!
+//! # Identity
+//!
+//! [`QAgent::identity`] names what an agent has learnt: the first 64 bits of a SHA-256 over
+//! its representation, world, hyper-parameters, training config, schedule, every table row
+//! that differs from the initial value and the seen entries, as 16 hex digits. A saved model loads with the same
+//! identity (the file keeps every value exactly), and any change to the table changes it.
+//! Demonstration recordings name the identity of the model a session started from, so
+//! that a replay can refuse another model.
+//!
 //! Saving refuses a table holding a value that is not finite: nothing a file keeps could
 //! be learnt from it. (Training and correction refuse up front the settings that lead
 //! there: [`crate::qlearning::check_fits_table`].)
@@ -235,11 +244,18 @@ impl QAgent {
     /// helper: atomically for a regular file.
     pub fn save(&self, path: &Path) -> Result<()> {
         let out = OutputPath::check(path)?;
-        let table = self.table();
-        let mut tensors = table_tensors(table).map_err(|reason| AgentError::ModelSave {
+        let bytes = self.to_bytes().map_err(|reason| AgentError::ModelSave {
             path: path.display().to_string(),
             reason,
         })?;
+        Ok(out.write(&bytes)?)
+    }
+
+    /// The bytes of the agent's model file (module docs); an error saying why for a table
+    /// no file can keep.
+    pub fn to_bytes(&self) -> std::result::Result<Vec<u8>, String> {
+        let table = self.table();
+        let mut tensors = table_tensors(table)?;
         tensors.extend(seen_tensors(table));
         let metadata = Metadata {
             grid: self.grid(),
@@ -254,8 +270,39 @@ impl QAgent {
                 initial: f64::from(table.initial()),
             },
         };
-        files::container::write(&out, MODEL_FORMAT, MODEL_VERSION, &metadata, &tensors)?;
-        Ok(())
+        files::container::to_bytes(MODEL_FORMAT, MODEL_VERSION, &metadata, &tensors)
+    }
+
+    /// The agent's identity (module docs): 16 hex digits.
+    pub fn identity(&self) -> String {
+        use sha2::{Digest, Sha256};
+        let mut hash = Sha256::new();
+        let table = self.table();
+        let settings = serde_json::to_vec(&(
+            self.kind(),
+            self.grid(),
+            self.blocks(),
+            self.params(),
+            self.training(),
+            self.schedule(),
+            (table.key_count(), table.columns(), table.initial().to_bits()),
+        ))
+        .expect("the settings serialise");
+        hash.update((settings.len() as u64).to_le_bytes());
+        hash.update(&settings);
+        let mut bytes = Vec::with_capacity(8 + 4 * table.columns());
+        for (key, row) in table.written_rows() {
+            bytes.clear();
+            bytes.extend_from_slice(&key.to_le_bytes());
+            bytes.extend(row.iter().flat_map(|v| v.to_bits().to_le_bytes()));
+            hash.update(&bytes);
+        }
+        // What the paper-code schedule has seen changes what it learns next.
+        for (key, bits) in table.seen_entries() {
+            hash.update(key.to_le_bytes());
+            hash.update(bits.to_le_bytes());
+        }
+        hash.finalize()[..8].iter().map(|b| format!("{b:02x}")).collect()
     }
 
     /// Reads an agent from the model file at `path`; an error saying what is wrong if the
@@ -263,16 +310,21 @@ impl QAgent {
     /// holds a table that does not fit its representation (module docs).
     pub fn load(path: &Path) -> Result<QAgent> {
         let name = path.display().to_string();
-        let fail = |reason: String| AgentError::Model {
+        let input = files::open_bounded(path, MAX_MODEL_BYTES, EXPECT.what).map_err(|e| AgentError::Model {
             path: name.clone(),
+            reason: read_problem(e),
+        })?;
+        QAgent::read_from(input, &name)
+    }
+
+    /// Reads an agent from the bytes of a model file, named `name` in errors, with the
+    /// checks of [`QAgent::load`] (the fuzz target `model_file` feeds it).
+    pub fn read_from(input: impl Read, name: &str) -> Result<QAgent> {
+        let fail = |reason: String| AgentError::Model {
+            path: name.to_string(),
             reason,
         };
-        let reason = |e: FilesError| match e {
-            FilesError::Read { problem, .. } => problem.to_string(),
-            other => other.to_string(),
-        };
-        let mut input =
-            BufReader::new(files::open_bounded(path, MAX_MODEL_BYTES, EXPECT.what).map_err(|e| fail(reason(e)))?);
+        let mut input = BufReader::new(input);
         let starts_json = input
             .fill_buf()
             .map_err(|e| fail(e.to_string()))?
@@ -289,11 +341,11 @@ impl QAgent {
                      (the old file's \"training\" field lists the settings it was trained with)"
                 )));
             }
-            Container::read_from(&bytes[..], &name, &EXPECT)
+            Container::read_from(&bytes[..], name, &EXPECT)
         } else {
-            Container::read_from(input, &name, &EXPECT)
+            Container::read_from(input, name, &EXPECT)
         };
-        QAgent::from_container(&container.map_err(|e| fail(reason(e)))?).map_err(|e| match e {
+        QAgent::from_container(&container.map_err(|e| fail(read_problem(e)))?).map_err(|e| match e {
             AgentError::Model { reason, .. } => fail(reason),
             other => fail(other.to_string()),
         })
@@ -412,6 +464,15 @@ impl QAgent {
             meta.training,
             meta.schedule,
         )
+    }
+}
+
+/// What is wrong with a file that could not be read, without its path (the model error
+/// names it).
+fn read_problem(e: FilesError) -> String {
+    match e {
+        FilesError::Read { problem, .. } => problem.to_string(),
+        other => other.to_string(),
     }
 }
 

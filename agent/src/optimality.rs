@@ -22,7 +22,12 @@ pub fn optimal_steps(grid: Grid, results: &[EpisodeResult]) -> Result<Vec<u32>> 
 /// The length of a shortest plan legal under `protocol` from each episode's start to its
 /// goal, in order.
 pub fn optimal_steps_under(grid: Grid, protocol: ActionProtocol, results: &[EpisodeResult]) -> Result<Vec<u32>> {
-    let solver = ExactSolver::new(grid).with_protocol(protocol);
+    optimal_steps_by(&ExactSolver::new(grid).with_protocol(protocol), results)
+}
+
+/// The length of the shortest plan `solver` finds (with its protocol and node budget) from
+/// each episode's start to its goal, in order.
+pub fn optimal_steps_by(solver: &ExactSolver, results: &[EpisodeResult]) -> Result<Vec<u32>> {
     results
         .iter()
         .map(|r| Ok(solver.distance(&r.start, &r.goal)?))

@@ -92,17 +92,31 @@ pub fn play(
     policy: &mut dyn Policy,
     episodes: u64,
     base_seed: u64,
+    trajectory: Option<&mut TrajectoryWriter>,
+) -> Result<Vec<EpisodeResult>> {
+    play_observed(env, policy, episodes, base_seed, trajectory, &mut |_| {})
+}
+
+/// [`play`], calling `observe` after each episode (a progress bar's hook).
+pub fn play_observed(
+    env: &mut Env,
+    policy: &mut dyn Policy,
+    episodes: u64,
+    base_seed: u64,
     mut trajectory: Option<&mut TrajectoryWriter>,
+    observe: &mut dyn FnMut(&EpisodeResult),
 ) -> Result<Vec<EpisodeResult>> {
     (0..episodes)
         .map(|k| {
-            play_episode(
+            let result = play_episode(
                 env,
                 policy,
                 k,
                 seeding::episode_seed(base_seed, k),
                 trajectory.as_deref_mut(),
-            )
+            )?;
+            observe(&result);
+            Ok(result)
         })
         .collect()
 }

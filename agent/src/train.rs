@@ -287,13 +287,13 @@ pub struct Trained {
 /// A training run in progress: play some games, look at (or evaluate) the agent, play
 /// more. `Send`, so runs go on separate threads.
 pub struct Trainer {
-    config: TrainConfig,
-    agent: QAgent,
+    pub(crate) config: TrainConfig,
+    pub(crate) agent: QAgent,
     /// One environment per goal, in the order of `config.goals`.
     envs: Vec<Env>,
-    report: TrainReport,
+    pub(crate) report: TrainReport,
     /// Steps of the recent games, `None` for a game cut off.
-    recent: VecDeque<Option<u32>>,
+    pub(crate) recent: VecDeque<Option<u32>>,
     /// The current game's transitions, for backward replay.
     path: Vec<TableStep>,
     /// The oracle, when it assists.
@@ -301,7 +301,7 @@ pub struct Trainer {
     /// Oscillation seen in the current game.
     watch: OscillationWatch,
     /// The last transition from every state-action, when the run ends with a replay.
-    memory: Option<ReplayMemory>,
+    pub(crate) memory: Option<ReplayMemory>,
 }
 
 /// The oracle that assists, as [`TrainConfig::oracle`] names it.
@@ -358,6 +358,12 @@ impl Trainer {
     /// Totals so far.
     pub fn report(&self) -> &TrainReport {
         &self.report
+    }
+
+    /// Sets the games the run is to play in all (what a checkpoint remembers as its
+    /// config's `games`); playing is still [`Trainer::play_games`]'s.
+    pub fn set_games(&mut self, games: u64) {
+        self.config.games = games;
     }
 
     /// Plays `count` more games, calling `progress` after each.

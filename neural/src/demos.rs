@@ -183,6 +183,12 @@ impl DemoLearner for Collector {
         Ok(())
     }
 
+    fn identity(&self) -> Option<String> {
+        // The network was not the model a session corrected: every session's steps are
+        // demonstrations to it.
+        None
+    }
+
     fn learn(&mut self, _rule: &CorrectionRule, step: &Experience) -> agent::Result<()> {
         // A step continues the last episode when it starts where that one stopped.
         let continues = self.episodes.last().is_some_and(|e| {

@@ -78,9 +78,10 @@ pub(crate) fn lower_bound(grid: Grid, state: &State, goal: &Goal) -> u32 {
 }
 
 /// Checks that `state` and `goal` make a problem on `grid` that has a solution: the same
-/// block count, the state inside the grid, the stack no taller than it. On a grid one cell
-/// wide blocks cannot pass each other, so there the goal must list them in the order they
-/// stand; on any wider grid every goal can be reached from every state (see the crate docs).
+/// block count, the state inside the grid, the stack no taller than it, and the goal
+/// reachable ([`Goal::can_be_reached`]: on a grid one cell wide blocks cannot pass each
+/// other, so there the goal must list them in the order they stand; on any wider grid every
+/// goal can be reached from every state, see the crate docs).
 pub(crate) fn check_problem(grid: Grid, state: &State, goal: &Goal) -> Result<()> {
     if state.block_count() != goal.block_count() {
         return Err(OracleError::BlockCountMismatch {
@@ -90,7 +91,7 @@ pub(crate) fn check_problem(grid: Grid, state: &State, goal: &Goal) -> Result<()
     }
     state.check_fits(grid)?;
     goal.check_fits(grid)?;
-    if grid.width() == 1 {
+    if !goal.can_be_reached(grid, state) {
         let mut standing: Vec<BlockId> = state.blocks().collect();
         standing.sort_by_key(|&b| state.cell(b).y);
         if standing != goal.order() {

@@ -125,6 +125,20 @@ pub enum SimError {
         /// How many blocks the world has.
         blocks: usize,
     },
+    /// More goals than [`crate::goal::MAX_ALL_GOALS`] asked for all at once.
+    #[error(
+        "{blocks} blocks have {goals} goals, more than the {max} that can be drawn all at once: name the goals to use (e.g. {example})"
+    )]
+    TooManyGoals {
+        /// The block count.
+        blocks: usize,
+        /// Its number of goals (`blocks!`), written out.
+        goals: String,
+        /// [`crate::goal::MAX_ALL_GOALS`].
+        max: usize,
+        /// An example goal of that many blocks.
+        example: String,
+    },
     /// A cell outside the grid.
     #[error("cell ({x}, {y}) is outside the {width}x{height} grid")]
     CellOutsideGrid {
@@ -206,6 +220,16 @@ pub enum SimError {
     PictureFormat {
         /// The path.
         path: String,
+    },
+    /// A trajectory file line that cannot be read or breaks the rules.
+    #[error("{name}:{line}: {reason}")]
+    Trajectory {
+        /// The file's name.
+        name: String,
+        /// The line's number, from 1.
+        line: usize,
+        /// What is wrong.
+        reason: String,
     },
     /// Reading or writing a file (trajectory, picture) failed, or its destination cannot
     /// be written.

@@ -10,6 +10,9 @@ use crate::error::{Result, SimError};
 use crate::grid::{Cell, Grid};
 use crate::state::{BlockId, MAX_BLOCKS, MIN_BLOCKS, State};
 
+/// The most goals [`Goal::all`] builds: every goal of 7 blocks (`7! = 5040`).
+pub const MAX_ALL_GOALS: usize = 5040;
+
 /// A goal: every block id once, bottom to top. `[1, 0, 2]` asks for block 1 at the bottom,
 /// 0 on top of 1 and 2 on top of 0, anywhere on the grid. Written `1,0,2`.
 #[derive(Clone, Copy, PartialEq, Eq, Hash)]
@@ -97,6 +100,12 @@ impl Goal {
         Ok(goal)
     }
 
+    /// Reads goals separated by `:`, e.g. `"0,1,2:1,0,2"`, each of `blocks` blocks (the
+    /// same goal may come more than once).
+    pub fn parse_list(text: &str, blocks: usize) -> Result<Vec<Goal>> {
+        text.split(':').map(|g| Goal::parse(g, Some(blocks))).collect()
+    }
+
     /// The identity goal `0, 1, ..., blocks - 1`.
     pub fn identity(blocks: usize) -> Result<Goal> {
         Goal::from_indices(&(0..blocks).collect::<Vec<_>>())
@@ -113,9 +122,20 @@ impl Goal {
         Goal::from_indices(&order)
     }
 
-    /// Every goal of `blocks` blocks, in lexicographic order (`blocks!` of them).
+    /// Every goal of `blocks` blocks, in lexicographic order (`blocks!` of them); an error
+    /// ([`SimError::TooManyGoals`]) past [`MAX_ALL_GOALS`], 7 blocks: 8 blocks have 40,320
+    /// goals and 12 almost half a billion, which nothing should build by default.
     pub fn all(blocks: usize) -> Result<Vec<Goal>> {
-        Goal::identity(blocks)?;
+        let identity = Goal::identity(blocks)?;
+        let goals = (1..=blocks as u128).product::<u128>();
+        if goals > MAX_ALL_GOALS as u128 {
+            return Err(SimError::TooManyGoals {
+                blocks,
+                goals: goals.to_string(),
+                max: MAX_ALL_GOALS,
+                example: identity.to_string(),
+            });
+        }
         let mut out = Vec::new();
         let mut order: Vec<usize> = (0..blocks).collect();
         loop {
@@ -132,6 +152,16 @@ impl Goal {
             order[i + 1..].reverse();
         }
         Ok(out)
+    }
+
+    /// Whether the goal can be reached from `state` on `grid` by the rules (SPEC section 2).
+    ///
+    /// On a grid at least two cells wide it always can (the `oracle` crate's docs give the
+    /// argument, and its tests check it against a search of every state on small grids).
+    /// On a grid one cell wide blocks cannot pass each other, so it can exactly when the
+    /// blocks stand, bottom to top, in the goal's order.
+    pub fn can_be_reached(&self, grid: Grid, state: &State) -> bool {
+        grid.width() > 1 || self.order().windows(2).all(|p| state.cell(p[0]).y < state.cell(p[1]).y)
     }
 
     /// An error if the stack cannot stand in `grid` (taller than its rows).

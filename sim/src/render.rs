@@ -45,9 +45,11 @@ pub fn colour(block: BlockId) -> [u8; 3] {
     PALETTE[block.index() % MAX_BLOCKS]
 }
 
-/// The one-character label of `block`: `0`-`9`, then `a`-`f`.
+/// The one-character label of `block`: `0`-`9`, then `A`-`F` (capitals, so that no label is
+/// a lower-case letter a key already means: `blockstack demo` picks a block by its label
+/// and drops with `d`).
 pub fn label(block: BlockId) -> char {
-    char::from_digit(block.0 as u32, 16).unwrap_or('?')
+    char::from_digit(block.0 as u32, 16).map_or('?', |c| c.to_ascii_uppercase())
 }
 
 /// Whether to colour ASCII output with ANSI escapes.

@@ -2,7 +2,12 @@
 //!
 //! - [`StartRule::Uniform`] (the default, SPEC section 3): every block on a distinct cell
 //!   drawn uniformly from the whole grid; a start in which the goal already holds is drawn
-//!   again.
+//!   again. On a grid one cell wide, where blocks cannot pass each other and the goal can
+//!   be reached only from starts where they stand in its order
+//!   ([`Goal::can_be_reached`]), the drawn cells are handed to the blocks in the goal's
+//!   order, bottom up: a start drawn uniformly among those from which the goal can be
+//!   reached, so that no episode is lost before it begins. (On wider grids every start can
+//!   reach every goal, and the draw is the SPEC's, seed for seed.)
 //! - [`StartRule::Paper`]: the authors' start (ORIGINAL.md, "World"; their
 //!   `BlockWorld_t.py:381`, `25 + 50 * randint(6)` for a block's pixel column and then its
 //!   pixel row). Each block's column is uniform in `0..W-1` and its row uniform in `1..H`:
@@ -92,7 +97,8 @@ impl StartRule {
     }
 }
 
-/// Distinct cells drawn uniformly, drawn again while the goal holds.
+/// Distinct cells drawn uniformly, drawn again while the goal holds; on a grid one cell
+/// wide, handed to the blocks in the goal's order (module docs).
 fn uniform(grid: Grid, goal: &Goal, rng: &mut SimRng) -> State {
     let n = goal.block_count();
     let mut cells = [Cell::default(); MAX_BLOCKS];
@@ -103,6 +109,13 @@ fn uniform(grid: Grid, goal: &Goal, rng: &mut SimRng) -> State {
             if !cells[..k].contains(&c) {
                 cells[k] = c;
                 k += 1;
+            }
+        }
+        if grid.width() == 1 {
+            let mut column = cells;
+            column[..n].sort_unstable_by_key(|c| c.y);
+            for (place, &b) in goal.order().iter().enumerate() {
+                cells[b.index()] = column[place];
             }
         }
         let state = State::new(&cells[..n], None).expect("distinct cells");

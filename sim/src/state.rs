@@ -86,6 +86,39 @@ impl State {
         })
     }
 
+    /// Reads a state as the command line writes it: every block's cell `x,y`, block 0
+    /// first, separated by `;` (e.g. `"0,0;3,0;5,2"`), and the held block, if any. Checked
+    /// like [`State::new`] and against `grid` ([`State::check_fits`]); a held block is
+    /// named as given, however large.
+    pub fn parse(text: &str, held: Option<usize>, grid: Grid) -> Result<State> {
+        let cells = text
+            .split(';')
+            .map(|part| {
+                let coords: Vec<Option<i64>> = part.split(',').map(|v| v.trim().parse().ok()).collect();
+                let [Some(x), Some(y)] = coords[..] else {
+                    return Err(SimError::Parse {
+                        what: "cell",
+                        text: part.trim().to_string(),
+                        reason: "write each block's cell as x,y, blocks separated by ';', e.g. \"0,0;3,0;5,2\"".into(),
+                    });
+                };
+                grid.cell(x, y)
+            })
+            .collect::<Result<Vec<Cell>>>()?;
+        let held = match held {
+            Some(b) if b >= cells.len() => {
+                return Err(SimError::NoSuchBlock {
+                    block: b,
+                    blocks: cells.len(),
+                });
+            }
+            held => held.map(|b| BlockId(b as u8)),
+        };
+        let state = State::new(&cells, held)?;
+        state.check_fits(grid)?;
+        Ok(state)
+    }
+
     /// An error naming the first block that stands outside `grid`.
     pub fn check_fits(&self, grid: Grid) -> Result<()> {
         for c in self.cells() {

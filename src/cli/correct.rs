@@ -67,7 +67,10 @@ pub fn correct(args: CorrectArgs) -> Result<()> {
         ..CorrectionConfig::new(profile.clone(), goals.clone(), args.demos, args.seed)
     };
     let record = record.as_ref().map(DemoWriter::append).transpose()?;
-    let corrected = agent::correct(agent, &config, record)?;
+    let bar = super::progress::bar(args.demos, "demonstrations");
+    let sink = super::progress::TickingSink { sink: record, bar };
+    let corrected = agent::correct(agent, &config, sink)?;
+    corrected.sink.bar.finish_and_clear();
     corrected
         .agent
         .save(out.path())

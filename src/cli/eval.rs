@@ -12,6 +12,7 @@ use sim::{Backend, Env, EnvConfig, Goal, GoalSpec, Termination};
 use super::model::Model;
 use super::profile::{PlayRulesArgs, ProfileArg};
 use super::run::RunReport;
+use super::solver_budget::SolverBudgetArg;
 use super::stdout::line;
 use super::train::parse_goals;
 
@@ -46,6 +47,8 @@ pub struct EvalArgs {
     pub profile: ProfileArg,
     #[command(flatten)]
     pub play: PlayRulesArgs,
+    #[command(flatten)]
+    pub budget: SolverBudgetArg,
 }
 
 /// One goal's figures.
@@ -89,7 +92,11 @@ pub fn eval(args: EvalArgs) -> Result<()> {
     let (mut all, mut all_optimal): (Vec<EpisodeResult>, Vec<u32>) = (Vec::new(), Vec::new());
     let mut per_goal = Vec::new();
     let mut config = None;
+    let solver = args.budget.solver(model.grid()).with_protocol(rules.protocol);
+    // Each episode counts twice: played, then solved exactly.
+    let bar = super::progress::bar(2 * args.episodes * goals.len() as u64, "episodes played and solved");
     for goal in &goals {
+        bar.set_message(format!("goal {goal}"));
         let goal_config = EnvConfig {
             grid: model.grid(),
             blocks: model.blocks(),
@@ -104,8 +111,19 @@ pub fn eval(args: EvalArgs) -> Result<()> {
         let mut env = Env::new(goal_config)?;
         config = Some(goal_config);
         let mut policy = model.policy(args.epsilon)?;
-        let results = agent::play(&mut env, policy.as_mut(), args.episodes, args.seed, None)?;
-        let optimal = optimality::optimal_steps_under(model.grid(), rules.protocol, &results)?;
+        let results =
+            agent::rollout::play_observed(&mut env, policy.as_mut(), args.episodes, args.seed, None, &mut |_| {
+                bar.inc(1)
+            })?;
+        let optimal = results
+            .iter()
+            .map(|r| {
+                let optimum = optimality::optimal_steps_by(&solver, std::slice::from_ref(r));
+                bar.inc(1);
+                optimum.map(|o| o[0])
+            })
+            .collect::<agent::Result<Vec<u32>>>()
+            .map_err(|e| args.budget.explain(e))?;
         per_goal.push(GoalReport {
             goal: goal.to_string(),
             summary: Summary::of(&results),
@@ -115,6 +133,7 @@ pub fn eval(args: EvalArgs) -> Result<()> {
         all.extend(results);
         all_optimal.extend(optimal);
     }
+    bar.finish_and_clear();
     let config = config.expect("at least one goal");
     let report = EvalReport {
         run: RunReport::new(

@@ -43,6 +43,17 @@ pub fn learn_from_demos(args: LearnFromDemosArgs) -> Result<()> {
         for bad in &report.bad_lines {
             let _ = writeln!(err, "{}:{}: skipped: {}", args.demos.display(), bad.line, bad.reason);
         }
+        if report.unchecked_sessions > 0 {
+            let _ = writeln!(
+                err,
+                "{}: {} of {} sessions are of recording version 1, which does not name its model: \
+                 not checked to have started from {}",
+                args.demos.display(),
+                report.unchecked_sessions,
+                report.sessions,
+                args.model.display()
+            );
+        }
     }
     agent
         .save(out.path())

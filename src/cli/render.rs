@@ -39,6 +39,16 @@ pub struct RenderArgs {
 
 /// Draws the start state of `reset(seed)`.
 pub fn render(args: RenderArgs) -> Result<()> {
+    // A picture of a start plays no episode: flags about episodes would be ignored.
+    for (flag, given) in [
+        ("--horizon", args.world.horizon.is_some()),
+        ("--reward", args.world.reward.is_some()),
+    ] {
+        anyhow::ensure!(
+            !given,
+            "{flag} does not apply to render: it draws a start and plays no episode"
+        );
+    }
     let out = args.out.as_deref().map(OutputPath::check).transpose()?;
     stdout::claim_for_data(&[out.as_ref()])?;
     let rules =

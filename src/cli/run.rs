@@ -14,6 +14,7 @@ use agent::{ExactPolicy, LearnerProfile, OracleKind, OraclePolicy, PaperOraclePo
 
 use super::model::Model;
 use super::profile::{PlayRulesArgs, ProfileArg, Rules};
+use super::solver_budget::SolverBudgetArg;
 use super::stdout::line;
 use super::world::WorldArgs;
 
@@ -64,10 +65,12 @@ pub struct RunArgs {
     /// The model file the `q` or `dqn` agent plays (see `blockstack train`, `blockstack dqn`).
     #[arg(long, required_if_eq_any([("agent", "q"), ("agent", "dqn")]))]
     pub model: Option<PathBuf>,
-    /// The `q` or `dqn` agent's probability of a random legal action (the paper's test
-    /// policy: 0.1).
-    #[arg(long, default_value_t = agent::profile::TEST_EPSILON)]
-    pub epsilon: f64,
+    /// The `q` or `dqn` agent's probability of a random legal action [default: the paper's
+    /// test policy: 0.1]
+    #[arg(long)]
+    pub epsilon: Option<f64>,
+    #[command(flatten)]
+    pub budget: SolverBudgetArg,
 }
 
 /// The machine-readable result of a run: no timings, so two runs compare equal. `eval
@@ -119,8 +122,43 @@ impl RunReport {
     }
 }
 
+/// Refuses, naming the flag, a flag given for an agent that does not use it (it would be
+/// ignored, and the run would not be what was asked).
+fn check_agent_flags(args: &RunArgs) -> Result<()> {
+    let agent_flags: [(&str, bool, &[AgentKind]); 4] = [
+        ("--model", args.model.is_some(), &[AgentKind::Q, AgentKind::Dqn]),
+        ("--epsilon", args.epsilon.is_some(), &[AgentKind::Q, AgentKind::Dqn]),
+        ("--oracle", args.oracle.is_some(), &[AgentKind::Oracle]),
+        (
+            "--solver-budget",
+            args.budget.solver_budget.is_some(),
+            &[AgentKind::Exact],
+        ),
+    ];
+    for (flag, given, owners) in agent_flags {
+        anyhow::ensure!(
+            !given || owners.contains(&args.agent),
+            "{flag} does not apply to --agent {}: it is for --agent {} only",
+            args.agent.name(),
+            owners.iter().map(|o| o.name()).collect::<Vec<_>>().join(" or ")
+        );
+    }
+    Ok(())
+}
+
+impl AgentKind {
+    /// The name `--agent` takes.
+    fn name(self) -> String {
+        self.to_possible_value()
+            .expect("no variant is skipped")
+            .get_name()
+            .to_string()
+    }
+}
+
 /// Plays the episodes and prints the summary.
 pub fn run(args: RunArgs) -> Result<()> {
+    check_agent_flags(&args)?;
     let trajectory_out = args.trajectory.as_deref().map(OutputPath::check).transpose()?;
     super::stdout::claim_for_data(&[trajectory_out.as_ref()])?;
     if let (Some(out), Some(model)) = (&args.trajectory, &args.model) {
@@ -156,13 +194,23 @@ pub fn run(args: RunArgs) -> Result<()> {
             OracleKind::Astar => Box::new(OraclePolicy::new(config.grid)),
             OracleKind::Paper => Box::new(PaperOraclePolicy::new(config.grid)),
         },
-        (AgentKind::Exact, _) => Box::new(ExactPolicy::new(config.grid)),
-        (AgentKind::Q | AgentKind::Dqn, Some(m)) => m.policy(args.epsilon)?,
+        (AgentKind::Exact, _) => Box::new(ExactPolicy::with_planner(args.budget.solver(config.grid))),
+        (AgentKind::Q | AgentKind::Dqn, Some(m)) => m.policy(args.epsilon.unwrap_or(agent::profile::TEST_EPSILON))?,
         (AgentKind::Q | AgentKind::Dqn, None) => anyhow::bail!("--agent q and --agent dqn need --model FILE"),
     };
     let mut env = Env::new(config)?;
     let mut trajectory = trajectory_out.as_ref().map(TrajectoryWriter::create).transpose()?;
-    let results = agent::play(&mut env, policy.as_mut(), args.episodes, args.seed, trajectory.as_mut())?;
+    let bar = super::progress::bar(args.episodes, "episodes");
+    let results = agent::rollout::play_observed(
+        &mut env,
+        policy.as_mut(),
+        args.episodes,
+        args.seed,
+        trajectory.as_mut(),
+        &mut |_| bar.inc(1),
+    )
+    .map_err(|e| args.budget.explain(e))?;
+    bar.finish_and_clear();
     if let Some(t) = trajectory {
         t.finish()?;
     }

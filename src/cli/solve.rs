@@ -1,11 +1,12 @@
 //! `blockstack solve`: a plan from a given state, by the exact solver or the oracle.
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
-use oracle::{ExactSolver, Oracle};
+use oracle::Oracle;
 use serde::Serialize;
-use sim::{BlockId, Cell, Goal, Grid, State};
+use sim::{Goal, Grid, State};
 
+use super::solver_budget::SolverBudgetArg;
 use super::stdout::line;
 
 /// Which planner solves.
@@ -49,6 +50,8 @@ pub struct SolveArgs {
     /// one.
     #[arg(long, default_value = "free")]
     pub protocol: sim::ActionProtocol,
+    #[command(flatten)]
+    pub budget: SolverBudgetArg,
     /// Print the plan as one JSON object: {"length":L,"actions":[indices],"solver":"exact"}.
     #[arg(long)]
     pub json: bool,
@@ -62,30 +65,29 @@ struct SolveReport {
     solver: &'static str,
 }
 
-/// Reads `--start`: `x,y` cells separated by `;`, each inside `grid`.
-fn parse_start(text: &str, grid: Grid) -> Result<Vec<Cell>> {
-    text.split(';')
-        .map(|part| {
-            let coords: Vec<Option<i64>> = part.split(',').map(|v| v.trim().parse().ok()).collect();
-            let [Some(x), Some(y)] = coords[..] else {
-                bail!("cannot read cell {:?}: write each block's cell as x,y, blocks separated by ';', e.g. \"0,0;3,0;5,2\"", part.trim());
-            };
-            Ok(grid.cell(x, y)?)
-        })
-        .collect()
-}
-
 /// Plans and prints the plan.
 pub fn solve(args: SolveArgs) -> Result<()> {
     let grid: Grid = args.grid.parse().context("--grid")?;
-    let cells = parse_start(&args.start, grid).context("--start")?;
-    let held = args.held.map(|b| BlockId(b.min(usize::from(u8::MAX)) as u8));
-    let state = State::new(&cells, held).context("--start")?;
+    let state = State::parse(&args.start, args.held, grid).with_context(|| {
+        if args.held.is_some() {
+            "--start and --held"
+        } else {
+            "--start"
+        }
+    })?;
     let goal = Goal::parse(&args.goal, Some(state.block_count())).context("--goal")?;
+    anyhow::ensure!(
+        args.solver == SolverKind::Exact || args.budget.solver_budget.is_none(),
+        "--solver-budget is the exact solver's: it does not apply to --solver {}",
+        args.solver.name()
+    );
     let plan = match args.solver {
-        SolverKind::Exact => ExactSolver::new(grid)
+        SolverKind::Exact => args
+            .budget
+            .solver(grid)
             .with_protocol(args.protocol)
-            .solve(&state, &goal)?,
+            .solve(&state, &goal)
+            .map_err(|e| args.budget.explain(e))?,
         SolverKind::Oracle => Oracle::new(grid).with_protocol(args.protocol).plan(&state, &goal)?,
     };
     if args.json {

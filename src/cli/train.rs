@@ -3,9 +3,9 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use agent::{Assist, OracleKind, Oscillation, QParams, ReprKind, Schedule, TrainConfig};
+use agent::{Assist, OracleKind, Oscillation, QParams, ReprKind, Schedule, TrainConfig, Trainer};
 use anyhow::{Context, Result};
-use clap::Args;
+use clap::{ArgGroup, Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use sim::{Backend, Goal, Grid, Profile, RewardModel};
 
@@ -13,8 +13,51 @@ use super::profile::{PlayRulesArgs, ProfileArg};
 
 use super::stdout::line;
 
+/// Games between two checkpoints unless `--checkpoint-every` says otherwise.
+const DEFAULT_CHECKPOINT_EVERY: u64 = 1000;
+
+/// The flags that set up a run, which `--resume` takes from its checkpoint instead.
+const RUN_FLAGS: [&str; 23] = [
+    "preset",
+    "blocks",
+    "grid",
+    "profile",
+    "protocol",
+    "start",
+    "repr",
+    "reward",
+    "schedule",
+    "oracle",
+    "oscillation",
+    "goals",
+    "seed",
+    "alpha",
+    "gamma",
+    "epsilon",
+    "initial_q",
+    "exploring_starts",
+    "backward_replay",
+    "final_replay",
+    "assist",
+    "horizon",
+    "backend",
+];
+
+/// A recipe of the learner's hyper-parameters (`train --preset`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Preset {
+    /// The profile's own learner: under spec the paper's (alpha 1, gamma 0.1, epsilon 0.1,
+    /// no replay), under original the paper's as its authors coded it.
+    Paper,
+    /// The role recipe (the agent crate's `TrainConfig::role_step_cost`): the role representation, the
+    /// step-cost reward, alpha 1, gamma 1, epsilon 0 (optimistic greedy exploration),
+    /// backward and final replay.
+    Optimal,
+}
+
 /// Arguments of `blockstack train`.
 #[derive(Debug, Args)]
+#[command(group(ArgGroup::new("checkpointing").args(["checkpoint", "resume"]).multiple(true)))]
 pub struct TrainArgs {
     /// Number of blocks.
     #[arg(long, default_value_t = 3)]
@@ -26,13 +69,21 @@ pub struct TrainArgs {
     pub profile: ProfileArg,
     #[command(flatten)]
     pub play: PlayRulesArgs,
+    /// The learner's recipe: paper (the profile's
+    /// learner) or optimal (the role recipe: role, step-cost, alpha 1, gamma 1, epsilon 0,
+    /// backward and final replay) [default: optimal for --repr role under the spec
+    /// profile, paper otherwise]. A profile sets the world and the learner as coded; a preset
+    /// then sets the representation, reward, alpha, gamma, epsilon, initial value and
+    /// replays; an explicit flag beats both.
+    #[arg(long)]
+    pub preset: Option<Preset>,
     /// State representation: raw, pairwise, chasing (the paper's prose), chasing-code (the
-    /// paper's code) or role (ours) [default: the profile's: chasing under spec,
-    /// chasing-code under original]
+    /// paper's code) or role (ours) [default: the preset's: chasing under spec,
+    /// chasing-code under original, role under --preset optimal]
     #[arg(long)]
     pub repr: Option<ReprKind>,
-    /// Reward model: sparse, dense, paper, step-cost or paper-code [default: the profile's:
-    /// paper under spec, paper-code under original]
+    /// Reward model: sparse, dense, paper, step-cost or paper-code [default: the preset's:
+    /// paper under spec, paper-code under original, step-cost under --preset optimal]
     #[arg(long)]
     pub reward: Option<String>,
     /// Training schedule: spec (goals in turn, constant alpha) or paper-code (the authors':
@@ -59,28 +110,31 @@ pub struct TrainArgs {
     /// Seed of the starts and of every random choice.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Learning rate alpha, in (0, 1].
-    #[arg(long, default_value_t = QParams::default().alpha)]
-    pub alpha: f64,
-    /// Discount factor gamma, in [0, 1].
-    #[arg(long, default_value_t = QParams::default().gamma)]
-    pub gamma: f64,
-    /// Probability of a random action while training.
-    #[arg(long, default_value_t = QParams::default().epsilon)]
-    pub epsilon: f64,
-    /// Value every Q-table entry starts at.
-    #[arg(long, default_value_t = QParams::default().initial_q, allow_hyphen_values = true)]
-    pub initial_q: f64,
+    /// Learning rate alpha, in (0, 1] [default: the preset's: 1]
+    #[arg(long)]
+    pub alpha: Option<f64>,
+    /// Discount factor gamma, in [0, 1] [default: the preset's: 0.1 paper, 1 optimal]
+    #[arg(long)]
+    pub gamma: Option<f64>,
+    /// Probability of a random action while training [default: the preset's: 0.1 paper,
+    /// 0 optimal]
+    #[arg(long)]
+    pub epsilon: Option<f64>,
+    /// Value every Q-table entry starts at [default: the preset's: 0]
+    #[arg(long, allow_hyphen_values = true)]
+    pub initial_q: Option<f64>,
     /// Start every game holding a random block (or none), not only with nothing held.
     #[arg(long)]
     pub exploring_starts: bool,
-    /// After each game, replay its updates once more, last step first.
-    #[arg(long)]
-    pub backward_replay: bool,
+    /// After each game, replay its updates once more, last step first (`--backward-replay`
+    /// or `--backward-replay=false`) [default: the preset's: off paper, on optimal]
+    #[arg(long, num_args = 0..=1, require_equals = true, default_missing_value = "true", value_name = "BOOL")]
+    pub backward_replay: Option<bool>,
     /// Remember the last transition from every state-action and replay them all, sweep
-    /// after sweep, after the last game.
-    #[arg(long)]
-    pub final_replay: bool,
+    /// after sweep, after the last game (`--final-replay` or `--final-replay=false`)
+    /// [default: the preset's: off paper, on optimal]
+    #[arg(long, num_args = 0..=1, require_equals = true, default_missing_value = "true", value_name = "BOOL")]
+    pub final_replay: Option<bool>,
     /// When the oracle chooses the action: none, oscillation (on oscillation, see
     /// --oscillation), or oscillation+P (also at each step with probability P).
     #[arg(long, default_value = "none")]
@@ -95,17 +149,28 @@ pub struct TrainArgs {
     /// Where to write the trained model (a .safetensors file; checked before training).
     #[arg(long)]
     pub out: PathBuf,
+    /// Write the run to this checkpoint file every --checkpoint-every games and when the
+    /// last game is played (atomically: a kill loses at most the games since the last one);
+    /// `train --resume FILE` continues it.
+    #[arg(long, value_name = "FILE")]
+    pub checkpoint: Option<PathBuf>,
+    /// Games between two checkpoints [default: 1000]
+    #[arg(long, value_name = "N", requires = "checkpointing", value_parser = clap::value_parser!(u64).range(1..))]
+    pub checkpoint_every: Option<u64>,
+    /// Continue the run in this checkpoint file, with its settings, to --games games in all
+    /// (default: the total it was started with); it goes on writing checkpoints to the same
+    /// file unless --checkpoint names another. The flags that set up a run are refused with it:
+    /// the checkpoint fixes them, so the run ends as if it had never stopped.
+    #[arg(long, value_name = "FILE", conflicts_with_all = RUN_FLAGS)]
+    pub resume: Option<PathBuf>,
 }
 
 /// Reads goals separated by ':' (e.g. `0,1,2:1,0,2`), each with `blocks` blocks; every goal
 /// of `blocks` blocks when `text` is `None`.
 pub fn parse_goals(text: Option<&str>, blocks: usize) -> Result<Vec<Goal>> {
     match text {
-        None => Ok(Goal::all(blocks)?),
-        Some(text) => text
-            .split(':')
-            .map(|g| Goal::parse(g, Some(blocks)).map_err(Into::into))
-            .collect(),
+        None => Goal::all(blocks).context("without --goals every goal is used"),
+        Some(text) => Ok(Goal::parse_list(text, blocks)?),
     }
 }
 
@@ -116,7 +181,26 @@ impl TrainArgs {
         let grid: Grid = self.grid.parse()?;
         let profile = self.profile.profile.unwrap_or(Profile::Spec);
         let goals = parse_goals(self.goals.as_deref(), self.blocks)?;
-        let base = TrainConfig::for_profile(profile, goals);
+        let preset = self.preset.unwrap_or(match (profile, self.repr) {
+            (Profile::Spec, Some(ReprKind::Role)) => Preset::Optimal,
+            _ => Preset::Paper,
+        });
+        let profile_learner = TrainConfig::for_profile(profile, goals.clone());
+        // The preset's parts of the learner over the profile's world and learner.
+        let base = match preset {
+            Preset::Paper => profile_learner,
+            Preset::Optimal => {
+                let recipe = TrainConfig::role_step_cost(goals);
+                TrainConfig {
+                    repr: recipe.repr,
+                    reward: recipe.reward,
+                    params: recipe.params,
+                    backward_replay: recipe.backward_replay,
+                    final_replay: recipe.final_replay,
+                    ..profile_learner
+                }
+            }
+        };
         let schedule = self.schedule.unwrap_or(base.schedule);
         // Without --horizon, games are as long as the schedule's (the profile's unless
         // --schedule says otherwise).
@@ -136,18 +220,18 @@ impl TrainArgs {
                 None => base.reward,
             },
             params: QParams {
-                alpha: self.alpha,
-                gamma: self.gamma,
-                epsilon: self.epsilon,
-                initial_q: self.initial_q,
+                alpha: self.alpha.unwrap_or(base.params.alpha),
+                gamma: self.gamma.unwrap_or(base.params.gamma),
+                epsilon: self.epsilon.unwrap_or(base.params.epsilon),
+                initial_q: self.initial_q.unwrap_or(base.params.initial_q),
             },
             games: self.games.unwrap_or(base.games),
             seed: self.seed,
             horizon,
             backend: self.backend.parse::<Backend>()?,
             exploring_starts: self.exploring_starts,
-            backward_replay: self.backward_replay,
-            final_replay: self.final_replay,
+            backward_replay: self.backward_replay.unwrap_or(base.backward_replay),
+            final_replay: self.final_replay.unwrap_or(base.final_replay),
             assist: self.assist,
             protocol: self.play.protocol.unwrap_or(base.protocol),
             start: self.play.start.start.unwrap_or(base.start),
@@ -156,18 +240,48 @@ impl TrainArgs {
             oscillation: self.oscillation.unwrap_or(base.oscillation),
             ..base
         };
+        anyhow::ensure!(
+            !(preset == Preset::Optimal
+                && config.schedule != Schedule::Spec
+                && (config.backward_replay || config.final_replay)),
+            "--preset optimal replays, which the {} schedule does not: add --schedule spec, or turn the replays off \
+             (--backward-replay=false --final-replay=false)",
+            config.schedule
+        );
         config.validate()?;
         Ok(config)
     }
 }
 
-/// Trains, showing a progress bar on a terminal, and saves the model.
+/// Trains (or resumes a checkpointed run), showing a progress bar on a terminal, writing
+/// checkpoints if asked, and saves the model.
 pub fn train(args: TrainArgs) -> Result<()> {
     let out = files::OutputPath::check(&args.out)?;
-    super::stdout::claim_for_data(&[Some(&out)])?;
-    let config = args.config()?;
+    let checkpoint_path = args.checkpoint.as_ref().or(args.resume.as_ref());
+    let checkpoint = checkpoint_path.map(files::OutputPath::check).transpose()?;
+    anyhow::ensure!(
+        !checkpoint.as_ref().is_some_and(files::OutputPath::is_stdout),
+        "--checkpoint -: a checkpoint is written again every N games, so it must be a file"
+    );
+    super::stdout::claim_for_data(&[Some(&out), checkpoint.as_ref()])?;
+    if let Some(path) = checkpoint_path {
+        files::refuse_same_file(&args.out, path)?;
+    }
+    let mut trainer = match &args.resume {
+        Some(path) => Trainer::resume(path)?,
+        None => Trainer::new(args.config()?)?,
+    };
+    let total = args.games.unwrap_or(trainer.config().games);
+    let played = trainer.report().games;
+    anyhow::ensure!(
+        total >= played,
+        "--games {total}: the checkpoint has played {played} games already; --games is the total, so ask for {played} or more"
+    );
+    trainer.set_games(total);
+    let config = trainer.config().clone();
     // Hidden by indicatif itself when stderr is not a terminal.
-    let bar = ProgressBar::new(config.games);
+    let bar = ProgressBar::new(total);
+    bar.set_position(played);
     bar.set_style(
         ProgressStyle::with_template("{bar:30} {pos}/{len} games  {msg}  [{elapsed_precise}, eta {eta}]")
             .expect("a valid template"),
@@ -184,7 +298,23 @@ pub fn train(args: TrainArgs) -> Result<()> {
         }
     };
     let clock = Instant::now();
-    let trained = agent::train(&config, Some(&mut show))?;
+    let every = args.checkpoint_every.unwrap_or(DEFAULT_CHECKPOINT_EVERY);
+    loop {
+        let played = trainer.report().games;
+        // Checkpoints fall on multiples of `every`, and on the last game.
+        let games = match &checkpoint {
+            Some(_) => (every - played % every).min(total - played),
+            None => total - played,
+        };
+        trainer.play_games(games, Some(&mut show))?;
+        if let Some(out) = &checkpoint {
+            trainer.write_checkpoint(out)?;
+        }
+        if trainer.report().games == total {
+            break;
+        }
+    }
+    let trained = trainer.finish();
     let seconds = clock.elapsed().as_secs_f64();
     bar.finish_and_clear();
     trained
@@ -219,5 +349,8 @@ pub fn train(args: TrainArgs) -> Result<()> {
         r.replay_sweeps
     ))?;
     line(format_args!("trained in {seconds:.1} s"))?;
+    if let Some(out) = &checkpoint {
+        line(format_args!("checkpoint {}", out.path().display()))?;
+    }
     line(format_args!("saved {}", args.out.display()))
 }

@@ -19,9 +19,9 @@ pub struct WorldArgs {
     /// Grid size, WxH.
     #[arg(long, default_value = "7x7")]
     pub grid: String,
-    /// Steps before an episode is cut off.
-    #[arg(long, default_value_t = sim::DEFAULT_HORIZON)]
-    pub horizon: u32,
+    /// Steps before an episode is cut off [default: 1000]
+    #[arg(long)]
+    pub horizon: Option<u32>,
     /// Reward model: sparse, dense, paper, step-cost or paper-code [default: the profile's:
     /// sparse under spec, paper-code under original]
     #[arg(long)]
@@ -45,7 +45,7 @@ impl WorldArgs {
             grid,
             blocks: self.blocks,
             goal,
-            horizon: self.horizon,
+            horizon: self.horizon.unwrap_or(sim::DEFAULT_HORIZON),
             reward: rules.reward,
             backend,
             protocol: rules.protocol,

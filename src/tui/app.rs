@@ -7,6 +7,7 @@ use std::time::Duration;
 use agent::correction::{CorrectionSession, SessionStep};
 use agent::{DemoSink, QAgent};
 use ratatui::crossterm::event::{KeyCode, KeyEvent, KeyEventKind, KeyModifiers};
+use sim::render::label;
 use sim::{Action, BlockId};
 
 /// The agent's paces, in steps per second, slowest first.
@@ -24,17 +25,20 @@ pub enum Command {
     Slower,
     /// Pause or resume the agent (space).
     TogglePause,
-    /// Take this action instead of the agent's (arrows, digits, `d`).
+    /// Take this action instead of the agent's (arrows, a block's label, `d`).
     Override(Action),
-    /// Pick a block that does not exist (a digit too large): explained, nothing done.
+    /// Pick a block that does not exist (a label too large): explained, nothing done.
     NoSuchBlock(u32),
+    /// A lower-case `a`-`f` but `d`: blocks 10 to 15 are picked with capitals, explained.
+    CapitalsPick(char),
     /// Abandon the episode and begin the next (`n`).
     NextEpisode,
     /// Save and quit (`q`, Esc, Ctrl-C).
     Quit,
 }
 
-/// The command a key press asks for, if any.
+/// The command a key press asks for, if any. A block is picked by its label
+/// ([`sim::render::label`]): `0`-`9`, then `A`-`F` for blocks 10 to 15 (`d` drops).
 pub fn command_for(key: KeyEvent, blocks: usize) -> Option<Command> {
     if key.kind == KeyEventKind::Release {
         return None;
@@ -49,14 +53,15 @@ pub fn command_for(key: KeyEvent, blocks: usize) -> Option<Command> {
         KeyCode::Left => Command::Override(Action::Left),
         KeyCode::Right => Command::Override(Action::Right),
         KeyCode::Char('d') => Command::Override(Action::Drop),
-        KeyCode::Char(c @ '0'..='9') => {
-            let i = c.to_digit(10).expect("a digit");
+        KeyCode::Char(c @ ('0'..='9' | 'A'..='F')) => {
+            let i = c.to_digit(16).expect("a label");
             if (i as usize) < blocks {
                 Command::Override(Action::Pick(BlockId(i as u8)))
             } else {
                 Command::NoSuchBlock(i)
             }
         }
+        KeyCode::Char(c @ ('a'..='c' | 'e' | 'f')) => Command::CapitalsPick(c),
         KeyCode::Char('n') => Command::NextEpisode,
         KeyCode::Char('q') | KeyCode::Esc => Command::Quit,
         _ => return None,
@@ -79,6 +84,9 @@ pub struct DemoApp<S: DemoSink> {
     save: SavePolicy,
     pace: usize,
     paused: bool,
+    /// The terminal is too small to show the world: the agent waits, and so do the keys
+    /// that act in a world no one can see.
+    hidden: bool,
     quit: bool,
     /// Corrections when the model was last saved.
     saved_at: u64,
@@ -99,6 +107,7 @@ impl<S: DemoSink> DemoApp<S> {
             save,
             pace: DEFAULT_PACE,
             paused: false,
+            hidden: false,
             quit: false,
             saved_at: 0,
             episode_corrections: 0,
@@ -132,6 +141,17 @@ impl<S: DemoSink> DemoApp<S> {
         self.paused
     }
 
+    /// Whether the world is hidden (the terminal is too small to show it).
+    pub fn is_hidden(&self) -> bool {
+        self.hidden
+    }
+
+    /// Says whether the terminal shows the world: while it does not, the agent does not
+    /// step ([`DemoApp::tick`]) and the keys that act are ignored.
+    pub fn set_hidden(&mut self, hidden: bool) {
+        self.hidden = hidden;
+    }
+
     /// Whether the person asked to quit.
     pub fn should_quit(&self) -> bool {
         self.quit
@@ -160,6 +180,9 @@ impl<S: DemoSink> DemoApp<S> {
     /// Carries out a person's command. Errors are the session's (a recording that cannot
     /// be written, a model that cannot be saved).
     pub fn handle(&mut self, command: Command) -> agent::Result<()> {
+        if self.hidden && matches!(command, Command::Override(_) | Command::NextEpisode) {
+            return Ok(());
+        }
         match command {
             Command::Faster => {
                 self.pace = (self.pace + 1).min(PACES.len() - 1);
@@ -178,9 +201,18 @@ impl<S: DemoSink> DemoApp<S> {
                 };
             }
             Command::NoSuchBlock(i) => {
+                let last = BlockId(self.agent().blocks() as u8 - 1);
                 self.message = format!(
-                    "There is no block {i}: the blocks are 0 to {}.",
-                    self.agent().blocks() - 1
+                    "There is no block {}: the blocks are 0 to {}.",
+                    label(BlockId(i as u8)),
+                    label(last)
+                );
+            }
+            Command::CapitalsPick(c) => {
+                self.message = format!(
+                    "Blocks 10 to 15 are labelled A to F: press {} (with Shift) to pick block {}.",
+                    c.to_ascii_uppercase(),
+                    c.to_digit(16).expect("a hex letter")
                 );
             }
             Command::Override(action) => {
@@ -228,9 +260,9 @@ impl<S: DemoSink> DemoApp<S> {
     }
 
     /// What the agent does when its time comes: its proposed step, or the next episode
-    /// after one has ended. Nothing while paused.
+    /// after one has ended. Nothing while paused or hidden.
     pub fn tick(&mut self) -> agent::Result<()> {
-        if self.paused || self.quit {
+        if self.paused || self.hidden || self.quit {
             return Ok(());
         }
         if self.session.is_over() {
@@ -354,6 +386,41 @@ pub(crate) mod tests {
             Some(Command::Quit)
         );
         assert_eq!(command_for(key(KeyCode::Char('x')), 3), None);
+        // Blocks 10 to 15 by their capital labels; a lower-case one is explained.
+        assert_eq!(
+            command_for(key(KeyCode::Char('F')), 16),
+            Some(Command::Override(Action::Pick(BlockId(15))))
+        );
+        assert_eq!(
+            command_for(key(KeyCode::Char('A')), 11),
+            Some(Command::Override(Action::Pick(BlockId(10))))
+        );
+        assert_eq!(command_for(key(KeyCode::Char('B')), 11), Some(Command::NoSuchBlock(11)));
+        assert_eq!(
+            command_for(key(KeyCode::Char('c')), 16),
+            Some(Command::CapitalsPick('c'))
+        );
+        assert_eq!(
+            command_for(key(KeyCode::Char('d')), 16),
+            Some(Command::Override(Action::Drop))
+        );
+    }
+
+    #[test]
+    fn a_hidden_world_stops_the_agent_and_the_keys_that_act() {
+        let dir = tempdir();
+        let mut app = app(&dir);
+        app.set_hidden(true);
+        for _ in 0..5 {
+            app.tick().unwrap();
+        }
+        app.handle(Command::Override(Action::Pick(BlockId(0)))).unwrap();
+        app.handle(Command::NextEpisode).unwrap();
+        assert_eq!(app.session().steps(), 0);
+        assert_eq!(app.session().episode_number(), Some(0));
+        app.set_hidden(false);
+        app.tick().unwrap();
+        assert_eq!(app.session().steps(), 1);
     }
 
     #[test]

@@ -12,6 +12,7 @@ use agent::DemoSink;
 use anyhow::{Context, Result};
 use ratatui::DefaultTerminal;
 use ratatui::crossterm::event::{self, Event};
+use ratatui::layout::Size;
 
 use app::{Command, DemoApp, command_for};
 
@@ -26,21 +27,29 @@ pub fn run<S: DemoSink>(app: &mut DemoApp<S>) -> Result<()> {
 
 fn event_loop<S: DemoSink>(terminal: &mut DefaultTerminal, app: &mut DemoApp<S>) -> Result<()> {
     let blocks = app.agent().blocks();
+    let grid = app.agent().grid();
     let mut last_tick = Instant::now();
     while !app.should_quit() {
+        // A terminal too small to show the world stops the agent until it grows.
+        app.set_hidden(!view::fits(terminal.size()?, grid, blocks));
         terminal.draw(|frame| view::draw(frame, app))?;
         let wait = app.tick_interval().saturating_sub(last_tick.elapsed());
         if event::poll(wait.min(Duration::from_millis(250)))? {
-            if let Event::Key(key) = event::read()? {
-                if let Some(command) = command_for(key, blocks) {
-                    app.handle(command)?;
-                    if matches!(command, Command::Override(_) | Command::NextEpisode) {
-                        // The agent waits a full beat after the person acts.
-                        last_tick = Instant::now();
+            match event::read()? {
+                Event::Key(key) => {
+                    if let Some(command) = command_for(key, blocks) {
+                        app.handle(command)?;
+                        if matches!(command, Command::Override(_) | Command::NextEpisode) {
+                            // The agent waits a full beat after the person acts.
+                            last_tick = Instant::now();
+                        }
                     }
                 }
+                // Before the agent's next step, not at the next redraw.
+                Event::Resize(width, height) => app.set_hidden(!view::fits(Size { width, height }, grid, blocks)),
+                // Any other event just redraws.
+                _ => {}
             }
-            // A resize or other event just redraws.
         }
         if last_tick.elapsed() >= app.tick_interval() {
             app.tick()?;

@@ -4,7 +4,7 @@
 
 use agent::DemoSink;
 use ratatui::Frame;
-use ratatui::layout::{Alignment, Constraint, Layout, Rect};
+use ratatui::layout::{Alignment, Constraint, Layout, Rect, Size};
 use ratatui::style::{Color, Modifier, Style};
 use ratatui::text::{Line, Span};
 use ratatui::widgets::{Block, Padding, Paragraph, Wrap};
@@ -22,8 +22,14 @@ const PANEL_HEIGHT: u16 = 13;
 /// Width of the goal's box in the top-right corner.
 const GOAL_BOX_WIDTH: u16 = 9;
 
-/// The help line.
-pub const HELP: &str = "arrows move  0-9 pick  d drop  space pause  +/- pace  n next  q quit";
+/// The help line for a world of `blocks` blocks (their labels pick them).
+pub fn help(blocks: usize) -> String {
+    let picks = match blocks {
+        ..=10 => format!("0-{} pick", label(BlockId(blocks as u8 - 1))),
+        _ => format!("0-9 A-{} pick", label(BlockId(blocks as u8 - 1))),
+    };
+    format!("arrows move  {picks}  d drop  space pause  +/- pace  n next  q quit")
+}
 
 /// A grid cell's size on screen: columns and rows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -35,32 +41,44 @@ struct CellSize {
 /// Roomy cells, then compact ones.
 const CELL_SIZES: [CellSize; 2] = [CellSize { width: 4, height: 2 }, CellSize { width: 3, height: 1 }];
 
-/// The terminal size a layout with `cell` needs for `grid`: the grid in a box, the panel
-/// beside it, a title line above and the help line below.
-fn needed(grid: Grid, cell: CellSize) -> (u16, u16) {
+/// The terminal size a layout with `cell` needs for `grid` and `blocks`: the grid in a
+/// box, the panel beside it, a title line above and the help line below.
+fn needed(grid: Grid, blocks: usize, cell: CellSize) -> (u16, u16) {
     let w = grid.width() as u16 * cell.width + 2 + PANEL_WIDTH;
     let h = (grid.height() as u16 * cell.height + 2).max(PANEL_HEIGHT) + 2;
-    (w.max(HELP.len() as u16), h)
+    (w.max(help(blocks).len() as u16), h)
 }
 
-/// The smallest terminal `blockstack demo` works in for `grid` (7 x 7: 61 x 19, so 80 x 24
-/// is plenty).
-pub fn minimum_size(grid: Grid) -> (u16, u16) {
-    needed(grid, CELL_SIZES[CELL_SIZES.len() - 1])
+/// The smallest terminal `blockstack demo` works in for `grid` and `blocks` (3 blocks on
+/// 7 x 7: 61 x 19, so 80 x 24 is plenty).
+pub fn minimum_size(grid: Grid, blocks: usize) -> (u16, u16) {
+    needed(grid, blocks, CELL_SIZES[CELL_SIZES.len() - 1])
+}
+
+/// The cell size the screen `area` shows `grid` with, if it is large enough.
+fn cell_size(area: Size, grid: Grid, blocks: usize) -> Option<CellSize> {
+    CELL_SIZES.into_iter().find(|&c| {
+        let (w, h) = needed(grid, blocks, c);
+        area.width >= w && area.height >= h
+    })
+}
+
+/// Whether a terminal of `area` shows the world of `grid` and `blocks`: if not, it gets a
+/// polite message and the agent waits ([`DemoApp::set_hidden`]).
+pub fn fits(area: Size, grid: Grid, blocks: usize) -> bool {
+    cell_size(area, grid, blocks).is_some()
 }
 
 /// Draws the whole screen.
 pub fn draw<S: DemoSink>(frame: &mut Frame, app: &DemoApp<S>) {
     let area = frame.area();
     let grid = app.agent().grid();
-    let Some(cell) = CELL_SIZES.into_iter().find(|&c| {
-        let (w, h) = needed(grid, c);
-        area.width >= w && area.height >= h
-    }) else {
-        draw_too_small(frame, grid);
+    let blocks = app.agent().blocks();
+    let Some(cell) = cell_size(area.as_size(), grid, blocks) else {
+        draw_too_small(frame, grid, blocks);
         return;
     };
-    let [title, body, help] =
+    let [title, body, help_area] =
         Layout::vertical([Constraint::Length(1), Constraint::Min(0), Constraint::Length(1)]).areas(area);
     let grid_box = grid.width() as u16 * cell.width + 2;
     let [world, panel] = Layout::horizontal([Constraint::Length(grid_box), Constraint::Min(0)]).areas(body);
@@ -104,22 +122,22 @@ pub fn draw<S: DemoSink>(frame: &mut Frame, app: &DemoApp<S>) {
         );
     }
     frame.render_widget(
-        Paragraph::new(HELP).style(Style::new().add_modifier(Modifier::REVERSED)),
-        help,
+        Paragraph::new(help(blocks)).style(Style::new().add_modifier(Modifier::REVERSED)),
+        help_area,
     );
 }
 
 /// The polite message for a terminal too small for even the compact layout.
-fn draw_too_small(frame: &mut Frame, grid: Grid) {
+fn draw_too_small(frame: &mut Frame, grid: Grid, blocks: usize) {
     let area = frame.area();
-    let (w, h) = minimum_size(grid);
+    let (w, h) = minimum_size(grid, blocks);
     let text = vec![
         Line::from("Sorry, this terminal is too small for blockstack demo."),
         Line::from(format!(
             "It is {}x{}; please make it at least {w}x{h} (80x24 is fine).",
             area.width, area.height
         )),
-        Line::from("q quits."),
+        Line::from("The agent waits until it is. q quits."),
     ];
     frame.render_widget(
         Paragraph::new(text)
@@ -288,7 +306,7 @@ mod tests {
         let text = screen(&app, 50, 12);
         assert!(text.contains("too small"), "{text}");
         assert!(text.contains("50x12"));
-        let (w, h) = minimum_size(Grid::default());
+        let (w, h) = minimum_size(Grid::default(), 3);
         assert!(w <= 80 && h <= 24);
         let text = screen(&app, w, h);
         assert!(!text.contains("too small"), "{text}");

@@ -1,0 +1,150 @@
+//! Bounds checked up front: too many goals, the exact solver's budget, grids one cell wide
+//! (played through), and flags that do not apply, each answered in one line with exit
+//! status 2.
+
+mod common;
+use common::{blockstack, stderr, stdout};
+
+#[test]
+fn too_many_goals_are_refused_in_one_short_line() {
+    for (blocks, grid, goals) in [("12", "12x12", "479001600"), ("8", "8x9", "40320")] {
+        let o = blockstack(&["train", "--blocks", blocks, "--grid", grid, "--out", "unused.st"]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.len() < 300, "{err}");
+        assert!(err.contains(goals) && err.contains("--goals"), "{err}");
+    }
+}
+
+#[test]
+fn the_exact_solver_budget_is_a_flag_named_when_it_runs_out() {
+    let o = blockstack(&[
+        "solve",
+        "--start",
+        "0,0;3,0;5,2",
+        "--goal",
+        "1,0,2",
+        "--solver-budget",
+        "2",
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.starts_with("blockstack: --solver-budget 2: "), "{err}");
+    assert!(err.contains("raise the budget"), "{err}");
+    let o = blockstack(&[
+        "solve",
+        "--start",
+        "0,0;3,0;5,2",
+        "--goal",
+        "1,0,2",
+        "--solver-budget",
+        "100000",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+
+    let o = blockstack(&["run", "--agent", "exact", "--episodes", "3", "--solver-budget", "2"]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("--solver-budget 2"), "{err}");
+
+    for (args, message) in [
+        (
+            &["solve", "--start", "0,0;1,0", "--goal", "0,1", "--solver-budget", "0"][..],
+            "--solver-budget",
+        ),
+        (
+            &[
+                "solve",
+                "--start",
+                "0,0;1,0",
+                "--goal",
+                "0,1",
+                "--solver-budget",
+                "1000000000",
+            ],
+            "--solver-budget",
+        ),
+        (
+            &[
+                "solve",
+                "--start",
+                "0,0;1,0",
+                "--goal",
+                "0,1",
+                "--solver",
+                "oracle",
+                "--solver-budget",
+                "9",
+            ],
+            "--solver oracle",
+        ),
+        (
+            &["run", "--agent", "random", "--solver-budget", "9"],
+            "--solver-budget does not apply to --agent random: it is for --agent exact only",
+        ),
+    ] {
+        let o = blockstack(args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(message), "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn the_oracle_plays_every_episode_on_a_grid_one_cell_wide() {
+    for oracle in ["astar", "paper"] {
+        let o = blockstack(&[
+            "run",
+            "--agent",
+            "oracle",
+            "--oracle",
+            oracle,
+            "--grid",
+            "1x6",
+            "--blocks",
+            "3",
+            "--episodes",
+            "200",
+            "--json",
+        ]);
+        assert!(o.status.success(), "{oracle}: {}", stderr(&o));
+        let report: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("json");
+        assert_eq!(report["episodes"], 200, "{report}");
+        assert_eq!(report["failures"], 0, "{report}");
+    }
+}
+
+#[test]
+fn flags_that_do_not_apply_are_refused_naming_the_flag() {
+    for (args, message) in [
+        (&["render", "--horizon", "5"][..], "--horizon does not apply to render"),
+        (&["render", "--reward", "sparse"], "--reward does not apply to render"),
+        (
+            &["run", "--agent", "random", "--epsilon", "5"],
+            "--epsilon does not apply to --agent random: it is for --agent q or dqn only",
+        ),
+        (
+            &["run", "--agent", "oracle", "--model", "m.st"],
+            "--model does not apply to --agent oracle",
+        ),
+        (
+            &["run", "--agent", "exact", "--oracle", "paper"],
+            "--oracle does not apply to --agent exact",
+        ),
+    ] {
+        let o = blockstack(args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+        assert!(err.contains(message), "{args:?}: {err}");
+    }
+    // Where they apply, they are taken.
+    for args in [
+        &["render", "--seed", "3"][..],
+        &["run", "--agent", "random", "--horizon", "5", "--episodes", "2"],
+    ] {
+        let o = blockstack(args);
+        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+    }
+}
