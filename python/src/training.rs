@@ -18,10 +18,7 @@ use crate::config;
 fn goals(text: Option<&str>, blocks: usize) -> PyResult<Vec<Goal>> {
     match text {
         None => Goal::all(blocks).or_value_error(),
-        Some(text) => text
-            .split(':')
-            .map(|g| Goal::parse(g, Some(blocks)).or_value_error())
-            .collect(),
+        Some(text) => Goal::parse_list(text, blocks).or_value_error(),
     }
 }
 
