@@ -8,14 +8,15 @@
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{blockstack, stderr};
+use common::{blockstack, scratch, stderr};
 
 /// The quick report: CI's, or one made now.
 fn quick_report() -> PathBuf {
     if let Some(dir) = std::env::var_os("BLOCKSTACK_QUICK_REPORT") {
         return PathBuf::from(dir);
     }
-    let dir = std::env::temp_dir().join(format!("blockstack-cli-reproduce-{}", std::process::id()));
+    // Under the target folder, one per checkout: a later run replaces it.
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli-reproduce-quick");
     let _ = std::fs::remove_dir_all(&dir);
     let o = blockstack(&["reproduce", "--quick", "--out", dir.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
@@ -187,7 +188,8 @@ fn the_quick_report_holds_every_experiment() {
 
 #[test]
 fn a_report_directory_that_cannot_be_made_fails_at_once() {
-    let file = std::env::temp_dir().join(format!("blockstack-cli-reproduce-file-{}", std::process::id()));
+    let dir = scratch("reproduce-file");
+    let file = dir.join("file");
     std::fs::write(&file, "not a directory").unwrap();
     let o = blockstack(&["reproduce", "--quick", "--out", file.join("report").to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2));

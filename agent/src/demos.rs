@@ -973,14 +973,13 @@ mod tests {
             assert!(err.contains(&other.identity()), "{err}");
         }
         // The same model saved and loaded keeps its identity, and the recording replays.
-        let dir = std::env::temp_dir().join(format!("demos-identity-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let dir = dir.path();
         let file = dir.join("m.safetensors");
         base.save(&file).unwrap();
         let loaded = QAgent::load(&file).unwrap();
         assert_eq!(loaded.identity(), base.identity());
         assert!(replay(&loaded, std::str::from_utf8(&bytes).unwrap(), BadLines::Fail).is_ok());
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
@@ -1086,8 +1085,8 @@ mod tests {
     #[test]
     fn what_is_not_a_recording_is_refused_at_its_first_line() {
         let base = trained();
-        let dir = std::env::temp_dir().join(format!("demos-not-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let dir = dir.path();
         let model = dir.join("m.safetensors");
         base.save(&model).unwrap();
         let trajectory = "{\"type\":\"episode\",\"episode\":0,\"seed\":1,\"grid\":[7,7],\"goal\":[0,1,2],\"horizon\":9,\"start\":[[0,0],[1,0],[2,0]]}\n";
@@ -1121,7 +1120,6 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(err.contains("no step"), "{err}");
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

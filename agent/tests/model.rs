@@ -13,11 +13,31 @@ fn goal(text: &str) -> Goal {
     text.parse().unwrap()
 }
 
-/// A file path in a fresh folder of the system's temporary directory.
-fn temp_path(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("agent-model-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+/// A file path in a fresh folder of the system's temporary directory; the folder, and the
+/// file in it, go when this is dropped.
+struct TempPath {
+    _dir: tempfile::TempDir,
+    path: PathBuf,
+}
+
+impl std::ops::Deref for TempPath {
+    type Target = Path;
+
+    fn deref(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl AsRef<Path> for TempPath {
+    fn as_ref(&self) -> &Path {
+        &self.path
+    }
+}
+
+fn temp_path(name: &str) -> TempPath {
+    let dir = tempfile::tempdir().expect("a scratch folder");
+    let path = dir.path().join(name);
+    TempPath { _dir: dir, path }
 }
 
 /// Our role + step-cost learner, on the grid backend (quick enough for tests).
@@ -183,7 +203,7 @@ fn values_beyond_the_tables_floats_are_refused_up_front() {
 
 /// A model file made by hand: `meta` as the metadata and `tensors`, with a valid
 /// checksum, so that only the model's own checks can refuse it.
-fn crafted(name: &str, meta: &Value, tensors: &[(&str, Tensor<'_>)]) -> PathBuf {
+fn crafted(name: &str, meta: &Value, tensors: &[(&str, Tensor<'_>)]) -> TempPath {
     let path = temp_path(name);
     let bytes = files::container::to_bytes(MODEL_FORMAT, MODEL_VERSION, meta, tensors).unwrap();
     std::fs::write(&path, bytes).unwrap();
@@ -205,7 +225,7 @@ fn saved() -> Vec<u8> {
     std::fs::read(&path).unwrap()
 }
 
-fn written(name: &str, bytes: &[u8]) -> PathBuf {
+fn written(name: &str, bytes: &[u8]) -> TempPath {
     let path = temp_path(name);
     std::fs::write(&path, bytes).unwrap();
     path

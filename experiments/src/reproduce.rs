@@ -642,7 +642,8 @@ mod tests {
     #[test]
     fn the_report_holds_every_experiment_and_its_pictures() {
         let (r, _, _) = run(2);
-        let dir = std::env::temp_dir().join(format!("blockstack-report-{}", std::process::id()));
+        let dir = tempfile::tempdir().unwrap();
+        let dir = dir.path().join("report");
         let files = write_report(&r, &dir).unwrap();
         let readme = std::fs::read_to_string(&files.readme).unwrap();
         for e in &r.experiments {
@@ -689,6 +690,5 @@ mod tests {
         let parts =
             gap["protocol"].as_f64().unwrap() + gap["start"].as_f64().unwrap() + gap["interaction"].as_f64().unwrap();
         assert!((parts - gap["gap"].as_f64().unwrap()).abs() < 1e-9);
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

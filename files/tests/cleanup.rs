@@ -7,9 +7,8 @@ use files::{OutputPath, live_temp_files, remove_temp_files};
 
 #[test]
 fn removing_the_temporary_files_removes_every_live_one_and_closes_the_registry() {
-    let dir = std::env::temp_dir().join(format!("files-cleanup-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let dir = dir.path();
     let mut a = OutputPath::check(dir.join("a.bin")).unwrap().create().unwrap();
     let mut b = OutputPath::check(dir.join("b.bin")).unwrap().create().unwrap();
     a.write_all(b"a").unwrap();
@@ -24,5 +23,5 @@ fn removing_the_temporary_files_removes_every_live_one_and_closes_the_registry()
     assert!(a.commit().is_err());
     assert!(OutputPath::check(dir.join("c.bin")).is_err());
     drop(b);
-    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
+    assert_eq!(std::fs::read_dir(dir).unwrap().count(), 0);
 }

@@ -1,7 +1,5 @@
 //! The safetensors container: round trips of every element type, and every refusal.
 
-use std::path::PathBuf;
-
 use files::container::to_bytes;
 use files::{Container, Dtype, Expect, OutputPath, ReadProblem, Tensor};
 use proptest::prelude::*;
@@ -14,12 +12,8 @@ const EXPECT: Expect<'static> = Expect {
     what: "a test file",
 };
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("files-container-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+mod common;
+use common::scratch;
 
 fn sample() -> Vec<u8> {
     let tensors = [
@@ -297,5 +291,4 @@ fn the_format_of_a_file_is_read_from_its_header() {
         assert_eq!(files::container::format_of(&path, 1 << 20), None, "{name}");
     }
     assert_eq!(files::container::format_of(&dir.join("missing"), 1 << 20), None);
-    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -5,12 +5,8 @@ use std::process::Command;
 
 use files::{FilesError, ReadProblem, open_bounded};
 
-fn scratch(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("files-input-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+mod common;
+use common::scratch;
 
 #[test]
 fn a_regular_file_larger_than_the_bound_is_refused_from_its_size() {

@@ -9,12 +9,8 @@ use std::process::Command;
 
 use files::{Destination, OutputPath, Special, live_temp_files, prepare_folder, refuse_same_file};
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("files-output-{}-{name}", std::process::id()));
-    let _ = fs::remove_dir_all(&dir);
-    fs::create_dir_all(&dir).unwrap();
-    dir
-}
+mod common;
+use common::scratch;
 
 /// Every file in `dir` whose name says it is a temporary file.
 fn temps(dir: &Path) -> Vec<String> {

@@ -335,8 +335,8 @@ mod tests {
         let c = config(DemoSource::None);
         let mut env = Env::new(c.env_config(c.goals[1])).unwrap();
         let mut policy = agent::ExactPolicy::new(c.grid);
-        let dir = std::env::temp_dir().join(format!("neural-demos-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let dir = dir.path();
         let path = dir.join("t.jsonl");
         let out = files::OutputPath::check(&path).unwrap();
         let mut writer = sim::trajectory::TrajectoryWriter::create(&out).unwrap();
@@ -352,6 +352,5 @@ mod tests {
         std::fs::write(&path, broken).unwrap();
         let err = read(&path, c.grid, 3).unwrap_err().to_string();
         assert!(err.contains("line 2"), "{err}");
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -84,8 +84,8 @@ fn the_same_seed_gives_the_same_weights_and_another_seed_others() {
 
 #[test]
 fn a_network_file_gives_back_the_same_network() {
-    let dir = std::env::temp_dir().join(format!("neural-roundtrip-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let dir = dir.path();
     // The paper network, trained a few steps so its batch-norm statistics moved.
     let config = DqnConfig {
         demos: DemoSource::Exact(5),
@@ -140,5 +140,4 @@ fn a_network_file_gives_back_the_same_network() {
     std::fs::write(&bad, bytes).unwrap();
     let err = Dqn::load(&bad).err().unwrap().to_string();
     assert!(err.contains("bad.safetensors") && err.contains("does not fit"), "{err}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }

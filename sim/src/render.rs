@@ -323,8 +323,8 @@ mod tests {
 
     #[test]
     fn a_picture_is_written_in_the_format_its_name_says() {
-        let dir = std::env::temp_dir().join(format!("sim-render-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let dir = dir.path();
         let obs = observation(Grid::default(), 3);
         for (name, format) in [
             ("w.png", image::ImageFormat::Png),
@@ -345,6 +345,5 @@ mod tests {
             assert!(!path.exists());
         }
         assert_eq!(PictureFormat::of(Path::new("-")).unwrap(), PictureFormat::Png);
-        let _ = std::fs::remove_dir_all(&dir);
     }
 }

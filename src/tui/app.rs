@@ -409,7 +409,7 @@ pub(crate) mod tests {
     #[test]
     fn a_hidden_world_stops_the_agent_and_the_keys_that_act() {
         let dir = tempdir();
-        let mut app = app(&dir);
+        let mut app = app(dir.path());
         app.set_hidden(true);
         for _ in 0..5 {
             app.tick().unwrap();
@@ -426,7 +426,7 @@ pub(crate) mod tests {
     #[test]
     fn an_override_is_executed_recorded_and_learnt_instead_of_the_proposal() {
         let dir = tempdir();
-        let mut app = app(&dir);
+        let mut app = app(dir.path());
         app.handle(Command::TogglePause).unwrap();
         let before = app.session().observation().unwrap();
         let q_before = app.agent().q(&before, Action::Pick(BlockId(1))).unwrap();
@@ -448,8 +448,8 @@ pub(crate) mod tests {
     #[test]
     fn the_model_is_saved_every_n_corrections_and_on_quit() {
         let dir = tempdir();
-        let mut app = app(&dir);
-        let path = dir.join("corrected.safetensors");
+        let mut app = app(dir.path());
+        let path = dir.path().join("corrected.safetensors");
         app.handle(Command::Override(Action::Pick(BlockId(0)))).unwrap();
         assert!(!path.exists());
         app.handle(Command::Override(Action::Up)).unwrap();
@@ -464,7 +464,7 @@ pub(crate) mod tests {
     #[test]
     fn pace_pause_and_next_episode() {
         let dir = tempdir();
-        let mut app = app(&dir);
+        let mut app = app(dir.path());
         let start = app.tick_interval();
         app.handle(Command::Faster).unwrap();
         assert!(app.tick_interval() < start);
@@ -504,7 +504,7 @@ pub(crate) mod tests {
         )
         .unwrap();
         let save = SavePolicy {
-            path: dir.join("corrected.json"),
+            path: dir.path().join("corrected.json"),
             every: 0,
         };
         let mut app = DemoApp::new(session, save).unwrap();
@@ -531,16 +531,8 @@ pub(crate) mod tests {
         assert_eq!(actions, ["pick 1", "drop", "pick 2"]);
     }
 
-    /// A fresh directory under the target's temporary folder.
-    pub(crate) fn tempdir() -> PathBuf {
-        use std::sync::atomic::{AtomicUsize, Ordering};
-        static N: AtomicUsize = AtomicUsize::new(0);
-        let dir = std::env::temp_dir().join(format!(
-            "blockstack-tui-{}-{}",
-            std::process::id(),
-            N.fetch_add(1, Ordering::Relaxed)
-        ));
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
+    /// A fresh folder in the system's temporary directory, removed when dropped.
+    pub(crate) fn tempdir() -> tempfile::TempDir {
+        tempfile::tempdir().unwrap()
     }
 }

@@ -270,7 +270,7 @@ mod tests {
     #[test]
     fn an_80x24_screen_shows_the_grid_the_goal_the_proposal_and_the_help() {
         let dir = tempdir();
-        let app = app(&dir);
+        let app = app(dir.path());
         let text = screen(&app, 80, 24);
         assert!(text.contains("goal 1,0,2"), "{text}");
         assert!(text.contains("world"));
@@ -288,7 +288,7 @@ mod tests {
     #[test]
     fn the_held_block_is_marked_and_the_step_count_moves() {
         let dir = tempdir();
-        let mut app = app(&dir);
+        let mut app = app(dir.path());
         app.handle(Command::TogglePause).unwrap();
         app.handle(Command::Override(Action::Pick(BlockId(2)))).unwrap();
         let text = screen(&app, 80, 24);
@@ -302,7 +302,7 @@ mod tests {
     #[test]
     fn a_small_terminal_gets_a_polite_message_and_a_middling_one_the_compact_grid() {
         let dir = tempdir();
-        let app = app(&dir);
+        let app = app(dir.path());
         let text = screen(&app, 50, 12);
         assert!(text.contains("too small"), "{text}");
         assert!(text.contains("50x12"));
