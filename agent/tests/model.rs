@@ -1,7 +1,10 @@
 //! Model files (format 2, safetensors): round trips bit for bit in every layout and value
 //! type, and a clear refusal of every bad file.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
+
+mod common;
+use common::{TempPath, temp_path};
 
 use agent::model::{MAX_MODEL_BYTES, MODEL_FORMAT, MODEL_VERSION};
 use agent::{CorrectionRule, QAgent, QParams, QTable, ReprKind, TrainConfig};
@@ -11,33 +14,6 @@ use sim::{Backend, Goal, Grid};
 
 fn goal(text: &str) -> Goal {
     text.parse().unwrap()
-}
-
-/// A file path in a fresh folder of the system's temporary directory; the folder, and the
-/// file in it, go when this is dropped.
-struct TempPath {
-    _dir: tempfile::TempDir,
-    path: PathBuf,
-}
-
-impl std::ops::Deref for TempPath {
-    type Target = Path;
-
-    fn deref(&self) -> &Path {
-        &self.path
-    }
-}
-
-impl AsRef<Path> for TempPath {
-    fn as_ref(&self) -> &Path {
-        &self.path
-    }
-}
-
-fn temp_path(name: &str) -> TempPath {
-    let dir = tempfile::tempdir().expect("a scratch folder");
-    let path = dir.path().join(name);
-    TempPath { _dir: dir, path }
 }
 
 /// Our role + step-cost learner, on the grid backend (quick enough for tests).

@@ -2,7 +2,8 @@
 //! the action protocol, the `paper-code` schedule updates as the authors' code did, and a
 //! model trained under `original` remembers it.
 
-use std::path::{Path, PathBuf};
+mod common;
+use common::temp_path;
 
 use agent::correction::{CorrectionConfig, CorrectionRule, SessionWorld, person_steps};
 use agent::demonstrator::PlannerKind;
@@ -166,33 +167,6 @@ fn replays_belong_to_the_spec_schedule() {
     };
     let err = agent::train(&config, None).unwrap_err().to_string();
     assert!(err.contains("spec schedule"), "{err}");
-}
-
-/// A file path in a fresh folder of the system's temporary directory; the folder, and the
-/// file in it, go when this is dropped.
-struct TempPath {
-    _dir: tempfile::TempDir,
-    path: PathBuf,
-}
-
-impl std::ops::Deref for TempPath {
-    type Target = Path;
-
-    fn deref(&self) -> &Path {
-        &self.path
-    }
-}
-
-impl AsRef<Path> for TempPath {
-    fn as_ref(&self) -> &Path {
-        &self.path
-    }
-}
-
-fn temp_path(name: &str) -> TempPath {
-    let dir = tempfile::tempdir().expect("a scratch folder");
-    let path = dir.path().join(name);
-    TempPath { _dir: dir, path }
 }
 
 #[test]

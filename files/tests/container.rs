@@ -12,8 +12,9 @@ const EXPECT: Expect<'static> = Expect {
     what: "a test file",
 };
 
-mod common;
-use common::scratch;
+#[path = "../../tests/common/scratch.rs"]
+mod scratch;
+use scratch::scratch;
 
 fn sample() -> Vec<u8> {
     let tensors = [

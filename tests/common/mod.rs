@@ -7,6 +7,10 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
+mod scratch;
+#[allow(unused_imports)]
+pub use scratch::scratch;
+
 /// The `blockstack` binary built for these tests.
 pub const BIN: &str = env!("CARGO_BIN_EXE_blockstack");
 
@@ -23,33 +27,6 @@ pub fn stdout(o: &Output) -> String {
 /// What a run printed on standard error.
 pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// A fresh, empty scratch folder, removed with everything in it when the test ends (passed
-/// or failed), so that test runs do not fill the disk.
-pub struct Scratch(tempfile::TempDir);
-
-impl std::ops::Deref for Scratch {
-    type Target = Path;
-
-    fn deref(&self) -> &Path {
-        self.0.path()
-    }
-}
-
-impl AsRef<Path> for Scratch {
-    fn as_ref(&self) -> &Path {
-        self.0.path()
-    }
-}
-
-/// A fresh scratch folder in the system's temporary directory, its name starting with `name`.
-pub fn scratch(name: &str) -> Scratch {
-    let dir = tempfile::Builder::new()
-        .prefix(&format!("blockstack-test-{name}-"))
-        .tempdir()
-        .expect("a scratch folder");
-    Scratch(dir)
 }
 
 /// The JSON metadata of a model file, read as any program could: the safetensors layout

@@ -1,4 +1,6 @@
-//! What the `files` tests share: scratch folders that are removed when a test ends.
+//! Scratch folders for the workspace's tests, removed when a test ends so that test runs do
+//! not fill the disk. The `files` crate's tests include this file too (`#[path]`): one home
+//! for the helper.
 
 use std::path::Path;
 
@@ -23,7 +25,7 @@ impl AsRef<Path> for Scratch {
 /// A fresh scratch folder in the system's temporary directory, its name starting with `name`.
 pub fn scratch(name: &str) -> Scratch {
     let dir = tempfile::Builder::new()
-        .prefix(&format!("files-test-{name}-"))
+        .prefix(&format!("blockstack-test-{name}-"))
         .tempdir()
         .expect("a scratch folder");
     Scratch(dir)
