@@ -3,37 +3,22 @@
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{blockstack, model_metadata, path, scratch, stderr, stdout};
+use common::{ROLE_ON_GRID, blockstack, model_metadata, path, scratch, stderr, stdout, train, train_model};
 
 /// Trains the role learner on one goal, on the grid backend (quick), and returns the model.
 fn train_role(dir: &Path, name: &str, games: &str) -> PathBuf {
     let out = dir.join(name);
-    let o = blockstack(&[
-        "train",
-        "--repr",
-        "role",
-        "--reward",
-        "step-cost",
-        "--goals",
-        "0,1,2",
+    let run = [
         "--games",
         games,
         "--seed",
         "1",
-        "--alpha",
-        "1",
-        "--gamma",
-        "1",
-        "--epsilon",
-        "0",
         "--backward-replay",
         "--final-replay",
-        "--backend",
-        "grid",
         "--out",
         path(&out),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    ];
+    let o = train(&[&ROLE_ON_GRID[..], &run].concat());
     // Not a terminal: no progress bar, nothing on stderr.
     assert_eq!(stderr(&o), "");
     assert!(stdout(&o).contains("games"), "{}", stdout(&o));
@@ -140,19 +125,11 @@ fn run_plays_a_q_model_and_writes_trajectories() {
 #[test]
 fn the_paper_learner_trains_with_its_defaults() {
     let dir = scratch("paper");
-    let out = dir.join("paper.safetensors");
-    let o = blockstack(&[
-        "train",
-        "--goals",
-        "0,1,2:1,0,2",
-        "--games",
-        "20",
-        "--backend",
-        "grid",
-        "--out",
-        path(&out),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let out = train_model(
+        &dir,
+        "paper.safetensors",
+        &["--goals", "0,1,2:1,0,2", "--games", "20", "--backend", "grid"],
+    );
     let model = model_metadata(&out);
     assert_eq!(model["repr"], "chasing");
     assert_eq!(model["params"]["gamma"], 0.1);

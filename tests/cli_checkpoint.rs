@@ -7,7 +7,7 @@ use std::process::Command;
 use std::time::{Duration, Instant};
 
 mod common;
-use common::{BIN, blockstack, path, scratch, stderr};
+use common::{BIN, blockstack, file_metadata, path, scratch, stderr, train};
 
 /// The role recipe on two goals, on the grid backend: its final replay makes the
 /// checkpoint carry a replay memory.
@@ -29,26 +29,16 @@ const ROLE: [&str; 15] = [
     "--backend=grid",
 ];
 
-fn train(args: &[&str]) {
-    let o = blockstack(&[&["train"][..], args].concat());
-    assert!(o.status.success(), "{args:?}: {}", stderr(&o));
-}
-
 fn same_bytes(a: &Path, b: &Path) {
     let (a_bytes, b_bytes) = (std::fs::read(a).unwrap(), std::fs::read(b).unwrap());
     assert!(a_bytes == b_bytes, "{} and {} differ", a.display(), b.display());
 }
 
-/// The games a checkpoint has played, read as any program could (safetensors header,
-/// blockstack's metadata in it).
+/// The games a checkpoint has played, read as any program could.
 fn games_played(checkpoint: &Path) -> u64 {
-    let bytes = std::fs::read(checkpoint).expect("the checkpoint exists");
-    let n = u64::from_le_bytes(bytes[..8].try_into().unwrap()) as usize;
-    let header: serde_json::Value = serde_json::from_slice(&bytes[8..8 + n]).expect("a JSON header");
-    assert_eq!(header["__metadata__"]["format"], "blockstack-train-checkpoint");
-    let meta: serde_json::Value =
-        serde_json::from_str(header["__metadata__"]["metadata"].as_str().unwrap()).expect("JSON metadata");
-    meta["report"]["games"].as_u64().expect("games played")
+    file_metadata(checkpoint, "blockstack-train-checkpoint")["report"]["games"]
+        .as_u64()
+        .expect("games played")
 }
 
 #[test]

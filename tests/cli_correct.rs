@@ -8,30 +8,21 @@ use std::time::{Duration, Instant};
 use agent::DemoRecord;
 
 mod common;
-use common::{blockstack, path, scratch, stderr};
+use common::{blockstack, path, scratch, stderr, train_model};
 
 /// The paper's learner, briefly trained on two goals on the grid backend.
-fn train(dir: &Path) -> PathBuf {
-    let out = dir.join("base.safetensors");
-    let o = blockstack(&[
-        "train",
-        "--goals",
-        "0,1,2:1,0,2",
-        "--games",
-        "300",
-        "--backend",
-        "grid",
-        "--out",
-        path(&out),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    out
+fn base_model(dir: &Path) -> PathBuf {
+    train_model(
+        dir,
+        "base.safetensors",
+        &["--goals", "0,1,2:1,0,2", "--games", "300", "--backend", "grid"],
+    )
 }
 
 #[test]
 fn replaying_a_recorded_correction_session_gives_the_same_model() {
     let dir = scratch("replay");
-    let base = train(&dir);
+    let base = base_model(&dir);
     let (live, demos, replayed) = (
         dir.join("live.safetensors"),
         dir.join("demos.jsonl"),
@@ -89,7 +80,7 @@ fn replaying_a_recorded_correction_session_gives_the_same_model() {
 #[test]
 fn a_killed_session_leaves_a_recording_whose_complete_lines_all_parse() {
     let dir = scratch("kill");
-    let base = train(&dir);
+    let base = base_model(&dir);
     let demos = dir.join("demos.jsonl");
     let mut child = Command::new(env!("CARGO_BIN_EXE_blockstack"))
         .args([
@@ -149,7 +140,7 @@ fn a_killed_session_leaves_a_recording_whose_complete_lines_all_parse() {
 #[test]
 fn malformed_lines_are_skipped_by_number_or_stop_the_command() {
     let dir = scratch("malformed");
-    let base = train(&dir);
+    let base = base_model(&dir);
     let demos = dir.join("demos.jsonl");
     let o = blockstack(&[
         "correct",
@@ -218,7 +209,7 @@ fn malformed_lines_are_skipped_by_number_or_stop_the_command() {
 #[test]
 fn learn_from_demos_refuses_what_cannot_be_learnt_from() {
     let dir = scratch("refusals");
-    let base = train(&dir);
+    let base = base_model(&dir);
     let demos = dir.join("demos.jsonl");
     let o = blockstack(&[
         "correct",
@@ -240,19 +231,11 @@ fn learn_from_demos_refuses_what_cannot_be_learnt_from() {
         .map(String::from)
         .collect();
     // Another model: the same settings, fewer games.
-    let other = dir.join("other.safetensors");
-    let o = blockstack(&[
-        "train",
-        "--goals",
-        "0,1,2:1,0,2",
-        "--games",
-        "20",
-        "--backend",
-        "grid",
-        "--out",
-        path(&other),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let other = train_model(
+        &dir,
+        "other.safetensors",
+        &["--goals", "0,1,2:1,0,2", "--games", "20", "--backend", "grid"],
+    );
     let write = |name: &str, lines: &[String]| {
         let file = dir.join(name);
         std::fs::write(&file, lines.iter().map(|l| format!("{l}\n")).collect::<String>()).unwrap();

@@ -12,34 +12,11 @@ use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
 mod common;
-use common::{BIN, blockstack, path, scratch, stderr, stdout};
+use common::{BIN, ROLE_ON_GRID, blockstack, path, scratch, stderr, stdout, train_model};
 
 /// Trains a small role model (grid backend, a few hundred games) at `dir/name`.
 fn small_model(dir: &Path, name: &str) -> PathBuf {
-    let out = dir.join(name);
-    let o = blockstack(&[
-        "train",
-        "--repr",
-        "role",
-        "--reward",
-        "step-cost",
-        "--goals",
-        "0,1,2",
-        "--games",
-        "300",
-        "--alpha",
-        "1",
-        "--gamma",
-        "1",
-        "--epsilon",
-        "0",
-        "--backend",
-        "grid",
-        "--out",
-        path(&out),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    out
+    train_model(dir, name, &[&ROLE_ON_GRID[..], &["--games", "300"]].concat())
 }
 
 /// The names in `dir`, sorted.

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{blockstack, model_metadata, path, scratch, stderr, stdout};
+use common::{blockstack, model_metadata, path, scratch, stderr, stdout, train, train_model};
 
 fn json(args: &[&str]) -> serde_json::Value {
     let o = blockstack(args);
@@ -15,8 +15,7 @@ fn json(args: &[&str]) -> serde_json::Value {
 /// Trains the paper's learner as coded for a few short games on the grid backend.
 fn train_original(dir: &Path) -> PathBuf {
     let out = dir.join("original.safetensors");
-    let o = blockstack(&[
-        "train",
+    let run = [
         "--profile",
         "original",
         "--games",
@@ -27,10 +26,8 @@ fn train_original(dir: &Path) -> PathBuf {
         "grid",
         "--seed",
         "2",
-        "--out",
-        path(&out),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    ];
+    let o = train(&[&run[..], &["--out", path(&out)]].concat());
     assert!(stdout(&o).contains("profile original: protocol paper, start paper, schedule paper-code"));
     out
 }
@@ -196,25 +193,24 @@ fn a_model_trained_under_original_evaluates_under_original_by_default() {
 #[test]
 fn train_flags_override_the_profile_part_by_part() {
     let dir = scratch("override");
-    let out = dir.join("m.safetensors");
-    let o = blockstack(&[
-        "train",
-        "--profile",
-        "original",
-        "--repr",
-        "chasing",
-        "--schedule",
-        "spec",
-        "--oracle",
-        "astar",
-        "--games",
-        "2",
-        "--backend",
-        "grid",
-        "--out",
-        path(&out),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let out = train_model(
+        &dir,
+        "m.safetensors",
+        &[
+            "--profile",
+            "original",
+            "--repr",
+            "chasing",
+            "--schedule",
+            "spec",
+            "--oracle",
+            "astar",
+            "--games",
+            "2",
+            "--backend",
+            "grid",
+        ],
+    );
     let file = model_metadata(&out);
     let t = &file["training"];
     assert_eq!(file["repr"], "chasing");

@@ -2,14 +2,12 @@
 //! paper's representations with the paper's learner, and every flag overrides its preset.
 
 mod common;
-use common::{blockstack, model_metadata, path, scratch, stderr, stdout};
+use common::{blockstack, model_metadata, path, scratch, stderr, stdout, train, train_model};
 
 #[test]
 fn the_role_learner_with_its_default_preset_plays_every_goal_greedily() {
     let dir = scratch("preset-role");
-    let model = dir.join("role.st");
-    let o = blockstack(&[
-        "train",
+    let run = [
         "--repr",
         "role",
         "--reward",
@@ -18,10 +16,8 @@ fn the_role_learner_with_its_default_preset_plays_every_goal_greedily() {
         "0,1,2",
         "--games",
         "20000",
-        "--out",
-        path(&model),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    ];
+    let model = train_model(&dir, "role.st", &run);
     let training = &model_metadata(&model)["training"];
     assert_eq!(training["params"]["gamma"], 1.0, "{training}");
     assert_eq!(training["final_replay"], true, "{training}");
@@ -46,24 +42,17 @@ fn presets_set_the_learner_and_flags_override_them() {
     let dir = scratch("preset-flags");
     let model = dir.join("m.st");
     let trained = |args: &[&str]| {
-        let o = blockstack(
-            &[
-                &[
-                    "train",
-                    "--goals",
-                    "0,1,2",
-                    "--games",
-                    "5",
-                    "--backend",
-                    "grid",
-                    "--out",
-                    path(&model),
-                ][..],
-                args,
-            ]
-            .concat(),
-        );
-        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+        let run = [
+            "--goals",
+            "0,1,2",
+            "--games",
+            "5",
+            "--backend",
+            "grid",
+            "--out",
+            path(&model),
+        ];
+        train(&[&run[..], args].concat());
         model_metadata(&model)["training"].clone()
     };
     // The paper's representation: the paper's learner.

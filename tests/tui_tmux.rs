@@ -14,7 +14,7 @@ use std::time::{Duration, Instant};
 use agent::DemoRecord;
 
 mod common;
-use common::{BIN, blockstack, path, scratch, stderr};
+use common::{BIN, blockstack, path, scratch, stderr, train_model};
 
 /// A tmux server of our own (its socket in the test's folder), killed when dropped.
 struct Tmux {
@@ -97,21 +97,13 @@ fn tmux_missing() -> bool {
     Command::new("tmux").arg("-V").output().is_err()
 }
 
-fn train(dir: &Path) -> PathBuf {
-    let out = dir.join("base.safetensors");
-    let o = blockstack(&[
-        "train",
-        "--goals",
-        "1,0,2",
-        "--games",
-        "300",
-        "--backend",
-        "grid",
-        "--out",
-        path(&out),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    out
+/// The paper's learner, briefly trained on one goal on the grid backend.
+fn base_model(dir: &Path) -> PathBuf {
+    train_model(
+        dir,
+        "base.safetensors",
+        &["--goals", "1,0,2", "--games", "300", "--backend", "grid"],
+    )
 }
 
 /// The value after `label` on the screen, e.g. `held: 2` -> `2`.
@@ -140,7 +132,7 @@ fn a_person_corrects_the_agent_in_the_terminal_and_quits() {
         return;
     }
     let dir = scratch("session");
-    let base = train(&dir);
+    let base = base_model(&dir);
     let (demos, corrected) = (dir.join("demos.jsonl"), dir.join("corrected.safetensors"));
     let tmux = Tmux::new(&dir);
     tmux.start(
@@ -215,7 +207,7 @@ fn a_demo_killed_mid_episode_leaves_whole_lines() {
         return;
     }
     let dir = scratch("kill");
-    let base = train(&dir);
+    let base = base_model(&dir);
     let demos = dir.join("demos.jsonl");
     let tmux = Tmux::new(&dir);
     tmux.start(
@@ -257,11 +249,9 @@ fn blocks_past_9_are_picked_by_letter_and_a_small_terminal_stops_the_agent() {
         return;
     }
     let dir = scratch("sixteen");
-    let model = dir.join("sixteen.safetensors");
     let goal: Vec<String> = (0..16).map(|b| b.to_string()).collect();
     let goal = goal.join(",");
-    let o = blockstack(&[
-        "train",
+    let run = [
         "--blocks",
         "16",
         "--grid",
@@ -274,10 +264,8 @@ fn blocks_past_9_are_picked_by_letter_and_a_small_terminal_stops_the_agent() {
         "20",
         "--backend",
         "grid",
-        "--out",
-        path(&model),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    ];
+    let model = train_model(&dir, "sixteen.safetensors", &run);
     let demos = dir.join("demos.jsonl");
     let tmux = Tmux::new(&dir);
     // A 16 x 16 grid needs more than 80 columns.
@@ -341,7 +329,7 @@ fn eval_run_and_correct_show_a_progress_bar_on_a_terminal_only() {
         return;
     }
     let dir = scratch("tmux-progress");
-    let model = train(&dir);
+    let model = base_model(&dir);
     let out = dir.join("corrected.safetensors");
     let tmux = Tmux::new(&dir);
     // Keeps the server up while the sessions below come and go.

@@ -4,7 +4,7 @@
 // Each test binary uses its own subset of these helpers.
 #![allow(dead_code)]
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 mod scratch;
@@ -29,14 +29,54 @@ pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
-/// The JSON metadata of a model file, read as any program could: the safetensors layout
-/// (8 bytes of header length, the JSON header) and blockstack's `metadata` entry in it.
-pub fn model_metadata(model: &Path) -> serde_json::Value {
-    let bytes = std::fs::read(model).expect("the model exists");
+/// The README's role recipe (alpha 1, gamma 1, epsilon 0, the step-cost reward) on goal
+/// 0,1,2, on the grid backend (quick); add `--games N`.
+pub const ROLE_ON_GRID: [&str; 14] = [
+    "--repr",
+    "role",
+    "--reward",
+    "step-cost",
+    "--goals",
+    "0,1,2",
+    "--alpha",
+    "1",
+    "--gamma",
+    "1",
+    "--epsilon",
+    "0",
+    "--backend",
+    "grid",
+];
+
+/// Runs `blockstack train ARGS`, checks that it succeeded, and returns what it printed.
+pub fn train(args: &[&str]) -> Output {
+    let o = blockstack(&[&["train"][..], args].concat());
+    assert!(o.status.success(), "train {args:?}: {}", stderr(&o));
+    o
+}
+
+/// Runs `blockstack train ARGS --out DIR/NAME`, checks that it succeeded, and returns the
+/// model's path.
+pub fn train_model(dir: &Path, name: &str, args: &[&str]) -> PathBuf {
+    let out = dir.join(name);
+    train(&[args, &["--out", path(&out)]].concat());
+    out
+}
+
+/// The JSON metadata of a file blockstack wrote in its safetensors container, read as any
+/// program could (8 bytes of header length, the JSON header, blockstack's `metadata` entry
+/// in it), checked to be of `format`.
+pub fn file_metadata(file: &Path, format: &str) -> serde_json::Value {
+    let bytes = std::fs::read(file).expect("the file exists");
     let n = u64::from_le_bytes(bytes[..8].try_into().unwrap()) as usize;
     let header: serde_json::Value = serde_json::from_slice(&bytes[8..8 + n]).expect("a JSON header");
-    assert_eq!(header["__metadata__"]["format"], "blockstack-q-agent");
+    assert_eq!(header["__metadata__"]["format"], format);
     serde_json::from_str(header["__metadata__"]["metadata"].as_str().expect("metadata text")).expect("JSON metadata")
+}
+
+/// The JSON metadata of a Q-learner's model file.
+pub fn model_metadata(model: &Path) -> serde_json::Value {
+    file_metadata(model, "blockstack-q-agent")
 }
 
 /// A path as a command-line argument.
