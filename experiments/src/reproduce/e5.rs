@@ -1,6 +1,11 @@
 //! E5: oracle assistance while training (the paper's Table I, section VI-B2): none, on
 //! oscillation, and on oscillation plus each step with probability 0.1; Wilcoxon against
 //! none.
+//!
+//! Table I does not say how long its learners trained. Both worlds train for the paper's
+//! learner's preset; the original world also trains for Fig. 3's middle point (50 games),
+//! where the paper's unassisted figure sits on Fig. 3's curve, so that the report shows
+//! how much of the gap to Table I is training length.
 
 use agent::{Assist, OracleKind, Oscillation, QAgent};
 use sim::{Goal, Profile};
@@ -16,9 +21,15 @@ const ASSISTS: [Assist; 3] = [
     Assist::OscillationOrChance { p: 0.1 },
 ];
 
-/// Jobs reported: in each world, a training and a suite per arm and replicate.
+/// Jobs reported: in each world, and in the original world at the shorter training, a
+/// training and a suite per arm and replicate.
 pub(super) fn jobs(scale: &Scale) -> u64 {
-    2 * (WORLDS.len() * ASSISTS.len() * scale.replicates) as u64
+    2 * ((WORLDS.len() + 1) * ASSISTS.len() * scale.replicates) as u64
+}
+
+/// The shorter training of the original world's second table: Fig. 3's middle point.
+fn short_training() -> u64 {
+    paper::FIG3[0].points[1].games
 }
 
 /// One world's E5: an arm per assistance, the tests against none, and the first
@@ -31,8 +42,8 @@ struct World {
     learner: String,
 }
 
-/// Runs E5 in `world`.
-fn in_world(ctx: &Context, world: Profile) -> Result<World> {
+/// Runs E5 in `world`, training for `games` or for the learner's preset.
+fn in_world(ctx: &Context, world: Profile, games: Option<u64>) -> Result<World> {
     let all = Goal::all(3)?;
     let suite = Suite::in_world(world, 3, Goals::Drawn, ctx.scale.test_games, ctx.seeds.test);
     let optimum = suite.optimum()?;
@@ -41,9 +52,13 @@ fn in_world(ctx: &Context, world: Profile) -> Result<World> {
     let mut assisted_share = Vec::new();
     let mut first_unassisted = None;
     for assist in ASSISTS {
-        let trained = ctx.train_replicates("E5", |r| agent::TrainConfig {
-            assist,
-            ..ctx.paper_config(world, &all, r)
+        let trained = ctx.train_replicates("E5", |r| {
+            let config = ctx.paper_config(world, &all, r);
+            agent::TrainConfig {
+                assist,
+                games: games.unwrap_or(config.games),
+                ..config
+            }
         })?;
         let (steps, by_oracle) = trained
             .iter()
@@ -74,6 +89,10 @@ fn in_world(ctx: &Context, world: Profile) -> Result<World> {
         .map(|arm| TestOutcome::wilcoxon(arm, &arms[0]))
         .collect::<Result<Vec<_>>>()?;
     let config = ctx.paper_config(world, &all, 0);
+    let config = agent::TrainConfig {
+        games: games.unwrap_or(config.games),
+        ..config
+    };
     let oracle = match config.oracle {
         OracleKind::Paper => "the authors' greedy centroid oracle",
         OracleKind::Astar => "the centroid + A* oracle",
@@ -104,7 +123,18 @@ fn in_world(ctx: &Context, world: Profile) -> Result<World> {
 /// Runs E5; also returns the first replicate of the unassisted learner of the SPEC world
 /// (the paper's learner on all six goals), which E7 plays.
 pub(super) fn run(ctx: &Context) -> Result<(Experiment, QAgent)> {
-    let (original, spec) = ctx.in_both_worlds(|w| in_world(ctx, w))?;
+    let (original, spec) = ctx.in_both_worlds(|w| in_world(ctx, w, None))?;
+    let short = in_world(ctx, Profile::Original, Some(short_training()))?;
+    let short_rows: Vec<Row> = (0..ASSISTS.len())
+        .map(|i| {
+            let test = if i == 0 { None } else { Some(short.tests[i - 1].clone()) };
+            Row::new(
+                Some(paper::TABLE_I.rows[i]),
+                Some((short.arms[i].clone(), vec![test])),
+                None,
+            )
+        })
+        .collect();
     let rows: Vec<Row> = (0..ASSISTS.len())
         .map(|i| {
             let tests = |w: &World| vec![if i == 0 { None } else { Some(w.tests[i - 1].clone()) }];
@@ -134,7 +164,7 @@ pub(super) fn run(ctx: &Context) -> Result<(Experiment, QAgent)> {
     let theirs = paper::TABLE_I.rows;
     let reading = format!(
         "The paper: {} and {} failures of {} with and without help (p = {}), {} on oscillation alone (p = {}); {}; \
-         {}. {} {}",
+         {}. {} {} Table I gives no training length; trained for {} games instead of {}, {}: {}",
         num(theirs[2].failures.map(f64::from), 0),
         num(theirs[0].failures.map(f64::from), 0),
         theirs[0].games.unwrap_or_default(),
@@ -145,6 +175,10 @@ pub(super) fn run(ctx: &Context) -> Result<(Experiment, QAgent)> {
         world(&spec, Profile::Spec),
         paper_against(&rows[0]),
         paper_against(&rows[2]),
+        short_training(),
+        ctx.scale.paper_games(Profile::Original),
+        world(&short, Profile::Original),
+        short_rows.iter().map(paper_against).collect::<Vec<_>>().join(" "),
     );
     let figure = Figure::new(
         "e5-steps",
@@ -157,9 +191,13 @@ pub(super) fn run(ctx: &Context) -> Result<(Experiment, QAgent)> {
         )),
     );
     let mut setup = Vec::new();
-    for (w, profile) in [(&original, Profile::Original), (&spec, Profile::Spec)] {
+    for (w, name) in [
+        (&original, format!("learner, {}", Profile::Original)),
+        (&spec, format!("learner, {}", Profile::Spec)),
+        (&short, format!("learner, {}, second table", Profile::Original)),
+    ] {
         setup.push(Setting {
-            name: format!("learner, {profile}"),
+            name,
             value: w.learner.clone(),
         });
     }
@@ -183,13 +221,25 @@ pub(super) fn run(ctx: &Context) -> Result<(Experiment, QAgent)> {
         id: "E5".into(),
         title: "Oracle assistance in training (Table I)".into(),
         setup,
-        tables: vec![Table {
-            title: "Oracle assistance in training".into(),
-            suite: format!("{}, in each world", spec.suite.describe()),
-            paper: Some(paper::TABLE_I),
-            tests: vec!["Wilcoxon vs baseline".into()],
-            rows,
-        }],
+        tables: vec![
+            Table {
+                title: "Oracle assistance in training".into(),
+                suite: format!("{}, in each world", spec.suite.describe()),
+                paper: Some(paper::TABLE_I),
+                tests: vec!["Wilcoxon vs baseline".into()],
+                rows,
+            },
+            Table {
+                title: format!(
+                    "Oracle assistance in training, {} training games (Table I gives no length; Fig. 3's middle point)",
+                    short_training()
+                ),
+                suite: format!("{}, in the original world", short.suite.describe()),
+                paper: Some(paper::TABLE_I),
+                tests: vec!["Wilcoxon vs baseline".into()],
+                rows: short_rows,
+            },
+        ],
         curves: Vec::new(),
         decomposition: None,
         paper_notes: Vec::new(),
