@@ -51,15 +51,16 @@ fn in_world(ctx: &Context, world: Profile, games: Option<u64>) -> Result<World> 
     let mut arms = Vec::new();
     let mut assisted_share = Vec::new();
     let mut first_unassisted = None;
+    // The paper's learner in `world` with training seed `r`, for `games` if given.
+    let learner = |r: usize| {
+        let config = ctx.paper_config(world, &all, r);
+        agent::TrainConfig {
+            games: games.unwrap_or(config.games),
+            ..config
+        }
+    };
     for assist in ASSISTS {
-        let trained = ctx.train_replicates("E5", |r| {
-            let config = ctx.paper_config(world, &all, r);
-            agent::TrainConfig {
-                assist,
-                games: games.unwrap_or(config.games),
-                ..config
-            }
-        })?;
+        let trained = ctx.train_replicates("E5", |r| agent::TrainConfig { assist, ..learner(r) })?;
         let (steps, by_oracle) = trained
             .iter()
             .fold((0, 0), |(s, o), t| (s + t.report.steps, o + t.report.assisted_steps));
@@ -88,11 +89,7 @@ fn in_world(ctx: &Context, world: Profile, games: Option<u64>) -> Result<World> 
         .skip(1)
         .map(|arm| TestOutcome::wilcoxon(arm, &arms[0]))
         .collect::<Result<Vec<_>>>()?;
-    let config = ctx.paper_config(world, &all, 0);
-    let config = agent::TrainConfig {
-        games: games.unwrap_or(config.games),
-        ..config
-    };
+    let config = learner(0);
     let oracle = match config.oracle {
         OracleKind::Paper => "the authors' greedy centroid oracle",
         OracleKind::Astar => "the centroid + A* oracle",
