@@ -42,13 +42,7 @@ impl Observation {
     /// A `W x H x (N + 1)` one-hot array: plane `i < N` marks block `i`'s cell, plane `N`
     /// marks the held block's cell (all zero when nothing is held).
     pub fn planes(&self) -> Planes {
-        let (w, h, n) = (self.grid.width(), self.grid.height(), self.state.block_count());
-        let mut planes = Planes {
-            width: w,
-            height: h,
-            channels: n + 1,
-            data: vec![0; w * h * (n + 1)],
-        };
+        let mut planes = self.empty_planes();
         self.write_planes(&mut planes.data);
         planes
     }
@@ -67,9 +61,28 @@ impl Observation {
             "a buffer of W x H x (N + 1) values"
         );
         out.fill(0);
+        self.mark_planes(out, self.blocks().iter().copied().enumerate());
+    }
+
+    /// A `W x H x (N + 1)` array of zeros, shaped for this observation's planes.
+    fn empty_planes(&self) -> Planes {
+        let (w, h, n) = (self.grid.width(), self.grid.height(), self.state.block_count());
+        Planes {
+            width: w,
+            height: h,
+            channels: n + 1,
+            data: vec![0; w * h * (n + 1)],
+        }
+    }
+
+    /// Sets to 1, in `out` (zeros laid out as [`Planes::data`]), the cell of every
+    /// `(channel, cell)` of `marks` and the held block's cell in the last channel: the one
+    /// layout of [`Observation::planes`] and [`Observation::role_planes`].
+    fn mark_planes(&self, out: &mut [u8], marks: impl Iterator<Item = (usize, Cell)>) {
+        let (h, n) = (self.grid.height(), self.state.block_count());
         let at = |c: Cell, channel: usize| (usize::from(c.x) * h + usize::from(c.y)) * (n + 1) + channel;
-        for (i, &c) in self.blocks().iter().enumerate() {
-            out[at(c, i)] = 1;
+        for (channel, c) in marks {
+            out[at(c, channel)] = 1;
         }
         if let Some(b) = self.held_block() {
             out[at(self.state.cell(b), n)] = 1;
@@ -141,20 +154,9 @@ impl Observation {
     /// (0 = bottom), plane `N` the held block's cell. Every goal becomes the same picture
     /// problem, so one network serves every goal.
     pub fn role_planes(&self) -> Planes {
-        let (w, h, n) = (self.grid.width(), self.grid.height(), self.state.block_count());
-        let mut planes = Planes {
-            width: w,
-            height: h,
-            channels: n + 1,
-            data: vec![0; w * h * (n + 1)],
-        };
-        let at = |c: Cell, channel: usize| (usize::from(c.x) * h + usize::from(c.y)) * (n + 1) + channel;
-        for (place, &b) in self.goal.order().iter().enumerate() {
-            planes.data[at(self.state.cell(b), place)] = 1;
-        }
-        if let Some(b) = self.held_block() {
-            planes.data[at(self.state.cell(b), n)] = 1;
-        }
+        let mut planes = self.empty_planes();
+        let by_place = self.goal.order().iter().map(|&b| self.state.cell(b)).enumerate();
+        self.mark_planes(&mut planes.data, by_place);
         planes
     }
 
