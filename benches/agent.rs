@@ -45,10 +45,7 @@ fn q_update(c: &mut Criterion) {
 
 fn train_games(c: &mut Criterion) {
     let mut group = c.benchmark_group("train_games");
-    let config = |backend| TrainConfig {
-        backend,
-        ..TrainConfig::role_step_cost(vec!["0,1,2".parse().unwrap()])
-    };
+    let config = |backend| TrainConfig::role_step_cost(vec!["0,1,2".parse().unwrap()]).with_backend(backend);
     for backend in [Backend::Physics, Backend::Grid] {
         let fresh_games = 100;
         group.throughput(Throughput::Elements(fresh_games));
@@ -79,10 +76,7 @@ fn train_original(c: &mut Criterion) {
     let mut group = c.benchmark_group("train_original");
     let goals = sim::Goal::all(3).unwrap();
     for backend in [Backend::Physics, Backend::Grid] {
-        let config = TrainConfig {
-            backend,
-            ..TrainConfig::original(goals.clone())
-        };
+        let config = TrainConfig::original(goals.clone()).with_backend(backend);
         // The steps the first 5 games take, the same in every iteration (seeded).
         let mut probe = Trainer::new(config.clone()).unwrap();
         probe.play_games(5, None).unwrap();

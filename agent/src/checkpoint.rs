@@ -10,7 +10,7 @@
 //! same table, bit for bit, as one played from 0 to `n` without stopping.
 //!
 //! The file is a `files` container (safetensors): format `blockstack-train-checkpoint`,
-//! version 1, metadata `{"config":TrainConfig,"report":TrainReport,"recent":[steps or
+//! version 1, metadata `{"config":TrainingMeta (the model file's stored run),"report":TrainReport,"recent":[steps or
 //! null, ...]}`, and tensors:
 //!
 //! - `model`, U8: the agent as a model file, byte for byte (write the tensor's bytes out and
@@ -31,8 +31,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{AgentError, Result};
 use crate::model::MAX_MODEL_BYTES;
+use crate::model::TrainingMeta;
 use crate::qlearning::QAgent;
-use crate::train::{RECENT_GAMES, TrainConfig, TrainReport, Trainer};
+use crate::train::{RECENT_GAMES, TrainReport, Trainer};
 
 /// The `format` of checkpoint files.
 pub const CHECKPOINT_FORMAT: &str = "blockstack-train-checkpoint";
@@ -57,7 +58,7 @@ const GOAL: u64 = u64::MAX;
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Metadata {
-    config: TrainConfig,
+    config: TrainingMeta,
     report: TrainReport,
     recent: Vec<Option<u32>>,
 }
@@ -91,7 +92,7 @@ impl Trainer {
             ]);
         }
         let metadata = Metadata {
-            config: self.config.clone(),
+            config: TrainingMeta::of(&self.config),
             report: self.report,
             recent: self.recent.iter().copied().collect(),
         };
@@ -129,7 +130,7 @@ impl Trainer {
             AgentError::Model { reason, .. } => fail(format!("its model: {reason}")),
             other => fail(other.to_string()),
         })?;
-        let mut trainer = Trainer::new(meta.config).map_err(|e| fail(format!("its config: {e}")))?;
+        let mut trainer = Trainer::new(meta.config.config()).map_err(|e| fail(format!("its config: {e}")))?;
         let fresh = &trainer.agent;
         if (
             agent.kind(),

@@ -30,7 +30,7 @@
 //! agent's and gets the ordinary update, the same as the agent's own steps: no margin
 //! ([`CorrectionRule::as_coded`]), and the update of the `paper-code` schedule at the
 //! agent's alpha (1; their demonstrations lower it at no step). A demonstration runs until a
-//! step's reward is above 70 or for 5000 steps ([`SessionWorld::of`] a `paper-code` agent),
+//! step's reward is above 70 or for 5000 steps ([`session_world`] of a `paper-code` agent),
 //! on one goal, with the agent proposing at epsilon 0.1; what the agent learns carries over
 //! from one demonstration to the next. Their goals were `[0,1,2] [2,1,0] [1,2,0] [1,0,2]`
 //! ([`DEMONSTRATED_GOALS`]).
@@ -55,10 +55,7 @@
 
 use serde::{Deserialize, Serialize};
 use sim::seeding::{SimRng, episode_seed};
-use sim::{
-    Action, ActionProtocol, Backend, Env, EnvConfig, Goal, GoalSpec, Grid, Observation, Profile, RewardModel,
-    StartRule, Termination,
-};
+use sim::{Action, Env, EnvConfig, Goal, GoalSpec, Grid, Observation, Profile, RewardModel, Termination};
 
 use crate::demonstrator::{Demonstrator, DemonstratorProfile};
 use crate::demos::{DemoRecord, DemoSink, EpisodeLine, SessionLine, StepLine};
@@ -191,53 +188,32 @@ pub fn raise_to_margin(agent: &mut QAgent, obs: &Observation, action: Action, ma
     Ok(row[column])
 }
 
-/// The world a session plays in, beside the agent's grid and block count.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SessionWorld {
-    /// The reward the agent learns from (use the one it was trained with).
-    pub reward: RewardModel,
-    /// Steps before an episode is cut off.
-    pub horizon: u32,
-    /// The backend the episodes are played in.
-    pub backend: Backend,
-    /// Which actions are legal (the agent's and the demonstrator's alike).
-    pub protocol: ActionProtocol,
-    /// How each episode's blocks are placed.
-    pub start: StartRule,
-    /// What ends an episode besides the horizon.
-    pub termination: Termination,
-}
-
-impl SessionWorld {
-    /// The world `agent` was trained in (its reward, backend, protocol and start rule), or
-    /// the paper's reward and physics in our world for an agent that does not say. An
-    /// agent of the `spec` schedule plays episodes of 1000 steps that end at the goal; one
-    /// of `paper-code` plays the authors' demonstrations: up to 5000 steps (1000 with two
-    /// blocks), ended by a reward above 70.
-    pub fn of(agent: &QAgent) -> SessionWorld {
-        let schedule = agent.schedule();
-        let (horizon, termination) = match schedule {
-            Schedule::Spec => (sim::DEFAULT_HORIZON, Termination::Goal),
-            Schedule::PaperCode => (schedule.game_steps(agent.blocks()), schedule.training_termination()),
-        };
-        match agent.training() {
-            Some(t) => SessionWorld {
-                reward: t.reward,
-                horizon,
-                backend: t.backend,
-                protocol: t.protocol,
-                start: t.start,
-                termination,
-            },
-            None => SessionWorld {
-                reward: RewardModel::from_name("paper").expect("a known model"),
-                horizon,
-                backend: Backend::Physics,
-                protocol: ActionProtocol::Free,
-                start: StartRule::Uniform,
-                termination,
-            },
-        }
+/// The world a session of `agent` plays in: the one it was trained in (its grid, block
+/// count, reward, backend, protocol and start rule), or the paper's reward and physics in
+/// our world for an agent that does not say. An agent of the `spec` schedule plays
+/// episodes of 1000 steps that end at the goal; one of `paper-code` plays the authors'
+/// demonstrations: up to 5000 steps (1000 with two blocks), ended by a reward above 70.
+/// Each episode fixes its own goal.
+pub fn session_world(agent: &QAgent) -> EnvConfig {
+    let schedule = agent.schedule();
+    let (horizon, termination) = match schedule {
+        Schedule::Spec => (sim::DEFAULT_HORIZON, Termination::Goal),
+        Schedule::PaperCode => (schedule.game_steps(agent.blocks()), schedule.training_termination()),
+    };
+    let trained = match agent.training() {
+        Some(t) => t.world,
+        None => EnvConfig {
+            reward: RewardModel::from_name("paper").expect("a known model"),
+            ..EnvConfig::default()
+        },
+    };
+    EnvConfig {
+        grid: agent.grid(),
+        blocks: agent.blocks(),
+        goal: GoalSpec::Random,
+        horizon,
+        termination,
+        ..trained
     }
 }
 
@@ -302,7 +278,7 @@ pub struct SessionReport {
 pub struct CorrectionSession<S: DemoSink> {
     agent: QAgent,
     rule: CorrectionRule,
-    world: SessionWorld,
+    world: EnvConfig,
     goals: Vec<Goal>,
     seed: u64,
     epsilon: f64,
@@ -321,7 +297,7 @@ impl<S: DemoSink> CorrectionSession<S> {
     pub fn new(
         agent: QAgent,
         rule: CorrectionRule,
-        world: SessionWorld,
+        world: EnvConfig,
         goals: Vec<Goal>,
         seed: u64,
         epsilon: f64,
@@ -474,18 +450,14 @@ impl<S: DemoSink> CorrectionSession<S> {
     }
 }
 
-/// The environment of an episode on `goal`.
-fn env_config(agent: &QAgent, world: &SessionWorld, goal: Goal) -> EnvConfig {
+/// The environment of an episode on `goal`: the session's world, on the agent's grid and
+/// block count.
+fn env_config(agent: &QAgent, world: &EnvConfig, goal: Goal) -> EnvConfig {
     EnvConfig {
         grid: agent.grid(),
         blocks: agent.blocks(),
         goal: GoalSpec::Fixed(goal),
-        horizon: world.horizon,
-        reward: world.reward,
-        backend: world.backend,
-        protocol: world.protocol,
-        start: world.start,
-        termination: world.termination,
+        ..*world
     }
 }
 
@@ -505,8 +477,8 @@ pub struct CorrectionConfig {
     pub rule: Option<CorrectionRule>,
     /// The agent's probability of a random proposal (the paper's test policy: 0.1).
     pub epsilon: f64,
-    /// The world's reward, horizon and backend (`None`: [`SessionWorld::of`] the agent).
-    pub world: Option<SessionWorld>,
+    /// The world's reward, horizon and backend (`None`: [`session_world`] of the agent).
+    pub world: Option<EnvConfig>,
     /// The model file the agent came from, for the recording's session line.
     pub model: Option<String>,
 }
@@ -546,7 +518,7 @@ pub struct Corrected<S> {
 /// runs on the caller's thread, so many can run at once.
 pub fn correct<S: DemoSink>(agent: QAgent, config: &CorrectionConfig, sink: S) -> Result<Corrected<S>> {
     config.demonstrator.validate()?;
-    let world = config.world.unwrap_or_else(|| SessionWorld::of(&agent));
+    let world = config.world.unwrap_or_else(|| session_world(&agent));
     let rule = config
         .rule
         .unwrap_or_else(|| CorrectionRule::for_profile(agent.training().map_or(Profile::Spec, |t| t.profile)));

@@ -807,19 +807,20 @@ pub fn learn_from_records(agent: &mut QAgent, records: &[DemoRecord]) -> Result<
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::config::TrainConfig;
     use crate::correction::{CorrectionConfig, correct};
     use crate::demonstrator::DemonstratorProfile;
     use crate::qlearning::QParams;
     use crate::repr::ReprKind;
-    use crate::train::{TrainConfig, train};
+    use crate::train::train;
 
     fn trained() -> QAgent {
         let goals: Vec<Goal> = ["0,1,2", "1,0,2"].iter().map(|g| g.parse().unwrap()).collect();
         let config = TrainConfig {
             games: 300,
-            backend: sim::Backend::Grid,
             ..TrainConfig::paper(goals)
-        };
+        }
+        .with_backend(sim::Backend::Grid);
         train(&config, None).unwrap().agent
     }
 

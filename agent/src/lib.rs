@@ -6,7 +6,9 @@
 //! - [`rollout`]: the episode loop every command and experiment shares, with its
 //!   [`Summary`] of failures and steps to goal.
 //! - [`QAgent`]: tabular Q-learning over one of the [`repr`] state representations, trained
-//!   by [`train`](train::train) / [`Trainer`] on a [`schedule`], assisted by an oracle as
+//!   by [`train`](train::train) / [`Trainer`] as a [`TrainConfig`] ([`config`]) says, which
+//!   [`TrainConfig::resolve`] ([`preset`]) makes from a profile, a preset and explicit
+//!   settings, on a [`schedule`], assisted by an oracle as
 //!   [`assist`] says, saved and loaded as [`model`] files; a run stopped and resumed
 //!   through a [`checkpoint`] ends as if it had not stopped.
 //! - [`optimality`]: steps taken against the exact solver's shortest plans.
@@ -17,6 +19,7 @@
 
 pub mod assist;
 pub mod checkpoint;
+pub mod config;
 pub mod correction;
 pub mod demonstrator;
 pub mod demos;
@@ -26,6 +29,7 @@ pub mod model;
 pub mod optimality;
 pub mod planner_policy;
 pub mod policy;
+pub mod preset;
 pub mod profile;
 pub mod qlearning;
 pub mod qtable;
@@ -35,16 +39,18 @@ pub mod schedule;
 pub mod train;
 
 pub use assist::{Assist, OracleKind, Oscillation};
+pub use config::{QParams, TrainConfig};
 pub use correction::{Corrected, CorrectionConfig, CorrectionRule, CorrectionSession, correct};
 pub use demonstrator::{Demonstrator, DemonstratorProfile};
 pub use demos::{BadLines, DemoRecord, DemoSink, DemoWriter};
 pub use error::{AgentError, Result};
 pub use planner_policy::{ExactPolicy, OraclePolicy, PaperOraclePolicy, PlannerPolicy};
 pub use policy::{Policy, RandomPolicy};
+pub use preset::{Preset, TrainOverrides};
 pub use profile::LearnerProfile;
-pub use qlearning::{QAgent, QParams, QPolicy};
+pub use qlearning::{QAgent, QPolicy};
 pub use qtable::QTable;
 pub use repr::{Repr, ReprKind, Representation};
 pub use rollout::{EpisodeResult, Summary, play, play_episode};
 pub use schedule::Schedule;
-pub use train::{Progress, TrainConfig, TrainReport, Trained, Trainer, train};
+pub use train::{Progress, TrainReport, Trained, Trainer, train};

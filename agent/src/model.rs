@@ -29,7 +29,7 @@
 //! ```text
 //! {"grid":{"width":7,"height":7},"blocks":3,"repr":"role",
 //!  "params":{"alpha":1.0,"gamma":1.0,"epsilon":0.0,"initial_q":0.0},
-//!  "training":{...the TrainConfig, or null...},
+//!  "training":{...the training run (`TrainingMeta`), or null...},
 //!  "table":{"keys":470596,"columns":8,"initial":0.0}}
 //! ```
 //!
@@ -65,14 +65,15 @@ use std::path::Path;
 
 use files::{Container, Dtype, Element, Expect, FilesError, OutputPath, Tensor};
 use serde::{Deserialize, Serialize};
-use sim::{Action, Grid};
+use sim::{Action, ActionProtocol, Backend, EnvConfig, Goal, GoalSpec, Grid, Profile, RewardModel, StartRule};
 
+use crate::assist::{Assist, OracleKind, Oscillation};
+use crate::config::TrainConfig;
 use crate::error::{AgentError, Result};
 use crate::qlearning::{QAgent, QParams};
 use crate::qtable::{DENSE_LIMIT, QTable};
 use crate::repr::{Repr, ReprKind, Representation};
 use crate::schedule::Schedule;
-use crate::train::TrainConfig;
 
 /// The `format` of every model file.
 pub const MODEL_FORMAT: &str = "blockstack-q-agent";
@@ -102,10 +103,107 @@ struct Metadata {
     blocks: usize,
     repr: ReprKind,
     params: QParams,
-    training: Option<TrainConfig>,
+    training: Option<TrainingMeta>,
     #[serde(default, skip_serializing_if = "is_spec")]
     schedule: Schedule,
     table: TableMeta,
+}
+
+/// A training run as model files (version 2) and checkpoints (version 1) store it: the
+/// flat field layout those formats were written with, frozen here, converted explicitly
+/// from and to [`TrainConfig`]. The identity of a model ([`QAgent::identity`]) hashes this
+/// form, so a regrouping of `TrainConfig` changes neither the files nor the identities
+/// that recordings name. Changing this struct is changing the format: bump its version.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TrainingMeta {
+    grid: Grid,
+    blocks: usize,
+    repr: ReprKind,
+    reward: RewardModel,
+    params: QParams,
+    goals: Vec<Goal>,
+    games: u64,
+    seed: u64,
+    horizon: u32,
+    backend: Backend,
+    exploring_starts: bool,
+    backward_replay: bool,
+    final_replay: bool,
+    assist: Assist,
+    // Absent in files written before profiles existed.
+    #[serde(default)]
+    profile: Profile,
+    #[serde(default)]
+    protocol: ActionProtocol,
+    #[serde(default)]
+    start: StartRule,
+    #[serde(default)]
+    schedule: Schedule,
+    #[serde(default)]
+    oracle: OracleKind,
+    #[serde(default)]
+    oscillation: Oscillation,
+}
+
+impl TrainingMeta {
+    /// The stored form of `config`.
+    pub fn of(config: &TrainConfig) -> TrainingMeta {
+        let w = &config.world;
+        TrainingMeta {
+            grid: w.grid,
+            blocks: w.blocks,
+            repr: config.repr,
+            reward: w.reward,
+            params: config.params,
+            goals: config.goals.clone(),
+            games: config.games,
+            seed: config.seed,
+            horizon: w.horizon,
+            backend: w.backend,
+            exploring_starts: config.exploring_starts,
+            backward_replay: config.backward_replay,
+            final_replay: config.final_replay,
+            assist: config.assist,
+            profile: config.profile,
+            protocol: w.protocol,
+            start: w.start,
+            schedule: config.schedule,
+            oracle: config.oracle,
+            oscillation: config.oscillation,
+        }
+    }
+
+    /// The config this stored form describes (the world's termination is the schedule's,
+    /// as it always was).
+    pub fn config(self) -> TrainConfig {
+        TrainConfig {
+            world: EnvConfig {
+                grid: self.grid,
+                blocks: self.blocks,
+                goal: GoalSpec::Random,
+                horizon: self.horizon,
+                reward: self.reward,
+                backend: self.backend,
+                protocol: self.protocol,
+                start: self.start,
+                termination: self.schedule.training_termination(),
+                ..EnvConfig::default()
+            },
+            goals: self.goals,
+            repr: self.repr,
+            params: self.params,
+            games: self.games,
+            seed: self.seed,
+            exploring_starts: self.exploring_starts,
+            backward_replay: self.backward_replay,
+            final_replay: self.final_replay,
+            assist: self.assist,
+            profile: self.profile,
+            schedule: self.schedule,
+            oracle: self.oracle,
+            oscillation: self.oscillation,
+        }
+    }
 }
 
 fn is_spec(schedule: &Schedule) -> bool {
@@ -262,7 +360,7 @@ impl QAgent {
             blocks: self.blocks(),
             repr: self.kind(),
             params: *self.params(),
-            training: self.training().cloned(),
+            training: self.training().map(TrainingMeta::of),
             schedule: self.schedule(),
             table: TableMeta {
                 keys: table.key_count(),
@@ -283,7 +381,7 @@ impl QAgent {
             self.grid(),
             self.blocks(),
             self.params(),
-            self.training(),
+            self.training().map(TrainingMeta::of),
             self.schedule(),
             (table.key_count(), table.columns(), table.initial().to_bits()),
         ))
@@ -461,7 +559,7 @@ impl QAgent {
             meta.blocks,
             meta.params,
             table,
-            meta.training,
+            meta.training.map(TrainingMeta::config),
             meta.schedule,
         )
     }
@@ -525,7 +623,7 @@ fn read_seen(c: &Container, meta: &Metadata, table: &mut QTable) -> std::result:
 
 /// The training config must describe the model it trained: same representation, block
 /// count and grid, and at least one goal, each of the model's block count.
-fn check_training(training: &TrainConfig, meta: &Metadata) -> std::result::Result<(), String> {
+fn check_training(training: &TrainingMeta, meta: &Metadata) -> std::result::Result<(), String> {
     if training.schedule != meta.schedule {
         return Err(format!(
             "the file is inconsistent: the agent learns by the {} schedule, its training config says {}",

@@ -15,80 +15,17 @@
 //! unchanged.
 
 use rand::RngExt;
-use serde::{Deserialize, Serialize};
+
 use sim::seeding::SimRng;
 use sim::{Action, Goal, Grid, Observation};
 
+use crate::config::TrainConfig;
+pub use crate::config::{QParams, check_epsilon, check_fits_table};
 use crate::error::{AgentError, Result};
 use crate::policy::Policy;
 use crate::qtable::QTable;
 use crate::repr::{Repr, ReprKind, Representation};
 use crate::schedule::Schedule;
-use crate::train::TrainConfig;
-
-/// The learner's hyper-parameters.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct QParams {
-    /// Learning rate, `0 < alpha <= 1` (paper: 1).
-    pub alpha: f64,
-    /// Discount factor, `0 <= gamma <= 1` (paper: 0.1).
-    pub gamma: f64,
-    /// Probability of a uniformly random action while training, `0 <= epsilon <= 1`
-    /// (paper: 0.1).
-    pub epsilon: f64,
-    /// The value every entry of the table starts at (paper: not stated; 0).
-    pub initial_q: f64,
-}
-
-impl Default for QParams {
-    /// The paper's: alpha 1, gamma 0.1, epsilon 0.1, table starting at 0.
-    fn default() -> Self {
-        QParams {
-            alpha: 1.0,
-            gamma: 0.1,
-            epsilon: 0.1,
-            initial_q: 0.0,
-        }
-    }
-}
-
-impl QParams {
-    /// An error naming the first value out of its range.
-    pub fn validate(&self) -> Result<()> {
-        let bad = |what: &str, v: f64, range: &str| Err(AgentError::Config(format!("{what} {v} is not in {range}")));
-        if !(self.alpha > 0.0 && self.alpha <= 1.0) {
-            return bad("alpha", self.alpha, "(0, 1]");
-        }
-        if !(0.0..=1.0).contains(&self.gamma) {
-            return bad("gamma", self.gamma, "[0, 1]");
-        }
-        check_epsilon(self.epsilon)?;
-        check_fits_table("the initial Q-value", self.initial_q)
-    }
-}
-
-/// An error unless `value` is a finite number that the table's 32-bit floats hold (at most
-/// `f32::MAX` in size): a value beyond it would become infinite in the table and could not
-/// be saved. `what` names it in the error.
-pub fn check_fits_table(what: &str, value: f64) -> Result<()> {
-    if value.is_finite() && value.abs() <= f64::from(f32::MAX) {
-        Ok(())
-    } else {
-        Err(AgentError::Config(format!(
-            "{what} {value:e} does not fit the Q-table's 32-bit floats: use a finite value of at most {:e} in size",
-            f32::MAX
-        )))
-    }
-}
-
-/// An error unless `0 <= epsilon <= 1`.
-pub fn check_epsilon(epsilon: f64) -> Result<()> {
-    if (0.0..=1.0).contains(&epsilon) {
-        Ok(())
-    } else {
-        Err(AgentError::Config(format!("epsilon {epsilon} is not in [0, 1]")))
-    }
-}
 
 /// A tabular Q-learner: a representation, its table, and its hyper-parameters.
 ///

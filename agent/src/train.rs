@@ -19,220 +19,20 @@ use std::collections::VecDeque;
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
 use sim::seeding::episode_seed;
-use sim::{ActionProtocol, Backend, BlockId, Env, EnvConfig, Goal, GoalSpec, Grid, Profile, RewardModel, StartRule};
+use sim::{BlockId, Env};
 
-use crate::assist::{Assist, OracleKind, Oscillation, OscillationWatch};
-use crate::error::{AgentError, Result};
+use crate::assist::{Assist, OracleKind, OscillationWatch};
+use crate::config::{QParams, TrainConfig};
+use crate::error::Result;
 use crate::memory::ReplayMemory;
-use crate::profile::LearnerProfile;
-use crate::qlearning::{QAgent, QParams, TableStep};
-use crate::repr::{Repr, ReprKind};
+use crate::qlearning::{QAgent, TableStep};
 use crate::rollout::policy_rng;
-use crate::schedule::Schedule;
 
 /// Games the progress figures look back over.
 pub const RECENT_GAMES: usize = 100;
 
 /// The most sweeps of the final experience replay.
 pub const MAX_REPLAY_SWEEPS: u32 = 1000;
-
-/// Everything that defines a training run.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct TrainConfig {
-    /// The grid (default 7 x 7).
-    pub grid: Grid,
-    /// Number of blocks.
-    pub blocks: usize,
-    /// The state representation.
-    pub repr: ReprKind,
-    /// The reward the learner maximises.
-    pub reward: RewardModel,
-    /// Learning rate, discount, exploration, initial values.
-    pub params: QParams,
-    /// The goals trained on, played in turn.
-    pub goals: Vec<Goal>,
-    /// Games to play.
-    pub games: u64,
-    /// The seed every start and every random choice derives from.
-    pub seed: u64,
-    /// Steps before a training game is cut off.
-    pub horizon: u32,
-    /// The world the games are played in.
-    pub backend: Backend,
-    /// Exploring starts: begin each game holding a block drawn at random (or none, with
-    /// equal chance), so that states with any block held are tried from the first step.
-    /// Starts with nothing held, as the paper's, when false.
-    pub exploring_starts: bool,
-    /// Backward replay: after each game, apply the game's updates once more, last step
-    /// first, so that what the last steps learnt reaches the first ones within the game
-    /// (with alpha 1 in this deterministic world, the whole path gets the values of its
-    /// end). Off in the paper's learner.
-    pub backward_replay: bool,
-    /// Experience replay at the end of training: remember the last transition seen from
-    /// every state-action, and after the last game apply the Q-update to every remembered
-    /// transition, sweep after sweep, until no value changes (at most
-    /// [`MAX_REPLAY_SWEEPS`]). The table then agrees with everything the agent has seen,
-    /// with no value left behind by a later change of its successors' (a stale value is
-    /// how a greedy agent gets stuck, e.g. picking the block it already holds). Off in the
-    /// paper's learner.
-    pub final_replay: bool,
-    /// When the oracle chooses the action instead of the learner.
-    pub assist: Assist,
-    /// The profile the config was made from; the fields below are its parts, each of which
-    /// may have been set otherwise (what a model file remembers).
-    #[serde(default)]
-    pub profile: Profile,
-    /// Which actions are legal in the training games.
-    #[serde(default)]
-    pub protocol: ActionProtocol,
-    /// How the training games' blocks are placed.
-    #[serde(default)]
-    pub start: StartRule,
-    /// How games are laid out and the table updated (the [`schedule`](crate::schedule)
-    /// module).
-    #[serde(default)]
-    pub schedule: Schedule,
-    /// Which oracle assists.
-    #[serde(default)]
-    pub oracle: OracleKind,
-    /// How oscillation is spotted for [`Assist::Oscillation`].
-    #[serde(default)]
-    pub oscillation: Oscillation,
-}
-
-impl TrainConfig {
-    /// The paper's learner (section VI): `chasing` representation, `paper` reward, alpha 1,
-    /// gamma 0.1, epsilon 0.1, 3 blocks on 7 x 7, horizon 1000, physics, on `goals`, 5000
-    /// games, seed 1.
-    pub fn paper(goals: Vec<Goal>) -> TrainConfig {
-        TrainConfig {
-            grid: Grid::default(),
-            blocks: goals.first().map_or(3, Goal::block_count),
-            repr: ReprKind::Chasing,
-            reward: RewardModel::from_name("paper").expect("a known model"),
-            params: QParams::default(),
-            goals,
-            games: 5000,
-            seed: 1,
-            horizon: sim::DEFAULT_HORIZON,
-            backend: Backend::Physics,
-            exploring_starts: false,
-            backward_replay: false,
-            final_replay: false,
-            assist: Assist::None,
-            profile: Profile::Spec,
-            protocol: ActionProtocol::Free,
-            start: StartRule::Uniform,
-            schedule: Schedule::Spec,
-            oracle: OracleKind::Astar,
-            oscillation: Oscillation::Actions,
-        }
-    }
-
-    /// The paper's learner as its authors coded it (ORIGINAL.md, "The learner"), in their
-    /// world: `chasing-code` representation, `paper-code` reward, the `paper` action
-    /// protocol and start rule, the `paper-code` schedule (games of up to 5000 steps, 1000
-    /// with two blocks, each on a goal drawn from `goals`, ended by a reward above 70),
-    /// alpha 1, gamma 0.1, epsilon 0.1, physics, 100 games (the most of the paper's Fig. 3
-    /// and E3), seed 1; assistance, when asked for, by the authors' oracle on their
-    /// oscillation test.
-    pub fn original(goals: Vec<Goal>) -> TrainConfig {
-        let blocks = goals.first().map_or(3, Goal::block_count);
-        let parts = LearnerProfile::of(Profile::Original);
-        TrainConfig {
-            repr: parts.repr,
-            reward: parts.reward,
-            games: 100,
-            horizon: parts.schedule.game_steps(blocks),
-            profile: parts.profile,
-            protocol: parts.profile.protocol(),
-            start: parts.profile.start_rule(),
-            schedule: parts.schedule,
-            oracle: parts.oracle,
-            oscillation: parts.oscillation,
-            ..TrainConfig::paper(goals)
-        }
-    }
-
-    /// The paper's learner of `profile`: [`TrainConfig::paper`] in our world (`spec`),
-    /// [`TrainConfig::original`] in the authors' (`original`).
-    pub fn for_profile(profile: Profile, goals: Vec<Goal>) -> TrainConfig {
-        match profile {
-            Profile::Spec => TrainConfig::paper(goals),
-            Profile::Original => TrainConfig::original(goals),
-        }
-    }
-
-    /// Our learner: `role` representation, `step-cost` reward, alpha 1 and gamma 1 (the
-    /// world is deterministic and the return is minus the steps to go), epsilon 0 (every
-    /// value starts at 0, above any true value, so untried actions look best and the
-    /// greedy learner tries them: optimism in place of random exploration), backward
-    /// replay after each game and a final replay of everything seen, 100,000 games against
-    /// the physics world from the paper's starts (nothing held), seed 1. Trained on one
-    /// goal it plays all of them.
-    pub fn role_step_cost(goals: Vec<Goal>) -> TrainConfig {
-        TrainConfig {
-            repr: ReprKind::Role,
-            reward: RewardModel::from_name("step-cost").expect("a known model"),
-            params: QParams {
-                alpha: 1.0,
-                gamma: 1.0,
-                epsilon: 0.0,
-                initial_q: 0.0,
-            },
-            games: 100_000,
-            backward_replay: true,
-            final_replay: true,
-            ..TrainConfig::paper(goals)
-        }
-    }
-
-    /// An error naming the first thing in the config that cannot train.
-    pub fn validate(&self) -> Result<()> {
-        self.params.validate()?;
-        self.assist.validate()?;
-        if self.schedule != Schedule::Spec && (self.backward_replay || self.final_replay) {
-            return Err(AgentError::Config(format!(
-                "backward and final replay belong to the spec schedule, not to {}",
-                self.schedule
-            )));
-        }
-        if self.goals.is_empty() {
-            return Err(AgentError::Config("no goals to train on".into()));
-        }
-        for goal in &self.goals {
-            self.env_config(*goal).validate()?;
-        }
-        Repr::new(self.repr, self.grid, self.blocks).map(|_| ())
-    }
-
-    /// The environment a training game on `goal` is played in (its protocol, start rule,
-    /// reward, and the schedule's termination rule).
-    pub fn env_config(&self, goal: Goal) -> EnvConfig {
-        EnvConfig {
-            grid: self.grid,
-            blocks: self.blocks,
-            goal: GoalSpec::Fixed(goal),
-            horizon: self.horizon,
-            reward: self.reward,
-            backend: self.backend,
-            protocol: self.protocol,
-            start: self.start,
-            termination: self.schedule.training_termination(),
-        }
-    }
-
-    /// The environment the trained agent is tested in on `goal`: the training world (its
-    /// protocol, start rule, reward, backend), but games end at the goal, after at most
-    /// `horizon` steps (the paper's tests: 1000).
-    pub fn test_env_config(&self, goal: Goal, horizon: u32) -> EnvConfig {
-        EnvConfig {
-            horizon,
-            termination: sim::Termination::Goal,
-            ..self.env_config(goal)
-        }
-    }
-}
 
 /// How training is going, after a game.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -318,7 +118,13 @@ impl Trainer {
     /// cannot train.
     pub fn new(config: TrainConfig) -> Result<Trainer> {
         config.validate()?;
-        let agent = QAgent::with_schedule(config.repr, config.grid, config.blocks, config.params, config.schedule)?;
+        let agent = QAgent::with_schedule(
+            config.repr,
+            config.world.grid,
+            config.world.blocks,
+            config.params,
+            config.schedule,
+        )?;
         let memory = config
             .final_replay
             .then(|| ReplayMemory::new(agent.table().key_count(), agent.table().columns()));
@@ -335,9 +141,9 @@ impl Trainer {
             path: Vec::new(),
             oracle: (config.assist != Assist::None).then(|| match config.oracle {
                 OracleKind::Astar => {
-                    AssistingOracle::Astar(oracle::Oracle::new(config.grid).with_protocol(config.protocol))
+                    AssistingOracle::Astar(oracle::Oracle::new(config.world.grid).with_protocol(config.world.protocol))
                 }
-                OracleKind::Paper => AssistingOracle::Paper(oracle::CentroidWalker::new(config.grid)),
+                OracleKind::Paper => AssistingOracle::Paper(oracle::CentroidWalker::new(config.world.grid)),
             }),
             watch: OscillationWatch::new(config.oscillation),
             memory,
@@ -411,7 +217,7 @@ impl Trainer {
         let agent = &mut self.agent;
         let mut obs = env.reset(seed);
         if self.config.exploring_starts {
-            let slot = rng.random_range(0..=self.config.blocks);
+            let slot = rng.random_range(0..=self.config.world.blocks);
             if slot > 0 {
                 let held = obs.state.with_held(Some(BlockId(slot as u8 - 1)))?;
                 obs = env.reset_to(held, obs.goal)?;
@@ -479,7 +285,7 @@ impl Trainer {
             }
             key = next_key;
             obs = step.observation;
-            if reached.is_none() && step.info.pairs_in_place + 1 == self.config.blocks {
+            if reached.is_none() && step.info.pairs_in_place + 1 == self.config.world.blocks {
                 reached = Some(step_number);
             }
         }
@@ -564,9 +370,9 @@ mod tests {
         // fixed point: Q(s, a) = r + gamma max Q(s'), exactly.
         let config = TrainConfig {
             games: 300,
-            backend: Backend::Grid,
             ..TrainConfig::role_step_cost(vec!["1,2,0".parse().unwrap()])
-        };
+        }
+        .with_backend(sim::Backend::Grid);
         let mut trainer = Trainer::new(config).unwrap();
         trainer.play_games(300, None).unwrap();
         let memory = trainer.memory.clone().unwrap();

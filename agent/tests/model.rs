@@ -21,9 +21,9 @@ fn role_config(goals: &[&str], games: u64, seed: u64) -> TrainConfig {
     TrainConfig {
         games,
         seed,
-        backend: Backend::Grid,
         ..TrainConfig::role_step_cost(goals.iter().map(|g| goal(g)).collect())
     }
+    .with_backend(Backend::Grid)
 }
 
 /// Every value of two tables, bit for bit (`QTable`'s `==` says `-0.0 == 0.0`).
@@ -78,9 +78,9 @@ fn trained_agents_round_trip_bit_for_bit() {
     // The paper's learner: values that are not short decimals survive exactly.
     let config = TrainConfig {
         games: 200,
-        backend: Backend::Grid,
         ..TrainConfig::paper(vec![goal("0,1,2")])
-    };
+    }
+    .with_backend(Backend::Grid);
     let paper = agent::train(&config, None).unwrap().agent;
     assert_eq!(round_trip(&paper, "paper.safetensors").0, Dtype::F32);
 }
@@ -356,7 +356,10 @@ fn tables_that_do_not_fit_their_model_are_refused() {
 
 #[test]
 fn a_training_config_that_contradicts_the_model_is_refused() {
-    let training = serde_json::to_value(TrainConfig::role_step_cost(vec![goal("0,1,2")])).unwrap();
+    let training = serde_json::to_value(agent::model::TrainingMeta::of(&TrainConfig::role_step_cost(vec![
+        goal("0,1,2"),
+    ])))
+    .unwrap();
     let with = |name: &str, change: &dyn Fn(&mut Value)| {
         let mut meta = role_meta();
         meta["training"] = training.clone();
@@ -396,7 +399,10 @@ fn seen_entries_belong_to_paper_code_models_and_must_fit() {
     let err = refusal(&crafted("seen-order.safetensors", &meta, &seen(&[9, 3], &[1, 1])));
     assert!(err.contains("in key order"), "{err}");
     // The training config names the schedule the agent learns by.
-    meta["training"] = serde_json::to_value(TrainConfig::role_step_cost(vec![goal("0,1,2")])).unwrap();
+    meta["training"] = serde_json::to_value(agent::model::TrainingMeta::of(&TrainConfig::role_step_cost(vec![
+        goal("0,1,2"),
+    ])))
+    .unwrap();
     let err = refusal(&crafted("schedule.safetensors", &meta, &seen(&[3], &[1])));
     assert!(err.contains("learns by the paper-code schedule"), "{err}");
 }

@@ -5,7 +5,7 @@
 mod common;
 use common::temp_path;
 
-use agent::correction::{CorrectionConfig, CorrectionRule, SessionWorld, person_steps};
+use agent::correction::{CorrectionConfig, CorrectionRule, person_steps, session_world};
 use agent::demonstrator::PlannerKind;
 use agent::{
     Assist, DemoRecord, Demonstrator, DemonstratorProfile, ExactPolicy, OraclePolicy, PaperOraclePolicy, Policy,
@@ -93,7 +93,7 @@ fn the_step_that_ends_the_game_sets_the_entry_to_its_reward() {
 fn a_training_game_ends_at_a_reward_above_70_only() {
     // The training world of the original profile: 3 blocks, one move from the goal.
     let config = TrainConfig::original(vec![goal("0,1,2")]);
-    assert_eq!(config.horizon, 5000);
+    assert_eq!(config.world.horizon, 5000);
     let mut env = Env::new(EnvConfig {
         backend: Backend::Grid,
         ..config.env_config(goal("0,1,2"))
@@ -106,7 +106,7 @@ fn a_training_game_ends_at_a_reward_above_70_only() {
     assert!(step.reward > 70.0 && step.terminated, "{step:?}");
     // Two blocks: the goal pays 50 per step and never ends a training game.
     let two = TrainConfig::original(vec![goal("0,1")]);
-    assert_eq!(two.horizon, 1000);
+    assert_eq!(two.world.horizon, 1000);
     let mut env = Env::new(EnvConfig {
         backend: Backend::Grid,
         ..two.env_config(goal("0,1"))
@@ -124,12 +124,15 @@ fn a_training_game_ends_at_a_reward_above_70_only() {
 // --- Training under the original profile -----------------------------------------------
 
 fn small_original(goals: &[&str], games: u64, seed: u64) -> TrainConfig {
+    let base = TrainConfig::original(goals.iter().map(|g| goal(g)).collect()).with_backend(Backend::Grid);
     TrainConfig {
         games,
         seed,
-        horizon: 400,
-        backend: Backend::Grid,
-        ..TrainConfig::original(goals.iter().map(|g| goal(g)).collect())
+        world: EnvConfig {
+            horizon: 400,
+            ..base.world
+        },
+        ..base
     }
 }
 
@@ -179,7 +182,7 @@ fn a_model_trained_under_original_remembers_its_world_and_seen_entries() {
     assert_eq!(loaded.schedule(), Schedule::PaperCode);
     let t = loaded.training().unwrap();
     assert_eq!(
-        (t.profile, t.protocol, t.start, t.reward.name()),
+        (t.profile, t.world.protocol, t.world.start, t.world.reward.name()),
         (
             Profile::Original,
             ActionProtocol::Paper,
@@ -188,7 +191,7 @@ fn a_model_trained_under_original_remembers_its_world_and_seen_entries() {
         )
     );
     // The world a correction session of it plays in is the authors'.
-    let world = SessionWorld::of(&loaded);
+    let world = session_world(&loaded);
     assert_eq!(
         (world.protocol, world.horizon, world.termination),
         (ActionProtocol::Paper, 5000, Termination::RewardAbove(70.0))
@@ -205,10 +208,10 @@ fn corrections_as_coded_get_the_plain_update_and_replay_to_the_same_table() {
     let mut preset = DemonstratorProfile::preset(2).unwrap();
     preset.takeover = 0.3;
     let config = CorrectionConfig {
-        world: Some(SessionWorld {
+        world: Some(EnvConfig {
             backend: Backend::Grid,
             horizon: 300,
-            ..SessionWorld::of(&base)
+            ..session_world(&base)
         }),
         ..CorrectionConfig::new(preset, agent::correction::demonstrated_goals(), 4, 6)
     };

@@ -17,9 +17,9 @@ fn role_config(goals: &[&str], games: u64, seed: u64) -> TrainConfig {
     TrainConfig {
         games,
         seed,
-        backend: Backend::Grid,
         ..TrainConfig::role_step_cost(goals.iter().map(|g| goal(g)).collect())
     }
+    .with_backend(Backend::Grid)
 }
 
 #[test]
@@ -143,9 +143,9 @@ fn a_trained_agent_finishes_an_easy_stack() {
 fn same_seed_same_table_and_evaluation() {
     let config = TrainConfig {
         games: 300,
-        backend: Backend::Grid,
         ..TrainConfig::paper(vec![goal("0,1,2"), goal("2,0,1")])
-    };
+    }
+    .with_backend(Backend::Grid);
     let a = agent::train(&config, None).unwrap();
     let b = agent::train(&config, None).unwrap();
     assert_eq!(a.agent, b.agent);
@@ -175,10 +175,7 @@ fn same_seed_same_table_and_evaluation() {
 #[test]
 fn physics_and_grid_training_give_the_same_agent() {
     let grid_run = role_config(&["1,0,2"], 2000, 4);
-    let physics_run = TrainConfig {
-        backend: Backend::Physics,
-        ..grid_run.clone()
-    };
+    let physics_run = TrainConfig { ..grid_run.clone() }.with_backend(Backend::Physics);
     let a = agent::train(&grid_run, None).unwrap();
     let b = agent::train(&physics_run, None).unwrap();
     assert_eq!(a.agent.table(), b.agent.table());
@@ -216,9 +213,9 @@ fn training_reports_progress_after_every_game() {
 fn the_oracle_assists_as_asked_and_the_table_learns_its_actions() {
     let base = TrainConfig {
         games: 200,
-        backend: Backend::Grid,
         ..TrainConfig::paper(vec![goal("0,1,2"), goal("2,1,0")])
-    };
+    }
+    .with_backend(Backend::Grid);
     let run = |assist| agent::train(&TrainConfig { assist, ..base.clone() }, None).unwrap();
     let none = run(Assist::None);
     assert_eq!(none.report.assisted_steps, 0);

@@ -444,17 +444,20 @@ const WORLDS: [Profile; 2] = [Profile::Original, Profile::Spec];
 fn paper_learner(config: &TrainConfig) -> String {
     let p = &config.params;
     let schedule = match config.schedule {
-        Schedule::Spec => format!("training games of up to {} steps ended by the goal", config.horizon),
+        Schedule::Spec => format!(
+            "training games of up to {} steps ended by the goal",
+            config.world.horizon
+        ),
         Schedule::PaperCode => format!(
             "the authors' schedule: training games of up to {} steps on a goal drawn per game, ended by a step \
              reward above 70, alpha lowered after step 4000, the update over seen entries",
-            config.horizon
+            config.world.horizon
         ),
     };
     format!(
         "{} representation, {} reward, alpha {}, gamma {}, epsilon {}, {schedule}",
         config.repr,
-        config.reward.name(),
+        config.world.reward.name(),
         p.alpha,
         p.gamma,
         p.epsilon

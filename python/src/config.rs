@@ -65,6 +65,18 @@ pub fn env_config(
     Ok(config)
 }
 
+/// A grid from Python: text such as `"7x7"` or a `(width, height)` pair, as every function
+/// of the package takes it.
+pub fn grid_from(grid: &Bound<'_, PyAny>) -> PyResult<Grid> {
+    if let Ok(text) = grid.extract::<String>() {
+        return text.parse::<Grid>().or_value_error();
+    }
+    let (w, h): (usize, usize) = grid
+        .extract()
+        .map_err(|_| value_error("a grid is text such as \"7x7\" or a (width, height) pair of whole numbers"))?;
+    Grid::new(w, h).or_value_error()
+}
+
 /// The profile called `name` (`spec` or `original`; `sim::Profile`).
 pub fn profile(name: &str) -> PyResult<Profile> {
     name.parse::<Profile>().or_value_error()

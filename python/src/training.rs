@@ -5,12 +5,12 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use agent::optimality::{self, Optimality};
-use agent::{Assist, EpisodeResult, QParams, ReprKind, Summary, TrainConfig};
+use agent::{Assist, EpisodeResult, Summary, TrainConfig, TrainOverrides};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use sim::{Backend, Env, Goal, Grid, RewardModel};
+use sim::{Backend, Env, Goal, RewardModel};
 
-use crate::boundary::{OrValueError, guard};
+use crate::boundary::{OrValueError, guard, value_error};
 use crate::config;
 
 /// Goals separated by `:` (`"0,1,2:1,0,2"`), as `blockstack train --goals` reads them, each
@@ -22,27 +22,43 @@ fn goals(text: Option<&str>, blocks: usize) -> PyResult<Vec<Goal>> {
     }
 }
 
-/// Trains a tabular Q-learner as `blockstack train` does, with the same flags and
-/// defaults (the paper's learner of `profile`: `TrainConfig::for_profile`; a flag left
-/// `None` keeps the profile's value), in this process, the GIL released. With
-/// `eval_episodes > 0`, then plays it `eval_episodes` times on each of `eval_goals` (the
-/// training goals by default) from the starts `blockstack eval --seed EVAL_SEED` plays,
-/// as `eval` does. `out` saves the model file.
+/// A setting given by name (`None` keeps the profile's and preset's).
+fn named<T: std::str::FromStr>(name: Option<&str>) -> PyResult<Option<T>>
+where
+    T::Err: std::fmt::Display,
+{
+    name.map(str::parse::<T>).transpose().or_value_error()
+}
+
+/// Trains a tabular Q-learner as `blockstack train` does: the same settings, resolved by the
+/// same library call (`agent::TrainConfig::resolve`: the profile, then the preset, then each
+/// setting given), so the same arguments give the same model file, byte for byte. In this
+/// process, the GIL released. With `eval_episodes > 0`, then plays it `eval_episodes` times
+/// on each of `eval_goals` (the training goals by default) from the starts `blockstack eval
+/// --seed EVAL_SEED` plays, as `eval` does. `out` saves the model file (its folder is
+/// checked before training).
 ///
-/// Returns a dict: the config's flags, the training totals (`games`, `successes`,
+/// Returns a dict: the config's settings, the training totals (`games`, `successes`,
 /// `steps`, `assisted_steps`, `replay_sweeps`, `train_seconds`) and, with an evaluation,
 /// `eval_episodes`, `eval_failures`, `eval_mean_steps`, `eval_median_steps`,
 /// `eval_mean_steps_failures_as_horizon`, `eval_mean_optimal_steps`,
 /// `eval_mean_ratio_to_optimum` (`None` where no episode reached the goal).
 #[pyfunction]
-#[pyo3(signature = (*, blocks=3, grid="7x7", repr=None, reward=None, goals=None, games=None, seed=1, alpha=None, gamma=None, epsilon=None, initial_q=None, exploring_starts=false, backward_replay=false, final_replay=false, assist="none", horizon=None, backend="physics", eval_episodes=0, eval_goals=None, eval_seed=2, eval_epsilon=0.1, out=None, profile="spec"))]
+#[pyo3(signature = (*, blocks=3, grid=None, profile=None, preset=None, protocol=None, start=None, repr=None, reward=None, schedule=None, oracle=None, oscillation=None, goals=None, games=None, seed=1, alpha=None, gamma=None, epsilon=None, initial_q=None, exploring_starts=false, backward_replay=None, final_replay=None, assist="none", horizon=None, backend="physics", eval_episodes=0, eval_goals=None, eval_seed=2, eval_epsilon=0.1, out=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn train<'py>(
     py: Python<'py>,
     blocks: usize,
-    grid: &str,
+    grid: Option<&Bound<'py, PyAny>>,
+    profile: Option<&str>,
+    preset: Option<&str>,
+    protocol: Option<&str>,
+    start: Option<&str>,
     repr: Option<&str>,
     reward: Option<&str>,
+    schedule: Option<&str>,
+    oracle: Option<&str>,
+    oscillation: Option<&str>,
     goals: Option<&str>,
     games: Option<u64>,
     seed: u64,
@@ -51,8 +67,8 @@ pub fn train<'py>(
     epsilon: Option<f64>,
     initial_q: Option<f64>,
     exploring_starts: bool,
-    backward_replay: bool,
-    final_replay: bool,
+    backward_replay: Option<bool>,
+    final_replay: Option<bool>,
     assist: &str,
     horizon: Option<u32>,
     backend: &str,
@@ -61,38 +77,40 @@ pub fn train<'py>(
     eval_seed: u64,
     eval_epsilon: f64,
     out: Option<PathBuf>,
-    profile: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let base = TrainConfig::for_profile(config::profile(profile)?, self::goals(goals, blocks)?);
-    let defaults = base.params;
-    let config = TrainConfig {
-        grid: grid.parse::<Grid>().or_value_error()?,
-        blocks,
-        repr: match repr {
-            Some(name) => name.parse::<ReprKind>().or_value_error()?,
-            None => base.repr,
-        },
-        reward: match reward {
-            Some(name) => RewardModel::from_name(name).or_value_error()?,
-            None => base.reward,
-        },
-        params: QParams {
-            alpha: alpha.unwrap_or(defaults.alpha),
-            gamma: gamma.unwrap_or(defaults.gamma),
-            epsilon: epsilon.unwrap_or(defaults.epsilon),
-            initial_q: initial_q.unwrap_or(defaults.initial_q),
-        },
-        games: games.unwrap_or(base.games),
-        seed,
-        horizon: horizon.unwrap_or(base.horizon),
-        backend: backend.parse::<Backend>().or_value_error()?,
-        exploring_starts,
+    // Checked before any work, as the CLI does: a missing folder must not cost a training run.
+    let out_path = out
+        .as_deref()
+        .map(files::OutputPath::check)
+        .transpose()
+        .or_value_error()?;
+    let overrides = TrainOverrides {
+        profile: named(profile)?,
+        preset: named(preset)?,
+        blocks: Some(blocks),
+        grid: grid.map(config::grid_from).transpose()?,
+        goals: Some(self::goals(goals, blocks)?),
+        protocol: named(protocol)?,
+        start: named(start)?,
+        repr: named(repr)?,
+        reward: reward.map(RewardModel::from_name).transpose().or_value_error()?,
+        schedule: named(schedule)?,
+        oracle: named(oracle)?,
+        oscillation: named(oscillation)?,
+        games,
+        seed: Some(seed),
+        alpha,
+        gamma,
+        epsilon,
+        initial_q,
+        exploring_starts: Some(exploring_starts),
         backward_replay,
         final_replay,
-        assist: assist.parse::<Assist>().or_value_error()?,
-        ..base
+        assist: named::<Assist>(Some(assist))?,
+        horizon,
+        backend: named::<Backend>(Some(backend))?,
     };
-    config.validate().or_value_error()?;
+    let config = TrainConfig::resolve(&overrides).or_value_error()?;
     let eval_goals = match eval_goals {
         Some(text) => self::goals(Some(text), blocks)?,
         None => config.goals.clone(),
@@ -111,13 +129,15 @@ pub fn train<'py>(
                     let mut policy = model.policy(eval_epsilon).or_value_error()?;
                     let played = agent::play(&mut env, &mut policy, eval_episodes, eval_seed, None).or_value_error()?;
                     optimal.extend(
-                        optimality::optimal_steps_under(config.grid, config.protocol, &played).or_value_error()?,
+                        optimality::optimal_steps_under(config.world.grid, config.world.protocol, &played)
+                            .or_value_error()?,
                     );
                     results.extend(played);
                 }
             }
-            if let Some(path) = &out {
-                trained.agent.save(path).or_value_error()?;
+            if let Some(out) = &out_path {
+                let bytes = trained.agent.to_bytes().map_err(value_error)?;
+                out.write(&bytes).or_value_error()?;
             }
             Ok((trained, seconds, (results, optimal)))
         })
@@ -125,9 +145,9 @@ pub fn train<'py>(
     let d = PyDict::new(py);
     d.set_item("profile", config.profile.to_string())?;
     d.set_item("blocks", blocks)?;
-    d.set_item("grid", config.grid.to_string())?;
+    d.set_item("grid", config.world.grid.to_string())?;
     d.set_item("repr", config.repr.name())?;
-    d.set_item("reward", config.reward.to_string())?;
+    d.set_item("reward", config.world.reward.to_string())?;
     d.set_item(
         "goals",
         config.goals.iter().map(Goal::to_string).collect::<Vec<_>>().join(":"),
@@ -138,7 +158,7 @@ pub fn train<'py>(
     d.set_item("epsilon", config.params.epsilon)?;
     d.set_item("initial_q", config.params.initial_q)?;
     d.set_item("assist", config.assist.to_string())?;
-    d.set_item("backend", config.backend.to_string())?;
+    d.set_item("backend", config.world.backend.to_string())?;
     let r = trained.report;
     d.set_item("games", r.games)?;
     d.set_item("successes", r.successes)?;

@@ -56,6 +56,7 @@ impl World {
             protocol,
             start,
             termination,
+            ..EnvConfig::default()
         };
         Ok(World {
             name,

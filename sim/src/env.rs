@@ -9,6 +9,7 @@ use crate::error::{Result, SimError};
 use crate::goal::Goal;
 use crate::grid::{Cell, Grid};
 use crate::grid_world::GridWorld;
+use crate::obs_kind::ObsKind;
 use crate::observation::Observation;
 use crate::physics_world::PhysicsWorld;
 use crate::profile::Profile;
@@ -94,6 +95,10 @@ pub struct EnvConfig {
     /// What ends an episode before the horizon (default: the goal holds).
     #[serde(default)]
     pub termination: Termination,
+    /// The array an agent outside the library is shown (default `planes`): what Python's
+    /// environments return and what a network reads. The world's rules do not depend on it.
+    #[serde(default)]
+    pub obs: ObsKind,
 }
 
 impl Default for EnvConfig {
@@ -108,6 +113,7 @@ impl Default for EnvConfig {
             protocol: ActionProtocol::default(),
             start: StartRule::default(),
             termination: Termination::default(),
+            obs: ObsKind::default(),
         }
     }
 }

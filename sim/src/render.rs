@@ -151,17 +151,26 @@ pub fn picture_size(grid: Grid, blocks: usize, cell: u32) -> Result<(u32, u32)> 
     Ok((width as u32, height as u32))
 }
 
+/// `(width, height)` in pixels of [`frame`]'s picture of a `grid` world with `blocks`
+/// blocks, at `cell` pixels a cell: the grid, and beside it the goal in small blocks.
+pub fn frame_size(grid: Grid, blocks: usize, cell: u32) -> (u32, u32) {
+    let (w, h) = (grid.width() as u32, grid.height() as u32);
+    let mini = (cell / 3).max(3);
+    let pad = mini / 2;
+    (
+        w * cell + 2 * mini + 2 * pad,
+        (h * cell).max(blocks as u32 * mini + 2 * pad),
+    )
+}
 /// The world as an RGB image, `cell` pixels per cell, with the goal stack in a margin at
 /// the top-right corner. Every grid fits the bounds at [`CELL_PIXELS`]; check a cell size
 /// given by a person with [`picture_size`] first ([`save_picture`] does).
 pub fn frame(obs: &Observation, cell: u32) -> RgbImage {
     let (w, h) = (obs.grid.width() as u32, obs.grid.height() as u32);
-    let n = obs.goal.block_count() as u32;
     let mini = (cell / 3).max(3);
     let margin = 2 * mini;
     let pad = mini / 2;
-    let width = w * cell + margin + 2 * pad;
-    let height = (h * cell).max(n * mini + 2 * pad);
+    let (width, height) = frame_size(obs.grid, obs.goal.block_count(), cell);
     let mut img = RgbImage::from_pixel(width, height, Rgb([250, 250, 250]));
     // Grid lines.
     for i in 0..=w {

@@ -30,6 +30,7 @@ fn config(width: usize, height: usize, blocks: usize, rules: Rules, backend: Bac
         protocol: rules.protocol,
         start: rules.start,
         termination: rules.termination,
+        ..EnvConfig::default()
     }
 }
 

@@ -107,6 +107,7 @@ pub fn eval(args: EvalArgs) -> Result<()> {
             protocol: rules.protocol,
             start: rules.start,
             termination: Termination::Goal,
+            obs: sim::ObsKind::default(),
         };
         let mut env = Env::new(goal_config)?;
         config = Some(goal_config);

@@ -56,7 +56,7 @@ impl Model {
     /// The reward it was trained with, when the file says.
     pub fn training_reward(&self) -> Option<RewardModel> {
         match self {
-            Model::Q(q) => q.training().map(|t| t.reward),
+            Model::Q(q) => q.training().map(|t| t.world.reward),
             Model::Dqn(d) => Some(d.config().reward),
         }
     }

@@ -9,7 +9,6 @@
 //! flag says otherwise.
 
 use agent::LearnerProfile;
-use agent::correction::SessionWorld;
 use anyhow::Result;
 use clap::Args;
 use sim::{ActionProtocol, Profile, RewardModel, StartRule};
@@ -74,8 +73,8 @@ impl Rules {
     pub fn of_model(model: &agent::QAgent) -> Rules {
         match model.training() {
             Some(t) => Rules {
-                protocol: t.protocol,
-                start: t.start,
+                protocol: t.world.protocol,
+                start: t.world.start,
                 ..Rules::of(t.profile)
             },
             None => Rules::of(Profile::Spec),
@@ -107,7 +106,7 @@ impl Rules {
 }
 
 /// The world of a correction session of `agent` (`demo`, `correct`): the one it was trained
-/// in ([`SessionWorld::of`]), then `--profile`'s protocol, start rule and learner's reward,
+/// in ([`agent::correction::session_world`]), then `--profile`'s protocol, start rule and learner's reward,
 /// then each part's own flag. Also the profile whose correction rule applies: `--profile`,
 /// else the one the agent was trained under.
 pub fn session_world(
@@ -115,8 +114,8 @@ pub fn session_world(
     profile: ProfileArg,
     play: PlayRulesArgs,
     reward: Option<&str>,
-) -> Result<(SessionWorld, Profile)> {
-    let mut world = SessionWorld::of(agent);
+) -> Result<(sim::EnvConfig, Profile)> {
+    let mut world = agent::correction::session_world(agent);
     let trained_under = agent.training().map_or(Profile::Spec, |t| t.profile);
     if let Some(p) = profile.profile {
         world.protocol = p.protocol();

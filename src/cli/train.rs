@@ -3,11 +3,11 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use agent::{Assist, OracleKind, Oscillation, QParams, ReprKind, Schedule, TrainConfig, Trainer};
+use agent::{Assist, OracleKind, Oscillation, Preset, ReprKind, Schedule, TrainConfig, TrainOverrides, Trainer};
 use anyhow::{Context, Result};
-use clap::{ArgGroup, Args, ValueEnum};
+use clap::{ArgGroup, Args};
 use indicatif::{ProgressBar, ProgressStyle};
-use sim::{Backend, Goal, Grid, Profile, RewardModel};
+use sim::{Backend, Goal, Grid, RewardModel};
 
 use super::profile::{PlayRulesArgs, ProfileArg};
 
@@ -42,18 +42,6 @@ const RUN_FLAGS: [&str; 23] = [
     "horizon",
     "backend",
 ];
-
-/// A recipe of the learner's hyper-parameters (`train --preset`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum Preset {
-    /// The profile's own learner: under spec the paper's (alpha 1, gamma 0.1, epsilon 0.1,
-    /// no replay), under original the paper's as its authors coded it.
-    Paper,
-    /// The role recipe (the agent crate's `TrainConfig::role_step_cost`): the role representation, the
-    /// step-cost reward, alpha 1, gamma 1, epsilon 0 (optimistic greedy exploration),
-    /// backward and final replay.
-    Optimal,
-}
 
 /// Arguments of `blockstack train`.
 #[derive(Debug, Args)]
@@ -175,81 +163,36 @@ pub fn parse_goals(text: Option<&str>, blocks: usize) -> Result<Vec<Goal>> {
 }
 
 impl TrainArgs {
-    /// The training config these arguments describe: the profile's learner
-    /// ([`TrainConfig::for_profile`]), each part the command line names set as it says.
+    /// The training config these arguments describe: the library's resolver
+    /// ([`TrainConfig::resolve`]: profile, then preset, then each flag given).
     pub fn config(&self) -> Result<TrainConfig> {
-        let grid: Grid = self.grid.parse()?;
-        let profile = self.profile.profile.unwrap_or(Profile::Spec);
-        let goals = parse_goals(self.goals.as_deref(), self.blocks)?;
-        let preset = self.preset.unwrap_or(match (profile, self.repr) {
-            (Profile::Spec, Some(ReprKind::Role)) => Preset::Optimal,
-            _ => Preset::Paper,
-        });
-        let profile_learner = TrainConfig::for_profile(profile, goals.clone());
-        // The preset's parts of the learner over the profile's world and learner.
-        let base = match preset {
-            Preset::Paper => profile_learner,
-            Preset::Optimal => {
-                let recipe = TrainConfig::role_step_cost(goals);
-                TrainConfig {
-                    repr: recipe.repr,
-                    reward: recipe.reward,
-                    params: recipe.params,
-                    backward_replay: recipe.backward_replay,
-                    final_replay: recipe.final_replay,
-                    ..profile_learner
-                }
-            }
+        let overrides = TrainOverrides {
+            profile: self.profile.profile,
+            preset: self.preset,
+            blocks: Some(self.blocks),
+            grid: Some(self.grid.parse::<Grid>()?),
+            goals: Some(parse_goals(self.goals.as_deref(), self.blocks)?),
+            protocol: self.play.protocol,
+            start: self.play.start.start,
+            repr: self.repr,
+            reward: self.reward.as_deref().map(RewardModel::from_name).transpose()?,
+            schedule: self.schedule,
+            oracle: self.oracle,
+            oscillation: self.oscillation,
+            games: self.games,
+            seed: Some(self.seed),
+            alpha: self.alpha,
+            gamma: self.gamma,
+            epsilon: self.epsilon,
+            initial_q: self.initial_q,
+            exploring_starts: Some(self.exploring_starts),
+            backward_replay: self.backward_replay,
+            final_replay: self.final_replay,
+            assist: Some(self.assist),
+            horizon: self.horizon,
+            backend: Some(self.backend.parse::<Backend>()?),
         };
-        let schedule = self.schedule.unwrap_or(base.schedule);
-        // Without --horizon, games are as long as the schedule's (the profile's unless
-        // --schedule says otherwise).
-        let horizon = self.horizon.unwrap_or_else(|| {
-            if self.schedule.is_some() {
-                schedule.game_steps(self.blocks)
-            } else {
-                base.horizon
-            }
-        });
-        let config = TrainConfig {
-            grid,
-            blocks: self.blocks,
-            repr: self.repr.unwrap_or(base.repr),
-            reward: match &self.reward {
-                Some(name) => RewardModel::from_name(name)?,
-                None => base.reward,
-            },
-            params: QParams {
-                alpha: self.alpha.unwrap_or(base.params.alpha),
-                gamma: self.gamma.unwrap_or(base.params.gamma),
-                epsilon: self.epsilon.unwrap_or(base.params.epsilon),
-                initial_q: self.initial_q.unwrap_or(base.params.initial_q),
-            },
-            games: self.games.unwrap_or(base.games),
-            seed: self.seed,
-            horizon,
-            backend: self.backend.parse::<Backend>()?,
-            exploring_starts: self.exploring_starts,
-            backward_replay: self.backward_replay.unwrap_or(base.backward_replay),
-            final_replay: self.final_replay.unwrap_or(base.final_replay),
-            assist: self.assist,
-            protocol: self.play.protocol.unwrap_or(base.protocol),
-            start: self.play.start.start.unwrap_or(base.start),
-            schedule,
-            oracle: self.oracle.unwrap_or(base.oracle),
-            oscillation: self.oscillation.unwrap_or(base.oscillation),
-            ..base
-        };
-        anyhow::ensure!(
-            !(preset == Preset::Optimal
-                && config.schedule != Schedule::Spec
-                && (config.backward_replay || config.final_replay)),
-            "--preset optimal replays, which the {} schedule does not: add --schedule spec, or turn the replays off \
-             (--backward-replay=false --final-replay=false)",
-            config.schedule
-        );
-        config.validate()?;
-        Ok(config)
+        Ok(TrainConfig::resolve(&overrides)?)
     }
 }
 
@@ -326,16 +269,16 @@ pub fn train(args: TrainArgs) -> Result<()> {
     line(format_args!(
         "trained {} with the {} reward on {} ({} blocks, {} grid, {} backend, seed {})",
         trained.agent.name(),
-        config.reward,
+        config.world.reward,
         goals.join(":"),
-        config.blocks,
-        config.grid,
-        config.backend,
+        config.world.blocks,
+        config.world.grid,
+        config.world.backend,
         config.seed
     ))?;
     line(format_args!(
         "profile {}: protocol {}, start {}, schedule {}, games of up to {} steps",
-        config.profile, config.protocol, config.start, config.schedule, config.horizon
+        config.profile, config.world.protocol, config.world.start, config.schedule, config.world.horizon
     ))?;
     line(format_args!(
         "{} games, {} reached the goal, {} steps; {} steps chosen by the {} oracle (assistance {}, oscillation by {}); {} final replay sweeps",

@@ -51,6 +51,7 @@ impl WorldArgs {
             protocol: rules.protocol,
             start: rules.start,
             termination: sim::Termination::Goal,
+            obs: sim::ObsKind::default(),
         };
         config.validate()?;
         Ok(config)

@@ -327,7 +327,7 @@ impl<S: DemoSink> DemoApp<S> {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use agent::correction::{CorrectionRule, SessionWorld};
+    use agent::correction::{CorrectionRule, session_world};
     use agent::{DemoRecord, QParams, ReprKind};
     use sim::{Goal, Grid};
 
@@ -341,7 +341,7 @@ pub(crate) mod tests {
         let session = CorrectionSession::new(
             agent.clone(),
             CorrectionRule::default(),
-            SessionWorld::of(&agent),
+            session_world(&agent),
             goals,
             7,
             0.0,
@@ -487,9 +487,9 @@ pub(crate) mod tests {
     fn under_the_paper_protocol_a_person_changes_blocks_by_a_drop_and_a_pick() {
         let dir = tempdir();
         let agent = QAgent::new(ReprKind::ChasingCode, Grid::default(), 3, QParams::default()).unwrap();
-        let world = SessionWorld {
+        let world = sim::EnvConfig {
             protocol: sim::ActionProtocol::Paper,
-            ..SessionWorld::of(&agent)
+            ..session_world(&agent)
         };
         let session = CorrectionSession::new(
             agent,

@@ -258,7 +258,7 @@ pub(super) fn ours_description(ours: &QAgent) -> String {
                 "{} representation, {} reward, alpha {}, gamma {}, epsilon {}{}, {} training games on {} (seed {}), \
                  {} backend",
                 t.repr,
-                t.reward,
+                t.world.reward,
                 t.params.alpha,
                 t.params.gamma,
                 t.params.epsilon,
@@ -266,7 +266,7 @@ pub(super) fn ours_description(ours: &QAgent) -> String {
                 t.games,
                 t.goals.iter().map(ToString::to_string).collect::<Vec<_>>().join(" "),
                 t.seed,
-                t.backend
+                t.world.backend
             )
         }
         None => ours.name(),

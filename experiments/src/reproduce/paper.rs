@@ -320,7 +320,7 @@ mod tests {
             (c.params.alpha, c.params.gamma, c.params.epsilon),
             (SETTINGS.alpha, SETTINGS.gamma, SETTINGS.epsilon)
         );
-        assert_eq!(c.horizon, SETTINGS.horizon);
-        assert_eq!(c.grid, sim::Grid::new(SETTINGS.grid, SETTINGS.grid).unwrap());
+        assert_eq!(c.world.horizon, SETTINGS.horizon);
+        assert_eq!(c.world.grid, sim::Grid::new(SETTINGS.grid, SETTINGS.grid).unwrap());
     }
 }
