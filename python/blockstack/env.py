@@ -28,14 +28,15 @@ class StackEnv(gym.Env):
 
     - ``blocks``: number of blocks ``N`` (2 to 16; default 3).
     - ``goal``: the stack bottom to top (``"1,0,2"`` or ``[1, 0, 2]``); ``None`` draws one
-      each episode. The ``planes`` and ``pixels`` observations show the goal only as
-      pixels do (the frame draws it); ``planes`` does not carry it, so with a drawn goal
-      use ``state`` or read ``info["goal"]``.
+      each episode. ``planes`` does not carry the goal (``role-planes`` name blocks by
+      their place in it, ``frame`` and ``paper-screen`` draw it), so with a drawn goal and
+      ``planes`` use ``info["goal"]``.
     - ``grid``: ``(width, height)``, default ``(7, 7)``.
     - ``reward``: ``sparse`` (+10 at the goal), ``dense``, ``paper`` or ``step-cost``;
       ``None`` (the default) takes the profile's (``sparse`` in ``spec``).
     - ``backend``: ``physics`` (rapier2d) or ``grid`` (the occupancy model); same rules.
-    - ``obs``: ``planes``, ``state`` or ``pixels`` (see :mod:`blockstack.spaces`).
+    - ``obs``: ``planes``, ``role-planes``, ``frame``, ``paper-screen`` or ``state`` (see
+      :mod:`blockstack.spaces`).
     - ``profile``: ``spec`` (the world of the SPEC: every action legal) or ``original`` (the
       paper's world as its authors coded it: their action protocol, nothing held: picks
       only, holding: moves and drop only; their start rule; the ``paper-code`` reward).
@@ -84,7 +85,7 @@ class StackEnv(gym.Env):
         self.render_mode = render_mode
         self.obs_kind = obs
         self.action_space = action_space(blocks)
-        self.observation_space = observation_space(obs, blocks, tuple(grid), self._native.frame_shape)
+        self.observation_space = observation_space(obs, blocks, tuple(grid))
         self._mask = np.ones(self.action_space.n, dtype=np.int8)
 
     def reset(self, *, seed: Optional[int] = None, options: Optional[dict] = None):

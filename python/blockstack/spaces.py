@@ -7,7 +7,9 @@ from typing import Tuple
 import numpy as np
 from gymnasium import spaces
 
-OBS_KINDS = ("planes", "state", "pixels")
+from blockstack._native import OBS_KINDS, observation_shape
+
+__all__ = ["OBS_KINDS", "action_space", "observation_space"]
 
 
 def action_space(blocks: int) -> spaces.Discrete:
@@ -15,27 +17,32 @@ def action_space(blocks: int) -> spaces.Discrete:
     return spaces.Discrete(5 + blocks)
 
 
-def observation_space(obs: str, blocks: int, grid: Tuple[int, int], frame_shape: Tuple[int, int, int]) -> spaces.Space:
-    """The space of observation kind ``obs``.
+def observation_space(obs: str, blocks: int, grid: Tuple[int, int]) -> spaces.Space:
+    """The space of observation kind ``obs`` (one name per array, the Rust ``sim::ObsKind``).
 
     - ``planes``: ``Box`` of ``uint8`` 0/1, shape ``(W, H, N + 1)``: plane ``i < N`` marks
       block ``i``'s cell ``[x, y]`` (``y`` upward), plane ``N`` the held block's.
+    - ``role-planes``: the same shape, plane ``p < N`` marking the block at place ``p`` of the
+      goal (0 the bottom), so one policy serves every goal.
+    - ``frame``: ``Box`` of ``uint8``, the rendered picture ``(height, width, 3)``, the goal
+      drawn beside the grid (what ``render_mode="rgb_array"`` returns).
+    - ``paper-screen``: ``Box`` of ``uint8``, ``(100, 100, 3)``: the paper's DQN input.
     - ``state``: ``Dict`` of ``blocks`` (``(N, 2)`` int64 cells), ``held`` (the held block's
       id, -1 for none) and ``goal`` (``(N,)`` int64, bottom to top).
-    - ``pixels``: ``Box`` of ``uint8``, the rendered frame ``(height, width, 3)``.
+
+    ``pixels`` (earlier releases) is refused: it meant ``frame`` here and ``paper-screen`` in
+    the networks.
     """
     w, h = grid
-    if obs == "planes":
-        return spaces.Box(0, 1, shape=(w, h, blocks + 1), dtype=np.uint8)
-    if obs == "pixels":
-        return spaces.Box(0, 255, shape=frame_shape, dtype=np.uint8)
-    if obs == "state":
-        high = np.tile(np.array([w - 1, h - 1], dtype=np.int64), (blocks, 1))
-        return spaces.Dict(
-            {
-                "blocks": spaces.Box(np.zeros_like(high), high, dtype=np.int64),
-                "held": spaces.Discrete(blocks + 1, start=-1),
-                "goal": spaces.Box(0, blocks - 1, shape=(blocks,), dtype=np.int64),
-            }
-        )
-    raise ValueError(f"cannot read observation kind from {obs!r}: choose planes, state or pixels")
+    shape = observation_shape(obs, blocks, (w, h))
+    if shape is not None:
+        high = 1 if obs in ("planes", "role-planes") else 255
+        return spaces.Box(0, high, shape=tuple(shape), dtype=np.uint8)
+    high = np.tile(np.array([w - 1, h - 1], dtype=np.int64), (blocks, 1))
+    return spaces.Dict(
+        {
+            "blocks": spaces.Box(np.zeros_like(high), high, dtype=np.int64),
+            "held": spaces.Discrete(blocks + 1, start=-1),
+            "goal": spaces.Box(0, blocks - 1, shape=(blocks,), dtype=np.int64),
+        }
+    )

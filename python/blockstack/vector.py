@@ -91,9 +91,8 @@ class StackVectorEnv(VectorEnv):
         self.threads = threads
         self.copy = copy
         self.render_mode = render_mode
-        frame = tuple(self._native.render_rgb(0).shape)
         self.single_action_space = action_space(blocks)
-        self.single_observation_space = observation_space(obs, blocks, tuple(grid), frame)
+        self.single_observation_space = observation_space(obs, blocks, tuple(grid))
         self.action_space = batch_space(self.single_action_space, num_envs)
         self.observation_space = batch_space(self.single_observation_space, num_envs)
         self._buffers = self._native.buffers()

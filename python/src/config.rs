@@ -5,29 +5,21 @@ use sim::{Backend, EnvConfig, Goal, GoalSpec, Grid, Profile, RewardModel};
 
 use crate::boundary::{OrValueError, value_error};
 
-/// What an environment shows its agent (the `obs` argument).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ObsKind {
-    /// [`sim::Observation::planes`]: `W x H x (N + 1)` one-hot `uint8` planes.
-    Planes,
-    /// Block cells, held block and goal, as integers.
-    State,
-    /// [`sim::Observation::rgb`]: the rendered frame, `uint8`, height x width x 3.
-    Pixels,
+pub use sim::ObsKind;
+
+/// The observation kind called `name` (`sim::ObsKind`: planes, role-planes, frame,
+/// paper-screen or state); a `ValueError` naming the choices otherwise, and naming the new
+/// names for the old, ambiguous `pixels`.
+pub fn obs_kind(name: &str) -> PyResult<ObsKind> {
+    name.parse::<ObsKind>().or_value_error()
 }
 
-impl ObsKind {
-    /// The kind called `name`; a `ValueError` naming the choices otherwise.
-    pub fn parse(name: &str) -> PyResult<ObsKind> {
-        match name {
-            "planes" => Ok(ObsKind::Planes),
-            "state" => Ok(ObsKind::State),
-            "pixels" => Ok(ObsKind::Pixels),
-            _ => Err(value_error(format!(
-                "cannot read observation kind from {name:?}: choose planes, state or pixels"
-            ))),
-        }
-    }
+/// The shape of the `uint8` array of observation kind `obs` in a world of `blocks` blocks on
+/// a `grid` (width, height) grid, or `None` for `state` (a dict of arrays).
+#[pyfunction]
+pub fn observation_shape(obs: &str, blocks: usize, grid: (usize, usize)) -> PyResult<Option<[usize; 3]>> {
+    let grid = Grid::new(grid.0, grid.1).or_value_error()?;
+    Ok(obs_kind(obs)?.shape(grid, blocks))
 }
 
 /// The world an environment is made of, from the Python keyword arguments: the profile's

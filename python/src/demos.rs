@@ -105,48 +105,36 @@ fn encode<'py>(
         }
         a.into_any()
     };
-    Ok(match kind {
-        ObsKind::Planes => bytes(vec![t, grid.width(), grid.height(), blocks + 1], &|o, out| {
-            o.write_planes(out)
-        }),
-        ObsKind::Pixels => {
-            let sample = Observation {
-                grid,
-                protocol: ActionProtocol::default(),
-                state: State::new(&(0..blocks).map(|i| grid.cell_at(i)).collect::<Vec<Cell>>(), None)
-                    .or_value_error()?,
-                goal: Goal::identity(blocks).or_value_error()?,
-            };
-            let (h, w) = observe::frame_shape(&sample);
-            bytes(vec![t, h, w, 3], &|o, out| out.copy_from_slice(o.rgb().as_raw()))
-        }
-        ObsKind::State => {
-            let cells = PyArrayDyn::<i64>::zeros(py, vec![t, blocks, 2], false);
-            let held = PyArray1::<i64>::zeros(py, t, false);
-            let goal = PyArray2::<i64>::zeros(py, [t, blocks], false);
-            {
-                let (mut c, mut h, mut g) = (cells.readwrite(), held.readwrite(), goal.readwrite());
-                let (c, h, g) = (
-                    c.as_slice_mut().expect("contiguous"),
-                    h.as_slice_mut().expect("contiguous"),
-                    g.as_slice_mut().expect("contiguous"),
+    if let Some(shape) = kind.shape(grid, blocks) {
+        let write = |o: &Observation, out: &mut [u8]| kind.write(o, out).expect("shaped by the kind's shape");
+        return Ok(bytes([&[t][..], &shape[..]].concat(), &write));
+    }
+    {
+        let cells = PyArrayDyn::<i64>::zeros(py, vec![t, blocks, 2], false);
+        let held = PyArray1::<i64>::zeros(py, t, false);
+        let goal = PyArray2::<i64>::zeros(py, [t, blocks], false);
+        {
+            let (mut c, mut h, mut g) = (cells.readwrite(), held.readwrite(), goal.readwrite());
+            let (c, h, g) = (
+                c.as_slice_mut().expect("contiguous"),
+                h.as_slice_mut().expect("contiguous"),
+                g.as_slice_mut().expect("contiguous"),
+            );
+            for (i, obs) in observations.iter().enumerate() {
+                observe::write_state(
+                    obs,
+                    &mut c[2 * blocks * i..2 * blocks * (i + 1)],
+                    &mut g[blocks * i..blocks * (i + 1)],
                 );
-                for (i, obs) in observations.iter().enumerate() {
-                    observe::write_state(
-                        obs,
-                        &mut c[2 * blocks * i..2 * blocks * (i + 1)],
-                        &mut g[blocks * i..blocks * (i + 1)],
-                    );
-                    h[i] = observe::held_index(obs);
-                }
+                h[i] = observe::held_index(obs);
             }
-            let d = PyDict::new(py);
-            d.set_item("blocks", cells)?;
-            d.set_item("held", held)?;
-            d.set_item("goal", goal)?;
-            d.into_any()
         }
-    })
+        let d = PyDict::new(py);
+        d.set_item("blocks", cells)?;
+        d.set_item("held", held)?;
+        d.set_item("goal", goal)?;
+        Ok(d.into_any())
+    }
 }
 
 /// Expert episodes as arrays for behaviour cloning or DQfD: episode `k` starts from
@@ -175,7 +163,7 @@ pub fn demonstrations<'py>(
     horizon: u32,
     profile: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let kind = ObsKind::parse(obs)?;
+    let kind = config::obs_kind(obs)?;
     let config = env_config(blocks, goal, grid, reward, backend, horizon, profile)?;
     let mut policy: Box<dyn Policy + Send> = match expert {
         "exact" => Box::new(ExactPolicy::new(config.grid)),
@@ -307,7 +295,7 @@ fn state_of(blocks: &[[u8; 2]], held: Option<u8>) -> Result<State, String> {
 #[pyfunction]
 #[pyo3(signature = (path, obs="planes", profile="spec"))]
 pub fn read_recording<'py>(py: Python<'py>, path: PathBuf, obs: &str, profile: &str) -> PyResult<Bound<'py, PyDict>> {
-    let kind = ObsKind::parse(obs)?;
+    let kind = config::obs_kind(obs)?;
     let protocol = config::profile(profile)?.protocol();
     let text = read_text(&path)?;
     let mut reader = Reader {

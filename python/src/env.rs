@@ -6,7 +6,7 @@ use pyo3::types::{PyBool, PyTuple};
 use sim::{Action, BlockId, Cell, Env, Observation, State};
 
 use crate::boundary::{OrValueError, guard, value_error};
-use crate::config::{ObsKind, env_config, goal_from};
+use crate::config::{self, ObsKind, env_config, goal_from};
 use crate::observe;
 
 /// One blockstack environment; the Gymnasium class `blockstack.StackEnv` wraps it.
@@ -84,7 +84,7 @@ impl NativeEnv {
         profile: &str,
         obs: &str,
     ) -> PyResult<Self> {
-        let kind = ObsKind::parse(obs)?;
+        let kind = config::obs_kind(obs)?;
         let config = env_config(blocks, goal, grid, reward, backend, horizon, profile)?;
         Ok(NativeEnv {
             env: guard(|| Env::new(config).or_value_error())?,
@@ -151,7 +151,7 @@ impl NativeEnv {
 
     /// The rendered frame, `uint8`, height x width x 3.
     fn render_rgb<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        observe::to_python(py, ObsKind::Pixels, &self.env.observation())
+        observe::to_python(py, ObsKind::Frame, &self.env.observation())
     }
 
     /// The world as text, top row first (`sim::render::ascii`, no colour).
@@ -212,13 +212,6 @@ impl NativeEnv {
     #[getter]
     fn steps(&self) -> u32 {
         self.env.steps()
-    }
-
-    /// The shape of the rendered frame, `(height, width, 3)`.
-    #[getter]
-    fn frame_shape(&self) -> (usize, usize, usize) {
-        let (h, w) = observe::frame_shape(&self.env.observation());
-        (h, w, 3)
     }
 }
 

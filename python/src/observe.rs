@@ -6,17 +6,12 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sim::{Action, Observation};
 
+use crate::boundary::OrValueError;
 use crate::config::ObsKind;
 
 /// The held block as an integer: its id, or -1 when nothing is held.
 pub fn held_index(obs: &Observation) -> i64 {
     obs.held_block().map_or(-1, |b| i64::from(b.0))
-}
-
-/// The shape of the `pixels` frame, `(height, width)`, for `obs`'s world.
-pub fn frame_shape(obs: &Observation) -> (usize, usize) {
-    let frame = obs.rgb();
-    (frame.height() as usize, frame.width() as usize)
 }
 
 /// Writes the legal actions of `obs` (under its environment's action protocol) into
@@ -28,49 +23,35 @@ pub fn write_action_mask(obs: &Observation, out: &mut [i8]) {
     }
 }
 
-/// The observation of kind `kind` as a fresh Python object: an array for `planes` and
-/// `pixels`, a dict of arrays for `state`.
+/// The observation of kind `kind` as a fresh Python object: a `uint8` array for the array
+/// kinds (`sim::ObsKind::shape`), a dict of arrays for `state`.
 pub fn to_python<'py>(py: Python<'py>, kind: ObsKind, obs: &Observation) -> PyResult<Bound<'py, PyAny>> {
-    Ok(match kind {
-        ObsKind::Planes => {
-            let (w, h, c) = (obs.grid.width(), obs.grid.height(), obs.state.block_count() + 1);
-            let array = PyArray3::<u8>::zeros(py, [w, h, c], false);
-            let mut rw = array.readwrite();
-            obs.write_planes(rw.as_slice_mut().expect("a fresh array is contiguous"));
-            drop(rw);
-            array.into_any()
+    let Some(shape) = kind.shape(obs.grid, obs.state.block_count()) else {
+        let n = obs.state.block_count();
+        let blocks = PyArray2::<i64>::zeros(py, [n, 2], false);
+        let goal = PyArray1::<i64>::zeros(py, n, false);
+        {
+            let mut b = blocks.readwrite();
+            let mut g = goal.readwrite();
+            write_state(
+                obs,
+                b.as_slice_mut().expect("contiguous"),
+                g.as_slice_mut().expect("contiguous"),
+            );
         }
-        ObsKind::Pixels => {
-            let frame = obs.rgb();
-            let (h, w) = (frame.height() as usize, frame.width() as usize);
-            let array = PyArray3::<u8>::zeros(py, [h, w, 3], false);
-            let mut rw = array.readwrite();
-            rw.as_slice_mut()
-                .expect("a fresh array is contiguous")
-                .copy_from_slice(frame.as_raw());
-            drop(rw);
-            array.into_any()
-        }
-        ObsKind::State => {
-            let n = obs.state.block_count();
-            let blocks = PyArray2::<i64>::zeros(py, [n, 2], false);
-            let goal = PyArray1::<i64>::zeros(py, n, false);
-            {
-                let mut b = blocks.readwrite();
-                let mut g = goal.readwrite();
-                write_state(
-                    obs,
-                    b.as_slice_mut().expect("contiguous"),
-                    g.as_slice_mut().expect("contiguous"),
-                );
-            }
-            let dict = PyDict::new(py);
-            dict.set_item("blocks", blocks)?;
-            dict.set_item("held", held_index(obs))?;
-            dict.set_item("goal", goal)?;
-            dict.into_any()
-        }
-    })
+        let dict = PyDict::new(py);
+        dict.set_item("blocks", blocks)?;
+        dict.set_item("held", held_index(obs))?;
+        dict.set_item("goal", goal)?;
+        return Ok(dict.into_any());
+    };
+    let array = PyArray3::<u8>::zeros(py, shape, false);
+    kind.write(
+        obs,
+        array.readwrite().as_slice_mut().expect("a fresh array is contiguous"),
+    )
+    .or_value_error()?;
+    Ok(array.into_any())
 }
 
 /// Writes every block's `[x, y]` into `blocks` (`N x 2`) and the goal, bottom to top, into

@@ -11,7 +11,7 @@ use pyo3::types::{PyDict, PyList};
 use sim::{Action, Autoreset, Observation, VecEnv, VecStep};
 
 use crate::boundary::{OrValueError, guard, value_error};
-use crate::config::{ObsKind, env_config};
+use crate::config::{self, ObsKind, env_config};
 use crate::observe;
 
 /// The observation buffer(s) of a batch: one array for `planes` and `pixels`, three for
@@ -54,10 +54,9 @@ enum ObsSlot<'a> {
 impl Slot<'_> {
     fn write_obs(&mut self, kind: ObsKind, obs: &Observation) {
         match &mut self.obs {
-            ObsSlot::Bytes(out) => match kind {
-                ObsKind::Planes => obs.write_planes(out),
-                _ => out.copy_from_slice(obs.rgb().as_raw()),
-            },
+            ObsSlot::Bytes(out) => kind
+                .write(obs, out)
+                .expect("the buffers are shaped by the kind's shape"),
             ObsSlot::State { blocks, held, goal } => {
                 observe::write_state(obs, blocks, goal);
                 **held = observe::held_index(obs);
@@ -259,7 +258,7 @@ impl NativeVecEnv {
         threads: usize,
         autoreset: &str,
     ) -> PyResult<Self> {
-        let kind = ObsKind::parse(obs)?;
+        let kind = config::obs_kind(obs)?;
         let mode = match autoreset {
             "next-step" => Autoreset::NextStep,
             "same-step" => Autoreset::SameStep,
@@ -274,16 +273,13 @@ impl NativeVecEnv {
         }
         let config = env_config(blocks, goal, grid, reward, backend, horizon, profile)?;
         let vec = guard(|| VecEnv::new(config, num_envs, threads).or_value_error())?.with_autoreset(mode);
-        let sample = vec.envs()[0].observation();
-        let (w, h, n) = (config.grid.width(), config.grid.height(), blocks);
-        let bytes = |shape: Vec<usize>| ObsBuffers::Bytes(PyArrayDyn::<u8>::zeros(py, shape, false).unbind());
-        let obs = match kind {
-            ObsKind::Planes => bytes(vec![num_envs, w, h, n + 1]),
-            ObsKind::Pixels => {
-                let (fh, fw) = observe::frame_shape(&sample);
-                bytes(vec![num_envs, fh, fw, 3])
+        let n = blocks;
+        let obs = match kind.shape(config.grid, n) {
+            Some(shape) => {
+                let shape = [&[num_envs][..], &shape[..]].concat();
+                ObsBuffers::Bytes(PyArrayDyn::<u8>::zeros(py, shape, false).unbind())
             }
-            ObsKind::State => ObsBuffers::State {
+            None => ObsBuffers::State {
                 blocks: PyArrayDyn::<i64>::zeros(py, vec![num_envs, n, 2], false).unbind(),
                 held: PyArray1::<i64>::zeros(py, num_envs, false).unbind(),
                 goal: PyArray2::<i64>::zeros(py, [num_envs, n], false).unbind(),
@@ -397,6 +393,6 @@ impl NativeVecEnv {
                 self.vec.len()
             ))
         })?;
-        observe::to_python(py, ObsKind::Pixels, &env.observation())
+        observe::to_python(py, ObsKind::Frame, &env.observation())
     }
 }

@@ -80,3 +80,14 @@ def test_bad_recordings_and_arguments_are_value_errors(tmp_path):
         blockstack.read_recording(tmp_path / "missing.jsonl")
     with pytest.raises(ValueError, match="choose exact or oracle"):
         blockstack.demonstrations(1, expert="human")
+
+
+def test_demonstrations_can_show_the_papers_screen_and_role_planes():
+    screen = blockstack.demonstrations(2, expert="exact", seed=3, goal="1,0,2", obs="paper-screen")
+    t = len(screen["actions"])
+    assert screen["observations"].shape == (t, 100, 100, 3) and screen["observations"].dtype == np.uint8
+    roles = blockstack.demonstrations(2, expert="exact", seed=3, goal="1,0,2", obs="role-planes")
+    planes = blockstack.demonstrations(2, expert="exact", seed=3, goal="1,0,2", obs="planes")
+    # Role planes are the block planes reordered by goal place: place 0 is block 1.
+    order = [1, 0, 2, 3]
+    assert np.array_equal(roles["observations"], planes["observations"][..., order])

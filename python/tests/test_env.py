@@ -15,7 +15,7 @@ ENV_ID = "blockstack/Stack-v0"
 
 
 @pytest.mark.parametrize("backend", ["physics", "grid"])
-@pytest.mark.parametrize("obs", ["planes", "state", "pixels"])
+@pytest.mark.parametrize("obs", ["planes", "role-planes", "frame", "paper-screen", "state"])
 @pytest.mark.parametrize("render_mode", ["rgb_array", "ansi"])
 def test_env_checker_passes_without_a_warning(obs, backend, render_mode):
     env = gym.make(ENV_ID, obs=obs, backend=backend, render_mode=render_mode, disable_env_checker=True)
@@ -45,7 +45,7 @@ def same(a, b):
     return a == b
 
 
-@pytest.mark.parametrize("obs", ["planes", "state", "pixels"])
+@pytest.mark.parametrize("obs", ["planes", "role-planes", "frame", "paper-screen", "state"])
 def test_the_same_seed_gives_the_same_trajectory(obs):
     actions = np.random.default_rng(0).integers(0, 8, size=200)
     first = trajectory(gym.make(ENV_ID, obs=obs), 11, actions)
@@ -134,7 +134,8 @@ def test_solve_reads_held_blocks_and_gives_nothing_when_the_goal_holds():
         ({"goal": "0,0,1"}, "is not a permutation"),
         ({"goal": "0,1"}, "goal"),
         ({"backend": "lego"}, "choose physics or grid"),
-        ({"obs": "smell"}, "choose planes, state or pixels"),
+        ({"obs": "smell"}, "choose one of planes, role-planes, frame, paper-screen, state"),
+        ({"obs": "pixels"}, "frame .*paper-screen"),
         ({"blocks": 1}, "1 blocks is not allowed"),
         ({"grid": (2, 2), "blocks": 3}, "taller than the grid"),
         ({"grid": (0, 5)}, "grid 0x5 is not allowed"),
@@ -185,7 +186,7 @@ def test_render_modes():
     text = blockstack.StackEnv(render_mode="ansi")
     text.reset(seed=2)
     assert "goal" in text.render() and "held: none" in text.render()
-    pixels = blockstack.StackEnv(obs="pixels", goal="1,0,2")
+    pixels = blockstack.StackEnv(obs="frame", goal="1,0,2")
     assert np.array_equal(pixels.reset(seed=2)[0], frame)
 
 

@@ -56,7 +56,9 @@ def actions_for(sync, masks, rng, expert_share):
     [
         {"obs": "planes", "backend": "physics", "blocks": 2, "horizon": 9},
         {"obs": "state", "backend": "grid", "blocks": 3, "reward": "dense", "horizon": 12},
-        {"obs": "pixels", "backend": "physics", "blocks": 2, "goal": "1,0", "horizon": 6},
+        {"obs": "frame", "backend": "physics", "blocks": 2, "goal": "1,0", "horizon": 6},
+        {"obs": "paper-screen", "backend": "grid", "blocks": 2, "goal": "1,0", "horizon": 6},
+        {"obs": "role-planes", "backend": "grid", "blocks": 3, "goal": "2,0,1", "horizon": 6},
         {"obs": "planes", "backend": "grid", "blocks": 2, "profile": "original", "horizon": 10},
     ],
 )
