@@ -113,7 +113,9 @@ fn bad_files_and_arguments_are_one_line_and_status_2() {
     let x = dir.join("x.safetensors");
     for (args, says) in [
         (vec!["--preset", "nope"], "unknown preset"),
-        (vec!["--obs", "planes", "--net", "paper"], "reads pixels"),
+        (vec!["--obs", "role-planes", "--net", "paper"], "reads paper-screen"),
+        (vec!["--obs", "planes"], "called role-planes now"),
+        (vec!["--obs", "pixels"], "paper-screen"),
         (vec!["--demos", "people:3"], "exact:K"),
         (
             vec!["--pretrain", "5", "--demos", "none"],

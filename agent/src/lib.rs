@@ -11,7 +11,8 @@
 //!   settings, on a [`schedule`], assisted by an oracle as
 //!   [`assist`] says, saved and loaded as [`model`] files; a run stopped and resumed
 //!   through a [`checkpoint`] ends as if it had not stopped.
-//! - [`optimality`]: steps taken against the exact solver's shortest plans.
+//! - [`optimality`]: steps taken against the exact solver's shortest plans; [`eval`]: a
+//!   policy evaluated on seeded starts, per goal and overall, as `blockstack eval` reports it.
 //! - [`correction`]: learning from a demonstrator's corrections, simulated [`demonstrator`]s,
 //!   and [`demos`] recordings and their replay.
 //! - [`profile`]: the learner-level parts of `sim::Profile`: ours (`spec`), or the paper's
@@ -24,6 +25,7 @@ pub mod correction;
 pub mod demonstrator;
 pub mod demos;
 pub mod error;
+pub mod eval;
 pub mod memory;
 pub mod model;
 pub mod optimality;

@@ -372,17 +372,28 @@ impl DqnConfig {
         self.net.obs()
     }
 
-    /// The environment a game on `goal` is played in.
-    pub fn env_config(&self, goal: Goal) -> EnvConfig {
+    /// The world the training games are played in (`sim`'s one world value), the goal
+    /// drawn: the grid, blocks, horizon, reward, backend and protocol of this config, from
+    /// uniform starts, ended at the goal, the network's observation kind.
+    pub fn world(&self) -> EnvConfig {
         EnvConfig {
             grid: self.grid,
             blocks: self.blocks,
-            goal: GoalSpec::Fixed(goal),
+            goal: GoalSpec::Random,
             horizon: self.horizon,
             reward: self.reward,
             backend: self.backend,
             protocol: self.protocol,
+            obs: self.obs(),
             ..EnvConfig::default()
+        }
+    }
+
+    /// The environment a game on `goal` is played in: [`DqnConfig::world`] with that goal.
+    pub fn env_config(&self, goal: Goal) -> EnvConfig {
+        EnvConfig {
+            goal: GoalSpec::Fixed(goal),
+            ..self.world()
         }
     }
 
@@ -512,7 +523,10 @@ mod tests {
             DqnConfig::preset(name, 3).unwrap().validate().unwrap();
         }
         let p = DqnConfig::preset("paper", 3).unwrap();
-        assert_eq!((p.buffer, p.batch, p.lr, p.obs()), (1000, 64, 1e-4, ObsKind::Pixels));
+        assert_eq!(
+            (p.buffer, p.batch, p.lr, p.obs()),
+            (1000, 64, 1e-4, ObsKind::PaperScreen)
+        );
         assert_eq!(p.optimizer, OptimizerKind::Rmsprop);
         assert_eq!(p.reward.name(), "sparse");
         assert!(DqnConfig::preset("nope", 3).is_err());

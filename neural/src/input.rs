@@ -28,53 +28,30 @@
 //!   block look the same except for where the walls are, so what a network learns at one
 //!   place serves every place. An absolute layout makes it learn every place separately.
 
-use std::fmt;
-
-use serde::{Deserialize, Serialize};
+pub use sim::ObsKind;
 use sim::observation::PIXELS_SIDE;
 use sim::{Action, Goal, Grid, Observation};
 
 use crate::error::{NeuralError, Result};
 use crate::mask::ActionSet;
 
-/// Which view of the world a network sees.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum ObsKind {
-    /// The role planes (one channel per goal place, plus the held block).
-    Planes,
-    /// The paper's 100 x 100 RGB screen.
-    Pixels,
-}
+/// The views a network can read: the role planes and the paper's screen, named as every
+/// layer names them ([`sim::ObsKind`]).
+pub const NETWORK_OBS: [ObsKind; 2] = [ObsKind::RolePlanes, ObsKind::PaperScreen];
 
-impl ObsKind {
-    /// The name it is chosen by.
-    pub fn name(self) -> &'static str {
-        match self {
-            ObsKind::Planes => "planes",
-            ObsKind::Pixels => "pixels",
-        }
+/// An error unless networks can read `kind` ([`NETWORK_OBS`]).
+pub fn check_network_obs(kind: ObsKind) -> Result<()> {
+    if NETWORK_OBS.contains(&kind) {
+        return Ok(());
     }
-}
-
-impl fmt::Display for ObsKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for ObsKind {
-    type Err = NeuralError;
-
-    fn from_str(text: &str) -> Result<ObsKind> {
-        match text {
-            "planes" => Ok(ObsKind::Planes),
-            "pixels" => Ok(ObsKind::Pixels),
-            _ => Err(NeuralError::Config(format!(
-                "unknown observation {text:?}: choose planes or pixels"
-            ))),
-        }
-    }
+    let hint = if kind == ObsKind::RolePlanes {
+        " (the networks' `planes` of earlier releases are called role-planes now)"
+    } else {
+        ""
+    };
+    Err(NeuralError::Config(format!(
+        "a network reads role-planes or paper-screen, not {kind}{hint}"
+    )))
 }
 
 /// How observations of one world are laid out for one network.
@@ -93,7 +70,8 @@ pub struct InputSpec {
 impl InputSpec {
     /// The layout; an error for centred pixels.
     pub fn new(kind: ObsKind, centred: bool, grid: Grid, blocks: usize) -> Result<InputSpec> {
-        if centred && kind == ObsKind::Pixels {
+        check_network_obs(kind)?;
+        if centred && kind == ObsKind::PaperScreen {
             return Err(NeuralError::Config("only planes can be centred".into()));
         }
         Ok(InputSpec {
@@ -108,9 +86,10 @@ impl InputSpec {
     pub fn shape(&self) -> (usize, usize, usize) {
         let (w, h, n) = (self.grid.width(), self.grid.height(), self.blocks);
         match (self.kind, self.centred) {
-            (ObsKind::Pixels, _) => (PIXELS_SIDE, PIXELS_SIDE, 3),
-            (ObsKind::Planes, false) => (w, h, n + 1),
-            (ObsKind::Planes, true) => (2 * w - 1, 2 * h - 1, n + 2),
+            (ObsKind::PaperScreen, _) => (PIXELS_SIDE, PIXELS_SIDE, 3),
+            // Role planes: `InputSpec::new` admits no other kind.
+            (_, false) => (w, h, n + 1),
+            (_, true) => (2 * w - 1, 2 * h - 1, n + 2),
         }
     }
 
@@ -128,8 +107,8 @@ impl InputSpec {
     /// The factor that turns a byte into the network's float.
     pub fn scale(&self) -> f32 {
         match self.kind {
-            ObsKind::Pixels => 1.0 / 255.0,
-            ObsKind::Planes => 1.0,
+            ObsKind::PaperScreen => 1.0 / 255.0,
+            _ => 1.0,
         }
     }
 
@@ -150,9 +129,10 @@ impl InputSpec {
     /// Appends the input of `obs` (of this layout's world) to `out`.
     pub fn encode(&self, obs: &Observation, out: &mut Vec<u8>) {
         match (self.kind, self.centred) {
-            (ObsKind::Pixels, _) => out.extend_from_slice(&obs.pixels().data),
-            (ObsKind::Planes, false) => out.extend_from_slice(&obs.role_planes().data),
-            (ObsKind::Planes, true) => self.encode_centred(obs, out),
+            (ObsKind::PaperScreen, _) => out.extend_from_slice(&obs.pixels().data),
+            // Role planes: `InputSpec::new` admits no other kind.
+            (_, false) => out.extend_from_slice(&obs.role_planes().data),
+            (_, true) => self.encode_centred(obs, out),
         }
     }
 
@@ -179,7 +159,7 @@ impl InputSpec {
 
     /// Whether Pick columns name goal places (planes) rather than block ids (pixels).
     fn by_place(&self) -> bool {
-        self.kind == ObsKind::Planes
+        self.kind == ObsKind::RolePlanes
     }
 
     /// The output column of `action` under `goal` (module docs).
@@ -239,7 +219,7 @@ mod tests {
 
     #[test]
     fn centred_planes_are_the_same_for_shifted_states_but_for_the_walls() {
-        let spec = InputSpec::new(ObsKind::Planes, true, Grid::default(), 3).unwrap();
+        let spec = InputSpec::new(ObsKind::RolePlanes, true, Grid::default(), 3).unwrap();
         assert_eq!(spec.shape(), (13, 13, 5));
         let a = obs([Cell::new(1, 2), Cell::new(3, 3), Cell::new(1, 1)], Some(0));
         let b = obs([Cell::new(2, 3), Cell::new(4, 4), Cell::new(2, 2)], Some(0));
@@ -258,8 +238,8 @@ mod tests {
 
     #[test]
     fn pick_columns_name_goal_places_on_planes_and_blocks_on_pixels() {
-        let planes = InputSpec::new(ObsKind::Planes, true, Grid::default(), 3).unwrap();
-        let pixels = InputSpec::new(ObsKind::Pixels, false, Grid::default(), 3).unwrap();
+        let planes = InputSpec::new(ObsKind::RolePlanes, true, Grid::default(), 3).unwrap();
+        let pixels = InputSpec::new(ObsKind::PaperScreen, false, Grid::default(), 3).unwrap();
         let o = obs([Cell::new(1, 2), Cell::new(3, 3), Cell::new(1, 1)], Some(2));
         // Goal 2,0,1: block 2 at place 0, block 0 at place 1, block 1 at place 2.
         for (block, place) in [(2u8, 0usize), (0, 1), (1, 2)] {
@@ -278,8 +258,8 @@ mod tests {
 
     #[test]
     fn pixels_cannot_be_centred_and_batches_scale_to_unit_floats() {
-        assert!(InputSpec::new(ObsKind::Pixels, true, Grid::default(), 3).is_err());
-        let spec = InputSpec::new(ObsKind::Pixels, false, Grid::default(), 3).unwrap();
+        assert!(InputSpec::new(ObsKind::PaperScreen, true, Grid::default(), 3).is_err());
+        let spec = InputSpec::new(ObsKind::PaperScreen, false, Grid::default(), 3).unwrap();
         let o = obs([Cell::new(1, 2), Cell::new(3, 3), Cell::new(1, 1)], None);
         let batch = spec.batch(&[&o, &o]);
         assert_eq!(batch.len(), 2 * 30_000);

@@ -15,6 +15,7 @@
 //!
 //! Everything runs on the CPU with candle; every random draw comes from the config's seed.
 
+pub mod any;
 pub mod config;
 pub mod demos;
 pub mod error;
@@ -27,6 +28,7 @@ pub mod optim;
 pub mod replay;
 pub mod train;
 
+pub use any::AnyModel;
 pub use config::{DemoSource, DqnConfig, Epsilon, LossKind, PRESETS, TargetEvery, TdLoss};
 pub use error::{NeuralError, Result};
 pub use input::ObsKind;

@@ -123,8 +123,8 @@ impl NetConfig {
     /// The observation this network reads.
     pub fn obs(&self) -> ObsKind {
         match self.kind {
-            NetKind::Paper => ObsKind::Pixels,
-            NetKind::Small | NetKind::Mlp => ObsKind::Planes,
+            NetKind::Paper => ObsKind::PaperScreen,
+            NetKind::Small | NetKind::Mlp => ObsKind::RolePlanes,
         }
     }
 
@@ -581,12 +581,12 @@ mod tests {
 
     #[test]
     fn networks_only_read_their_observation() {
-        assert!(NetConfig::paper().validate(ObsKind::Planes).is_err());
-        assert!(NetConfig::small().validate(ObsKind::Pixels).is_err());
+        assert!(NetConfig::paper().validate(ObsKind::RolePlanes).is_err());
+        assert!(NetConfig::small().validate(ObsKind::PaperScreen).is_err());
         let bad = NetConfig {
             batch_norm: true,
             ..NetConfig::small()
         };
-        assert!(bad.validate(ObsKind::Planes).is_err());
+        assert!(bad.validate(ObsKind::RolePlanes).is_err());
     }
 }

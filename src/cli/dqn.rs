@@ -20,7 +20,8 @@ pub struct DqnArgs {
     /// dqfd-planes (ours with DQfD: the recommended recipe). Default: from --obs and --loss.
     #[arg(long)]
     pub preset: Option<String>,
-    /// What the network sees: planes or pixels (default: the preset's, else planes).
+    /// What the network sees: role-planes or paper-screen (default: the preset's, else
+    /// role-planes). Earlier releases called them planes and pixels.
     #[arg(long)]
     pub obs: Option<ObsKind>,
     /// The network: paper (pixels), small (centred planes), mlp (absolute planes).
@@ -115,6 +116,9 @@ pub struct DqnArgs {
 impl DqnArgs {
     /// The training config these arguments describe.
     pub fn config(&self) -> Result<DqnConfig> {
+        if let Some(obs) = self.obs {
+            neural::input::check_network_obs(obs)?;
+        }
         let demos = match (&self.demos, &self.demos_file) {
             (_, Some(path)) => Some(DemoSource::File(path.display().to_string())),
             (Some(d), None) => Some(d.clone()),
@@ -134,11 +138,11 @@ impl DqnArgs {
                     Some(loss) => loss == LossKind::Dqfd,
                     None => demos.as_ref().is_some_and(|d| *d != DemoSource::None),
                 };
-                match (obs.unwrap_or(ObsKind::Planes), dqfd) {
-                    (ObsKind::Pixels, false) => "paper",
-                    (ObsKind::Pixels, true) => "paper-dqfd",
-                    (ObsKind::Planes, false) => "dqn-planes",
-                    (ObsKind::Planes, true) => "dqfd-planes",
+                match (obs.unwrap_or(ObsKind::RolePlanes), dqfd) {
+                    (ObsKind::PaperScreen, false) => "paper",
+                    (ObsKind::PaperScreen, true) => "paper-dqfd",
+                    (_, false) => "dqn-planes",
+                    (_, true) => "dqfd-planes",
                 }
                 .into()
             }
@@ -161,8 +165,8 @@ impl DqnArgs {
         } else if let Some(obs) = self.obs {
             if obs != c.obs() {
                 c.net = match obs {
-                    ObsKind::Pixels => neural::NetConfig::paper(),
-                    ObsKind::Planes => neural::NetConfig::small(),
+                    ObsKind::PaperScreen => neural::NetConfig::paper(),
+                    _ => neural::NetConfig::small(),
                 };
             }
         }

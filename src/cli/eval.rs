@@ -2,16 +2,15 @@
 
 use std::path::PathBuf;
 
-use agent::optimality::{self, Optimality};
-use agent::{EpisodeResult, Summary};
+use agent::Summary;
+use agent::eval::{EvalPlan, EvalReport};
+use agent::optimality::Optimality;
 use anyhow::Result;
 use clap::Args;
-use serde::Serialize;
-use sim::{Backend, Env, EnvConfig, Goal, GoalSpec, Termination};
+use neural::AnyModel;
+use sim::{Backend, EnvConfig};
 
-use super::model::Model;
-use super::profile::{PlayRulesArgs, ProfileArg};
-use super::run::RunReport;
+use super::profile::{PlayRulesArgs, ProfileArg, Rules};
 use super::solver_budget::SolverBudgetArg;
 use super::stdout::line;
 use super::train::parse_goals;
@@ -51,105 +50,53 @@ pub struct EvalArgs {
     pub budget: SolverBudgetArg,
 }
 
-/// One goal's figures.
-#[derive(Debug, Serialize)]
-struct GoalReport {
-    goal: String,
-    #[serde(flatten)]
-    summary: Summary,
-    #[serde(flatten)]
-    optimality: Optimality,
-    /// Mean steps over every episode, a failure counted as the horizon (as the paper's
-    /// figures seem to be: 847.7 = 0.7 x 1000 + 0.3 x 492).
-    mean_steps_failures_as_horizon: f64,
-}
-
-/// The machine-readable result: the fields of `run --json` (with
-/// `mean_steps_failures_as_horizon`), per-goal figures, no timings.
-#[derive(Debug, Serialize)]
-struct EvalReport {
-    #[serde(flatten)]
-    run: RunReport,
-    #[serde(flatten)]
-    optimality: Optimality,
-    model: String,
-    epsilon: f64,
-    per_goal: Vec<GoalReport>,
-}
-
-/// Evaluates the model and prints the figures.
+/// Evaluates the model ([`neural::AnyModel::evaluate_with`], the library's one evaluation)
+/// and prints the figures.
 pub fn eval(args: EvalArgs) -> Result<()> {
-    let model = Model::load(&args.model)?;
+    let model = AnyModel::load(&args.model)?;
     let goals = parse_goals(args.goals.as_deref(), model.blocks())?;
     let backend: Backend = args.backend.parse()?;
     // The model's own world (protocol, start rule) unless the command line says otherwise;
     // the reward only sums up in trajectories, so it is the model's training reward.
-    let rules = model.rules().played(args.profile, args.play, None)?;
+    let rules = Rules::of_model(&model).played(args.profile, args.play, None)?;
     let reward = match (args.profile.profile, model.training_reward()) {
         (None, Some(r)) => r,
         _ => rules.reward,
     };
-    let (mut all, mut all_optimal): (Vec<EpisodeResult>, Vec<u32>) = (Vec::new(), Vec::new());
-    let mut per_goal = Vec::new();
-    let mut config = None;
-    let solver = args.budget.solver(model.grid()).with_protocol(rules.protocol);
-    // Each episode counts twice: played, then solved exactly.
-    let bar = super::progress::bar(2 * args.episodes * goals.len() as u64, "episodes played and solved");
-    for goal in &goals {
-        bar.set_message(format!("goal {goal}"));
-        let goal_config = EnvConfig {
+    let plan = EvalPlan {
+        world: EnvConfig {
             grid: model.grid(),
             blocks: model.blocks(),
-            goal: GoalSpec::Fixed(*goal),
             horizon: args.horizon,
             reward,
             backend,
             protocol: rules.protocol,
             start: rules.start,
-            termination: Termination::Goal,
-            obs: sim::ObsKind::default(),
-        };
-        let mut env = Env::new(goal_config)?;
-        config = Some(goal_config);
-        let mut policy = model.policy(args.epsilon)?;
-        let results =
-            agent::rollout::play_observed(&mut env, policy.as_mut(), args.episodes, args.seed, None, &mut |_| {
-                bar.inc(1)
-            })?;
-        let optimal = results
-            .iter()
-            .map(|r| {
-                let optimum = optimality::optimal_steps_by(&solver, std::slice::from_ref(r));
-                bar.inc(1);
-                optimum.map(|o| o[0])
-            })
-            .collect::<agent::Result<Vec<u32>>>()
-            .map_err(|e| args.budget.explain(e))?;
-        per_goal.push(GoalReport {
-            goal: goal.to_string(),
-            summary: Summary::of(&results),
-            optimality: Optimality::of(&results, &optimal),
-            mean_steps_failures_as_horizon: optimality::mean_steps_failures_as_horizon(&results, args.horizon),
-        });
-        all.extend(results);
-        all_optimal.extend(optimal);
-    }
-    bar.finish_and_clear();
-    let config = config.expect("at least one goal");
-    let report = EvalReport {
-        run: RunReport::new(
-            model.name(),
-            &config,
-            &rules,
-            Some(goals.iter().map(Goal::to_string).collect::<Vec<_>>().join(":")),
-            args.seed,
-            &all,
-        ),
-        optimality: Optimality::of(&all, &all_optimal),
-        model: args.model.display().to_string(),
-        epsilon: args.epsilon,
-        per_goal,
+            ..EnvConfig::default()
+        },
+        profile: rules.profile,
+        goals,
+        episodes: args.episodes,
+        seed: args.seed,
     };
+    plan.world.validate()?;
+    let solver = args.budget.solver(model.grid()).with_protocol(rules.protocol);
+    // Each episode counts twice: played, then solved exactly.
+    let bar = super::progress::bar(
+        2 * args.episodes * plan.goals.len() as u64,
+        "episodes played and solved",
+    );
+    let evaluation = model
+        .evaluate_with(
+            &plan,
+            &args.model.display().to_string(),
+            args.epsilon,
+            &solver,
+            &mut || bar.inc(1),
+        )
+        .map_err(|e| args.budget.explain(e))?;
+    bar.finish_and_clear();
+    let report = evaluation.report;
     if args.json {
         line(serde_json::to_string(&report)?)
     } else {

@@ -12,7 +12,6 @@ mod demo;
 mod dqn;
 mod eval;
 mod learn_from_demos;
-mod model;
 mod profile;
 mod progress;
 mod render;

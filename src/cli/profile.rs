@@ -67,17 +67,23 @@ impl Rules {
         }
     }
 
-    /// The rules of a model's training world (its protocol and start rule, and its
-    /// profile's reward for the world), or the `spec` profile's for a model that does not
-    /// say.
-    pub fn of_model(model: &agent::QAgent) -> Rules {
-        match model.training() {
-            Some(t) => Rules {
-                protocol: t.world.protocol,
-                start: t.world.start,
-                ..Rules::of(t.profile)
+    /// The rules of a model's training world: a tabular model's protocol and start rule
+    /// with its profile's reward ([`Rules::of`] the `spec` profile for a model that does not
+    /// say); a network's protocol and reward in the `spec` profile's world (`blockstack dqn`
+    /// trains there, from uniform starts).
+    pub fn of_model(model: &neural::AnyModel) -> Rules {
+        let world = model.world();
+        match model {
+            neural::AnyModel::Q(_) => Rules {
+                protocol: world.protocol,
+                start: world.start,
+                ..Rules::of(model.profile())
             },
-            None => Rules::of(Profile::Spec),
+            neural::AnyModel::Dqn(_) => Rules {
+                protocol: world.protocol,
+                reward: world.reward,
+                ..Rules::of(Profile::Spec)
+            },
         }
     }
 

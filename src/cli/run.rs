@@ -5,18 +5,16 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use files::OutputPath;
-use serde::Serialize;
 use sim::trajectory::TrajectoryWriter;
 use sim::{Env, GoalSpec};
 
-use agent::optimality::mean_steps_failures_as_horizon;
-use agent::{ExactPolicy, LearnerProfile, OracleKind, OraclePolicy, PaperOraclePolicy, Policy, RandomPolicy, Summary};
-
-use super::model::Model;
 use super::profile::{PlayRulesArgs, ProfileArg, Rules};
 use super::solver_budget::SolverBudgetArg;
 use super::stdout::line;
 use super::world::WorldArgs;
+use agent::eval::RunReport;
+use agent::{ExactPolicy, LearnerProfile, OracleKind, OraclePolicy, PaperOraclePolicy, Policy, RandomPolicy};
+use neural::AnyModel;
 
 /// Which agent plays.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -73,55 +71,6 @@ pub struct RunArgs {
     pub budget: SolverBudgetArg,
 }
 
-/// The machine-readable result of a run: no timings, so two runs compare equal. `eval
-/// --json` holds the same fields and more.
-#[derive(Debug, Serialize)]
-pub(super) struct RunReport {
-    pub agent: String,
-    pub blocks: usize,
-    pub goal: Option<String>,
-    pub grid: String,
-    pub horizon: u32,
-    pub backend: String,
-    pub seed: u64,
-    pub profile: String,
-    pub protocol: String,
-    pub start: String,
-    #[serde(flatten)]
-    pub summary: Summary,
-    /// Mean steps over every episode, a failure counted as the horizon (how the paper's
-    /// figures read: 847.7 = 0.7 x 1000 + 0.3 x 492).
-    pub mean_steps_failures_as_horizon: f64,
-}
-
-impl RunReport {
-    /// The report of `results`, played by `agent` in the world of `config` under `rules`
-    /// with base seed `seed`; `goal` names the goals played (`None`: drawn per episode).
-    pub fn new(
-        agent: String,
-        config: &sim::EnvConfig,
-        rules: &Rules,
-        goal: Option<String>,
-        seed: u64,
-        results: &[agent::EpisodeResult],
-    ) -> RunReport {
-        RunReport {
-            agent,
-            blocks: config.blocks,
-            goal,
-            grid: config.grid.to_string(),
-            horizon: config.horizon,
-            backend: config.backend.to_string(),
-            seed,
-            profile: rules.profile.to_string(),
-            protocol: config.protocol.to_string(),
-            start: config.start.to_string(),
-            summary: Summary::of(results),
-            mean_steps_failures_as_horizon: mean_steps_failures_as_horizon(results, config.horizon),
-        }
-    }
-}
-
 /// Refuses, naming the flag, a flag given for an agent that does not use it (it would be
 /// ignored, and the run would not be what was asked).
 fn check_agent_flags(args: &RunArgs) -> Result<()> {
@@ -166,9 +115,9 @@ pub fn run(args: RunArgs) -> Result<()> {
     }
     let model = match (args.agent, &args.model) {
         (AgentKind::Q | AgentKind::Dqn, Some(path)) => {
-            let model = Model::load(path)?;
+            let model = AnyModel::load(path)?;
             match (args.agent, &model) {
-                (AgentKind::Q, Model::Q(_)) | (AgentKind::Dqn, Model::Dqn(_)) => {}
+                (AgentKind::Q, AnyModel::Q(_)) | (AgentKind::Dqn, AnyModel::Dqn(_)) => {}
                 _ => anyhow::bail!(
                     "{} holds a {} model, not what --agent {} plays",
                     path.display(),
@@ -181,7 +130,7 @@ pub fn run(args: RunArgs) -> Result<()> {
         _ => None,
     };
     // A model's own world unless the command line says otherwise.
-    let base = model.as_ref().map_or(Rules::of(sim::Profile::Spec), Model::rules);
+    let base = model.as_ref().map_or(Rules::of(sim::Profile::Spec), Rules::of_model);
     let rules = base.played(args.profile, args.play, args.world.reward.as_deref())?;
     let config = args.world.config(&rules)?;
     if let Some(m) = &model {
@@ -218,7 +167,8 @@ pub fn run(args: RunArgs) -> Result<()> {
         GoalSpec::Fixed(g) => Some(g.to_string()),
         GoalSpec::Random => None,
     };
-    let report = RunReport::new(policy.name(), &config, &rules, goal, args.seed, &results);
+    // No timings, so two runs compare equal; `eval --json` holds the same fields and more.
+    let report = RunReport::new(policy.name(), &config, rules.profile, goal, args.seed, &results);
     if args.json {
         line(serde_json::to_string(&report)?)
     } else {

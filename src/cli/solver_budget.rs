@@ -43,6 +43,11 @@ impl SolverBudgetArg {
                 c.downcast_ref::<oracle::OracleError>(),
                 Some(oracle::OracleError::BudgetExceeded { .. })
             ) || matches!(
+                c.downcast_ref::<neural::NeuralError>(),
+                Some(neural::NeuralError::Agent(agent::AgentError::Oracle(
+                    oracle::OracleError::BudgetExceeded { .. }
+                )))
+            ) || matches!(
                 c.downcast_ref::<agent::AgentError>(),
                 Some(agent::AgentError::Oracle(oracle::OracleError::BudgetExceeded { .. }))
             )

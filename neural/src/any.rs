@@ -1,0 +1,147 @@
+//! A model file of either kind, loaded and played through one type.
+//!
+//! `blockstack train` writes tabular Q-agents ([`agent::QAgent`]), `blockstack dqn` writes
+//! networks ([`Dqn`]); both are safetensors containers whose header names their format.
+//! [`AnyModel::load`] reads the header and the file with the reader of its kind, so that
+//! `blockstack eval`, `blockstack run --model`, Python's `blockstack.load` and the
+//! experiments all load, describe and play a model the same way. It lives in `neural`
+//! because `neural` is the lowest crate that knows both kinds.
+
+use std::path::Path;
+
+use agent::eval::{EvalPlan, Evaluation};
+use agent::{Policy, QAgent};
+use oracle::ExactSolver;
+use sim::{EnvConfig, GoalSpec, Grid, Profile, RewardModel};
+
+use crate::error::Result;
+use crate::model::{Dqn, FORMAT, MAX_NETWORK_BYTES};
+
+/// A trained agent read from a model file.
+pub enum AnyModel {
+    /// A tabular Q-agent (`blockstack train`).
+    Q(Box<QAgent>),
+    /// A network (`blockstack dqn`).
+    Dqn(Box<Dqn>),
+}
+
+impl AnyModel {
+    /// Reads the model file at `path`, whichever kind it is: the container names its format
+    /// in its header; anything that is not a network file is read as a tabular model (whose
+    /// reader says what is wrong with a file that is neither).
+    pub fn load(path: &Path) -> Result<AnyModel> {
+        match files::container::format_of(path, MAX_NETWORK_BYTES) {
+            Some(format) if format == FORMAT => Ok(AnyModel::Dqn(Box::new(Dqn::load(path)?))),
+            _ => Ok(AnyModel::Q(Box::new(QAgent::load(path)?))),
+        }
+    }
+
+    /// The grid it plays on.
+    pub fn grid(&self) -> Grid {
+        match self {
+            AnyModel::Q(q) => q.grid(),
+            AnyModel::Dqn(d) => d.grid(),
+        }
+    }
+
+    /// The number of blocks it plays with.
+    pub fn blocks(&self) -> usize {
+        match self {
+            AnyModel::Q(q) => q.blocks(),
+            AnyModel::Dqn(d) => d.blocks(),
+        }
+    }
+
+    /// Its name in reports.
+    pub fn name(&self) -> String {
+        match self {
+            AnyModel::Q(q) => q.name(),
+            AnyModel::Dqn(d) => d.name(),
+        }
+    }
+
+    /// The reward it was trained with, when the file says.
+    pub fn training_reward(&self) -> Option<RewardModel> {
+        match self {
+            AnyModel::Q(q) => q.training().map(|t| t.world.reward),
+            AnyModel::Dqn(d) => Some(d.config().reward),
+        }
+    }
+
+    /// The profile its world's rules came from: a tabular model's training profile (`spec`
+    /// when the file does not say); `spec` for a network (`blockstack dqn` trains there).
+    pub fn profile(&self) -> Profile {
+        match self {
+            AnyModel::Q(q) => q.training().map_or(Profile::Spec, |t| t.profile),
+            AnyModel::Dqn(_) => Profile::Spec,
+        }
+    }
+
+    /// The world it was trained in, as games are played in to test it: its grid, blocks,
+    /// reward, backend, action protocol and start rule, games ending at the goal after at
+    /// most 1000 steps (the paper's tests), the goal drawn. A tabular model whose file does
+    /// not say plays in its profile's world.
+    pub fn world(&self) -> EnvConfig {
+        let trained = match self {
+            AnyModel::Q(q) => q
+                .training()
+                .map_or_else(|| EnvConfig::for_profile(Profile::Spec), |t| t.world),
+            AnyModel::Dqn(d) => d.config().world(),
+        };
+        EnvConfig {
+            grid: self.grid(),
+            blocks: self.blocks(),
+            goal: GoalSpec::Random,
+            horizon: sim::DEFAULT_HORIZON,
+            termination: sim::Termination::Goal,
+            ..trained
+        }
+    }
+
+    /// An error unless a world of `blocks` blocks on `grid` is the model's.
+    pub fn check_world(&self, grid: Grid, blocks: usize) -> Result<()> {
+        match self {
+            AnyModel::Q(q) => q.check_world(grid, blocks)?,
+            AnyModel::Dqn(d) => d.check_world(grid, blocks)?,
+        }
+        Ok(())
+    }
+
+    /// The model playing with a random legal action with probability `epsilon`.
+    pub fn policy(&self, epsilon: f64) -> Result<Box<dyn Policy + '_>> {
+        Ok(match self {
+            AnyModel::Q(q) => Box::new(q.policy(epsilon)?),
+            AnyModel::Dqn(d) => Box::new(d.policy(epsilon)?),
+        })
+    }
+
+    /// Evaluates the model on `plan` ([`agent::eval::evaluate`]) with the exact solver under
+    /// the plan's protocol, `model` naming where it came from; `tick` after every episode
+    /// played and every start solved.
+    pub fn evaluate(&self, plan: &EvalPlan, model: &str, epsilon: f64, tick: &mut dyn FnMut()) -> Result<Evaluation> {
+        self.check_world(plan.world.grid, plan.world.blocks)?;
+        let solver = ExactSolver::new(plan.world.grid).with_protocol(plan.world.protocol);
+        self.evaluate_with(plan, model, epsilon, &solver, tick)
+    }
+
+    /// [`AnyModel::evaluate`] with a solver of the caller's (a node budget of its own).
+    pub fn evaluate_with(
+        &self,
+        plan: &EvalPlan,
+        model: &str,
+        epsilon: f64,
+        solver: &ExactSolver,
+        tick: &mut dyn FnMut(),
+    ) -> Result<Evaluation> {
+        self.check_world(plan.world.grid, plan.world.blocks)?;
+        Ok(agent::eval::evaluate(
+            plan,
+            self.name(),
+            model.to_string(),
+            epsilon,
+            solver,
+            &mut || Ok(self.policy(epsilon)?),
+            tick,
+        )?)
+    }
+}
