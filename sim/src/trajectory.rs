@@ -97,11 +97,7 @@ impl Outcomes {
             .filter(|m| same_reward(reward, m.reward(t)))
             .collect();
         if fits.is_empty() {
-            let given: Vec<String> = self
-                .rewards
-                .iter()
-                .map(|m| format!("{m} {}", m.reward(t)))
-                .collect();
+            let given: Vec<String> = self.rewards.iter().map(|m| format!("{m} {}", m.reward(t))).collect();
             return Err(format!(
                 "the reward {reward} is not what {} for this step ({}): an invented reward?",
                 if self.rewards.len() == RewardModel::NAMES.len() {
@@ -126,7 +122,11 @@ impl Outcomes {
                 if self.terminations.len() == 2 {
                     format!(
                         " and its reward is {}above {}",
-                        if reward > Termination::PAPER_TRAINING_THRESHOLD { "" } else { "not " },
+                        if reward > Termination::PAPER_TRAINING_THRESHOLD {
+                            ""
+                        } else {
+                            "not "
+                        },
                         Termination::PAPER_TRAINING_THRESHOLD
                     )
                 } else {
@@ -439,7 +439,7 @@ impl<R: BufRead> TrajectoryReader<R> {
         let previous_action = open.steps.last().map(|s| s.action);
         let action = Action::from_index(action, goal.block_count()).map_err(|e| self.error(e.to_string()))?;
         let state = self.state(&blocks, held, grid, &goal)?;
-        let (open, world) = self.current.as_mut().expect("an open episode");
+        let (_, world) = self.current.as_mut().expect("an open episode");
         let before = world.state();
         world.act(action).expect("an action of the world's blocks");
         if world.state() != state {
@@ -606,7 +606,10 @@ mod tests {
             .chain([after.to_string() + "\n"])
             .collect();
         let err = refused(&broken);
-        assert!(err.contains(&format!(":{}:", last + 2)) && err.contains("ended"), "{err}");
+        assert!(
+            err.contains(&format!(":{}:", last + 2)) && err.contains("ended"),
+            "{err}"
+        );
     }
 
     #[test]
