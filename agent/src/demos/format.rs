@@ -382,7 +382,12 @@ pub enum DemoFile {
 pub fn open(path: &Path) -> Result<DemoFile> {
     refuse_model_file(path)?;
     let file = files::open_bounded(path, MAX_RECORDING_BYTES, "a recording")?;
-    let mut input = std::io::BufReader::new(file);
+    read(Box::new(std::io::BufReader::new(file)), path)
+}
+
+/// The demonstrations read from `input` (named `path` in errors), told by the first line
+/// as [`open`] tells them.
+pub fn read(mut input: Box<dyn BufRead + Send>, path: &Path) -> Result<DemoFile> {
     let mut first = Vec::new();
     read_bounded_line(&mut input, &mut first).map_err(|e| demos_error(path, &format!("cannot read: {e}")))?;
     let trajectory = std::str::from_utf8(&first)
