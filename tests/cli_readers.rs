@@ -45,6 +45,8 @@ fn a_step_after_a_terminated_step_is_refused_in_one_line() {
     let end = lines.iter().position(|l| l.contains("\"terminated\":true")).unwrap();
     let mut after: serde_json::Value = serde_json::from_str(lines[end]).unwrap();
     after["step"] = (after["step"].as_u64().unwrap() + 1).into();
+    // Picking the held block again: the rules allow it and change nothing.
+    after["action"] = 7.into();
     let broken = dir.join("t.jsonl");
     let body: String = lines[..=end].iter().map(|l| format!("{l}\n")).collect();
     std::fs::write(&broken, body + &after.to_string() + "\n").unwrap();

@@ -225,6 +225,8 @@ mod tests {
         let last = lines.iter().position(|l| l.contains("\"terminated\":true")).unwrap();
         let mut after: serde_json::Value = serde_json::from_str(lines[last]).unwrap();
         after["step"] = (after["step"].as_u64().unwrap() + 1).into();
+        // Picking the held block again: the rules allow it and change nothing.
+        after["action"] = 7.into();
         let broken: String = lines[..=last]
             .iter()
             .map(|l| format!("{l}\n"))

@@ -71,6 +71,7 @@ def test_steps_after_a_terminated_step_are_refused(tmp_path):
     end = next(i for i, r in enumerate(rows) if '"terminated":true' in r)
     after = json.loads(rows[end])
     after["step"] += 1
+    after["action"] = 7  # picking the held block again: allowed, and changes nothing
     refused(write(tmp_path / "t.jsonl", rows[:end + 1] + [after]), f"line {end + 2}")
 
 
@@ -168,7 +169,7 @@ BAD_INPUTS = [
     json.dumps(dict(EPISODE, horizon=0)) + "\n",
     json.dumps(EPISODE) + "\n" + json.dumps(dict(PICK0, action=2 ** 64)) + "\n",
     json.dumps(EPISODE) + "\n" + json.dumps(dict(PICK0, held=255)) + "\n",
-    json.dumps(EPISODE) + "\n" + json.dumps(dict(PICK0, reward=float("nan")).replace("NaN", "1e999")) + "\n",
+    json.dumps(EPISODE) + "\n" + json.dumps(dict(PICK0, reward=float("nan"))).replace("NaN", "1e999") + "\n",
     '{"type":"session","format":"blockstack-demos","version":2,"grid":[7,7],"blocks":300,"rule":{"margin":null,"learn_agent_steps":true},"demonstrator":"x","model":null,"model_id":"0"}\n',
 ]
 
