@@ -1,5 +1,5 @@
 //! The demonstrated episodes of a file of either kind, a `blockstack-demos` recording or a
-//! trajectory file, read by the one checked reader of each ([`Replay`] and
+//! trajectory file, read by the one checked reader of each ([`Replay`](super::Replay) and
 //! `sim::trajectory::TrajectoryReader`). What `neural`'s `--demos-file` and the Python
 //! package's `read_recording` learn from, so that both refuse the same files with the same
 //! message.

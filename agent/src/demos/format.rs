@@ -372,7 +372,7 @@ pub enum DemoFile {
     /// A `blockstack-demos` recording, to replay ([`crate::demos::Replay`]).
     Recording(Box<dyn BufRead + Send>),
     /// A trajectory file (`blockstack run --trajectory`), read by `sim`'s checked reader.
-    Trajectory(TrajectoryReader<Box<dyn BufRead + Send>>),
+    Trajectory(Box<TrajectoryReader<Box<dyn BufRead + Send>>>),
 }
 
 /// Opens the demonstrations at `path` through [`MAX_RECORDING_BYTES`]: a trajectory file
@@ -396,7 +396,7 @@ pub fn read(mut input: Box<dyn BufRead + Send>, path: &Path) -> Result<DemoFile>
         .is_some_and(|r| matches!(r, Record::Episode { .. }));
     let whole: Box<dyn BufRead + Send> = Box::new(Cursor::new(first).chain(input));
     Ok(if trajectory {
-        DemoFile::Trajectory(TrajectoryReader::new(whole, &path.display().to_string()))
+        DemoFile::Trajectory(Box::new(TrajectoryReader::new(whole, &path.display().to_string())))
     } else {
         DemoFile::Recording(whole)
     })
