@@ -8,9 +8,11 @@
 //! reading it again must give it back.
 
 use std::io::BufReader;
+use std::path::Path;
 
-use agent::demos::{BadLines, Replay};
-use agent::{QAgent, QParams, ReprKind, Representation};
+use agent::demos::format::{RawLine, RecordingLines};
+use agent::demos::{DemoRecord, episodes_of};
+use agent::{QAgent, Representation};
 use sim::trajectory::TrajectoryReader;
 use sim::{Action, Goal, Grid, State};
 
@@ -23,23 +25,49 @@ pub fn model_file(data: &[u8]) {
     }
 }
 
-/// The recording reader ([`Replay`]), into a fresh 3-block agent of the paper's
-/// representation on the default grid (the world of the kept recordings), under both
-/// bad-line policies.
+/// The recording format's reader (`agent::demos::format`), with no learner: every line
+/// it reads that parses as a record writes back to the same record; and the checked reader
+/// of demonstrations files.
 pub fn recording(data: &[u8]) {
-    for policy in [BadLines::Skip, BadLines::Fail] {
-        let mut agent = QAgent::new(ReprKind::Chasing, Grid::default(), 3, QParams::default())
-            .expect("the paper's agent on the default grid");
-        let mut replay = Replay::new(&mut agent, policy, "fuzz input");
-        let _ = replay.read(data);
+    let mut lines = RecordingLines::new(data);
+    while let Ok(Some(line)) = lines.next_line() {
+        if let RawLine::Text(text) = line {
+            if let Ok(record) = serde_json::from_str::<DemoRecord>(text.trim()) {
+                let again = serde_json::to_string(&record).expect("records serialise");
+                assert_eq!(serde_json::from_str::<DemoRecord>(&again).ok(), Some(record));
+            }
+        }
+    }
+    demonstrations(data);
+}
+
+/// The checked reader of demonstrations files (`agent::demos::episodes_of`, what `dqn
+/// --demos-file` and Python's `read_recording` run) on `data`: the episodes it gives replay
+/// by the rules from their start.
+fn demonstrations(data: &[u8]) {
+    let name = Path::new("fuzz input");
+    let Ok(file) = agent::demos::format::read(Box::new(std::io::Cursor::new(data.to_vec())), name) else {
+        return;
+    };
+    if let Ok(episodes) = episodes_of(file, name, None) {
+        for e in episodes {
+            let actions: Vec<Action> = e.steps.iter().map(|s| s.action).collect();
+            let states = sim::GridWorld::new(e.grid, e.start)
+                .expect("a checked start")
+                .replay(&actions)
+                .expect("checked actions");
+            assert_eq!(states, e.states());
+        }
     }
 }
 
-/// The trajectory reader ([`TrajectoryReader`]): episodes it hands out keep their horizon.
+/// The trajectory reader ([`TrajectoryReader`]), which `dqn --demos-file` and Python's
+/// `read_recording` run: episodes it hands out keep their horizon.
 pub fn trajectory(data: &[u8]) {
     for episode in TrajectoryReader::new(BufReader::new(data), "fuzz input").map_while(Result::ok) {
         assert!(episode.steps.len() <= episode.horizon as usize);
     }
+    demonstrations(data);
 }
 
 /// The command line's parsers of grids (`--grid`), goals (`--goal`, `--goals`), states

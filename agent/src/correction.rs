@@ -62,10 +62,8 @@ use crate::demos::{DemoRecord, DemoSink, EpisodeLine, SessionLine, StepLine};
 use crate::error::{AgentError, Result};
 use crate::qlearning::{QAgent, check_epsilon};
 use crate::rollout::policy_rng;
+pub use crate::rule::{CorrectionRule, DEFAULT_MARGIN, Experience};
 use crate::schedule::Schedule;
-
-/// The default margin by which a demonstrator's action is made to beat every other.
-pub const DEFAULT_MARGIN: f64 = 0.8;
 
 /// The goals the authors' people demonstrated on (ORIGINAL.md, "Demonstrations"); the
 /// other two, `0,2,1` and `2,0,1`, were never demonstrated.
@@ -79,46 +77,7 @@ pub fn demonstrated_goals() -> Vec<Goal> {
         .collect()
 }
 
-/// How an agent learns from a demonstration session (module docs: the rule).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct CorrectionRule {
-    /// After a correction, `Q(s, a_E)` is raised to at least `max_{a != a_E} Q(s, a) +
-    /// margin`; finite and at least 0. `None` (written `null`): no margin, the plain
-    /// update alone, as the authors coded it.
-    pub margin: Option<f64>,
-    /// Whether the agent's own (uncorrected) steps get the Q-update too.
-    pub learn_agent_steps: bool,
-}
-
-impl Default for CorrectionRule {
-    /// Margin 0.8, learning from every step.
-    fn default() -> Self {
-        CorrectionRule {
-            margin: Some(DEFAULT_MARGIN),
-            learn_agent_steps: true,
-        }
-    }
-}
-
 impl CorrectionRule {
-    /// The rule of the authors' code: no margin, learning from every step.
-    pub const fn as_coded() -> Self {
-        CorrectionRule {
-            margin: None,
-            learn_agent_steps: true,
-        }
-    }
-
-    /// The rule of `profile`: ours (margin 0.8) under `spec`, [`CorrectionRule::as_coded`]
-    /// under `original`.
-    pub fn for_profile(profile: Profile) -> Self {
-        match profile {
-            Profile::Spec => CorrectionRule::default(),
-            Profile::Original => CorrectionRule::as_coded(),
-        }
-    }
-
     /// An error unless the margin, if any, is at least 0 and fits the table's floats
     /// ([`crate::qlearning::check_fits_table`]).
     pub fn validate(&self) -> Result<()> {
@@ -140,6 +99,7 @@ impl CorrectionRule {
             next,
             terminated,
             corrected,
+            ..
         } = *step;
         if corrected || self.learn_agent_steps {
             agent.update(&obs, action, reward, &next, terminated)?;
@@ -149,24 +109,6 @@ impl CorrectionRule {
             _ => agent.q(&obs, action),
         }
     }
-}
-
-/// One executed step, as the rule learns from it.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Experience {
-    /// The state it was taken in.
-    pub obs: Observation,
-    /// The executed action.
-    pub action: Action,
-    /// The reward.
-    pub reward: f64,
-    /// The state it led to.
-    pub next: Observation,
-    /// The step ended the episode by its termination rule (the goal holds in `next`, or
-    /// under the authors' rule the reward was above 70).
-    pub terminated: bool,
-    /// A demonstrator chose `action`.
-    pub corrected: bool,
 }
 
 /// The large-margin step: raises `Q(obs, action)` to at least `max_{a != action} Q(obs, a) +
@@ -314,7 +256,9 @@ impl<S: DemoSink> CorrectionSession<S> {
             env_config(&agent, &world, *goal).validate()?;
         }
         sink.record(&DemoRecord::Session(SessionLine::new(
-            &agent,
+            agent.grid(),
+            agent.blocks(),
+            agent.identity(),
             rule,
             demonstrator,
             model,
@@ -425,6 +369,7 @@ impl<S: DemoSink> CorrectionSession<S> {
                 reward: step.reward,
                 next: step.observation,
                 terminated: step.terminated,
+                truncated: step.truncated,
                 corrected,
             },
         )?;
@@ -626,6 +571,7 @@ mod tests {
             reward: 5.0,
             next: step.observation,
             terminated: false,
+            truncated: false,
             corrected: false,
         };
         quiet.learn(&mut a, &pick).unwrap();
@@ -650,6 +596,7 @@ mod tests {
             reward: -1.0,
             next: o,
             terminated: false,
+            truncated: false,
             corrected: true,
         };
         let q = rule.learn(&mut a, &drop).unwrap();

@@ -39,6 +39,10 @@ pub enum AgentError {
     /// A file's destination or reading failed (names the file).
     #[error(transparent)]
     Files(#[from] files::FilesError),
+    /// A file of demonstrations whose episodes are of different worlds (grid or block
+    /// count), read by a learner that takes one.
+    #[error("the demonstrations mix worlds: {0}")]
+    MixedWorlds(String),
     /// A model used with a world (or for a purpose) it was not made for.
     #[error("the model does not fit: {0}")]
     ModelMismatch(String),

@@ -13,8 +13,9 @@
 //!   through a [`checkpoint`] ends as if it had not stopped.
 //! - [`optimality`]: steps taken against the exact solver's shortest plans; [`eval`]: a
 //!   policy evaluated on seeded starts, per goal and overall, as `blockstack eval` reports it.
-//! - [`correction`]: learning from a demonstrator's corrections, simulated [`demonstrator`]s,
-//!   and [`demos`] recordings and their replay.
+//! - [`correction`]: learning from a demonstrator's corrections, and simulated
+//!   [`demonstrator`]s; [`demos`]: recordings ([`demos::format`], needing no learner) and
+//!   their replay into one; [`rule`]: the data both share.
 //! - [`profile`]: the learner-level parts of `sim::Profile`: ours (`spec`), or the paper's
 //!   learner, oracle and corrections as its authors coded them (`original`).
 
@@ -37,6 +38,7 @@ pub mod qlearning;
 pub mod qtable;
 pub mod repr;
 pub mod rollout;
+pub mod rule;
 pub mod schedule;
 pub mod train;
 

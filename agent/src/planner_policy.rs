@@ -12,7 +12,7 @@
 
 use oracle::{CentroidWalker, ExactSolver, Oracle, Plan, Planner};
 use sim::seeding::SimRng;
-use sim::{Action, Goal, Grid, GridWorld, Observation, State, World};
+use sim::{Action, Goal, Grid, GridWorld, Observation, State};
 
 use crate::error::Result;
 use crate::policy::Policy;
@@ -38,12 +38,8 @@ impl PlanCursor {
 
     /// Follows `plan` from `obs`, returning its first action.
     fn follow(&mut self, obs: &Observation, plan: Plan) -> Result<Action> {
-        let mut world = GridWorld::new(obs.grid, obs.state)?;
-        let mut steps = Vec::with_capacity(plan.len());
-        for &action in &plan.actions {
-            steps.push((*world.state_ref(), action));
-            world.act(action)?;
-        }
+        let states = GridWorld::new(obs.grid, obs.state)?.replay(&plan.actions)?;
+        let mut steps: Vec<(State, Action)> = states.into_iter().zip(plan.actions).collect();
         steps.reverse();
         self.goal = Some(obs.goal);
         self.steps = steps;

@@ -19,8 +19,8 @@
 use sim::{Profile, RewardModel};
 
 use crate::assist::{OracleKind, Oscillation};
-use crate::correction::CorrectionRule;
 use crate::repr::ReprKind;
+use crate::rule::CorrectionRule;
 use crate::schedule::Schedule;
 
 /// The paper's test policy: a random (legal) action with probability 0.1, in both

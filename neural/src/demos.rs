@@ -4,32 +4,28 @@
 //! - **Planners.** Demonstration `k` plays goal `goals[k % len]` from the start
 //!   `reset(episode_seed(demo_seed(seed), k))` ([`demo_seed`]: starts no training game
 //!   shares) and follows the planner's plan, carried out by `sim`'s rules.
-//! - **Recordings.** A `blockstack-demos` file (what `blockstack demo` and `blockstack
-//!   correct` record) is read by `agent`'s reader, which checks every line; its corrections
-//!   are demonstrated actions (the large-margin loss applies to them), the agent's own steps
-//!   are transitions like any other. A trajectory file (`blockstack run --trajectory`) is
-//!   read with `sim::trajectory`'s records; every step is demonstrated, and replaying each
-//!   action by the rules must give the recorded state (a file that does not replay is
-//!   refused, naming the line).
+//! - **Files.** A `blockstack-demos` recording (what `blockstack demo` and `blockstack
+//!   correct` record) or a trajectory file (`blockstack run --trajectory`), read by
+//!   `agent::demos::read_episodes`, the checked reader of each format that the Python
+//!   package uses too (a file that does not replay by the rules is refused, naming the
+//!   line). A recording's corrections are demonstrated actions (the large-margin loss
+//!   applies to them), the agent's own steps transitions like any other; every step of a
+//!   trajectory file is demonstrated.
 //!
 //! Rewards are always recomputed with the learner's reward model (a recording made under
 //! another reward teaches the same actions), and an episode's transitions get their n-step
 //! returns from [`NStep`].
 
-use std::io::BufRead;
 use std::path::Path;
 
-use agent::correction::{CorrectionRule, Experience};
-use agent::demos::{BadLines, DemoLearner, Replay};
 use oracle::{ExactSolver, Oracle, Planner};
 use rayon::prelude::*;
 use sim::reward::Transition as RewardTransition;
 use sim::seeding::episode_seed;
-use sim::trajectory::Record;
-use sim::{Action, Cell, Env, Goal, Grid, GridWorld, Observation, State, World};
+use sim::{Action, Env, Goal, Grid, GridWorld, Observation, State};
 
 use crate::config::{DemoSource, DqnConfig};
-use crate::error::{NeuralError, Result};
+use crate::error::Result;
 use crate::replay::{NStep, Transition};
 
 /// One demonstrated episode: the states it passed through and the actions between them.
@@ -114,12 +110,7 @@ pub fn planned<P: Planner + Sync>(config: &DqnConfig, count: u64, planner: &P) -
         .par_iter()
         .map(|&(start, goal)| {
             let plan = planner.plan(&start, &goal)?;
-            let mut world = GridWorld::new(config.grid, start)?;
-            let mut states = vec![start];
-            for &a in &plan.actions {
-                world.act(a)?;
-                states.push(*world.state_ref());
-            }
+            let states = GridWorld::new(config.grid, start)?.replay(&plan.actions)?;
             Ok(DemoEpisode {
                 goal,
                 states,
@@ -131,174 +122,28 @@ pub fn planned<P: Planner + Sync>(config: &DqnConfig, count: u64, planner: &P) -
 }
 
 /// The demonstrations in the file at `path`, a `blockstack-demos` recording or a trajectory
-/// file (told apart by the first line), for `blocks` blocks on `grid`.
+/// file, for `blocks` blocks on `grid` (module docs).
 pub fn read(path: &Path, grid: Grid, blocks: usize) -> Result<Vec<DemoEpisode>> {
-    let fail = |reason: String| NeuralError::Demos {
-        path: path.display().to_string(),
-        reason,
-    };
-    let open = || -> Result<_> {
-        let file = files::open_bounded(path, agent::demos::MAX_RECORDING_BYTES, "a recording")
-            .map_err(|e| fail(e.to_string()))?;
-        Ok(std::io::BufReader::new(file))
-    };
-    let mut first = String::new();
-    open()?.read_line(&mut first).map_err(|e| fail(e.to_string()))?;
-    let value: serde_json::Value = serde_json::from_str(first.trim())
-        .map_err(|e| fail(format!("line 1 is not JSON ({e}): is this a recording?")))?;
-    match (value["type"].as_str(), value["format"].as_str()) {
-        (Some("session"), _) => {
-            let mut collector = Collector {
-                grid,
-                blocks,
-                episodes: Vec::new(),
-            };
-            agent::demos::learn_from_file(&mut collector, path, BadLines::Fail)?;
-            Ok(collector.episodes)
-        }
-        (Some("episode"), None) => {
-            trajectory(open()?, grid, blocks).map_err(|(line, reason)| fail(format!("line {line}: {reason}")))
-        }
-        _ => Err(fail(
-            "the first line is neither a blockstack-demos session nor a trajectory episode".into(),
-        )),
-    }
+    Ok(agent::demos::read_episodes(path, Some((grid, blocks)))?
+        .into_iter()
+        .map(DemoEpisode::from)
+        .collect())
 }
 
-/// Collects the steps of a `blockstack-demos` recording into episodes.
-struct Collector {
-    grid: Grid,
-    blocks: usize,
-    episodes: Vec<DemoEpisode>,
-}
-
-impl DemoLearner for Collector {
-    fn check_world(&self, grid: Grid, blocks: usize) -> agent::Result<()> {
-        if grid != self.grid || blocks != self.blocks {
-            return Err(agent::AgentError::ModelMismatch(format!(
-                "the learner plays {} blocks on a {} grid, the recording has {blocks} blocks on a {grid} grid",
-                self.blocks, self.grid
-            )));
-        }
-        Ok(())
-    }
-
-    fn identity(&self) -> Option<String> {
-        // The network was not the model a session corrected: every session's steps are
-        // demonstrations to it.
-        None
-    }
-
-    fn learn(&mut self, _rule: &CorrectionRule, step: &Experience) -> agent::Result<()> {
-        // A step continues the last episode when it starts where that one stopped.
-        let continues = self.episodes.last().is_some_and(|e| {
-            e.goal == step.obs.goal && e.states.last() == Some(&step.obs.state) && !e.goal.holds(&step.obs.state)
-        });
-        if !continues {
-            self.episodes.push(DemoEpisode {
-                goal: step.obs.goal,
-                states: vec![step.obs.state],
-                actions: Vec::new(),
-                expert: Vec::new(),
-            });
-        }
-        let e = self.episodes.last_mut().expect("an episode was just made");
-        e.states.push(step.next.state);
-        e.actions.push(step.action);
-        e.expert.push(step.corrected);
-        Ok(())
-    }
-}
-
-/// The episodes of a trajectory file; an error is the line number and why.
-fn trajectory(
-    input: impl BufRead,
-    grid: Grid,
-    blocks: usize,
-) -> std::result::Result<Vec<DemoEpisode>, (usize, String)> {
-    let mut episodes: Vec<DemoEpisode> = Vec::new();
-    let mut world: Option<(u64, GridWorld)> = None;
-    for (i, line) in input.lines().enumerate() {
-        let n = i + 1;
-        let line = line.map_err(|e| (n, e.to_string()))?;
-        if line.trim().is_empty() {
-            continue;
-        }
-        let record: Record = serde_json::from_str(&line).map_err(|e| (n, format!("not a trajectory line ({e})")))?;
-        match record {
-            Record::Episode {
-                episode,
-                grid: [w, h],
-                goal,
-                start,
-                ..
-            } => {
-                if [w, h] != [grid.width(), grid.height()] || goal.block_count() != blocks {
-                    return Err((
-                        n,
-                        format!(
-                            "the episode has {} blocks on a {w}x{h} grid, the learner plays {blocks} on {grid}",
-                            goal.block_count()
-                        ),
-                    ));
-                }
-                let cells: Vec<Cell> = start.iter().map(|&[x, y]| Cell::new(x, y)).collect();
-                let state = State::new(&cells, None).map_err(|e| (n, e.to_string()))?;
-                world = Some((episode, GridWorld::new(grid, state).map_err(|e| (n, e.to_string()))?));
-                episodes.push(DemoEpisode {
-                    goal,
-                    states: vec![state],
-                    actions: Vec::new(),
-                    expert: Vec::new(),
-                });
-            }
-            Record::Step {
-                episode,
-                action,
-                blocks: cells,
-                held,
-                ..
-            } => {
-                let Some((current, w)) = world.as_mut().filter(|(k, _)| *k == episode) else {
-                    return Err((n, format!("a step of episode {episode} before its episode line")));
-                };
-                let _ = current;
-                let action = Action::from_index(action, blocks).map_err(|e| (n, e.to_string()))?;
-                w.act(action).map_err(|e| (n, e.to_string()))?;
-                let recorded: Vec<Cell> = cells.iter().map(|&[x, y]| Cell::new(x, y)).collect();
-                let state = *w.state_ref();
-                if state.cells() != recorded.as_slice() || state.held_block().map(|b| b.0) != held {
-                    return Err((
-                        n,
-                        "the recorded state is not what the action leads to by the rules".into(),
-                    ));
-                }
-                let e = episodes.last_mut().expect("an episode line came first");
-                e.states.push(state);
-                e.actions.push(action);
-                e.expert.push(true);
-            }
+impl From<agent::demos::DemoEpisode> for DemoEpisode {
+    fn from(e: agent::demos::DemoEpisode) -> Self {
+        DemoEpisode {
+            goal: e.goal,
+            states: e.states(),
+            actions: e.steps.iter().map(|s| s.action).collect(),
+            expert: e.steps.iter().map(|s| s.demonstrated).collect(),
         }
     }
-    Ok(episodes)
 }
 
 /// Every transition of `episodes` for the learner of `config`.
 pub fn transitions(episodes: &[DemoEpisode], config: &DqnConfig) -> Vec<Transition> {
     episodes.iter().flat_map(|e| e.transitions(config)).collect()
-}
-
-/// Reads a `blockstack-demos` recording from `input` (errors name `name`): for tests and
-/// callers that hold a recording in memory.
-pub fn read_recording(input: impl BufRead, name: &str, grid: Grid, blocks: usize) -> Result<Vec<DemoEpisode>> {
-    let mut collector = Collector {
-        grid,
-        blocks,
-        episodes: Vec::new(),
-    };
-    let mut replay = Replay::new(&mut collector, BadLines::Fail, name);
-    replay.read(input)?;
-    Ok(collector.episodes)
 }
 
 #[cfg(test)]
@@ -352,5 +197,48 @@ mod tests {
         std::fs::write(&path, broken).unwrap();
         let err = read(&path, c.grid, 3).unwrap_err().to_string();
         assert!(err.contains("line 2"), "{err}");
+    }
+
+    #[test]
+    fn files_written_by_the_previous_release_read_as_demonstrations() {
+        let fixtures = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures");
+        let grid = Grid::default();
+        let recording = read(&fixtures.join("recording-v2.jsonl"), grid, 3).unwrap();
+        assert_eq!(recording.len(), 2, "one per episode line");
+        assert!(recording.iter().any(|e| e.expert.iter().any(|&x| x)), "corrections");
+        assert!(recording.iter().all(|e| e.goal.holds(e.states.last().unwrap())));
+        let trajectory = read(&fixtures.join("trajectory.jsonl"), grid, 3).unwrap();
+        assert_eq!(trajectory.len(), 3);
+        assert!(trajectory.iter().all(|e| e.expert.iter().all(|&x| x)));
+        // Another world than the learner's is refused.
+        let err = read(&fixtures.join("trajectory-dense.jsonl"), grid, 3)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("4 blocks on a 5x6 grid"), "{err}");
+    }
+
+    #[test]
+    fn a_step_after_the_episode_terminated_is_refused() {
+        let fixtures = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures");
+        let text = std::fs::read_to_string(fixtures.join("trajectory.jsonl")).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        let last = lines.iter().position(|l| l.contains("\"terminated\":true")).unwrap();
+        let mut after: serde_json::Value = serde_json::from_str(lines[last]).unwrap();
+        after["step"] = (after["step"].as_u64().unwrap() + 1).into();
+        // Picking the held block again: the rules allow it and change nothing.
+        after["action"] = 7.into();
+        let broken: String = lines[..=last]
+            .iter()
+            .map(|l| format!("{l}\n"))
+            .chain([after.to_string() + "\n"])
+            .collect();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("t.jsonl");
+        std::fs::write(&path, broken).unwrap();
+        let err = read(&path, Grid::default(), 3).unwrap_err().to_string();
+        assert!(
+            err.contains(&format!("line {}", last + 2)) && err.contains("ended"),
+            "{err}"
+        );
     }
 }

@@ -12,7 +12,7 @@ use std::collections::{HashSet, VecDeque};
 use oracle::{ExactSolver, Oracle, Planner};
 use rand::RngExt;
 use sim::seeding::{self, SimRng, episode_seed};
-use sim::{Action, Env, GridWorld, Observation, State, World};
+use sim::{Action, Env, GridWorld, Observation, State};
 
 use crate::config::{DemoSource, DqnConfig, TargetEvery};
 use crate::demos::{self, DemoEpisode};
@@ -314,12 +314,7 @@ impl Trainer {
     /// the demonstrations; the agent plays on.
     fn correct(&mut self, obs: &Observation) -> Result<()> {
         let plan = self.corrector.plan(&obs.state, &obs.goal)?;
-        let mut world = GridWorld::new(obs.grid, obs.state)?;
-        let mut states = vec![obs.state];
-        for &a in &plan.actions {
-            world.act(a)?;
-            states.push(*world.state_ref());
-        }
+        let states = GridWorld::new(obs.grid, obs.state)?.replay(&plan.actions)?;
         let episode = DemoEpisode {
             goal: obs.goal,
             states,

@@ -50,5 +50,8 @@ def read_recording(path: Union[str, os.PathLike], obs: str = "planes", profile: 
     Reads trajectory files (``blockstack run --trajectory FILE``) and demonstration
     recordings (``blockstack demo`` / ``correct --record FILE``); the lines tell which.
     Recordings do not name their world: ``action_masks`` follow ``profile``'s protocol.
+    Every line is checked as ``blockstack dqn --demos-file`` checks it (the rules replayed,
+    rewards and end flags that some reward model and termination rule give, one world per
+    file): a file the CLI refuses raises ``ValueError`` with the CLI's message.
     """
     return _native.read_recording(os.fspath(path), obs, profile)

@@ -2,18 +2,15 @@
 //! CLI wrote (trajectories of `run --trajectory`, demonstration sessions of `demo` /
 //! `correct --record`) read back into the same arrays.
 
-use std::io::Read;
 use std::path::PathBuf;
 
-use agent::demos::{DemoRecord, MAX_RECORDING_BYTES};
 use agent::rollout::policy_rng;
 use agent::{ExactPolicy, OraclePolicy, Policy};
 use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sim::seeding::episode_seed;
-use sim::trajectory::Record;
-use sim::{Action, ActionProtocol, BlockId, Cell, Env, Goal, Grid, Observation, State};
+use sim::{Action, ActionProtocol, Cell, Env, Goal, Grid, Observation, State};
 
 use crate::boundary::{OrValueError, guard, value_error};
 use crate::config::{self, ObsKind, env_config};
@@ -56,8 +53,23 @@ impl Columns {
     }
 
     /// The columns as a dict of numpy arrays, observations encoded as `kind` for a world of
-    /// `blocks` blocks on `grid`.
+    /// `blocks` blocks on `grid`. A `ValueError` if an observation is of another world:
+    /// arrays hold one shape.
     fn into_dict<'py>(self, py: Python<'py>, kind: ObsKind, grid: Grid, blocks: usize) -> PyResult<Bound<'py, PyDict>> {
+        if let Some((t, o)) = self
+            .observations
+            .iter()
+            .chain(&self.next_observations)
+            .enumerate()
+            .find(|(_, o)| o.grid != grid || o.state.block_count() != blocks || o.goal.block_count() != blocks)
+        {
+            return Err(value_error(format!(
+                "step {} has {} blocks on a {} grid, and the arrays {blocks} blocks on a {grid} grid",
+                t % self.observations.len().max(1),
+                o.state.block_count(),
+                o.grid
+            )));
+        }
         let d = PyDict::new(py);
         d.set_item("observations", encode(py, kind, &self.observations, grid, blocks)?)?;
         d.set_item(
@@ -204,188 +216,54 @@ pub fn demonstrations<'py>(
             Ok(columns)
         })
     })?;
-    columns.into_dict(py, kind, config.grid, blocks)
-}
-
-/// Reads a recording as text, through `files`' bounded reader: a recording of either kind
-/// is refused past `agent::demos::MAX_RECORDING_BYTES`, before memory grows past it.
-fn read_text(path: &std::path::Path) -> PyResult<String> {
-    let mut text = String::new();
-    files::open_bounded(path, MAX_RECORDING_BYTES, "a recording")
-        .or_value_error()?
-        .read_to_string(&mut text)
-        .map_err(|e| value_error(format!("cannot read {}: {e}", path.display())))?;
-    Ok(text)
-}
-
-/// A recording read line by line.
-struct Reader {
-    /// The protocol the masks are computed under (recordings do not say).
-    protocol: ActionProtocol,
-    grid: Option<Grid>,
-    blocks: Option<usize>,
-    /// The current episode: its number, the observation before its next step, and whether
-    /// that step is its first.
-    episode: Option<(u64, Observation, bool)>,
-    columns: Columns,
-}
-
-impl Reader {
-    fn begin(&mut self, episode: u64, grid: Grid, goal: Goal, start: State) -> Result<(), String> {
-        start.check_fits(grid).map_err(|e| e.to_string())?;
-        if goal.block_count() != start.block_count() {
-            return Err(format!(
-                "the goal {goal} and the start disagree on the number of blocks"
-            ));
-        }
-        self.grid = Some(grid);
-        self.blocks = Some(start.block_count());
-        self.episode = Some((
-            episode,
-            Observation {
-                grid,
-                state: start,
-                goal,
-                protocol: self.protocol,
-            },
-            true,
-        ));
-        Ok(())
-    }
-
-    #[allow(clippy::too_many_arguments)]
-    fn step(
-        &mut self,
-        episode: u64,
-        action: Action,
-        after: State,
-        reward: f64,
-        terminated: bool,
-        truncated: bool,
-        before: Option<State>,
-    ) -> Result<(), String> {
-        let Some((number, obs, first)) = self.episode.as_mut() else {
-            return Err("a step before any episode line".into());
-        };
-        if *number != episode {
-            return Err(format!("a step of episode {episode} inside episode {number}"));
-        }
-        if let Some(before) = before {
-            obs.state = before;
-        }
-        let next = Observation { state: after, ..*obs };
-        self.columns
-            .push(episode, *obs, action, reward, next, terminated, truncated, *first);
-        *obs = next;
-        *first = false;
-        Ok(())
-    }
-}
-
-fn state_of(blocks: &[[u8; 2]], held: Option<u8>) -> Result<State, String> {
-    let cells: Vec<Cell> = blocks.iter().map(|&[x, y]| Cell::new(x, y)).collect();
-    State::new(&cells, held.map(BlockId)).map_err(|e| e.to_string())
+    guard(|| columns.into_dict(py, kind, config.grid, blocks))
 }
 
 /// Reads a recording the CLI wrote into the arrays [`demonstrations`] gives: a trajectory
 /// file (`blockstack run --trajectory`) or a demonstration recording (`blockstack demo` /
-/// `correct --record`); the format is told by its lines. A line that does not read is an
-/// error naming its number. Recordings do not name the world they were played in: the
+/// `correct --record`), told by the first line. Read by `agent::demos::read_episodes`, the
+/// checked reader `blockstack dqn --demos-file` uses: a file the CLI refuses is a
+/// `ValueError` with the CLI's message, naming the line. A file holds one world (grid and
+/// block count). Recordings do not name the protocol they were played under: the
 /// `action_masks` are those of `profile`'s action protocol.
 #[pyfunction]
 #[pyo3(signature = (path, obs="planes", profile="spec"))]
 pub fn read_recording<'py>(py: Python<'py>, path: PathBuf, obs: &str, profile: &str) -> PyResult<Bound<'py, PyDict>> {
     let kind = config::obs_kind(obs)?;
     let protocol = config::profile(profile)?.protocol();
-    let text = read_text(&path)?;
-    let mut reader = Reader {
-        protocol,
-        grid: None,
-        blocks: None,
-        episode: None,
-        columns: Columns::default(),
-    };
-    for (number, line) in text.lines().enumerate() {
-        if line.trim().is_empty() {
-            continue;
-        }
-        let outcome = if let Ok(record) = serde_json::from_str::<Record>(line) {
-            match record {
-                Record::Episode {
-                    episode,
-                    grid,
-                    goal,
-                    start,
-                    ..
-                } => Grid::new(grid[0], grid[1])
-                    .map_err(|e| e.to_string())
-                    .and_then(|g| reader.begin(episode, g, goal, state_of(&start, None)?)),
-                Record::Step {
-                    episode,
-                    action,
-                    blocks,
-                    held,
-                    reward,
-                    terminated,
-                    truncated,
-                    ..
-                } => {
-                    let n = blocks.len();
-                    Action::from_index(action, n).map_err(|e| e.to_string()).and_then(|a| {
-                        reader.step(
-                            episode,
-                            a,
-                            state_of(&blocks, held)?,
-                            reward,
-                            terminated,
-                            truncated,
-                            None,
-                        )
-                    })
-                }
-            }
-        } else {
-            match serde_json::from_str::<DemoRecord>(line) {
-                Ok(DemoRecord::Session(s)) => Grid::new(s.grid[0], s.grid[1])
-                    .map(|g| reader.grid = Some(g))
-                    .map_err(|e| e.to_string()),
-                Ok(DemoRecord::Episode(e)) => match reader.grid {
-                    None => Err("an episode line before the session line".into()),
-                    Some(grid) => e
-                        .start
-                        .state(grid)
-                        .map_err(|err| err.to_string())
-                        .and_then(|start| reader.begin(e.episode, grid, e.goal, start)),
-                },
-                Ok(DemoRecord::Step(s)) => {
-                    let read = || -> Result<(Action, State, State), String> {
-                        let grid = reader.grid.ok_or("a step line before the session line")?;
-                        let n = reader.blocks.ok_or("a step line before any episode line")?;
-                        Ok((
-                            Action::parse(&s.action, n).map_err(|e| e.to_string())?,
-                            s.state.state(grid).map_err(|e| e.to_string())?,
-                            s.next.state(grid).map_err(|e| e.to_string())?,
-                        ))
-                    };
-                    read().and_then(|(action, before, after)| {
-                        reader.step(
-                            s.episode,
-                            action,
-                            after,
-                            s.reward,
-                            s.terminated,
-                            s.truncated,
-                            Some(before),
-                        )
-                    })
-                }
-                Err(e) => Err(format!("neither a trajectory nor a demonstration line: {e}")),
-            }
+    let episodes = py.detach(|| guard(|| agent::demos::read_episodes(&path, None).or_value_error()))?;
+    guard(|| {
+        // The reader holds a file to one world, that of its first episode (which exists).
+        let Some(first) = episodes.first() else {
+            return Err(value_error(format!("{} holds no episode", path.display())));
         };
-        outcome.map_err(|reason| value_error(format!("{} line {}: {reason}", path.display(), number + 1)))?;
-    }
-    let (Some(grid), Some(blocks)) = (reader.grid, reader.blocks) else {
-        return Err(value_error(format!("{} holds no episode", path.display())));
-    };
-    reader.columns.into_dict(py, kind, grid, blocks)
+        let (grid, blocks) = (first.grid, first.goal.block_count());
+        let mut columns = Columns::default();
+        for e in &episodes {
+            let mut obs = Observation {
+                grid: e.grid,
+                state: e.start,
+                goal: e.goal,
+                protocol,
+            };
+            for (k, step) in e.steps.iter().enumerate() {
+                let next = Observation {
+                    state: step.state,
+                    ..obs
+                };
+                columns.push(
+                    e.episode,
+                    obs,
+                    step.action,
+                    step.reward,
+                    next,
+                    step.terminated,
+                    step.truncated,
+                    k == 0,
+                );
+                obs = next;
+            }
+        }
+        columns.into_dict(py, kind, grid, blocks)
+    })
 }

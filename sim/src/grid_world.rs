@@ -1,5 +1,6 @@
 //! The pure occupancy-grid backend: the reference model, and what planners search over.
 
+use crate::action::Action;
 use crate::error::Result;
 use crate::grid::{Cell, Direction, Grid};
 use crate::occupancy::Occupancy;
@@ -42,6 +43,19 @@ impl GridWorld {
     #[inline]
     pub fn state_ref(&self) -> &State {
         &self.state
+    }
+
+    /// Carries out `actions` by the rules: the states the world passes through, the current
+    /// one first (`actions.len() + 1` of them). How a plan becomes the states it visits; an
+    /// error for an action of a block the world does not have.
+    pub fn replay(&mut self, actions: &[Action]) -> Result<Vec<State>> {
+        let mut states = Vec::with_capacity(actions.len() + 1);
+        states.push(self.state);
+        for &action in actions {
+            self.act(action)?;
+            states.push(self.state);
+        }
+        Ok(states)
     }
 }
 

@@ -19,10 +19,12 @@
 //! just opened, its number is the previous one plus one, its action exists, and its state
 //! is what the rules ([`World::act`] on a [`GridWorld`]) make of the previous state and
 //! the action; no step comes after the episode ended, and the episode ends at its horizon
-//! at the latest; rewards are finite. The reward model and the termination rule are not in
-//! the file, so rewards and end flags are checked only that far. A line longer than
-//! [`MAX_LINE_BYTES`] is refused. The last episode of a file cut short (a killed run
-//! writing to a FIFO) is handed out as it stands: [`Episode::is_complete`] says so.
+//! at the latest. The reward model and the termination rule are not in the file, so
+//! [`Outcomes`] keeps every one that agrees with the steps read so far and refuses a step
+//! that leaves none: a reward no model gives, or an end flag no rule sets, is invented. A
+//! line longer than [`MAX_LINE_BYTES`] is refused at once (the same bound as a
+//! demonstration recording's). The last episode of a file cut short (a killed run writing
+//! to a FIFO) is handed out as it stands: [`Episode::is_complete`] says so.
 
 use std::io::{BufRead, Read, Write};
 
@@ -35,12 +37,108 @@ use crate::error::{Result, SimError};
 use crate::goal::Goal;
 use crate::grid::{Cell, Grid};
 use crate::grid_world::GridWorld;
+use crate::reward::{RewardModel, Transition};
 use crate::state::{BlockId, State};
+use crate::termination::Termination;
 use crate::world::World;
 
-/// The longest line of a trajectory file: 64 KiB (a step line of 16 blocks takes a few
-/// hundred bytes).
+/// The longest line of a trajectory file, and of a demonstration recording (`agent`'s
+/// `demos::format` shares it): 64 KiB (a step line of 16 blocks takes well under 1 KiB).
 pub const MAX_LINE_BYTES: u64 = 1 << 16;
+
+/// Reads one line of a JSON Lines file through the bound [`MAX_LINE_BYTES`] into `buf`
+/// (cleared first, newline kept): the number of bytes read, 0 at the end. A line longer
+/// than the bound stops after `MAX_LINE_BYTES + 1` bytes, so that a device or a binary file
+/// is refused at its first line instead of read into memory; the caller refuses it.
+pub fn read_bounded_line(input: &mut impl BufRead, buf: &mut Vec<u8>) -> std::io::Result<usize> {
+    buf.clear();
+    input.take(MAX_LINE_BYTES + 1).read_until(b'\n', buf)
+}
+
+/// The reward models and termination rules that could have produced the rewards and end
+/// flags a file records (module docs). Files do not name them; every run and session uses
+/// one of each, so the candidates only shrink as steps are read.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Outcomes {
+    rewards: Vec<RewardModel>,
+    terminations: Vec<Termination>,
+}
+
+impl Default for Outcomes {
+    /// Every named reward model, and both termination rules.
+    fn default() -> Self {
+        Outcomes {
+            rewards: RewardModel::NAMES
+                .iter()
+                .map(|n| RewardModel::from_name(n).expect("a named model"))
+                .collect(),
+            terminations: vec![Termination::Goal, Termination::paper_training()],
+        }
+    }
+}
+
+/// Whether a recorded reward is the computed one: JSON's decimal text may differ from the
+/// computed float in its last digit.
+fn same_reward(recorded: f64, computed: f64) -> bool {
+    (recorded - computed).abs() <= 1e-9 * computed.abs().max(1.0)
+}
+
+impl Outcomes {
+    /// Checks the recorded `reward` and `terminated` of the step `t` against the candidates
+    /// left, and keeps those that agree; an error (why, for a message) if none does.
+    pub fn check(&mut self, t: &Transition, reward: f64, terminated: bool) -> std::result::Result<(), String> {
+        if !reward.is_finite() {
+            return Err(format!("the reward {reward} is not a finite number"));
+        }
+        let fits: Vec<RewardModel> = self
+            .rewards
+            .iter()
+            .copied()
+            .filter(|m| same_reward(reward, m.reward(t)))
+            .collect();
+        if fits.is_empty() {
+            let given: Vec<String> = self.rewards.iter().map(|m| format!("{m} {}", m.reward(t))).collect();
+            return Err(format!(
+                "the reward {reward} is not what {} for this step ({}): an invented reward?",
+                if self.rewards.len() == RewardModel::NAMES.len() {
+                    "any reward model gives"
+                } else {
+                    "the reward model of the earlier steps gives"
+                },
+                given.join(", ")
+            ));
+        }
+        let holds = t.reaches_goal();
+        let ends: Vec<Termination> = self
+            .terminations
+            .iter()
+            .copied()
+            .filter(|rule| rule.ends(reward, holds) == terminated)
+            .collect();
+        if ends.is_empty() {
+            let (marked, goal) = if terminated { ("", "not ") } else { ("not ", "") };
+            return Err(format!(
+                "the step is {marked}marked terminated, though the goal does {goal}hold after it{}",
+                if self.terminations.len() == 2 {
+                    format!(
+                        " and its reward is {}above {}",
+                        if reward > Termination::PAPER_TRAINING_THRESHOLD {
+                            ""
+                        } else {
+                            "not "
+                        },
+                        Termination::PAPER_TRAINING_THRESHOLD
+                    )
+                } else {
+                    String::new()
+                }
+            ));
+        }
+        self.rewards = fits;
+        self.terminations = ends;
+        Ok(())
+    }
+}
 
 /// One line of a trajectory file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -192,6 +290,8 @@ pub struct TrajectoryReader<R> {
     current: Option<(Episode, GridWorld)>,
     /// The number the next episode must have.
     next_episode: Option<u64>,
+    /// The reward model and termination rule the steps so far agree with.
+    outcomes: Outcomes,
     failed: bool,
 }
 
@@ -204,6 +304,7 @@ impl<R: BufRead> TrajectoryReader<R> {
             line: 0,
             current: None,
             next_episode: None,
+            outcomes: Outcomes::default(),
             failed: false,
         }
     }
@@ -219,10 +320,7 @@ impl<R: BufRead> TrajectoryReader<R> {
     /// The next line, without its newline; `None` at the end.
     fn next_line(&mut self) -> Result<Option<String>> {
         let mut buf = Vec::new();
-        let n = (&mut self.input)
-            .take(MAX_LINE_BYTES + 1)
-            .read_until(b'\n', &mut buf)
-            .map_err(|e| self.error(format!("cannot read: {e}")))?;
+        let n = read_bounded_line(&mut self.input, &mut buf).map_err(|e| self.error(format!("cannot read: {e}")))?;
         if n == 0 {
             return Ok(None);
         }
@@ -337,13 +435,11 @@ impl<R: BufRead> TrajectoryReader<R> {
                 open.horizon
             )));
         }
-        if !reward.is_finite() {
-            return Err(self.error(format!("the reward {reward} is not a finite number")));
-        }
         let (grid, goal) = (open.grid, open.goal);
+        let previous_action = open.steps.last().map(|s| s.action);
         let action = Action::from_index(action, goal.block_count()).map_err(|e| self.error(e.to_string()))?;
         let state = self.state(&blocks, held, grid, &goal)?;
-        let (open, world) = self.current.as_mut().expect("an open episode");
+        let (_, world) = self.current.as_mut().expect("an open episode");
         let before = world.state();
         world.act(action).expect("an action of the world's blocks");
         if world.state() != state {
@@ -355,6 +451,18 @@ impl<R: BufRead> TrajectoryReader<R> {
                 describe(&state)
             )));
         }
+        let transition = Transition {
+            grid,
+            goal: &goal,
+            before: &before,
+            action,
+            previous_action,
+            after: &state,
+        };
+        if let Err(reason) = self.outcomes.check(&transition, reward, terminated) {
+            return Err(self.error(reason));
+        }
+        let (open, _) = self.current.as_mut().expect("an open episode");
         open.steps.push(EpisodeStep {
             action,
             state,
@@ -402,5 +510,147 @@ impl<R: BufRead> Iterator for TrajectoryReader<R> {
         let next = self.next_episode();
         self.failed = next.is_err();
         next.transpose()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The trajectory files `blockstack run --trajectory` wrote at the release before this
+    /// reader served the commands (tests/fixtures/README.md).
+    const FIXTURES: [&str; 4] = [
+        "trajectory.jsonl",
+        "trajectory-original.jsonl",
+        "trajectory-paper.jsonl",
+        "trajectory-dense.jsonl",
+    ];
+
+    fn fixture(name: &str) -> String {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../tests/fixtures")
+            .join(name);
+        std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+    }
+
+    fn read(text: &str) -> Result<Vec<Episode>> {
+        TrajectoryReader::new(text.as_bytes(), "t.jsonl").collect()
+    }
+
+    /// The error's message for `text`, which must not read.
+    fn refused(text: &str) -> String {
+        read(text).expect_err("refused").to_string()
+    }
+
+    /// `text` with line `i` (from 0) edited as JSON by `edit`.
+    fn edited(text: &str, i: usize, edit: impl Fn(&mut serde_json::Value)) -> String {
+        text.lines()
+            .enumerate()
+            .map(|(k, l)| {
+                if k == i {
+                    let mut v: serde_json::Value = serde_json::from_str(l).unwrap();
+                    edit(&mut v);
+                    v.to_string() + "\n"
+                } else {
+                    format!("{l}\n")
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn files_written_by_the_previous_release_still_read() {
+        for name in FIXTURES {
+            let text = fixture(name);
+            let episodes = read(&text).unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert!(!episodes.is_empty(), "{name}");
+            let steps: usize = episodes.iter().map(|e| e.steps.len()).sum();
+            let lines = text.lines().count();
+            assert_eq!(steps + episodes.len(), lines, "{name}: every line read");
+            assert!(episodes.iter().all(Episode::is_complete), "{name}");
+        }
+    }
+
+    #[test]
+    fn an_invented_reward_or_termination_is_refused() {
+        let text = fixture("trajectory.jsonl");
+        // Line 2 is the first step of episode 0: no goal, reward 0.
+        let reward = edited(&text, 1, |v| v["reward"] = 5.0.into());
+        let err = refused(&reward);
+        assert!(err.contains(":2:") && err.contains("invented reward"), "{err}");
+        let ended = edited(&text, 1, |v| v["terminated"] = true.into());
+        let err = refused(&ended);
+        assert!(err.contains(":2:") && err.contains("marked terminated"), "{err}");
+        // The last step of episode 0 reaches the goal: not marking it is refused too (as
+        // an episode going on after it, since a rule of rewards above 70 would not end it).
+        let last = text.lines().position(|l| l.contains("\"terminated\":true")).unwrap();
+        let err = refused(&edited(&text, last, |v| v["terminated"] = false.into()));
+        assert!(err.contains("before episode 0 ended"), "{err}");
+        // A reward one model gives, but not the model of the earlier steps: the dense
+        // reward on a file of sparse rewards.
+        let dense = fixture("trajectory-dense.jsonl");
+        let err = refused(&edited(&dense, 3, |v| v["reward"] = 0.0.into()));
+        assert!(err.contains(":4:") && err.contains("earlier steps"), "{err}");
+    }
+
+    #[test]
+    fn a_step_after_a_terminated_step_is_refused() {
+        let text = fixture("trajectory.jsonl");
+        let lines: Vec<&str> = text.lines().collect();
+        let last = lines.iter().position(|l| l.contains("\"terminated\":true")).unwrap();
+        let mut after: serde_json::Value = serde_json::from_str(lines[last]).unwrap();
+        after["step"] = (after["step"].as_u64().unwrap() + 1).into();
+        // Picking the held block again: the rules allow it and change nothing.
+        after["action"] = 7.into();
+        let broken: String = lines[..=last]
+            .iter()
+            .map(|l| format!("{l}\n"))
+            .chain([after.to_string() + "\n"])
+            .collect();
+        let err = refused(&broken);
+        assert!(
+            err.contains(&format!(":{}:", last + 2)) && err.contains("ended"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn a_cell_outside_the_grid_is_refused() {
+        let text = fixture("trajectory.jsonl");
+        let outside = edited(&text, 1, |v| v["blocks"][0] = serde_json::json!([0, 7]));
+        let err = refused(&outside);
+        assert!(err.contains(":2:"), "{err}");
+        let start = edited(&text, 0, |v| v["start"][1] = serde_json::json!([7, 0]));
+        assert!(refused(&start).contains(":1:"));
+    }
+
+    #[test]
+    fn an_over_long_line_is_refused_at_once() {
+        // Valid JSON padded past the bound: refused as too long, not parsed.
+        let text = fixture("trajectory.jsonl");
+        let long = text.replacen("{\"type\"", &format!("{{{}\"type\"", " ".repeat(70_000)), 1);
+        assert!(refused(&long).contains("longer than"));
+        // An endless input without a newline: refused after the bound, not read to its end.
+        let mut zeros = std::io::BufReader::new(std::io::repeat(0));
+        let mut reader = TrajectoryReader::new(&mut zeros, "/dev/zero");
+        let err = reader.next().unwrap().unwrap_err().to_string();
+        assert!(err.contains(":1:") && err.contains("longer than"), "{err}");
+    }
+
+    #[test]
+    fn a_plan_replays_into_the_states_it_visits() {
+        let episode = &read(&fixture("trajectory.jsonl")).unwrap()[0];
+        let actions: Vec<Action> = episode.steps.iter().map(|s| s.action).collect();
+        let states = GridWorld::new(episode.grid, episode.start)
+            .unwrap()
+            .replay(&actions)
+            .unwrap();
+        assert_eq!(states[0], episode.start);
+        assert_eq!(
+            states[1..],
+            episode.steps.iter().map(|s| s.state).collect::<Vec<_>>()[..]
+        );
+        let mut world = GridWorld::new(episode.grid, episode.start).unwrap();
+        assert!(world.replay(&[Action::Pick(BlockId(9))]).is_err());
     }
 }

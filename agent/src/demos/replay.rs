@@ -1,50 +1,18 @@
-//! Demonstration recordings: every step of a correction session as JSON Lines, written as it
-//! happens, and their replay.
+//! Replaying recordings into a learner: [`Replay`] applies the recorded steps to any
+//! [`DemoLearner`] (the tabular agent is one; `neural` collects demonstrations, the Python
+//! package columns of arrays), checking every line, in file order. Started from the same
+//! model, a tabular agent ends with the same table as the live session.
 //!
-//! # Format (`blockstack-demos`, version 2)
-//!
-//! ```text
-//! {"type":"session","format":"blockstack-demos","version":2,"grid":[7,7],"blocks":3,"rule":{"margin":0.8,"learn_agent_steps":true},"demonstrator":"person","model":"agent.safetensors","model_id":"3f9c0a1b2d4e5f60"}
-//! {"type":"episode","episode":0,"seed":123,"goal":[0,1,2],"start":{"blocks":[[1,2],[4,0],[6,6]],"held":null}}
-//! {"type":"step","episode":0,"step":1,"state":{"blocks":[[1,2],[4,0],[6,6]],"held":null},"proposed":"drop","action":"pick 1","correction":true,"reward":0.0,"next":{"blocks":[[1,2],[4,0],[6,6]],"held":1},"terminated":false,"truncated":false}
-//! ```
-//!
-//! - A *session* line opens every session; a file may hold several sessions one after the
-//!   other (a recording is appended to, never overwritten). `rule` is how the agent learnt;
-//!   `model` the model file the session started from, when known, and `model_id` that
-//!   model's identity ([`QAgent::identity`]). Version 1 (before `model_id`) is still read.
-//! - An *episode* line opens every episode: its number in the session, the seed of its
-//!   start, its goal (bottom to top) and its start state.
-//! - A *step* line per executed action: the state before it, the agent's proposed action,
-//!   the executed action (names as `blockstack solve` prints them: `up`, `pick 2`, ...),
-//!   whether a demonstrator chose it (`correction`; it may equal the proposal), the reward,
-//!   and the state after it with the episode's end flags. Each step line holds all a
-//!   learner needs, so any complete line can be learnt from on its own.
-//!
-//! Every line is written with one write and flushed at once: a session that is killed loses
-//! at most the line being written, and every complete line parses. So a recording is
-//! appended to in place ([`files::OutputPath::append`]), not written through a temporary
-//! file as whole-file outputs are: a temporary file would lose the whole session on a kill.
-//! The destination is still checked like any output (a missing folder or a directory is
-//! refused before the session starts; a FIFO or `-` receives the lines as they come).
-//!
-//! A recording is read through a bound ([`MAX_RECORDING_BYTES`], and
-//! [`MAX_LINE_BYTES`] for one line), so that a device or a huge file given as a recording
-//! is refused, never read until memory runs out.
-//!
-//! # Replay
-//!
-//! [`Replay`] applies the recorded steps to an agent with the recorded rule, in file order
-//! (any [`DemoLearner`]; the tabular agent is one):
-//! started from the same model, it ends with the same table as the live session. A line
-//! that cannot be used is an error naming its line number; the caller's [`BadLines`]
-//! policy says whether to report it and go on or to stop. Such a line is:
+//! A line that cannot be used is an error naming its line number; the caller's
+//! [`BadLines`] policy says whether to report it and go on or to stop. Such a line is:
 //!
 //! - not JSON, an unknown field, a line cut off by a kill;
 //! - a step or episode before its session line, a step of another episode than the one
 //!   just opened, a state that does not fit the world;
 //! - a step that breaks the world's rules: its `next` is not what the rules
 //!   ([`sim::World::act`]) make of its `state` and `action`;
+//! - a step whose reward or `terminated` flag no reward model or termination rule gives,
+//!   or not the one the session's earlier steps agree with ([`sim::trajectory::Outcomes`]);
 //! - a step out of order: its number not above the last step's of its episode (a line
 //!   written twice), its `state` not the last step's `next` (or the episode's start), or a
 //!   step after one that ended the episode; an episode numbered not above the last;
@@ -53,276 +21,26 @@
 //!
 //! Some problems end the replay whatever the policy, because nothing after them could be
 //! learnt from correctly: a file that does not begin with a session line (a model file, a
-//! trajectory file, an empty file), a session of another format or version, and a session
-//! recorded from another model than the agent being replayed into (its `model_id` is not
-//! the agent's identity at that point of the replay: sessions appended one after another
-//! each started from the model the previous one left). [`learn_from_file`] refuses a file
-//! from which no step was learnt.
+//! trajectory file, an empty file), a line longer than the bound, a session of another
+//! format or version, and a session recorded from another model than the agent being
+//! replayed into (its `model_id` is not the agent's identity at that point of the replay:
+//! sessions appended one after another each started from the model the previous one
+//! left). [`learn_from_file`] refuses a file from which no step was learnt.
 
-use std::io::{BufRead, Read, Write};
-use std::path::{Path, PathBuf};
+use std::io::BufRead;
+use std::path::Path;
 
-use files::{Output, OutputPath};
-use serde::{Deserialize, Serialize};
-use sim::{Action, ActionProtocol, Cell, Goal, Grid, GridWorld, Observation, State, Step, World};
+use sim::reward::Transition;
+use sim::trajectory::Outcomes;
+use sim::{Action, ActionProtocol, Goal, Grid, GridWorld, Observation, State, World};
 
-use crate::correction::{CorrectionRule, Experience};
+use super::format::{
+    DEMOS_FORMAT, DEMOS_VERSION, DemoRecord, EpisodeLine, MAX_LINE_BYTES, RawLine, RecordingLines, SessionLine,
+    StepLine, demos_error,
+};
 use crate::error::{AgentError, Result};
-use crate::model::MODEL_FORMAT;
 use crate::qlearning::{QAgent, check_fits_table};
-
-/// The `format` field of every session line.
-pub const DEMOS_FORMAT: &str = "blockstack-demos";
-
-/// The recording format version this build writes (it reads this one and version 1).
-pub const DEMOS_VERSION: u32 = 2;
-
-/// The largest recording read: 1 GiB, some three million steps.
-pub const MAX_RECORDING_BYTES: u64 = 1 << 30;
-
-/// The longest line of a recording: 64 KiB (a step line of 16 blocks takes well under
-/// 1 KiB).
-pub const MAX_LINE_BYTES: u64 = 1 << 16;
-
-/// A state as recorded: every block's cell `[x, y]` by block id, and the held block.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct StateLine {
-    /// Every block's cell.
-    pub blocks: Vec<[u8; 2]>,
-    /// The held block's id, or `null`.
-    pub held: Option<u8>,
-}
-
-impl StateLine {
-    /// The record of `state`.
-    pub fn of(state: &State) -> StateLine {
-        StateLine {
-            blocks: state.cells().iter().map(|c| [c.x, c.y]).collect(),
-            held: state.held_block().map(|b| b.0),
-        }
-    }
-
-    /// The state, checked against `grid`.
-    pub fn state(&self, grid: Grid) -> Result<State> {
-        let cells: Vec<Cell> = self.blocks.iter().map(|&[x, y]| Cell::new(x, y)).collect();
-        let state = State::new(&cells, self.held.map(sim::BlockId))?;
-        state.check_fits(grid)?;
-        Ok(state)
-    }
-}
-
-/// The line that opens a session.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SessionLine {
-    /// Always [`DEMOS_FORMAT`].
-    pub format: String,
-    /// Always [`DEMOS_VERSION`] for files this build writes.
-    pub version: u32,
-    /// `[W, H]`.
-    pub grid: [usize; 2],
-    /// Number of blocks.
-    pub blocks: usize,
-    /// How the agent learnt in this session.
-    pub rule: CorrectionRule,
-    /// Who corrected: `person`, or a simulated demonstrator's name.
-    pub demonstrator: String,
-    /// The model file the session started from, when known.
-    pub model: Option<String>,
-    /// The identity of the model the session started from ([`QAgent::identity`]); always
-    /// present from version 2.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub model_id: Option<String>,
-}
-
-impl SessionLine {
-    /// The header of a session of `agent` (its grid, blocks and identity), loaded from the
-    /// file `model` when known.
-    pub fn new(agent: &QAgent, rule: CorrectionRule, demonstrator: &str, model: Option<&str>) -> Self {
-        let grid = agent.grid();
-        SessionLine {
-            format: DEMOS_FORMAT.into(),
-            version: DEMOS_VERSION,
-            grid: [grid.width(), grid.height()],
-            blocks: agent.blocks(),
-            rule,
-            demonstrator: demonstrator.into(),
-            model: model.map(Into::into),
-            model_id: Some(agent.identity()),
-        }
-    }
-}
-
-/// The line that opens an episode.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct EpisodeLine {
-    /// The episode's number in the session, from 0.
-    pub episode: u64,
-    /// The seed its start was drawn with.
-    pub seed: u64,
-    /// The goal, bottom to top.
-    pub goal: Goal,
-    /// The start state.
-    pub start: StateLine,
-}
-
-impl EpisodeLine {
-    /// The header of episode `episode`, reset with `seed`, starting at `obs`.
-    pub fn new(episode: u64, seed: u64, obs: &Observation) -> Self {
-        EpisodeLine {
-            episode,
-            seed,
-            goal: obs.goal,
-            start: StateLine::of(&obs.state),
-        }
-    }
-}
-
-/// One executed step.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct StepLine {
-    /// The episode's number.
-    pub episode: u64,
-    /// Actions taken in the episode, this one included.
-    pub step: u32,
-    /// The state before the action.
-    pub state: StateLine,
-    /// The agent's proposed action.
-    pub proposed: String,
-    /// The executed action.
-    pub action: String,
-    /// Whether a demonstrator chose the executed action.
-    pub correction: bool,
-    /// The reward.
-    pub reward: f64,
-    /// The state after the action.
-    pub next: StateLine,
-    /// The goal holds after the action.
-    pub terminated: bool,
-    /// The horizon was reached without the goal.
-    pub truncated: bool,
-}
-
-impl StepLine {
-    /// The line of `step`, the outcome of `action` (proposed: `proposed`) taken in `obs`
-    /// in episode `episode`.
-    pub fn new(
-        episode: u64,
-        obs: &Observation,
-        proposed: Action,
-        action: Action,
-        correction: bool,
-        step: &Step,
-    ) -> Self {
-        StepLine {
-            episode,
-            step: step.info.steps,
-            state: StateLine::of(&obs.state),
-            proposed: proposed.to_string(),
-            action: action.to_string(),
-            correction,
-            reward: step.reward,
-            next: StateLine::of(&step.observation.state),
-            terminated: step.terminated,
-            truncated: step.truncated,
-        }
-    }
-}
-
-/// One line of a recording.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "type", rename_all = "lowercase")]
-pub enum DemoRecord {
-    /// Opens a session.
-    Session(SessionLine),
-    /// Opens an episode.
-    Episode(EpisodeLine),
-    /// One executed step.
-    Step(StepLine),
-}
-
-/// Where a session's lines go, as they happen.
-pub trait DemoSink {
-    /// Takes one line.
-    fn record(&mut self, line: &DemoRecord) -> Result<()>;
-}
-
-/// Records nothing.
-impl DemoSink for () {
-    fn record(&mut self, _line: &DemoRecord) -> Result<()> {
-        Ok(())
-    }
-}
-
-/// Keeps every line in memory.
-impl DemoSink for Vec<DemoRecord> {
-    fn record(&mut self, line: &DemoRecord) -> Result<()> {
-        self.push(line.clone());
-        Ok(())
-    }
-}
-
-/// Records to the sink when there is one.
-impl<S: DemoSink> DemoSink for Option<S> {
-    fn record(&mut self, line: &DemoRecord) -> Result<()> {
-        self.as_mut().map_or(Ok(()), |s| s.record(line))
-    }
-}
-
-/// Writes a recording as JSON Lines, one write and one flush per line.
-#[derive(Debug)]
-pub struct DemoWriter<W: Write = Output> {
-    out: W,
-    path: PathBuf,
-}
-
-impl DemoWriter<Output> {
-    /// Opens `out` to append to (a regular file is created if missing; an earlier
-    /// recording is kept), in place (module docs).
-    pub fn append(out: &OutputPath) -> Result<Self> {
-        Ok(DemoWriter {
-            out: out.append()?,
-            path: out.path().to_path_buf(),
-        })
-    }
-}
-
-impl<W: Write> DemoWriter<W> {
-    /// A writer to `out` (named `name` in errors).
-    pub fn new(out: W, name: &str) -> Self {
-        DemoWriter {
-            out,
-            path: PathBuf::from(name),
-        }
-    }
-
-    /// The underlying writer.
-    pub fn into_inner(self) -> W {
-        self.out
-    }
-}
-
-impl<W: Write> DemoSink for DemoWriter<W> {
-    fn record(&mut self, line: &DemoRecord) -> Result<()> {
-        let mut text = serde_json::to_string(line).expect("records serialise");
-        text.push('\n');
-        // One write per line: a kill between two lines leaves only whole lines.
-        self.out
-            .write_all(text.as_bytes())
-            .and_then(|()| self.out.flush())
-            .map_err(|e| files::FilesError::write(&self.path, &e).into())
-    }
-}
-
-fn demos_error(path: &Path, reason: &str) -> AgentError {
-    AgentError::Demos {
-        path: path.display().to_string(),
-        reason: reason.into(),
-    }
-}
+use crate::rule::{CorrectionRule, Experience};
 
 /// What to do with a line that cannot be used.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -413,12 +131,14 @@ impl From<sim::SimError> for LineError {
 }
 
 /// The session being replayed.
-#[derive(Clone, Copy)]
+#[derive(Clone)]
 struct OpenSession {
     grid: Grid,
     rule: CorrectionRule,
     /// The number of its last episode line used.
     last_episode: Option<u64>,
+    /// The reward model and termination rule its steps so far agree with.
+    outcomes: Outcomes,
 }
 
 /// The episode being replayed.
@@ -430,6 +150,8 @@ struct OpenEpisode {
     last_step: u32,
     /// Where that step left the world (the start before the first).
     state: State,
+    /// That step's action (`None` before the first).
+    last_action: Option<Action>,
     /// That step ended the episode.
     ended: bool,
 }
@@ -444,6 +166,15 @@ pub trait DemoLearner {
     /// for a learner that takes any session's steps as demonstrations (it was not the
     /// model the session corrected, so there is nothing to match).
     fn identity(&self) -> Option<String>;
+
+    /// An episode line opened episode `episode` (numbered in its session) of `goal` from
+    /// `start`, in a world checked to be the learner's: the steps [`DemoLearner::learn`]
+    /// gets next are this episode's, in order, the first from `start`. Learners that keep
+    /// episodes apart begin one here; the tabular agent has nothing to do.
+    fn begin_episode(&mut self, episode: u64, goal: Goal, start: State) -> Result<()> {
+        let _ = (episode, goal, start);
+        Ok(())
+    }
 
     /// Learns from one recorded step, by the session's `rule`.
     fn learn(&mut self, rule: &CorrectionRule, step: &Experience) -> Result<()>;
@@ -491,50 +222,28 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
     /// A line longer than [`MAX_LINE_BYTES`] stops the replay whatever the policy: the
     /// input is not a recording.
     pub fn read(&mut self, input: impl BufRead) -> Result<()> {
-        let mut input = input;
-        let mut buf = Vec::new();
+        let mut lines = RecordingLines::new(input);
         loop {
-            buf.clear();
-            let n = (&mut input)
-                .take(MAX_LINE_BYTES + 1)
-                .read_until(b'\n', &mut buf)
+            let line = lines
+                .next_line()
                 .map_err(|e| demos_error(Path::new(&self.name), &format!("cannot read: {e}")))?;
-            if n == 0 {
-                return Ok(());
-            }
-            if self.report.lines == 0 && contains(&buf, MODEL_FORMAT.as_bytes()) {
-                self.report.lines += 1;
-                return self.bad(LineError::fatal(format!(
-                    "it is a model file ({MODEL_FORMAT}), not a recording: give the recording first and the model with --model"
-                )));
-            }
-            if n as u64 > MAX_LINE_BYTES {
-                self.report.lines += 1;
-                return self.bad(LineError::fatal(format!(
+            let problem = match line {
+                None => return Ok(()),
+                Some(RawLine::Text(text)) => {
+                    self.line(text)?;
+                    continue;
+                }
+                Some(RawLine::TooLong) => LineError::fatal(format!(
                     "the line is longer than {}, the longest a recording line can be: is this a recording?",
                     files::Bytes(MAX_LINE_BYTES)
-                )));
-            }
-            let complete = buf.last() == Some(&b'\n');
-            match std::str::from_utf8(&buf) {
-                Ok(text) if complete || text.trim().is_empty() => self.line(text)?,
-                Ok(text) => {
-                    // A last line without its newline: what a kill mid-write leaves. It is
-                    // used if it happens to be whole, reported otherwise.
-                    if serde_json::from_str::<DemoRecord>(text.trim()).is_ok() {
-                        self.line(text)?;
-                    } else {
-                        self.report.lines += 1;
-                        self.bad(LineError::bad(
-                            "the line is cut off (no newline at its end: was the session killed?)",
-                        ))?;
-                    }
+                )),
+                Some(RawLine::CutOff) => {
+                    LineError::bad("the line is cut off (no newline at its end: was the session killed?)")
                 }
-                Err(_) => {
-                    self.report.lines += 1;
-                    self.bad(LineError::bad("the line is not UTF-8 text"))?;
-                }
-            }
+                Some(RawLine::NotText) => LineError::bad("the line is not UTF-8 text"),
+            };
+            self.report.lines += 1;
+            self.bad(problem)?;
         }
     }
 
@@ -620,6 +329,7 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
             grid,
             rule: s.rule,
             last_episode: None,
+            outcomes: Outcomes::default(),
         });
         self.episode = None;
         self.report.sessions += 1;
@@ -627,7 +337,10 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
     }
 
     fn episode(&mut self, e: EpisodeLine) -> std::result::Result<(), LineError> {
-        let session = self.session.ok_or_else(|| no_header("an episode", "session"))?;
+        let session = self
+            .session
+            .as_mut()
+            .ok_or_else(|| no_header("an episode", "session"))?;
         let start = e.start.state(session.grid)?;
         self.agent.check_world(session.grid, e.goal.block_count())?;
         check_blocks(&start, &e.goal)?;
@@ -652,15 +365,14 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
             }
             _ => {}
         }
-        self.session = Some(OpenSession {
-            last_episode: Some(e.episode),
-            ..session
-        });
+        self.agent.begin_episode(e.episode, e.goal, start)?;
+        session.last_episode = Some(e.episode);
         self.episode = Some(OpenEpisode {
             number: e.episode,
             goal: e.goal,
             last_step: 0,
             state: start,
+            last_action: None,
             ended: false,
         });
         self.report.episodes += 1;
@@ -668,7 +380,7 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
     }
 
     fn step(&mut self, s: StepLine) -> std::result::Result<(), LineError> {
-        let session = self.session.ok_or_else(|| no_header("a step", "session"))?;
+        let session = self.session.as_mut().ok_or_else(|| no_header("a step", "session"))?;
         let episode = match self.episode {
             Some(e) if e.number == s.episode => e,
             _ => return Err(no_header(&format!("a step of episode {}", s.episode), "episode")),
@@ -725,6 +437,21 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
             )));
         }
         check_fits_table("the reward", s.reward)?;
+        if follows {
+            // The previous action is known only on a step that follows the last one used.
+            let transition = Transition {
+                grid: session.grid,
+                goal: &episode.goal,
+                before: &obs.state,
+                action,
+                previous_action: episode.last_action,
+                after: &next.state,
+            };
+            session
+                .outcomes
+                .check(&transition, s.reward, s.terminated)
+                .map_err(LineError::bad)?;
+        }
         self.agent.learn(
             &session.rule,
             &Experience {
@@ -733,12 +460,14 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
                 reward: s.reward,
                 next,
                 terminated: s.terminated,
+                truncated: s.truncated,
                 corrected: s.correction,
             },
         )?;
         self.episode = Some(OpenEpisode {
             last_step: s.step,
             state: next.state,
+            last_action: Some(action),
             ended: s.terminated || s.truncated,
             ..episode
         });
@@ -767,22 +496,30 @@ fn check_blocks(state: &State, goal: &Goal) -> std::result::Result<(), LineError
     }
 }
 
-/// Whether `needle` occurs in `haystack`.
-fn contains(haystack: &[u8], needle: &[u8]) -> bool {
-    haystack.windows(needle.len()).any(|w| w == needle)
-}
-
 fn no_header(what: &str, header: &str) -> LineError {
     LineError::bad(format!("{what} before its {header} line"))
 }
 
 /// Replays the recording at `path` into `agent` (module docs), reading at most
-/// [`MAX_RECORDING_BYTES`]. An error if no step could be learnt from it (an empty file, a
-/// file of sessions without steps, or one whose every step was skipped).
+/// [`MAX_RECORDING_BYTES`](super::format::MAX_RECORDING_BYTES). An error if no step could
+/// be learnt from it (an empty file, a file of sessions without steps, or one whose every
+/// step was skipped), or if it is a model file.
 pub fn learn_from_file<L: DemoLearner + ?Sized>(agent: &mut L, path: &Path, policy: BadLines) -> Result<ReplayReport> {
-    let file = files::open_bounded(path, MAX_RECORDING_BYTES, "a recording")?;
+    super::format::refuse_model_file(path)?;
+    let file = files::open_bounded(path, super::format::MAX_RECORDING_BYTES, "a recording")?;
+    learn_from_reader(agent, std::io::BufReader::new(file), path, policy)
+}
+
+/// Replays the recording read from `input` (named `path` in errors) into `agent`, as
+/// [`learn_from_file`] does.
+pub fn learn_from_reader<L: DemoLearner + ?Sized>(
+    agent: &mut L,
+    input: impl BufRead,
+    path: &Path,
+    policy: BadLines,
+) -> Result<ReplayReport> {
     let mut replay = Replay::new(agent, policy, &path.display().to_string());
-    replay.read(std::io::BufReader::new(file))?;
+    replay.read(input)?;
     let report = replay.finish();
     if report.steps == 0 {
         let reason = match (report.sessions, report.bad_lines.len()) {
@@ -810,6 +547,7 @@ mod tests {
     use crate::config::TrainConfig;
     use crate::correction::{CorrectionConfig, correct};
     use crate::demonstrator::DemonstratorProfile;
+    use crate::demos::format::DemoWriter;
     use crate::qlearning::QParams;
     use crate::repr::ReprKind;
     use crate::train::train;
@@ -912,7 +650,9 @@ mod tests {
     fn semantic_errors_name_the_line() {
         let mut agent = QAgent::new(ReprKind::Chasing, Grid::default(), 3, QParams::default()).unwrap();
         let session = serde_json::to_string(&DemoRecord::Session(SessionLine::new(
-            &agent,
+            agent.grid(),
+            agent.blocks(),
+            agent.identity(),
             CorrectionRule::default(),
             "person",
             None,
@@ -1139,5 +879,90 @@ mod tests {
         let (replayed, report) = replay(&base, &v1, BadLines::Fail).unwrap();
         assert_eq!(report.unchecked_sessions, 1);
         assert_eq!(replayed, live);
+    }
+
+    fn fixture(name: &str) -> std::path::PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../tests/fixtures")
+            .join(name)
+    }
+
+    #[test]
+    fn recordings_written_by_the_previous_release_still_replay() {
+        let mut agent = QAgent::load(&fixture("model.safetensors")).unwrap();
+        let before = agent.clone();
+        let report = learn_from_file(&mut agent, &fixture("recording-v2.jsonl"), BadLines::Fail).unwrap();
+        assert_eq!((report.sessions, report.episodes, report.steps), (1, 2, 21));
+        assert!(report.bad_lines.is_empty());
+        assert_ne!(agent, before, "learnt");
+        // The original profile's session (paper-code rewards, their termination rule),
+        // into a learner that takes any session.
+        let episodes = super::super::read_episodes(&fixture("recording-original-v2.jsonl"), None).unwrap();
+        assert_eq!(episodes.len(), 2);
+        assert_eq!(episodes.iter().map(|e| e.steps.len()).sum::<usize>(), 32 - 3);
+    }
+
+    #[test]
+    fn an_invented_reward_or_termination_is_a_bad_line() {
+        let path = fixture("recording-v2.jsonl");
+        let base = QAgent::load(&fixture("model.safetensors")).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        // Line 3 is the first step: a pick, reward 0, the goal far.
+        for (edit, needle) in [
+            (
+                Box::new(|s: &mut StepLine| s.reward = 5.0) as Box<dyn Fn(&mut StepLine)>,
+                "invented reward",
+            ),
+            (Box::new(|s: &mut StepLine| s.terminated = true), "marked terminated"),
+        ] {
+            let text = edited(&bytes, 2, |l| {
+                let DemoRecord::Step(mut s) = serde_json::from_str::<DemoRecord>(l).unwrap() else {
+                    unreachable!()
+                };
+                edit(&mut s);
+                serde_json::to_string(&DemoRecord::Step(s)).unwrap()
+            });
+            let err = replay(&base, &text, BadLines::Fail).unwrap_err();
+            assert!(err.contains("line 3") && err.contains(needle), "{err}");
+        }
+    }
+
+    #[test]
+    fn episodes_are_begun_in_the_learner_before_their_steps() {
+        /// Records what the replay hands it.
+        #[derive(Default)]
+        struct Log(Vec<String>);
+        impl DemoLearner for Log {
+            fn check_world(&self, _grid: Grid, _blocks: usize) -> Result<()> {
+                Ok(())
+            }
+            fn identity(&self) -> Option<String> {
+                None
+            }
+            fn begin_episode(&mut self, episode: u64, _goal: Goal, start: State) -> Result<()> {
+                self.0.push(format!("episode {episode} {start:?}"));
+                Ok(())
+            }
+            fn learn(&mut self, _rule: &CorrectionRule, step: &Experience) -> Result<()> {
+                self.0.push(format!("step {:?}", step.obs.state));
+                Ok(())
+            }
+        }
+        let mut log = Log::default();
+        let report = learn_from_file(&mut log, &fixture("recording-v2.jsonl"), BadLines::Fail).unwrap();
+        let begun: Vec<usize> = log
+            .0
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| l.starts_with("episode"))
+            .map(|(k, _)| k)
+            .collect();
+        assert_eq!(begun.len(), report.episodes);
+        assert_eq!(log.0.len(), report.episodes + report.steps);
+        for &k in &begun {
+            // The first step of each episode starts from the start just begun.
+            let start = log.0[k].splitn(3, ' ').nth(2).unwrap();
+            assert_eq!(log.0[k + 1], format!("step {start}"));
+        }
     }
 }

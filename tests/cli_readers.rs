@@ -1,0 +1,93 @@
+//! The commands that read demonstrations (`dqn --demos-file`, `learn-from-demos`) run the
+//! one checked reader of each file format: what it refuses is one line and exit 2, and the
+//! files the previous release wrote (tests/fixtures/) still read.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+mod common;
+use common::{blockstack, path, scratch, stderr, stdout};
+
+fn fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures").join(name)
+}
+
+/// `blockstack dqn --demos-file FILE` on the default 3-block world, with a tiny network.
+fn dqn(demos: &Path, out: &Path) -> std::process::Output {
+    blockstack(&[
+        "dqn",
+        "--demos-file",
+        path(demos),
+        "--pretrain",
+        "20",
+        "--steps",
+        "20",
+        "--hidden",
+        "16",
+        "--out",
+        path(out),
+    ])
+}
+
+/// The run was refused with exit 2 and one line naming `needle`.
+fn refused_in_one_line(o: &std::process::Output, needle: &str) {
+    let err = stderr(o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains(needle), "{err}");
+}
+
+#[test]
+fn a_step_after_a_terminated_step_is_refused_in_one_line() {
+    let dir = scratch("readers-after-end");
+    let text = std::fs::read_to_string(fixture("trajectory.jsonl")).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let end = lines.iter().position(|l| l.contains("\"terminated\":true")).unwrap();
+    let mut after: serde_json::Value = serde_json::from_str(lines[end]).unwrap();
+    after["step"] = (after["step"].as_u64().unwrap() + 1).into();
+    // Picking the held block again: the rules allow it and change nothing.
+    after["action"] = 7.into();
+    let broken = dir.join("t.jsonl");
+    let body: String = lines[..=end].iter().map(|l| format!("{l}\n")).collect();
+    std::fs::write(&broken, body + &after.to_string() + "\n").unwrap();
+    let out = dir.join("net.safetensors");
+    refused_in_one_line(&dqn(&broken, &out), &format!("line {}", end + 2));
+    assert!(!out.exists());
+}
+
+#[test]
+fn a_device_given_as_demonstrations_is_refused_at_its_first_line() {
+    let dir = scratch("readers-dev-zero");
+    let out = dir.join("net.safetensors");
+    let start = Instant::now();
+    refused_in_one_line(&dqn(Path::new("/dev/zero"), &out), "longer than 64 KiB");
+    assert!(start.elapsed() < Duration::from_secs(30), "not read to the bound");
+}
+
+#[test]
+fn files_written_by_the_previous_release_still_read() {
+    let dir = scratch("readers-fixtures");
+    let out = dir.join("learnt.safetensors");
+    let o = blockstack(&[
+        "learn-from-demos",
+        path(&fixture("recording-v2.jsonl")),
+        "--model",
+        path(&fixture("model.safetensors")),
+        "--on-bad-line",
+        "fail",
+        "--out",
+        path(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("in 2 episodes of 1 sessions; 0 of 24 lines skipped"),
+        "{}",
+        stdout(&o)
+    );
+    for demos in ["trajectory.jsonl", "recording-v2.jsonl"] {
+        let net = dir.join("net.safetensors");
+        let o = dqn(&fixture(demos), &net);
+        assert!(o.status.success(), "{demos}: {}", stderr(&o));
+        assert!(net.exists(), "{demos}");
+    }
+}
