@@ -12,7 +12,7 @@ use std::path::Path;
 use agent::eval::{EvalPlan, Evaluation};
 use agent::{Policy, QAgent};
 use oracle::ExactSolver;
-use sim::{EnvConfig, GoalSpec, Grid, Profile, RewardModel};
+use sim::{EnvConfig, Goal, GoalSpec, Grid, Profile, RewardModel};
 
 use crate::error::Result;
 use crate::model::{Dqn, FORMAT, MAX_NETWORK_BYTES};
@@ -95,6 +95,19 @@ impl AnyModel {
             horizon: sim::DEFAULT_HORIZON,
             termination: sim::Termination::Goal,
             ..trained
+        }
+    }
+
+    /// An evaluation in the model's own world ([`AnyModel::world`], its profile reported):
+    /// `episodes` seeded starts from base seed `seed` on each of `goals`, as `blockstack
+    /// eval` plays them when no flag changes the world.
+    pub fn eval_plan(&self, goals: Vec<Goal>, episodes: u64, seed: u64) -> EvalPlan {
+        EvalPlan {
+            world: self.world(),
+            profile: self.profile(),
+            goals,
+            episodes,
+            seed,
         }
     }
 

@@ -44,7 +44,7 @@ pub fn check_network_obs(kind: ObsKind) -> Result<()> {
     if NETWORK_OBS.contains(&kind) {
         return Ok(());
     }
-    let hint = if kind == ObsKind::RolePlanes {
+    let hint = if kind == ObsKind::Planes {
         " (the networks' `planes` of earlier releases are called role-planes now)"
     } else {
         ""

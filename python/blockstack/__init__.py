@@ -15,6 +15,8 @@ Importing the package registers ``blockstack/Stack-v0`` with Gymnasium::
 - :func:`solve`: a shortest (or the oracle's) plan from any state.
 - :func:`demonstrations` and :func:`read_recording`: expert trajectories, and the CLI's
   recordings, as dicts of numpy arrays.
+- :func:`load`: a trained model file of either kind, played and evaluated with
+  Stable-Baselines3's conventions (:class:`Model`).
 - :func:`train`: the Rust tabular trainer, in-process; ``python -m blockstack.sweep`` runs
   grids of it on Ray.
 
@@ -28,16 +30,21 @@ from gymnasium.envs.registration import register, registry
 from blockstack._native import REWARDS, episode_seed, train
 from blockstack.demonstrations import demonstrations, read_recording
 from blockstack.env import StackEnv
+from blockstack.model import Model, load
+from blockstack import vector
 from blockstack.planning import solve
 
 __all__ = [
     "REWARDS",
+    "Model",
     "StackEnv",
     "demonstrations",
     "episode_seed",
+    "load",
     "read_recording",
     "solve",
     "train",
+    "vector",
 ]
 
 ENV_ID = "blockstack/Stack-v0"

@@ -43,6 +43,8 @@ class StackEnv(gym.Env):
       An illegal action is a ``ValueError`` that changes nothing; ``info["action_mask"]``
       says which are legal. (``gymnasium.utils.env_checker.check_env`` steps random
       actions, so it passes in ``spec`` only.)
+    - ``protocol`` (``free`` or ``paper``) and ``start`` (``uniform`` or ``paper``): one rule
+      of the profile each, set otherwise; ``None`` (the default) keeps the profile's.
     - ``render_mode``: ``None``, ``rgb_array`` (the frame) or ``ansi`` (text).
     - ``max_episode_steps``: the horizon: an episode that has not reached the goal after
       this many steps is truncated, by the Rust environment itself. (``gymnasium.make``
@@ -75,12 +77,14 @@ class StackEnv(gym.Env):
         render_mode: Optional[str] = None,
         max_episode_steps: int = 1000,
         horizon: Optional[int] = None,
+        protocol: Optional[str] = None,
+        start: Optional[str] = None,
     ):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"cannot read render mode from {render_mode!r}: choose None, rgb_array or ansi")
         steps = max_episode_steps if horizon is None else horizon
         self._native = _native.NativeEnv(
-            blocks, goal_text(goal), tuple(grid), reward, backend, steps, profile, obs
+            blocks, goal_text(goal), tuple(grid), reward, backend, steps, profile, obs, protocol, start
         )
         self.render_mode = render_mode
         self.obs_kind = obs

@@ -24,7 +24,7 @@ pub fn observation_shape(obs: &str, blocks: usize, grid: (usize, usize)) -> PyRe
 
 /// The world an environment is made of, from the Python keyword arguments: the profile's
 /// world (its action protocol, start rule and reward) with the given grid, blocks, goal,
-/// horizon and backend, and the given reward if one is named.
+/// horizon and backend, and the reward, protocol and start rule given by name, if any.
 #[allow(clippy::too_many_arguments)]
 pub fn env_config(
     blocks: usize,
@@ -34,6 +34,7 @@ pub fn env_config(
     backend: &str,
     horizon: u32,
     profile: &str,
+    rules: PlayRules<'_>,
 ) -> PyResult<EnvConfig> {
     let profile = self::profile(profile)?;
     let defaults = EnvConfig::for_profile(profile);
@@ -51,10 +52,27 @@ pub fn env_config(
             None => defaults.reward,
         },
         backend: backend.parse::<Backend>().or_value_error()?,
+        protocol: match rules.protocol {
+            Some(name) => name.parse().or_value_error()?,
+            None => defaults.protocol,
+        },
+        start: match rules.start {
+            Some(name) => name.parse().or_value_error()?,
+            None => defaults.start,
+        },
         ..defaults
     };
     config.validate().or_value_error()?;
     Ok(config)
+}
+
+/// The rules of play a profile sets, named one by one (`None`: the profile's).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PlayRules<'a> {
+    /// The action protocol's name (`free` or `paper`).
+    pub protocol: Option<&'a str>,
+    /// The start rule's name (`uniform` or `paper`).
+    pub start: Option<&'a str>,
 }
 
 /// A grid from Python: text such as `"7x7"` or a `(width, height)` pair, as every function

@@ -10,7 +10,7 @@ use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sim::seeding::episode_seed;
-use sim::{Action, ActionProtocol, Cell, Env, Goal, Grid, Observation, State};
+use sim::{Action, Env, Grid, Observation};
 
 use crate::boundary::{OrValueError, guard, value_error};
 use crate::config::{self, ObsKind, env_config};
@@ -176,7 +176,7 @@ pub fn demonstrations<'py>(
     profile: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let kind = config::obs_kind(obs)?;
-    let config = env_config(blocks, goal, grid, reward, backend, horizon, profile)?;
+    let config = env_config(blocks, goal, grid, reward, backend, horizon, profile, config::PlayRules::default())?;
     let mut policy: Box<dyn Policy + Send> = match expert {
         "exact" => Box::new(ExactPolicy::new(config.grid)),
         "oracle" => Box::new(OraclePolicy::new(config.grid)),

@@ -72,7 +72,7 @@ impl NativeEnv {
     /// An environment of the given world; a `ValueError` with the crate's message for a
     /// config that cannot make one.
     #[new]
-    #[pyo3(signature = (blocks=3, goal=None, grid=(7, 7), reward=None, backend="physics", horizon=1000, profile="spec", obs="planes"))]
+    #[pyo3(signature = (blocks=3, goal=None, grid=(7, 7), reward=None, backend="physics", horizon=1000, profile="spec", obs="planes", protocol=None, start=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         blocks: usize,
@@ -83,9 +83,12 @@ impl NativeEnv {
         horizon: u32,
         profile: &str,
         obs: &str,
+        protocol: Option<&str>,
+        start: Option<&str>,
     ) -> PyResult<Self> {
         let kind = config::obs_kind(obs)?;
-        let config = env_config(blocks, goal, grid, reward, backend, horizon, profile)?;
+        let rules = config::PlayRules { protocol, start };
+        let config = env_config(blocks, goal, grid, reward, backend, horizon, profile, rules)?;
         Ok(NativeEnv {
             env: guard(|| Env::new(config).or_value_error())?,
             kind,

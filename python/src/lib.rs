@@ -10,6 +10,7 @@
 //! - [`planning`]: the exact solver and the oracle (`blockstack.solve`).
 //! - [`demos`]: expert demonstrations and recorded episodes as arrays.
 //! - [`training`]: the tabular trainer, in-process (`blockstack.train`, the Ray sweep).
+//! - [`model`]: a model file of either kind, loaded, played and evaluated (`blockstack.load`).
 //! - [`output`]: files written through the `files` crate (the sweep's table).
 //!
 //! Errors: every error of the crates reaches Python as `ValueError` with the crate's own
@@ -22,6 +23,7 @@ mod boundary;
 mod config;
 mod demos;
 mod env;
+mod model;
 mod observe;
 mod output;
 mod planning;
@@ -33,6 +35,7 @@ mod vector;
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<env::NativeEnv>()?;
     m.add_class::<vector::NativeVecEnv>()?;
+    m.add_class::<model::NativeModel>()?;
     m.add_function(wrap_pyfunction!(planning::solve, m)?)?;
     m.add_function(wrap_pyfunction!(demos::demonstrations, m)?)?;
     m.add_function(wrap_pyfunction!(demos::read_recording, m)?)?;

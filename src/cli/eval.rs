@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use agent::Summary;
-use agent::eval::{EvalPlan, EvalReport};
+use agent::eval::EvalReport;
 use agent::optimality::Optimality;
 use anyhow::Result;
 use clap::Args;
@@ -63,21 +63,15 @@ pub fn eval(args: EvalArgs) -> Result<()> {
         (None, Some(r)) => r,
         _ => rules.reward,
     };
-    let plan = EvalPlan {
-        world: EnvConfig {
-            grid: model.grid(),
-            blocks: model.blocks(),
-            horizon: args.horizon,
-            reward,
-            backend,
-            protocol: rules.protocol,
-            start: rules.start,
-            ..EnvConfig::default()
-        },
-        profile: rules.profile,
-        goals,
-        episodes: args.episodes,
-        seed: args.seed,
+    let mut plan = model.eval_plan(goals, args.episodes, args.seed);
+    plan.profile = rules.profile;
+    plan.world = EnvConfig {
+        horizon: args.horizon,
+        reward,
+        backend,
+        protocol: rules.protocol,
+        start: rules.start,
+        ..plan.world
     };
     plan.world.validate()?;
     let solver = args.budget.solver(model.grid()).with_protocol(rules.protocol);

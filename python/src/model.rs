@@ -1,0 +1,143 @@
+//! Trained models from Python: either kind of model file (`neural::AnyModel`), its world,
+//! its actions and its evaluation, behind `blockstack.load`.
+
+use std::path::PathBuf;
+
+use agent::eval::EvalPlan;
+use agent::rollout::policy_rng;
+use neural::AnyModel;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use sim::seeding::SimRng;
+use sim::{Goal, Observation, State};
+
+use crate::boundary::{OrValueError, guard, value_error};
+use crate::env::state_from;
+
+/// A model file of either kind, loaded: `blockstack.Model` wraps it.
+#[pyclass(module = "blockstack._native")]
+pub struct NativeModel {
+    model: AnyModel,
+    path: String,
+    /// The generator the policy draws from (ties, and random actions when not
+    /// deterministic): [`policy_rng`] of the episode's seed after `reset(seed)`, as
+    /// `blockstack run` plays an episode reset with that seed.
+    rng: SimRng,
+}
+
+#[pymethods]
+impl NativeModel {
+    /// The model file at `path` (`blockstack train` or `blockstack dqn`); a `ValueError`
+    /// saying what is wrong with a file that is neither.
+    #[new]
+    fn new(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+        let model = py.detach(|| guard(|| AnyModel::load(&path).or_value_error()))?;
+        Ok(NativeModel {
+            model,
+            path: path.display().to_string(),
+            rng: policy_rng(0),
+        })
+    }
+
+    /// `q` (a tabular Q-agent) or `dqn` (a network).
+    #[getter]
+    fn kind(&self) -> &'static str {
+        match self.model {
+            AnyModel::Q(_) => "q",
+            AnyModel::Dqn(_) => "dqn",
+        }
+    }
+
+    /// The model's name in reports (as `blockstack eval` prints it).
+    #[getter]
+    fn name(&self) -> String {
+        self.model.name()
+    }
+
+    /// The world it was trained in, as keyword arguments of `blockstack.StackEnv`:
+    /// `blocks`, `grid`, `reward`, `backend`, `profile`, `protocol`, `start`, `horizon`.
+    fn world<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let w = self.model.world();
+        let d = PyDict::new(py);
+        d.set_item("blocks", w.blocks)?;
+        d.set_item("grid", (w.grid.width(), w.grid.height()))?;
+        d.set_item("reward", w.reward.to_string())?;
+        d.set_item("backend", w.backend.to_string())?;
+        d.set_item("profile", self.model.profile().to_string())?;
+        d.set_item("protocol", w.protocol.to_string())?;
+        d.set_item("start", w.start.to_string())?;
+        d.set_item("horizon", w.horizon)?;
+        Ok(d)
+    }
+
+    /// Starts the policy's generator for an episode reset with `seed`, as `blockstack run`
+    /// does: from then on the model breaks ties (and draws random actions) as the CLI would
+    /// in that episode.
+    fn reset(&mut self, seed: u64) {
+        self.rng = policy_rng(seed);
+    }
+
+    /// The action for a `state` observation (`cells` by block id, `held` a block id or
+    /// `None`, `goal` bottom to top): greedy with `epsilon` 0, else a random legal action
+    /// with probability `epsilon`.
+    #[pyo3(signature = (cells, held, goal, epsilon=0.0))]
+    fn act(&mut self, cells: Vec<(u8, u8)>, held: Option<u8>, goal: Vec<usize>, epsilon: f64) -> PyResult<usize> {
+        let state: State = state_from(&cells, held)?;
+        let goal = Goal::from_indices(&goal).or_value_error()?;
+        let world = self.model.world();
+        self.model.check_world(world.grid, state.block_count()).or_value_error()?;
+        if goal.block_count() != state.block_count() {
+            return Err(value_error(format!(
+                "the goal has {} blocks and the state {}",
+                goal.block_count(),
+                state.block_count()
+            )));
+        }
+        let obs = Observation {
+            grid: world.grid,
+            state,
+            goal,
+            protocol: world.protocol,
+        };
+        let (model, rng) = (&self.model, &mut self.rng);
+        guard(|| {
+            let mut policy = model.policy(epsilon).or_value_error()?;
+            Ok(policy.act(&obs, rng).or_value_error()?.index())
+        })
+    }
+
+    /// Evaluates the model in its own world as `blockstack eval --json` does with the same
+    /// settings, and returns that JSON text: `episodes` seeded starts from base seed `seed`
+    /// on each goal (`goals` `:`-separated, default every goal), with `epsilon`, on the
+    /// `backend`, games cut at `horizon`. The GIL is released.
+    #[pyo3(signature = (episodes=500, seed=2, goals=None, epsilon=0.1, backend="physics", horizon=1000))]
+    fn evaluate(
+        &self,
+        py: Python<'_>,
+        episodes: u64,
+        seed: u64,
+        goals: Option<&str>,
+        epsilon: f64,
+        backend: &str,
+        horizon: u32,
+    ) -> PyResult<String> {
+        let blocks = self.model.blocks();
+        let goals = match goals {
+            Some(text) => Goal::parse_list(text, blocks).or_value_error()?,
+            None => Goal::all(blocks).or_value_error()?,
+        };
+        let mut plan: EvalPlan = self.model.eval_plan(goals, episodes, seed);
+        plan.world.backend = backend.parse().or_value_error()?;
+        plan.world.horizon = horizon;
+        plan.world.validate().or_value_error()?;
+        py.detach(|| {
+            guard(|| {
+                let evaluation = self
+                    .model
+                    .evaluate(&plan, &self.path, epsilon, &mut || {})
+                    .or_value_error()?;
+                serde_json::to_string(&evaluation.report).or_value_error()
+            })
+        })
+    }
+}
