@@ -70,8 +70,9 @@ use serde::Serialize;
 use sim::{Goal, Profile};
 use thiserror::Error;
 
-use crate::plots::{BarChart, BoxPlot, CurvesChart, EpisodeFrames, LearningCurve, PlotError};
-use crate::stats::StatsError;
+use crate::episode::EpisodeFrames;
+use plots::{BarChart, BoxPlot, CurvesChart, LearningCurve, PlotError};
+use stats::StatsError;
 
 /// The `format` field of `results.json`.
 pub const FORMAT: &str = "blockstack-reproduction";

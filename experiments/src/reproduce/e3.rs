@@ -210,7 +210,7 @@ pub(super) fn run(ctx: &Context, ours: &QAgent) -> Result<Experiment> {
 /// below the horizon. The two-sample test's p-value only falls as that distance grows; the
 /// least separated samples the counts allow (every success at one same step count, every
 /// failure at the horizon) give the largest p-value, which is what this returns.
-pub(super) fn paper_ks_bound() -> Result<crate::stats::TestResult> {
+pub(super) fn paper_ks_bound() -> Result<stats::TestResult> {
     let [learner, random] = [paper::E3.rows[0], paper::E3.rows[1]];
     let sample = |row: paper::PaperRow| -> Vec<f64> {
         let (failures, games) = (row.failures.unwrap_or(0), row.games.unwrap_or(0));
@@ -224,7 +224,7 @@ pub(super) fn paper_ks_bound() -> Result<crate::stats::TestResult> {
             })
             .collect()
     };
-    Ok(crate::stats::ks_2samp(&sample(learner), &sample(random))?)
+    Ok(stats::ks_2samp(&sample(learner), &sample(random))?)
 }
 
 /// The note on the paper's own KS p-value, from [`paper_ks_bound`].

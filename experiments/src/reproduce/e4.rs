@@ -13,7 +13,7 @@ use super::arms::{ArmResult, Goals, Row, Suite, Table};
 use super::e3::ours_description;
 use super::text::{mean_name, num, percent};
 use super::{Context, Curve, CurvePoint, Drawing, Experiment, Figure, Result, Scale, Setting, paper, paper_learner};
-use crate::plots::{LearningCurve, LearningPoint, LearningSeries, SeriesStyle};
+use plots::{LearningCurve, LearningPoint, LearningSeries, SeriesStyle};
 
 /// Jobs reported: a training stretch and a suite per point (a suite per test epsilon in the
 /// original world), per replicate of the paper's learner and for ours.

@@ -10,7 +10,8 @@ use super::arms::{ArmResult, Goals, Row, Rules, Suite, Table, TestOutcome, mean_
 use super::e3::ours_description;
 use super::text::{num, significance};
 use super::{Context, Drawing, Experiment, Figure, HORIZON, Result, Scale, Setting};
-use crate::plots::{Bar, BarChart, EpisodeFrames, Reference};
+use crate::episode::EpisodeFrames;
+use plots::{Bar, BarChart, Reference};
 
 /// The agents, in the table's order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -22,7 +22,7 @@ use sim::{Goal, Profile, RewardModel};
 use super::arms::{ArmResult, Goals, Row, Suite, Table};
 use super::text::num;
 use super::{Context, Drawing, Experiment, Figure, HORIZON, Options, Result, Setting};
-use crate::plots::{CurvesChart, Series};
+use plots::{CurvesChart, Series};
 
 /// How much E8 trains.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]

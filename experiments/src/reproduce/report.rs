@@ -9,7 +9,8 @@ use super::paper::MeanOver;
 use super::spread::Spread;
 use super::text::{ALPHA, failures, num, p_value, verdict};
 use super::{Curve, Decomposition, Drawing, Experiment, ReproduceError, Reproduction, Result};
-use crate::plots::{GifOptions, bar_chart, box_plot, curves_chart, episode_gif, learning_curve};
+use crate::episode::{GifOptions, episode_gif};
+use plots::{bar_chart, box_plot, curves_chart, learning_curve};
 
 /// The files a report is made of.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -56,7 +57,7 @@ pub fn write_report(r: &Reproduction, dir: &Path) -> Result<ReportFiles> {
     })
 }
 
-fn chart(files: crate::plots::ChartFiles) -> [PathBuf; 2] {
+fn chart(files: plots::ChartFiles) -> [PathBuf; 2] {
     [files.png, files.svg]
 }
 
@@ -140,7 +141,7 @@ pub fn markdown(r: &Reproduction) -> String {
              says otherwise (column ε).",
             r.paper_settings.test_epsilon
         ),
-        "**Tests.** Wilcoxon signed-rank (paired), two-sample Kolmogorov-Smirnov: `experiments::stats`, ports of \
+        "**Tests.** Wilcoxon signed-rank (paired), two-sample Kolmogorov-Smirnov: the `stats` crate, ports of \
          SciPy's defaults checked against SciPy; p is two-sided. Our p pools every agent's games; beside it, \
          (k/n) says for how many of the n agents alone (the paper's protocol: one agent) p is below 0.05."
             .into(),
