@@ -37,6 +37,20 @@ fn the_quick_report_holds_every_experiment() {
     assert_eq!(json["format"], "blockstack-reproduction");
     assert_eq!(json["version"], 1);
     assert_eq!(json["options"]["quick"], true);
+    // Where it ran: the commit (or "unknown"), the machine, the threads; at the top of the
+    // report too.
+    let ran = &json["ran"];
+    let commit = ran["commit"].as_str().unwrap();
+    assert!(!commit.is_empty() && !commit.contains(char::is_whitespace), "{ran}");
+    assert!(ran["cpu"].as_str().is_some_and(|c| !c.is_empty()), "{ran}");
+    assert!(ran["cores"].as_u64().unwrap() >= 1 && ran["threads"].as_u64().unwrap() >= 1);
+    let top = readme.lines().nth(2).unwrap_or_default();
+    assert!(top.starts_with(&format!("Ran at commit {commit}, ")), "{top}");
+    // The front page's block, computed from results.json.
+    let summary = std::fs::read_to_string(dir.join("summary.md")).expect("summary.md exists");
+    let text = std::fs::read_to_string(dir.join("results.json")).unwrap();
+    assert_eq!(summary, experiments::reproduce::summary(&text).unwrap());
+    assert_eq!(summary.lines().filter(|l| l.starts_with("| E")).count(), 8, "{summary}");
     let experiments = json["experiments"].as_array().unwrap();
     let ids: Vec<&str> = experiments.iter().map(|e| e["id"].as_str().unwrap()).collect();
     assert_eq!(ids, ["E1", "E2", "E3", "E4", "E5", "E6", "E7", "E8"]);
@@ -190,6 +204,41 @@ fn the_quick_report_holds_every_experiment() {
         );
         assert!((ours - theirs).abs() < 1e-9, "{world}: {ours} against {theirs}");
     }
+}
+
+#[test]
+fn only_runs_the_experiments_asked_for() {
+    let dir = scratch("reproduce-only");
+    let out = dir.join("report");
+    let o = blockstack(&[
+        "reproduce",
+        "--quick",
+        "--only",
+        "e1",
+        "--jobs",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("reproduced E1 (quick run, seed 1, 1 thread)"));
+    let json = read_json(&out.join("results.json"));
+    let ids: Vec<&str> = json["experiments"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e["id"].as_str().unwrap())
+        .collect();
+    assert_eq!(ids, ["E1"]);
+    assert_eq!(json["ran"]["threads"], 1);
+    let o = blockstack(&["reproduce", "--quick", "--only", "E9", "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(stderr(&o).trim_end().lines().count(), 1, "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("--only E9: name experiments E1 to E8"),
+        "{}",
+        stderr(&o)
+    );
 }
 
 #[test]

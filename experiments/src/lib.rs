@@ -1,6 +1,6 @@
-//! Experiments: the paper reproduced ([`reproduce`]), with its statistics ([`stats`]) and
-//! pictures ([`plots`]).
+//! Experiments: the paper reproduced ([`reproduce`]), and the pictures of its episodes
+//! ([`episode`]). The statistics and the charts it uses are crates of their own (`stats`,
+//! `plots`), knowing nothing of blocks; this crate is the reproduction only.
 
-pub mod plots;
+pub mod episode;
 pub mod reproduce;
-pub mod stats;

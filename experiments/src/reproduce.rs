@@ -2,9 +2,19 @@
 //! paper's figures, with their statistical tests, pictures, a report and machine-readable
 //! results. `blockstack reproduce` is the command over it.
 //!
-//! [`reproduce`] runs every experiment and returns the [`Reproduction`]: data only, nothing
-//! printed, nothing written; [`write_report`] then draws the pictures and writes
-//! `README.md` and `results.json` into a directory.
+//! [`reproduce`] runs the experiments asked for and returns the [`Reproduction`]: data only,
+//! nothing printed, nothing written; [`write_report`] then draws the pictures and writes
+//! `README.md`, `results.json` and the front page's summary, `summary.md` ([`summary`]),
+//! into a directory, with where the run happened ([`Ran`]).
+//!
+//! # How a run is organised
+//!
+//! Every experiment is one module `e1` to `e8` with one signature, `run(&Context, &Shared)`,
+//! listed once in [`EXPERIMENTS`] with its id, the jobs it reports and the parts of the
+//! shared stage it needs. The shared stage (`Shared`) trains the agents several experiments
+//! play (our learner, the paper's learner in the SPEC world) before the experiments that
+//! need them, and only those the experiments asked for need: `--only E1` trains none of
+//! them. The experiments that need nothing run while the shared stage trains.
 //!
 //! # How the experiments are run
 //!
@@ -54,24 +64,31 @@ mod e6;
 mod e7;
 mod e8;
 pub mod paper;
+mod ran;
 mod report;
+mod shared;
 mod spread;
+mod summary;
 mod text;
 
 pub use arms::{ArmResult, Goals, Measured, Row, Rules, Suite, Table, TestOutcome};
 pub use e1::{Decomposition, Gap, WorldArm};
 pub use e8::Budget;
+pub use ran::Ran;
 pub use report::{ReportFiles, write_report};
 pub use spread::{PaperInside, Placement, Spread};
+pub use summary::summary;
 
-use agent::{QAgent, Schedule, TrainConfig, Trained};
+use agent::{Schedule, TrainConfig, Trained};
 use rayon::prelude::*;
 use serde::Serialize;
 use sim::{Goal, Profile};
 use thiserror::Error;
 
-use crate::plots::{BarChart, BoxPlot, CurvesChart, EpisodeFrames, LearningCurve, PlotError};
-use crate::stats::StatsError;
+use crate::episode::EpisodeFrames;
+use plots::{BarChart, BoxPlot, CurvesChart, LearningCurve, PlotError};
+use shared::{Part, Shared};
+use stats::StatsError;
 
 /// The `format` field of `results.json`.
 pub const FORMAT: &str = "blockstack-reproduction";
@@ -113,6 +130,18 @@ pub enum ReproduceError {
     /// The report's folder or one of its files could not be written.
     #[error(transparent)]
     Files(#[from] files::FilesError),
+    /// An experiment id that is not in [`EXPERIMENTS`].
+    #[error("no experiment {id}: name experiments E1 to E8")]
+    UnknownExperiment {
+        /// The id asked for.
+        id: String,
+    },
+    /// A `results.json` that is not a reproduction's.
+    #[error("not a reproduction's results.json: {reason}")]
+    Results {
+        /// What is missing or wrong.
+        reason: String,
+    },
 }
 
 /// Shorthand for results whose error is a [`ReproduceError`].
@@ -127,8 +156,8 @@ pub struct Options {
     pub quick: bool,
     /// E8's long budget: the pixel runs and the whole ablation ([`Budget::Long`]).
     pub long: bool,
-    /// The experiments to run, by id ("E1" to "E8"); empty for all. E1-E7 share their
-    /// agents, so asking for any of them runs them all and reports the ones asked for.
+    /// The experiments to run, by id ("E1" to "E8", any case); empty for all. The agents
+    /// they share are trained only when one of them needs them.
     pub only: Vec<String>,
 }
 
@@ -225,18 +254,6 @@ impl Scale {
             Profile::Spec => self.paper_games,
             Profile::Original => self.original_games,
         }
-    }
-
-    /// Jobs (trainings, corrections, suites played) the whole run reports to its
-    /// [`ProgressSink`].
-    pub fn jobs(&self) -> u64 {
-        e1::jobs(self)
-            + e2::jobs(self)
-            + e3::jobs(self)
-            + e4::jobs(self)
-            + e5::jobs(self)
-            + e6::jobs(self)
-            + e7::jobs(self)
     }
 }
 
@@ -390,7 +407,7 @@ impl Figure {
 /// One experiment's results, ready for the report.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Experiment {
-    /// "E1" to "E7".
+    /// "E1" to "E8".
     pub id: String,
     /// What it asks.
     pub title: String,
@@ -429,12 +446,79 @@ pub struct Reproduction {
     pub experiments: Vec<Experiment>,
 }
 
-/// What every experiment shares: the counts, the seeds, and where progress goes.
+/// What every experiment shares: the counts, the seeds, E8's budget, and where progress
+/// goes.
 pub(crate) struct Context<'a> {
     scale: Scale,
     seeds: Seeds,
+    budget: Budget,
     progress: &'a dyn ProgressSink,
 }
+
+/// One experiment of the reproduction, as [`EXPERIMENTS`] lists it.
+pub struct Spec {
+    /// "E1" to "E8".
+    pub id: &'static str,
+    /// The parts of the shared stage it plays.
+    needs: &'static [Part],
+    /// The jobs it reports to the [`ProgressSink`].
+    jobs: fn(&Context) -> u64,
+    /// Runs it.
+    run: fn(&Context, &Shared) -> Result<Experiment>,
+}
+
+/// Every experiment, in the report's order: E1-E7 are the paper's section VI (E7 the table
+/// it never had), E8 its section III-C.
+pub const EXPERIMENTS: [Spec; 8] = [
+    Spec {
+        id: "E1",
+        needs: &[],
+        jobs: e1::jobs,
+        run: e1::run,
+    },
+    Spec {
+        id: "E2",
+        needs: &[],
+        jobs: e2::jobs,
+        run: e2::run,
+    },
+    Spec {
+        id: "E3",
+        needs: &[Part::Ours],
+        jobs: e3::jobs,
+        run: e3::run,
+    },
+    Spec {
+        id: "E4",
+        needs: &[Part::OursCurve],
+        jobs: e4::jobs,
+        run: e4::run,
+    },
+    Spec {
+        id: "E5",
+        needs: &[],
+        jobs: e5::jobs,
+        run: e5::run,
+    },
+    Spec {
+        id: "E6",
+        needs: &[],
+        jobs: e6::jobs,
+        run: e6::run,
+    },
+    Spec {
+        id: "E7",
+        needs: &[Part::Ours, Part::PaperSpec],
+        jobs: e7::jobs,
+        run: e7::run,
+    },
+    Spec {
+        id: "E8",
+        needs: &[],
+        jobs: e8::jobs,
+        run: e8::run,
+    },
+];
 
 /// The worlds E1-E6 are run in: the paper's as coded, then ours.
 const WORLDS: [Profile; 2] = [Profile::Original, Profile::Spec];
@@ -514,6 +598,17 @@ fn goals(texts: &[&str]) -> Vec<Goal> {
         .collect()
 }
 
+/// The parts of the shared stage `chosen` need, each once.
+fn needs(chosen: &[&Spec]) -> Vec<Part> {
+    let mut needs = Vec::new();
+    for part in chosen.iter().flat_map(|e| e.needs) {
+        if !needs.contains(part) {
+            needs.push(*part);
+        }
+    }
+    needs
+}
+
 /// Runs the experiments `options` ask for, reporting progress to `progress`, on the
 /// current rayon pool.
 pub fn reproduce(options: &Options, progress: &dyn ProgressSink) -> Result<Reproduction> {
@@ -523,23 +618,39 @@ pub fn reproduce(options: &Options, progress: &dyn ProgressSink) -> Result<Repro
 /// Runs the experiments `options` ask for with counts of one's own for E1-E7 (each schedule
 /// in `scale` must have a point, and `replicates` must be at least 1); E8's budget comes
 /// from `options`.
+///
+/// The shared stage trains what the chosen experiments need while those that need nothing
+/// of it run; then the others run. Every result is fixed by its seed, so neither this
+/// order nor the number of threads changes any figure.
 pub fn reproduce_with(options: &Options, scale: Scale, progress: &dyn ProgressSink) -> Result<Reproduction> {
-    let seeds = Seeds::new(options.seed, &scale);
-    let paper_part = ["E1", "E2", "E3", "E4", "E5", "E6", "E7"]
+    if let Some(id) = options
+        .only
         .iter()
-        .any(|id| options.runs(id));
-    let e8 = options.runs("E8").then(|| Budget::of(options));
-    progress.begin(if paper_part { scale.jobs() } else { 0 } + e8.map_or(0, e8::jobs));
-    let ctx = Context { scale, seeds, progress };
-    let mut experiments = if paper_part {
-        paper_experiments(&ctx)?
-    } else {
-        Vec::new()
-    };
-    experiments.retain(|e| options.runs(&e.id));
-    if let Some(budget) = e8 {
-        experiments.push(e8::run(&ctx, budget)?);
+        .find(|id| !EXPERIMENTS.iter().any(|e| e.id.eq_ignore_ascii_case(id)))
+    {
+        return Err(ReproduceError::UnknownExperiment { id: id.clone() });
     }
+    let chosen: Vec<&Spec> = EXPERIMENTS.iter().filter(|e| options.runs(e.id)).collect();
+    let needs = needs(&chosen);
+    let seeds = Seeds::new(options.seed, &scale);
+    let ctx = Context {
+        scale,
+        seeds,
+        budget: Budget::of(options),
+        progress,
+    };
+    progress.begin(Shared::jobs(&ctx, &needs) + chosen.iter().map(|e| (e.jobs)(&ctx)).sum::<u64>());
+    let (free, bound): (Vec<&Spec>, Vec<&Spec>) = chosen.iter().partition(|e| e.needs.is_empty());
+    let run_all = |specs: &[&Spec], shared: &Shared| -> Result<Vec<Experiment>> {
+        specs.iter().map(|e| (e.run)(&ctx, shared)).collect()
+    };
+    // Our learner trains for longest: it goes on one thread while the rest share the others.
+    let (shared, free) = rayon::join(|| Shared::train(&ctx, &needs), || run_all(&free, &Shared::default()));
+    let (shared, free) = (shared?, free?);
+    let bound = run_all(&bound, &shared)?;
+    // Back in the table's order.
+    let mut experiments: Vec<Experiment> = free.into_iter().chain(bound).collect();
+    experiments.sort_by_key(|e| EXPERIMENTS.iter().position(|s| s.id == e.id));
     Ok(Reproduction {
         format: FORMAT,
         version: VERSION,
@@ -549,28 +660,6 @@ pub fn reproduce_with(options: &Options, scale: Scale, progress: &dyn ProgressSi
         paper_settings: paper::SETTINGS,
         experiments,
     })
-}
-
-/// E1 to E7, which share their agents.
-fn paper_experiments(ctx: &Context) -> Result<Vec<Experiment>> {
-    // Our learner trains for longest: it goes on one thread while the rest share the others.
-    let (ours, rest) = rayon::join(
-        || e4::train_ours(ctx),
-        || -> Result<_> {
-            let e1 = e1::run(ctx)?;
-            let e2 = e2::run(ctx)?;
-            let paper_curves = e4::paper_curves(ctx)?;
-            let (e5, paper_agent) = e5::run(ctx)?;
-            let e6 = e6::run(ctx)?;
-            Ok((e1, e2, paper_curves, e5, paper_agent, e6))
-        },
-    );
-    let (ours, ours_curve): (QAgent, Curve) = ours?;
-    let (e1, e2, paper_curves, e5, paper_agent, e6) = rest?;
-    let e3 = e3::run(ctx, &ours)?;
-    let e4 = e4::experiment(ctx, paper_curves, ours_curve);
-    let e7 = e7::run(ctx, &paper_agent, &ours)?;
-    Ok(vec![e1, e2, e3, e4, e5, e6, e7])
 }
 
 #[cfg(test)]
@@ -614,17 +703,39 @@ mod tests {
         }
     }
 
-    fn run(threads: usize) -> (Reproduction, u64, u64) {
+    /// The experiments `only` asks for, on `threads` threads: the results, the jobs
+    /// announced and the jobs reported.
+    fn run_only(threads: usize, only: &[&str]) -> (Reproduction, u64, u64) {
         let count = Count::default();
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         let options = Options {
             seed: 5,
             quick: true,
             long: false,
-            only: Vec::new(),
+            only: only.iter().map(|id| id.to_string()).collect(),
         };
         let r = pool.install(|| reproduce_with(&options, tiny(), &count)).unwrap();
         (r, count.announced.into_inner(), count.done.into_inner())
+    }
+
+    fn run(threads: usize) -> (Reproduction, u64, u64) {
+        run_only(threads, &[])
+    }
+
+    /// The jobs the run of `only` (empty: all) announces: each experiment's and the shared
+    /// parts they need.
+    fn jobs(only: &[&str]) -> u64 {
+        let ctx = Context {
+            scale: tiny(),
+            seeds: Seeds::new(5, &tiny()),
+            budget: Budget::Quick,
+            progress: &(),
+        };
+        let chosen: Vec<&Spec> = EXPERIMENTS
+            .iter()
+            .filter(|e| only.is_empty() || only.contains(&e.id))
+            .collect();
+        Shared::jobs(&ctx, &needs(&chosen)) + chosen.iter().map(|e| (e.jobs)(&ctx)).sum::<u64>()
     }
 
     #[test]
@@ -636,10 +747,46 @@ mod tests {
             serde_json::to_string(&three).unwrap()
         );
         assert_eq!(one, three, "the samples behind the tables too");
-        assert_eq!(announced, tiny().jobs() + e8::jobs(Budget::Quick));
+        assert_eq!(announced, jobs(&[]));
         assert_eq!(done, announced);
         let ids: Vec<&str> = one.experiments.iter().map(|e| e.id.as_str()).collect();
         assert_eq!(ids, ["E1", "E2", "E3", "E4", "E5", "E6", "E7", "E8"]);
+    }
+
+    #[test]
+    fn each_experiment_alone_trains_only_what_it_needs_and_gives_the_same_figures() {
+        let (all, _, _) = run(2);
+        for (spec, full) in EXPERIMENTS.iter().zip(&all.experiments) {
+            let (alone, announced, done) = run_only(2, &[spec.id]);
+            assert_eq!(alone.experiments, std::slice::from_ref(full), "{}", spec.id);
+            assert_eq!((announced, done), (jobs(&[spec.id]), announced), "{}", spec.id);
+        }
+        // E1 needs no shared agent; E3 plays our learner, trained without the tests along its
+        // curve, which only E4 needs (and which give E3 its agent when both run).
+        let scale = tiny();
+        let e1_own = EXPERIMENTS[0].jobs;
+        let e3_own = WORLDS.len() as u64 * (2 * scale.replicates as u64 + 1) + 2;
+        let curve = 2 * scale.ours_curve.len() as u64;
+        let ctx = Context {
+            scale: tiny(),
+            seeds: Seeds::new(5, &tiny()),
+            budget: Budget::Quick,
+            progress: &(),
+        };
+        assert_eq!(jobs(&["E1"]), e1_own(&ctx));
+        assert_eq!(jobs(&["E3"]), e3_own + 1, "one training of our learner");
+        assert_eq!(jobs(&["E4"]), e4::jobs(&ctx) + curve);
+        assert_eq!(jobs(&["E3", "E4"]), e3_own + e4::jobs(&ctx) + curve);
+        let (e3, _, _) = run_only(1, &["e3"]);
+        assert_eq!(e3.experiments.len(), 1, "ids in any case");
+        let options = Options {
+            seed: 5,
+            quick: true,
+            long: false,
+            only: vec!["E9".into()],
+        };
+        let err = reproduce_with(&options, tiny(), &()).unwrap_err();
+        assert_eq!(err.to_string(), "no experiment E9: name experiments E1 to E8");
     }
 
     #[test]
@@ -647,7 +794,13 @@ mod tests {
         let (r, _, _) = run(2);
         let dir = tempfile::tempdir().unwrap();
         let dir = dir.path().join("report");
-        let files = write_report(&r, &dir).unwrap();
+        let ran = Ran {
+            commit: "abc1234".into(),
+            cpu: "a test CPU".into(),
+            cores: 4,
+            threads: 2,
+        };
+        let files = write_report(&r, &ran, &dir).unwrap();
         let readme = std::fs::read_to_string(&files.readme).unwrap();
         for e in &r.experiments {
             assert!(readme.contains(&format!("## {}: {}", e.id, e.title)), "{}", e.id);
@@ -666,8 +819,27 @@ mod tests {
                 .map(|e| e.figures.iter().map(|f| f.files.len()).sum::<usize>())
                 .sum::<usize>()
         );
-        let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&files.results).unwrap()).unwrap();
+        assert!(readme.contains("Ran at commit abc1234, a test CPU (4 cores), 2 threads."));
+        let text = std::fs::read_to_string(&files.results).unwrap();
+        let json: serde_json::Value = serde_json::from_str(&text).unwrap();
         assert_eq!(json["format"], FORMAT);
+        // Where it ran, after the figures, which are the reproduction's as they are.
+        assert_eq!(json["ran"]["commit"], "abc1234");
+        assert_eq!(json["ran"]["threads"], 2);
+        let figures = serde_json::to_string_pretty(&r).unwrap();
+        assert!(text.starts_with(figures.trim_end_matches(['}', '\n'])));
+        // The front page's block, from results.json: a line per experiment.
+        let summary_md = std::fs::read_to_string(&files.summary).unwrap();
+        assert_eq!(summary_md, summary(&text).unwrap());
+        assert!(summary_md.contains("at commit abc1234, on a test CPU (4 cores, 2 threads)"));
+        let table: Vec<&str> = summary_md.lines().filter(|l| l.starts_with("| E")).collect();
+        assert_eq!(table.len(), 8, "{summary_md}");
+        assert!(table[0].starts_with("| E1 random agent, 2 blocks"), "{}", table[0]);
+        assert!(
+            table[0].contains("| 4.0%, 263.55 |"),
+            "the paper's E1 figures: {}",
+            table[0]
+        );
         assert_eq!(json["experiments"].as_array().unwrap().len(), 8);
         // Every arm's figures and the paper's beside them.
         let e5 = &json["experiments"][4]["tables"][0]["rows"];

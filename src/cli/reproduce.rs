@@ -14,8 +14,8 @@ use super::stdout::line;
 /// Arguments of `blockstack reproduce`.
 #[derive(Debug, Args)]
 pub struct ReproduceArgs {
-    /// Directory to write the report to (README.md, results.json, pictures); made if
-    /// missing, checked to be writable before the run.
+    /// Directory to write the report to (README.md, results.json, summary.md, pictures);
+    /// made if missing, checked to be writable before the run.
     #[arg(long, default_value = "report")]
     pub out: PathBuf,
     /// Small counts, to check the pipeline in a minute; not the paper's figures.
@@ -25,8 +25,8 @@ pub struct ReproduceArgs {
     /// on 2 cores); the default run trains E8's plane arms only.
     #[arg(long, conflicts_with = "quick")]
     pub long: bool,
-    /// Run only these experiments, e.g. E8 or E1,E5 (E1-E7 share their agents: asking for
-    /// one runs them all).
+    /// Run only these experiments, e.g. E8 or E1,E5 (the agents experiments share are
+    /// trained only when one asked for needs them).
     #[arg(long, value_delimiter = ',')]
     pub only: Vec<String>,
     /// The seed every training, start and random choice derives from.
@@ -71,7 +71,7 @@ pub fn reproduce(args: ReproduceArgs) -> Result<()> {
     );
     for id in &args.only {
         anyhow::ensure!(
-            (1..=8).any(|k| id.eq_ignore_ascii_case(&format!("E{k}"))),
+            reproduce::EXPERIMENTS.iter().any(|e| id.eq_ignore_ascii_case(e.id)),
             "--only {id}: name experiments E1 to E8"
         );
     }
@@ -85,7 +85,8 @@ pub fn reproduce(args: ReproduceArgs) -> Result<()> {
     let sink = Bar(bar);
     let results = pool.install(|| reproduce::reproduce(&options, &sink))?;
     sink.0.finish_and_clear();
-    let written = reproduce::write_report(&results, &args.out)?;
+    let ran = reproduce::Ran::here(pool.current_num_threads());
+    let written = reproduce::write_report(&results, &ran, &args.out)?;
     let ids: Vec<&str> = results.experiments.iter().map(|e| e.id.as_str()).collect();
     line(format_args!(
         "reproduced {} ({} run, seed {}, {} thread{}) in {:.0} s",
@@ -106,9 +107,10 @@ pub fn reproduce(args: ReproduceArgs) -> Result<()> {
         line(format_args!("{}: {}", e.id, e.reading))?;
     }
     line(format_args!(
-        "report: {} (results: {}, {} pictures)",
+        "report: {} (results: {}, summary: {}, {} pictures)",
         written.readme.display(),
         written.results.display(),
+        written.summary.display(),
         written.pictures.len()
     ))
 }

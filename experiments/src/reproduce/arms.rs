@@ -11,8 +11,8 @@ use sim::{ActionProtocol, Env, EnvConfig, Goal, GoalSpec, Grid, Observation, Pro
 use super::paper::{MeanOver, PaperRow, PaperTable};
 use super::spread::PaperInside;
 use super::{ProgressSink, Result};
-use crate::plots::{Arm, BoxPlot};
-use crate::stats::{self, Method, TestResult};
+use plots::{Arm, BoxPlot};
+use stats::{Method, TestResult};
 
 /// The goals of a suite's games.
 #[derive(Clone, Debug, PartialEq)]

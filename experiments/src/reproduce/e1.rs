@@ -15,8 +15,9 @@ use serde::Serialize;
 use sim::{ActionProtocol, Profile, StartRule};
 
 use super::arms::{ArmResult, Goals, Row, Rules, Suite, Table, mean_of};
+use super::shared::Shared;
 use super::text::{num, paper_against};
-use super::{Context, Experiment, HORIZON, Result, Scale, Setting, paper};
+use super::{Context, Experiment, HORIZON, Result, Setting, paper};
 
 /// The worlds E1 plays, SPEC first, then one rule switched to the paper's, then both (the
 /// original world).
@@ -34,7 +35,7 @@ const WORLDS: [Rules; 4] = [
 ];
 
 /// Jobs reported: one suite played per world.
-pub(super) fn jobs(_: &Scale) -> u64 {
+pub(super) fn jobs(_: &Context) -> u64 {
     WORLDS.len() as u64
 }
 
@@ -101,7 +102,7 @@ pub struct Decomposition {
 }
 
 /// Runs E1.
-pub(super) fn run(ctx: &Context) -> Result<Experiment> {
+pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
     let per_replicate = ctx.scale.e1_games;
     let suite = |rules| Suite {
         blocks: 2,

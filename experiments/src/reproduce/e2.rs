@@ -4,14 +4,16 @@
 use sim::{Goal, Profile};
 
 use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, mean_of, play_replicates};
+use super::shared::Shared;
 use super::text::{mean_name, num, paper_against, significance, world_name};
-use super::{Context, Experiment, HORIZON, Result, Scale, Setting, WORLDS, paper, paper_learner};
+use super::{Context, Experiment, HORIZON, Result, Setting, WORLDS, paper, paper_learner};
 
 /// The test epsilons the paper reports.
 const EPSILONS: [f64; 2] = [0.01, 0.05];
 
 /// Jobs reported: in each world, the trainings, and one suite per replicate and epsilon.
-pub(super) fn jobs(scale: &Scale) -> u64 {
+pub(super) fn jobs(ctx: &Context) -> u64 {
+    let scale = &ctx.scale;
     WORLDS.len() as u64 * scale.replicates as u64 * (1 + EPSILONS.len() as u64)
 }
 
@@ -63,7 +65,7 @@ fn in_world(ctx: &Context, world: Profile) -> Result<World> {
 }
 
 /// Runs E2.
-pub(super) fn run(ctx: &Context) -> Result<Experiment> {
+pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
     let (original, spec) = ctx.in_both_worlds(|w| in_world(ctx, w))?;
     let rows: Vec<Row> = (0..EPSILONS.len())
         .map(|i| {

@@ -7,12 +7,14 @@ use agent::{QAgent, RandomPolicy};
 use sim::Profile;
 
 use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, mean_of, play_replicates};
+use super::shared::Shared;
 use super::text::{num, p_value, paper_against, significance, world_name};
-use super::{Context, Experiment, HORIZON, Result, Scale, Setting, WORLDS, goals, paper, paper_learner};
+use super::{Context, Experiment, HORIZON, Result, Setting, WORLDS, goals, paper, paper_learner};
 
 /// Jobs reported: in each world the trainings and their suites and the random agent's
 /// suite; our learner's two suites.
-pub(super) fn jobs(scale: &Scale) -> u64 {
+pub(super) fn jobs(ctx: &Context) -> u64 {
+    let scale = &ctx.scale;
     WORLDS.len() as u64 * (2 * scale.replicates as u64 + 1) + 2
 }
 
@@ -81,8 +83,9 @@ fn in_world(ctx: &Context, world: Profile) -> Result<World> {
     })
 }
 
-/// Runs E3 with our trained learner `ours`.
-pub(super) fn run(ctx: &Context, ours: &QAgent) -> Result<Experiment> {
+/// Runs E3, with our learner from the shared stage.
+pub(super) fn run(ctx: &Context, shared: &Shared) -> Result<Experiment> {
+    let ours = shared.ours();
     let (original, spec) = ctx.in_both_worlds(|w| in_world(ctx, w))?;
     let eps = ctx.test_epsilon();
     let mut ours_arms = Vec::new();
@@ -210,7 +213,7 @@ pub(super) fn run(ctx: &Context, ours: &QAgent) -> Result<Experiment> {
 /// below the horizon. The two-sample test's p-value only falls as that distance grows; the
 /// least separated samples the counts allow (every success at one same step count, every
 /// failure at the horizon) give the largest p-value, which is what this returns.
-pub(super) fn paper_ks_bound() -> Result<crate::stats::TestResult> {
+pub(super) fn paper_ks_bound() -> Result<stats::TestResult> {
     let [learner, random] = [paper::E3.rows[0], paper::E3.rows[1]];
     let sample = |row: paper::PaperRow| -> Vec<f64> {
         let (failures, games) = (row.failures.unwrap_or(0), row.games.unwrap_or(0));
@@ -224,7 +227,7 @@ pub(super) fn paper_ks_bound() -> Result<crate::stats::TestResult> {
             })
             .collect()
     };
-    Ok(crate::stats::ks_2samp(&sample(learner), &sample(random))?)
+    Ok(stats::ks_2samp(&sample(learner), &sample(random))?)
 }
 
 /// The note on the paper's own KS p-value, from [`paper_ks_bound`].

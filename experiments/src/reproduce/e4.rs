@@ -5,25 +5,26 @@
 //! games, at test epsilon 0.1 and 0.05: Fig. 3's points, its values beside ours. In the
 //! SPEC world, the paper's learner and ours along their own (longer) trainings.
 
-use agent::{EpisodeResult, QAgent, TrainConfig, Trainer};
+use agent::{EpisodeResult, TrainConfig};
 use rayon::prelude::*;
 use sim::{Goal, Profile};
 
 use super::arms::{ArmResult, Goals, Row, Suite, Table};
-use super::e3::ours_description;
+use super::shared::{Shared, train_along};
 use super::text::{mean_name, num, percent};
-use super::{Context, Curve, CurvePoint, Drawing, Experiment, Figure, Result, Scale, Setting, paper, paper_learner};
-use crate::plots::{LearningCurve, LearningPoint, LearningSeries, SeriesStyle};
+use super::{Context, Curve, CurvePoint, Drawing, Experiment, Figure, Result, Setting, paper, paper_learner};
+use plots::{LearningCurve, LearningPoint, LearningSeries, SeriesStyle};
 
 /// Jobs reported: a training stretch and a suite per point (a suite per test epsilon in the
-/// original world), per replicate of the paper's learner and for ours.
-pub(super) fn jobs(scale: &Scale) -> u64 {
+/// original world), per replicate of the paper's learner (ours is the shared stage's).
+pub(super) fn jobs(ctx: &Context) -> u64 {
+    let scale = &ctx.scale;
     let original = scale.replicates * scale.original_curve.len() * (1 + paper::FIG3.len());
-    (original + 2 * (scale.curve_replicates * scale.paper_curve.len() + scale.ours_curve.len())) as u64
+    (original + 2 * scale.curve_replicates * scale.paper_curve.len()) as u64
 }
 
 /// The SPEC world's test games at every point: all goals, drawn per game.
-fn suite(ctx: &Context) -> Suite {
+pub(super) fn suite(ctx: &Context) -> Suite {
     Suite::in_world(Profile::Spec, 3, Goals::Drawn, ctx.scale.test_games, ctx.seeds.test)
 }
 
@@ -31,49 +32,6 @@ fn suite(ctx: &Context) -> Suite {
 fn original_suite(ctx: &Context) -> Suite {
     let games = u64::from(paper::FIG3[0].test_games);
     Suite::in_world(Profile::Original, 3, Goals::Drawn, games, ctx.seeds.test)
-}
-
-/// The goal our learner trains on: one is enough for the role representation.
-pub(super) fn ours_goal() -> Goal {
-    Goal::identity(3).expect("3 blocks make a goal")
-}
-
-/// Our learner's training config.
-pub(super) fn ours_config(ctx: &Context) -> TrainConfig {
-    TrainConfig {
-        seed: ctx.seeds.ours,
-        games: ctx.scale.ours_games,
-        ..TrainConfig::role_step_cost(vec![ours_goal()])
-    }
-}
-
-/// Trains as `config` says, testing the agent at each of `schedule`'s game counts (in
-/// increasing order) as [`agent::train`] would give it after that many games, once per
-/// test epsilon of `epsilons`. Returns the agent at the last point and, per point and
-/// epsilon, its test results.
-fn train_along(
-    ctx: &Context,
-    config: TrainConfig,
-    schedule: &[u64],
-    suite: &Suite,
-    epsilons: &[f64],
-) -> Result<(QAgent, Vec<Vec<Vec<EpisodeResult>>>)> {
-    let mut trainer = Trainer::new(config)?;
-    let mut tests = Vec::with_capacity(schedule.len());
-    let mut agent = None;
-    for &games in schedule {
-        trainer.play_games(games.saturating_sub(trainer.report().games), None)?;
-        let snapshot = trainer.snapshot().agent;
-        ctx.progress.advance("E4");
-        let mut at_point = Vec::with_capacity(epsilons.len());
-        for &eps in epsilons {
-            at_point.push(suite.play(&mut snapshot.policy(eps)?)?);
-            ctx.progress.advance("E4");
-        }
-        tests.push(at_point);
-        agent = Some(snapshot);
-    }
-    Ok((agent.expect("a schedule has points"), tests))
 }
 
 /// Trains `replicates` of `config(r)` in parallel along `schedule`, testing at each point
@@ -91,7 +49,7 @@ where
 {
     let runs: Vec<Vec<Vec<Vec<EpisodeResult>>>> = (0..replicates)
         .into_par_iter()
-        .map(|r| Ok(train_along(ctx, config(r), schedule, suite, epsilons)?.1))
+        .map(|r| Ok(train_along(ctx, "E4", config(r), schedule, suite, epsilons)?.1))
         .collect::<Result<_>>()?;
     // Regroup by point and epsilon: the results of each replicate.
     Ok((0..schedule.len())
@@ -103,36 +61,8 @@ where
         .collect())
 }
 
-/// Trains our learner, testing it along the way: the trained agent and its curve.
-pub(super) fn train_ours(ctx: &Context) -> Result<(QAgent, Curve)> {
-    let suite = suite(ctx);
-    let schedule = &ctx.scale.ours_curve;
-    let eps = ctx.test_epsilon();
-    let (agent, tests) = train_along(ctx, ours_config(ctx), schedule, &suite, &[eps])?;
-    let optimum = suite.optimum()?;
-    let points = schedule
-        .iter()
-        .zip(tests)
-        .map(|(&games, mut at_point)| {
-            let results = at_point.swap_remove(0);
-            CurvePoint::of(
-                games,
-                &ArmResult::of("", "", Some(eps), &[results], &optimum, suite.horizon),
-            )
-        })
-        .collect();
-    let curve = Curve {
-        learner: format!("ours: {}", ours_description(&agent)),
-        world: Profile::Spec,
-        test_epsilon: eps,
-        suite: suite.describe(),
-        points,
-    };
-    Ok((agent, curve))
-}
-
 /// The paper's learner along its training in both worlds.
-pub(super) struct PaperCurves {
+struct PaperCurves {
     /// In the SPEC world, at the test epsilon 0.1.
     spec: Curve,
     /// In the original world, one curve per test epsilon of Fig. 3.
@@ -141,9 +71,14 @@ pub(super) struct PaperCurves {
     table: Table,
 }
 
+/// Runs E4: the paper's learner's curves, beside our learner's from the shared stage.
+pub(super) fn run(ctx: &Context, shared: &Shared) -> Result<Experiment> {
+    Ok(experiment(ctx, paper_curves(ctx)?, shared.ours_curve().clone()))
+}
+
 /// The paper's learner's curves: in the SPEC world trained on all six goals in turn, in the
 /// original world on a goal drawn per game from all six.
-pub(super) fn paper_curves(ctx: &Context) -> Result<PaperCurves> {
+fn paper_curves(ctx: &Context) -> Result<PaperCurves> {
     let (original, spec) = rayon::join(|| original_curves(ctx), || spec_curve(ctx));
     let (original, table) = original?;
     Ok(PaperCurves {
@@ -363,7 +298,7 @@ fn fig3_text() -> String {
 }
 
 /// E4 from the paper's learner's curves and ours.
-pub(super) fn experiment(ctx: &Context, paper_curves: PaperCurves, ours: Curve) -> Experiment {
+fn experiment(ctx: &Context, paper_curves: PaperCurves, ours: Curve) -> Experiment {
     let PaperCurves {
         spec: paper_learner,
         original,

@@ -7,12 +7,13 @@
 //! where the paper's unassisted figure sits on Fig. 3's curve, so that the report shows
 //! how much of the gap to Table I is training length.
 
-use agent::{Assist, OracleKind, Oscillation, QAgent};
+use agent::{Assist, OracleKind, Oscillation};
 use sim::{Goal, Profile};
 
 use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, play_replicates, steps_box_plot};
+use super::shared::Shared;
 use super::text::{num, paper_against, significance, world_name};
-use super::{Context, Drawing, Experiment, Figure, HORIZON, Result, Scale, Setting, WORLDS, paper, paper_learner};
+use super::{Context, Drawing, Experiment, Figure, HORIZON, Result, Setting, WORLDS, paper, paper_learner};
 
 /// The arms, in the paper's order.
 const ASSISTS: [Assist; 3] = [
@@ -23,7 +24,8 @@ const ASSISTS: [Assist; 3] = [
 
 /// Jobs reported: in each world, and in the original world at the shorter training, a
 /// training and a suite per arm and replicate.
-pub(super) fn jobs(scale: &Scale) -> u64 {
+pub(super) fn jobs(ctx: &Context) -> u64 {
+    let scale = &ctx.scale;
     2 * ((WORLDS.len() + 1) * ASSISTS.len() * scale.replicates) as u64
 }
 
@@ -32,12 +34,10 @@ fn short_training() -> u64 {
     paper::FIG3[0].points[1].games
 }
 
-/// One world's E5: an arm per assistance, the tests against none, and the first
-/// unassisted agent.
+/// One world's E5: an arm per assistance and the tests against none.
 struct World {
     arms: Vec<ArmResult>,
     tests: Vec<TestOutcome>,
-    first_unassisted: QAgent,
     suite: Suite,
     learner: String,
 }
@@ -50,7 +50,6 @@ fn in_world(ctx: &Context, world: Profile, games: Option<u64>) -> Result<World> 
     let eps = ctx.test_epsilon();
     let mut arms = Vec::new();
     let mut assisted_share = Vec::new();
-    let mut first_unassisted = None;
     // The paper's learner in `world` with training seed `r`, for `games` if given.
     let learner = |r: usize| {
         let config = ctx.paper_config(world, &all, r);
@@ -80,9 +79,6 @@ fn in_world(ctx: &Context, world: Profile, games: Option<u64>) -> Result<World> 
             &optimum,
             HORIZON,
         ));
-        if assist == Assist::None {
-            first_unassisted = trained.into_iter().next().map(|t| t.agent);
-        }
     }
     let tests = arms
         .iter()
@@ -112,14 +108,12 @@ fn in_world(ctx: &Context, world: Profile, games: Option<u64>) -> Result<World> 
         ),
         arms,
         tests,
-        first_unassisted: first_unassisted.expect("the unassisted arm has a replicate"),
         suite,
     })
 }
 
-/// Runs E5; also returns the first replicate of the unassisted learner of the SPEC world
-/// (the paper's learner on all six goals), which E7 plays.
-pub(super) fn run(ctx: &Context) -> Result<(Experiment, QAgent)> {
+/// Runs E5.
+pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
     let (original, spec) = ctx.in_both_worlds(|w| in_world(ctx, w, None))?;
     let short = in_world(ctx, Profile::Original, Some(short_training()))?;
     let short_rows: Vec<Row> = (0..ASSISTS.len())
@@ -214,7 +208,7 @@ pub(super) fn run(ctx: &Context) -> Result<(Experiment, QAgent)> {
                 .into(),
         },
     ]);
-    let experiment = Experiment {
+    Ok(Experiment {
         id: "E5".into(),
         title: "Oracle assistance in training (Table I)".into(),
         setup,
@@ -242,6 +236,5 @@ pub(super) fn run(ctx: &Context) -> Result<(Experiment, QAgent)> {
         paper_notes: Vec::new(),
         reading,
         figures: vec![figure],
-    };
-    Ok((experiment, spec.first_unassisted))
+    })
 }

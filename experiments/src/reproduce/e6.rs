@@ -10,15 +10,15 @@ use sim::{Goal, Profile};
 
 use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, play_replicates, steps_box_plot};
 use super::paper::PaperTable;
-use super::{
-    Context, Drawing, Experiment, Figure, HORIZON, Result, Scale, Setting, WORLDS, goals, paper, paper_learner,
-};
+use super::shared::Shared;
+use super::{Context, Drawing, Experiment, Figure, HORIZON, Result, Setting, WORLDS, goals, paper, paper_learner};
 
 /// The simulated demonstrators, by preset number.
 const DEMONSTRATORS: [u8; 3] = [1, 2, 3];
 
 /// Jobs reported: in each world, trainings, corrections, and every agent's three suites.
-pub(super) fn jobs(scale: &Scale) -> u64 {
+pub(super) fn jobs(ctx: &Context) -> u64 {
+    let scale = &ctx.scale;
     let agents = (scale.replicates * (1 + DEMONSTRATORS.len())) as u64;
     let world = scale.replicates as u64 + (scale.replicates * DEMONSTRATORS.len()) as u64 + 3 * agents;
     WORLDS.len() as u64 * world
@@ -181,7 +181,7 @@ fn in_world(ctx: &Context, world: Profile) -> Result<World> {
 }
 
 /// Runs E6.
-pub(super) fn run(ctx: &Context) -> Result<Experiment> {
+pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
     let (original, spec) = ctx.in_both_worlds(|w| in_world(ctx, w))?;
     let mut tables = Vec::new();
     let mut figures = Vec::new();

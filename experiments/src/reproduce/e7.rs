@@ -2,15 +2,17 @@
 //! (the paper's and ours), the oracle and the exact solver, on the same starts of every
 //! goal, against the shortest plans.
 
-use agent::{EpisodeResult, ExactPolicy, OraclePolicy, Policy, QAgent, RandomPolicy};
+use agent::{EpisodeResult, ExactPolicy, OraclePolicy, Policy, RandomPolicy};
 use rayon::prelude::*;
 use sim::{Goal, Profile};
 
 use super::arms::{ArmResult, Goals, Row, Rules, Suite, Table, TestOutcome, mean_of};
 use super::e3::ours_description;
+use super::shared::Shared;
 use super::text::{num, significance};
-use super::{Context, Drawing, Experiment, Figure, HORIZON, Result, Scale, Setting};
-use crate::plots::{Bar, BarChart, EpisodeFrames, Reference};
+use super::{Context, Drawing, Experiment, Figure, HORIZON, Result, Setting};
+use crate::episode::EpisodeFrames;
+use plots::{Bar, BarChart, Reference};
 
 /// The agents, in the table's order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -64,12 +66,13 @@ impl Agent {
 }
 
 /// Jobs reported: one suite per agent.
-pub(super) fn jobs(_: &Scale) -> u64 {
+pub(super) fn jobs(_: &Context) -> u64 {
     AGENTS.len() as u64
 }
 
-/// Runs E7 with the paper's learner `paper_agent` and ours.
-pub(super) fn run(ctx: &Context, paper_agent: &QAgent, ours: &QAgent) -> Result<Experiment> {
+/// Runs E7 with the paper's learner of the SPEC world and ours, from the shared stage.
+pub(super) fn run(ctx: &Context, shared: &Shared) -> Result<Experiment> {
+    let (paper_agent, ours) = (shared.paper_spec(), shared.ours());
     let suite = Suite {
         blocks: 3,
         goals: Goals::Each(Goal::all(3)?),

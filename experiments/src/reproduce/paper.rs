@@ -1,5 +1,5 @@
 //! The paper's published figures, in one place, each with the table or section it comes
-//! from ("Interactive Robot Learning", section VI; a copy in `../shared/paper/`).
+//! from (the paper "Interactive Robot Learning", section VI).
 //!
 //! The report prints these beside ours; nothing else in the project types in a figure of
 //! the paper. Two readings are ours and stated where used:

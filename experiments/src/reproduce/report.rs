@@ -1,15 +1,19 @@
 //! The report: `README.md` (one section per experiment, ours beside the paper's), the
-//! pictures, and `results.json` (every figure of the tables), written into one directory.
+//! pictures, `results.json` (every figure of the tables) and `summary.md` (the front page's
+//! block, [`summary`]), written into one directory with where the run happened.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use super::arms::{ArmResult, Measured, Table, TestOutcome};
 use super::paper::MeanOver;
+use super::ran::Ran;
 use super::spread::Spread;
+use super::summary::summary;
 use super::text::{ALPHA, failures, num, p_value, verdict};
 use super::{Curve, Decomposition, Drawing, Experiment, ReproduceError, Reproduction, Result};
-use crate::plots::{GifOptions, bar_chart, box_plot, curves_chart, episode_gif, learning_curve};
+use crate::episode::{GifOptions, episode_gif};
+use plots::{bar_chart, box_plot, curves_chart, learning_curve};
 
 /// The files a report is made of.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -18,13 +22,23 @@ pub struct ReportFiles {
     pub readme: PathBuf,
     /// `results.json`.
     pub results: PathBuf,
+    /// `summary.md`.
+    pub summary: PathBuf,
     /// Every picture, in the order of the report.
     pub pictures: Vec<PathBuf>,
 }
 
-/// Draws the pictures of `r` and writes them, `README.md` and `results.json` into `dir`
-/// (made if missing), each file atomically.
-pub fn write_report(r: &Reproduction, dir: &Path) -> Result<ReportFiles> {
+/// `results.json`: the reproduction's figures, then where it ran.
+#[derive(serde::Serialize)]
+struct ResultsFile<'a> {
+    #[serde(flatten)]
+    reproduction: &'a Reproduction,
+    ran: &'a Ran,
+}
+
+/// Draws the pictures of `r` and writes them, `README.md`, `results.json` and `summary.md`
+/// into `dir` (made if missing), each file atomically; `ran` says where `r` was run.
+pub fn write_report(r: &Reproduction, ran: &Ran, dir: &Path) -> Result<ReportFiles> {
     files::prepare_folder(dir)?;
     let mut pictures = Vec::new();
     for figure in r.experiments.iter().flat_map(|e| &e.figures) {
@@ -42,26 +56,30 @@ pub fn write_report(r: &Reproduction, dir: &Path) -> Result<ReportFiles> {
         }
     }
     let results = dir.join("results.json");
-    let json = serde_json::to_vec_pretty(r).map_err(|e| ReproduceError::Write {
-        path: results.display().to_string(),
-        reason: e.to_string(),
-    })?;
-    files::write(&results, &json)?;
+    let json =
+        serde_json::to_string_pretty(&ResultsFile { reproduction: r, ran }).map_err(|e| ReproduceError::Write {
+            path: results.display().to_string(),
+            reason: e.to_string(),
+        })?;
+    files::write(&results, json.as_bytes())?;
+    let summary_md = dir.join("summary.md");
+    files::write(&summary_md, summary(&json)?.as_bytes())?;
     let readme = dir.join("README.md");
-    files::write(&readme, markdown(r).as_bytes())?;
+    files::write(&readme, markdown(r, ran).as_bytes())?;
     Ok(ReportFiles {
         readme,
         results,
+        summary: summary_md,
         pictures,
     })
 }
 
-fn chart(files: crate::plots::ChartFiles) -> [PathBuf; 2] {
+fn chart(files: plots::ChartFiles) -> [PathBuf; 2] {
     [files.png, files.svg]
 }
 
-/// The report as Markdown.
-pub fn markdown(r: &Reproduction) -> String {
+/// The report as Markdown; `ran` says where `r` was run.
+pub fn markdown(r: &Reproduction, ran: &Ran) -> String {
     let mut md = String::new();
     let command = format!(
         "blockstack reproduce --seed {}{}{}{}",
@@ -75,6 +93,7 @@ pub fn markdown(r: &Reproduction) -> String {
         }
     );
     let _ = writeln!(md, "# The paper reproduced\n");
+    let _ = writeln!(md, "Ran at {}.\n", ran.describe());
     let _ = writeln!(
         md,
         "Written by `{command}`: every experiment of SPEC section 9 on the paper's 7 x 7 grid (horizon {}, rapier2d \
@@ -140,14 +159,14 @@ pub fn markdown(r: &Reproduction) -> String {
              says otherwise (column ε).",
             r.paper_settings.test_epsilon
         ),
-        "**Tests.** Wilcoxon signed-rank (paired), two-sample Kolmogorov-Smirnov: `experiments::stats`, ports of \
+        "**Tests.** Wilcoxon signed-rank (paired), two-sample Kolmogorov-Smirnov: the `stats` crate, ports of \
          SciPy's defaults checked against SciPy; p is two-sided. Our p pools every agent's games; beside it, \
          (k/n) says for how many of the n agents alone (the paper's protocol: one agent) p is below 0.05."
             .into(),
     ] {
         let _ = writeln!(md, "- {line}");
     }
-    summary(&mut md, r);
+    paper_beside_ours(&mut md, r);
     for e in &r.experiments {
         experiment(&mut md, e);
     }
@@ -156,7 +175,7 @@ pub fn markdown(r: &Reproduction) -> String {
 
 /// Every row the paper has, its figures beside ours in each world and the readings of the
 /// spread: the report's overview (and the README's Results table).
-fn summary(md: &mut String, r: &Reproduction) {
+fn paper_beside_ours(md: &mut String, r: &Reproduction) {
     let _ = writeln!(md, "\n## The paper's figures beside ours\n");
     let _ = writeln!(
         md,

@@ -1,5 +1,9 @@
 //! Non-parametric two-sample tests with p-values that match SciPy.
 //!
+//! A crate of its own, knowing nothing of blocks, so that anyone comparing two samples
+//! (the reproduction's tables, a sweep of hyper-parameters) gets the same p-values as
+//! SciPy without a Python run.
+//!
 //! The paper's tables compare agents by per-episode outcomes (step counts,
 //! with failed episodes recorded at the step limit), so the data are discrete
 //! and heavily tied. Three two-sided tests are provided, each a port of the
@@ -24,9 +28,10 @@
 //! in practice (8 values against 300; two identical samples of 500 values).
 //! `stats-claw` has all three but is young and has a single maintainer. The
 //! algorithms below are short, are taken from SciPy's own source, and are
-//! tested against SciPy's output, so we keep them here with no extra
-//! dependency. The normal CDF is a port of Cephes' `ndtr`, the routine SciPy
-//! itself calls, so the asymptotic p-values agree to rounding.
+//! tested against SciPy's output (`scripts/scipy_reference.py` regenerates the
+//! reference values), so we keep them here with no extra dependency. The normal
+//! CDF is a port of Cephes' `ndtr`, the routine SciPy itself calls, so the
+//! asymptotic p-values agree to rounding.
 //!
 //! # Methods, as SciPy chooses them
 //!

@@ -1,11 +1,14 @@
-//! The report's pictures: charts as PNG and SVG, episodes as animated GIFs.
+//! Pictures for reports: charts as PNG and SVG, picture sequences as animated GIFs.
 //!
-//! | function | picture | experiment |
+//! A crate of its own, knowing nothing of blocks: it draws numbers and pictures it is
+//! given, so any report (the reproduction's, a sweep's, a single run's) can use it.
+//!
+//! | function | picture | used for |
 //! | --- | --- | --- |
 //! | [`learning_curve`] | failures and mean steps against training games, two panels, several series and reference values | E4 |
 //! | [`box_plot`] | steps per arm: boxes, whiskers, outliers, reference markers | E5, E6 |
 //! | [`bar_chart`] | one bar per agent, optional intervals, second values, optimum line | E7 |
-//! | [`episode_gif`] | one or more episodes side by side, animated | the demo |
+//! | [`animated_gif`] | one or more picture sequences side by side, animated | episodes |
 //! | [`curves_chart`] | several learners' curves against training, one line each | E8 |
 //!
 //! Every function is pure: it takes the data, validates it, and writes its files atomically
@@ -14,22 +17,25 @@
 //! non-finite value, a count above its total) is a [`PlotError`], never a panic; a single
 //! point or all-equal values give a picture with a padded axis.
 //!
-//! Text is drawn with DejaVu Sans, bundled in `experiments/assets/` (Bitstream Vera
-//! licence, beside it) and registered once with plotters' `ab_glyph` renderer: nothing
-//! here reads system fonts, so CI machines without fonts draw the same pictures. PNGs are
-//! rendered by plotters into an RGB buffer and encoded by `image` (so the build holds one
-//! `image` version); GIFs are encoded by `gif`, storing only what changed between frames.
+//! # Why a bundled font
+//!
+//! Text is drawn with DejaVu Sans, bundled in `assets/` (Bitstream Vera licence, beside
+//! it) and registered once with plotters' `ab_glyph` renderer: nothing here reads system
+//! fonts, so CI machines without fonts draw the same pictures, and a picture does not
+//! change with the fonts a machine happens to have. PNGs are rendered by plotters into an
+//! RGB buffer and encoded by `image` (so the build holds one `image` version); GIFs are
+//! encoded by `gif`, storing only what changed between frames.
 
+mod animation;
 mod bars;
 mod boxes;
 mod curves;
-mod episode;
 mod learning;
 
+pub use animation::{GifOptions, Panel, animated_gif, canvases, frame_indices};
 pub use bars::{Bar, BarChart, Reference, bar_chart};
 pub use boxes::{Arm, BoxPlot, box_plot};
 pub use curves::{CurvesChart, Series, curves_chart};
-pub use episode::{EpisodeFrames, GifOptions, episode_gif, frame_indices};
 pub use learning::{LearningCurve, LearningPoint, LearningSeries, SeriesStyle, learning_curve};
 
 use std::ffi::OsString;

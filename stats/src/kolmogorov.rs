@@ -533,7 +533,7 @@ fn smirnov_sf(n: u64, x: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::stats::fixtures::assert_close;
+    use crate::fixtures::assert_close;
 
     #[test]
     fn kstwo_sf_matches_scipy() {

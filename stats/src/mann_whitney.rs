@@ -126,7 +126,7 @@ fn asymptotic_p(u: f64, n1: usize, n2: usize, ties: &[usize]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::stats::fixtures::{
+    use crate::fixtures::{
         DISTINCT_8, DISTINCT_300, STEPS_8, STEPS_200, STEPS_250, STEPS_300, STEPS_500_A, STEPS_500_B, assert_close,
     };
     use proptest::prelude::*;

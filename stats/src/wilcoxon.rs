@@ -216,7 +216,7 @@ fn asymptotic_p(r_plus: f64, count: usize, ties: &[usize], correction: bool) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::stats::fixtures::{D_60, PAIRED_A, PAIRED_B, assert_close};
+    use crate::fixtures::{D_60, PAIRED_A, PAIRED_B, assert_close};
     use proptest::prelude::*;
 
     /// Checks a result against SciPy's statistic and p-value.

@@ -1,45 +1,50 @@
-//! Animated GIFs of episodes, one panel per episode, side by side.
+//! Animated GIFs of picture sequences, one panel per sequence, side by side.
+//!
+//! The frames are any RGB pictures (the caller renders them); this module lays them out
+//! under two caption lines, keeps the panels in step, subsamples long sequences and
+//! stores only what changed between frames.
 
 use std::path::Path;
 
 use image::{Rgb, RgbImage, imageops};
 use plotters::prelude::*;
-use sim::Observation;
 
 use super::rgb::RgbBuffer;
 use super::{FONT_FAMILY, INK, PlotError, Result, register_font};
 
-/// One episode to animate: its caption and the observation after each step, the start
-/// first (so `observations.len() - 1` steps).
+/// One sequence of pictures to animate, with its caption.
 #[derive(Clone, Debug, PartialEq)]
-pub struct EpisodeFrames {
+pub struct Panel {
     /// Written above the panel, e.g. "Q-learner (paper), goal 1,0,2".
     pub caption: String,
-    /// The states of the episode, the start first.
-    pub observations: Vec<Observation>,
+    /// The pictures, the first state first (so `frames.len() - 1` steps).
+    pub frames: Vec<RgbImage>,
+    /// Appended to the step line on the last frame, e.g. ", goal reached"; may be empty.
+    pub ending: String,
 }
 
-/// How an episode GIF is drawn and timed.
+/// How an animation is captioned and timed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct GifOptions {
-    /// Side of a grid cell in pixels, 8 to 128.
-    pub cell_px: u32,
+    /// Height of the caption font in pixels, 10 to 64; the caption shrinks (down to 10)
+    /// to fit its panel's width.
+    pub caption_px: u32,
     /// How long each frame shows, in milliseconds; at least 20 (browsers slow faster
     /// GIFs down).
     pub frame_ms: u32,
     /// How long the last frame shows before the animation loops, in milliseconds.
     pub last_frame_ms: u32,
-    /// The most frames to write, at least 2; longer episodes are subsampled by
+    /// The most frames to write, at least 2; longer sequences are subsampled by
     /// [`frame_indices`].
     pub max_frames: usize,
 }
 
 impl Default for GifOptions {
-    /// 32-pixel cells, 150 ms a frame, the end held 2 s, at most 120 frames: a 1000-step
-    /// episode of two panels stays under a megabyte.
+    /// 14-pixel captions, 150 ms a frame, the end held 2 s, at most 120 frames: a
+    /// 1000-step sequence of two small panels stays under a megabyte.
     fn default() -> Self {
         Self {
-            cell_px: 32,
+            caption_px: 14,
             frame_ms: 150,
             last_frame_ms: 2000,
             max_frames: 120,
@@ -64,24 +69,43 @@ pub fn frame_indices(len: usize, max_frames: usize) -> Vec<usize> {
         .collect()
 }
 
-/// Writes an animated GIF of `episodes` side by side to `path`, atomically, looping
+/// The pictures [`animated_gif`] writes, one per frame, whole (before the GIF stores only
+/// what changed): for checking an animation, or for writing it in another format.
+///
+/// Errors: as [`animated_gif`], but for the size limit of a GIF.
+pub fn canvases(panels: &[Panel], options: &GifOptions) -> Result<Vec<RgbImage>> {
+    check(panels, options)?;
+    register_font()?;
+    let film = Film::new(panels, options.caption_px);
+    frame_indices(film.longest(), options.max_frames)
+        .into_iter()
+        .map(|t| {
+            film.canvas(t).map_err(|reason| PlotError::Draw {
+                path: "an animation frame".into(),
+                reason,
+            })
+        })
+        .collect()
+}
+
+/// Writes an animated GIF of `panels` side by side to `path`, atomically, looping
 /// forever, and returns the number of frames written.
 ///
-/// Each panel shows [`sim::render::frame`] of the episode's state with two caption lines
-/// above it: the episode's caption, then "step k of n", with "goal reached" or "goal not
-/// reached" on the final state. All panels advance together, one step per frame;
-/// a shorter episode holds its final state while a longer one goes on. Episodes longer
-/// than [`GifOptions::max_frames`] states are subsampled by [`frame_indices`] (on the
-/// longest episode's timeline), so a 1000-step episode still gives a small file; the
-/// step counter shows which steps were kept. After the first frame, each frame stores
-/// only the rectangle that changed, with unchanged pixels transparent.
+/// Each panel shows its picture with two caption lines above it: the panel's caption,
+/// then "step k of n", with the panel's [`Panel::ending`] on its final picture. All
+/// panels advance together, one step per frame; a shorter panel holds its final picture
+/// while a longer one goes on. Sequences longer than [`GifOptions::max_frames`] are
+/// subsampled by [`frame_indices`] (on the longest panel's timeline), so a 1000-step
+/// sequence still gives a small file; the step counter shows which steps were kept.
+/// After the first frame, each frame stores only the rectangle that changed, with
+/// unchanged pixels transparent.
 ///
-/// Errors: no episodes, an episode without observations, options out of range, or a
-/// picture too large for a GIF.
-pub fn episode_gif(episodes: &[EpisodeFrames], options: &GifOptions, path: &Path) -> Result<usize> {
-    check(episodes, options)?;
+/// Errors: no panels, a panel without pictures, options out of range, or a picture too
+/// large for a GIF.
+pub fn animated_gif(panels: &[Panel], options: &GifOptions, path: &Path) -> Result<usize> {
+    check(panels, options)?;
     register_font()?;
-    let film = Film::new(episodes, options.cell_px);
+    let film = Film::new(panels, options.caption_px);
     let (width, height) = film.size();
     let (Ok(w16), Ok(h16)) = (u16::try_from(width), u16::try_from(height)) else {
         return Err(PlotError::Inconsistent {
@@ -116,11 +140,9 @@ pub fn episode_gif(episodes: &[EpisodeFrames], options: &GifOptions, path: &Path
     Ok(indices.len())
 }
 
-/// The episodes' frames and the layout of the panels on the canvas.
+/// The panels and their layout on the canvas.
 struct Film<'a> {
-    episodes: &'a [EpisodeFrames],
-    /// Each episode's rendered states.
-    frames: Vec<Vec<RgbImage>>,
+    panels: &'a [Panel],
     panel_w: u32,
     frame_h: u32,
     font_px: u32,
@@ -131,18 +153,14 @@ const PAD: u32 = 8;
 const GAP: u32 = 16;
 
 impl<'a> Film<'a> {
-    /// Renders every state of `episodes` with cells of `cell` pixels.
-    fn new(episodes: &'a [EpisodeFrames], cell: u32) -> Self {
-        let frames: Vec<Vec<RgbImage>> = episodes
-            .iter()
-            .map(|e| e.observations.iter().map(|o| sim::render::frame(o, cell)).collect())
-            .collect();
+    /// Lays out `panels` with captions of `font_px` pixels.
+    fn new(panels: &'a [Panel], font_px: u32) -> Self {
+        let pictures = || panels.iter().flat_map(|p| &p.frames);
         Self {
-            episodes,
-            panel_w: frames.iter().flatten().map(RgbImage::width).max().unwrap_or(1),
-            frame_h: frames.iter().flatten().map(RgbImage::height).max().unwrap_or(1),
-            frames,
-            font_px: (cell * 4 / 9).clamp(11, 18),
+            panels,
+            panel_w: pictures().map(RgbImage::width).max().unwrap_or(1),
+            frame_h: pictures().map(RgbImage::height).max().unwrap_or(1),
+            font_px,
         }
     }
 
@@ -153,37 +171,35 @@ impl<'a> Film<'a> {
 
     /// The canvas' width and height.
     fn size(&self) -> (u32, u32) {
-        let n = self.episodes.len() as u32;
+        let n = self.panels.len() as u32;
         (
             2 * PAD + n * self.panel_w + (n - 1) * GAP,
             2 * PAD + self.caption_h() + self.frame_h,
         )
     }
 
-    /// States in the longest episode.
+    /// Pictures in the longest panel.
     fn longest(&self) -> usize {
-        self.frames.iter().map(Vec::len).max().unwrap_or(0)
+        self.panels.iter().map(|p| p.frames.len()).max().unwrap_or(0)
     }
 
-    /// The picture at time `t`: every episode at state `t`, or its final state if shorter.
+    /// The picture at time `t`: every panel at picture `t`, or its final one if shorter.
     fn canvas(&self, t: usize) -> std::result::Result<RgbImage, String> {
         let (width, height) = self.size();
         let mut canvas = RgbImage::from_pixel(width, height, Rgb([255, 255, 255]));
         let mut captions = Vec::new();
-        for (p, (episode, panel)) in self.episodes.iter().zip(&self.frames).enumerate() {
-            let i = t.min(panel.len() - 1);
+        for (p, panel) in self.panels.iter().enumerate() {
+            let i = t.min(panel.frames.len() - 1);
             let x = PAD + p as u32 * (self.panel_w + GAP);
-            imageops::replace(&mut canvas, &panel[i], i64::from(x), i64::from(PAD + self.caption_h()));
-            let steps = panel.len() - 1;
-            let obs = &episode.observations[i];
-            let status = if i < steps {
-                ""
-            } else if obs.goal.holds(&obs.state) {
-                ", goal reached"
-            } else {
-                ", goal not reached"
-            };
-            captions.push((x, episode.caption.as_str(), format!("step {i} of {steps}{status}")));
+            imageops::replace(
+                &mut canvas,
+                &panel.frames[i],
+                i64::from(x),
+                i64::from(PAD + self.caption_h()),
+            );
+            let steps = panel.frames.len() - 1;
+            let ending = if i < steps { "" } else { panel.ending.as_str() };
+            captions.push((x, panel.caption.as_str(), format!("step {i} of {steps}{ending}")));
         }
         draw_captions(canvas, &captions, self.font_px, self.panel_w)
     }
@@ -222,16 +238,16 @@ fn delta_frame(previous: Option<&RgbImage>, current: &RgbImage, ms: u32) -> gif:
     frame
 }
 
-/// Validates the inputs of [`episode_gif`].
-fn check(episodes: &[EpisodeFrames], options: &GifOptions) -> Result<()> {
-    if episodes.is_empty() {
+/// Validates the inputs of [`animated_gif`].
+fn check(panels: &[Panel], options: &GifOptions) -> Result<()> {
+    if panels.is_empty() {
         return Err(PlotError::Empty {
-            what: "the list of episodes".into(),
+            what: "the list of panels".into(),
         });
     }
-    if let Some(e) = episodes.iter().find(|e| e.observations.is_empty()) {
+    if let Some(p) = panels.iter().find(|p| p.frames.is_empty()) {
         return Err(PlotError::Empty {
-            what: format!("episode {:?}", e.caption),
+            what: format!("panel {:?}", p.caption),
         });
     }
     let bad = |reason: String| {
@@ -240,8 +256,8 @@ fn check(episodes: &[EpisodeFrames], options: &GifOptions) -> Result<()> {
             reason,
         })
     };
-    if !(8..=128).contains(&options.cell_px) {
-        return bad(format!("cells of {} pixels; use 8 to 128", options.cell_px));
+    if !(10..=64).contains(&options.caption_px) {
+        return bad(format!("captions of {} pixels; use 10 to 64", options.caption_px));
     }
     if options.frame_ms < 20 {
         return bad(format!("frames of {} ms; use at least 20", options.frame_ms));
@@ -302,31 +318,27 @@ fn draw_captions(
 mod tests {
     use image::AnimationDecoder;
     use image::codecs::gif::GifDecoder;
-    use sim::{Action, Env, EnvConfig, Goal};
 
     use super::super::test_support::{listing, temp_dir};
     use super::*;
 
-    /// An episode of `steps` seeded random actions (or fewer, if it ends), start first.
-    fn episode(seed: u64, steps: usize) -> Vec<Observation> {
-        let goal: Goal = "1,0,2".parse().expect("goal");
-        let mut env = Env::new(EnvConfig {
-            horizon: steps as u32,
-            ..EnvConfig::with_goal(goal)
-        })
-        .expect("env");
-        let mut observations = vec![env.reset(seed)];
-        let n = env.action_count();
-        let mut rng = sim::seeding::rng(seed);
-        while !env.is_over() {
-            let i = rand::RngExt::random_range(&mut rng, 0..n);
-            observations.push(
-                env.step(Action::from_index(i, 3).expect("action"))
-                    .expect("step")
-                    .observation,
-            );
-        }
-        observations
+    /// `steps + 1` pictures of a `side`-pixel square moving across a `7 x side` field, a
+    /// few colours as in a rendered grid.
+    fn moving(steps: usize, side: u32) -> Vec<RgbImage> {
+        (0..=steps)
+            .map(|s| {
+                let at = (s as u32 % 7) * side;
+                RgbImage::from_fn(7 * side, 7 * side, |x, y| {
+                    if (at..at + side).contains(&x) && y >= 3 * side && y < 4 * side {
+                        Rgb([200, 40, 40])
+                    } else if (x / side + y / side) % 2 == 0 {
+                        Rgb([235, 235, 235])
+                    } else {
+                        Rgb([250, 250, 250])
+                    }
+                })
+            })
+            .collect()
     }
 
     fn decode(path: &Path) -> Vec<image::Frame> {
@@ -356,25 +368,27 @@ mod tests {
     }
 
     #[test]
-    fn one_episode_gives_one_frame_per_state_and_holds_the_last() {
+    fn one_panel_gives_one_frame_per_picture_and_holds_the_last() {
         let dir = temp_dir("gif-one");
-        let observations = episode(3, 12);
-        let states = observations.len();
-        let path = dir.join("episode.gif");
-        let episodes = [EpisodeFrames {
-            caption: "random agent".into(),
-            observations,
+        let frames = moving(11, 32);
+        let states = frames.len();
+        let path = dir.join("panel.gif");
+        let panels = [Panel {
+            caption: "a square".into(),
+            frames,
+            ending: ", done".into(),
         }];
-        let written = episode_gif(&episodes, &GifOptions::default(), &path).expect("gif");
+        let options = GifOptions::default();
+        let written = animated_gif(&panels, &options, &path).expect("gif");
         assert_eq!(written, states);
-        let frames = decode(&path);
-        assert_eq!(frames.len(), states);
+        let decoded = decode(&path);
+        assert_eq!(decoded.len(), states);
         let delay = |f: &image::Frame| f.delay().numer_denom_ms();
-        assert_eq!(delay(&frames[0]), (150, 1));
-        assert_eq!(delay(&frames[states - 1]), (2000, 1));
-        // The caption band has text in it: dark pixels above the grid.
-        let first = frames[0].buffer();
-        let dark = first
+        assert_eq!(delay(&decoded[0]), (150, 1));
+        assert_eq!(delay(&decoded[states - 1]), (2000, 1));
+        // The caption band has text in it: dark pixels above the pictures.
+        let dark = decoded[0]
+            .buffer()
             .rows()
             .take(40)
             .flatten()
@@ -383,43 +397,40 @@ mod tests {
         assert!(dark > 50, "{dark} dark pixels in the caption band");
         // Delta frames composite back to exactly the pictures drawn (few colours: no
         // quantisation loss).
-        let film = Film::new(&episodes, GifOptions::default().cell_px);
-        for (t, frame) in frames.iter().enumerate() {
+        let canvases = canvases(&panels, &options).expect("canvases");
+        assert_eq!(canvases.len(), states);
+        for (t, (frame, canvas)) in decoded.iter().zip(&canvases).enumerate() {
             let decoded = image::DynamicImage::ImageRgba8(frame.buffer().clone()).into_rgb8();
-            assert!(decoded == film.canvas(t).expect("canvas"), "frame {t} differs");
+            assert!(decoded == *canvas, "frame {t} differs");
         }
-        assert_eq!(listing(&dir), ["episode.gif"]);
+        // The ending is written on the last frame only.
+        assert!(canvases[states - 1] != canvases[states - 2]);
+        assert_eq!(listing(&dir), ["panel.gif"]);
     }
 
     #[test]
-    fn long_episodes_side_by_side_are_subsampled_and_small() {
+    fn long_panels_side_by_side_are_subsampled_and_small() {
         let dir = temp_dir("gif-two");
-        let long = episode(5, 1000);
-        assert_eq!(
-            long.len(),
-            1001,
-            "a random agent rarely finishes in 1000 steps from this seed"
-        );
-        let short = episode(5, 30);
         let path = dir.join("two.gif");
-        let episodes = [
-            EpisodeFrames {
-                caption: "random agent, 1000 steps: the caption is long and must shrink to fit, or else be cut short"
-                    .into(),
-                observations: long,
+        let panels = [
+            Panel {
+                caption: "1000 steps: the caption is long and must shrink to fit, or else be cut short".into(),
+                frames: moving(1000, 32),
+                ending: String::new(),
             },
-            EpisodeFrames {
+            Panel {
                 caption: "short".into(),
-                observations: short,
+                frames: moving(30, 32),
+                ending: ", done".into(),
             },
         ];
         let options = GifOptions::default();
-        let written = episode_gif(&episodes, &options, &path).expect("gif");
+        let written = animated_gif(&panels, &options, &path).expect("gif");
         assert_eq!(written, options.max_frames);
         let frames = decode(&path);
         assert_eq!(frames.len(), options.max_frames);
         let (w, h) = frames[0].buffer().dimensions();
-        let single = sim::render::frame(&episodes[0].observations[0], options.cell_px);
+        let single = &panels[0].frames[0];
         assert!(w > 2 * single.width() && h > single.height(), "{w}x{h}");
         let size = std::fs::metadata(&path).expect("gif").len();
         assert!(size < 1_000_000, "{size} bytes");
@@ -429,25 +440,30 @@ mod tests {
     fn bad_inputs_are_errors() {
         let dir = temp_dir("gif-bad");
         let path = dir.join("bad.gif");
-        let ok = EpisodeFrames {
+        let ok = Panel {
             caption: "ok".into(),
-            observations: episode(1, 3),
+            frames: moving(3, 8),
+            ending: String::new(),
         };
         let options = GifOptions::default();
         assert!(matches!(
-            episode_gif(&[], &options, &path),
+            animated_gif(&[], &options, &path),
             Err(PlotError::Empty { .. })
         ));
-        let empty = EpisodeFrames {
+        let empty = Panel {
             caption: "empty".into(),
-            observations: vec![],
+            frames: vec![],
+            ending: String::new(),
         };
-        let err = episode_gif(&[ok.clone(), empty], &options, &path).unwrap_err();
+        let err = animated_gif(&[ok.clone(), empty], &options, &path).unwrap_err();
         assert!(err.to_string().contains("\"empty\""), "{err}");
         for bad in [
-            GifOptions { cell_px: 0, ..options },
             GifOptions {
-                cell_px: 1000,
+                caption_px: 0,
+                ..options
+            },
+            GifOptions {
+                caption_px: 1000,
                 ..options
             },
             GifOptions { frame_ms: 0, ..options },
@@ -456,28 +472,29 @@ mod tests {
                 ..options
             },
         ] {
-            let err = episode_gif(std::slice::from_ref(&ok), &bad, &path).unwrap_err();
+            let err = animated_gif(std::slice::from_ref(&ok), &bad, &path).unwrap_err();
+            assert!(matches!(err, PlotError::Inconsistent { .. }), "{err}");
+            let err = canvases(std::slice::from_ref(&ok), &bad).unwrap_err();
             assert!(matches!(err, PlotError::Inconsistent { .. }), "{err}");
         }
-        // Too wide for a GIF: many panels of large cells.
-        let wide = vec![ok.clone(); 200];
-        let err = episode_gif(
-            &wide,
-            &GifOptions {
-                cell_px: 128,
-                ..options
-            },
-            &path,
-        )
-        .unwrap_err();
+        // Too wide for a GIF: many wide panels (of thin pictures, to spare memory).
+        let wide = vec![
+            Panel {
+                frames: vec![RgbImage::new(1000, 1)],
+                ..ok.clone()
+            };
+            66
+        ];
+        let err = animated_gif(&wide, &options, &path).unwrap_err();
         assert!(err.to_string().contains("larger than a GIF"), "{err}");
         assert!(listing(&dir).is_empty());
-        // A single state is a one-frame GIF.
-        let still = EpisodeFrames {
+        // A single picture is a one-frame GIF.
+        let still = Panel {
             caption: String::new(),
-            observations: vec![ok.observations[0]],
+            frames: vec![ok.frames[0].clone()],
+            ending: String::new(),
         };
-        assert_eq!(episode_gif(&[still], &options, &path).expect("gif"), 1);
+        assert_eq!(animated_gif(&[still], &options, &path).expect("gif"), 1);
         assert_eq!(decode(&path).len(), 1);
     }
 }

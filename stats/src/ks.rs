@@ -225,7 +225,7 @@ fn outer_prob_inside(m: usize, n: usize, g: usize, h: usize) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::stats::fixtures::{STEPS_8, STEPS_200, STEPS_300, STEPS_500_A, STEPS_500_B, assert_close};
+    use crate::fixtures::{STEPS_8, STEPS_200, STEPS_300, STEPS_500_A, STEPS_500_B, assert_close};
     use proptest::prelude::*;
     use std::time::{Duration, Instant};
 
@@ -325,7 +325,7 @@ mod tests {
         );
     }
 
-    /// `big_x(n)` of experiments/scripts/scipy_reference.py:
+    /// `big_x(n)` of stats/scripts/scipy_reference.py:
     /// `(i * 7919 + 13) % 10007` for `i` in `0..n` (many ties).
     fn big_x(n: u64) -> Vec<f64> {
         (0..n).map(|i| ((i * 7919 + 13) % 10007) as f64).collect()
