@@ -4,11 +4,12 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use agent::optimality::{self, Optimality};
-use agent::{Assist, EpisodeResult, Summary, TrainConfig, TrainOverrides};
+use agent::eval::EvalPlan;
+use agent::{Assist, TrainConfig, TrainOverrides};
+use oracle::ExactSolver;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use sim::{Backend, Env, Goal, RewardModel};
+use sim::{Backend, EnvConfig, Goal, RewardModel};
 
 use crate::boundary::{OrValueError, guard, value_error};
 use crate::config;
@@ -120,26 +121,43 @@ pub fn train<'py>(
             let clock = Instant::now();
             let trained = agent::train(&config, None).or_value_error()?;
             let seconds = clock.elapsed().as_secs_f64();
-            let mut results: Vec<EpisodeResult> = Vec::new();
-            let mut optimal = Vec::new();
-            if eval_episodes > 0 {
+            let evaluation = if eval_episodes > 0 {
+                // The library's one evaluation, in the training world with games that end
+                // at the goal within the paper's 1000 steps.
+                let plan = EvalPlan {
+                    world: EnvConfig {
+                        horizon: sim::DEFAULT_HORIZON,
+                        ..config.world
+                    },
+                    profile: config.profile,
+                    goals: eval_goals,
+                    episodes: eval_episodes,
+                    seed: eval_seed,
+                };
+                let solver = ExactSolver::new(config.world.grid).with_protocol(config.world.protocol);
                 let model = &trained.agent;
-                for goal in &eval_goals {
-                    let mut env = Env::new(config.test_env_config(*goal, sim::DEFAULT_HORIZON)).or_value_error()?;
-                    let mut policy = model.policy(eval_epsilon).or_value_error()?;
-                    let played = agent::play(&mut env, &mut policy, eval_episodes, eval_seed, None).or_value_error()?;
-                    optimal.extend(
-                        optimality::optimal_steps_under(config.world.grid, config.world.protocol, &played)
-                            .or_value_error()?,
-                    );
-                    results.extend(played);
-                }
-            }
+                let name = model.name();
+                Some(
+                    agent::eval::evaluate(
+                        &plan,
+                        name,
+                        String::new(),
+                        eval_epsilon,
+                        &solver,
+                        &mut || Ok(Box::new(model.policy(eval_epsilon)?)),
+                        &mut || {},
+                    )
+                    .or_value_error()?
+                    .report,
+                )
+            } else {
+                None
+            };
             if let Some(out) = &out_path {
                 let bytes = trained.agent.to_bytes().map_err(value_error)?;
                 out.write(&bytes).or_value_error()?;
             }
-            Ok((trained, seconds, (results, optimal)))
+            Ok((trained, seconds, evaluation))
         })
     })?;
     let d = PyDict::new(py);
@@ -166,18 +184,13 @@ pub fn train<'py>(
     d.set_item("assisted_steps", r.assisted_steps)?;
     d.set_item("replay_sweeps", r.replay_sweeps)?;
     d.set_item("train_seconds", seconds)?;
-    let (results, optimal) = evaluation;
-    if !results.is_empty() {
-        let summary = Summary::of(&results);
-        let o = Optimality::of(&results, &optimal);
+    if let Some(e) = evaluation {
+        let (summary, o) = (e.run.summary, e.optimality);
         d.set_item("eval_episodes", summary.episodes)?;
         d.set_item("eval_failures", summary.failures)?;
         d.set_item("eval_mean_steps", summary.mean_steps)?;
         d.set_item("eval_median_steps", summary.median_steps)?;
-        d.set_item(
-            "eval_mean_steps_failures_as_horizon",
-            optimality::mean_steps_failures_as_horizon(&results, sim::DEFAULT_HORIZON),
-        )?;
+        d.set_item("eval_mean_steps_failures_as_horizon", e.run.mean_steps_failures_as_horizon)?;
         d.set_item("eval_mean_optimal_steps", o.mean_optimal_steps)?;
         d.set_item("eval_mean_ratio_to_optimum", o.mean_ratio_to_optimum)?;
     }

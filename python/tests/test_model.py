@@ -1,0 +1,95 @@
+"""``blockstack.load``: a model trained with the CLI, loaded in Python, plays and evaluates
+as the CLI plays and evaluates it."""
+
+import json
+
+import pytest
+
+import blockstack
+
+
+@pytest.fixture(scope="module")
+def role_model(tmp_path_factory, cli):
+    path = tmp_path_factory.mktemp("model") / "role.safetensors"
+    cli("train", "--repr", "role", "--goals", "0,1,2", "--games", "400", "--backend", "grid", "--out", path)
+    return path
+
+
+@pytest.fixture(scope="module")
+def network(tmp_path_factory, cli):
+    path = tmp_path_factory.mktemp("network") / "net.safetensors"
+    cli("dqn", "--preset", "dqn-planes", "--blocks", "2", "--steps", "60", "--seed", "3", "--out", path)
+    return path
+
+
+def cli_actions(cli, tmp_path, model, agent, goal, episodes, seed, extra=()):
+    """The actions of each episode of ``blockstack run``, from its trajectory file."""
+    trajectory = tmp_path / f"{agent}.jsonl"
+    cli("run", "--agent", agent, "--model", model, "--goal", goal, "--episodes", episodes, "--seed", seed,
+        "--epsilon", "0", "--trajectory", trajectory, *extra)
+    actions = [[] for _ in range(episodes)]
+    for line in trajectory.read_text().splitlines():
+        record = json.loads(line)
+        if record["type"] == "step":
+            actions[record["episode"]].append(record["action"])
+    return actions
+
+
+def python_actions(model, goal, episodes, seed, **overrides):
+    """The same episodes played from Python: reset with the CLI's episode seeds."""
+    env = model.make_env(goal=goal, **overrides)
+    out = []
+    for k in range(episodes):
+        s = blockstack.episode_seed(seed, k)
+        obs, info = env.reset(seed=s)
+        model.reset(s)
+        actions, done = [], False
+        while not done:
+            action, state = model.predict(obs, deterministic=True)
+            assert state is None
+            actions.append(action)
+            obs, reward, terminated, truncated, info = env.step(action)
+            done = terminated or truncated
+        out.append(actions)
+    return out
+
+
+def test_a_tabular_model_plays_the_clis_greedy_trajectory(cli, tmp_path, role_model):
+    model = blockstack.load(role_model)
+    assert model.kind == "q" and model.world["blocks"] == 3
+    expected = cli_actions(cli, tmp_path, role_model, "q", "1,0,2", 3, 7, ("--backend", "physics"))
+    assert python_actions(model, "1,0,2", 3, 7) == expected
+
+
+def test_a_network_plays_the_clis_greedy_trajectory(cli, tmp_path, network):
+    model = blockstack.load(network)
+    assert model.kind == "dqn" and model.world["blocks"] == 2
+    expected = cli_actions(cli, tmp_path, network, "dqn", "1,0", 2, 5, ("--blocks", "2", "--horizon", "40"))
+    assert python_actions(model, "1,0", 2, 5, horizon=40) == expected
+
+
+@pytest.mark.parametrize("fixture", ["role_model", "network"])
+def test_evaluate_is_what_eval_json_prints(cli, fixture, request):
+    path = request.getfixturevalue(fixture)
+    model = blockstack.load(path)
+    ours = model.evaluate(episodes=4, seed=3, epsilon=0.0, backend="grid")
+    theirs = json.loads(cli("eval", "--model", path, "--episodes", 4, "--seed", 3, "--epsilon", 0,
+                            "--backend", "grid", "--json"))
+    assert ours == theirs
+
+
+def test_files_that_are_not_models_are_value_errors(tmp_path):
+    bad = tmp_path / "bad.safetensors"
+    bad.write_bytes(b"not a model")
+    with pytest.raises(ValueError, match="bad.safetensors"):
+        blockstack.load(bad)
+    with pytest.raises(ValueError):
+        blockstack.load(tmp_path / "missing.safetensors")
+
+
+def test_predict_reads_the_state_observation(role_model):
+    model = blockstack.load(role_model)
+    env = model.make_env(obs="planes")
+    obs, _ = env.reset(seed=1)
+    with pytest.raises(ValueError, match="obs='state'"):
+        model.predict(obs)
