@@ -293,6 +293,8 @@ struct LayerBuffers {
     mean: Vec<f64>,
     inv_std: Vec<f64>,
     var: Vec<f64>,
+    /// Per-channel coefficients of batch normalisation's element-wise pass.
+    coef: Vec<f32>,
     /// A sparse layer's non-zero inputs: sample `b`'s are `nz[nz_start[b]..nz_start[b + 1]]`.
     nz: Vec<(u32, f32)>,
     nz_start: Vec<usize>,
@@ -312,8 +314,9 @@ pub struct Workspace {
     dcols: Vec<f32>,
     /// The second half's weight gradient, added to the first's.
     dw_half: Vec<f32>,
-    /// Per-channel sums of the batch-normalisation backward pass.
+    /// Per-channel sums and coefficients of the batch-normalisation backward pass.
     sums: Vec<f64>,
+    coef: Vec<f32>,
 }
 
 impl Workspace {
@@ -349,6 +352,7 @@ fn both<A: FnOnce() + Send, B: FnOnce() + Send>(parts: usize, a: A, b: B) {
 }
 
 /// Sets every row of `rows` (of `bias.len()` values) to `bias`.
+#[inline(always)]
 fn fill_rows(rows: &mut [f32], bias: &[f32]) {
     for row in rows.chunks_exact_mut(bias.len()) {
         row.copy_from_slice(bias);
@@ -356,6 +360,7 @@ fn fill_rows(rows: &mut [f32], bias: &[f32]) {
 }
 
 /// Adds every row of `rows` into `sum` (of one row's length), overwriting it.
+#[inline(always)]
 fn sum_rows(rows: &[f32], sum: &mut [f32]) {
     sum.fill(0.0);
     for row in rows.chunks_exact(sum.len()) {
@@ -366,6 +371,7 @@ fn sum_rows(rows: &[f32], sum: &mut [f32]) {
 }
 
 /// Sets `delta` to 0 where the layer's output (after ReLU) is 0.
+#[inline(always)]
 fn relu_backward(delta: &mut [f32], out: &[f32]) {
     for (d, &o) in delta.iter_mut().zip(out) {
         if o <= 0.0 {
@@ -628,81 +634,84 @@ impl QNet {
 
     /// One forward pass over every layer.
     fn pass(&self, x: &[f32], ws: &mut Workspace, train: bool) {
-        let batch = x.len() / self.input.len();
-        assert_eq!(batch * self.input.len(), x.len(), "a whole number of inputs");
-        ws.batch = batch;
-        if ws.layers.len() != self.layers.len() {
-            ws.layers = (0..self.layers.len()).map(|_| LayerBuffers::default()).collect();
-        }
-        for (i, layer) in self.layers.iter().enumerate() {
-            let (before, rest) = ws.layers.split_at_mut(i);
-            let input: &[f32] = before.last().map_or(x, |l| &l.out);
-            let buf = &mut rest[0];
-            fit(&mut buf.out, batch * layer.width());
-            let parts = kernels::parts(batch, MIN_HALF_WORK.div_ceil(layer.work()));
-            let half = kernels::part_start(batch, parts, 1);
-            match layer {
-                Layer::Conv {
-                    geo,
-                    out,
-                    weight,
-                    bias,
-                    norm,
-                } => {
-                    let (positions, patch) = (geo.positions(), geo.patch());
-                    fit(&mut buf.cols, batch * positions * patch);
-                    fit(&mut buf.pre, batch * positions * out);
-                    let w = &self.params[weight.range()];
-                    let b = &self.params[bias.range()];
-                    let (x0, x1) = input.split_at(half * geo.input_len());
-                    let (c0, c1) = halves(&mut buf.cols, half * positions * patch, parts);
-                    let (z0, z1) = halves(&mut buf.pre, half * positions * out, parts);
-                    let conv = |x: &[f32], cols: &mut [f32], z: &mut [f32]| {
-                        geo.im2col(x, cols);
-                        fill_rows(z, b);
-                        matmul(z, cols, w, (z.len() / out, patch, *out), true);
-                    };
-                    both(parts, || conv(x0, c0, z0), || conv(x1, c1, z1));
-                    match norm {
-                        Some(n) if train => self.norm_train(n, buf),
-                        Some(n) => self.norm_eval(n, buf),
-                        None => {
-                            for (o, &z) in buf.out.iter_mut().zip(&buf.pre) {
-                                *o = z.max(0.0);
+        kernels::with_avx2(|| {
+            let batch = x.len() / self.input.len();
+            assert_eq!(batch * self.input.len(), x.len(), "a whole number of inputs");
+            ws.batch = batch;
+            if ws.layers.len() != self.layers.len() {
+                ws.layers = (0..self.layers.len()).map(|_| LayerBuffers::default()).collect();
+            }
+            for (i, layer) in self.layers.iter().enumerate() {
+                let (before, rest) = ws.layers.split_at_mut(i);
+                let input: &[f32] = before.last().map_or(x, |l| &l.out);
+                let buf = &mut rest[0];
+                fit(&mut buf.out, batch * layer.width());
+                let parts = kernels::parts(batch, MIN_HALF_WORK.div_ceil(layer.work()));
+                let half = kernels::part_start(batch, parts, 1);
+                match layer {
+                    Layer::Conv {
+                        geo,
+                        out,
+                        weight,
+                        bias,
+                        norm,
+                    } => {
+                        let (positions, patch) = (geo.positions(), geo.patch());
+                        fit(&mut buf.cols, batch * positions * patch);
+                        fit(&mut buf.pre, batch * positions * out);
+                        let w = &self.params[weight.range()];
+                        let b = &self.params[bias.range()];
+                        let (x0, x1) = input.split_at(half * geo.input_len());
+                        let (c0, c1) = halves(&mut buf.cols, half * positions * patch, parts);
+                        let (z0, z1) = halves(&mut buf.pre, half * positions * out, parts);
+                        let conv = |x: &[f32], cols: &mut [f32], z: &mut [f32]| {
+                            geo.im2col(x, cols);
+                            fill_rows(z, b);
+                            matmul(z, cols, w, (z.len() / out, patch, *out), true);
+                        };
+                        both(parts, || conv(x0, c0, z0), || conv(x1, c1, z1));
+                        match norm {
+                            Some(n) if train => self.norm_train(n, buf),
+                            Some(n) => self.norm_eval(n, buf),
+                            None => {
+                                for (o, &z) in buf.out.iter_mut().zip(&buf.pre) {
+                                    *o = z.max(0.0);
+                                }
                             }
                         }
                     }
-                }
-                Layer::Linear {
-                    inputs,
-                    out,
-                    weight,
-                    bias,
-                    relu,
-                    sparse,
-                } => {
-                    let w = &self.params[weight.range()];
-                    let b = &self.params[bias.range()];
-                    if *sparse {
-                        sparse_forward(input, *inputs, w, b, buf);
-                    } else {
-                        let (x0, x1) = input.split_at(half * inputs);
-                        let (y0, y1) = halves(&mut buf.out, half * out, parts);
-                        let linear = |x: &[f32], y: &mut [f32]| {
-                            fill_rows(y, b);
-                            matmul(y, x, w, (y.len() / out, *inputs, *out), true);
-                        };
-                        both(parts, || linear(x0, y0), || linear(x1, y1));
-                    }
-                    if *relu {
-                        buf.out.iter_mut().for_each(|v| *v = v.max(0.0));
+                    Layer::Linear {
+                        inputs,
+                        out,
+                        weight,
+                        bias,
+                        relu,
+                        sparse,
+                    } => {
+                        let w = &self.params[weight.range()];
+                        let b = &self.params[bias.range()];
+                        if *sparse {
+                            sparse_forward(input, *inputs, w, b, buf);
+                        } else {
+                            let (x0, x1) = input.split_at(half * inputs);
+                            let (y0, y1) = halves(&mut buf.out, half * out, parts);
+                            let linear = |x: &[f32], y: &mut [f32]| {
+                                fill_rows(y, b);
+                                matmul(y, x, w, (y.len() / out, *inputs, *out), true);
+                            };
+                            both(parts, || linear(x0, y0), || linear(x1, y1));
+                        }
+                        if *relu {
+                            buf.out.iter_mut().for_each(|v| *v = v.max(0.0));
+                        }
                     }
                 }
             }
-        }
+        })
     }
 
     /// Batch normalisation on the batch's statistics, then ReLU: `pre` becomes `x_hat`.
+    #[inline(always)]
     fn norm_train(&self, n: &Norm, buf: &mut LayerBuffers) {
         let channels = n.gamma.len;
         fit(&mut buf.mean, channels);
@@ -726,32 +735,47 @@ impl QNet {
             buf.var[c] = var;
             buf.inv_std[c] = 1.0 / (var + BN_EPS).sqrt();
         }
+        // x_hat = z * scale + shift, y = gamma * x_hat + beta, per channel in f32.
         let gamma = &self.params[n.gamma.range()];
         let beta = &self.params[n.beta.range()];
+        fit(&mut buf.coef, 2 * channels);
+        let (scale, shift) = buf.coef.split_at_mut(channels);
+        for c in 0..channels {
+            scale[c] = buf.inv_std[c] as f32;
+            shift[c] = (-buf.mean[c] * buf.inv_std[c]) as f32;
+        }
         for (pre, out) in buf
             .pre
             .chunks_exact_mut(channels)
             .zip(buf.out.chunks_exact_mut(channels))
         {
-            for c in 0..channels {
-                let x_hat = ((f64::from(pre[c]) - buf.mean[c]) * buf.inv_std[c]) as f32;
-                pre[c] = x_hat;
-                out[c] = (gamma[c] * x_hat + beta[c]).max(0.0);
+            let per_channel = scale.iter().zip(shift.iter()).zip(gamma.iter().zip(beta));
+            for ((z, o), ((&sc, &sh), (&g, &b))) in pre.iter_mut().zip(out.iter_mut()).zip(per_channel) {
+                let x_hat = *z * sc + sh;
+                *z = x_hat;
+                *o = (g * x_hat + b).max(0.0);
             }
         }
     }
 
     /// Batch normalisation on the running statistics, then ReLU.
+    #[inline(always)]
     fn norm_eval(&self, n: &Norm, buf: &mut LayerBuffers) {
         let channels = n.gamma.len;
         let gamma = &self.params[n.gamma.range()];
         let beta = &self.params[n.beta.range()];
         let mean = &self.buffers[n.running_mean.range()];
         let var = &self.buffers[n.running_var.range()];
+        // y = z * scale + shift per channel.
+        fit(&mut buf.coef, 2 * channels);
+        let (scale, shift) = buf.coef.split_at_mut(channels);
+        for c in 0..channels {
+            scale[c] = gamma[c] / (f64::from(var[c]) + BN_EPS).sqrt() as f32;
+            shift[c] = beta[c] - mean[c] * scale[c];
+        }
         for (pre, out) in buf.pre.chunks_exact(channels).zip(buf.out.chunks_exact_mut(channels)) {
-            for c in 0..channels {
-                let scale = gamma[c] / (f64::from(var[c]) + BN_EPS).sqrt() as f32;
-                out[c] = ((pre[c] - mean[c]) * scale + beta[c]).max(0.0);
+            for ((&z, o), (&sc, &sh)) in pre.iter().zip(out.iter_mut()).zip(scale.iter().zip(shift.iter())) {
+                *o = (z * sc + sh).max(0.0);
             }
         }
     }
@@ -760,147 +784,176 @@ impl QNet {
     /// as [`QNet::params`]), from `dq`, its gradient with respect to the Q-values of the
     /// last [`QNet::forward_train`] through `ws`. No gradient is computed for the input.
     pub fn backward(&self, ws: &mut Workspace, dq: &[f32], grad: &mut [f32]) {
-        let batch = ws.batch;
-        assert_eq!(dq.len(), batch * self.actions, "one gradient per Q-value");
-        assert_eq!(grad.len(), self.params.len(), "one gradient per parameter");
-        let Workspace {
-            layers,
-            delta,
-            delta_in,
-            dcols,
-            dw_half,
-            sums,
-            ..
-        } = ws;
-        fit(delta, dq.len());
-        delta.copy_from_slice(dq);
-        for (i, layer) in self.layers.iter().enumerate().rev() {
-            let (before, rest) = layers.split_at(i);
-            let input: Option<&[f32]> = before.last().map(|l| l.out.as_slice());
-            let buf = &rest[0];
-            let parts = kernels::parts(batch, MIN_HALF_WORK.div_ceil(layer.work()));
-            let half = kernels::part_start(batch, parts, 1);
-            match layer {
-                Layer::Conv {
-                    geo,
-                    out,
-                    weight,
-                    bias,
-                    norm,
-                } => {
-                    let (positions, patch) = (geo.positions(), geo.patch());
-                    match norm {
-                        Some(n) => self.norm_backward(n, buf, delta, sums, grad),
-                        None => relu_backward(delta, &buf.out),
-                    }
-                    sum_rows(delta, &mut grad[bias.range()]);
-                    let w = &self.params[weight.range()];
-                    fit(dw_half, weight.len);
-                    if input.is_some() {
-                        fit(dcols, buf.cols.len());
-                        fit(delta_in, batch * geo.input_len());
-                    }
-                    let rows = half * positions;
-                    let (g0, g1) = (&mut grad[weight.range()], &mut dw_half[..]);
-                    let (cols0, cols1) = buf.cols.split_at(rows * patch);
-                    let (d0, d1) = delta.split_at(rows * out);
-                    let wants_input = input.is_some();
-                    let (dc0, dc1, dx0, dx1) = if wants_input {
-                        let (dc0, dc1) = halves(dcols, rows * patch, parts);
-                        let (dx0, dx1) = halves(delta_in, half * geo.input_len(), parts);
-                        (dc0, dc1, dx0, dx1)
-                    } else {
-                        (&mut [][..], &mut [][..], &mut [][..], &mut [][..])
-                    };
-                    let conv = |cols: &[f32], d: &[f32], g: &mut [f32], dc: &mut [f32], dx: &mut [f32]| {
-                        let r = d.len() / out;
-                        matmul_tn(g, cols, d, (patch, r, *out), false);
-                        if wants_input {
-                            matmul_nt(dc, d, w, (r, *out, patch), false);
-                            geo.col2im(dc, dx);
+        kernels::with_avx2(|| {
+            let batch = ws.batch;
+            assert_eq!(dq.len(), batch * self.actions, "one gradient per Q-value");
+            assert_eq!(grad.len(), self.params.len(), "one gradient per parameter");
+            let Workspace {
+                layers,
+                delta,
+                delta_in,
+                dcols,
+                dw_half,
+                sums,
+                coef,
+                ..
+            } = ws;
+            fit(delta, dq.len());
+            delta.copy_from_slice(dq);
+            for (i, layer) in self.layers.iter().enumerate().rev() {
+                let (before, rest) = layers.split_at(i);
+                let input: Option<&[f32]> = before.last().map(|l| l.out.as_slice());
+                let buf = &rest[0];
+                let parts = kernels::parts(batch, MIN_HALF_WORK.div_ceil(layer.work()));
+                let half = kernels::part_start(batch, parts, 1);
+                match layer {
+                    Layer::Conv {
+                        geo,
+                        out,
+                        weight,
+                        bias,
+                        norm,
+                    } => {
+                        let (positions, patch) = (geo.positions(), geo.patch());
+                        match norm {
+                            Some(n) => {
+                                self.norm_backward(n, buf, delta, (sums, coef), grad);
+                                // Batch normalisation subtracts the batch mean: the bias
+                                // changes no output in training, and its gradient is 0
+                                // (computed, it is rounding noise that Adam would turn
+                                // into a random walk).
+                                grad[bias.range()].fill(0.0);
+                            }
+                            None => {
+                                relu_backward(delta, &buf.out);
+                                sum_rows(delta, &mut grad[bias.range()]);
+                            }
                         }
-                    };
-                    both(
-                        parts,
-                        || conv(cols0, d0, g0, dc0, dx0),
-                        || conv(cols1, d1, g1, dc1, dx1),
-                    );
-                    if parts == 2 {
-                        for (g, &h) in grad[weight.range()].iter_mut().zip(dw_half.iter()) {
-                            *g += h;
+                        let w = &self.params[weight.range()];
+                        fit(dw_half, weight.len);
+                        if input.is_some() {
+                            fit(dcols, buf.cols.len());
+                            fit(delta_in, batch * geo.input_len());
+                        }
+                        let rows = half * positions;
+                        let (g0, g1) = (&mut grad[weight.range()], &mut dw_half[..]);
+                        let (cols0, cols1) = buf.cols.split_at(rows * patch);
+                        let (d0, d1) = delta.split_at(rows * out);
+                        let wants_input = input.is_some();
+                        let (dc0, dc1, dx0, dx1) = if wants_input {
+                            let (dc0, dc1) = halves(dcols, rows * patch, parts);
+                            let (dx0, dx1) = halves(delta_in, half * geo.input_len(), parts);
+                            (dc0, dc1, dx0, dx1)
+                        } else {
+                            (&mut [][..], &mut [][..], &mut [][..], &mut [][..])
+                        };
+                        let conv = |cols: &[f32], d: &[f32], g: &mut [f32], dc: &mut [f32], dx: &mut [f32]| {
+                            let r = d.len() / out;
+                            matmul_tn(g, cols, d, (patch, r, *out), false);
+                            if wants_input {
+                                matmul_nt(dc, d, w, (r, *out, patch), false);
+                                geo.col2im(dc, dx);
+                            }
+                        };
+                        both(
+                            parts,
+                            || conv(cols0, d0, g0, dc0, dx0),
+                            || conv(cols1, d1, g1, dc1, dx1),
+                        );
+                        if parts == 2 {
+                            for (g, &h) in grad[weight.range()].iter_mut().zip(dw_half.iter()) {
+                                *g += h;
+                            }
+                        }
+                    }
+                    Layer::Linear {
+                        inputs,
+                        out,
+                        weight,
+                        bias,
+                        relu,
+                        sparse,
+                    } => {
+                        if *relu {
+                            relu_backward(delta, &buf.out);
+                        }
+                        sum_rows(delta, &mut grad[bias.range()]);
+                        if *sparse {
+                            sparse_backward(buf, delta, *out, &mut grad[weight.range()]);
+                            continue;
+                        }
+                        let x = input.expect("a dense layer follows another");
+                        let w = &self.params[weight.range()];
+                        fit(dw_half, weight.len);
+                        fit(delta_in, batch * inputs);
+                        let (x0, x1) = x.split_at(half * inputs);
+                        let (d0, d1) = delta.split_at(half * out);
+                        let (g0, g1) = (&mut grad[weight.range()], &mut dw_half[..]);
+                        let (dx0, dx1) = halves(delta_in, half * inputs, parts);
+                        let linear = |x: &[f32], d: &[f32], g: &mut [f32], dx: &mut [f32]| {
+                            let r = d.len() / out;
+                            matmul_tn(g, x, d, (*inputs, r, *out), false);
+                            matmul_nt(dx, d, w, (r, *out, *inputs), false);
+                        };
+                        both(parts, || linear(x0, d0, g0, dx0), || linear(x1, d1, g1, dx1));
+                        if parts == 2 {
+                            for (g, &h) in grad[weight.range()].iter_mut().zip(dw_half.iter()) {
+                                *g += h;
+                            }
                         }
                     }
                 }
-                Layer::Linear {
-                    inputs,
-                    out,
-                    weight,
-                    bias,
-                    relu,
-                    sparse,
-                } => {
-                    if *relu {
-                        relu_backward(delta, &buf.out);
-                    }
-                    sum_rows(delta, &mut grad[bias.range()]);
-                    if *sparse {
-                        sparse_backward(buf, delta, *out, &mut grad[weight.range()]);
-                        continue;
-                    }
-                    let x = input.expect("a dense layer follows another");
-                    let w = &self.params[weight.range()];
-                    fit(dw_half, weight.len);
-                    fit(delta_in, batch * inputs);
-                    let (x0, x1) = x.split_at(half * inputs);
-                    let (d0, d1) = delta.split_at(half * out);
-                    let (g0, g1) = (&mut grad[weight.range()], &mut dw_half[..]);
-                    let (dx0, dx1) = halves(delta_in, half * inputs, parts);
-                    let linear = |x: &[f32], d: &[f32], g: &mut [f32], dx: &mut [f32]| {
-                        let r = d.len() / out;
-                        matmul_tn(g, x, d, (*inputs, r, *out), false);
-                        matmul_nt(dx, d, w, (r, *out, *inputs), false);
-                    };
-                    both(parts, || linear(x0, d0, g0, dx0), || linear(x1, d1, g1, dx1));
-                    if parts == 2 {
-                        for (g, &h) in grad[weight.range()].iter_mut().zip(dw_half.iter()) {
-                            *g += h;
-                        }
-                    }
-                }
+                std::mem::swap(delta, delta_in);
             }
-            std::mem::swap(delta, delta_in);
-        }
+        })
     }
 
     /// Batch normalisation's and ReLU's backward pass, in place over `delta` (gradient of
     /// the output, then of the convolution's output), with the scale's and shift's gradients.
-    fn norm_backward(&self, n: &Norm, buf: &LayerBuffers, delta: &mut [f32], sums: &mut Vec<f64>, grad: &mut [f32]) {
+    #[inline(always)]
+    fn norm_backward(
+        &self,
+        n: &Norm,
+        buf: &LayerBuffers,
+        delta: &mut [f32],
+        (sums, coef): (&mut Vec<f64>, &mut Vec<f32>),
+        grad: &mut [f32],
+    ) {
         let channels = n.gamma.len;
         fit(sums, 2 * channels);
         sums.fill(0.0);
         let (d_beta, d_gamma) = sums.split_at_mut(channels);
         let rows = buf.out.chunks_exact(channels).zip(buf.pre.chunks_exact(channels));
         for (d, (out, x_hat)) in delta.chunks_exact_mut(channels).zip(rows) {
-            for c in 0..channels {
-                if out[c] <= 0.0 {
-                    d[c] = 0.0;
+            let sums = d_beta.iter_mut().zip(d_gamma.iter_mut());
+            for (((d, &o), &x), (sb, sg)) in d.iter_mut().zip(out).zip(x_hat).zip(sums) {
+                if o <= 0.0 {
+                    *d = 0.0;
                 }
-                d_beta[c] += f64::from(d[c]);
-                d_gamma[c] += f64::from(d[c]) * f64::from(x_hat[c]);
+                *sb += f64::from(*d);
+                *sg += f64::from(*d) * f64::from(x);
             }
         }
         for c in 0..channels {
             grad[n.beta.offset + c] = d_beta[c] as f32;
             grad[n.gamma.offset + c] = d_gamma[c] as f32;
         }
+        // dz = gamma / std * (dy - mean(dy) - x_hat * mean(dy * x_hat)) = k * dy + a + b * x_hat.
         let count = (buf.pre.len() / channels) as f64;
         let gamma = &self.params[n.gamma.range()];
-        // dz = gamma / std * (dy - mean(dy) - x_hat * mean(dy * x_hat))
+        fit(coef, 3 * channels);
+        let (k, rest) = coef.split_at_mut(channels);
+        let (a, b) = rest.split_at_mut(channels);
+        for c in 0..channels {
+            let kc = f64::from(gamma[c]) * buf.inv_std[c];
+            k[c] = kc as f32;
+            a[c] = (-kc * d_beta[c] / count) as f32;
+            b[c] = (-kc * d_gamma[c] / count) as f32;
+        }
         for (d, x_hat) in delta.chunks_exact_mut(channels).zip(buf.pre.chunks_exact(channels)) {
-            for c in 0..channels {
-                let k = f64::from(gamma[c]) * buf.inv_std[c];
-                let v = f64::from(d[c]) - d_beta[c] / count - f64::from(x_hat[c]) * d_gamma[c] / count;
-                d[c] = (k * v) as f32;
+            let per_channel = k.iter().zip(a.iter()).zip(b.iter());
+            for ((d, &x), ((&k, &a), &b)) in d.iter_mut().zip(x_hat).zip(per_channel) {
+                *d = k * *d + a + b * x;
             }
         }
     }
@@ -908,6 +961,7 @@ impl QNet {
 
 /// The first layer of a perceptron: for each sample, the bias plus `x_i` times weight row
 /// `i` for every non-zero input `i` (planes are 0/1 with about one value in sixteen set).
+#[inline(always)]
 fn sparse_forward(x: &[f32], inputs: usize, w: &[f32], b: &[f32], buf: &mut LayerBuffers) {
     let out = b.len();
     buf.nz.clear();
@@ -927,6 +981,7 @@ fn sparse_forward(x: &[f32], inputs: usize, w: &[f32], b: &[f32], buf: &mut Laye
 
 /// The sparse layer's weight gradient: `delta`'s row added, times `x_i`, to weight row `i`
 /// for each non-zero input, sample after sample.
+#[inline(always)]
 fn sparse_backward(buf: &LayerBuffers, delta: &[f32], out: usize, grad: &mut [f32]) {
     grad.fill(0.0);
     for (b, d) in delta.chunks_exact(out).enumerate() {
