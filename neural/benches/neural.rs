@@ -80,7 +80,7 @@ fn network(c: &mut Criterion) {
                             black_box(online.forward(&next, &mut eval));
                         }
                         online.forward_train(&x, &mut train);
-                        online.backward(&mut train, &dq, &mut grad);
+                        online.backward(&x, &mut train, &dq, &mut grad);
                         optimizer.step(online.params_mut(), &mut grad, config.l2, config.clip_norm)
                     })
                 })

@@ -258,7 +258,8 @@ impl Learner {
                 losses.total += losses.margin * lambda_margin;
             }
         }
-        self.online.backward(&mut self.train_ws, &self.dq, &mut self.grad);
+        self.online
+            .backward(&self.x, &mut self.train_ws, &self.dq, &mut self.grad);
         losses
     }
 }
@@ -347,7 +348,7 @@ mod tests {
         dq[best] += 1.0;
         dq[taken] -= 1.0;
         let mut grad = vec![0.0; learner.online.parameter_count()];
-        learner.online.backward(&mut ws, &dq, &mut grad);
+        learner.online.backward(&x, &mut ws, &dq, &mut grad);
         let bias = learner.online.param_range("linear3.bias").unwrap();
         assert_eq!(grad[bias].to_vec(), vec![0.0, 1.0, -1.0, 0.0, 0.0, 0.0, 0.0]);
         // The learner's own step reports the same margin loss (and the TD loss of a terminal

@@ -281,7 +281,7 @@ pub struct QNet {
 /// The buffers of one layer's pass, kept for the backward pass.
 #[derive(Default)]
 struct LayerBuffers {
-    /// A convolution's patches (`batch * positions x patch`).
+    /// A convolution's patches, a chunk of samples for each half of the batch.
     cols: Vec<f32>,
     /// A convolution's output before the ReLU: normalised (`x_hat`) with batch
     /// normalisation in training, else the plain product plus bias.
@@ -310,7 +310,8 @@ pub struct Workspace {
     /// The gradient with respect to the current layer's output, and its input's.
     delta: Vec<f32>,
     delta_in: Vec<f32>,
-    /// A convolution's patch gradients.
+    /// A convolution's patches and their gradients, a chunk of samples for each half.
+    cols: Vec<f32>,
     dcols: Vec<f32>,
     /// The second half's weight gradient, added to the first's.
     dw_half: Vec<f32>,
@@ -334,6 +335,15 @@ impl Workspace {
 /// Resizes `v` to `n` values (allocating only when it grows past its capacity).
 fn fit<T: Clone + Default>(v: &mut Vec<T>, n: usize) {
     v.resize(n, T::default());
+}
+
+/// Values of patches gathered at a time (1 MB): the chunk stays in the core's caches
+/// between its gathering and its matrix product.
+const CHUNK_VALUES: usize = 1 << 18;
+
+/// Samples per chunk of a convolution's patches.
+fn chunk_samples(geo: &ConvGeometry) -> usize {
+    (CHUNK_VALUES / (geo.positions() * geo.patch())).max(1)
 }
 
 /// Splits `v` at `at` when there are two parts; with one the second part is empty.
@@ -656,18 +666,24 @@ impl QNet {
                         bias,
                         norm,
                     } => {
-                        let (positions, patch) = (geo.positions(), geo.patch());
-                        fit(&mut buf.cols, batch * positions * patch);
+                        let (positions, patch, in_len) = (geo.positions(), geo.patch(), geo.input_len());
+                        let chunk = chunk_samples(geo);
+                        fit(&mut buf.cols, 2 * chunk * positions * patch);
                         fit(&mut buf.pre, batch * positions * out);
                         let w = &self.params[weight.range()];
                         let b = &self.params[bias.range()];
-                        let (x0, x1) = input.split_at(half * geo.input_len());
-                        let (c0, c1) = halves(&mut buf.cols, half * positions * patch, parts);
+                        let (x0, x1) = input.split_at(half * in_len);
+                        let (c0, c1) = buf.cols.split_at_mut(chunk * positions * patch);
                         let (z0, z1) = halves(&mut buf.pre, half * positions * out, parts);
+                        // A few samples at a time, so the patches stay in cache.
                         let conv = |x: &[f32], cols: &mut [f32], z: &mut [f32]| {
-                            geo.im2col(x, cols);
                             fill_rows(z, b);
-                            matmul(z, cols, w, (z.len() / out, patch, *out), true);
+                            for (xc, zc) in x.chunks(chunk * in_len).zip(z.chunks_mut(chunk * positions * out)) {
+                                let rows = xc.len() / in_len * positions;
+                                let cols = &mut cols[..rows * patch];
+                                geo.im2col(xc, cols);
+                                matmul(zc, cols, w, (rows, patch, *out), true);
+                            }
                         };
                         both(parts, || conv(x0, c0, z0), || conv(x1, c1, z1));
                         match norm {
@@ -782,8 +798,9 @@ impl QNet {
 
     /// The gradient of a loss with respect to every parameter, written over `grad` (laid out
     /// as [`QNet::params`]), from `dq`, its gradient with respect to the Q-values of the
-    /// last [`QNet::forward_train`] through `ws`. No gradient is computed for the input.
-    pub fn backward(&self, ws: &mut Workspace, dq: &[f32], grad: &mut [f32]) {
+    /// last [`QNet::forward_train`] through `ws`, whose input was `x`. No gradient is
+    /// computed for the input.
+    pub fn backward(&self, x: &[f32], ws: &mut Workspace, dq: &[f32], grad: &mut [f32]) {
         kernels::with_avx2(|| {
             let batch = ws.batch;
             assert_eq!(dq.len(), batch * self.actions, "one gradient per Q-value");
@@ -792,6 +809,7 @@ impl QNet {
                 layers,
                 delta,
                 delta_in,
+                cols,
                 dcols,
                 dw_half,
                 sums,
@@ -802,7 +820,7 @@ impl QNet {
             delta.copy_from_slice(dq);
             for (i, layer) in self.layers.iter().enumerate().rev() {
                 let (before, rest) = layers.split_at(i);
-                let input: Option<&[f32]> = before.last().map(|l| l.out.as_slice());
+                let input: &[f32] = before.last().map_or(x, |l| l.out.as_slice());
                 let buf = &rest[0];
                 let parts = kernels::parts(batch, MIN_HALF_WORK.div_ceil(layer.work()));
                 let half = kernels::part_start(batch, parts, 1);
@@ -830,35 +848,50 @@ impl QNet {
                             }
                         }
                         let w = &self.params[weight.range()];
+                        let in_len = geo.input_len();
+                        let chunk = chunk_samples(geo);
+                        let chunk_len = chunk * positions * patch;
                         fit(dw_half, weight.len);
-                        if input.is_some() {
-                            fit(dcols, buf.cols.len());
-                            fit(delta_in, batch * geo.input_len());
+                        fit(cols, 2 * chunk_len);
+                        let wants_input = i > 0;
+                        if wants_input {
+                            fit(dcols, 2 * chunk_len);
+                            fit(delta_in, batch * in_len);
                         }
-                        let rows = half * positions;
                         let (g0, g1) = (&mut grad[weight.range()], &mut dw_half[..]);
-                        let (cols0, cols1) = buf.cols.split_at(rows * patch);
-                        let (d0, d1) = delta.split_at(rows * out);
-                        let wants_input = input.is_some();
+                        let (x0, x1) = input.split_at(half * in_len);
+                        let (d0, d1) = delta.split_at(half * positions * out);
+                        let (cols0, cols1) = cols.split_at_mut(chunk_len);
                         let (dc0, dc1, dx0, dx1) = if wants_input {
-                            let (dc0, dc1) = halves(dcols, rows * patch, parts);
-                            let (dx0, dx1) = halves(delta_in, half * geo.input_len(), parts);
+                            let (dc0, dc1) = dcols.split_at_mut(chunk_len);
+                            let (dx0, dx1) = halves(delta_in, half * in_len, parts);
                             (dc0, dc1, dx0, dx1)
                         } else {
                             (&mut [][..], &mut [][..], &mut [][..], &mut [][..])
                         };
-                        let conv = |cols: &[f32], d: &[f32], g: &mut [f32], dc: &mut [f32], dx: &mut [f32]| {
-                            let r = d.len() / out;
-                            matmul_tn(g, cols, d, (patch, r, *out), false);
-                            if wants_input {
-                                matmul_nt(dc, d, w, (r, *out, patch), false);
-                                geo.col2im(dc, dx);
-                            }
-                        };
+                        // The patches again, a few samples at a time (cheaper than keeping
+                        // them all from the forward pass: they would not stay in cache).
+                        let conv =
+                            |x: &[f32], cols: &mut [f32], d: &[f32], g: &mut [f32], dc: &mut [f32], dx: &mut [f32]| {
+                                let chunks = x.chunks(chunk * in_len).zip(d.chunks(chunk * positions * out));
+                                for (k, (xc, dch)) in chunks.enumerate() {
+                                    let samples = xc.len() / in_len;
+                                    let rows = samples * positions;
+                                    let cols = &mut cols[..rows * patch];
+                                    geo.im2col(xc, cols);
+                                    matmul_tn(g, cols, dch, (patch, rows, *out), k > 0);
+                                    if wants_input {
+                                        let dc = &mut dc[..rows * patch];
+                                        matmul_nt(dc, dch, w, (rows, *out, patch), false);
+                                        let start = k * chunk * in_len;
+                                        geo.col2im(dc, &mut dx[start..start + samples * in_len]);
+                                    }
+                                }
+                            };
                         both(
                             parts,
-                            || conv(cols0, d0, g0, dc0, dx0),
-                            || conv(cols1, d1, g1, dc1, dx1),
+                            || conv(x0, cols0, d0, g0, dc0, dx0),
+                            || conv(x1, cols1, d1, g1, dc1, dx1),
                         );
                         if parts == 2 {
                             for (g, &h) in grad[weight.range()].iter_mut().zip(dw_half.iter()) {
@@ -882,7 +915,7 @@ impl QNet {
                             sparse_backward(buf, delta, *out, &mut grad[weight.range()]);
                             continue;
                         }
-                        let x = input.expect("a dense layer follows another");
+                        let x = input;
                         let w = &self.params[weight.range()];
                         fit(dw_half, weight.len);
                         fit(delta_in, batch * inputs);

@@ -348,7 +348,7 @@ fn check(kind: NetKind, batch_norm: bool, hidden: usize, batch: usize) {
     }
     let dq32: Vec<f32> = dq.iter().map(|&v| v as f32).collect();
     let mut grad = vec![0.0; net.parameter_count()];
-    net.backward(&mut ws, &dq32, &mut grad);
+    net.backward(&x, &mut ws, &dq32, &mut grad);
     let global = g_ref.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     for (name, len, start) in &names {
         let range = *start..start + len;
