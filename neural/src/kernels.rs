@@ -197,26 +197,33 @@ impl ConvGeometry {
     }
 }
 
-/// Runs `f` compiled for AVX2 when the CPU has it (the std library caches the check), else
-/// as it is. The build targets baseline x86-64 (SSE2): the element-wise passes (sparse
+/// Declares `fn $name(args) -> ret` that runs `$generic` (an `#[inline(always)]` function
+/// of the same arguments) compiled for AVX2 when the CPU has it (the std library caches
+/// the check), else as it is.
+///
+/// Why: the build targets baseline x86-64 (SSE2), and the element-wise passes (sparse
 /// rows, batch normalisation, the optimiser) run about twice as fast on 256-bit vectors.
-/// Only what `f` inlines is compiled so, and without FMA contraction the results are the
-/// same bits either way.
-#[inline(always)]
-pub fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
-    #[cfg(target_arch = "x86_64")]
-    {
-        #[target_feature(enable = "avx2")]
-        fn run<R>(f: impl FnOnce() -> R) -> R {
-            f()
+/// Without FMA contraction both versions give the same bits.
+macro_rules! avx2_dispatch {
+    ($(#[$m:meta])* $vis:vis fn $name:ident => $generic:ident ($($arg:ident : $ty:ty),* $(,)?) $(-> $ret:ty)?) => {
+        $(#[$m])*
+        $vis fn $name($($arg: $ty),*) $(-> $ret)? {
+            #[cfg(target_arch = "x86_64")]
+            {
+                #[target_feature(enable = "avx2")]
+                fn fast($($arg: $ty),*) $(-> $ret)? {
+                    $generic($($arg),*)
+                }
+                if std::arch::is_x86_feature_detected!("avx2") {
+                    // SAFETY: the CPU has AVX2, checked just above.
+                    return unsafe { fast($($arg),*) };
+                }
+            }
+            $generic($($arg),*)
         }
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2, checked just above.
-            return unsafe { run(f) };
-        }
-    }
-    f()
+    };
 }
+pub(crate) use avx2_dispatch;
 
 /// How many fixed parts a batch of `batch` samples is split into: two when each half
 /// carries at least `min_half` samples' worth of work, else one. It depends on the work

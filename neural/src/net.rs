@@ -363,7 +363,7 @@ fn both<A: FnOnce() + Send, B: FnOnce() + Send>(parts: usize, a: A, b: B) {
 
 /// Sets every row of `rows` (of `bias.len()` values) to `bias`.
 #[inline(always)]
-fn fill_rows(rows: &mut [f32], bias: &[f32]) {
+fn fill_rows_any(rows: &mut [f32], bias: &[f32]) {
     for row in rows.chunks_exact_mut(bias.len()) {
         row.copy_from_slice(bias);
     }
@@ -371,7 +371,7 @@ fn fill_rows(rows: &mut [f32], bias: &[f32]) {
 
 /// Adds every row of `rows` into `sum` (of one row's length), overwriting it.
 #[inline(always)]
-fn sum_rows(rows: &[f32], sum: &mut [f32]) {
+fn sum_rows_any(rows: &[f32], sum: &mut [f32]) {
     sum.fill(0.0);
     for row in rows.chunks_exact(sum.len()) {
         for (s, &v) in sum.iter_mut().zip(row) {
@@ -382,7 +382,7 @@ fn sum_rows(rows: &[f32], sum: &mut [f32]) {
 
 /// Sets `delta` to 0 where the layer's output (after ReLU) is 0.
 #[inline(always)]
-fn relu_backward(delta: &mut [f32], out: &[f32]) {
+fn relu_backward_any(delta: &mut [f32], out: &[f32]) {
     for (d, &o) in delta.iter_mut().zip(out) {
         if o <= 0.0 {
             *d = 0.0;
@@ -644,154 +644,82 @@ impl QNet {
 
     /// One forward pass over every layer.
     fn pass(&self, x: &[f32], ws: &mut Workspace, train: bool) {
-        kernels::with_avx2(|| {
-            let batch = x.len() / self.input.len();
-            assert_eq!(batch * self.input.len(), x.len(), "a whole number of inputs");
-            ws.batch = batch;
-            if ws.layers.len() != self.layers.len() {
-                ws.layers = (0..self.layers.len()).map(|_| LayerBuffers::default()).collect();
-            }
-            for (i, layer) in self.layers.iter().enumerate() {
-                let (before, rest) = ws.layers.split_at_mut(i);
-                let input: &[f32] = before.last().map_or(x, |l| &l.out);
-                let buf = &mut rest[0];
-                fit(&mut buf.out, batch * layer.width());
-                let parts = kernels::parts(batch, MIN_HALF_WORK.div_ceil(layer.work()));
-                let half = kernels::part_start(batch, parts, 1);
-                match layer {
-                    Layer::Conv {
-                        geo,
-                        out,
-                        weight,
-                        bias,
-                        norm,
-                    } => {
-                        let (positions, patch, in_len) = (geo.positions(), geo.patch(), geo.input_len());
-                        let chunk = chunk_samples(geo);
-                        fit(&mut buf.cols, 2 * chunk * positions * patch);
-                        fit(&mut buf.pre, batch * positions * out);
-                        let w = &self.params[weight.range()];
-                        let b = &self.params[bias.range()];
-                        let (x0, x1) = input.split_at(half * in_len);
-                        let (c0, c1) = buf.cols.split_at_mut(chunk * positions * patch);
-                        let (z0, z1) = halves(&mut buf.pre, half * positions * out, parts);
-                        // A few samples at a time, so the patches stay in cache.
-                        let conv = |x: &[f32], cols: &mut [f32], z: &mut [f32]| {
-                            fill_rows(z, b);
-                            for (xc, zc) in x.chunks(chunk * in_len).zip(z.chunks_mut(chunk * positions * out)) {
-                                let rows = xc.len() / in_len * positions;
-                                let cols = &mut cols[..rows * patch];
-                                geo.im2col(xc, cols);
-                                matmul(zc, cols, w, (rows, patch, *out), true);
-                            }
-                        };
-                        both(parts, || conv(x0, c0, z0), || conv(x1, c1, z1));
-                        match norm {
-                            Some(n) if train => self.norm_train(n, buf),
-                            Some(n) => self.norm_eval(n, buf),
-                            None => {
-                                for (o, &z) in buf.out.iter_mut().zip(&buf.pre) {
-                                    *o = z.max(0.0);
-                                }
-                            }
+        let batch = x.len() / self.input.len();
+        assert_eq!(batch * self.input.len(), x.len(), "a whole number of inputs");
+        ws.batch = batch;
+        if ws.layers.len() != self.layers.len() {
+            ws.layers = (0..self.layers.len()).map(|_| LayerBuffers::default()).collect();
+        }
+        for (i, layer) in self.layers.iter().enumerate() {
+            let (before, rest) = ws.layers.split_at_mut(i);
+            let input: &[f32] = before.last().map_or(x, |l| &l.out);
+            let buf = &mut rest[0];
+            fit(&mut buf.out, batch * layer.width());
+            let parts = kernels::parts(batch, MIN_HALF_WORK.div_ceil(layer.work()));
+            let half = kernels::part_start(batch, parts, 1);
+            match layer {
+                Layer::Conv {
+                    geo,
+                    out,
+                    weight,
+                    bias,
+                    norm,
+                } => {
+                    let (positions, patch, in_len) = (geo.positions(), geo.patch(), geo.input_len());
+                    let chunk = chunk_samples(geo);
+                    fit(&mut buf.cols, 2 * chunk * positions * patch);
+                    fit(&mut buf.pre, batch * positions * out);
+                    let w = &self.params[weight.range()];
+                    let b = &self.params[bias.range()];
+                    let (x0, x1) = input.split_at(half * in_len);
+                    let (c0, c1) = buf.cols.split_at_mut(chunk * positions * patch);
+                    let (z0, z1) = halves(&mut buf.pre, half * positions * out, parts);
+                    // A few samples at a time, so the patches stay in cache.
+                    let conv = |x: &[f32], cols: &mut [f32], z: &mut [f32]| {
+                        fill_rows(z, b);
+                        for (xc, zc) in x.chunks(chunk * in_len).zip(z.chunks_mut(chunk * positions * out)) {
+                            let rows = xc.len() / in_len * positions;
+                            let cols = &mut cols[..rows * patch];
+                            geo.im2col(xc, cols);
+                            matmul(zc, cols, w, (rows, patch, *out), true);
                         }
-                    }
-                    Layer::Linear {
-                        inputs,
-                        out,
-                        weight,
-                        bias,
-                        relu,
-                        sparse,
-                    } => {
-                        let w = &self.params[weight.range()];
-                        let b = &self.params[bias.range()];
-                        if *sparse {
-                            sparse_forward(input, *inputs, w, b, buf);
-                        } else {
-                            let (x0, x1) = input.split_at(half * inputs);
-                            let (y0, y1) = halves(&mut buf.out, half * out, parts);
-                            let linear = |x: &[f32], y: &mut [f32]| {
-                                fill_rows(y, b);
-                                matmul(y, x, w, (y.len() / out, *inputs, *out), true);
-                            };
-                            both(parts, || linear(x0, y0), || linear(x1, y1));
-                        }
-                        if *relu {
-                            buf.out.iter_mut().for_each(|v| *v = v.max(0.0));
+                    };
+                    both(parts, || conv(x0, c0, z0), || conv(x1, c1, z1));
+                    match norm {
+                        Some(n) if train => norm_train(&self.params, n, buf),
+                        Some(n) => norm_eval(&self.params, &self.buffers, n, buf),
+                        None => {
+                            for (o, &z) in buf.out.iter_mut().zip(&buf.pre) {
+                                *o = z.max(0.0);
+                            }
                         }
                     }
                 }
-            }
-        })
-    }
-
-    /// Batch normalisation on the batch's statistics, then ReLU: `pre` becomes `x_hat`.
-    #[inline(always)]
-    fn norm_train(&self, n: &Norm, buf: &mut LayerBuffers) {
-        let channels = n.gamma.len;
-        fit(&mut buf.mean, channels);
-        fit(&mut buf.inv_std, channels);
-        fit(&mut buf.var, channels);
-        let (sum, sq) = (&mut buf.mean, &mut buf.var);
-        sum.fill(0.0);
-        sq.fill(0.0);
-        for row in buf.pre.chunks_exact(channels) {
-            for ((s, q), &z) in sum.iter_mut().zip(sq.iter_mut()).zip(row) {
-                let z = f64::from(z);
-                *s += z;
-                *q += z * z;
-            }
-        }
-        let rows = (buf.pre.len() / channels) as f64;
-        for c in 0..channels {
-            let mean = buf.mean[c] / rows;
-            let var = (buf.var[c] / rows - mean * mean).max(0.0);
-            buf.mean[c] = mean;
-            buf.var[c] = var;
-            buf.inv_std[c] = 1.0 / (var + BN_EPS).sqrt();
-        }
-        // x_hat = z * scale + shift, y = gamma * x_hat + beta, per channel in f32.
-        let gamma = &self.params[n.gamma.range()];
-        let beta = &self.params[n.beta.range()];
-        fit(&mut buf.coef, 2 * channels);
-        let (scale, shift) = buf.coef.split_at_mut(channels);
-        for c in 0..channels {
-            scale[c] = buf.inv_std[c] as f32;
-            shift[c] = (-buf.mean[c] * buf.inv_std[c]) as f32;
-        }
-        for (pre, out) in buf
-            .pre
-            .chunks_exact_mut(channels)
-            .zip(buf.out.chunks_exact_mut(channels))
-        {
-            let per_channel = scale.iter().zip(shift.iter()).zip(gamma.iter().zip(beta));
-            for ((z, o), ((&sc, &sh), (&g, &b))) in pre.iter_mut().zip(out.iter_mut()).zip(per_channel) {
-                let x_hat = *z * sc + sh;
-                *z = x_hat;
-                *o = (g * x_hat + b).max(0.0);
-            }
-        }
-    }
-
-    /// Batch normalisation on the running statistics, then ReLU.
-    #[inline(always)]
-    fn norm_eval(&self, n: &Norm, buf: &mut LayerBuffers) {
-        let channels = n.gamma.len;
-        let gamma = &self.params[n.gamma.range()];
-        let beta = &self.params[n.beta.range()];
-        let mean = &self.buffers[n.running_mean.range()];
-        let var = &self.buffers[n.running_var.range()];
-        // y = z * scale + shift per channel.
-        fit(&mut buf.coef, 2 * channels);
-        let (scale, shift) = buf.coef.split_at_mut(channels);
-        for c in 0..channels {
-            scale[c] = gamma[c] / (f64::from(var[c]) + BN_EPS).sqrt() as f32;
-            shift[c] = beta[c] - mean[c] * scale[c];
-        }
-        for (pre, out) in buf.pre.chunks_exact(channels).zip(buf.out.chunks_exact_mut(channels)) {
-            for ((&z, o), (&sc, &sh)) in pre.iter().zip(out.iter_mut()).zip(scale.iter().zip(shift.iter())) {
-                *o = (z * sc + sh).max(0.0);
+                Layer::Linear {
+                    inputs,
+                    out,
+                    weight,
+                    bias,
+                    relu,
+                    sparse,
+                } => {
+                    let w = &self.params[weight.range()];
+                    let b = &self.params[bias.range()];
+                    if *sparse {
+                        sparse_forward(input, *inputs, w, b, buf);
+                    } else {
+                        let (x0, x1) = input.split_at(half * inputs);
+                        let (y0, y1) = halves(&mut buf.out, half * out, parts);
+                        let linear = |x: &[f32], y: &mut [f32]| {
+                            fill_rows(y, b);
+                            matmul(y, x, w, (y.len() / out, *inputs, *out), true);
+                        };
+                        both(parts, || linear(x0, y0), || linear(x1, y1));
+                    }
+                    if *relu {
+                        relu_in_place(&mut buf.out);
+                    }
+                }
             }
         }
     }
@@ -801,201 +729,322 @@ impl QNet {
     /// last [`QNet::forward_train`] through `ws`, whose input was `x`. No gradient is
     /// computed for the input.
     pub fn backward(&self, x: &[f32], ws: &mut Workspace, dq: &[f32], grad: &mut [f32]) {
-        kernels::with_avx2(|| {
-            let batch = ws.batch;
-            assert_eq!(dq.len(), batch * self.actions, "one gradient per Q-value");
-            assert_eq!(grad.len(), self.params.len(), "one gradient per parameter");
-            let Workspace {
-                layers,
-                delta,
-                delta_in,
-                cols,
-                dcols,
-                dw_half,
-                sums,
-                coef,
-                ..
-            } = ws;
-            fit(delta, dq.len());
-            delta.copy_from_slice(dq);
-            for (i, layer) in self.layers.iter().enumerate().rev() {
-                let (before, rest) = layers.split_at(i);
-                let input: &[f32] = before.last().map_or(x, |l| l.out.as_slice());
-                let buf = &rest[0];
-                let parts = kernels::parts(batch, MIN_HALF_WORK.div_ceil(layer.work()));
-                let half = kernels::part_start(batch, parts, 1);
-                match layer {
-                    Layer::Conv {
-                        geo,
-                        out,
-                        weight,
-                        bias,
-                        norm,
-                    } => {
-                        let (positions, patch) = (geo.positions(), geo.patch());
-                        match norm {
-                            Some(n) => {
-                                self.norm_backward(n, buf, delta, (sums, coef), grad);
-                                // Batch normalisation subtracts the batch mean: the bias
-                                // changes no output in training, and its gradient is 0
-                                // (computed, it is rounding noise that Adam would turn
-                                // into a random walk).
-                                grad[bias.range()].fill(0.0);
-                            }
-                            None => {
-                                relu_backward(delta, &buf.out);
-                                sum_rows(delta, &mut grad[bias.range()]);
-                            }
+        let batch = ws.batch;
+        assert_eq!(dq.len(), batch * self.actions, "one gradient per Q-value");
+        assert_eq!(grad.len(), self.params.len(), "one gradient per parameter");
+        let Workspace {
+            layers,
+            delta,
+            delta_in,
+            cols,
+            dcols,
+            dw_half,
+            sums,
+            coef,
+            ..
+        } = ws;
+        fit(delta, dq.len());
+        delta.copy_from_slice(dq);
+        for (i, layer) in self.layers.iter().enumerate().rev() {
+            let (before, rest) = layers.split_at(i);
+            let input: &[f32] = before.last().map_or(x, |l| l.out.as_slice());
+            let buf = &rest[0];
+            let parts = kernels::parts(batch, MIN_HALF_WORK.div_ceil(layer.work()));
+            let half = kernels::part_start(batch, parts, 1);
+            match layer {
+                Layer::Conv {
+                    geo,
+                    out,
+                    weight,
+                    bias,
+                    norm,
+                } => {
+                    let (positions, patch) = (geo.positions(), geo.patch());
+                    match norm {
+                        Some(n) => {
+                            norm_backward(&self.params, n, buf, delta, sums, coef, grad);
+                            // Batch normalisation subtracts the batch mean: the bias
+                            // changes no output in training, and its gradient is 0
+                            // (computed, it is rounding noise that Adam would turn
+                            // into a random walk).
+                            grad[bias.range()].fill(0.0);
                         }
-                        let w = &self.params[weight.range()];
-                        let in_len = geo.input_len();
-                        let chunk = chunk_samples(geo);
-                        let chunk_len = chunk * positions * patch;
-                        fit(dw_half, weight.len);
-                        fit(cols, 2 * chunk_len);
-                        let wants_input = i > 0;
-                        if wants_input {
-                            fit(dcols, 2 * chunk_len);
-                            fit(delta_in, batch * in_len);
-                        }
-                        let (g0, g1) = (&mut grad[weight.range()], &mut dw_half[..]);
-                        let (x0, x1) = input.split_at(half * in_len);
-                        let (d0, d1) = delta.split_at(half * positions * out);
-                        let (cols0, cols1) = cols.split_at_mut(chunk_len);
-                        let (dc0, dc1, dx0, dx1) = if wants_input {
-                            let (dc0, dc1) = dcols.split_at_mut(chunk_len);
-                            let (dx0, dx1) = halves(delta_in, half * in_len, parts);
-                            (dc0, dc1, dx0, dx1)
-                        } else {
-                            (&mut [][..], &mut [][..], &mut [][..], &mut [][..])
-                        };
-                        // The patches again, a few samples at a time (cheaper than keeping
-                        // them all from the forward pass: they would not stay in cache).
-                        let conv =
-                            |x: &[f32], cols: &mut [f32], d: &[f32], g: &mut [f32], dc: &mut [f32], dx: &mut [f32]| {
-                                let chunks = x.chunks(chunk * in_len).zip(d.chunks(chunk * positions * out));
-                                for (k, (xc, dch)) in chunks.enumerate() {
-                                    let samples = xc.len() / in_len;
-                                    let rows = samples * positions;
-                                    let cols = &mut cols[..rows * patch];
-                                    geo.im2col(xc, cols);
-                                    matmul_tn(g, cols, dch, (patch, rows, *out), k > 0);
-                                    if wants_input {
-                                        let dc = &mut dc[..rows * patch];
-                                        matmul_nt(dc, dch, w, (rows, *out, patch), false);
-                                        let start = k * chunk * in_len;
-                                        geo.col2im(dc, &mut dx[start..start + samples * in_len]);
-                                    }
-                                }
-                            };
-                        both(
-                            parts,
-                            || conv(x0, cols0, d0, g0, dc0, dx0),
-                            || conv(x1, cols1, d1, g1, dc1, dx1),
-                        );
-                        if parts == 2 {
-                            for (g, &h) in grad[weight.range()].iter_mut().zip(dw_half.iter()) {
-                                *g += h;
-                            }
+                        None => {
+                            relu_backward(delta, &buf.out);
+                            sum_rows(delta, &mut grad[bias.range()]);
                         }
                     }
-                    Layer::Linear {
-                        inputs,
-                        out,
-                        weight,
-                        bias,
-                        relu,
-                        sparse,
-                    } => {
-                        if *relu {
-                            relu_backward(delta, &buf.out);
-                        }
-                        sum_rows(delta, &mut grad[bias.range()]);
-                        if *sparse {
-                            sparse_backward(buf, delta, *out, &mut grad[weight.range()]);
-                            continue;
-                        }
-                        let x = input;
-                        let w = &self.params[weight.range()];
-                        fit(dw_half, weight.len);
-                        fit(delta_in, batch * inputs);
-                        let (x0, x1) = x.split_at(half * inputs);
-                        let (d0, d1) = delta.split_at(half * out);
-                        let (g0, g1) = (&mut grad[weight.range()], &mut dw_half[..]);
-                        let (dx0, dx1) = halves(delta_in, half * inputs, parts);
-                        let linear = |x: &[f32], d: &[f32], g: &mut [f32], dx: &mut [f32]| {
-                            let r = d.len() / out;
-                            matmul_tn(g, x, d, (*inputs, r, *out), false);
-                            matmul_nt(dx, d, w, (r, *out, *inputs), false);
-                        };
-                        both(parts, || linear(x0, d0, g0, dx0), || linear(x1, d1, g1, dx1));
-                        if parts == 2 {
-                            for (g, &h) in grad[weight.range()].iter_mut().zip(dw_half.iter()) {
-                                *g += h;
+                    let w = &self.params[weight.range()];
+                    let in_len = geo.input_len();
+                    let chunk = chunk_samples(geo);
+                    let chunk_len = chunk * positions * patch;
+                    fit(dw_half, weight.len);
+                    fit(cols, 2 * chunk_len);
+                    let wants_input = i > 0;
+                    if wants_input {
+                        fit(dcols, 2 * chunk_len);
+                        fit(delta_in, batch * in_len);
+                    }
+                    let (g0, g1) = (&mut grad[weight.range()], &mut dw_half[..]);
+                    let (x0, x1) = input.split_at(half * in_len);
+                    let (d0, d1) = delta.split_at(half * positions * out);
+                    let (cols0, cols1) = cols.split_at_mut(chunk_len);
+                    let (dc0, dc1, dx0, dx1) = if wants_input {
+                        let (dc0, dc1) = dcols.split_at_mut(chunk_len);
+                        let (dx0, dx1) = halves(delta_in, half * in_len, parts);
+                        (dc0, dc1, dx0, dx1)
+                    } else {
+                        (&mut [][..], &mut [][..], &mut [][..], &mut [][..])
+                    };
+                    // The patches again, a few samples at a time (cheaper than keeping
+                    // them all from the forward pass: they would not stay in cache).
+                    let conv =
+                        |x: &[f32], cols: &mut [f32], d: &[f32], g: &mut [f32], dc: &mut [f32], dx: &mut [f32]| {
+                            let chunks = x.chunks(chunk * in_len).zip(d.chunks(chunk * positions * out));
+                            for (k, (xc, dch)) in chunks.enumerate() {
+                                let samples = xc.len() / in_len;
+                                let rows = samples * positions;
+                                let cols = &mut cols[..rows * patch];
+                                geo.im2col(xc, cols);
+                                matmul_tn(g, cols, dch, (patch, rows, *out), k > 0);
+                                if wants_input {
+                                    let dc = &mut dc[..rows * patch];
+                                    matmul_nt(dc, dch, w, (rows, *out, patch), false);
+                                    let start = k * chunk * in_len;
+                                    geo.col2im(dc, &mut dx[start..start + samples * in_len]);
+                                }
                             }
+                        };
+                    both(
+                        parts,
+                        || conv(x0, cols0, d0, g0, dc0, dx0),
+                        || conv(x1, cols1, d1, g1, dc1, dx1),
+                    );
+                    if parts == 2 {
+                        for (g, &h) in grad[weight.range()].iter_mut().zip(dw_half.iter()) {
+                            *g += h;
                         }
                     }
                 }
-                std::mem::swap(delta, delta_in);
+                Layer::Linear {
+                    inputs,
+                    out,
+                    weight,
+                    bias,
+                    relu,
+                    sparse,
+                } => {
+                    if *relu {
+                        relu_backward(delta, &buf.out);
+                    }
+                    sum_rows(delta, &mut grad[bias.range()]);
+                    if *sparse {
+                        sparse_backward(buf, delta, *out, &mut grad[weight.range()]);
+                        continue;
+                    }
+                    let x = input;
+                    let w = &self.params[weight.range()];
+                    fit(dw_half, weight.len);
+                    fit(delta_in, batch * inputs);
+                    let (x0, x1) = x.split_at(half * inputs);
+                    let (d0, d1) = delta.split_at(half * out);
+                    let (g0, g1) = (&mut grad[weight.range()], &mut dw_half[..]);
+                    let (dx0, dx1) = halves(delta_in, half * inputs, parts);
+                    let linear = |x: &[f32], d: &[f32], g: &mut [f32], dx: &mut [f32]| {
+                        let r = d.len() / out;
+                        matmul_tn(g, x, d, (*inputs, r, *out), false);
+                        matmul_nt(dx, d, w, (r, *out, *inputs), false);
+                    };
+                    both(parts, || linear(x0, d0, g0, dx0), || linear(x1, d1, g1, dx1));
+                    if parts == 2 {
+                        for (g, &h) in grad[weight.range()].iter_mut().zip(dw_half.iter()) {
+                            *g += h;
+                        }
+                    }
+                }
             }
-        })
+            std::mem::swap(delta, delta_in);
+        }
     }
+}
 
-    /// Batch normalisation's and ReLU's backward pass, in place over `delta` (gradient of
-    /// the output, then of the convolution's output), with the scale's and shift's gradients.
-    #[inline(always)]
-    fn norm_backward(
-        &self,
+/// Batch normalisation on the batch's statistics, then ReLU: `pre` becomes `x_hat`.
+#[inline(always)]
+fn norm_train_any(params: &[f32], n: &Norm, buf: &mut LayerBuffers) {
+    let channels = n.gamma.len;
+    fit(&mut buf.mean, channels);
+    fit(&mut buf.inv_std, channels);
+    fit(&mut buf.var, channels);
+    let (sum, sq) = (&mut buf.mean, &mut buf.var);
+    sum.fill(0.0);
+    sq.fill(0.0);
+    for row in buf.pre.chunks_exact(channels) {
+        for ((s, q), &z) in sum.iter_mut().zip(sq.iter_mut()).zip(row) {
+            let z = f64::from(z);
+            *s += z;
+            *q += z * z;
+        }
+    }
+    let rows = (buf.pre.len() / channels) as f64;
+    for c in 0..channels {
+        let mean = buf.mean[c] / rows;
+        let var = (buf.var[c] / rows - mean * mean).max(0.0);
+        buf.mean[c] = mean;
+        buf.var[c] = var;
+        buf.inv_std[c] = 1.0 / (var + BN_EPS).sqrt();
+    }
+    // x_hat = z * scale + shift, y = gamma * x_hat + beta, per channel in f32.
+    let gamma = &params[n.gamma.range()];
+    let beta = &params[n.beta.range()];
+    fit(&mut buf.coef, 2 * channels);
+    let (scale, shift) = buf.coef.split_at_mut(channels);
+    for c in 0..channels {
+        scale[c] = buf.inv_std[c] as f32;
+        shift[c] = (-buf.mean[c] * buf.inv_std[c]) as f32;
+    }
+    for (pre, out) in buf
+        .pre
+        .chunks_exact_mut(channels)
+        .zip(buf.out.chunks_exact_mut(channels))
+    {
+        let per_channel = scale.iter().zip(shift.iter()).zip(gamma.iter().zip(beta));
+        for ((z, o), ((&sc, &sh), (&g, &b))) in pre.iter_mut().zip(out.iter_mut()).zip(per_channel) {
+            let x_hat = *z * sc + sh;
+            *z = x_hat;
+            *o = (g * x_hat + b).max(0.0);
+        }
+    }
+}
+
+/// Batch normalisation on the running statistics, then ReLU.
+#[inline(always)]
+fn norm_eval_any(params: &[f32], buffers: &[f32], n: &Norm, buf: &mut LayerBuffers) {
+    let channels = n.gamma.len;
+    let gamma = &params[n.gamma.range()];
+    let beta = &params[n.beta.range()];
+    let mean = &buffers[n.running_mean.range()];
+    let var = &buffers[n.running_var.range()];
+    // y = z * scale + shift per channel.
+    fit(&mut buf.coef, 2 * channels);
+    let (scale, shift) = buf.coef.split_at_mut(channels);
+    for c in 0..channels {
+        scale[c] = gamma[c] / (f64::from(var[c]) + BN_EPS).sqrt() as f32;
+        shift[c] = beta[c] - mean[c] * scale[c];
+    }
+    for (pre, out) in buf.pre.chunks_exact(channels).zip(buf.out.chunks_exact_mut(channels)) {
+        for ((&z, o), (&sc, &sh)) in pre.iter().zip(out.iter_mut()).zip(scale.iter().zip(shift.iter())) {
+            *o = (z * sc + sh).max(0.0);
+        }
+    }
+}
+
+/// Batch normalisation's and ReLU's backward pass, in place over `delta` (gradient of
+/// the output, then of the convolution's output), with the scale's and shift's gradients.
+#[inline(always)]
+fn norm_backward_any(
+    params: &[f32],
+    n: &Norm,
+    buf: &LayerBuffers,
+    delta: &mut [f32],
+    sums: &mut Vec<f64>,
+    coef: &mut Vec<f32>,
+    grad: &mut [f32],
+) {
+    let channels = n.gamma.len;
+    fit(sums, 2 * channels);
+    sums.fill(0.0);
+    let (d_beta, d_gamma) = sums.split_at_mut(channels);
+    let rows = buf.out.chunks_exact(channels).zip(buf.pre.chunks_exact(channels));
+    for (d, (out, x_hat)) in delta.chunks_exact_mut(channels).zip(rows) {
+        let sums = d_beta.iter_mut().zip(d_gamma.iter_mut());
+        for (((d, &o), &x), (sb, sg)) in d.iter_mut().zip(out).zip(x_hat).zip(sums) {
+            if o <= 0.0 {
+                *d = 0.0;
+            }
+            *sb += f64::from(*d);
+            *sg += f64::from(*d) * f64::from(x);
+        }
+    }
+    for c in 0..channels {
+        grad[n.beta.offset + c] = d_beta[c] as f32;
+        grad[n.gamma.offset + c] = d_gamma[c] as f32;
+    }
+    // dz = gamma / std * (dy - mean(dy) - x_hat * mean(dy * x_hat)) = k * dy + a + b * x_hat.
+    let count = (buf.pre.len() / channels) as f64;
+    let gamma = &params[n.gamma.range()];
+    fit(coef, 3 * channels);
+    let (k, rest) = coef.split_at_mut(channels);
+    let (a, b) = rest.split_at_mut(channels);
+    for c in 0..channels {
+        let kc = f64::from(gamma[c]) * buf.inv_std[c];
+        k[c] = kc as f32;
+        a[c] = (-kc * d_beta[c] / count) as f32;
+        b[c] = (-kc * d_gamma[c] / count) as f32;
+    }
+    for (d, x_hat) in delta.chunks_exact_mut(channels).zip(buf.pre.chunks_exact(channels)) {
+        let per_channel = k.iter().zip(a.iter()).zip(b.iter());
+        for ((d, &x), ((&k, &a), &b)) in d.iter_mut().zip(x_hat).zip(per_channel) {
+            *d = k * *d + a + b * x;
+        }
+    }
+}
+
+kernels::avx2_dispatch! {
+    fn fill_rows => fill_rows_any(rows: &mut [f32], bias: &[f32])
+}
+
+kernels::avx2_dispatch! {
+    fn sum_rows => sum_rows_any(rows: &[f32], sum: &mut [f32])
+}
+
+kernels::avx2_dispatch! {
+    fn relu_backward => relu_backward_any(delta: &mut [f32], out: &[f32])
+}
+
+kernels::avx2_dispatch! {
+    fn sparse_forward => sparse_forward_any(x: &[f32], inputs: usize, w: &[f32], b: &[f32], buf: &mut LayerBuffers)
+}
+
+kernels::avx2_dispatch! {
+    fn sparse_backward => sparse_backward_any(buf: &LayerBuffers, delta: &[f32], out: usize, grad: &mut [f32])
+}
+
+kernels::avx2_dispatch! {
+    fn norm_train => norm_train_any(params: &[f32], n: &Norm, buf: &mut LayerBuffers)
+}
+
+kernels::avx2_dispatch! {
+    fn norm_eval => norm_eval_any(params: &[f32], buffers: &[f32], n: &Norm, buf: &mut LayerBuffers)
+}
+
+kernels::avx2_dispatch! {
+    fn norm_backward => norm_backward_any(
+        params: &[f32],
         n: &Norm,
         buf: &LayerBuffers,
         delta: &mut [f32],
-        (sums, coef): (&mut Vec<f64>, &mut Vec<f32>),
+        sums: &mut Vec<f64>,
+        coef: &mut Vec<f32>,
         grad: &mut [f32],
-    ) {
-        let channels = n.gamma.len;
-        fit(sums, 2 * channels);
-        sums.fill(0.0);
-        let (d_beta, d_gamma) = sums.split_at_mut(channels);
-        let rows = buf.out.chunks_exact(channels).zip(buf.pre.chunks_exact(channels));
-        for (d, (out, x_hat)) in delta.chunks_exact_mut(channels).zip(rows) {
-            let sums = d_beta.iter_mut().zip(d_gamma.iter_mut());
-            for (((d, &o), &x), (sb, sg)) in d.iter_mut().zip(out).zip(x_hat).zip(sums) {
-                if o <= 0.0 {
-                    *d = 0.0;
-                }
-                *sb += f64::from(*d);
-                *sg += f64::from(*d) * f64::from(x);
-            }
-        }
-        for c in 0..channels {
-            grad[n.beta.offset + c] = d_beta[c] as f32;
-            grad[n.gamma.offset + c] = d_gamma[c] as f32;
-        }
-        // dz = gamma / std * (dy - mean(dy) - x_hat * mean(dy * x_hat)) = k * dy + a + b * x_hat.
-        let count = (buf.pre.len() / channels) as f64;
-        let gamma = &self.params[n.gamma.range()];
-        fit(coef, 3 * channels);
-        let (k, rest) = coef.split_at_mut(channels);
-        let (a, b) = rest.split_at_mut(channels);
-        for c in 0..channels {
-            let kc = f64::from(gamma[c]) * buf.inv_std[c];
-            k[c] = kc as f32;
-            a[c] = (-kc * d_beta[c] / count) as f32;
-            b[c] = (-kc * d_gamma[c] / count) as f32;
-        }
-        for (d, x_hat) in delta.chunks_exact_mut(channels).zip(buf.pre.chunks_exact(channels)) {
-            let per_channel = k.iter().zip(a.iter()).zip(b.iter());
-            for ((d, &x), ((&k, &a), &b)) in d.iter_mut().zip(x_hat).zip(per_channel) {
-                *d = k * *d + a + b * x;
-            }
-        }
+    )
+}
+
+kernels::avx2_dispatch! {
+    fn relu_in_place => relu_any(v: &mut [f32])
+}
+
+/// ReLU in place.
+#[inline(always)]
+fn relu_any(v: &mut [f32]) {
+    for v in v {
+        *v = v.max(0.0);
     }
 }
 
 /// The first layer of a perceptron: for each sample, the bias plus `x_i` times weight row
 /// `i` for every non-zero input `i` (planes are 0/1 with about one value in sixteen set).
 #[inline(always)]
-fn sparse_forward(x: &[f32], inputs: usize, w: &[f32], b: &[f32], buf: &mut LayerBuffers) {
+fn sparse_forward_any(x: &[f32], inputs: usize, w: &[f32], b: &[f32], buf: &mut LayerBuffers) {
     let out = b.len();
     buf.nz.clear();
     buf.nz_start.clear();
@@ -1015,7 +1064,7 @@ fn sparse_forward(x: &[f32], inputs: usize, w: &[f32], b: &[f32], buf: &mut Laye
 /// The sparse layer's weight gradient: `delta`'s row added, times `x_i`, to weight row `i`
 /// for each non-zero input, sample after sample.
 #[inline(always)]
-fn sparse_backward(buf: &LayerBuffers, delta: &[f32], out: usize, grad: &mut [f32]) {
+fn sparse_backward_any(buf: &LayerBuffers, delta: &[f32], out: usize, grad: &mut [f32]) {
     grad.fill(0.0);
     for (b, d) in delta.chunks_exact(out).enumerate() {
         for &(i, v) in &buf.nz[buf.nz_start[b]..buf.nz_start[b + 1]] {

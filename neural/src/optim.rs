@@ -98,53 +98,76 @@ impl Optimizer {
             params.len() == self.first.len() && grads.len() == params.len(),
             "the optimiser's parameters"
         );
-        let (kind, lr) = (self.kind, self.lr);
         self.steps += 1;
         let t = self.steps.min(i32::MAX as u64) as i32;
-        let (first, second) = (&mut self.first, &mut self.second);
-        crate::kernels::with_avx2(|| {
-            let k = (2.0 * l2) as f32;
-            // Eight partial sums in a fixed order: vectorised, and the same bits every time.
-            let mut lanes = [0.0f64; 8];
-            for (g, w) in grads.chunks_mut(8).zip(params.chunks(8)) {
-                for ((g, &w), lane) in g.iter_mut().zip(w).zip(lanes.iter_mut()) {
-                    if l2 > 0.0 {
-                        *g += k * w;
-                    }
-                    *lane += f64::from(*g) * f64::from(*g);
-                }
-            }
-            let norm = lanes.iter().sum::<f64>().sqrt();
-            let scale = match clip {
-                Some(c) if norm > c && norm > 0.0 => (c / norm) as f32,
-                _ => 1.0,
-            };
-            match kind {
-                OptimizerKind::Rmsprop => {
-                    for ((w, &g), sq) in params.iter_mut().zip(grads.iter()).zip(first.iter_mut()) {
-                        let g = g * scale;
-                        *sq = RMS_ALPHA * *sq + (1.0 - RMS_ALPHA) * g * g;
-                        *w -= lr * g / (sq.sqrt() + EPS);
-                    }
-                }
-                OptimizerKind::Adam => {
-                    // w -= lr * (m / c1) / (sqrt(s / c2) + eps), with the bias corrections
-                    // folded into the constants: one division a value.
-                    let (b1, b2) = ADAM_BETAS;
-                    let (c1, c2) = (1.0 - b1.powi(t), 1.0 - b2.powi(t));
-                    let (step, inv_c2) = (lr / c1, 1.0 / c2);
-                    let moments = first.iter_mut().zip(second.iter_mut());
-                    for ((w, &g), (m, s)) in params.iter_mut().zip(grads.iter()).zip(moments) {
-                        let g = g * scale;
-                        *m = b1 * *m + (1.0 - b1) * g;
-                        *s = b2 * *s + (1.0 - b2) * g * g;
-                        *w -= step * *m / ((*s * inv_c2).sqrt() + EPS);
-                    }
-                }
-            }
-            norm
-        })
+        let settings = (self.kind, self.lr, t, l2, clip);
+        update(settings, params, grads, &mut self.first, &mut self.second)
     }
+}
+
+/// What one update needs beside the buffers: the kind, the learning rate, the step number
+/// (from 1), the L2 weight and the clip.
+type Settings = (OptimizerKind, f32, i32, f64, Option<f64>);
+
+crate::kernels::avx2_dispatch! {
+    fn update => update_any(
+        settings: Settings,
+        params: &mut [f32],
+        grads: &mut [f32],
+        first: &mut [f32],
+        second: &mut [f32],
+    ) -> f64
+}
+
+/// [`Optimizer::step`]'s two passes.
+#[inline(always)]
+fn update_any(
+    (kind, lr, t, l2, clip): Settings,
+    params: &mut [f32],
+    grads: &mut [f32],
+    first: &mut [f32],
+    second: &mut [f32],
+) -> f64 {
+    let k = (2.0 * l2) as f32;
+    // Eight partial sums in a fixed order: vectorised, and the same bits every time.
+    let mut lanes = [0.0f64; 8];
+    for (g, w) in grads.chunks_mut(8).zip(params.chunks(8)) {
+        for ((g, &w), lane) in g.iter_mut().zip(w).zip(lanes.iter_mut()) {
+            if l2 > 0.0 {
+                *g += k * w;
+            }
+            *lane += f64::from(*g) * f64::from(*g);
+        }
+    }
+    let norm = lanes.iter().sum::<f64>().sqrt();
+    let scale = match clip {
+        Some(c) if norm > c && norm > 0.0 => (c / norm) as f32,
+        _ => 1.0,
+    };
+    match kind {
+        OptimizerKind::Rmsprop => {
+            for ((w, &g), sq) in params.iter_mut().zip(grads.iter()).zip(first.iter_mut()) {
+                let g = g * scale;
+                *sq = RMS_ALPHA * *sq + (1.0 - RMS_ALPHA) * g * g;
+                *w -= lr * g / (sq.sqrt() + EPS);
+            }
+        }
+        OptimizerKind::Adam => {
+            // w -= lr * (m / c1) / (sqrt(s / c2) + eps), with the bias corrections folded
+            // into the constants: one division a value.
+            let (b1, b2) = ADAM_BETAS;
+            let (c1, c2) = (1.0 - b1.powi(t), 1.0 - b2.powi(t));
+            let (step, inv_c2) = (lr / c1, 1.0 / c2);
+            let moments = first.iter_mut().zip(second.iter_mut());
+            for ((w, &g), (m, s)) in params.iter_mut().zip(grads.iter()).zip(moments) {
+                let g = g * scale;
+                *m = b1 * *m + (1.0 - b1) * g;
+                *s = b2 * *s + (1.0 - b2) * g * g;
+                *w -= step * *m / ((*s * inv_c2).sqrt() + EPS);
+            }
+        }
+    }
+    norm
 }
 
 #[cfg(test)]
