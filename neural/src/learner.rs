@@ -22,6 +22,8 @@
 //! buffer of a step (inputs, Q-values, gradients, the networks' workspaces) is kept from
 //! one step to the next.
 
+use std::collections::HashMap;
+
 use serde::Serialize;
 
 use crate::config::{DqnConfig, LossKind, TdLoss};
@@ -58,7 +60,7 @@ pub struct Learner {
     /// The online network's training pass, and every other pass.
     train_ws: Workspace,
     eval_ws: Workspace,
-    bytes: [Vec<u8>; 2],
+    encoder: Encoder,
     x: Vec<f32>,
     next_x: Vec<f32>,
     target_q: Vec<f32>,
@@ -69,40 +71,70 @@ pub struct Learner {
     grad: Vec<f32>,
 }
 
-/// The inputs of `observations` as floats into `out`, through the byte buffers `bytes`.
-/// Pixels are rendered by two threads when the pool has them, half the batch each (a
-/// screen costs about 0.1 ms to render, a third of a paper-network step).
-fn encode<'a>(
-    spec: &InputSpec,
-    count: usize,
-    observation: impl Fn(usize) -> &'a sim::Observation + Sync,
-    bytes: &mut [Vec<u8>; 2],
-    out: &mut Vec<f32>,
-) {
-    let width = spec.len();
-    out.resize(count * width, 0.0);
-    let parts = if spec.kind == ObsKind::Pixels {
-        kernels::parts(count, 2)
-    } else {
-        1
-    };
-    let half = kernels::part_start(count, parts, 1);
-    let (x0, x1) = out.split_at_mut(half * width);
-    let [b0, b1] = bytes;
-    let scale = spec.scale();
-    let run = |range: std::ops::Range<usize>, bytes: &mut Vec<u8>, x: &mut [f32]| {
-        bytes.clear();
-        for i in range {
-            spec.encode(observation(i), bytes);
+/// At most this many bytes of rendered screens are kept (about 8,700 screens); past it the
+/// cache starts again empty.
+const SCREEN_CACHE_BYTES: usize = 256 << 20;
+
+/// Turns observations into the network's floats, for the learner's batches.
+///
+/// Rendering the paper's screen costs about 0.1 ms, and a DQfD step of the paper network
+/// needs 192 of them (20-25 ms, as much as its arithmetic). A replay buffer samples the
+/// same observations again and again (the demonstrations above all), so the rendered bytes
+/// of each are kept, up to [`SCREEN_CACHE_BYTES`]. Planes cost little to encode and are
+/// not kept. The inputs are the same either way.
+#[derive(Default)]
+struct Encoder {
+    bytes: Vec<u8>,
+    screens: HashMap<sim::Observation, Box<[u8]>>,
+    cached: usize,
+}
+
+impl Encoder {
+    /// The inputs of observations `0..count` as floats into `out`.
+    fn encode<'a>(
+        &mut self,
+        spec: &InputSpec,
+        count: usize,
+        observation: impl Fn(usize) -> &'a sim::Observation,
+        out: &mut Vec<f32>,
+    ) {
+        let width = spec.len();
+        out.resize(count * width, 0.0);
+        let scale = spec.scale();
+        if spec.kind != ObsKind::Pixels {
+            self.bytes.clear();
+            for i in 0..count {
+                spec.encode(observation(i), &mut self.bytes);
+            }
+            to_floats(&self.bytes, out, scale);
+            return;
         }
-        for (x, &b) in x.iter_mut().zip(bytes.iter()) {
-            *x = f32::from(b) * scale;
+        for (i, x) in out.chunks_exact_mut(width).enumerate() {
+            let obs = observation(i);
+            if !self.screens.contains_key(obs) {
+                if self.cached + width > SCREEN_CACHE_BYTES {
+                    self.screens.clear();
+                    self.cached = 0;
+                }
+                self.bytes.clear();
+                spec.encode(obs, &mut self.bytes);
+                self.screens.insert(*obs, self.bytes.as_slice().into());
+                self.cached += width;
+            }
+            to_floats(&self.screens[obs], x, scale);
         }
-    };
-    if parts == 2 {
-        kernels::join(|| run(0..half, b0, x0), || run(half..count, b1, x1));
-    } else {
-        run(0..count, b0, x0);
+    }
+}
+
+kernels::avx2_dispatch! {
+    fn to_floats => to_floats_any(bytes: &[u8], out: &mut [f32], scale: f32)
+}
+
+/// `out[i] = bytes[i] * scale`.
+#[inline(always)]
+fn to_floats_any(bytes: &[u8], out: &mut [f32], scale: f32) {
+    for (x, &b) in out.iter_mut().zip(bytes) {
+        *x = f32::from(b) * scale;
     }
 }
 
@@ -151,7 +183,7 @@ impl Learner {
             gradient_steps: 0,
             train_ws: Workspace::new(),
             eval_ws: Workspace::new(),
-            bytes: [Vec::new(), Vec::new()],
+            encoder: Encoder::default(),
             x: Vec::new(),
             next_x: Vec::new(),
             target_q: Vec::new(),
@@ -211,7 +243,7 @@ impl Learner {
             }
         };
         let count = if dqfd { 2 * b } else { b };
-        encode(&spec, count, next, &mut self.bytes, &mut self.next_x);
+        self.encoder.encode(&spec, count, next, &mut self.next_x);
         let q = self.target.forward(&self.next_x, &mut self.eval_ws);
         self.target_q.clear();
         self.target_q.extend_from_slice(q);
@@ -249,7 +281,7 @@ impl Learner {
         }
 
         // The online network's values, and the losses' gradient with respect to them.
-        encode(&spec, b, |i| &batch[i].obs, &mut self.bytes, &mut self.x);
+        self.encoder.encode(&spec, b, |i| &batch[i].obs, &mut self.x);
         let q = self.online.forward_train(&self.x, &mut self.train_ws);
         self.dq.clear();
         self.dq.resize(b * actions, 0.0);
