@@ -57,9 +57,9 @@ pub struct Learner {
     target: QNet,
     optimizer: Optimizer,
     gradient_steps: u64,
-    /// The online network's training pass, and every other pass.
+    /// The online network's training pass, and the target and choosing passes.
     train_ws: Workspace,
-    eval_ws: Workspace,
+    eval_ws: [Workspace; 2],
     encoder: Encoder,
     x: Vec<f32>,
     next_x: Vec<f32>,
@@ -182,7 +182,7 @@ impl Learner {
             optimizer,
             gradient_steps: 0,
             train_ws: Workspace::new(),
-            eval_ws: Workspace::new(),
+            eval_ws: [Workspace::new(), Workspace::new()],
             encoder: Encoder::default(),
             x: Vec::new(),
             next_x: Vec::new(),
@@ -244,13 +244,24 @@ impl Learner {
         };
         let count = if dqfd { 2 * b } else { b };
         self.encoder.encode(&spec, count, next, &mut self.next_x);
-        let q = self.target.forward(&self.next_x, &mut self.eval_ws);
-        self.target_q.clear();
-        self.target_q.extend_from_slice(q);
-        self.chooser_q.clear();
+        // The target network's values, and with double DQN the online network's choices,
+        // side by side on two threads when the pool has them (neither changes a network).
+        let next_x = &self.next_x;
+        let values = |net: &QNet, ws: &mut Workspace, out: &mut Vec<f32>| {
+            out.clear();
+            out.extend_from_slice(net.forward(next_x, ws));
+        };
+        let (target, online) = (&self.target, &self.online);
+        let [target_ws, chooser_ws] = &mut self.eval_ws;
+        let (target_q, chooser_q) = (&mut self.target_q, &mut self.chooser_q);
+        chooser_q.clear();
         if config.double {
-            let q = self.online.forward(&self.next_x, &mut self.eval_ws);
-            self.chooser_q.extend_from_slice(q);
+            kernels::join(
+                || values(target, target_ws, target_q),
+                || values(online, chooser_ws, chooser_q),
+            );
+        } else {
+            values(target, target_ws, target_q);
         }
         let (target_q, chooser_q) = (&self.target_q, &self.chooser_q);
         let value = |row: usize, obs: &sim::Observation| -> f32 {
