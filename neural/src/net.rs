@@ -1045,15 +1045,33 @@ fn relu_any(v: &mut [f32]) {
 /// `i` for every non-zero input `i` (planes are 0/1 with about one value in sixteen set).
 #[inline(always)]
 fn sparse_forward_any(x: &[f32], inputs: usize, w: &[f32], b: &[f32], buf: &mut LayerBuffers) {
+    /// Outputs summed at a time: eight 256-bit registers that stay put while the weight
+    /// rows stream past (the same sums in the same order as one output at a time).
+    const BLOCK: usize = 64;
     let out = b.len();
     buf.nz.clear();
     buf.nz_start.clear();
     for (sample, y) in x.chunks_exact(inputs).zip(buf.out.chunks_exact_mut(out)) {
-        buf.nz_start.push(buf.nz.len());
-        y.copy_from_slice(b);
-        for (i, &v) in sample.iter().enumerate().filter(|(_, v)| **v != 0.0) {
-            buf.nz.push((i as u32, v));
-            for (y, &w) in y.iter_mut().zip(&w[i * out..(i + 1) * out]) {
+        let start = buf.nz.len();
+        buf.nz_start.push(start);
+        let set = sample.iter().enumerate().filter(|(_, v)| **v != 0.0);
+        buf.nz.extend(set.map(|(i, &v)| (i as u32, v)));
+        let nz = &buf.nz[start..];
+        let blocks = out / BLOCK * BLOCK;
+        for k in (0..blocks).step_by(BLOCK) {
+            let mut acc: [f32; BLOCK] = b[k..k + BLOCK].try_into().expect("a block");
+            for &(i, v) in nz {
+                let row: &[f32; BLOCK] = w[i as usize * out + k..][..BLOCK].try_into().expect("a block");
+                for (a, &w) in acc.iter_mut().zip(row) {
+                    *a += v * w;
+                }
+            }
+            y[k..k + BLOCK].copy_from_slice(&acc);
+        }
+        y[blocks..].copy_from_slice(&b[blocks..]);
+        for &(i, v) in nz {
+            let row = &w[i as usize * out + blocks..(i as usize + 1) * out];
+            for (y, &w) in y[blocks..].iter_mut().zip(row) {
                 *y += v * w;
             }
         }
