@@ -1,13 +1,19 @@
 //! The neural learner's speed: one gradient step (batch 64) of each network, one greedy
-//! action, and self-play throughput, each on 1 and 2 threads.
+//! action, and self-play throughput, on 1 and 2 threads.
 //!
-//! `cargo bench -p neural`. `train_step/<net>/<threads>` is one DQfD gradient step on 64
-//! demonstrated transitions (sampling, encoding, target passes, forward, backward,
-//! optimiser), `<net>` `small` (the `dqfd-planes` recipe) or `paper` (`paper-dqfd`), both
-//! on 3 blocks; `greedy/<net>` encodes one observation and takes the masked argmax;
-//! `self_play/<net>/<threads>` is 100 environment steps of the recipe with a gradient step
-//! each. The thread count is a rayon pool's: the networks split large layers into two
-//! fixed halves, so it changes the time, never the result.
+//! `cargo bench -p neural`. `<net>` is `small` (the `dqfd-planes` recipe) or `paper`
+//! (`paper-dqfd`), both on 3 blocks; `<threads>` a rayon pool's size (the networks split
+//! large layers into two fixed halves, so it changes the time, never the result).
+//!
+//! - `network/<net>/<threads>`: the arithmetic of one DQfD step on inputs already encoded
+//!   (target and choosing passes on 128 next observations, training pass and backward pass
+//!   on 64, optimiser).
+//! - `train_step/<net>/<threads>`: one whole DQfD gradient step on 64 demonstrated
+//!   transitions (sampling, encoding, the above). With 50 demonstrations every screen is
+//!   soon in the learner's cache of rendered screens: the paper network's figure leaves out
+//!   rendering (about 0.12 ms a screen, `greedy/paper` includes one).
+//! - `greedy/<net>`: one observation encoded, its masked argmax (one thread).
+//! - `self_play/<net>/<threads>`: 100 environment steps of the recipe, a gradient step each.
 
 use std::hint::black_box;
 
