@@ -17,10 +17,6 @@ pub enum NeuralError {
     /// A planner could not plan a demonstration.
     #[error(transparent)]
     Oracle(#[from] oracle::OracleError),
-    /// The tensor library failed (a shape that does not fit: a bug, or a network file that
-    /// passed its checks but does not fit its own config).
-    #[error("network computation failed: {0}")]
-    Tensor(#[from] candle_core::Error),
     /// A learner configuration that cannot work (names the setting).
     #[error("invalid configuration: {0}")]
     Config(String),

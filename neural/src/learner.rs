@@ -15,14 +15,23 @@
 //!
 //! Every maximum over actions (the targets' and the margin's) runs over the allowed actions
 //! only ([`crate::mask`]).
+//!
+//! The losses' gradients with respect to the Q-values are written by hand here (each term
+//! is a sum over the batch of a function of one or two Q-values); [`QNet::backward`] takes
+//! them through the network. A maximum's gradient goes to its first maximal action. Every
+//! buffer of a step (inputs, Q-values, gradients, the networks' workspaces) is kept from
+//! one step to the next.
 
-use candle_core::{Device, Tensor};
+use std::collections::HashMap;
+
 use serde::Serialize;
 
 use crate::config::{DqnConfig, LossKind, TdLoss};
 use crate::error::Result;
-use crate::mask::{masked_argmax, masked_max};
-use crate::net::{Mode, QNet};
+use crate::input::{InputSpec, ObsKind};
+use crate::kernels;
+use crate::mask::{ActionSet, masked_argmax, masked_max};
+use crate::net::{QNet, Workspace};
 use crate::optim::Optimizer;
 use crate::replay::Transition;
 
@@ -42,24 +51,146 @@ pub struct Losses {
     pub margin: f32,
 }
 
-/// The online and target networks and the optimiser.
+/// The online and target networks, the optimiser, and the buffers of a step.
 pub struct Learner {
     online: QNet,
     target: QNet,
     optimizer: Optimizer,
     gradient_steps: u64,
+    /// The online network's training pass, and the target and choosing passes.
+    train_ws: Workspace,
+    eval_ws: [Workspace; 2],
+    encoder: Encoder,
+    x: Vec<f32>,
+    next_x: Vec<f32>,
+    target_q: Vec<f32>,
+    chooser_q: Vec<f32>,
+    y1: Vec<f32>,
+    yn: Vec<f32>,
+    dq: Vec<f32>,
+    grad: Vec<f32>,
+}
+
+/// At most this many bytes of rendered screens are kept (about 8,700 screens); past it the
+/// cache starts again empty.
+const SCREEN_CACHE_BYTES: usize = 256 << 20;
+
+/// Turns observations into the network's floats, for the learner's batches.
+///
+/// Rendering the paper's screen costs about 0.1 ms, and a DQfD step of the paper network
+/// needs 192 of them (20-25 ms, as much as its arithmetic). A replay buffer samples the
+/// same observations again and again (the demonstrations above all), so the rendered bytes
+/// of each are kept, up to [`SCREEN_CACHE_BYTES`]. Planes cost little to encode and are
+/// not kept. The inputs are the same either way.
+#[derive(Default)]
+struct Encoder {
+    bytes: Vec<u8>,
+    screens: HashMap<sim::Observation, Box<[u8]>>,
+    cached: usize,
+}
+
+impl Encoder {
+    /// The inputs of observations `0..count` as floats into `out`.
+    fn encode<'a>(
+        &mut self,
+        spec: &InputSpec,
+        count: usize,
+        observation: impl Fn(usize) -> &'a sim::Observation,
+        out: &mut Vec<f32>,
+    ) {
+        let width = spec.len();
+        out.resize(count * width, 0.0);
+        let scale = spec.scale();
+        if spec.kind != ObsKind::Pixels {
+            self.bytes.clear();
+            for i in 0..count {
+                spec.encode(observation(i), &mut self.bytes);
+            }
+            to_floats(&self.bytes, out, scale);
+            return;
+        }
+        for (i, x) in out.chunks_exact_mut(width).enumerate() {
+            let obs = observation(i);
+            if !self.screens.contains_key(obs) {
+                if self.cached + width > SCREEN_CACHE_BYTES {
+                    self.screens.clear();
+                    self.cached = 0;
+                }
+                self.bytes.clear();
+                spec.encode(obs, &mut self.bytes);
+                self.screens.insert(*obs, self.bytes.as_slice().into());
+                self.cached += width;
+            }
+            to_floats(&self.screens[obs], x, scale);
+        }
+    }
+}
+
+kernels::avx2_dispatch! {
+    fn to_floats => to_floats_any(bytes: &[u8], out: &mut [f32], scale: f32)
+}
+
+/// `out[i] = bytes[i] * scale`.
+#[inline(always)]
+fn to_floats_any(bytes: &[u8], out: &mut [f32], scale: f32) {
+    for (x, &b) in out.iter_mut().zip(bytes) {
+        *x = f32::from(b) * scale;
+    }
+}
+
+/// A TD loss of the difference `d` and its derivative.
+fn td_term(d: f32, kind: TdLoss) -> (f32, f32) {
+    match kind {
+        TdLoss::Mse => (d * d, 2.0 * d),
+        TdLoss::Huber => {
+            let a = d.abs();
+            let c = a.min(1.0);
+            (0.5 * c * c + (a - c), if a <= 1.0 { d } else { d.signum() })
+        }
+    }
+}
+
+/// The large margin of one demonstrated transition: `max_a [Q(s,a) + l(a_E,a)] - Q(s,a_E)`
+/// over the allowed actions (`l` = `margin` but 0 at `expert`), and the action of the
+/// maximum (its gradient is +1 there and -1 at `expert`).
+pub fn margin_term(q: &[f32], expert: usize, allowed: ActionSet, margin: f32) -> (f32, usize) {
+    let mut best = (f32::NEG_INFINITY, 0);
+    for (a, &v) in q.iter().enumerate() {
+        let l = if a == expert {
+            0.0
+        } else if allowed.contains(a) {
+            margin
+        } else {
+            MASKED
+        };
+        if v + l > best.0 {
+            best = (v + l, a);
+        }
+    }
+    (best.0 - q[expert], best.1)
 }
 
 impl Learner {
     /// A learner starting from `online` (the target a copy of it).
     pub fn new(online: QNet, config: &DqnConfig) -> Result<Learner> {
         let target = online.try_clone()?;
-        let optimizer = Optimizer::new(config.optimizer, config.lr, online.params());
+        let optimizer = Optimizer::new(config.optimizer, config.lr, online.parameter_count());
         Ok(Learner {
+            grad: vec![0.0; online.parameter_count()],
             online,
             target,
             optimizer,
             gradient_steps: 0,
+            train_ws: Workspace::new(),
+            eval_ws: [Workspace::new(), Workspace::new()],
+            encoder: Encoder::default(),
+            x: Vec::new(),
+            next_x: Vec::new(),
+            target_q: Vec::new(),
+            chooser_q: Vec::new(),
+            y1: Vec::new(),
+            yn: Vec::new(),
+            dq: Vec::new(),
         })
     }
 
@@ -80,42 +211,75 @@ impl Learner {
 
     /// Copies the online network into the target network.
     pub fn refresh_target(&mut self) -> Result<()> {
-        self.target.copy_from(&self.online)
+        self.target.copy_from(&self.online);
+        Ok(())
     }
 
     /// One gradient step on `batch` (not empty) with `config`'s losses.
     pub fn step(&mut self, batch: &[&Transition], config: &DqnConfig) -> Result<Losses> {
+        let losses = self.gradients(batch, config);
+        let l2 = if config.loss == LossKind::Dqfd { config.l2 } else { 0.0 };
+        self.optimizer
+            .step(self.online.params_mut(), &mut self.grad, l2, config.clip_norm);
+        self.gradient_steps += 1;
+        Ok(losses)
+    }
+
+    /// The losses of `batch`, and their gradient with respect to the online network's
+    /// parameters in `self.grad`; the training pass moves batch normalisation's running
+    /// statistics.
+    fn gradients(&mut self, batch: &[&Transition], config: &DqnConfig) -> Losses {
         let dqfd = config.loss == LossKind::Dqfd;
         let spec = *self.online.input();
         let b = batch.len();
         let actions = self.online.actions();
 
         // Targets, without gradients: next observations, then the n-step ones.
-        let mut next: Vec<_> = batch.iter().map(|t| &t.next).collect();
-        if dqfd {
-            next.extend(batch.iter().map(|t| &t.n_step.last));
-        }
-        let next_x = Tensor::from_vec(spec.batch(&next), (next.len(), spec.len()), &Device::Cpu)?;
-        let target_q = self.target.forward(&next_x, Mode::Eval)?.detach().to_vec2::<f32>()?;
-        let chooser_q = if config.double {
-            self.online.forward(&next_x, Mode::Eval)?.detach().to_vec2::<f32>()?
-        } else {
-            Vec::new()
+        let next = |i: usize| {
+            if i < b {
+                &batch[i].next
+            } else {
+                &batch[i - b].n_step.last
+            }
         };
+        let count = if dqfd { 2 * b } else { b };
+        self.encoder.encode(&spec, count, next, &mut self.next_x);
+        // The target network's values, and with double DQN the online network's choices,
+        // side by side on two threads when the pool has them (neither changes a network).
+        let next_x = &self.next_x;
+        let values = |net: &QNet, ws: &mut Workspace, out: &mut Vec<f32>| {
+            out.clear();
+            out.extend_from_slice(net.forward(next_x, ws));
+        };
+        let (target, online) = (&self.target, &self.online);
+        let [target_ws, chooser_ws] = &mut self.eval_ws;
+        let (target_q, chooser_q) = (&mut self.target_q, &mut self.chooser_q);
+        chooser_q.clear();
+        if config.double {
+            kernels::join(
+                || values(target, target_ws, target_q),
+                || values(online, chooser_ws, chooser_q),
+            );
+        } else {
+            values(target, target_ws, target_q);
+        }
+        let (target_q, chooser_q) = (&self.target_q, &self.chooser_q);
         let value = |row: usize, obs: &sim::Observation| -> f32 {
             let allowed = spec.allowed_columns(obs, config.mask_noops);
+            let target = &target_q[row * actions..(row + 1) * actions];
             if config.double {
-                masked_argmax(&chooser_q[row], allowed).map_or(0.0, |a| target_q[row][a])
+                let chooser = &chooser_q[row * actions..(row + 1) * actions];
+                masked_argmax(chooser, allowed).map_or(0.0, |a| target[a])
             } else {
-                masked_max(&target_q[row], allowed).unwrap_or(0.0)
+                masked_max(target, allowed).unwrap_or(0.0)
             }
         };
         let gamma = config.gamma as f32;
-        let mut y1 = Vec::with_capacity(b);
-        let mut yn = Vec::with_capacity(b);
+        self.y1.clear();
+        self.yn.clear();
         for (i, t) in batch.iter().enumerate() {
             let bootstrap = if t.terminal { 0.0 } else { gamma * value(i, &t.next) };
-            y1.push(t.reward + bootstrap);
+            self.y1.push(t.reward + bootstrap);
             if dqfd {
                 let n = &t.n_step;
                 let bootstrap = if n.terminal {
@@ -123,73 +287,51 @@ impl Learner {
                 } else {
                     gamma.powi(n.steps as i32) * value(b + i, &n.last)
                 };
-                yn.push(n.rewards + bootstrap);
+                self.yn.push(n.rewards + bootstrap);
             }
         }
 
-        // The online network's values, with gradients.
-        let obs: Vec<_> = batch.iter().map(|t| &t.obs).collect();
-        let x = Tensor::from_vec(spec.batch(&obs), (b, spec.len()), &Device::Cpu)?;
-        let q = self.online.forward(&x, Mode::Train)?;
-        let taken: Vec<u32> = batch
-            .iter()
-            .map(|t| spec.column(&t.obs.goal, t.action) as u32)
-            .collect();
-        let taken = Tensor::from_vec(taken, (b, 1), &Device::Cpu)?;
-        let q_taken = q.gather(&taken, 1)?.squeeze(1)?;
-
-        let td_of = |y: Vec<f32>| -> Result<Tensor> {
-            let d = (&q_taken - Tensor::from_vec(y, b, &Device::Cpu)?)?;
-            Ok(match config.td_loss {
-                TdLoss::Mse => d.sqr()?.mean_all()?,
-                TdLoss::Huber => {
-                    let a = d.abs()?;
-                    let c = a.clamp(0f32, 1f32)?;
-                    ((c.sqr()? * 0.5)? + (a - c)?)?.mean_all()?
-                }
-            })
-        };
-        let td = td_of(y1)?;
-        let mut total = td.clone();
+        // The online network's values, and the losses' gradient with respect to them.
+        self.encoder.encode(&spec, b, |i| &batch[i].obs, &mut self.x);
+        let q = self.online.forward_train(&self.x, &mut self.train_ws);
+        self.dq.clear();
+        self.dq.resize(b * actions, 0.0);
         let mut losses = Losses::default();
-        if dqfd {
-            let n_step = td_of(yn)?;
-            total = (total + (&n_step * config.lambda_n_step)?)?;
-            losses.n_step = n_step.to_scalar::<f32>()?;
-            let experts = batch.iter().filter(|t| t.expert).count();
-            if experts > 0 {
-                let margin = config.margin as f32;
-                let mut l = vec![0f32; b * actions];
-                let mut weight = vec![0f32; b];
-                for (i, t) in batch.iter().enumerate().filter(|(_, t)| t.expert) {
+        let inv_b = 1.0 / b as f32;
+        let experts = batch.iter().filter(|t| t.expert).count();
+        let lambda_n = config.lambda_n_step as f32;
+        let lambda_margin = config.lambda_margin as f32;
+        for (i, t) in batch.iter().enumerate() {
+            let row = i * actions;
+            let taken = spec.column(&t.obs.goal, t.action);
+            let q_taken = q[row + taken];
+            let (l, g) = td_term(q_taken - self.y1[i], config.td_loss);
+            losses.td += l * inv_b;
+            self.dq[row + taken] += g * inv_b;
+            if dqfd {
+                let (l, g) = td_term(q_taken - self.yn[i], config.td_loss);
+                losses.n_step += l * inv_b;
+                self.dq[row + taken] += lambda_n * g * inv_b;
+                if t.expert {
+                    let weight = 1.0 / experts as f32;
                     let allowed = spec.allowed_columns(&t.obs, config.mask_noops);
-                    let expert = spec.column(&t.obs.goal, t.action);
-                    for a in 0..actions {
-                        l[i * actions + a] = if a == expert {
-                            0.0
-                        } else if allowed.contains(a) {
-                            margin
-                        } else {
-                            MASKED
-                        };
-                    }
-                    weight[i] = 1.0 / experts as f32;
+                    let (j, best) = margin_term(&q[row..row + actions], taken, allowed, config.margin as f32);
+                    losses.margin += j * weight;
+                    self.dq[row + best] += lambda_margin * weight;
+                    self.dq[row + taken] -= lambda_margin * weight;
                 }
-                let l = Tensor::from_vec(l, (b, actions), &Device::Cpu)?;
-                let weight = Tensor::from_vec(weight, b, &Device::Cpu)?;
-                let j = ((q.broadcast_add(&l)?.max(1)? - &q_taken)? * weight)?.sum_all()?;
-                total = (total + (&j * config.lambda_margin)?)?;
-                losses.margin = j.to_scalar::<f32>()?;
             }
         }
-        losses.td = td.to_scalar::<f32>()?;
-        losses.total = total.to_scalar::<f32>()?;
-        let grads = total.backward()?;
-        let l2 = if dqfd { config.l2 } else { 0.0 };
-        self.optimizer
-            .step(self.online.params(), &grads, l2, config.clip_norm)?;
-        self.gradient_steps += 1;
-        Ok(losses)
+        losses.total = losses.td;
+        if dqfd {
+            losses.total += losses.n_step * lambda_n;
+            if experts > 0 {
+                losses.total += losses.margin * lambda_margin;
+            }
+        }
+        self.online
+            .backward(&self.x, &mut self.train_ws, &self.dq, &mut self.grad);
+        losses
     }
 }
 
@@ -221,16 +363,20 @@ mod tests {
             batch_norm: false,
         };
         let input = net_config.input(Grid::default(), 2).unwrap();
-        let net = QNet::new(net_config, input, &mut sim::seeding::rng(0)).unwrap();
+        let mut net = QNet::new(net_config, input, &mut sim::seeding::rng(0)).unwrap();
         // Zero every weight; the last bias alone sets Q(s, .) = b for every s.
         let q = [1.0f32, 2.0, 0.5, -1.0, 0.0, 0.3, 0.1];
-        for (name, v) in net.params() {
+        let shapes: Vec<(String, Vec<usize>, usize)> = net
+            .tensors()
+            .map(|t| (t.name.to_string(), t.shape.to_vec(), t.values.len()))
+            .collect();
+        for (name, shape, len) in shapes {
             let values = if name == "linear3.bias" {
                 q.to_vec()
             } else {
-                vec![0.0; v.elem_count()]
+                vec![0.0; len]
             };
-            net.set_tensor(name, v.dims(), values).unwrap();
+            net.set_tensor(&name, &shape, &values).unwrap();
         }
         let obs = Observation {
             grid: Grid::default(),
@@ -260,31 +406,33 @@ mod tests {
             ..config
         };
         let mut learner = Learner::new(net, &dqfd_margin_only).unwrap();
-        // Recompute the loss graph by hand to read the gradient before the step.
+        // The margin term alone, taken through the network by hand.
         let spec = *learner.online.input();
-        let x = Tensor::from_vec(spec.batch(&[&obs]), (1, spec.len()), &Device::Cpu).unwrap();
-        let qt = learner.online.forward(&x, Mode::Train).unwrap();
-        let l = Tensor::from_vec(vec![0.8f32, 0.8, 0.0, 0.8, 0.8, 0.8, 0.8], (1, 7), &Device::Cpu).unwrap();
-        let taken = Tensor::from_vec(vec![2u32], (1, 1), &Device::Cpu).unwrap();
-        let j = (qt.broadcast_add(&l).unwrap().max(1).unwrap() - qt.gather(&taken, 1).unwrap().squeeze(1).unwrap())
-            .unwrap()
-            .sum_all()
-            .unwrap();
-        assert!((j.to_scalar::<f32>().unwrap() - 2.3).abs() < 1e-6);
-        let grads = j.backward().unwrap();
-        let bias = &learner
-            .online
-            .params()
-            .iter()
-            .find(|(n, _)| n == "linear3.bias")
-            .unwrap()
-            .1;
-        let g = grads.get(bias.as_tensor()).unwrap().to_vec1::<f32>().unwrap();
-        assert_eq!(g, vec![0.0, 1.0, -1.0, 0.0, 0.0, 0.0, 0.0]);
+        let x = spec.batch(&[&obs]);
+        let mut ws = Workspace::new();
+        let qt = learner.online.forward_train(&x, &mut ws).to_vec();
+        let taken = spec.column(&obs.goal, Action::Left);
+        assert_eq!(taken, 2);
+        let (j, best) = margin_term(&qt, taken, ActionSet::from_indices(0..7), 0.8);
+        assert!((j - 2.3).abs() < 1e-6);
+        let mut dq = vec![0.0; 7];
+        dq[best] += 1.0;
+        dq[taken] -= 1.0;
+        let mut grad = vec![0.0; learner.online.parameter_count()];
+        learner.online.backward(&x, &mut ws, &dq, &mut grad);
+        let bias = learner.online.param_range("linear3.bias").unwrap();
+        assert_eq!(grad[bias].to_vec(), vec![0.0, 1.0, -1.0, 0.0, 0.0, 0.0, 0.0]);
         // The learner's own step reports the same margin loss (and the TD loss of a terminal
         // step with reward 0: (Q(s, Left) - 0)^2 = 0.25).
         let losses = learner.step(&batch, &dqfd_margin_only).unwrap();
         assert!((losses.margin - 2.3).abs() < 1e-6, "{losses:?}");
         assert!((losses.td - 0.25).abs() < 1e-6, "{losses:?}");
+    }
+
+    #[test]
+    fn the_td_terms_and_their_derivatives() {
+        assert_eq!(td_term(0.5, TdLoss::Mse), (0.25, 1.0));
+        assert_eq!(td_term(0.5, TdLoss::Huber), (0.125, 0.5));
+        assert_eq!(td_term(-3.0, TdLoss::Huber), (2.5, -1.0));
     }
 }

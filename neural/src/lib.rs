@@ -3,7 +3,8 @@
 //! (section III-C) rebuilt, and made to learn.
 //!
 //! - [`input`]: what a network sees: `sim`'s pixel and plane views laid out as bytes.
-//! - [`net`]: the Q-networks, the paper's convolutional one and our small one.
+//! - [`net`]: the Q-networks, the paper's convolutional one and our small one, forward and
+//!   backward by hand on the [`kernels`] (matrix products on `gemm`, im2col).
 //! - [`mask`]: which actions may be chosen, and the masked argmax every choice goes through.
 //! - [`replay`], [`learner`], [`optim`]: experience replay with n-step returns; one gradient
 //!   step of the DQN and DQfD losses; RMSprop and Adam.
@@ -13,13 +14,14 @@
 //!   `agent::play`, rollouts and evaluation serve it unchanged), saved and read as a
 //!   network file in the project's model container (`files::container`).
 //!
-//! Everything runs on the CPU with candle; every random draw comes from the config's seed.
+//! Everything runs on the CPU; every random draw comes from the config's seed.
 
 pub mod any;
 pub mod config;
 pub mod demos;
 pub mod error;
 pub mod input;
+pub mod kernels;
 pub mod learner;
 pub mod mask;
 pub mod model;

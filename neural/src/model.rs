@@ -150,24 +150,12 @@ impl Dqn {
     /// atomically for a regular file.
     pub fn save(&self, path: &Path) -> Result<()> {
         let out = OutputPath::check(path)?;
-        let values = self
+        let tensors: Vec<(&str, Tensor<'_>)> = self
             .net
             .tensors()
-            .map(|(name, v)| -> Result<_> {
-                Ok((
-                    name.as_str(),
-                    v.dims().to_vec(),
-                    v.as_tensor().flatten_all()?.to_vec1::<f32>()?,
-                ))
-            })
-            .collect::<Result<Vec<_>>>()?;
-        let tensors: Vec<(&str, Tensor<'_>)> = values
-            .iter()
-            .map(|(name, shape, v)| {
-                (
-                    *name,
-                    Tensor::from_values(shape, v).expect("a variable's shape fits its values"),
-                )
+            .map(|t| {
+                let tensor = Tensor::from_values(t.shape, t.values).expect("a tensor's shape fits its values");
+                (t.name, tensor)
             })
             .collect();
         let metadata = Metadata {
@@ -197,7 +185,7 @@ impl Dqn {
             .validate()
             .map_err(|e| fail(format!("its training config is not valid: {e}")))?;
         let input = config.net.input(config.grid, config.blocks)?;
-        let net = QNet::new(config.net, input, &mut sim::seeding::rng(0))?;
+        let mut net = QNet::new(config.net, input, &mut sim::seeding::rng(0))?;
         let names = container.names();
         let expected = net.tensors().count();
         if names.len() != expected {
@@ -212,7 +200,7 @@ impl Dqn {
             let values = tensor
                 .values::<f32>()
                 .ok_or_else(|| fail(format!("tensor {name} is {:?}, not F32", tensor.dtype())))?;
-            net.set_tensor(&name, tensor.shape(), values)
+            net.set_tensor(&name, tensor.shape(), &values)
                 .map_err(|e| fail(e.to_string()))?;
         }
         Ok(Dqn { net, config, report })

@@ -21,22 +21,35 @@
 //!
 //! # How it is computed
 //!
-//! Activations are `batch x (rows * columns * channels)`, channel fastest. A convolution is
-//! an `index_select` of every patch (a precomputed index, "im2col") and one matrix product:
-//! identical to a direct convolution, and about twice as fast as candle's `conv2d`, whose
-//! backward pass also computes a gradient for the input image that nobody needs. Batch
-//! normalisation is written here too: its running mean and variance are kept beside the
-//! weights ([`QNet::buffers`]), so a target network copy and a saved file carry them, and
-//! the optimiser never sees them. In training mode it normalises by the batch's statistics
-//! and updates the running ones (momentum 0.1, PyTorch's); in evaluation mode (acting, and
-//! the target network) it uses the running ones.
+//! By hand, at the cost of the arithmetic (issue 19): activations are `batch x (rows *
+//! columns * channels)`, channel fastest; a convolution gathers its patches with contiguous
+//! row copies into a reused buffer (im2col, [`crate::kernels`]) and makes one matrix
+//! product; every product runs on the `gemm` crate. Bias, batch normalisation and ReLU are
+//! one pass each way. The backward pass computes only the gradients that are used (none
+//! for the input image). The perceptrons' first layer reads planes of 0/1 values with
+//! about one in sixteen set: it sums the weight rows of the set inputs instead of
+//! multiplying by a mostly-zero matrix. The parameters are one flat buffer, so the
+//! optimiser ([`crate::optim`]) updates them in one fused pass, and a [`Workspace`] holds
+//! every intermediate buffer from one step to the next.
+//!
+//! Batch normalisation's running mean and variance are kept beside the weights
+//! ([`QNet::buffers`]), so a target network copy and a saved file carry them, and the
+//! optimiser never sees them. In training ([`QNet::forward_train`]) it normalises by the
+//! batch's statistics and updates the running ones (momentum 0.1, PyTorch's); otherwise
+//! (acting, and the target network) it uses the running ones.
+//!
+//! Large layers split a batch into two fixed halves that run on two threads when the
+//! rayon pool has them. The split depends on the layer's size only, and every sum runs in
+//! a fixed order, so the same seed gives the same network, bit for bit, on one thread or
+//! two (on the same machine: `gemm` picks its kernels for the CPU).
 //!
 //! Weights start as PyTorch's defaults do, uniform in `±1/sqrt(fan_in)`, drawn from the
 //! seeded generator: same seed, same network.
 
 use std::fmt;
 
-use candle_core::{DType, Device, Tensor, Var};
+use std::cell::RefCell;
+
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
 use sim::Action;
@@ -44,6 +57,7 @@ use sim::seeding::SimRng;
 
 use crate::error::{NeuralError, Result};
 use crate::input::{InputSpec, ObsKind};
+use crate::kernels::{self, ConvGeometry, matmul, matmul_nt, matmul_tn};
 
 /// Which network.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -157,60 +171,223 @@ impl NetConfig {
     }
 }
 
-/// Whether a forward pass trains (batch statistics) or evaluates (running statistics).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Mode {
-    /// Training: batch normalisation uses and updates batch statistics.
-    Train,
-    /// Evaluation: batch normalisation uses its running statistics.
-    Eval,
-}
-
 /// Batch normalisation's momentum and epsilon (PyTorch's defaults).
-const BN_MOMENTUM: f64 = 0.1;
+const BN_MOMENTUM: f32 = 0.1;
 const BN_EPS: f64 = 1e-5;
 
-/// A convolution's geometry and its im2col index.
-struct Conv {
-    index: Tensor,
-    /// Output positions (rows * columns).
-    positions: usize,
-    /// Values per patch (k * k * channels in).
-    patch: usize,
-    channels_out: usize,
+/// Below this many multiply-adds per half a layer runs on one thread: a fork and join
+/// costs more than it saves.
+const MIN_HALF_WORK: usize = 2_000_000;
+
+/// Where a tensor lives in a flat buffer.
+#[derive(Clone, Copy, Debug)]
+struct Slot {
+    offset: usize,
+    len: usize,
 }
 
-struct BatchNorm {
-    gamma: Var,
-    beta: Var,
-    running_mean: Var,
-    running_var: Var,
+impl Slot {
+    fn range(self) -> std::ops::Range<usize> {
+        self.offset..self.offset + self.len
+    }
 }
 
+/// Batch normalisation's tensors: scale and shift among the parameters, the running
+/// statistics among the buffers.
+#[derive(Clone, Debug)]
+struct Norm {
+    gamma: Slot,
+    beta: Slot,
+    running_mean: Slot,
+    running_var: Slot,
+}
+
+#[derive(Clone, Debug)]
 enum Layer {
+    /// Convolution (+ batch normalisation) + ReLU.
     Conv {
-        conv: Conv,
-        weight: Var,
-        bias: Var,
-        norm: Option<BatchNorm>,
+        geo: ConvGeometry,
+        out: usize,
+        weight: Slot,
+        bias: Slot,
+        norm: Option<Norm>,
     },
+    /// Linear layer, ReLU unless it is the last. `sparse`: the first layer of a perceptron,
+    /// whose inputs are mostly 0, computed as a sum of the weight rows of its non-zero inputs.
     Linear {
-        weight: Var,
-        bias: Var,
+        inputs: usize,
+        out: usize,
+        weight: Slot,
+        bias: Slot,
         relu: bool,
+        sparse: bool,
     },
+}
+
+impl Layer {
+    /// Values per sample out of the layer.
+    fn width(&self) -> usize {
+        match self {
+            Layer::Conv { geo, out, .. } => geo.positions() * out,
+            Layer::Linear { out, .. } => *out,
+        }
+    }
+
+    /// Multiply-adds per sample of the layer's forward pass.
+    fn work(&self) -> usize {
+        match self {
+            Layer::Conv { geo, out, .. } => geo.positions() * geo.patch() * out,
+            Layer::Linear { inputs, out, .. } => inputs * out,
+        }
+    }
+}
+
+/// A named tensor of a network file.
+#[derive(Clone, Debug)]
+struct TensorInfo {
+    name: String,
+    shape: Vec<usize>,
+    slot: Slot,
+    /// A batch-normalisation statistic (in the buffers), not a parameter.
+    buffer: bool,
+}
+
+/// One of a network's named tensors, as a network file stores it.
+#[derive(Clone, Copy, Debug)]
+pub struct NamedTensor<'a> {
+    /// Its name (`conv1.weight`, `linear2.bias`, `conv1.bn.running_mean`, ...).
+    pub name: &'a str,
+    /// Its shape.
+    pub shape: &'a [usize],
+    /// Its values, row-major.
+    pub values: &'a [f32],
 }
 
 /// A Q-network: one Q-value per action for a batch of inputs.
+///
+/// Its parameters are one flat buffer ([`QNet::params`]), laid out tensor after tensor in
+/// [`QNet::tensors`]' order, so the optimiser runs over one slice.
+#[derive(Clone, Debug)]
 pub struct QNet {
     config: NetConfig,
     input: InputSpec,
     actions: usize,
     layers: Vec<Layer>,
-    /// Trainable variables by name, in a fixed order.
-    params: Vec<(String, Var)>,
-    /// Batch normalisation's running statistics by name, in a fixed order.
-    buffers: Vec<(String, Var)>,
+    tensors: Vec<TensorInfo>,
+    params: Vec<f32>,
+    buffers: Vec<f32>,
+}
+
+/// The buffers of one layer's pass, kept for the backward pass.
+#[derive(Default)]
+struct LayerBuffers {
+    /// A convolution's patches, a chunk of samples for each half of the batch.
+    cols: Vec<f32>,
+    /// A convolution's output before the ReLU: normalised (`x_hat`) with batch
+    /// normalisation in training, else the plain product plus bias.
+    pre: Vec<f32>,
+    /// The layer's output (after the ReLU where there is one).
+    out: Vec<f32>,
+    /// Batch statistics of the last training pass: mean, 1 / standard deviation, and the
+    /// biased variance.
+    mean: Vec<f64>,
+    inv_std: Vec<f64>,
+    var: Vec<f64>,
+    /// Per-channel coefficients of batch normalisation's element-wise pass.
+    coef: Vec<f32>,
+    /// A sparse layer's non-zero inputs: sample `b`'s are `nz[nz_start[b]..nz_start[b + 1]]`.
+    nz: Vec<(u32, f32)>,
+    nz_start: Vec<usize>,
+}
+
+/// Reusable buffers for passes through one network shape: made once, grown to the largest
+/// batch seen, then reused (no allocation in the steady state). A training pass keeps what
+/// its backward pass needs here.
+#[derive(Default)]
+pub struct Workspace {
+    batch: usize,
+    layers: Vec<LayerBuffers>,
+    /// The gradient with respect to the current layer's output, and its input's.
+    delta: Vec<f32>,
+    delta_in: Vec<f32>,
+    /// A convolution's patches and their gradients, a chunk of samples for each half.
+    cols: Vec<f32>,
+    dcols: Vec<f32>,
+    /// The second half's weight gradient, added to the first's.
+    dw_half: Vec<f32>,
+    /// Per-channel sums and coefficients of the batch-normalisation backward pass.
+    sums: Vec<f64>,
+    coef: Vec<f32>,
+}
+
+impl Workspace {
+    /// An empty workspace.
+    pub fn new() -> Workspace {
+        Workspace::default()
+    }
+
+    /// The output of the last pass: `batch x actions` Q-values.
+    pub fn output(&self) -> &[f32] {
+        self.layers.last().map_or(&[][..], |l| l.out.as_slice())
+    }
+}
+
+/// Resizes `v` to `n` values (allocating only when it grows past its capacity).
+fn fit<T: Clone + Default>(v: &mut Vec<T>, n: usize) {
+    v.resize(n, T::default());
+}
+
+/// Values of patches gathered at a time (1 MB): the chunk stays in the core's caches
+/// between its gathering and its matrix product.
+const CHUNK_VALUES: usize = 1 << 18;
+
+/// Samples per chunk of a convolution's patches.
+fn chunk_samples(geo: &ConvGeometry) -> usize {
+    (CHUNK_VALUES / (geo.positions() * geo.patch())).max(1)
+}
+
+/// Splits `v` at `at` when there are two parts; with one the second part is empty.
+fn halves(v: &mut [f32], at: usize, parts: usize) -> (&mut [f32], &mut [f32]) {
+    if parts == 2 { v.split_at_mut(at) } else { (v, &mut []) }
+}
+
+/// Runs both halves' work, on two threads when there are two parts.
+fn both<A: FnOnce() + Send, B: FnOnce() + Send>(parts: usize, a: A, b: B) {
+    if parts == 2 {
+        kernels::join(a, b);
+    } else {
+        a();
+        b();
+    }
+}
+
+/// Sets every row of `rows` (of `bias.len()` values) to `bias`.
+#[inline(always)]
+fn fill_rows_any(rows: &mut [f32], bias: &[f32]) {
+    for row in rows.chunks_exact_mut(bias.len()) {
+        row.copy_from_slice(bias);
+    }
+}
+
+/// Adds every row of `rows` into `sum` (of one row's length), overwriting it.
+#[inline(always)]
+fn sum_rows_any(rows: &[f32], sum: &mut [f32]) {
+    sum.fill(0.0);
+    for row in rows.chunks_exact(sum.len()) {
+        for (s, &v) in sum.iter_mut().zip(row) {
+            *s += v;
+        }
+    }
+}
+
+/// Sets `delta` to 0 where the layer's output (after ReLU) is 0.
+#[inline(always)]
+fn relu_backward_any(delta: &mut [f32], out: &[f32]) {
+    for (d, &o) in delta.iter_mut().zip(out) {
+        if o <= 0.0 {
+            *d = 0.0;
+        }
+    }
 }
 
 /// Uniform values in `±bound`.
@@ -218,36 +395,9 @@ fn uniform(rng: &mut SimRng, n: usize, bound: f32) -> Vec<f32> {
     (0..n).map(|_| rng.random_range(-bound..=bound)).collect()
 }
 
-fn var(values: Vec<f32>, shape: &[usize]) -> Result<Var> {
-    Ok(Var::from_tensor(&Tensor::from_vec(values, shape, &Device::Cpu)?)?)
-}
-
-/// The im2col index of a `k x k` stride-`s` convolution over `rows x cols x ch` inputs.
-fn conv_index(rows: usize, cols: usize, ch: usize, k: usize, s: usize) -> Result<(Conv, usize, usize)> {
-    let (out_r, out_c) = ((rows - k) / s + 1, (cols - k) / s + 1);
-    let mut index = Vec::with_capacity(out_r * out_c * k * k * ch);
-    for or in 0..out_r {
-        for oc in 0..out_c {
-            for kr in 0..k {
-                for kc in 0..k {
-                    for c in 0..ch {
-                        index.push((((or * s + kr) * cols + oc * s + kc) * ch + c) as u32);
-                    }
-                }
-            }
-        }
-    }
-    let len = index.len();
-    Ok((
-        Conv {
-            index: Tensor::from_vec(index, len, &Device::Cpu)?,
-            positions: out_r * out_c,
-            patch: k * k * ch,
-            channels_out: 0,
-        },
-        out_r,
-        out_c,
-    ))
+thread_local! {
+    /// The buffers of acting passes (one input at a time), per thread.
+    static ACTING: RefCell<Workspace> = RefCell::new(Workspace::new());
 }
 
 impl QNet {
@@ -261,6 +411,7 @@ impl QNet {
             input,
             actions,
             layers: Vec::new(),
+            tensors: Vec::new(),
             params: Vec::new(),
             buffers: Vec::new(),
         };
@@ -268,38 +419,35 @@ impl QNet {
         if config.kind == NetKind::Paper {
             let (mut rows, mut cols, mut ch) = input.shape();
             for (i, (k, s, out)) in [(8, 4, 16), (4, 2, 32)].into_iter().enumerate() {
-                if rows < k || cols < k {
-                    return Err(NeuralError::Config(format!(
+                let geo = ConvGeometry::new(rows, cols, ch, k, s).ok_or_else(|| {
+                    NeuralError::Config(format!(
                         "a {rows} x {cols} input is smaller than the paper network's {k} x {k} filters"
-                    )));
-                }
-                let (mut conv, r, c) = conv_index(rows, cols, ch, k, s)?;
-                conv.channels_out = out;
-                let bound = 1.0 / (conv.patch as f32).sqrt();
+                    ))
+                })?;
+                let patch = geo.patch();
+                let bound = 1.0 / (patch as f32).sqrt();
                 let name = format!("conv{}", i + 1);
-                let weight = net.param(
+                let weight = net.add(
                     &format!("{name}.weight"),
-                    uniform(rng, conv.patch * out, bound),
-                    &[conv.patch, out],
-                )?;
-                let bias = net.param(&format!("{name}.bias"), uniform(rng, out, bound), &[out])?;
-                let norm = if config.batch_norm {
-                    Some(BatchNorm {
-                        gamma: net.param(&format!("{name}.bn.weight"), vec![1.0; out], &[out])?,
-                        beta: net.param(&format!("{name}.bn.bias"), vec![0.0; out], &[out])?,
-                        running_mean: net.buffer(&format!("{name}.bn.running_mean"), vec![0.0; out], &[out])?,
-                        running_var: net.buffer(&format!("{name}.bn.running_var"), vec![1.0; out], &[out])?,
-                    })
-                } else {
-                    None
-                };
+                    uniform(rng, patch * out, bound),
+                    &[patch, out],
+                    false,
+                );
+                let bias = net.add(&format!("{name}.bias"), uniform(rng, out, bound), &[out], false);
+                let norm = config.batch_norm.then(|| Norm {
+                    gamma: net.add(&format!("{name}.bn.weight"), vec![1.0; out], &[out], false),
+                    beta: net.add(&format!("{name}.bn.bias"), vec![0.0; out], &[out], false),
+                    running_mean: net.add(&format!("{name}.bn.running_mean"), vec![0.0; out], &[out], true),
+                    running_var: net.add(&format!("{name}.bn.running_var"), vec![1.0; out], &[out], true),
+                });
                 net.layers.push(Layer::Conv {
-                    conv,
+                    geo,
+                    out,
                     weight,
                     bias,
                     norm,
                 });
-                (rows, cols, ch) = (r, c, out);
+                (rows, cols, ch) = (geo.out_rows, geo.out_cols, out);
             }
             width = rows * cols * ch;
         }
@@ -311,31 +459,40 @@ impl QNet {
             let (fan_in, out) = (w[0], w[1]);
             let bound = 1.0 / (fan_in as f32).sqrt();
             let name = format!("linear{}", i + 1);
-            let weight = net.param(
+            let weight = net.add(
                 &format!("{name}.weight"),
                 uniform(rng, fan_in * out, bound),
                 &[fan_in, out],
-            )?;
-            let bias = net.param(&format!("{name}.bias"), uniform(rng, out, bound), &[out])?;
+                false,
+            );
+            let bias = net.add(&format!("{name}.bias"), uniform(rng, out, bound), &[out], false);
             net.layers.push(Layer::Linear {
+                inputs: fan_in,
+                out,
                 weight,
                 bias,
                 relu: i + 2 < widths.len(),
+                sparse: net.layers.is_empty(),
             });
         }
         Ok(net)
     }
 
-    fn param(&mut self, name: &str, values: Vec<f32>, shape: &[usize]) -> Result<Var> {
-        let v = var(values, shape)?;
-        self.params.push((name.into(), v.clone()));
-        Ok(v)
-    }
-
-    fn buffer(&mut self, name: &str, values: Vec<f32>, shape: &[usize]) -> Result<Var> {
-        let v = var(values, shape)?;
-        self.buffers.push((name.into(), v.clone()));
-        Ok(v)
+    /// Appends a named tensor to the parameters or the buffers.
+    fn add(&mut self, name: &str, values: Vec<f32>, shape: &[usize], buffer: bool) -> Slot {
+        let store = if buffer { &mut self.buffers } else { &mut self.params };
+        let slot = Slot {
+            offset: store.len(),
+            len: values.len(),
+        };
+        store.extend(values);
+        self.tensors.push(TensorInfo {
+            name: name.into(),
+            shape: shape.to_vec(),
+            slot,
+            buffer,
+        });
+        slot
     }
 
     /// The network's shape.
@@ -353,145 +510,589 @@ impl QNet {
         self.actions
     }
 
-    /// The trainable variables, by name, in a fixed order.
-    pub fn params(&self) -> &[(String, Var)] {
+    /// Every trainable value, tensor after tensor (the order of [`QNet::tensors`]).
+    pub fn params(&self) -> &[f32] {
         &self.params
     }
 
-    /// Batch normalisation's running statistics, by name, in a fixed order (empty without).
-    pub fn buffers(&self) -> &[(String, Var)] {
+    /// The trainable values, to update.
+    pub fn params_mut(&mut self) -> &mut [f32] {
+        &mut self.params
+    }
+
+    /// Batch normalisation's running statistics (empty without).
+    pub fn buffers(&self) -> &[f32] {
         &self.buffers
     }
 
     /// Number of trainable values.
     pub fn parameter_count(&self) -> usize {
-        self.params.iter().map(|(_, v)| v.elem_count()).sum()
+        self.params.len()
     }
 
-    /// Every named tensor: parameters, then buffers.
-    pub fn tensors(&self) -> impl Iterator<Item = &(String, Var)> {
-        self.params.iter().chain(&self.buffers)
+    /// Every named tensor: parameters, then batch normalisation's running statistics.
+    pub fn tensors(&self) -> impl Iterator<Item = NamedTensor<'_>> {
+        let params = self.tensors.iter().filter(|t| !t.buffer);
+        params
+            .chain(self.tensors.iter().filter(|t| t.buffer))
+            .map(|t| NamedTensor {
+                name: &t.name,
+                shape: &t.shape,
+                values: if t.buffer {
+                    &self.buffers[t.slot.range()]
+                } else {
+                    &self.params[t.slot.range()]
+                },
+            })
     }
 
-    /// Q-values `[batch, actions]` of `x`, `[batch, input length]`.
-    pub fn forward(&self, x: &Tensor, mode: Mode) -> Result<Tensor> {
-        let batch = x.dim(0)?;
-        let mut h = x.clone();
-        for layer in &self.layers {
-            h = match layer {
-                Layer::Conv {
-                    conv,
-                    weight,
-                    bias,
-                    norm,
-                } => {
-                    let cols = h.index_select(&conv.index, 1)?;
-                    let rows = batch * conv.positions;
-                    let mut y = cols
-                        .reshape((rows, conv.patch))?
-                        .matmul(weight.as_tensor())?
-                        .broadcast_add(bias.as_tensor())?;
-                    if let Some(bn) = norm {
-                        y = batch_norm(&y, bn, mode)?;
-                    }
-                    y.relu()?.reshape((batch, conv.positions * conv.channels_out))?
-                }
-                Layer::Linear { weight, bias, relu } => {
-                    let y = h.matmul(weight.as_tensor())?.broadcast_add(bias.as_tensor())?;
-                    if *relu { y.relu()? } else { y }
-                }
-            };
+    /// Where the parameter `name` lives in [`QNet::params`] (`None` for a buffer or an
+    /// unknown name).
+    pub fn param_range(&self, name: &str) -> Option<std::ops::Range<usize>> {
+        self.tensors
+            .iter()
+            .find(|t| t.name == name && !t.buffer)
+            .map(|t| t.slot.range())
+    }
+
+    /// Sets the tensor named `name` to `values` (a network file's); an error naming it if
+    /// the network has no such tensor or its shape differs.
+    pub fn set_tensor(&mut self, name: &str, shape: &[usize], values: &[f32]) -> Result<()> {
+        let t = self
+            .tensors
+            .iter()
+            .find(|t| t.name == name)
+            .ok_or_else(|| NeuralError::Mismatch(format!("the network has no tensor {name}")))?;
+        if t.shape != shape || values.len() != t.slot.len {
+            return Err(NeuralError::Mismatch(format!(
+                "tensor {name} is {:?} in the network and {shape:?} in the file",
+                t.shape
+            )));
         }
-        Ok(h)
+        let store = if t.buffer { &mut self.buffers } else { &mut self.params };
+        store[t.slot.range()].copy_from_slice(values);
+        Ok(())
     }
 
-    /// Q-values of the encoded `inputs` (`batch * input length` floats), evaluation mode,
-    /// as one row per input.
+    /// An independent copy.
+    pub fn try_clone(&self) -> Result<QNet> {
+        Ok(self.clone())
+    }
+
+    /// Sets every parameter and buffer to `other`'s (a network of the same shape).
+    pub fn copy_from(&mut self, other: &QNet) {
+        self.params.copy_from_slice(&other.params);
+        self.buffers.copy_from_slice(&other.buffers);
+    }
+
+    /// Q-values of the encoded `inputs` (`batch * input length` floats), batch
+    /// normalisation on its running statistics, as one row per input.
     pub fn q_values(&self, inputs: Vec<f32>) -> Result<Vec<Vec<f32>>> {
-        let batch = inputs.len() / self.input.len();
-        let x = Tensor::from_vec(inputs, (batch, self.input.len()), &Device::Cpu)?;
-        Ok(self.forward(&x, Mode::Eval)?.detach().to_vec2::<f32>()?)
+        let width = self.input.len();
+        if inputs.len() % width != 0 {
+            return Err(NeuralError::Mismatch(format!(
+                "{} input values are not a whole number of {width}-value inputs",
+                inputs.len()
+            )));
+        }
+        Ok(ACTING.with_borrow_mut(|ws| {
+            self.forward(&inputs, ws)
+                .chunks_exact(self.actions)
+                .map(<[f32]>::to_vec)
+                .collect()
+        }))
     }
 
     /// The allowed action (see [`crate::mask`]) with the highest Q-value in `obs` (of this
     /// network's world).
     pub fn greedy_action(&self, obs: &sim::Observation, mask_noops: bool) -> Result<Action> {
-        let q = self.q_values(self.input.batch(&[obs]))?;
+        let x = self.input.batch(&[obs]);
         let allowed = self.input.allowed_columns(obs, mask_noops);
-        let column = crate::mask::masked_argmax(&q[0], allowed).expect("some action is always allowed");
-        Ok(self.input.action(&obs.goal, column))
+        let column = ACTING.with_borrow_mut(|ws| crate::mask::masked_argmax(self.forward(&x, ws), allowed));
+        Ok(self
+            .input
+            .action(&obs.goal, column.expect("some action is always allowed")))
     }
 
-    /// An independent copy (new variables with the same values).
-    pub fn try_clone(&self) -> Result<QNet> {
-        let mut rng = sim::seeding::rng(0);
-        let copy = QNet::new(self.config, self.input, &mut rng)?;
-        copy.copy_from(self)?;
-        Ok(copy)
+    /// Q-values (`batch x actions`) of `x` (`batch x input length`), batch normalisation on
+    /// its running statistics (acting, and the target network).
+    pub fn forward<'w>(&self, x: &[f32], ws: &'w mut Workspace) -> &'w [f32] {
+        self.pass(x, ws, false);
+        ws.output()
     }
 
-    /// Sets every parameter and buffer to `other`'s (a network of the same shape).
-    pub fn copy_from(&self, other: &QNet) -> Result<()> {
-        for ((_, dst), (_, src)) in self.tensors().zip(other.tensors()) {
-            dst.set(&src.as_tensor().copy()?)?;
+    /// Q-values of `x` in training: batch normalisation on the batch's statistics, whose
+    /// running averages it updates (momentum 0.1, the unbiased variance, as PyTorch keeps
+    /// them). `ws` keeps what [`QNet::backward`] needs.
+    pub fn forward_train<'w>(&mut self, x: &[f32], ws: &'w mut Workspace) -> &'w [f32] {
+        self.pass(x, ws, true);
+        for (layer, buffers) in self.layers.iter().zip(&ws.layers) {
+            if let Layer::Conv { norm: Some(n), .. } = layer {
+                let rows = buffers.pre.len() / buffers.mean.len();
+                let unbiased = if rows > 1 { rows as f64 / (rows - 1) as f64 } else { 1.0 };
+                let stats = buffers.mean.iter().zip(&buffers.var);
+                for (i, (&m, &v)) in stats.enumerate() {
+                    let rm = &mut self.buffers[n.running_mean.offset + i];
+                    *rm = *rm * (1.0 - BN_MOMENTUM) + m as f32 * BN_MOMENTUM;
+                    let rv = &mut self.buffers[n.running_var.offset + i];
+                    *rv = *rv * (1.0 - BN_MOMENTUM) + (v * unbiased) as f32 * BN_MOMENTUM;
+                }
+            }
         }
-        Ok(())
+        ws.output()
     }
 
-    /// Sets the tensor named `name` to `values` (a network file's); an error naming it if
-    /// the network has no such tensor or its shape differs.
-    pub fn set_tensor(&self, name: &str, shape: &[usize], values: Vec<f32>) -> Result<()> {
-        let (_, v) = self
-            .tensors()
-            .find(|(n, _)| n == name)
-            .ok_or_else(|| NeuralError::Mismatch(format!("the network has no tensor {name}")))?;
-        if v.dims() != shape {
-            return Err(NeuralError::Mismatch(format!(
-                "tensor {name} is {:?} in the network and {shape:?} in the file",
-                v.dims()
-            )));
+    /// One forward pass over every layer.
+    fn pass(&self, x: &[f32], ws: &mut Workspace, train: bool) {
+        let batch = x.len() / self.input.len();
+        assert_eq!(batch * self.input.len(), x.len(), "a whole number of inputs");
+        ws.batch = batch;
+        if ws.layers.len() != self.layers.len() {
+            ws.layers = (0..self.layers.len()).map(|_| LayerBuffers::default()).collect();
         }
-        v.set(&Tensor::from_vec(values, shape, &Device::Cpu)?)?;
-        Ok(())
+        for (i, layer) in self.layers.iter().enumerate() {
+            let (before, rest) = ws.layers.split_at_mut(i);
+            let input: &[f32] = before.last().map_or(x, |l| &l.out);
+            let buf = &mut rest[0];
+            fit(&mut buf.out, batch * layer.width());
+            let parts = kernels::parts(batch, MIN_HALF_WORK.div_ceil(layer.work()));
+            let half = kernels::part_start(batch, parts, 1);
+            match layer {
+                Layer::Conv {
+                    geo,
+                    out,
+                    weight,
+                    bias,
+                    norm,
+                } => {
+                    let (positions, patch, in_len) = (geo.positions(), geo.patch(), geo.input_len());
+                    let chunk = chunk_samples(geo);
+                    fit(&mut buf.cols, 2 * chunk * positions * patch);
+                    fit(&mut buf.pre, batch * positions * out);
+                    let w = &self.params[weight.range()];
+                    let b = &self.params[bias.range()];
+                    let (x0, x1) = input.split_at(half * in_len);
+                    let (c0, c1) = buf.cols.split_at_mut(chunk * positions * patch);
+                    let (z0, z1) = halves(&mut buf.pre, half * positions * out, parts);
+                    // A few samples at a time, so the patches stay in cache.
+                    let conv = |x: &[f32], cols: &mut [f32], z: &mut [f32]| {
+                        fill_rows(z, b);
+                        for (xc, zc) in x.chunks(chunk * in_len).zip(z.chunks_mut(chunk * positions * out)) {
+                            let rows = xc.len() / in_len * positions;
+                            let cols = &mut cols[..rows * patch];
+                            geo.im2col(xc, cols);
+                            matmul(zc, cols, w, (rows, patch, *out), true);
+                        }
+                    };
+                    both(parts, || conv(x0, c0, z0), || conv(x1, c1, z1));
+                    match norm {
+                        Some(n) if train => norm_train(&self.params, n, buf),
+                        Some(n) => norm_eval(&self.params, &self.buffers, n, buf),
+                        None => {
+                            for (o, &z) in buf.out.iter_mut().zip(&buf.pre) {
+                                *o = z.max(0.0);
+                            }
+                        }
+                    }
+                }
+                Layer::Linear {
+                    inputs,
+                    out,
+                    weight,
+                    bias,
+                    relu,
+                    sparse,
+                } => {
+                    let w = &self.params[weight.range()];
+                    let b = &self.params[bias.range()];
+                    if *sparse {
+                        sparse_forward(input, *inputs, w, b, buf);
+                    } else {
+                        let (x0, x1) = input.split_at(half * inputs);
+                        let (y0, y1) = halves(&mut buf.out, half * out, parts);
+                        let linear = |x: &[f32], y: &mut [f32]| {
+                            fill_rows(y, b);
+                            matmul(y, x, w, (y.len() / out, *inputs, *out), true);
+                        };
+                        both(parts, || linear(x0, y0), || linear(x1, y1));
+                    }
+                    if *relu {
+                        relu_in_place(&mut buf.out);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The gradient of a loss with respect to every parameter, written over `grad` (laid out
+    /// as [`QNet::params`]), from `dq`, its gradient with respect to the Q-values of the
+    /// last [`QNet::forward_train`] through `ws`, whose input was `x`. No gradient is
+    /// computed for the input.
+    pub fn backward(&self, x: &[f32], ws: &mut Workspace, dq: &[f32], grad: &mut [f32]) {
+        let batch = ws.batch;
+        assert_eq!(dq.len(), batch * self.actions, "one gradient per Q-value");
+        assert_eq!(grad.len(), self.params.len(), "one gradient per parameter");
+        let Workspace {
+            layers,
+            delta,
+            delta_in,
+            cols,
+            dcols,
+            dw_half,
+            sums,
+            coef,
+            ..
+        } = ws;
+        fit(delta, dq.len());
+        delta.copy_from_slice(dq);
+        for (i, layer) in self.layers.iter().enumerate().rev() {
+            let (before, rest) = layers.split_at(i);
+            let input: &[f32] = before.last().map_or(x, |l| l.out.as_slice());
+            let buf = &rest[0];
+            let parts = kernels::parts(batch, MIN_HALF_WORK.div_ceil(layer.work()));
+            let half = kernels::part_start(batch, parts, 1);
+            match layer {
+                Layer::Conv {
+                    geo,
+                    out,
+                    weight,
+                    bias,
+                    norm,
+                } => {
+                    let (positions, patch) = (geo.positions(), geo.patch());
+                    match norm {
+                        Some(n) => {
+                            norm_backward(&self.params, n, buf, delta, sums, coef, grad);
+                            // Batch normalisation subtracts the batch mean: the bias
+                            // changes no output in training, and its gradient is 0
+                            // (computed, it is rounding noise that Adam would turn
+                            // into a random walk).
+                            grad[bias.range()].fill(0.0);
+                        }
+                        None => {
+                            relu_backward(delta, &buf.out);
+                            sum_rows(delta, &mut grad[bias.range()]);
+                        }
+                    }
+                    let w = &self.params[weight.range()];
+                    let in_len = geo.input_len();
+                    let chunk = chunk_samples(geo);
+                    let chunk_len = chunk * positions * patch;
+                    fit(dw_half, weight.len);
+                    fit(cols, 2 * chunk_len);
+                    let wants_input = i > 0;
+                    if wants_input {
+                        fit(dcols, 2 * chunk_len);
+                        fit(delta_in, batch * in_len);
+                    }
+                    let (g0, g1) = (&mut grad[weight.range()], &mut dw_half[..]);
+                    let (x0, x1) = input.split_at(half * in_len);
+                    let (d0, d1) = delta.split_at(half * positions * out);
+                    let (cols0, cols1) = cols.split_at_mut(chunk_len);
+                    let (dc0, dc1, dx0, dx1) = if wants_input {
+                        let (dc0, dc1) = dcols.split_at_mut(chunk_len);
+                        let (dx0, dx1) = halves(delta_in, half * in_len, parts);
+                        (dc0, dc1, dx0, dx1)
+                    } else {
+                        (&mut [][..], &mut [][..], &mut [][..], &mut [][..])
+                    };
+                    // The patches again, a few samples at a time (cheaper than keeping
+                    // them all from the forward pass: they would not stay in cache).
+                    let conv =
+                        |x: &[f32], cols: &mut [f32], d: &[f32], g: &mut [f32], dc: &mut [f32], dx: &mut [f32]| {
+                            let chunks = x.chunks(chunk * in_len).zip(d.chunks(chunk * positions * out));
+                            for (k, (xc, dch)) in chunks.enumerate() {
+                                let samples = xc.len() / in_len;
+                                let rows = samples * positions;
+                                let cols = &mut cols[..rows * patch];
+                                geo.im2col(xc, cols);
+                                matmul_tn(g, cols, dch, (patch, rows, *out), k > 0);
+                                if wants_input {
+                                    let dc = &mut dc[..rows * patch];
+                                    matmul_nt(dc, dch, w, (rows, *out, patch), false);
+                                    let start = k * chunk * in_len;
+                                    geo.col2im(dc, &mut dx[start..start + samples * in_len]);
+                                }
+                            }
+                        };
+                    both(
+                        parts,
+                        || conv(x0, cols0, d0, g0, dc0, dx0),
+                        || conv(x1, cols1, d1, g1, dc1, dx1),
+                    );
+                    if parts == 2 {
+                        for (g, &h) in grad[weight.range()].iter_mut().zip(dw_half.iter()) {
+                            *g += h;
+                        }
+                    }
+                }
+                Layer::Linear {
+                    inputs,
+                    out,
+                    weight,
+                    bias,
+                    relu,
+                    sparse,
+                } => {
+                    if *relu {
+                        relu_backward(delta, &buf.out);
+                    }
+                    sum_rows(delta, &mut grad[bias.range()]);
+                    if *sparse {
+                        sparse_backward(buf, delta, *out, &mut grad[weight.range()]);
+                        continue;
+                    }
+                    let x = input;
+                    let w = &self.params[weight.range()];
+                    fit(dw_half, weight.len);
+                    fit(delta_in, batch * inputs);
+                    let (x0, x1) = x.split_at(half * inputs);
+                    let (d0, d1) = delta.split_at(half * out);
+                    let (g0, g1) = (&mut grad[weight.range()], &mut dw_half[..]);
+                    let (dx0, dx1) = halves(delta_in, half * inputs, parts);
+                    let linear = |x: &[f32], d: &[f32], g: &mut [f32], dx: &mut [f32]| {
+                        let r = d.len() / out;
+                        matmul_tn(g, x, d, (*inputs, r, *out), false);
+                        matmul_nt(dx, d, w, (r, *out, *inputs), false);
+                    };
+                    both(parts, || linear(x0, d0, g0, dx0), || linear(x1, d1, g1, dx1));
+                    if parts == 2 {
+                        for (g, &h) in grad[weight.range()].iter_mut().zip(dw_half.iter()) {
+                            *g += h;
+                        }
+                    }
+                }
+            }
+            std::mem::swap(delta, delta_in);
+        }
     }
 }
 
-/// Batch normalisation over the rows of `y` (`[rows, channels]`).
-fn batch_norm(y: &Tensor, bn: &BatchNorm, mode: Mode) -> Result<Tensor> {
-    let (mean, var) = match mode {
-        Mode::Train => {
-            let mean = y.mean_keepdim(0)?;
-            let var = y.broadcast_sub(&mean)?.sqr()?.mean_keepdim(0)?;
-            // Running statistics: the unbiased variance, as PyTorch keeps it.
-            let rows = y.dim(0)? as f64;
-            let unbiased = if rows > 1.0 { rows / (rows - 1.0) } else { 1.0 };
-            let m = mean.detach().squeeze(0)?;
-            let v = (var.detach().squeeze(0)? * unbiased)?;
-            bn.running_mean
-                .set(&((bn.running_mean.as_tensor() * (1.0 - BN_MOMENTUM))? + (m * BN_MOMENTUM)?)?)?;
-            bn.running_var
-                .set(&((bn.running_var.as_tensor() * (1.0 - BN_MOMENTUM))? + (v * BN_MOMENTUM)?)?)?;
-            (mean, var)
+/// Batch normalisation on the batch's statistics, then ReLU: `pre` becomes `x_hat`.
+#[inline(always)]
+fn norm_train_any(params: &[f32], n: &Norm, buf: &mut LayerBuffers) {
+    let channels = n.gamma.len;
+    fit(&mut buf.mean, channels);
+    fit(&mut buf.inv_std, channels);
+    fit(&mut buf.var, channels);
+    let (sum, sq) = (&mut buf.mean, &mut buf.var);
+    sum.fill(0.0);
+    sq.fill(0.0);
+    for row in buf.pre.chunks_exact(channels) {
+        for ((s, q), &z) in sum.iter_mut().zip(sq.iter_mut()).zip(row) {
+            let z = f64::from(z);
+            *s += z;
+            *q += z * z;
         }
-        Mode::Eval => (
-            bn.running_mean.as_tensor().unsqueeze(0)?,
-            bn.running_var.as_tensor().unsqueeze(0)?,
-        ),
-    };
-    let x_hat = y.broadcast_sub(&mean)?.broadcast_div(&(var + BN_EPS)?.sqrt()?)?;
-    Ok(x_hat
-        .broadcast_mul(bn.gamma.as_tensor())?
-        .broadcast_add(bn.beta.as_tensor())?)
+    }
+    let rows = (buf.pre.len() / channels) as f64;
+    for c in 0..channels {
+        let mean = buf.mean[c] / rows;
+        let var = (buf.var[c] / rows - mean * mean).max(0.0);
+        buf.mean[c] = mean;
+        buf.var[c] = var;
+        buf.inv_std[c] = 1.0 / (var + BN_EPS).sqrt();
+    }
+    // x_hat = z * scale + shift, y = gamma * x_hat + beta, per channel in f32.
+    let gamma = &params[n.gamma.range()];
+    let beta = &params[n.beta.range()];
+    fit(&mut buf.coef, 2 * channels);
+    let (scale, shift) = buf.coef.split_at_mut(channels);
+    for c in 0..channels {
+        scale[c] = buf.inv_std[c] as f32;
+        shift[c] = (-buf.mean[c] * buf.inv_std[c]) as f32;
+    }
+    for (pre, out) in buf
+        .pre
+        .chunks_exact_mut(channels)
+        .zip(buf.out.chunks_exact_mut(channels))
+    {
+        let per_channel = scale.iter().zip(shift.iter()).zip(gamma.iter().zip(beta));
+        for ((z, o), ((&sc, &sh), (&g, &b))) in pre.iter_mut().zip(out.iter_mut()).zip(per_channel) {
+            let x_hat = *z * sc + sh;
+            *z = x_hat;
+            *o = (g * x_hat + b).max(0.0);
+        }
+    }
 }
 
-/// A batch of float inputs as a tensor.
-pub fn inputs_tensor(values: Vec<f32>, width: usize) -> Result<Tensor> {
-    let batch = values.len() / width;
-    Ok(Tensor::from_vec(values, (batch, width), &Device::Cpu)?)
+/// Batch normalisation on the running statistics, then ReLU.
+#[inline(always)]
+fn norm_eval_any(params: &[f32], buffers: &[f32], n: &Norm, buf: &mut LayerBuffers) {
+    let channels = n.gamma.len;
+    let gamma = &params[n.gamma.range()];
+    let beta = &params[n.beta.range()];
+    let mean = &buffers[n.running_mean.range()];
+    let var = &buffers[n.running_var.range()];
+    // y = z * scale + shift per channel.
+    fit(&mut buf.coef, 2 * channels);
+    let (scale, shift) = buf.coef.split_at_mut(channels);
+    for c in 0..channels {
+        scale[c] = gamma[c] / (f64::from(var[c]) + BN_EPS).sqrt() as f32;
+        shift[c] = beta[c] - mean[c] * scale[c];
+    }
+    for (pre, out) in buf.pre.chunks_exact(channels).zip(buf.out.chunks_exact_mut(channels)) {
+        for ((&z, o), (&sc, &sh)) in pre.iter().zip(out.iter_mut()).zip(scale.iter().zip(shift.iter())) {
+            *o = (z * sc + sh).max(0.0);
+        }
+    }
 }
 
-/// The element type of every tensor here.
-pub const DTYPE: DType = DType::F32;
+/// Batch normalisation's and ReLU's backward pass, in place over `delta` (gradient of
+/// the output, then of the convolution's output), with the scale's and shift's gradients.
+#[inline(always)]
+fn norm_backward_any(
+    params: &[f32],
+    n: &Norm,
+    buf: &LayerBuffers,
+    delta: &mut [f32],
+    sums: &mut Vec<f64>,
+    coef: &mut Vec<f32>,
+    grad: &mut [f32],
+) {
+    let channels = n.gamma.len;
+    fit(sums, 2 * channels);
+    sums.fill(0.0);
+    let (d_beta, d_gamma) = sums.split_at_mut(channels);
+    let rows = buf.out.chunks_exact(channels).zip(buf.pre.chunks_exact(channels));
+    for (d, (out, x_hat)) in delta.chunks_exact_mut(channels).zip(rows) {
+        let sums = d_beta.iter_mut().zip(d_gamma.iter_mut());
+        for (((d, &o), &x), (sb, sg)) in d.iter_mut().zip(out).zip(x_hat).zip(sums) {
+            if o <= 0.0 {
+                *d = 0.0;
+            }
+            *sb += f64::from(*d);
+            *sg += f64::from(*d) * f64::from(x);
+        }
+    }
+    for c in 0..channels {
+        grad[n.beta.offset + c] = d_beta[c] as f32;
+        grad[n.gamma.offset + c] = d_gamma[c] as f32;
+    }
+    // dz = gamma / std * (dy - mean(dy) - x_hat * mean(dy * x_hat)) = k * dy + a + b * x_hat.
+    let count = (buf.pre.len() / channels) as f64;
+    let gamma = &params[n.gamma.range()];
+    fit(coef, 3 * channels);
+    let (k, rest) = coef.split_at_mut(channels);
+    let (a, b) = rest.split_at_mut(channels);
+    for c in 0..channels {
+        let kc = f64::from(gamma[c]) * buf.inv_std[c];
+        k[c] = kc as f32;
+        a[c] = (-kc * d_beta[c] / count) as f32;
+        b[c] = (-kc * d_gamma[c] / count) as f32;
+    }
+    for (d, x_hat) in delta.chunks_exact_mut(channels).zip(buf.pre.chunks_exact(channels)) {
+        let per_channel = k.iter().zip(a.iter()).zip(b.iter());
+        for ((d, &x), ((&k, &a), &b)) in d.iter_mut().zip(x_hat).zip(per_channel) {
+            *d = k * *d + a + b * x;
+        }
+    }
+}
+
+kernels::avx2_dispatch! {
+    fn fill_rows => fill_rows_any(rows: &mut [f32], bias: &[f32])
+}
+
+kernels::avx2_dispatch! {
+    fn sum_rows => sum_rows_any(rows: &[f32], sum: &mut [f32])
+}
+
+kernels::avx2_dispatch! {
+    fn relu_backward => relu_backward_any(delta: &mut [f32], out: &[f32])
+}
+
+kernels::avx2_dispatch! {
+    fn sparse_forward => sparse_forward_any(x: &[f32], inputs: usize, w: &[f32], b: &[f32], buf: &mut LayerBuffers)
+}
+
+kernels::avx2_dispatch! {
+    fn sparse_backward => sparse_backward_any(buf: &LayerBuffers, delta: &[f32], out: usize, grad: &mut [f32])
+}
+
+kernels::avx2_dispatch! {
+    fn norm_train => norm_train_any(params: &[f32], n: &Norm, buf: &mut LayerBuffers)
+}
+
+kernels::avx2_dispatch! {
+    fn norm_eval => norm_eval_any(params: &[f32], buffers: &[f32], n: &Norm, buf: &mut LayerBuffers)
+}
+
+kernels::avx2_dispatch! {
+    fn norm_backward => norm_backward_any(
+        params: &[f32],
+        n: &Norm,
+        buf: &LayerBuffers,
+        delta: &mut [f32],
+        sums: &mut Vec<f64>,
+        coef: &mut Vec<f32>,
+        grad: &mut [f32],
+    )
+}
+
+kernels::avx2_dispatch! {
+    fn relu_in_place => relu_any(v: &mut [f32])
+}
+
+/// ReLU in place.
+#[inline(always)]
+fn relu_any(v: &mut [f32]) {
+    for v in v {
+        *v = v.max(0.0);
+    }
+}
+
+/// The first layer of a perceptron: for each sample, the bias plus `x_i` times weight row
+/// `i` for every non-zero input `i` (planes are 0/1 with about one value in sixteen set).
+#[inline(always)]
+fn sparse_forward_any(x: &[f32], inputs: usize, w: &[f32], b: &[f32], buf: &mut LayerBuffers) {
+    /// Outputs summed at a time: eight 256-bit registers that stay put while the weight
+    /// rows stream past (the same sums in the same order as one output at a time).
+    const BLOCK: usize = 64;
+    let out = b.len();
+    buf.nz.clear();
+    buf.nz_start.clear();
+    for (sample, y) in x.chunks_exact(inputs).zip(buf.out.chunks_exact_mut(out)) {
+        let start = buf.nz.len();
+        buf.nz_start.push(start);
+        let set = sample.iter().enumerate().filter(|(_, v)| **v != 0.0);
+        buf.nz.extend(set.map(|(i, &v)| (i as u32, v)));
+        let nz = &buf.nz[start..];
+        let blocks = out / BLOCK * BLOCK;
+        for k in (0..blocks).step_by(BLOCK) {
+            let mut acc: [f32; BLOCK] = b[k..k + BLOCK].try_into().expect("a block");
+            for &(i, v) in nz {
+                let row: &[f32; BLOCK] = w[i as usize * out + k..][..BLOCK].try_into().expect("a block");
+                for (a, &w) in acc.iter_mut().zip(row) {
+                    *a += v * w;
+                }
+            }
+            y[k..k + BLOCK].copy_from_slice(&acc);
+        }
+        y[blocks..].copy_from_slice(&b[blocks..]);
+        for &(i, v) in nz {
+            let row = &w[i as usize * out + blocks..(i as usize + 1) * out];
+            for (y, &w) in y[blocks..].iter_mut().zip(row) {
+                *y += v * w;
+            }
+        }
+    }
+    buf.nz_start.push(buf.nz.len());
+}
+
+/// The sparse layer's weight gradient: `delta`'s row added, times `x_i`, to weight row `i`
+/// for each non-zero input, sample after sample.
+#[inline(always)]
+fn sparse_backward_any(buf: &LayerBuffers, delta: &[f32], out: usize, grad: &mut [f32]) {
+    grad.fill(0.0);
+    for (b, d) in delta.chunks_exact(out).enumerate() {
+        for &(i, v) in &buf.nz[buf.nz_start[b]..buf.nz_start[b + 1]] {
+            let i = i as usize;
+            for (g, &d) in grad[i * out..(i + 1) * out].iter_mut().zip(d) {
+                *g += v * d;
+            }
+        }
+    }
+}
 
 #[cfg(test)]
 mod tests {
@@ -510,16 +1111,12 @@ mod tests {
     #[test]
     fn the_paper_network_has_the_papers_layers() {
         let net = paper(true);
-        let shapes: Vec<(String, Vec<usize>)> = net
-            .params()
-            .iter()
-            .map(|(n, v)| (n.clone(), v.dims().to_vec()))
-            .collect();
+        let shapes: Vec<(String, Vec<usize>)> = net.tensors().map(|t| (t.name.to_string(), t.shape.to_vec())).collect();
         assert_eq!(shapes[0], ("conv1.weight".into(), vec![8 * 8 * 3, 16]));
         assert_eq!(shapes[4], ("conv2.weight".into(), vec![4 * 4 * 16, 32]));
         assert_eq!(shapes[8], ("linear1.weight".into(), vec![11 * 11 * 32, 256]));
         assert_eq!(shapes[10], ("linear2.weight".into(), vec![256, 8]));
-        assert_eq!(net.buffers().len(), 4);
+        assert_eq!(shapes.iter().filter(|(n, _)| n.contains("running")).count(), 4);
         assert!(
             (1_000_000..1_010_000).contains(&net.parameter_count()),
             "{}",
@@ -534,20 +1131,12 @@ mod tests {
         let (rows, cols, ch, k, s) = (5, 5, 2, 3, 2);
         let x: Vec<f32> = (0..rows * cols * ch).map(|i| (i as f32 * 0.37).sin()).collect();
         let w: Vec<f32> = (0..k * k * ch).map(|i| (i as f32 * 0.11).cos()).collect();
-        let (conv, out_r, out_c) = conv_index(rows, cols, ch, k, s).unwrap();
-        let xt = Tensor::from_vec(x.clone(), (1, rows * cols * ch), &Device::Cpu).unwrap();
-        let wt = Tensor::from_vec(w.clone(), (k * k * ch, 1), &Device::Cpu).unwrap();
-        let got = xt
-            .index_select(&conv.index, 1)
-            .unwrap()
-            .reshape((conv.positions, conv.patch))
-            .unwrap()
-            .matmul(&wt)
-            .unwrap()
-            .flatten_all()
-            .unwrap()
-            .to_vec1::<f32>()
-            .unwrap();
+        let geo = ConvGeometry::new(rows, cols, ch, k, s).unwrap();
+        let (out_r, out_c) = (geo.out_rows, geo.out_cols);
+        let mut patches = vec![0.0; geo.positions() * geo.patch()];
+        geo.im2col(&x, &mut patches);
+        let mut got = vec![0.0; geo.positions()];
+        matmul(&mut got, &patches, &w, (geo.positions(), geo.patch(), 1), false);
         for or in 0..out_r {
             for oc in 0..out_c {
                 let mut sum = 0.0;
@@ -565,18 +1154,27 @@ mod tests {
 
     #[test]
     fn batch_norm_trains_on_batch_statistics_and_plays_on_running_ones() {
-        let net = paper(true);
-        let x = Tensor::rand(0f32, 1.0, (4, net.input().len()), &Device::Cpu).unwrap();
-        let before = net.buffers()[0].1.as_tensor().to_vec1::<f32>().unwrap();
-        let eval_a = net.forward(&x, Mode::Eval).unwrap().to_vec2::<f32>().unwrap();
-        net.forward(&x, Mode::Train).unwrap();
-        let after = net.buffers()[0].1.as_tensor().to_vec1::<f32>().unwrap();
-        assert_ne!(before, after, "a training pass moves the running mean");
-        let eval_b = net.forward(&x, Mode::Eval).unwrap().to_vec2::<f32>().unwrap();
+        let mut net = paper(true);
+        let mut rng = sim::seeding::rng(9);
+        let x: Vec<f32> = (0..4 * net.input().len()).map(|_| rng.random_range(0.0..1.0)).collect();
+        let mut ws = Workspace::new();
+        let before = net.buffers().to_vec();
+        let eval_a = net.forward(&x, &mut ws).to_vec();
+        net.forward_train(&x, &mut ws);
+        let after = net.buffers().to_vec();
+        assert_ne!(before[..16], after[..16], "a training pass moves the running mean");
+        let eval_b = net.forward(&x, &mut ws).to_vec();
         assert_ne!(eval_a, eval_b);
         // A copy carries the running statistics.
         let copy = net.try_clone().unwrap();
-        assert_eq!(copy.forward(&x, Mode::Eval).unwrap().to_vec2::<f32>().unwrap(), eval_b);
+        assert_eq!(copy.forward(&x, &mut ws), eval_b);
+        // One input at a time gives the same values as the batch.
+        let single = net.q_values(x[..net.input().len()].to_vec()).unwrap();
+        let close = single[0]
+            .iter()
+            .zip(&eval_b)
+            .all(|(a, b)| (a - b).abs() <= 1e-5 * (1.0 + b.abs()));
+        assert!(close, "{:?} {:?}", single[0], &eval_b[..net.actions()]);
     }
 
     #[test]

@@ -22,10 +22,7 @@ fn tiny(seed: u64) -> DqnConfig {
 }
 
 fn weights(dqn: &Dqn) -> Vec<Vec<f32>> {
-    dqn.net()
-        .tensors()
-        .map(|(_, v)| v.as_tensor().flatten_all().unwrap().to_vec1::<f32>().unwrap())
-        .collect()
+    dqn.net().tensors().map(|t| t.values.to_vec()).collect()
 }
 
 /// Failures and mean steps (a failure counted as the horizon) over 40 seeded games of each
