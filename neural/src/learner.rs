@@ -101,7 +101,7 @@ impl Encoder {
         let width = spec.len();
         out.resize(count * width, 0.0);
         let scale = spec.scale();
-        if spec.kind != ObsKind::Pixels {
+        if spec.kind != ObsKind::PaperScreen {
             self.bytes.clear();
             for i in 0..count {
                 spec.encode(observation(i), &mut self.bytes);
