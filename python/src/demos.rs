@@ -176,7 +176,16 @@ pub fn demonstrations<'py>(
     profile: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let kind = config::obs_kind(obs)?;
-    let config = env_config(blocks, goal, grid, reward, backend, horizon, profile, config::PlayRules::default())?;
+    let config = env_config(
+        blocks,
+        goal,
+        grid,
+        reward,
+        backend,
+        horizon,
+        profile,
+        config::PlayRules::default(),
+    )?;
     let mut policy: Box<dyn Policy + Send> = match expert {
         "exact" => Box::new(ExactPolicy::new(config.grid)),
         "oracle" => Box::new(OraclePolicy::new(config.grid)),

@@ -85,7 +85,9 @@ impl NativeModel {
         let state: State = state_from(&cells, held)?;
         let goal = Goal::from_indices(&goal).or_value_error()?;
         let world = self.model.world();
-        self.model.check_world(world.grid, state.block_count()).or_value_error()?;
+        self.model
+            .check_world(world.grid, state.block_count())
+            .or_value_error()?;
         if goal.block_count() != state.block_count() {
             return Err(value_error(format!(
                 "the goal has {} blocks and the state {}",

@@ -190,7 +190,10 @@ pub fn train<'py>(
         d.set_item("eval_failures", summary.failures)?;
         d.set_item("eval_mean_steps", summary.mean_steps)?;
         d.set_item("eval_median_steps", summary.median_steps)?;
-        d.set_item("eval_mean_steps_failures_as_horizon", e.run.mean_steps_failures_as_horizon)?;
+        d.set_item(
+            "eval_mean_steps_failures_as_horizon",
+            e.run.mean_steps_failures_as_horizon,
+        )?;
         d.set_item("eval_mean_optimal_steps", o.mean_optimal_steps)?;
         d.set_item("eval_mean_ratio_to_optimum", o.mean_ratio_to_optimum)?;
     }

@@ -271,7 +271,16 @@ impl NativeVecEnv {
         if num_envs == 0 {
             return Err(value_error("a vector environment needs at least one environment"));
         }
-        let config = env_config(blocks, goal, grid, reward, backend, horizon, profile, config::PlayRules::default())?;
+        let config = env_config(
+            blocks,
+            goal,
+            grid,
+            reward,
+            backend,
+            horizon,
+            profile,
+            config::PlayRules::default(),
+        )?;
         let vec = guard(|| VecEnv::new(config, num_envs, threads).or_value_error())?.with_autoreset(mode);
         let n = blocks;
         let obs = match kind.shape(config.grid, n) {
