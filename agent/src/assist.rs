@@ -8,7 +8,7 @@
 //!
 //! - [`Oscillation::Actions`] (ours): the last six actions are one pair `a, b` (`a != b`)
 //!   three times in a row, `a, b, a, b, a, b`; the oracle chooses the next action.
-//! - [`Oscillation::Distances`] (the authors' code, ORIGINAL.md "Oracle"; their
+//! - [`Oscillation::Distances`] (the authors' code, docs/world.md section 10 "Oracle"; their
 //!   `RL.py:246-252`): the first entry of the authors' state tuple
 //!   ([`sim::CodedState::distance`]: the held pair's `d`, or every pair's `d` with nothing
 //!   held) is recorded for every state a game meets, the current one included; when the

@@ -25,7 +25,7 @@
 //!
 //! # As the authors coded it (the `original` profile)
 //!
-//! In the authors' code (ORIGINAL.md, "Demonstrations"; their
+//! In the authors' code (docs/world.md section 10, "Demonstrations"; their
 //! `Demonstrations/Demonstrations.py:102-287`) the person's action simply replaces the
 //! agent's and gets the ordinary update, the same as the agent's own steps: no margin
 //! ([`CorrectionRule::as_coded`]), and the update of the `paper-code` schedule at the
@@ -65,7 +65,7 @@ use crate::rollout::policy_rng;
 pub use crate::rule::{CorrectionRule, DEFAULT_MARGIN, Experience};
 use crate::schedule::Schedule;
 
-/// The goals the authors' people demonstrated on (ORIGINAL.md, "Demonstrations"); the
+/// The goals the authors' people demonstrated on (docs/world.md section 10, "Demonstrations"); the
 /// other two, `0,2,1` and `2,0,1`, were never demonstrated.
 pub const DEMONSTRATED_GOALS: [&str; 4] = ["0,1,2", "2,1,0", "1,2,0", "1,0,2"];
 

@@ -4,7 +4,7 @@
 //! The file is the `files` crate's container (a safetensors file whose `__metadata__`
 //! holds `format` = `blockstack-q-agent`, `version` = `2`, a CRC-32 and this module's JSON
 //! metadata); its extension is `.safetensors`. numpy, Python's `safetensors` package and
-//! candle read it without blockstack (the README shows how).
+//! candle read it without blockstack (docs/formats.md shows how).
 //!
 //! # Tensors
 //!

@@ -3,7 +3,7 @@
 //! `sim` holds a profile's world (action protocol, start rule, reward of the world,
 //! training termination); this module holds the rest, keyed by the same enum:
 //!
-//! | part | `spec` (default) | `original` (ORIGINAL.md) |
+//! | part | `spec` (default) | `original` (docs/world.md section 10) |
 //! |---|---|---|
 //! | representation | `chasing` | `chasing-code` |
 //! | the learner's reward | `paper` (our reading of the prose) | `paper-code` |

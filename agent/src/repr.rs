@@ -1,4 +1,4 @@
-//! State representations for the tabular Q-learner (SPEC section 7).
+//! State representations for the tabular Q-learner (docs/world.md section 7).
 //!
 //! A representation turns a state and a goal into a table key in `0..key_count()`, and
 //! maps the world's actions to table columns and back. The paper's three ([`Raw`],
@@ -293,7 +293,7 @@ impl Representation for Pairwise {
     }
 }
 
-/// Representation 3 of the paper, the one its tables use (SPEC sections 6 and 7): the held
+/// Representation 3 of the paper, the one its tables use (docs/world.md sections 6 and 7): the held
 /// block's Manhattan distance to the cell it chases, the total distance along the goal
 /// chain, the direction of the chased cell (up/down/level, left/right/level, and whether it
 /// is occupied by another block or lies outside the grid), the held block, and the block it
@@ -376,7 +376,7 @@ impl Representation for Chasing {
     }
 }
 
-/// Representation 3 as the authors coded it (ORIGINAL.md, "State representation 3 as
+/// Representation 3 as the authors coded it (docs/world.md section 10, "State representation 3 as
 /// coded"): the key is the authors' state tuple [`CodedState`], `(d, D, (h, v, '-'), s,
 /// (lower, upper))`, and nothing else, so two states with equal tuples share a row and no
 /// goal is in the key. With nothing held the tuple is `((d of each goal pair), 0, ('-',

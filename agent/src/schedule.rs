@@ -6,7 +6,7 @@
 //!   `goals[k % goals.len()]` for at most the config's horizon, alpha stays as set, and a
 //!   step updates `Q(s,a) <- (1 - alpha) Q(s,a) + alpha (r + gamma max_a' Q(s',a'))`, the max
 //!   over every column of `s'` (the initial values count), 0 when the step reached the goal.
-//! - [`Schedule::PaperCode`]: the authors' learner as coded (ORIGINAL.md, "The learner";
+//! - [`Schedule::PaperCode`]: the authors' learner as coded (docs/world.md section 10, "The learner";
 //!   their `RL.py:192-299`, `q_learning_real`):
 //!   - a game is up to [`PAPER_GAME_STEPS`] steps long ([`PAPER_GAME_STEPS_TWO_BLOCKS`] with
 //!     two blocks), on a goal drawn uniformly from the training goals by the game's own

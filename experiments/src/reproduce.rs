@@ -1,4 +1,4 @@
-//! The reproduction of the paper (SPEC section 9): experiments E1-E8, each beside the
+//! The reproduction of the paper (docs/world.md section 9): experiments E1-E8, each beside the
 //! paper's figures, with their statistical tests, pictures, a report and machine-readable
 //! results. `blockstack reproduce` is the command over it.
 //!
@@ -19,7 +19,7 @@
 //! # How the experiments are run
 //!
 //! - **Two worlds.** The paper's figures were measured in the world its authors coded
-//!   (ORIGINAL.md), not the one SPEC.md describes. E1-E6 run in both: under the `original`
+//!   (docs/world.md section 10), not the one docs/world.md describes. E1-E6 run in both: under the `original`
 //!   profile (the action protocol, start rule, reward, representation, schedule, oracle and
 //!   correction rule of the authors' code, from `sim::Profile` and the agent crate's
 //!   presets, [`TrainConfig::for_profile`]) and in the SPEC world; every row of a table puts

@@ -1,5 +1,5 @@
 //! The paper's oracle as its authors coded it: a greedy walker towards a stack laid around
-//! the blocks' centroid (ORIGINAL.md, "Oracle"; the authors' `State.py:25-50`
+//! the blocks' centroid (docs/world.md section 10, "Oracle"; the authors' `State.py:25-50`
 //! `compute_goal_positions`, `Oracle.py:24-85` `get_oracle_best_action`, and
 //! `RL.py:422-430`, which picks a random block when nothing is held).
 //!
@@ -39,7 +39,7 @@
 //! its target. It lives in the walker from call to call; [`CentroidWalker::begin_episode`]
 //! sets it horizontal again (the authors built a fresh trainer, `order = True`, per game).
 //!
-//! Rule 4 is narrower than ORIGINAL.md's summary ("else a random free move that does not
+//! Rule 4 is narrower than docs/world.md section 10's summary ("else a random free move that does not
 //! enter another block's target cell"): in the code the random move is taken only by a
 //! block standing on another block's target; any other block with no good move drops.
 //!

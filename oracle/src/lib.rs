@@ -1,4 +1,4 @@
-//! Planners for the blockstack world (SPEC section 8).
+//! Planners for the blockstack world (docs/world.md section 8).
 //!
 //! - [`Oracle`]: the paper's analytical oracle made sound. It places the stack, routes the
 //!   blocks one at a time with A* around the others, and moves blockers out of the way;

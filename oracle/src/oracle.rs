@@ -33,7 +33,7 @@
 //! one whose bound is no shorter than the best plan so far is skipped, so usually one or
 //! two rollouts are made.
 //!
-//! SPEC section 8 places the stack at the cell nearest the centroid. That cell is not
+//! docs/world.md section 8 places the stack at the cell nearest the centroid. That cell is not
 //! where a shortest plan builds in general: it ignores that a block left where it stands
 //! needs no pick, and that routes bend around blocks. So the centroid only breaks ties
 //! here, and plan length decides (`cargo run --release -p oracle --example

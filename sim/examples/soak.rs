@@ -1,5 +1,5 @@
 //! Soak: a long run of random legal actions in the physics world, every step checked against
-//! the occupancy-grid model (SPEC section 4, invariant 2), and the steps per second.
+//! the occupancy-grid model (docs/world.md section 4, invariant 2), and the steps per second.
 //!
 //! `cargo run --release -p sim --example soak [steps] [seed]` (default 10^8 steps, seed 1)
 //!

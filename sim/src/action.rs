@@ -1,4 +1,4 @@
-//! The actions and their indices (SPEC section 2).
+//! The actions and their indices (docs/world.md section 2).
 
 use std::fmt;
 

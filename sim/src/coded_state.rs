@@ -1,8 +1,8 @@
 //! The authors' state tuple: the paper's representation 3 as their code computes it.
 //!
-//! ORIGINAL.md, "State representation 3 as coded"; the authors' `BlockWorld_t.py:279-357`
+//! docs/world.md section 10, "State representation 3 as coded"; the authors' `BlockWorld_t.py:279-357`
 //! (`get_state_as_tuple_pramodith2` and the next-state code after it). The paper's prose
-//! describes the chasing representation one way (our `chasing`, SPEC section 7); their code
+//! describes the chasing representation one way (our `chasing`, docs/world.md section 7); their code
 //! keys its Q-table on a different tuple, and the reward it trained with
 //! ([`PaperCode`](crate::reward::PaperCode)) compares that tuple before and after every step.
 //! [`CodedState`] is that tuple as a typed value:
@@ -183,7 +183,7 @@ impl<'de> Deserialize<'de> for PairDistances {
 
 /// The first entry of the tuple: `d` of the held block's pair, or, with nothing held,
 /// `d` of every goal pair. The paper's oracle reads the last six of these to detect
-/// oscillation (ORIGINAL.md, "Oracle").
+/// oscillation (docs/world.md section 10, "Oracle").
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Distance {

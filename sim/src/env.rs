@@ -436,7 +436,7 @@ impl Env {
         self.legal[usize::from(held.is_some())]
     }
 
-    /// Takes the action with index `index` (SPEC section 2's table); an error for an index
+    /// Takes the action with index `index` (docs/world.md section 2's table); an error for an index
     /// out of range.
     pub fn step_index(&mut self, index: usize) -> Result<Step> {
         self.step(Action::from_index(index, self.config.blocks)?)

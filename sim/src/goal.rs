@@ -1,5 +1,5 @@
 //! Goals: the order of the stack, bottom to top, and what it asks of every block
-//! (SPEC sections 3 and 6).
+//! (docs/world.md sections 3 and 6).
 
 use std::fmt;
 
@@ -154,7 +154,7 @@ impl Goal {
         Ok(out)
     }
 
-    /// Whether the goal can be reached from `state` on `grid` by the rules (SPEC section 2).
+    /// Whether the goal can be reached from `state` on `grid` by the rules (docs/world.md section 2).
     ///
     /// On a grid at least two cells wide it always can (the `oracle` crate's docs give the
     /// argument, and its tests check it against a search of every state on small grids).
@@ -217,7 +217,7 @@ impl Goal {
         self.pairs().all(|(a, b)| on_top(state.cell(a), state.cell(b)))
     }
 
-    /// The block `block` chases (SPEC section 6): the one above it in the goal, or, for the
+    /// The block `block` chases (docs/world.md section 6): the one above it in the goal, or, for the
     /// top block, the one below it.
     pub fn chased_block(&self, block: BlockId) -> BlockId {
         let p = self.place_of(block);
@@ -228,7 +228,7 @@ impl Goal {
         }
     }
 
-    /// The cell `block` chases (SPEC section 6): directly below the block above it in the
+    /// The cell `block` chases (docs/world.md section 6): directly below the block above it in the
     /// goal, or, for the top block, directly above the block below it. `None` when that cell
     /// is outside the grid.
     pub fn chased_cell(&self, block: BlockId, state: &State, grid: Grid) -> Option<Cell> {

@@ -2,7 +2,7 @@
 //! the goal's order.
 //!
 //! - [`Grid`], [`Cell`], [`BlockId`], [`Action`], [`Goal`], [`State`]: the vocabulary.
-//! - [`World`]: the rules (SPEC section 2), written once in [`World::act`], over two
+//! - [`World`]: the rules (docs/world.md section 2), written once in [`World::act`], over two
 //!   backends: [`GridWorld`], a pure occupancy model that planners search over, and
 //!   [`PhysicsWorld`], rapier2d rigid bodies moved by a controller that asks rapier's
 //!   collision detection whether each move is free.
@@ -14,8 +14,8 @@
 //!
 //! # Two worlds: `spec` and `original`
 //!
-//! SPEC.md is our world. The paper's experiments ran in the world its authors coded
-//! (`../shared/ORIGINAL.md`, with file:line citations of their repository), which differs
+//! Our world is the one docs/world.md sections 1-9 describe. The paper's experiments ran in the world its authors coded
+//! (docs/world.md section 10, with file:line citations of their repository), which differs
 //! in rules that an [`EnvConfig`] can switch one by one, or all at once with a [`Profile`]
 //! ([`EnvConfig::for_profile`]):
 //!

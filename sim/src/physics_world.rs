@@ -1,5 +1,5 @@
 //! The physics backend: every block a rapier2d rigid body, moved by a discrete controller
-//! that asks rapier's collision detection whether each move is free (SPEC section 4).
+//! that asks rapier's collision detection whether each move is free (docs/world.md section 4).
 //!
 //! # How a move is decided
 //!

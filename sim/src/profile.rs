@@ -5,7 +5,7 @@
 //! learner-level parts (representation, training schedule, oracle) are keyed by the same
 //! enum in the crates that own them.
 //!
-//! | part | `spec` (default) | `original` (ORIGINAL.md) |
+//! | part | `spec` (default) | `original` (docs/world.md section 10) |
 //! |---|---|---|
 //! | action protocol | `free` | `paper` |
 //! | start rule | `uniform` | `paper` |
@@ -22,11 +22,11 @@ use crate::reward::{PaperCode, RewardModel};
 use crate::start::StartRule;
 use crate::termination::Termination;
 
-/// Which world: ours (SPEC.md) or the authors' code (ORIGINAL.md).
+/// Which world: ours (docs/world.md) or the authors' code (docs/world.md section 10).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Profile {
-    /// Our world, the contract of SPEC.md.
+    /// Our world, the contract of docs/world.md.
     #[default]
     Spec,
     /// The paper's world as its authors coded it.

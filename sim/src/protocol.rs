@@ -1,8 +1,8 @@
 //! Action protocols: which actions are legal in a state, and the action mask that says so.
 //!
-//! SPEC section 2 lets an agent take any of the `5 + N` actions at any time: that is the
+//! docs/world.md section 2 lets an agent take any of the `5 + N` actions at any time: that is the
 //! [`ActionProtocol::Free`] protocol, the default. The paper's agents never chose that way.
-//! In the authors' code (ORIGINAL.md, "The action protocol"; their `RL.py:50-71`) an agent
+//! In the authors' code (docs/world.md section 10, "The action protocol"; their `RL.py:50-71`) an agent
 //! with nothing held may only pick a block, and an agent holding a block may only move it or
 //! drop it: that is [`ActionProtocol::Paper`], and every figure of the paper was measured
 //! under it.
@@ -27,10 +27,10 @@ const MOVES_AND_DROP: u32 = 0b1_1111;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum ActionProtocol {
-    /// SPEC section 2: all `5 + N` actions in every state.
+    /// docs/world.md section 2: all `5 + N` actions in every state.
     #[default]
     Free,
-    /// The authors' code (ORIGINAL.md, `RL.py:50-71`): with nothing held only `Pick(i)`;
+    /// The authors' code (docs/world.md section 10, `RL.py:50-71`): with nothing held only `Pick(i)`;
     /// holding a block only `Up`, `Down`, `Left`, `Right` and `Drop`.
     Paper,
 }
@@ -131,7 +131,7 @@ impl std::str::FromStr for ActionProtocol {
     }
 }
 
-/// A set of actions of a world with `N` blocks, one bit per action index (SPEC section 2's
+/// A set of actions of a world with `N` blocks, one bit per action index (docs/world.md section 2's
 /// table; at most `5 + MAX_BLOCKS` = 21 actions).
 ///
 /// `Copy` and a few bytes, so every step can return one. It knows how many actions the

@@ -1,4 +1,4 @@
-//! Reward models (SPEC section 5, and `paper-code`, the authors' code). Each is a named type whose fields are its constants;
+//! Reward models (docs/world.md section 5, and `paper-code`, the authors' code). Each is a named type whose fields are its constants;
 //! [`RewardModel`] picks one by name.
 
 use std::fmt;
@@ -86,7 +86,7 @@ impl Dense {
 
 /// `paper`: the paper's tuned Q-learning reward (section IV.6), summed per step:
 ///
-/// - the held block's distance to the cell it chases (SPEC section 6): `closer` when it
+/// - the held block's distance to the cell it chases (docs/world.md section 6): `closer` when it
 ///   fell, `farther` when it grew, 0 when equal. Counted only when the same block is held
 ///   before and after the step (a move); a pick or a drop changes no distance. A chased cell
 ///   outside the grid (below a block on the bottom row) still has a distance.
@@ -165,7 +165,7 @@ impl Paper {
     }
 }
 
-/// `paper-code`: the reward as the authors coded it (ORIGINAL.md, "Reward as coded"; their
+/// `paper-code`: the reward as the authors coded it (docs/world.md section 10, "Reward as coded"; their
 /// `BlockWorld_t.py:104-159`, `get_sparse_reward_for_state_pramodith` plus
 /// `get_reward_for_state_action_pramodith`), where `paper` is our reading of their prose.
 /// Per step, the sum of:

@@ -1,6 +1,6 @@
 //! Start rules: how [`Env::reset`](crate::Env::reset) places the blocks.
 //!
-//! - [`StartRule::Uniform`] (the default, SPEC section 3): every block on a distinct cell
+//! - [`StartRule::Uniform`] (the default, docs/world.md section 3): every block on a distinct cell
 //!   drawn uniformly from the whole grid; a start in which the goal already holds is drawn
 //!   again. On a grid one cell wide, where blocks cannot pass each other and the goal can
 //!   be reached only from starts where they stand in its order
@@ -8,7 +8,7 @@
 //!   order, bottom up: a start drawn uniformly among those from which the goal can be
 //!   reached, so that no episode is lost before it begins. (On wider grids every start can
 //!   reach every goal, and the draw is the SPEC's, seed for seed.)
-//! - [`StartRule::Paper`]: the authors' start (ORIGINAL.md, "World"; their
+//! - [`StartRule::Paper`]: the authors' start (docs/world.md section 10, "World"; their
 //!   `BlockWorld_t.py:381`, `25 + 50 * randint(6)` for a block's pixel column and then its
 //!   pixel row). Each block's column is uniform in `0..W-1` and its row uniform in `1..H`:
 //!   with our `y` upward, that is the 6 x 6 corner of the 7 x 7 grid that leaves out the
@@ -16,7 +16,7 @@
 //!   runs, and under [`Termination::Goal`](crate::Termination::Goal) it ends on its first
 //!   action if the goal still holds after it (as the authors' game ended on its first
 //!   step). The authors let two blocks share a cell; a world that cannot hold two blocks on
-//!   one cell draws a block whose cell is taken again (ORIGINAL.md: this changes no figure
+//!   one cell draws a block whose cell is taken again (docs/world.md section 10: this changes no figure
 //!   measurably). Their code then hands the drawn cells to the blocks in a random order;
 //!   the draws are independent and identically distributed, so that shuffle changes nothing
 //!   and is left out.
@@ -36,7 +36,7 @@ use crate::state::{MAX_BLOCKS, State};
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum StartRule {
-    /// SPEC section 3: distinct cells uniform over the grid, never a start meeting the goal.
+    /// docs/world.md section 3: distinct cells uniform over the grid, never a start meeting the goal.
     #[default]
     Uniform,
     /// The authors' code: column uniform in `0..W-1`, row uniform in `1..H`, a taken cell

@@ -1,8 +1,8 @@
 //! Termination rules: what ends an episode before its horizon.
 //!
-//! SPEC section 3 ends an episode when the goal holds ([`Termination::Goal`], the default).
+//! docs/world.md section 3 ends an episode when the goal holds ([`Termination::Goal`], the default).
 //! The authors' *training* games did not end at the goal: a training game ended when a
-//! step's reward exceeded 70 (ORIGINAL.md, "Reward as coded"; with the `paper-code` reward
+//! step's reward exceeded 70 (docs/world.md section 10, "Reward as coded"; with the `paper-code` reward
 //! that is both pairs of a 3-block stack in place, and never happens with 2 blocks, whose
 //! training games run their full length). Their test games ended at the goal.
 //! [`Termination::RewardAbove`] is that training rule; [`Termination::paper_training`] gives
@@ -18,7 +18,7 @@ use crate::error::{Result, SimError};
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Termination {
-    /// SPEC section 3: the goal holds after the step. A start in which the goal already
+    /// docs/world.md section 3: the goal holds after the step. A start in which the goal already
     /// holds ends the episode at once, unless the start rule keeps such starts (then the
     /// first step ends it, if the goal still holds after it).
     #[default]
@@ -29,7 +29,7 @@ pub enum Termination {
 }
 
 impl Termination {
-    /// The threshold of the authors' training games (ORIGINAL.md, "Reward as coded").
+    /// The threshold of the authors' training games (docs/world.md section 10, "Reward as coded").
     pub const PAPER_TRAINING_THRESHOLD: f64 = 70.0;
 
     /// The authors' training rule: a step's reward above 70 ends the game.

@@ -6,7 +6,7 @@
 //! ```
 //!
 //! A step line holds the state *after* the action; `step` counts the actions taken in the
-//! episode, 1 for the first; `action` is the index of SPEC section 2's table; `held` is a
+//! episode, 1 for the first; `action` is the index of docs/world.md section 2's table; `held` is a
 //! block id or `null`. Other tools read this format: it is stable, and a change to it is a
 //! change of the format's version in this documentation.
 //!

@@ -1,4 +1,4 @@
-//! The rules of the world (SPEC section 2), in one place, over any backend.
+//! The rules of the world (docs/world.md section 2), in one place, over any backend.
 //!
 //! A backend ([`GridWorld`](crate::GridWorld), [`PhysicsWorld`](crate::PhysicsWorld)) only
 //! knows how to read its blocks back and how to decide and carry out a one-cell move of a
@@ -72,7 +72,7 @@ pub trait World {
     /// The whole logical state, read back from the backend.
     fn state(&self) -> State;
 
-    /// Carries out `action` by the rules of SPEC section 2; an error only for a pick of a
+    /// Carries out `action` by the rules of docs/world.md section 2; an error only for a pick of a
     /// block that does not exist.
     #[inline]
     fn act(&mut self, action: Action) -> Result<Effect> {

@@ -1,4 +1,4 @@
-//! The paper's world as its authors coded it (ORIGINAL.md): the action protocols and their
+//! The paper's world as its authors coded it (docs/world.md section 10): the action protocols and their
 //! masks, the paper start rule, the reward-above termination, and `paper-code` on
 //! hand-computed states, through the environment and on both backends.
 

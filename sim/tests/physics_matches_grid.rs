@@ -1,4 +1,4 @@
-//! SPEC section 4's invariants: the physics world and the occupancy model agree step for
+//! docs/world.md section 4's invariants: the physics world and the occupancy model agree step for
 //! step, and every body sits on its cell centre after every step.
 
 use proptest::prelude::*;

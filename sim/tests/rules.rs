@@ -1,4 +1,4 @@
-//! The rules of SPEC section 2 on hand-built states, for both backends.
+//! The rules of docs/world.md section 2 on hand-built states, for both backends.
 
 use sim::{Action, BlockId, Cell, Effect, Grid, GridWorld, PhysicsWorld, SimError, State, World};
 

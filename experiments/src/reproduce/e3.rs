@@ -282,7 +282,7 @@ mod tests {
 
     #[test]
     fn the_papers_counts_bound_its_ks_p_value() {
-        // ORIGINAL.md: 70 against 97 failures of 100 differ by at least 0.27, so p <= 0.0013.
+        // docs/world.md section 10: 70 against 97 failures of 100 differ by at least 0.27, so p <= 0.0013.
         let bound = paper_ks_bound().unwrap();
         assert!((bound.statistic - 0.27).abs() < 1e-12, "{}", bound.statistic);
         assert!(bound.p_value < 0.0014 && bound.p_value > 0.0005, "{}", bound.p_value);

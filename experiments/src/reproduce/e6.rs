@@ -61,7 +61,7 @@ struct World {
 
 /// Runs E6 in `world`.
 fn in_world(ctx: &Context, world: Profile) -> Result<World> {
-    // The authors' baselines learnt every goal and their people showed four (ORIGINAL.md,
+    // The authors' baselines learnt every goal and their people showed four (docs/world.md section 10,
     // "Demonstrations"); ours learn and are shown the same four.
     let (trained_on, shown) = match world {
         Profile::Original => (Goal::all(3)?, agent::correction::demonstrated_goals()),

@@ -9,7 +9,7 @@
 //! - E3's random agent "failed 97 times out of 1000" in a test of 100 games: we read 97 of
 //!   100 (its 984.4 mean steps then fits: 0.97 x 1000 + 0.03 x 480).
 //!
-//! One reading is ORIGINAL.md's: E2 gives neither failures nor a training length, and at
+//! One reading is docs/world.md section 10's: E2 gives neither failures nor a training length, and at
 //! test epsilon 0.01 a nearly greedy table is trapped in some games, so its 75.25 and 77.92
 //! read as means over the games that reached the goal ([`MeanOver::Successes`]).
 
@@ -21,7 +21,7 @@ use serde::Serialize;
 pub enum MeanOver {
     /// Every game, a failure counted as the horizon (module docs): every table's.
     FailuresAtHorizon,
-    /// The games that reached the goal (E2's, as ORIGINAL.md reads them).
+    /// The games that reached the goal (E2's, as docs/world.md section 10 reads them).
     Successes,
 }
 
