@@ -89,7 +89,7 @@ class StackVectorEnv(VectorEnv):
             raise ValueError(f"autoreset mode {autoreset_mode!r} is not supported: use next-step or same-step")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"cannot read render mode from {render_mode!r}: choose None or rgb_array")
-        num_envs = whole("num_envs", num_envs, 1)
+        num_envs = whole("num_envs", num_envs)
         blocks = whole("blocks", blocks)
         grid = _native.grid_size(grid)
         steps = whole("max_episode_steps", max_episode_steps, 0, U32_MAX)

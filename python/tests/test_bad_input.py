@@ -194,3 +194,25 @@ def test_sweep_configs_that_are_not_tables_are_one_line_errors(tmp_path, capsys)
         assert needle in err and err.count("\n") == 1 and "Traceback" not in err, (name, err)
     assert sweep.main([str(tmp_path / "g.json"), "--num-cpus", "0"]) == 2
     assert "--num-cpus" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        "blockstack.train(blocks=2, goals='0,1', games=10**9, backend='grid')",
+        "blockstack.demonstrations(10**6, blocks=2, backend='grid')",
+    ],
+)
+def test_ctrl_c_stops_a_long_native_call(call):
+    script = (
+        "import os, signal, threading, time, blockstack\n"
+        "threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGINT)).start()\n"
+        "start = time.monotonic()\n"
+        "try:\n"
+        f"    {call}\n"
+        "except KeyboardInterrupt:\n"
+        "    print('interrupted after', time.monotonic() - start)\n"
+    )
+    run = run_python(script)
+    assert run.returncode == 0, run.stderr
+    assert "interrupted" in run.stdout, run.stdout

@@ -17,7 +17,7 @@ import blockstack
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 FIXTURES = ROOT / "tests" / "fixtures"
-OBS = ("planes", "state", "pixels")
+OBS = ("planes", "state", "frame")
 
 
 def lines(name):
@@ -181,7 +181,7 @@ def test_no_bad_input_crashes_the_interpreter(tmp_path):
     script = (
         "import sys, blockstack\n"
         "for p in sys.argv[1:]:\n"
-        "    for obs in ('planes', 'state', 'pixels'):\n"
+        "    for obs in ('planes', 'state', 'frame'):\n"
         "        try:\n"
         "            blockstack.read_recording(p, obs=obs)\n"
         "        except ValueError:\n"
