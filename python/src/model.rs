@@ -113,6 +113,7 @@ impl NativeModel {
     /// on each goal (`goals` `:`-separated, default every goal), with `epsilon`, on the
     /// `backend`, games cut at `horizon`. The GIL is released.
     #[pyo3(signature = (episodes=500, seed=2, goals=None, epsilon=0.1, backend="physics", horizon=1000))]
+    #[allow(clippy::too_many_arguments)]
     fn evaluate(
         &self,
         py: Python<'_>,
