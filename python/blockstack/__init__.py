@@ -27,12 +27,13 @@ they report is raised as ``ValueError`` with their message.
 
 from gymnasium.envs.registration import register, registry
 
-from blockstack._native import REWARDS, episode_seed, train
+from blockstack._native import REWARDS, episode_seed
 from blockstack.demonstrations import demonstrations, read_recording
 from blockstack.env import StackEnv
 from blockstack.model import Model, load
 from blockstack import vector
 from blockstack.planning import solve
+from blockstack.training import train
 
 __all__ = [
     "REWARDS",

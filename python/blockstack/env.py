@@ -8,6 +8,7 @@ import gymnasium as gym
 import numpy as np
 
 from blockstack import _native
+from blockstack._checks import U32_MAX, optional_whole, whole
 from blockstack._goal import Goal, goal_text
 from blockstack.spaces import action_space, observation_space
 
@@ -21,6 +22,44 @@ def check_seed(seed: Any) -> Optional[int]:
     return int(seed)
 
 
+#: The keys ``reset(options=...)`` reads; any other is refused (a typo must not be ignored).
+RESET_OPTIONS = ("cells", "held", "goal")
+
+
+def check_action(action: Any, blocks: int) -> Any:
+    """``action`` unchanged, or a ``ValueError`` for an integer outside the action range
+    (the native side reads 64-bit integers only, and would call ``2**70`` "not an int")."""
+    if isinstance(action, (int, np.integer)) and not isinstance(action, bool):
+        if not 0 <= int(action) < 5 + blocks:
+            raise ValueError(
+                f"action {int(action)} is out of range: with {blocks} blocks the actions are 0..{5 + blocks}"
+            )
+    return action
+
+
+def reset_state(options: dict) -> Tuple[list, Optional[int], Goal]:
+    """The ``(cells, held, goal)`` of ``reset(options=...)``, checked: known keys only,
+    ``held`` and ``goal`` only with ``cells``, whole numbers in range."""
+    if not isinstance(options, dict):
+        raise ValueError(f"reset options are a dict with keys {', '.join(RESET_OPTIONS)}, not {options!r}")
+    unknown = sorted(str(k) for k in options if k not in RESET_OPTIONS)
+    if unknown:
+        raise ValueError(f"unknown reset option(s) {', '.join(unknown)}: the options are {', '.join(RESET_OPTIONS)}")
+    if "cells" not in options:
+        raise ValueError(
+            f"reset options {', '.join(sorted(options))} need \"cells\": a start state is every block's (x, y)"
+        )
+    cells = []
+    for i, cell in enumerate(options["cells"]):
+        try:
+            x, y = cell
+        except (TypeError, ValueError):
+            raise ValueError(f"cells[{i}] must be an (x, y) pair, not {cell!r}") from None
+        cells.append((whole(f"cells[{i}] x", x, 0, 255), whole(f"cells[{i}] y", y, 0, 255)))
+    held = optional_whole("held", options.get("held"), 0, 255)
+    return cells, held, goal_text(options.get("goal"))
+
+
 class StackEnv(gym.Env):
     """Blocks on a grid, picked, moved and dropped until they stand in the goal's order.
 
@@ -31,7 +70,7 @@ class StackEnv(gym.Env):
       each episode. ``planes`` does not carry the goal (``role-planes`` name blocks by
       their place in it, ``frame`` and ``paper-screen`` draw it), so with a drawn goal and
       ``planes`` use ``info["goal"]``.
-    - ``grid``: ``(width, height)``, default ``(7, 7)``.
+    - ``grid``: ``(width, height)`` or text such as ``"7x7"``, default ``(7, 7)``.
     - ``reward``: ``sparse`` (+10 at the goal), ``dense``, ``paper`` or ``step-cost``;
       ``None`` (the default) takes the profile's (``sparse`` in ``spec``).
     - ``backend``: ``physics`` (rapier2d) or ``grid`` (the occupancy model); same rules.
@@ -60,7 +99,11 @@ class StackEnv(gym.Env):
     from the Rust ``ActionMask``; all ones in the ``spec`` world), ``blocked`` (a held block's move was
     stopped), ``pairs_in_place`` (goal pairs standing), ``goal`` (int64, bottom to top).
     ``reset(options={"cells": [(x, y), ...], "held": i, "goal": "1,0,2"})`` starts from a
-    given state instead.
+    given state instead (``held`` and ``goal`` only with ``cells``; any other key, or a
+    start where the goal already holds, is a ``ValueError`` that changes nothing).
+
+    Not picklable or copyable (the Rust world and its generator are not Python objects):
+    make another with the same arguments and ``reset(options=...)`` it to ``state()``.
     """
 
     metadata = {"render_modes": ["rgb_array", "ansi"], "render_fps": 4}
@@ -82,32 +125,41 @@ class StackEnv(gym.Env):
     ):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"cannot read render mode from {render_mode!r}: choose None, rgb_array or ansi")
-        steps = max_episode_steps if horizon is None else horizon
-        self._native = _native.NativeEnv(
-            blocks, goal_text(goal), tuple(grid), reward, backend, steps, profile, obs, protocol, start
-        )
+        blocks = whole("blocks", blocks)
+        grid = _native.grid_size(grid)
+        steps = whole("max_episode_steps", max_episode_steps, 0, U32_MAX)
+        if horizon is not None:
+            steps = whole("horizon", horizon, 0, U32_MAX)
+        self._native = _native.NativeEnv(blocks, goal_text(goal), grid, reward, backend, steps, profile, obs, protocol, start)
         self.render_mode = render_mode
         self.obs_kind = obs
         self.action_space = action_space(blocks)
-        self.observation_space = observation_space(obs, blocks, tuple(grid))
+        self.observation_space = observation_space(obs, blocks, grid)
         self._mask = np.ones(self.action_space.n, dtype=np.int8)
 
     def reset(self, *, seed: Optional[int] = None, options: Optional[dict] = None):
         seed = check_seed(seed)
-        super().reset(seed=seed)
-        if options and "cells" in options:
-            obs, info = self._native.reset_to(
-                [tuple(c) for c in options["cells"]], options.get("held"), options.get("goal")
-            )
+        if options:
+            # Checked before anything changes: a refused reset leaves the episode as it was.
+            cells, held, goal = reset_state(options)
+            obs, info = self._native.reset_to(cells, held, goal)
+            super().reset(seed=seed)
         else:
+            super().reset(seed=seed)
             obs, info = self._native.reset(seed)
         self._mask = info["action_mask"]
         return obs, info
 
     def step(self, action):
-        obs, reward, terminated, truncated, info = self._native.step(action)
+        obs, reward, terminated, truncated, info = self._native.step(check_action(action, self._native.blocks))
         self._mask = info["action_mask"]
         return obs, reward, terminated, truncated, info
+
+    def __reduce__(self):
+        raise TypeError(
+            "a StackEnv cannot be pickled or copied (its Rust world and generator are not "
+            "Python objects): make another with the same arguments and reset(options=...) it to state()"
+        )
 
     def render(self):
         if self.render_mode == "rgb_array":

@@ -27,7 +27,8 @@ running cluster (``ray start --head`` on one machine, ``ray start --address ...`
 others), and every machine needs ``pip install blockstack[ray]``.
 
 The results are one table: printed, and written as CSV to ``--out`` (one row per run: the
-swept flags, then the training totals and evaluation figures).
+swept flags, then the training totals and evaluation figures). A run that fails is named
+on stderr and the exit status is 1; the finished runs are still printed and written.
 """
 
 from __future__ import annotations
@@ -41,40 +42,66 @@ import sys
 from typing import Any, Dict, List
 
 from blockstack import _native
+from blockstack.training import check_settings
+
+
+#: The most runs one sweep may have: combinations are counted before any is built.
+MAX_RUNS = 100_000
 
 
 def read_config(path: str) -> Dict[str, Dict[str, Any]]:
-    """The ``train`` and ``sweep`` tables of a TOML or JSON file, flag names with ``_``."""
+    """The ``train`` and ``sweep`` tables of a TOML or JSON file, flag names with ``_``.
+
+    Every way a file can be wrong is a ``ValueError`` (or ``OSError``) of one line naming
+    the file: syntax errors, a file or table that is not a table, a swept flag that is not
+    a non-empty list, more than :data:`MAX_RUNS` combinations.
+    """
     with open(path, "rb") as f:
         data = f.read()
-    if path.endswith(".json"):
-        config = json.loads(data)
-    else:
-        try:
-            import tomllib
-        except ImportError:  # Python < 3.11
+    try:
+        if path.endswith(".json"):
+            config = json.loads(data)
+        else:
             try:
-                import tomli as tomllib
-            except ImportError:
-                raise SystemExit(f"{path}: reading TOML needs Python >= 3.11 or `pip install tomli`; or write JSON")
-        config = tomllib.loads(data.decode())
+                import tomllib
+            except ImportError:  # Python < 3.11
+                try:
+                    import tomli as tomllib
+                except ImportError:
+                    raise SystemExit(f"{path}: reading TOML needs Python >= 3.11 or `pip install tomli`; or write JSON")
+            config = tomllib.loads(data.decode())
+    except (ValueError, UnicodeDecodeError) as e:  # JSONDecodeError and TOMLDecodeError are ValueErrors
+        raise ValueError(f"{path}: {str(e).splitlines()[0] if str(e) else type(e).__name__}") from None
+    if not isinstance(config, dict):
+        raise ValueError(f"{path}: a sweep config is a table with [train] and [sweep], not {type(config).__name__}")
     unknown = set(config) - {"train", "sweep"}
     if unknown:
         raise ValueError(f"{path}: unknown tables {sorted(unknown)}: use [train] and [sweep]")
     tables = {}
     for table in ("train", "sweep"):
-        tables[table] = {k.replace("-", "_"): v for k, v in config.get(table, {}).items()}
+        value = config.get(table, {})
+        if not isinstance(value, dict):
+            raise ValueError(f"{path}: {table} must be a table of flags, not {type(value).__name__}")
+        tables[table] = {str(k).replace("-", "_"): v for k, v in value.items()}
+    count = 1
     for flag, values in tables["sweep"].items():
         if not isinstance(values, list) or not values:
             raise ValueError(f"{path}: sweep.{flag} must be a non-empty list of values")
+        count *= len(values)
+    if count > MAX_RUNS:
+        raise ValueError(f"{path}: the sweep has {count:,} combinations, more than {MAX_RUNS:,}: sweep fewer values")
     return tables
 
 
 def runs(config: Dict[str, Dict[str, Any]]) -> List[Dict[str, Any]]:
-    """The flags of every run: each combination of the sweep's values over the shared flags."""
+    """The flags of every run: each combination of the sweep's values over the shared flags,
+    each checked as :func:`blockstack.train` checks its settings before training."""
     swept = config["sweep"]
     names = list(swept)
-    return [dict(config["train"], **dict(zip(names, values))) for values in itertools.product(*swept.values())]
+    return [
+        check_settings(dict(config["train"], **dict(zip(names, values))))
+        for values in itertools.product(*swept.values())
+    ]
 
 
 def _train(flags: Dict[str, Any]) -> Dict[str, Any]:
@@ -109,7 +136,10 @@ def main(argv=None) -> int:
     parser.add_argument("--num-cpus", type=int, help="CPUs of the local Ray (default: all)")
     parser.add_argument("--out", default="sweep-results.csv", help="the CSV table to write")
     args = parser.parse_args(argv)
+    # Everything that can be checked is checked here, before Ray starts.
     try:
+        if args.num_cpus is not None and args.num_cpus < 1:
+            raise ValueError(f"--num-cpus must be at least 1, not {args.num_cpus}")
         config = read_config(args.config)
         all_runs = runs(config)
         _native.check_output(args.out)  # before any run, not after all of them
@@ -125,31 +155,44 @@ def main(argv=None) -> int:
         ray.init(address=args.address, logging_level="ERROR")
     else:
         ray.init(num_cpus=args.num_cpus, include_dashboard=False, logging_level="ERROR")
+    swept = list(config["sweep"])
+    rows, failed = [], []
     try:
         task = ray.remote(num_cpus=1)(_train)
         print(f"{len(all_runs)} runs on {int(ray.cluster_resources().get('CPU', 0))} CPUs", flush=True)
-        try:
-            rows = ray.get([task.remote(flags) for flags in all_runs])
-        except ray.exceptions.RayTaskError as e:
-            print(f"error: a run failed: {e.cause if hasattr(e, 'cause') else e}", file=sys.stderr)
-            return 2
+        pending = [task.remote(flags) for flags in all_runs]
+        # One run's failure keeps every other run's result.
+        for flags, ref in zip(all_runs, pending):
+            try:
+                rows.append(ray.get(ref))
+            except ray.exceptions.RayTaskError as e:
+                failed.append((flags, e.cause if getattr(e, "cause", None) is not None else e))
     finally:
         ray.shutdown()
-    swept = list(config["sweep"])
-    columns = table(rows, swept)
-    write_csv(args.out, rows, columns)
-    # On screen, flags every run shares go on one line; the CSV keeps every column.
-    shared = [c for c in columns if c not in swept and c != "train_seconds" and len({_cell(r.get(c)) for r in rows}) == 1]
-    print("every run: " + ", ".join(f"{c}={_cell(rows[0].get(c))}" for c in shared))
-    shown = [c for c in columns if c not in shared]
-    out = io.StringIO()
-    w = csv.writer(out, delimiter="\t", lineterminator="\n")
-    w.writerow(shown)
-    for row in rows:
-        w.writerow([_cell(row.get(c)) for c in shown])
-    print(out.getvalue(), end="")
-    print(f"wrote {args.out}")
-    return 0
+    status = 0
+    if rows:
+        columns = table(rows, swept)
+        # On screen, flags every run shares go on one line; the CSV keeps every column.
+        shared = [c for c in columns if c not in swept and c != "train_seconds" and len({_cell(r.get(c)) for r in rows}) == 1]
+        print("every run: " + ", ".join(f"{c}={_cell(rows[0].get(c))}" for c in shared))
+        shown = [c for c in columns if c not in shared]
+        out = io.StringIO()
+        w = csv.writer(out, delimiter="\t", lineterminator="\n")
+        w.writerow(shown)
+        for row in rows:
+            w.writerow([_cell(row.get(c)) for c in shown])
+        print(out.getvalue(), end="", flush=True)
+        try:
+            write_csv(args.out, rows, columns)
+            print(f"wrote {args.out}")
+        except (OSError, ValueError) as e:
+            print(f"error: the table was not written: {e}", file=sys.stderr)
+            status = 1
+    for flags, error in failed:
+        which = ", ".join(f"{name}={_cell(flags.get(name))}" for name in swept) or "the only run"
+        print(f"error: run {which} failed: {str(error).strip().splitlines()[-1]}", file=sys.stderr)
+        status = 1
+    return status
 
 
 def _cell(value: Any) -> str:

@@ -11,6 +11,7 @@ either autoreset mode (the tests check it step for step).
 from __future__ import annotations
 
 import os
+import threading
 from typing import Optional, Sequence, Tuple, Union
 
 import numpy as np
@@ -18,6 +19,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from blockstack import _native
+from blockstack._checks import ENV_BYTES, U32_MAX, fits_in_memory, observation_bytes, whole
 from blockstack._goal import Goal, goal_text
 from blockstack.env import check_seed
 from blockstack.spaces import action_space, observation_space
@@ -27,6 +29,8 @@ from blockstack.spaces import action_space, observation_space
 PARALLEL_FROM_ENVS = 256
 
 _MODES = {AutoresetMode.NEXT_STEP: "next-step", AutoresetMode.SAME_STEP: "same-step"}
+#: The spellings taken for each mode: Gymnasium's values and the native side's names.
+_SPELLINGS = {spelling: mode for mode, name in _MODES.items() for spelling in (mode.value, name)}
 _INFO_KEYS = ("action_mask", "blocked", "pairs_in_place", "goal")
 
 
@@ -51,6 +55,11 @@ class StackVectorEnv(VectorEnv):
     - ``copy``: ``True`` (Gymnasium's default) returns copies; ``False`` returns the
       buffers themselves, overwritten by the next call (the fastest way to read them).
 
+    ``num_envs`` is refused with a ``ValueError`` when the buffers and environments would
+    need more than the machine's physical memory (about 8 KiB and an observation each).
+    ``grid`` is ``(width, height)`` or text such as ``"7x7"``. One instance may be used from
+    several threads: its calls take turns. It cannot be pickled or copied.
+
     ``reset(seed=s)`` resets environment ``i`` with ``s + i`` (a list gives one seed each),
     as ``SyncVectorEnv`` does; ``reset()`` continues every environment's generator.
     """
@@ -74,17 +83,29 @@ class StackVectorEnv(VectorEnv):
         autoreset_mode: Union[AutoresetMode, str] = AutoresetMode.NEXT_STEP,
         copy: bool = True,
     ):
-        mode = AutoresetMode(autoreset_mode)
-        if mode not in _MODES:
-            raise ValueError(f"autoreset mode {mode.value!r} is not supported: use next-step or same-step")
+        key = autoreset_mode.value if isinstance(autoreset_mode, AutoresetMode) else autoreset_mode
+        mode = _SPELLINGS.get(key) if isinstance(key, str) else None
+        if mode is None:
+            raise ValueError(f"autoreset mode {autoreset_mode!r} is not supported: use next-step or same-step")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"cannot read render mode from {render_mode!r}: choose None or rgb_array")
+        num_envs = whole("num_envs", num_envs)
+        blocks = whole("blocks", blocks)
+        grid = _native.grid_size(grid)
+        steps = whole("max_episode_steps", max_episode_steps, 0, U32_MAX)
+        if horizon is not None:
+            steps = whole("horizon", horizon, 0, U32_MAX)
         if threads is None:
             threads = 1 if num_envs < PARALLEL_FROM_ENVS else _cores()
-        steps = max_episode_steps if horizon is None else horizon
+        threads = whole("threads", threads, 0, 4096)
+        # Every buffer and environment, counted before any is made: an allocation that
+        # fails in Rust would abort the interpreter.
+        per_env = observation_bytes(obs, blocks, grid) + 8 * (blocks + 2) + (5 + blocks) + 3 + ENV_BYTES
+        fits_in_memory(f"num_envs={num_envs}", num_envs * per_env)
         self._native = _native.NativeVecEnv(
-            num_envs, blocks, goal_text(goal), tuple(grid), reward, backend, steps, profile, obs, threads, _MODES[mode]
+            num_envs, blocks, goal_text(goal), grid, reward, backend, steps, profile, obs, threads, _MODES[mode]
         )
+        self._lock = threading.Lock()
         self.metadata = dict(self.metadata, autoreset_mode=mode)
         self.autoreset_mode = mode
         self.num_envs = num_envs
@@ -92,7 +113,7 @@ class StackVectorEnv(VectorEnv):
         self.copy = copy
         self.render_mode = render_mode
         self.single_action_space = action_space(blocks)
-        self.single_observation_space = observation_space(obs, blocks, tuple(grid))
+        self.single_observation_space = observation_space(obs, blocks, grid)
         self.action_space = batch_space(self.single_action_space, num_envs)
         self.observation_space = batch_space(self.single_observation_space, num_envs)
         self._buffers = self._native.buffers()
@@ -142,23 +163,43 @@ class StackVectorEnv(VectorEnv):
                 raise ValueError(f"{len(seeds)} seeds given for {n} environments: give one per environment")
         if seed is not None:
             self._np_random_seed = seeds[0]
-        self._native.reset(seeds)
-        return self._out(self._buffers["obs"]), self._infos(())
+        # One call at a time writes the shared buffers; the results are read under the
+        # same turn, so two threads never see each other's half-written arrays.
+        with self._lock:
+            self._native.reset(seeds)
+            return self._out(self._buffers["obs"]), self._infos(())
 
     def step(self, actions):
-        ended = self._native.step(np.asarray(actions))
-        b = self._buffers
-        return (
-            self._out(b["obs"]),
-            b["rewards"].copy() if self.copy else b["rewards"],
-            b["terminations"].copy() if self.copy else b["terminations"],
-            b["truncations"].copy() if self.copy else b["truncations"],
-            self._infos(ended),
+        actions = np.asarray(actions)
+        if actions.dtype.kind in "iu" and actions.size:
+            count = self.single_action_space.n
+            # Checked here, in Python's integers: a uint64 beyond int64 would wrap natively.
+            for value in (actions.min(), actions.max()):
+                if not 0 <= int(value) < count:
+                    raise ValueError(
+                        f"action {int(value)} is out of range: with {count - 5} blocks the actions are 0..{count}"
+                    )
+        with self._lock:
+            ended = self._native.step(actions)
+            b = self._buffers
+            return (
+                self._out(b["obs"]),
+                b["rewards"].copy() if self.copy else b["rewards"],
+                b["terminations"].copy() if self.copy else b["terminations"],
+                b["truncations"].copy() if self.copy else b["truncations"],
+                self._infos(ended),
+            )
+
+    def __reduce__(self):
+        raise TypeError(
+            "a StackVectorEnv cannot be pickled or copied (its Rust worlds and generators are not "
+            "Python objects): make another with the same arguments"
         )
 
     def render(self):
         if self.render_mode == "rgb_array":
-            return tuple(self._native.render_rgb(i) for i in range(self.num_envs))
+            with self._lock:
+                return tuple(self._native.render_rgb(i) for i in range(self.num_envs))
         return None
 
     def action_masks(self) -> np.ndarray:

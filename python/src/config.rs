@@ -81,10 +81,23 @@ pub fn grid_from(grid: &Bound<'_, PyAny>) -> PyResult<Grid> {
     if let Ok(text) = grid.extract::<String>() {
         return text.parse::<Grid>().or_value_error();
     }
-    let (w, h): (usize, usize) = grid
-        .extract()
-        .map_err(|_| value_error("a grid is text such as \"7x7\" or a (width, height) pair of whole numbers"))?;
+    // A list as well as a tuple: grids often come from JSON or TOML.
+    let pair: Vec<usize> = grid.extract().unwrap_or_default();
+    let [w, h] = pair[..] else {
+        return Err(value_error(
+            "a grid is text such as \"7x7\" or a (width, height) pair of whole numbers",
+        ));
+    };
     Grid::new(w, h).or_value_error()
+}
+
+/// `(width, height)` of a grid given as text such as `"7x7"` or a `(width, height)` pair
+/// ([`grid_from`]): the one reading of a grid argument, for the Python classes and
+/// functions to call before they build anything.
+#[pyfunction]
+pub fn grid_size(grid: &Bound<'_, PyAny>) -> PyResult<(usize, usize)> {
+    let grid = grid_from(grid)?;
+    Ok((grid.width(), grid.height()))
 }
 
 /// The profile called `name` (`spec` or `original`; `sim::Profile`).

@@ -3,6 +3,7 @@
 //! `correct --record`) read back into the same arrays.
 
 use std::path::PathBuf;
+use std::time::{Duration, Instant};
 
 use agent::rollout::policy_rng;
 use agent::{ExactPolicy, OraclePolicy, Policy};
@@ -94,6 +95,16 @@ impl Columns {
         d.set_item("action_masks", masks)?;
         Ok(d)
     }
+}
+
+/// Bytes of the arrays [`Columns::into_dict`] makes of `steps` steps: two observations
+/// and an action mask each, and 27 bytes of the other columns.
+fn array_bytes(steps: usize, kind: ObsKind, grid: Grid, blocks: usize) -> u128 {
+    let obs = match kind.shape(grid, blocks) {
+        Some(shape) => shape.iter().map(|&d| d as u128).product::<u128>(),
+        None => 8 * (3 * blocks as u128 + 1),
+    };
+    steps as u128 * (2 * obs + Action::count(blocks) as u128 + 27)
 }
 
 /// `observations` as one array `(T, *shape)` (a dict of such arrays for `state`).
@@ -199,7 +210,14 @@ pub fn demonstrations<'py>(
         guard(|| {
             let mut env = Env::new(config).or_value_error()?;
             let mut columns = Columns::default();
+            // Ctrl-C stops a long run: signals are looked at every 50 ms, with the GIL
+            // taken back only for that.
+            let mut looked = Instant::now();
             for k in 0..episodes {
+                if looked.elapsed() >= Duration::from_millis(50) {
+                    Python::attach(|py| py.check_signals())?;
+                    looked = Instant::now();
+                }
                 let episode_seed = episode_seed(seed, k);
                 let mut obs = env.reset(episode_seed);
                 let mut rng = policy_rng(episode_seed);
@@ -236,8 +254,16 @@ pub fn demonstrations<'py>(
 /// block count). Recordings do not name the protocol they were played under: the
 /// `action_masks` are those of `profile`'s action protocol.
 #[pyfunction]
-#[pyo3(signature = (path, obs="planes", profile="spec"))]
-pub fn read_recording<'py>(py: Python<'py>, path: PathBuf, obs: &str, profile: &str) -> PyResult<Bound<'py, PyDict>> {
+/// `max_bytes` bounds the arrays: a file whose arrays would need more is refused, saying
+/// how large they would be, before anything is allocated.
+#[pyo3(signature = (path, obs="planes", profile="spec", max_bytes=None))]
+pub fn read_recording<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+    obs: &str,
+    profile: &str,
+    max_bytes: Option<u64>,
+) -> PyResult<Bound<'py, PyDict>> {
     let kind = config::obs_kind(obs)?;
     let protocol = config::profile(profile)?.protocol();
     let episodes = py.detach(|| guard(|| agent::demos::read_episodes(&path, None).or_value_error()))?;
@@ -247,6 +273,16 @@ pub fn read_recording<'py>(py: Python<'py>, path: PathBuf, obs: &str, profile: &
             return Err(value_error(format!("{} holds no episode", path.display())));
         };
         let (grid, blocks) = (first.grid, first.goal.block_count());
+        let steps: usize = episodes.iter().map(|e| e.steps.len()).sum();
+        let bytes = array_bytes(steps, kind, grid, blocks);
+        if let Some(max) = max_bytes.filter(|&max| bytes > u128::from(max)) {
+            return Err(value_error(format!(
+                "{}: its {steps} steps as obs={obs} make {:.1} GiB of arrays, more than this machine's {:.1} GiB of memory",
+                path.display(),
+                bytes as f64 / f64::from(1u32 << 30),
+                max as f64 / f64::from(1u32 << 30)
+            )));
+        }
         let mut columns = Columns::default();
         for e in &episodes {
             let mut obs = Observation {

@@ -3,7 +3,7 @@
 use oracle::{ExactSolver, Oracle, Planner};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyTuple};
-use sim::{Action, BlockId, Cell, Env, Observation, State};
+use sim::{Action, BlockId, Cell, Env, Observation, State, Termination};
 
 use crate::boundary::{OrValueError, guard, value_error};
 use crate::config::{self, ObsKind, env_config, goal_from};
@@ -120,12 +120,13 @@ impl NativeEnv {
             None => self.env.goal(),
         };
         let state = state_from(&cells, held)?;
-        let obs = guard(|| self.env.reset_to(state, goal).or_value_error())?;
-        if self.env.is_over() {
+        // Refused before the reset: a refused start leaves the episode as it was.
+        if matches!(self.env.config().termination, Termination::Goal) && goal.holds(&state) {
             return Err(value_error(format!(
                 "goal {goal} already holds in that state: an episode needs a start where it does not"
             )));
         }
+        let obs = guard(|| self.env.reset_to(state, goal).or_value_error())?;
         let (o, i) = self.obs_info(py, &obs, false)?;
         PyTuple::new(py, [o, i])
     }

@@ -42,6 +42,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(training::train, m)?)?;
     m.add_function(wrap_pyfunction!(config::episode_seed, m)?)?;
     m.add_function(wrap_pyfunction!(config::observation_shape, m)?)?;
+    m.add_function(wrap_pyfunction!(config::grid_size, m)?)?;
     m.add("OBS_KINDS", sim::ObsKind::NAMES.to_vec())?;
     m.add_function(wrap_pyfunction!(output::check_output, m)?)?;
     m.add_function(wrap_pyfunction!(output::write_output, m)?)?;

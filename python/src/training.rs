@@ -2,10 +2,10 @@
 //! flags of `blockstack train`, for Python and the Ray sweep.
 
 use std::path::PathBuf;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use agent::eval::EvalPlan;
-use agent::{Assist, TrainConfig, TrainOverrides};
+use agent::{Assist, TrainConfig, TrainOverrides, Trainer};
 use oracle::ExactSolver;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -119,7 +119,18 @@ pub fn train<'py>(
     let (trained, seconds, evaluation) = py.detach(|| {
         guard(|| {
             let clock = Instant::now();
-            let trained = agent::train(&config, None).or_value_error()?;
+            // `agent::train`, a game at a time, so that Ctrl-C (looked at every 50 ms, the
+            // GIL taken back only for that) stops a long run with KeyboardInterrupt.
+            let mut trainer = Trainer::new(config.clone()).or_value_error()?;
+            let mut looked = Instant::now();
+            for _ in 0..config.games {
+                trainer.play_games(1, None).or_value_error()?;
+                if looked.elapsed() >= Duration::from_millis(50) {
+                    Python::attach(|py| py.check_signals())?;
+                    looked = Instant::now();
+                }
+            }
+            let trained = trainer.finish();
             let seconds = clock.elapsed().as_secs_f64();
             let evaluation = if eval_episodes > 0 {
                 // The library's one evaluation, in the training world with games that end

@@ -63,3 +63,17 @@ def test_an_unwritable_table_is_refused_before_any_run(tmp_path, capsys):
     config.write_text(json.dumps({"train": {"games": 5}, "sweep": {"seed": [1]}}))
     assert sweep.main([str(config), "--out", str(tmp_path / "missing" / "r.csv")]) == 2
     assert "does not exist" in capsys.readouterr().err
+
+
+def test_a_failed_run_keeps_the_finished_ones_and_is_named(tmp_path, capsys):
+    pytest.importorskip("ray")
+    config = tmp_path / "sweep.json"
+    config.write_text(json.dumps({"train": {"blocks": 2, "goals": "0,1", "games": 5, "backend": "grid"},
+                                  "sweep": {"reward": ["sparse", "shiny"]}}))
+    out = tmp_path / "results.csv"
+    assert sweep.main([str(config), "--num-cpus", "2", "--out", str(out)]) == 1
+    captured = capsys.readouterr()
+    assert "run reward=shiny failed" in captured.err and "cannot read reward" in captured.err
+    rows = list(csv.DictReader(out.open()))
+    assert [r["reward"] for r in rows] == ["sparse"]
+    assert "sparse" in captured.out
