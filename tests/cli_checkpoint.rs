@@ -160,7 +160,15 @@ fn checkpoint_misuse_is_one_line_and_exit_status_2() {
     // checkpoint (no process has this id). The next run on that checkpoint removes it.
     let stale = dir.join(".ck.999999999-0.tmp");
     std::fs::write(&stale, b"half a checkpoint").unwrap();
-    let o = blockstack(&["train", "--resume", path(&ck), "--games", "30", "--out", path(&dir.join("r.st"))]);
+    let o = blockstack(&[
+        "train",
+        "--resume",
+        path(&ck),
+        "--games",
+        "30",
+        "--out",
+        path(&dir.join("r.st")),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(!stale.exists(), "the stale temporary file is removed");
     for (args, message) in [
@@ -188,15 +196,34 @@ fn checkpoint_misuse_is_one_line_and_exit_status_2() {
     let o = blockstack(&["train", "--resume", path(&ck), "--out", path(&ck)]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     let err = stderr(&o);
-    assert!(err.contains("would destroy the input") && err.contains("--out and --resume"), "{err}");
+    assert!(
+        err.contains("would destroy the input") && err.contains("--out and --resume"),
+        "{err}"
+    );
     // Both flags named, whether the file exists yet or not.
     for same in [ck.clone(), dir.join("new.st")] {
-        let o = blockstack(&["train", "--games", "5", "--checkpoint", path(&same), "--out", path(&same)]);
+        let o = blockstack(&[
+            "train",
+            "--games",
+            "5",
+            "--checkpoint",
+            path(&same),
+            "--out",
+            path(&same),
+        ]);
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(2), "{err}");
         assert_eq!(err.lines().count(), 1, "{err}");
         assert!(err.contains("--out") && err.contains("--checkpoint"), "{err}");
     }
-    let o = blockstack(&["train", "--resume", path(&ck), "--checkpoint", path(&model), "--out", path(&model)]);
+    let o = blockstack(&[
+        "train",
+        "--resume",
+        path(&ck),
+        "--checkpoint",
+        path(&model),
+        "--out",
+        path(&model),
+    ]);
     assert!(stderr(&o).contains("--checkpoint"), "{}", stderr(&o));
 }

@@ -204,7 +204,16 @@ fn an_untrained_network_is_warned_about_and_marked_in_its_file() {
     for steps in ["0", "50"] {
         let out = dir.join(format!("untrained-{steps}.safetensors"));
         let o = blockstack(&[
-            "dqn", "--blocks", "2", "--loss", "dqn", "--steps", steps, "--hidden", "16", "--out",
+            "dqn",
+            "--blocks",
+            "2",
+            "--loss",
+            "dqn",
+            "--steps",
+            steps,
+            "--hidden",
+            "16",
+            "--out",
             path(&out),
         ]);
         assert!(o.status.success(), "{}", stderr(&o));

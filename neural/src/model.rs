@@ -8,7 +8,9 @@
 //! parameter and per batch-normalisation statistic, named as [`QNet::tensors`] names them
 //! (`conv1.weight`, `linear2.bias`, `conv1.bn.running_mean`, ...; a convolution's weight is
 //! `[k * k * channels in, channels out]`, a linear layer's `[in, out]`), and as metadata
-//! `{"config": the DqnConfig, "report": the TrainReport}`. A reader refuses a file that is
+//! `{"config": the DqnConfig, "report": the TrainReport}`, with `"warnings": [sentence, ...]`
+//! when the run took no gradient step ([`Dqn::warnings`]; absent otherwise, and optional
+//! for a reader). A reader refuses a file that is
 //! missing, too large ([`MAX_NETWORK_BYTES`]), truncated, corrupt, of another format or
 //! version, or whose tensors do not fit the network its config describes, each with a
 //! message that says which.
