@@ -156,6 +156,21 @@ fn checkpoint_misuse_is_one_line_and_exit_status_2() {
         "--out",
         path(&model),
     ]);
+    // What a run killed with SIGKILL mid-write leaves: a hidden temporary file of the
+    // checkpoint (no process has this id). The next run on that checkpoint removes it.
+    let stale = dir.join(".ck.999999999-0.tmp");
+    std::fs::write(&stale, b"half a checkpoint").unwrap();
+    let o = blockstack(&[
+        "train",
+        "--resume",
+        path(&ck),
+        "--games",
+        "30",
+        "--out",
+        path(&dir.join("r.st")),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stale.exists(), "the stale temporary file is removed");
     for (args, message) in [
         (vec!["--resume", path(&ck), "--games", "10"], "--games is the total"),
         (
@@ -180,5 +195,35 @@ fn checkpoint_misuse_is_one_line_and_exit_status_2() {
     }
     let o = blockstack(&["train", "--resume", path(&ck), "--out", path(&ck)]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(stderr(&o).contains("would destroy the input"), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("would destroy the input") && err.contains("--out and --resume"),
+        "{err}"
+    );
+    // Both flags named, whether the file exists yet or not.
+    for same in [ck.clone(), dir.join("new.st")] {
+        let o = blockstack(&[
+            "train",
+            "--games",
+            "5",
+            "--checkpoint",
+            path(&same),
+            "--out",
+            path(&same),
+        ]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.contains("--out") && err.contains("--checkpoint"), "{err}");
+    }
+    let o = blockstack(&[
+        "train",
+        "--resume",
+        path(&ck),
+        "--checkpoint",
+        path(&model),
+        "--out",
+        path(&model),
+    ]);
+    assert!(stderr(&o).contains("--checkpoint"), "{}", stderr(&o));
 }

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{blockstack, path, scratch, stderr, stdout};
+use common::{blockstack, file_metadata, path, scratch, stderr, stdout};
 
 /// A tiny DQfD run on 2 blocks (seconds), saved under `name`.
 fn train(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {
@@ -128,6 +128,22 @@ fn bad_files_and_arguments_are_one_line_and_status_2() {
         assert_eq!(o.status.code(), Some(2), "{all:?}");
         assert!(stderr(&o).contains(says), "{all:?}: {}", stderr(&o));
     }
+    // Sizes too large to allocate are refused before anything is, in one line (these
+    // aborted, or grew to 19 GB).
+    for (args, says) in [
+        (vec!["--demos", "exact:1000000000"], "--demos exact:1000000000"),
+        (vec!["--batch", "1000000000000"], "--batch 1000000000000"),
+        (vec!["--batch", "1000000", "--buffer", "1000000"], "--batch 1000000"),
+        (vec!["--batch", "1000000"], "larger than the buffer"),
+        (vec!["--buffer", "10", "--batch", "64"], "--buffer 10"),
+    ] {
+        let mut all = vec!["dqn", "--out", path(&x)];
+        all.extend(args);
+        let o = blockstack(&all);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{all:?}: {err}");
+        assert!(err.contains(says) && err.lines().count() == 1, "{all:?}: {err}");
+    }
     assert!(!x.exists());
 }
 
@@ -179,4 +195,38 @@ fn demonstrations_come_from_a_trajectory_file_too() {
     ]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("missing.jsonl"), "{}", stderr(&o));
+}
+
+#[test]
+fn an_untrained_network_is_warned_about_and_marked_in_its_file() {
+    let dir = scratch("dqn-untrained");
+    // No steps at all, and fewer steps than self-play's learning start: no gradient step.
+    for steps in ["0", "50"] {
+        let out = dir.join(format!("untrained-{steps}.safetensors"));
+        let o = blockstack(&[
+            "dqn",
+            "--blocks",
+            "2",
+            "--loss",
+            "dqn",
+            "--steps",
+            steps,
+            "--hidden",
+            "16",
+            "--out",
+            path(&out),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let err = stderr(&o);
+        assert!(err.contains("warning: the network is untrained"), "{err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        let warnings = &file_metadata(&out, "blockstack-dqn")["warnings"];
+        assert!(warnings[0].as_str().unwrap().contains("untrained"), "{warnings}");
+        // The file still reads and plays.
+        let o = blockstack(&["eval", "--model", path(&out), "--episodes", "1"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    // A trained network carries no warnings (and its metadata no such field).
+    let net = train(&dir, "net.safetensors", &[]);
+    assert!(file_metadata(&net, "blockstack-dqn").get("warnings").is_none());
 }

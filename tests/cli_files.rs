@@ -375,7 +375,7 @@ fn model_files_that_cannot_be_read_are_one_line_errors() {
         assert!(err.contains(model) && err.contains(needle), "{err}");
     };
     // A device that never ends is refused at once, not read until memory runs out.
-    check("/dev/zero", "not a safetensors file");
+    check("/dev/zero", "a pipe or a device is not supported");
     // A model of the JSON format this blockstack wrote before.
     let v1 = dir.join("old.json");
     fs::write(
@@ -580,4 +580,55 @@ fn standard_output_as_a_destination_carries_the_data_alone() {
         assert_eq!(o.status.code(), Some(2), "{args:?}");
         assert!(stderr(&o).contains("standard output (-)"), "{}", stderr(&o));
     }
+}
+
+/// Runs `script` in bash with `$BIN` set to the binary (for process substitution).
+fn bash(script: &str) -> Output {
+    Command::new("bash")
+        .args(["-c", script])
+        .env("BIN", BIN)
+        .output()
+        .expect("bash runs")
+}
+
+#[test]
+fn pipes_from_process_substitution_are_written_or_refused_in_one_line() {
+    let dir = scratch("process-substitution");
+    // `>(cat > t)`: /dev/fd/N, a link to "pipe:[...]", is a writable pipe.
+    let t = dir.join("t.jsonl");
+    let o = bash(&format!(
+        "\"$BIN\" run --goal 1,0,2 --episodes 2 --seed 7 --backend grid --trajectory >(cat > '{}'); \
+         status=$?; wait $!; exit $status",
+        t.display()
+    ));
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = fs::read_to_string(&t).unwrap();
+    assert_eq!(text.lines().filter(|l| l.contains("\"type\":\"episode\"")).count(), 2);
+    // `<(cat m)`: a model is read twice, so a pipe is refused, naming the flag.
+    let model = small_model(&dir, "m.st");
+    for command in ["eval --episodes 1", "run --agent q --episodes 1"] {
+        let o = bash(&format!("\"$BIN\" {command} --model <(cat '{}')", model.display()));
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{command}: {err}");
+        assert_eq!(err.lines().count(), 1, "{command}: {err}");
+        assert!(err.contains("--model") && err.contains("pipe"), "{command}: {err}");
+    }
+}
+
+#[test]
+fn no_episodes_is_refused_in_one_line() {
+    let dir = scratch("no-episodes");
+    let t = dir.join("t.jsonl");
+    for args in [
+        vec!["run", "--episodes", "0"],
+        vec!["run", "--episodes", "0", "--json", "--trajectory", path(&t)],
+    ] {
+        let o = blockstack(&args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+        assert!(err.contains("--episodes 0"), "{args:?}: {err}");
+        assert_eq!(stdout(&o), "", "{args:?}");
+    }
+    assert!(!t.exists());
 }

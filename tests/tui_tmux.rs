@@ -85,10 +85,36 @@ impl Tmux {
     }
 }
 
+impl Tmux {
+    /// Waits until `session`'s program has ended (its pane closes with it: the commands are
+    /// started with `exec`).
+    fn wait_gone(&self, session: &str, what: &str) {
+        let deadline = Instant::now() + Duration::from_secs(20);
+        while self.alive(session) {
+            assert!(Instant::now() < deadline, "{what}");
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+}
+
 impl Drop for Tmux {
     fn drop(&mut self) {
+        // The programs still running in our panes: a demo saves its model as it ends, so the
+        // scratch folder may be removed only once they are gone (else the late file keeps
+        // the folder in the system's temp dir).
+        let panes = self.run(&["list-panes", "-a", "-F", "#{pane_pid}"]);
+        let pids: Vec<String> = String::from_utf8_lossy(&panes.stdout)
+            .split_whitespace()
+            .map(str::to_string)
+            .collect();
         // Only our own server, by its socket.
         let _ = self.run(&["kill-server"]);
+        let deadline = Instant::now() + Duration::from_secs(20);
+        for pid in pids {
+            while Path::new("/proc").join(&pid).exists() && Instant::now() < deadline {
+                std::thread::sleep(Duration::from_millis(20));
+            }
+        }
         let _ = std::fs::remove_file(&self.socket);
     }
 }
@@ -166,11 +192,7 @@ fn a_person_corrects_the_agent_in_the_terminal_and_quits() {
         field(s, "step: ") == (step + 2).to_string()
     });
     tmux.keys("demo", &["q"]);
-    let deadline = Instant::now() + Duration::from_secs(20);
-    while tmux.alive("demo") {
-        assert!(Instant::now() < deadline, "q did not quit");
-        std::thread::sleep(Duration::from_millis(50));
-    }
+    tmux.wait_gone("demo", "q did not quit");
     // The recording holds both corrections, with what the agent proposed.
     let lines = records(&demos);
     let corrections: Vec<(String, String)> = lines
@@ -231,6 +253,7 @@ fn a_demo_killed_mid_episode_leaves_whole_lines() {
         .trim()
         .to_string();
     assert!(Command::new("kill").args(["-KILL", &pid]).status().unwrap().success());
+    tmux.wait_gone("demo", "the killed demo is still running");
     let lines = records(&demos);
     assert!(matches!(lines[0], DemoRecord::Session(_)));
     assert!(
@@ -320,6 +343,9 @@ fn blocks_past_9_are_picked_by_letter_and_a_small_terminal_stops_the_agent() {
     tmux.wait_for("demo", "the world again", |s| s.contains("world"));
     stepping(shown);
     tmux.keys("demo", &["q"]);
+    // It saves its model as it quits: into the scratch folder, which must still be there.
+    tmux.wait_gone("demo", "q did not quit");
+    assert!(dir.join("corrected.safetensors").exists());
 }
 
 #[test]

@@ -13,7 +13,8 @@
 //!
 //! An atomic write that is dropped without [`Output::commit`], or fails on the way,
 //! removes its temporary file; one alive when the process is signalled is removed by
-//! [`crate::remove_temp_files`]. A reader of the target sees the old file or the new one,
+//! [`crate::remove_temp_files`]; one that a process killed outright (SIGKILL) left is
+//! removed by the next check or write of the same destination. A reader of the target sees the old file or the new one,
 //! never half of one.
 //!
 //! # Appending
@@ -305,10 +306,19 @@ fn classify(path: &Path) -> Result<Destination> {
                 let kind = meta.file_type();
                 if kind.is_symlink() {
                     let link = fs::read_link(&target).map_err(|e| FilesError::destination(path, e.to_string()))?;
-                    target = match target.parent() {
+                    let next = match target.parent() {
                         Some(dir) if link.is_relative() => dir.join(link),
                         _ => link,
                     };
+                    // A link whose text names no file but which the system follows, to a
+                    // special file: `/dev/fd/N` of a pipe (`>(cat > t)`) reads "pipe:[123]".
+                    // The special file is written through the link itself.
+                    if fs::symlink_metadata(&next).is_err() {
+                        if let Some(kind) = fs::metadata(&target).ok().and_then(|m| special_of(m.file_type())) {
+                            return Ok(Destination::Special { target, kind });
+                        }
+                    }
+                    target = next;
                     continue;
                 }
                 if kind.is_dir() {
@@ -320,18 +330,7 @@ fn classify(path: &Path) -> Result<Destination> {
                         ),
                     ));
                 }
-                let special = if kind.is_char_device() {
-                    Some(Special::CharDevice)
-                } else if kind.is_block_device() {
-                    Some(Special::BlockDevice)
-                } else if kind.is_fifo() {
-                    Some(Special::Fifo)
-                } else if kind.is_socket() {
-                    Some(Special::Socket)
-                } else {
-                    None
-                };
-                return match special {
+                return match special_of(kind) {
                     Some(kind) => Ok(Destination::Special { target, kind }),
                     None => {
                         check_folder(path, &target)?;
@@ -350,6 +349,21 @@ fn classify(path: &Path) -> Result<Destination> {
         path,
         format!("more than {MAX_LINKS} symbolic links to follow: is there a loop?"),
     ))
+}
+
+/// What kind of special file `kind` is, if it is one.
+fn special_of(kind: fs::FileType) -> Option<Special> {
+    if kind.is_char_device() {
+        Some(Special::CharDevice)
+    } else if kind.is_block_device() {
+        Some(Special::BlockDevice)
+    } else if kind.is_fifo() {
+        Some(Special::Fifo)
+    } else if kind.is_socket() {
+        Some(Special::Socket)
+    } else {
+        None
+    }
 }
 
 /// Checks that the folder of the regular file `target` (given as `path`) exists and that

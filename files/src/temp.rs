@@ -39,12 +39,14 @@ fn closed_error() -> io::Error {
 }
 
 /// Creates a new hidden temporary file in `dir` for `name`: `.NAME.PID-N.tmp`, opened for
-/// writing, and lists it.
+/// writing, and lists it. First removes the stale temporary files of the same destination
+/// ([`remove_stale`]).
 pub(crate) fn create(dir: &Path, name: &str) -> io::Result<(File, PathBuf)> {
     let mut reg = registry();
     if reg.closed {
         return Err(closed_error());
     }
+    remove_stale(dir, name);
     loop {
         let n = reg.next;
         reg.next += 1;
@@ -59,6 +61,43 @@ pub(crate) fn create(dir: &Path, name: &str) -> io::Result<(File, PathBuf)> {
             Err(e) => return Err(e),
         }
     }
+}
+
+/// Removes the temporary files that processes no longer running left for `dir/name` (a
+/// process killed with SIGKILL cannot clean up, and a checkpoint's temporary file can be
+/// large). Only this crate's own names for that exact destination, `.NAME.PID-N.tmp`, whose
+/// process `PID` is gone; nothing where running processes cannot be told (no `/proc`).
+/// Best effort: a file that cannot be listed or removed is left as it is.
+fn remove_stale(dir: &Path, name: &str) {
+    let proc = Path::new("/proc");
+    if !proc.join("self").exists() {
+        return;
+    }
+    let Ok(entries) = fs::read_dir(dir) else {
+        return;
+    };
+    let prefix = format!(".{name}.");
+    for entry in entries.flatten() {
+        let file_name = entry.file_name();
+        let Some(pid) = file_name
+            .to_str()
+            .and_then(|n| n.strip_prefix(&prefix))
+            .and_then(|n| n.strip_suffix(".tmp"))
+            .and_then(stale_pid)
+        else {
+            continue;
+        };
+        if pid != std::process::id() && !proc.join(pid.to_string()).exists() {
+            let _ = fs::remove_file(entry.path());
+        }
+    }
+}
+
+/// The `PID` of a temporary file's `PID-N` part, if it is exactly that.
+fn stale_pid(part: &str) -> Option<u32> {
+    let (pid, n) = part.split_once('-')?;
+    let digits = |t: &str| !t.is_empty() && t.bytes().all(|b| b.is_ascii_digit());
+    (digits(pid) && digits(n)).then(|| pid.parse().ok()).flatten()
 }
 
 /// Renames the listed temporary file `temp` over `target` and unlists it.

@@ -248,3 +248,36 @@ fn a_folder_output_is_made_if_missing() {
     );
     assert!(temps(&report).is_empty());
 }
+
+#[test]
+fn stale_temporary_files_of_the_same_destination_are_removed_by_the_next_write() {
+    let dir = tempfile::tempdir().unwrap();
+    let dir = dir.path();
+    // No process has an id this large (Linux's pid_max is at most 2^22).
+    let gone = 999_999_999u32;
+    let own = std::process::id();
+    let names = [
+        format!(".out.st.{gone}-0.tmp"),
+        format!(".out.st.{gone}-12.tmp"),
+        format!(".out.st.{own}-77.tmp"),
+        format!(".other.st.{gone}-0.tmp"),
+        format!(".out.st.x.{gone}-0.tmp"),
+        format!(".out.st.{gone}-0.tmp.bak"),
+        ".out.st.1-.tmp".to_string(),
+        "out.st.999999999-0.tmp".to_string(),
+    ];
+    for name in &names {
+        std::fs::write(dir.join(name), b"stale").unwrap();
+    }
+    let out = OutputPath::check(dir.join("out.st")).unwrap();
+    let left = |name: &String| dir.join(name).exists();
+    // Only the dead process's files for exactly this destination went.
+    assert!(!left(&names[0]) && !left(&names[1]));
+    assert!(names[2..].iter().all(left), "others kept");
+    std::fs::write(dir.join(&names[0]), b"stale again").unwrap();
+    let mut o = out.create().unwrap();
+    o.write_all(b"new").unwrap();
+    o.commit().unwrap();
+    assert!(!left(&names[0]));
+    assert_eq!(std::fs::read(dir.join("out.st")).unwrap(), b"new");
+}

@@ -257,6 +257,18 @@ pub struct DqnConfig {
     pub correct_loops: bool,
 }
 
+/// The most input values one batch may hold (a batch's inputs are made in memory at every
+/// gradient step): 256 MiB of floats, over 2,000 paper screens or 79,000 centred 7 x 7
+/// planes of 3 blocks, where the presets draw 64.
+pub const MAX_BATCH_VALUES: usize = 1 << 26;
+
+/// The most memory the agent's transitions in the replay buffer may take: 8 GiB.
+pub const MAX_BUFFER_BYTES: u64 = 8 << 30;
+
+/// The most episodes a planner may demonstrate (all are kept in memory): 100 times the
+/// recommended recipe's 10,000.
+pub const MAX_DEMO_EPISODES: u64 = 1_000_000;
+
 /// The preset names, in the order the CLI lists them.
 pub const PRESETS: [&str; 4] = ["paper", "paper-dqfd", "dqn-planes", "dqfd-planes"];
 
@@ -452,6 +464,41 @@ impl DqnConfig {
         if self.buffer == 0 {
             return bad("the buffer must hold at least 1 transition".into());
         }
+        if self.batch > self.buffer {
+            return bad(format!(
+                "the batch (--batch {}) is larger than the buffer (--buffer {}): it cannot be drawn from it",
+                self.batch, self.buffer
+            ));
+        }
+        // Checked before anything is allocated: a batch's inputs, the buffer and the planned
+        // demonstrations are all made in memory, and a size too large to allocate would abort.
+        let values = self.batch.saturating_mul(self.net.input(self.grid, self.blocks)?.len());
+        if values > MAX_BATCH_VALUES {
+            return bad(format!(
+                "the batch (--batch {}) needs {values} input values, more than the {MAX_BATCH_VALUES} allowed: \
+                 choose a smaller batch",
+                self.batch
+            ));
+        }
+        let held = (self.buffer as u64).min(self.steps);
+        let bytes = held.saturating_mul(std::mem::size_of::<crate::replay::Transition>() as u64);
+        if bytes > MAX_BUFFER_BYTES {
+            return bad(format!(
+                "the buffer (--buffer {}) would grow to {} MiB over {} steps, more than the {} MiB allowed",
+                self.buffer,
+                bytes >> 20,
+                self.steps,
+                MAX_BUFFER_BYTES >> 20
+            ));
+        }
+        if let DemoSource::Exact(k) | DemoSource::Oracle(k) = self.demos {
+            if k > MAX_DEMO_EPISODES {
+                return bad(format!(
+                    "{k} demonstrated episodes (--demos {}) are more than the {MAX_DEMO_EPISODES} allowed",
+                    self.demos
+                ));
+            }
+        }
         if self.train_every == 0 {
             return bad("train-every must be at least 1 step".into());
         }
@@ -530,6 +577,60 @@ mod tests {
         assert_eq!(p.optimizer, OptimizerKind::Rmsprop);
         assert_eq!(p.reward.name(), "sparse");
         assert!(DqnConfig::preset("nope", 3).is_err());
+    }
+
+    #[test]
+    fn sizes_that_cannot_be_allocated_are_refused_up_front() {
+        let base = || DqnConfig::preset("dqn-planes", 3).unwrap();
+        let refused = |c: DqnConfig, words: &str| {
+            let e = c.validate().unwrap_err().to_string();
+            assert!(e.contains(words), "{e}");
+        };
+        refused(
+            DqnConfig {
+                batch: 1_000_000_000_000,
+                ..base()
+            },
+            "--batch 1000000000000",
+        );
+        refused(
+            DqnConfig {
+                batch: 1_000_000,
+                buffer: 1_000_000,
+                ..base()
+            },
+            "--batch 1000000",
+        );
+        refused(
+            DqnConfig {
+                batch: 2_000,
+                buffer: 1_000,
+                ..base()
+            },
+            "larger than the buffer",
+        );
+        refused(
+            DqnConfig {
+                demos: DemoSource::Exact(1_000_000_000),
+                ..base()
+            },
+            "--demos exact:1000000000",
+        );
+        refused(
+            DqnConfig {
+                buffer: usize::MAX,
+                steps: u64::MAX,
+                ..base()
+            },
+            "--buffer",
+        );
+        // A large buffer is fine when the run is too short to fill it.
+        DqnConfig {
+            buffer: usize::MAX,
+            ..base()
+        }
+        .validate()
+        .unwrap();
     }
 
     #[test]

@@ -8,7 +8,9 @@
 //! parameter and per batch-normalisation statistic, named as [`QNet::tensors`] names them
 //! (`conv1.weight`, `linear2.bias`, `conv1.bn.running_mean`, ...; a convolution's weight is
 //! `[k * k * channels in, channels out]`, a linear layer's `[in, out]`), and as metadata
-//! `{"config": the DqnConfig, "report": the TrainReport}`. A reader refuses a file that is
+//! `{"config": the DqnConfig, "report": the TrainReport}`, with `"warnings": [sentence, ...]`
+//! when the run took no gradient step ([`Dqn::warnings`]; absent otherwise, and optional
+//! for a reader). A reader refuses a file that is
 //! missing, too large ([`MAX_NETWORK_BYTES`]), truncated, corrupt, of another format or
 //! version, or whose tensors do not fit the network its config describes, each with a
 //! message that says which.
@@ -72,12 +74,19 @@ pub struct Dqn {
     net: QNet,
     config: DqnConfig,
     report: TrainReport,
+    warnings: Vec<String>,
 }
 
 impl Dqn {
     /// A network with its config and report (the trainer's).
     pub fn new(net: QNet, config: DqnConfig, report: TrainReport) -> Dqn {
-        Dqn { net, config, report }
+        let warnings = training_warnings(&config, &report);
+        Dqn {
+            net,
+            config,
+            report,
+            warnings,
+        }
     }
 
     /// The network.
@@ -93,6 +102,12 @@ impl Dqn {
     /// The training totals.
     pub fn report(&self) -> &TrainReport {
         &self.report
+    }
+
+    /// What makes this network less than its user may think (a run that took no gradient
+    /// step: its weights are the seed's initial ones), one sentence each; saved in its file.
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
     }
 
     /// The grid it plays on.
@@ -161,6 +176,7 @@ impl Dqn {
         let metadata = Metadata {
             config: self.config.clone(),
             report: self.report,
+            warnings: self.warnings.clone(),
         };
         files::container::write(&out, FORMAT, VERSION, &metadata, &tensors)?;
         Ok(())
@@ -178,7 +194,11 @@ impl Dqn {
             FilesError::Read { problem, .. } => fail(problem.to_string()),
             other => fail(other.to_string()),
         })?;
-        let Metadata { config, report } = container
+        let Metadata {
+            config,
+            report,
+            warnings,
+        } = container
             .metadata()
             .map_err(|e| fail(format!("the file is corrupt: its metadata does not read ({e})")))?;
         config
@@ -203,8 +223,28 @@ impl Dqn {
             net.set_tensor(&name, tensor.shape(), &values)
                 .map_err(|e| fail(e.to_string()))?;
         }
-        Ok(Dqn { net, config, report })
+        Ok(Dqn {
+            net,
+            config,
+            report,
+            warnings,
+        })
     }
+}
+
+/// The warnings of [`Dqn::warnings`] for a run of `config` that ended with `report`. A run
+/// that pre-trained but learned nothing in self-play is not warned about: pre-training alone
+/// is a way to train.
+fn training_warnings(config: &DqnConfig, report: &TrainReport) -> Vec<String> {
+    if report.gradient_steps > 0 {
+        return Vec::new();
+    }
+    vec![format!(
+        "the network is untrained: no gradient step was taken (no pre-training, {} self-play steps, \
+         and self-play learns only once the buffer holds {} of the agent's transitions)",
+        report.steps,
+        config.learning_starts.max(1)
+    )]
 }
 
 /// The JSON metadata of a network file.
@@ -213,6 +253,9 @@ impl Dqn {
 struct Metadata {
     config: DqnConfig,
     report: TrainReport,
+    /// [`Dqn::warnings`]; absent when there are none, and in files from before it was kept.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    warnings: Vec<String>,
 }
 
 /// A trained network playing without learning. Borrows the network.

@@ -1,5 +1,6 @@
 //! `blockstack dqn`: train a deep Q-network (DQN, or DQfD from demonstrations) and save it.
 
+use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -282,6 +283,15 @@ pub fn dqn(args: DqnArgs) -> Result<()> {
     bar.finish_and_clear();
     dqn.save(&args.out)
         .with_context(|| "the network was trained but not saved")?;
+    for warning in dqn.warnings() {
+        // On standard error, as main prints errors: a warning that cannot be shown has nowhere
+        // else to go, and the file records it anyway.
+        let _ = writeln!(
+            std::io::stderr(),
+            "blockstack: warning: {warning} (recorded in {})",
+            args.out.display()
+        );
+    }
     let r = dqn.report();
     line(format_args!("trained {}: {}", dqn.name(), config.describe()))?;
     line(format_args!(

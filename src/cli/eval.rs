@@ -1,6 +1,7 @@
 //! `blockstack eval`: play a trained model on seeded starts, per goal and overall.
 
-use std::path::PathBuf;
+use std::os::unix::fs::FileTypeExt;
+use std::path::{Path, PathBuf};
 
 use agent::Summary;
 use agent::eval::EvalReport;
@@ -53,7 +54,7 @@ pub struct EvalArgs {
 /// Evaluates the model ([`neural::AnyModel::evaluate_with`], the library's one evaluation)
 /// and prints the figures.
 pub fn eval(args: EvalArgs) -> Result<()> {
-    let model = AnyModel::load(&args.model)?;
+    let model = load_model(&args.model)?;
     let goals = parse_goals(args.goals.as_deref(), model.blocks())?;
     let backend: Backend = args.backend.parse()?;
     // The model's own world (protocol, start rule) unless the command line says otherwise;
@@ -138,4 +139,19 @@ fn print_report(r: &EvalReport) -> Result<()> {
     row("all", &run.summary, &r.optimality, run.mean_steps_failures_as_horizon)?;
     line("steps, optimum and ratio are over the episodes that reached the goal; the optimum is the")?;
     line("exact solver's shortest legal plan from each start; the last column counts a failure as the horizon H")
+}
+
+/// Reads the model file `--model PATH`. A pipe or a device (`<(cat m)`) is refused with a
+/// line that says so: a model is read twice (its header says which reader reads the file),
+/// and the second reading of a pipe finds it empty.
+pub(super) fn load_model(path: &Path) -> Result<AnyModel> {
+    if let Ok(meta) = std::fs::metadata(path) {
+        let kind = meta.file_type();
+        anyhow::ensure!(
+            !(kind.is_fifo() || kind.is_socket() || kind.is_char_device() || kind.is_block_device()),
+            "--model {}: a pipe or a device is not supported as a model file (it is read twice); save the model to a file first",
+            path.display()
+        );
+    }
+    Ok(AnyModel::load(path)?)
 }

@@ -108,6 +108,8 @@ impl AgentKind {
 /// Plays the episodes and prints the summary.
 pub fn run(args: RunArgs) -> Result<()> {
     check_agent_flags(&args)?;
+    // No episodes, no figures: a mean over nothing would print as -0.00.
+    anyhow::ensure!(args.episodes > 0, "--episodes 0: play at least 1 episode");
     let trajectory_out = args.trajectory.as_deref().map(OutputPath::check).transpose()?;
     super::stdout::claim_for_data(&[trajectory_out.as_ref()])?;
     if let (Some(out), Some(model)) = (&args.trajectory, &args.model) {
@@ -115,7 +117,7 @@ pub fn run(args: RunArgs) -> Result<()> {
     }
     let model = match (args.agent, &args.model) {
         (AgentKind::Q | AgentKind::Dqn, Some(path)) => {
-            let model = AnyModel::load(path)?;
+            let model = super::eval::load_model(path)?;
             match (args.agent, &model) {
                 (AgentKind::Q, AnyModel::Q(_)) | (AgentKind::Dqn, AnyModel::Dqn(_)) => {}
                 _ => anyhow::bail!(

@@ -208,7 +208,16 @@ pub fn train(args: TrainArgs) -> Result<()> {
     );
     super::stdout::claim_for_data(&[Some(&out), checkpoint.as_ref()])?;
     if let Some(path) = checkpoint_path {
-        files::refuse_same_file(&args.out, path)?;
+        match (&args.checkpoint, files::refuse_same_file(&args.out, path)) {
+            (_, Ok(())) => {}
+            // The checkpoint is written as well as read: it is not only an input.
+            (Some(_), Err(_)) => anyhow::bail!(
+                "--out {} and --checkpoint {} are the same file: the model and the checkpoint need a file each",
+                args.out.display(),
+                path.display()
+            ),
+            (None, Err(e)) => return Err(anyhow::Error::new(e).context("--out and --resume")),
+        }
     }
     let mut trainer = match &args.resume {
         Some(path) => Trainer::resume(path)?,
