@@ -254,6 +254,9 @@ pub fn demonstrations<'py>(
 /// block count). Recordings do not name the protocol they were played under: the
 /// `action_masks` are those of `profile`'s action protocol.
 #[pyfunction]
+/// Reading happens on a thread of its own while this one looks for Ctrl-C every 100 ms, so
+/// a file that never comes (a FIFO with no writer) or a long read stops with
+/// `KeyboardInterrupt`; the abandoned reader ends when its file does.
 /// `max_bytes` bounds the arrays: a file whose arrays would need more is refused, saying
 /// how large they would be, before anything is allocated.
 #[pyo3(signature = (path, obs="planes", profile="spec", max_bytes=None))]
@@ -266,7 +269,7 @@ pub fn read_recording<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let kind = config::obs_kind(obs)?;
     let protocol = config::profile(profile)?.protocol();
-    let episodes = py.detach(|| guard(|| agent::demos::read_episodes(&path, None).or_value_error()))?;
+    let episodes = read_interruptibly(py, &path)?;
     guard(|| {
         // The reader holds a file to one world, that of its first episode (which exists).
         let Some(first) = episodes.first() else {
@@ -311,4 +314,36 @@ pub fn read_recording<'py>(
         }
         columns.into_dict(py, kind, grid, blocks)
     })
+}
+
+/// [`agent::demos::read_episodes`] of `path` on a thread of its own, the caller checking for
+/// signals (Ctrl-C) every 100 ms: opening a FIFO blocks until a writer comes, which no
+/// signal check inside the reader could interrupt.
+fn read_interruptibly(py: Python<'_>, path: &std::path::Path) -> PyResult<Vec<agent::demos::DemoEpisode>> {
+    use std::sync::mpsc::{RecvTimeoutError, channel};
+    let (sender, receiver) = channel();
+    let owned = path.to_path_buf();
+    std::thread::spawn(move || {
+        let read = guard(|| agent::demos::read_episodes(&owned, None).or_value_error());
+        // The caller may have gone (interrupted): nobody is left to tell.
+        let _ = sender.send(read);
+    });
+    // Borrowed across the GIL's release, so it must be shareable.
+    let receiver = std::sync::Mutex::new(receiver);
+    loop {
+        let wait = || {
+            let receiver = receiver.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+            receiver.recv_timeout(std::time::Duration::from_millis(100))
+        };
+        match py.detach(wait) {
+            Ok(read) => return read,
+            Err(RecvTimeoutError::Timeout) => py.check_signals()?,
+            Err(RecvTimeoutError::Disconnected) => {
+                return Err(value_error(format!(
+                    "{}: the reader stopped without an answer",
+                    path.display()
+                )));
+            }
+        }
+    }
 }
