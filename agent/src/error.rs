@@ -58,6 +58,9 @@ pub enum AgentError {
         /// What is wrong.
         reason: String,
     },
+    /// Work stopped on the caller's word (a progress hook that saw Ctrl-C).
+    #[error("interrupted")]
+    Interrupted,
 }
 
 /// Shorthand for results whose error is an [`AgentError`].

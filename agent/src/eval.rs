@@ -14,7 +14,8 @@ use sim::{Env, EnvConfig, Goal, GoalSpec, Profile, Termination};
 use crate::error::{AgentError, Result};
 use crate::optimality::{self, Optimality};
 use crate::policy::Policy;
-use crate::rollout::{EpisodeResult, Summary, play_observed};
+use crate::rollout::{EpisodeResult, Summary, play_episode};
+use sim::seeding::episode_seed;
 
 /// A run of a policy, as `blockstack run --json` reports it: the world, the seed and the
 /// figures.
@@ -139,7 +140,8 @@ pub struct Evaluation {
 /// Plays the policies that `make_policy` makes (a fresh one per goal) on `plan`, measures
 /// every start's optimum with `solver` (whose protocol should be the world's), and reports
 /// it all with `name` (the policy's), `model` (where it came from) and `epsilon`. `tick`
-/// is called once per episode played and once per start solved (a progress bar's hook).
+/// is called once per episode played and once per start solved (a progress bar's hook); an
+/// error it returns (e.g. [`AgentError::Interrupted`] on Ctrl-C) stops the evaluation.
 pub fn evaluate<'a>(
     plan: &EvalPlan,
     name: String,
@@ -147,7 +149,7 @@ pub fn evaluate<'a>(
     epsilon: f64,
     solver: &ExactSolver,
     make_policy: &mut dyn FnMut() -> Result<Box<dyn Policy + 'a>>,
-    tick: &mut dyn FnMut(),
+    tick: &mut dyn FnMut() -> Result<()>,
 ) -> Result<Evaluation> {
     if plan.episodes == 0 {
         return Err(AgentError::Config(
@@ -170,14 +172,18 @@ pub fn evaluate<'a>(
             ..world
         })?;
         let mut policy = make_policy()?;
-        let played = play_observed(&mut env, policy.as_mut(), plan.episodes, plan.seed, None, &mut |_| {
-            tick()
-        })?;
+        let played = (0..plan.episodes)
+            .map(|k| {
+                let result = play_episode(&mut env, policy.as_mut(), k, episode_seed(plan.seed, k), None)?;
+                tick()?;
+                Ok(result)
+            })
+            .collect::<Result<Vec<_>>>()?;
         let best = played
             .iter()
             .map(|r| {
                 let d = optimality::optimal_steps_by(solver, std::slice::from_ref(r))?;
-                tick();
+                tick()?;
                 Ok(d[0])
             })
             .collect::<Result<Vec<u32>>>()?;
@@ -235,7 +241,10 @@ mod tests {
             0.0,
             &solver,
             &mut || Ok(Box::new(ExactPolicy::new(sim::Grid::default()))),
-            &mut || ticks += 1,
+            &mut || {
+                ticks += 1;
+                Ok(())
+            },
         )
         .unwrap();
         assert_eq!(ticks, 2 * 2 * 4);
@@ -250,6 +259,31 @@ mod tests {
     }
 
     #[test]
+    fn a_tick_that_says_stop_stops_the_evaluation() {
+        let solver = ExactSolver::new(sim::Grid::default());
+        let mut ticks = 0;
+        let err = evaluate(
+            &plan(50),
+            "exact".into(),
+            "-".into(),
+            0.0,
+            &solver,
+            &mut || Ok(Box::new(ExactPolicy::new(sim::Grid::default()))),
+            &mut || {
+                ticks += 1;
+                if ticks == 3 {
+                    Err(AgentError::Interrupted)
+                } else {
+                    Ok(())
+                }
+            },
+        )
+        .unwrap_err();
+        assert!(matches!(err, AgentError::Interrupted));
+        assert_eq!(ticks, 3);
+    }
+
+    #[test]
     fn no_episodes_is_an_error_not_a_report_of_nothing() {
         let solver = ExactSolver::new(sim::Grid::default());
         let err = evaluate(
@@ -259,7 +293,7 @@ mod tests {
             0.0,
             &solver,
             &mut || Ok(Box::new(ExactPolicy::new(sim::Grid::default()))),
-            &mut || {},
+            &mut || Ok(()),
         )
         .unwrap_err();
         assert!(err.to_string().contains("at least one episode"), "{err}");

@@ -131,7 +131,13 @@ impl AnyModel {
     /// Evaluates the model on `plan` ([`agent::eval::evaluate`]) with the exact solver under
     /// the plan's protocol, `model` naming where it came from; `tick` after every episode
     /// played and every start solved.
-    pub fn evaluate(&self, plan: &EvalPlan, model: &str, epsilon: f64, tick: &mut dyn FnMut()) -> Result<Evaluation> {
+    pub fn evaluate(
+        &self,
+        plan: &EvalPlan,
+        model: &str,
+        epsilon: f64,
+        tick: &mut dyn FnMut() -> agent::Result<()>,
+    ) -> Result<Evaluation> {
         self.check_world(plan.world.grid, plan.world.blocks)?;
         let solver = ExactSolver::new(plan.world.grid).with_protocol(plan.world.protocol);
         self.evaluate_with(plan, model, epsilon, &solver, tick)
@@ -144,7 +150,7 @@ impl AnyModel {
         model: &str,
         epsilon: f64,
         solver: &ExactSolver,
-        tick: &mut dyn FnMut(),
+        tick: &mut dyn FnMut() -> agent::Result<()>,
     ) -> Result<Evaluation> {
         self.check_world(plan.world.grid, plan.world.blocks)?;
         Ok(agent::eval::evaluate(

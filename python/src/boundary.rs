@@ -3,6 +3,7 @@
 
 use std::fmt::Display;
 use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::time::{Duration, Instant};
 
 use pyo3::PyErr;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
@@ -36,4 +37,31 @@ impl<T, E: Display> OrValueError<T> for Result<T, E> {
     fn or_value_error(self) -> Result<T, PyErr> {
         self.map_err(value_error)
     }
+}
+
+/// A progress hook for long native calls made with the GIL released: at most every 100 ms
+/// it takes the GIL back to look for signals; a pending one (Ctrl-C's `KeyboardInterrupt`)
+/// is kept in `signal` and stops the work with [`agent::AgentError::Interrupted`], and
+/// [`raise_signal`] then raises it in place of the error.
+pub fn signal_checker(signal: &mut Option<PyErr>) -> impl FnMut() -> agent::Result<()> + '_ {
+    let mut looked = Instant::now();
+    move || {
+        if looked.elapsed() < Duration::from_millis(100) {
+            return Ok(());
+        }
+        looked = Instant::now();
+        match pyo3::Python::attach(|py| py.check_signals()) {
+            Ok(()) => Ok(()),
+            Err(e) => {
+                *signal = Some(e);
+                Err(agent::AgentError::Interrupted)
+            }
+        }
+    }
+}
+
+/// The signal [`signal_checker`] kept, if it stopped the work; else `error`'s message as a
+/// `ValueError`.
+pub fn raise_signal(signal: Option<PyErr>, error: impl Display) -> PyErr {
+    signal.unwrap_or_else(|| value_error(error))
 }

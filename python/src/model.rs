@@ -11,7 +11,7 @@ use pyo3::types::PyDict;
 use sim::seeding::SimRng;
 use sim::{Goal, Observation, State};
 
-use crate::boundary::{OrValueError, guard, value_error};
+use crate::boundary::{OrValueError, guard, raise_signal, signal_checker, value_error};
 use crate::env::state_from;
 
 /// A model file of either kind, loaded: `blockstack.Model` wraps it.
@@ -135,10 +135,11 @@ impl NativeModel {
         plan.world.validate().or_value_error()?;
         py.detach(|| {
             guard(|| {
-                let evaluation = self
+                let mut signal = None;
+                let evaluated = self
                     .model
-                    .evaluate(&plan, &self.path, epsilon, &mut || {})
-                    .or_value_error()?;
+                    .evaluate(&plan, &self.path, epsilon, &mut signal_checker(&mut signal));
+                let evaluation = evaluated.map_err(|e| raise_signal(signal, e))?;
                 serde_json::to_string(&evaluation.report).or_value_error()
             })
         })

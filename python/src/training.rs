@@ -11,7 +11,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sim::{Backend, EnvConfig, Goal, RewardModel};
 
-use crate::boundary::{OrValueError, guard, value_error};
+use crate::boundary::{OrValueError, guard, raise_signal, signal_checker, value_error};
 use crate::config;
 
 /// Goals separated by `:` (`"0,1,2:1,0,2"`), as `blockstack train --goals` reads them, each
@@ -148,19 +148,17 @@ pub fn train<'py>(
                 let solver = ExactSolver::new(config.world.grid).with_protocol(config.world.protocol);
                 let model = &trained.agent;
                 let name = model.name();
-                Some(
-                    agent::eval::evaluate(
-                        &plan,
-                        name,
-                        String::new(),
-                        eval_epsilon,
-                        &solver,
-                        &mut || Ok(Box::new(model.policy(eval_epsilon)?)),
-                        &mut || {},
-                    )
-                    .or_value_error()?
-                    .report,
-                )
+                let mut signal = None;
+                let evaluated = agent::eval::evaluate(
+                    &plan,
+                    name,
+                    String::new(),
+                    eval_epsilon,
+                    &solver,
+                    &mut || Ok(Box::new(model.policy(eval_epsilon)?)),
+                    &mut signal_checker(&mut signal),
+                );
+                Some(evaluated.map_err(|e| raise_signal(signal, e))?.report)
             } else {
                 None
             };

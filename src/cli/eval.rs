@@ -87,7 +87,10 @@ pub fn eval(args: EvalArgs) -> Result<()> {
             &args.model.display().to_string(),
             args.epsilon,
             &solver,
-            &mut || bar.inc(1),
+            &mut || {
+                bar.inc(1);
+                Ok(())
+            },
         )
         .map_err(|e| args.budget.explain(e))?;
     bar.finish_and_clear();
