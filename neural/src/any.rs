@@ -138,7 +138,6 @@ impl AnyModel {
         epsilon: f64,
         tick: &mut dyn FnMut() -> agent::Result<()>,
     ) -> Result<Evaluation> {
-        self.check_world(plan.world.grid, plan.world.blocks)?;
         let solver = ExactSolver::new(plan.world.grid).with_protocol(plan.world.protocol);
         self.evaluate_with(plan, model, epsilon, &solver, tick)
     }
