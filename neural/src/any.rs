@@ -12,7 +12,7 @@ use std::path::Path;
 use agent::eval::{EvalPlan, Evaluation};
 use agent::{Policy, QAgent};
 use oracle::ExactSolver;
-use sim::{EnvConfig, Goal, GoalSpec, Grid, Profile, RewardModel};
+use sim::{Action, EnvConfig, Goal, GoalSpec, Grid, Observation, Profile, RewardModel};
 
 use crate::error::Result;
 use crate::model::{Dqn, FORMAT, MAX_NETWORK_BYTES};
@@ -118,6 +118,26 @@ impl AnyModel {
             AnyModel::Dqn(d) => d.check_world(grid, blocks)?,
         }
         Ok(())
+    }
+
+    /// The Q-value of every action legal in `obs`, in action-index order: a tabular
+    /// model's table row, a network's forward pass (its output columns mapped back to
+    /// actions). What a person watching the model is shown beside its greedy choice.
+    pub fn legal_q_values(&self, obs: &Observation) -> Result<Vec<(Action, f32)>> {
+        let legal = obs.legal_actions();
+        let by_action = match self {
+            AnyModel::Q(q) => q.q_values(obs)?,
+            AnyModel::Dqn(d) => {
+                let by_column = d.q_values(obs)?;
+                let input = d.net().input();
+                let mut by_action = vec![0.0; by_column.len()];
+                for (column, &v) in by_column.iter().enumerate() {
+                    by_action[input.action(&obs.goal, column).index()] = v;
+                }
+                by_action
+            }
+        };
+        Ok(legal.iter().map(|a| (a, by_action[a.index()])).collect())
     }
 
     /// The model playing with a random legal action with probability `epsilon`.
