@@ -148,7 +148,11 @@ impl StudyFile {
 /// An error unless `name` is 1 to 32 letters, digits, `-` and `_`: names go into file
 /// names, and a path must not.
 pub fn check_name(name: &str) -> std::result::Result<(), String> {
-    if (1..=32).contains(&name.len()) && name.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'-' || b == b'_') {
+    if (1..=32).contains(&name.len())
+        && name
+            .bytes()
+            .all(|b| b.is_ascii_alphanumeric() || b == b'-' || b == b'_')
+    {
         Ok(())
     } else {
         Err(format!(
@@ -315,7 +319,11 @@ pub fn conditions(config: &mut ServeConfig) -> Result<(String, Vec<Arc<Condition
         let modes = c
             .modes
             .as_ref()
-            .map(|ms| ms.iter().map(|m| m.parse::<Mode>()).collect::<std::result::Result<Vec<_>, _>>())
+            .map(|ms| {
+                ms.iter()
+                    .map(|m| m.parse::<Mode>())
+                    .collect::<std::result::Result<Vec<_>, _>>()
+            })
             .transpose()
             .map_err(|e| err(format!("condition {}: {e}", c.name)))?;
         let model = c.model.as_ref().map(|m| folder.join(m));

@@ -198,7 +198,10 @@ impl Participant {
 
     fn begin_watch(&mut self) -> agent::Result<()> {
         let c = &self.condition;
-        let model = c.model.as_ref().ok_or_else(|| agent::AgentError::Config("no model to watch".into()))?;
+        let model = c
+            .model
+            .as_ref()
+            .ok_or_else(|| agent::AgentError::Config("no model to watch".into()))?;
         let k = self.watching.as_ref().map_or(0, |w| w.k + 1);
         let goals: Vec<_> = c.goals.iter().filter(|g| g.block_count() == model.blocks()).collect();
         let world = EnvConfig {
@@ -244,8 +247,8 @@ impl Participant {
 
     fn act(&mut self, name: &str) -> std::result::Result<(), String> {
         let obs = self.live("an action of your own")?;
-        let action = Action::parse(name, obs.state.block_count())
-            .map_err(|e| format!("{name:?} is not an action here: {e}"))?;
+        let action =
+            Action::parse(name, obs.state.block_count()).map_err(|e| format!("{name:?} is not an action here: {e}"))?;
         let steps = person_steps(&obs, action).map_err(|e| format!("not now: {e}"))?;
         if steps.is_empty() {
             self.message = format!("{action}: that block is held already.");
@@ -281,11 +284,10 @@ impl Participant {
         if self.session.is_over() {
             self.progress.episodes_done += 1;
             let steps = self.session.steps();
-            let reached = self
-                .session
-                .observation()
-                .is_some_and(|o| o.goal.holds(&o.state));
-            let shortest = self.shortest.map_or(String::new(), |s| format!("; the shortest plan takes {s}"));
+            let reached = self.session.observation().is_some_and(|o| o.goal.holds(&o.state));
+            let shortest = self
+                .shortest
+                .map_or(String::new(), |s| format!("; the shortest plan takes {s}"));
             self.message = if reached {
                 format!("Goal reached in {steps} steps{shortest}.")
             } else {
@@ -319,7 +321,9 @@ impl Participant {
             Some(policy.act(&obs, &mut w.rng).map_err(|e| e.to_string())?)
         };
         let steps = w.env.steps();
-        let shortest = w.shortest.map_or(String::new(), |s| format!("; the shortest plan takes {s}"));
+        let shortest = w
+            .shortest
+            .map_or(String::new(), |s| format!("; the shortest plan takes {s}"));
         self.message = if step.terminated {
             format!("The agent reached the goal in {steps} steps{shortest}.")
         } else if step.truncated {
@@ -349,7 +353,10 @@ impl Participant {
                 self.session.steps(),
                 self.session.is_over(),
                 self.shortest,
-                self.session.proposal().filter(|_| self.mode == Mode::Correct).map(|a| a.to_string()),
+                self.session
+                    .proposal()
+                    .filter(|_| self.mode == Mode::Correct)
+                    .map(|a| a.to_string()),
                 None,
             ),
         };
@@ -438,5 +445,9 @@ fn shortest(world: &EnvConfig, obs: &Observation) -> Option<u32> {
 }
 
 fn join(steps: &[Action]) -> String {
-    steps.iter().map(ToString::to_string).collect::<Vec<_>>().join(", then ")
+    steps
+        .iter()
+        .map(ToString::to_string)
+        .collect::<Vec<_>>()
+        .join(", then ")
 }

@@ -20,12 +20,12 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Instant;
 
 use agent::DemoWriter;
+use axum::Router;
 use axum::extract::ws::{CloseFrame, Message, WebSocket, WebSocketUpgrade};
 use axum::extract::{Form, Path, State};
 use axum::http::{HeaderMap, StatusCode, header};
 use axum::response::{Html, IntoResponse, Redirect, Response};
 use axum::routing::{get, post};
-use axum::Router;
 use files::OutputPath;
 use serde::{Deserialize, Serialize};
 
@@ -192,7 +192,10 @@ impl App {
         if registry.all.len() >= self.limits.max_sessions {
             return Err((
                 StatusCode::SERVICE_UNAVAILABLE,
-                format!("this server takes at most {} sessions, and has them all", self.limits.max_sessions),
+                format!(
+                    "this server takes at most {} sessions, and has them all",
+                    self.limits.max_sessions
+                ),
             ));
         }
         let number = registry.all.len();
@@ -313,8 +316,14 @@ fn router(app: Arc<App>) -> Router {
         .route("/results/{token}", get(results_page))
         .route("/api/results/{token}", get(results))
         .route("/ws/{token}", get(socket))
-        .route("/assets/app.js", get(|| async { ([(header::CONTENT_TYPE, "text/javascript")], APP_JS) }))
-        .route("/assets/style.css", get(|| async { ([(header::CONTENT_TYPE, "text/css")], STYLE_CSS) }))
+        .route(
+            "/assets/app.js",
+            get(|| async { ([(header::CONTENT_TYPE, "text/javascript")], APP_JS) }),
+        )
+        .route(
+            "/assets/style.css",
+            get(|| async { ([(header::CONTENT_TYPE, "text/css")], STYLE_CSS) }),
+        )
         .with_state(app)
 }
 
@@ -427,7 +436,11 @@ async fn socket(
     upgrade: WebSocketUpgrade,
 ) -> Response {
     if !same_origin(&headers) {
-        return (StatusCode::FORBIDDEN, "a page of another origin may not open this session").into_response();
+        return (
+            StatusCode::FORBIDDEN,
+            "a page of another origin may not open this session",
+        )
+            .into_response();
     }
     let limit = app.limits.max_frame_bytes;
     upgrade
@@ -446,7 +459,9 @@ impl Drop for Connected {
 }
 
 async fn refuse(mut socket: WebSocket, message: &str) {
-    let _ = socket.send(Message::Text(error_line(None, message.into()).into())).await;
+    let _ = socket
+        .send(Message::Text(error_line(None, message.into()).into()))
+        .await;
     let _ = socket.send(Message::Close(None)).await;
 }
 

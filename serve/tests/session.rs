@@ -58,9 +58,18 @@ async fn a_person_plays_an_episode_and_every_step_is_recorded() {
     assert_eq!(last["progress"]["episodes_done"], 1);
 
     let path = only_recording(dir.path());
-    assert!(path.file_name().unwrap().to_str().unwrap().ends_with("-default-P01.jsonl"));
+    assert!(
+        path.file_name()
+            .unwrap()
+            .to_str()
+            .unwrap()
+            .ends_with("-default-P01.jsonl")
+    );
     let lines = lines(&path);
-    assert_eq!(last["progress"]["recorded_lines"].as_u64().unwrap() as usize, lines.len());
+    assert_eq!(
+        last["progress"]["recorded_lines"].as_u64().unwrap() as usize,
+        lines.len()
+    );
     assert_eq!(lines[0]["type"], "session");
     assert_eq!(lines[0]["version"], 2);
     assert_eq!(lines[0]["demonstrator"], "person");
@@ -117,7 +126,10 @@ async fn bad_input_gets_one_line_and_changes_nothing() {
         let answer = receive(&mut socket).await;
         assert_eq!(answer["type"], "error", "{text} -> {answer}");
         let message = answer["message"].as_str().unwrap();
-        assert!(!message.contains('\n') && message.contains("nothing was done"), "{message}");
+        assert!(
+            !message.contains('\n') && message.contains("nothing was done"),
+            "{message}"
+        );
     }
     socket
         .send(tokio_tungstenite::tungstenite::Message::Binary(vec![1, 2, 3].into()))
@@ -131,7 +143,10 @@ async fn bad_input_gets_one_line_and_changes_nothing() {
     // A move with nothing held is no error under the free protocol; the state is as it was
     // before the bad messages.
     let now = ask(&mut socket, json!({"type": "mode", "mode": "play"})).await;
-    assert_eq!((now["blocks"].clone(), now["steps"].clone()), (first["blocks"].clone(), json!(0)));
+    assert_eq!(
+        (now["blocks"].clone(), now["steps"].clone()),
+        (first["blocks"].clone(), json!(0))
+    );
 
     // A message larger than the frame bound ends the connection.
     let huge = "y".repeat(100 * 1024);
@@ -179,19 +194,30 @@ async fn sessions_are_isolated_and_tokens_checked() {
     let mut first = connect(addr, &a, None).await.unwrap();
     let view_a = receive(&mut first).await;
     let mut second = connect(addr, &a, None).await.unwrap();
-    assert!(receive(&mut second).await["message"]
-        .as_str()
-        .unwrap()
-        .contains("another window"));
+    assert!(
+        receive(&mut second).await["message"]
+            .as_str()
+            .unwrap()
+            .contains("another window")
+    );
     // Bob's moves never reach Alice's recording.
     let mut bob = connect(addr, &b, None).await.unwrap();
     let view_b = receive(&mut bob).await;
     let pick = format!("pick {}", 0);
     act(&mut bob, &pick).await;
     act(&mut bob, "up").await;
-    let files: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().path()).collect();
-    let alice_file = files.iter().find(|p| p.to_str().unwrap().ends_with("alice.jsonl")).unwrap();
-    let bob_file = files.iter().find(|p| p.to_str().unwrap().ends_with("bob.jsonl")).unwrap();
+    let files: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    let alice_file = files
+        .iter()
+        .find(|p| p.to_str().unwrap().ends_with("alice.jsonl"))
+        .unwrap();
+    let bob_file = files
+        .iter()
+        .find(|p| p.to_str().unwrap().ends_with("bob.jsonl"))
+        .unwrap();
     assert_eq!(lines(alice_file).len(), 2, "session and episode lines only");
     assert_eq!(lines(bob_file).len(), 4);
     // Both play the condition's seeded starts: the same first episode.
@@ -202,7 +228,10 @@ async fn sessions_are_isolated_and_tokens_checked() {
     let api = path.replace("/results/", "/api/results/");
     let (status, body) = http(addr, "GET", &api, "").await;
     assert_eq!(status, 200);
-    assert!(body.contains("\"name\":\"bob\"") && body.contains("\"steps\":2"), "{body}");
+    assert!(
+        body.contains("\"name\":\"bob\"") && body.contains("\"steps\":2"),
+        "{body}"
+    );
     assert_eq!(http(addr, "GET", &format!("/api/results/{a}"), "").await.0, 404);
     assert_eq!(http(addr, "GET", &format!("/results/{a}"), "").await.0, 404);
     assert_eq!(http(addr, "GET", &path, "").await.0, 200);
@@ -291,7 +320,13 @@ async fn a_person_corrects_the_agent_and_watches_it() {
     let w = ask(&mut socket, json!({"type": "mode", "mode": "watch"})).await;
     assert_eq!(w["mode"], "watch");
     let greedy = w["greedy"].as_str().unwrap().to_string();
-    assert!(w["q"].as_array().unwrap().iter().any(|q| q["action"] == greedy.as_str()));
+    assert!(
+        w["q"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|q| q["action"] == greedy.as_str())
+    );
     let after = ask(&mut socket, json!({"type": "step"})).await;
     assert_eq!(after["steps"], 1);
     assert!(after["message"].as_str().unwrap().contains(&greedy), "{after}");
@@ -357,7 +392,11 @@ modes = ["correct", "play"]
     assert_eq!(last["done"], true);
     let after = ask(socket, json!({"type": "next"})).await;
     assert!(after["message"].as_str().unwrap().contains("finished"), "{after}");
-    let api = results.split_once(&addr.to_string()).unwrap().1.replace("/results/", "/api/results/");
+    let api = results
+        .split_once(&addr.to_string())
+        .unwrap()
+        .1
+        .replace("/results/", "/api/results/");
     let (_, body) = http(addr, "GET", &api, "").await;
     let json: Value = serde_json::from_str(body.split("\r\n\r\n").nth(1).unwrap()).unwrap();
     assert_eq!(json["study"], "pilot");
@@ -425,7 +464,13 @@ async fn recordings_survive_a_kill() {
     use std::io::BufRead;
     let dir = tempfile::tempdir().unwrap();
     let mut child = std::process::Command::new(std::env::current_exe().unwrap())
-        .args(["child_server", "--exact", "--ignored", "--nocapture", "--test-threads=1"])
+        .args([
+            "child_server",
+            "--exact",
+            "--ignored",
+            "--nocapture",
+            "--test-threads=1",
+        ])
         .env("SERVE_CHILD_DIR", dir.path())
         .stdout(std::process::Stdio::piped())
         .spawn()
@@ -450,9 +495,13 @@ async fn recordings_survive_a_kill() {
     };
     let token = join(addr, "").await.unwrap();
     let mut socket = connect(addr, &token, None).await.unwrap();
-    let mut acknowledged = receive(&mut socket).await["progress"]["recorded_lines"].as_u64().unwrap();
+    let mut acknowledged = receive(&mut socket).await["progress"]["recorded_lines"]
+        .as_u64()
+        .unwrap();
     for a in ["pick 0", "up", "right", "drop", "pick 1", "left"] {
-        acknowledged = act(&mut socket, a).await["progress"]["recorded_lines"].as_u64().unwrap();
+        acknowledged = act(&mut socket, a).await["progress"]["recorded_lines"]
+            .as_u64()
+            .unwrap();
     }
     child.0.kill().unwrap();
     child.0.wait().unwrap();

@@ -130,7 +130,13 @@ pub fn only_recording(dir: &Path) -> std::path::PathBuf {
 
 /// A tabular model of 3 blocks on the default grid, untrained, saved in `dir`.
 pub fn tabular_model(dir: &Path) -> std::path::PathBuf {
-    let agent = agent::QAgent::new(agent::ReprKind::Chasing, sim::Grid::default(), 3, agent::QParams::default()).unwrap();
+    let agent = agent::QAgent::new(
+        agent::ReprKind::Chasing,
+        sim::Grid::default(),
+        3,
+        agent::QParams::default(),
+    )
+    .unwrap();
     let path = dir.join("agent.safetensors");
     agent.save(&path).unwrap();
     path
