@@ -633,6 +633,21 @@ mod tests {
     }
 
     #[test]
+    fn a_profile_given_replaces_the_world_rules_and_the_rule_of_the_session() {
+        let a = agent();
+        let (world, profile) = session_world_under(&a, None);
+        assert_eq!((world, profile), (session_world(&a), Profile::Spec));
+        let (world, profile) = session_world_under(&a, Some(Profile::Original));
+        assert_eq!(profile, Profile::Original);
+        assert_eq!(world.protocol, sim::ActionProtocol::Paper);
+        assert_eq!(world.start, Profile::Original.start_rule());
+        assert_eq!(world.horizon, session_world(&a).horizon, "the agent's schedule keeps its horizon");
+        assert_eq!(default_goals(3, Profile::Original).unwrap(), demonstrated_goals());
+        assert_eq!(default_goals(3, Profile::Spec).unwrap().len(), 6);
+        assert_eq!(default_goals(2, Profile::Original).unwrap().len(), 2);
+    }
+
+    #[test]
     fn correction_runs_can_go_to_other_threads() {
         fn send<T: Send>() {}
         send::<CorrectionConfig>();
