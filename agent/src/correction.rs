@@ -641,7 +641,11 @@ mod tests {
         assert_eq!(profile, Profile::Original);
         assert_eq!(world.protocol, sim::ActionProtocol::Paper);
         assert_eq!(world.start, Profile::Original.start_rule());
-        assert_eq!(world.horizon, session_world(&a).horizon, "the agent's schedule keeps its horizon");
+        assert_eq!(
+            world.horizon,
+            session_world(&a).horizon,
+            "the agent's schedule keeps its horizon"
+        );
         assert_eq!(default_goals(3, Profile::Original).unwrap(), demonstrated_goals());
         assert_eq!(default_goals(3, Profile::Spec).unwrap().len(), 6);
         assert_eq!(default_goals(2, Profile::Original).unwrap().len(), 2);
