@@ -451,3 +451,65 @@ fn join(steps: &[Action]) -> String {
         .collect::<Vec<_>>()
         .join(", then ")
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use sim::Profile;
+
+    fn participant(profile: Profile) -> Participant {
+        let c = Condition::prepare("c", None, Some(profile), Some("0,1,2"), 2, None, 7).unwrap();
+        Participant::new(Arc::new(c), Recorder::new(None)).unwrap()
+    }
+
+    fn act(p: &mut Participant, action: &str) -> Outcome {
+        p.handle(&ClientMessage::Act {
+            id: None,
+            action: action.into(),
+        })
+    }
+
+    #[test]
+    fn under_the_paper_protocol_a_pick_while_holding_is_a_drop_and_the_pick() {
+        let mut p = participant(Profile::Original);
+        let refused = act(&mut p, "up").unwrap_err();
+        assert!(refused.contains("only pick"), "{refused}");
+        assert_eq!(p.progress().steps, 0);
+        act(&mut p, "pick 1").unwrap();
+        let view = act(&mut p, "pick 2").unwrap();
+        assert_eq!(view.held, Some(2));
+        assert_eq!((view.steps, view.progress.corrections), (3, 3));
+        assert!(view.message.contains("drop, then pick 2"), "{}", view.message);
+    }
+
+    #[test]
+    fn an_episode_ends_with_the_shortest_plan_and_the_limit_is_kept() {
+        let mut p = participant(Profile::Spec);
+        for _ in 0..2 {
+            let obs = p.session.observation().unwrap();
+            let plan = ExactSolver::new(obs.grid).solve(&obs.state, &obs.goal).unwrap();
+            let mut view = None;
+            for a in &plan.actions {
+                view = Some(act(&mut p, &a.to_string()).unwrap());
+            }
+            let view = view.unwrap();
+            assert_eq!(view.shortest, Some(plan.len() as u32));
+            assert_eq!(view.outcome.as_deref(), Some("goal"));
+            if !p.is_done() {
+                p.handle(&ClientMessage::Next { id: None }).unwrap();
+            }
+        }
+        assert!(p.is_done());
+        assert!(
+            p.handle(&ClientMessage::Next { id: None })
+                .unwrap_err()
+                .contains("finished")
+        );
+        // Watch and correct need a model: not offered.
+        let mode = ClientMessage::Mode {
+            id: None,
+            mode: Mode::Correct,
+        };
+        assert!(p.handle(&mode).unwrap_err().contains("not offered"));
+    }
+}

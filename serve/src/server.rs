@@ -338,7 +338,15 @@ struct JoinForm {
     name: String,
 }
 
-async fn join(State(app): State<Arc<App>>, Form(form): Form<JoinForm>) -> Response {
+async fn join(State(app): State<Arc<App>>, headers: HeaderMap, Form(form): Form<JoinForm>) -> Response {
+    // Another site's page may not fill the server with sessions through its own form.
+    if !same_origin(&headers) {
+        return (
+            StatusCode::FORBIDDEN,
+            "a page of another origin may not begin a session",
+        )
+            .into_response();
+    }
     let name = Some(form.name.trim().to_string()).filter(|n| !n.is_empty());
     match app.join(name) {
         Ok(token) => Redirect::to(&format!("/s/{token}")).into_response(),
@@ -411,7 +419,7 @@ async fn results(State(app): State<Arc<App>>, Path(token): Path<String>) -> Resp
         .into_response()
 }
 
-/// Whether a WebSocket request comes from our own page: a browser names the page's origin,
+/// Whether a request (a WebSocket, the join form) comes from our own page: a browser names the page's origin,
 /// which must be this server as the browser reached it (its `Host`). A client that sends
 /// no `Origin` is not a browser, and no other site's page can make it act.
 fn same_origin(headers: &HeaderMap) -> bool {
@@ -504,5 +512,58 @@ async fn session_socket(mut socket: WebSocket, app: Arc<App>, token: String) {
         if socket.send(Message::Text(answer.into())).await.is_err() {
             break;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn headers(origin: Option<&str>, host: &str) -> HeaderMap {
+        let mut h = HeaderMap::new();
+        h.insert(header::HOST, host.parse().unwrap());
+        if let Some(o) = origin {
+            h.insert(header::ORIGIN, o.parse().unwrap());
+        }
+        h
+    }
+
+    #[test]
+    fn only_the_servers_own_origin_passes() {
+        assert!(same_origin(&headers(None, "127.0.0.1:8080")));
+        assert!(same_origin(&headers(Some("http://127.0.0.1:8080"), "127.0.0.1:8080")));
+        assert!(same_origin(&headers(Some("https://Example.org"), "example.org")));
+        assert!(!same_origin(&headers(Some("http://127.0.0.1:8081"), "127.0.0.1:8080")));
+        assert!(!same_origin(&headers(Some("http://evil.example"), "127.0.0.1:8080")));
+        assert!(!same_origin(&headers(Some("null"), "127.0.0.1:8080")));
+    }
+
+    #[test]
+    fn the_bucket_allows_a_seconds_worth_then_refills() {
+        let mut b = Bucket {
+            tokens: 5.0,
+            last: Instant::now(),
+        };
+        assert_eq!((0..10).filter(|_| b.take(5)).count(), 5);
+        b.last -= std::time::Duration::from_millis(400);
+        assert_eq!((0..10).filter(|_| b.take(5)).count(), 2);
+    }
+
+    #[test]
+    fn tokens_are_fresh_128_bit_hex() {
+        let (a, b) = (new_token(), new_token());
+        assert_eq!(a.len(), 32);
+        assert!(a.bytes().all(|c| c.is_ascii_hexdigit()));
+        assert_ne!(a, b);
+    }
+
+    #[test]
+    fn a_recording_never_reuses_a_name_and_stays_in_its_folder() {
+        let dir = tempfile::tempdir().unwrap();
+        let (path, file) = recording_path(dir.path(), 3, "c", Some("P1"));
+        assert_eq!(file, "p0003-c-P1.jsonl");
+        assert_eq!(path.parent().unwrap(), dir.path());
+        std::fs::write(&path, "").unwrap();
+        assert_eq!(recording_path(dir.path(), 3, "c", Some("P1")).1, "p0004-c-P1.jsonl");
     }
 }

@@ -190,6 +190,10 @@ async fn sessions_are_isolated_and_tokens_checked() {
     // Another site's page may not open a session.
     let foreign = connect(addr, &a, Some("http://evil.example")).await;
     assert!(foreign.unwrap_err().contains("403"));
+    let (status, _) = http_with(addr, "POST", "/join", "name=x", "Origin: http://evil.example\r\n").await;
+    assert_eq!(status, 403);
+    let (status, _) = http_with(addr, "POST", "/join", "name=x", &format!("Origin: http://{addr}\r\n")).await;
+    assert_eq!(status, 303);
     // One page per session.
     let mut first = connect(addr, &a, None).await.unwrap();
     let view_a = receive(&mut first).await;

@@ -211,6 +211,13 @@ def test_play_correct_and_watch_in_the_browser(server, page):
         "--on-bad-line", "fail",
     )
     assert f"{len(steps)} steps" in out, out
+    # And Python's reader, when the package is installed (scripts/test installs it).
+    try:
+        import blockstack
+    except ImportError:
+        return
+    arrays = blockstack.read_recording(next(record.iterdir()))
+    assert len(arrays["actions"]) == len(steps)
 
 
 def test_results_page_lists_the_sessions(server, page):
