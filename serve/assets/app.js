@@ -15,7 +15,7 @@ let waiting = false;
 let timer = null;
 
 function show(id) {
-  for (const s of ["join", "session", "results"]) $(s).hidden = s !== id;
+  for (const s of ["join", "session", "results", "curve"]) $(s).hidden = s !== id;
 }
 
 function send(message) {
@@ -214,6 +214,61 @@ async function results(token) {
   setInterval(refresh, 2000);
 }
 
+// A training run's learning curve: the share of recent games that reached the goal (blue,
+// left axis) and their mean steps (orange, right axis) against games played.
+async function curve() {
+  show("curve");
+  const draw = (data) => {
+    $("curvetitle").textContent = data.title;
+    const c = $("chart");
+    const ctx = c.getContext("2d");
+    const [w, h, pad] = [c.width, c.height, 40];
+    ctx.clearRect(0, 0, w, h);
+    ctx.strokeStyle = "#999";
+    ctx.strokeRect(pad, 10, w - 2 * pad, h - pad - 10);
+    const pts = data.points;
+    const xmax = Math.max(data.target, 1);
+    const smax = Math.max(1, ...pts.map((p) => p.mean_steps || 0));
+    const x = (g) => pad + (w - 2 * pad) * g / xmax;
+    const y = (v) => h - pad - (h - pad - 10) * v;
+    const line = (colour, value) => {
+      ctx.strokeStyle = colour;
+      ctx.lineWidth = 2;
+      ctx.beginPath();
+      let started = false;
+      for (const p of pts) {
+        const v = value(p);
+        if (v === null) continue;
+        if (started) ctx.lineTo(x(p.games), y(v)); else ctx.moveTo(x(p.games), y(v));
+        started = true;
+      }
+      ctx.stroke();
+    };
+    line("#266ed2", (p) => p.success_rate);
+    line("#f0961e", (p) => (p.mean_steps === null ? null : p.mean_steps / smax));
+    ctx.fillStyle = "#222";
+    ctx.font = "12px sans-serif";
+    ctx.fillText("0", pad - 12, h - pad);
+    ctx.fillText("100%", 2, 20);
+    ctx.fillText(`${smax.toFixed(0)} steps`, w - pad + 2, 20);
+    ctx.fillText(`${xmax} games`, w - pad - 50, h - pad + 15);
+    const last = pts[pts.length - 1];
+    $("curvenote").textContent = last
+      ? `${last.games} of ${data.target} games; recent games reaching the goal ${(100 * last.success_rate).toFixed(0)}% (blue), mean steps ${last.mean_steps === null ? "-" : last.mean_steps.toFixed(1)} (orange)`
+      : "Waiting for the first games...";
+  };
+  const refresh = async () => {
+    try {
+      const r = await fetch("/api/curve");
+      if (r.ok) draw(await r.json());
+    } catch (e) {
+      $("curvenote").textContent = "The training run has ended (the server is gone).";
+    }
+  };
+  await refresh();
+  setInterval(refresh, 1000);
+}
+
 function main() {
   const path = location.pathname.split("/").filter(Boolean);
   if (path[0] === "s" && path[1]) {
@@ -230,6 +285,8 @@ function main() {
     $("world").focus();
   } else if (path[0] === "results" && path[1]) {
     results(path[1]);
+  } else if (path[0] === "curve") {
+    curve();
   } else {
     show("join");
   }

@@ -11,13 +11,16 @@
 //! - [`participant`]: one participant's state machine, with no network in it.
 //! - [`config`]: settings, the study file and the conditions it makes.
 //! - [`server`]: the routes, the WebSocket loop and the bounds.
+//! - [`curve`]: a training run's learning curve, live (`blockstack train ... --serve`).
 
 pub mod config;
+pub mod curve;
 pub mod error;
 pub mod participant;
 pub mod protocol;
 pub mod server;
 
 pub use config::{Limits, ServeConfig, StudyFile};
+pub use curve::{CurveHandle, CurvePoint, serve_curve};
 pub use error::{Result, ServeError};
 pub use server::{Links, Server, run};

@@ -34,7 +34,8 @@ use crate::error::{Result, ServeError};
 use crate::participant::{Participant, Recorder};
 use crate::protocol::{ClientMessage, ErrorMessage, Mode, Progress};
 
-const INDEX_HTML: &str = include_str!("../assets/index.html");
+/// The page: one HTML file for every view (join, session, results, curve).
+pub(crate) const INDEX_HTML: &str = include_str!("../assets/index.html");
 const APP_JS: &str = include_str!("../assets/app.js");
 const STYLE_CSS: &str = include_str!("../assets/style.css");
 
@@ -316,6 +317,13 @@ fn router(app: Arc<App>) -> Router {
         .route("/results/{token}", get(results_page))
         .route("/api/results/{token}", get(results))
         .route("/ws/{token}", get(socket))
+        .merge(asset_routes())
+        .with_state(app)
+}
+
+/// The script and style sheet, compiled in.
+pub(crate) fn asset_routes<S: Clone + Send + Sync + 'static>() -> Router<S> {
+    Router::new()
         .route(
             "/assets/app.js",
             get(|| async { ([(header::CONTENT_TYPE, "text/javascript")], APP_JS) }),
@@ -324,7 +332,6 @@ fn router(app: Arc<App>) -> Router {
             "/assets/style.css",
             get(|| async { ([(header::CONTENT_TYPE, "text/css")], STYLE_CSS) }),
         )
-        .with_state(app)
 }
 
 async fn page() -> Html<&'static str> {
