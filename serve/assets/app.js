@@ -227,7 +227,8 @@ async function curve() {
     ctx.strokeStyle = "#999";
     ctx.strokeRect(pad, 10, w - 2 * pad, h - pad - 10);
     const pts = data.points;
-    const xmax = Math.max(data.target, 1);
+    // The games played so far fill the width: the curve grows into view as the run goes on.
+    const xmax = Math.max(1, ...pts.map((p) => p.games));
     const smax = Math.max(1, ...pts.map((p) => p.mean_steps || 0));
     const x = (g) => pad + (w - 2 * pad) * g / xmax;
     const y = (v) => h - pad - (h - pad - 10) * v;
@@ -250,7 +251,9 @@ async function curve() {
     ctx.font = "12px sans-serif";
     ctx.fillText("0", pad - 12, h - pad);
     ctx.fillText("100%", 2, 20);
-    ctx.fillText(`${smax.toFixed(0)} steps`, w - pad + 2, 20);
+    ctx.textAlign = "right";
+    ctx.fillText(`${smax.toFixed(0)} steps`, w - pad - 4, 24);
+    ctx.textAlign = "left";
     ctx.fillText(`${xmax} games`, w - pad - 50, h - pad + 15);
     const last = pts[pts.length - 1];
     $("curvenote").textContent = last

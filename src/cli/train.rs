@@ -245,7 +245,11 @@ pub fn train(args: TrainArgs) -> Result<()> {
     );
     let curve = match args.serve {
         Some(port) => {
-            let title = format!("blockstack train: {}", args.out.display());
+            let name = args
+                .out
+                .file_name()
+                .map_or("-".into(), |n| n.to_string_lossy().into_owned());
+            let title = format!("blockstack train: {name}, {} games", total);
             let handle = serve::serve_curve([127, 0, 0, 1].into(), port, &title, total)?;
             writeln!(std::io::stderr(), "learning curve: {}", handle.url)?;
             Some(handle)

@@ -230,3 +230,27 @@ def test_results_page_lists_the_sessions(server, page):
     # A wrong token opens nothing.
     page.goto(re.sub(r"/results/\w+", "/results/" + "0" * 32, links["researcher"]))
     assert "unknown results link" in page.content()
+
+
+def test_a_training_runs_curve_is_live(page, tmp_path):
+    proc = subprocess.Popen(
+        [str(BINARY), "train", "--games", "100000", "--serve", "0", "--out", tmp_path / "m.safetensors"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        url = None
+        while url is None:
+            line = proc.stderr.readline()
+            assert line, "train ended before serving its curve"
+            if line.startswith("learning curve: "):
+                url = line.split(": ", 1)[1].strip()
+        page.goto(url)
+        page.wait_for_function("document.getElementById('curvenote').textContent.includes(' of 100000 games')", timeout=20_000)
+        page.wait_for_timeout(1500)
+        assert "blockstack train" in page.inner_text("#curvetitle")
+        page.screenshot(path=str(SHOTS / "serve-curve.png"))
+    finally:
+        proc.kill()
+        proc.wait()
