@@ -8,7 +8,6 @@
 //! in (its protocol and start rule, its profile's reward) unless `--profile` or a part's
 //! flag says otherwise.
 
-use agent::LearnerProfile;
 use anyhow::Result;
 use clap::Args;
 use sim::{ActionProtocol, Profile, RewardModel, StartRule};
@@ -112,8 +111,8 @@ impl Rules {
 }
 
 /// The world of a correction session of `agent` (`demo`, `correct`): the one it was trained
-/// in ([`agent::correction::session_world`]), then `--profile`'s protocol, start rule and learner's reward,
-/// then each part's own flag. Also the profile whose correction rule applies: `--profile`,
+/// in under `--profile` ([`agent::correction::session_world_under`]), then each part's own
+/// flag. Also the profile whose correction rule applies: `--profile`,
 /// else the one the agent was trained under.
 pub fn session_world(
     agent: &agent::QAgent,
@@ -121,19 +120,13 @@ pub fn session_world(
     play: PlayRulesArgs,
     reward: Option<&str>,
 ) -> Result<(sim::EnvConfig, Profile)> {
-    let mut world = agent::correction::session_world(agent);
-    let trained_under = agent.training().map_or(Profile::Spec, |t| t.profile);
-    if let Some(p) = profile.profile {
-        world.protocol = p.protocol();
-        world.start = p.start_rule();
-        world.reward = LearnerProfile::of(p).reward;
-    }
+    let (mut world, profile) = agent::correction::session_world_under(agent, profile.profile);
     world.protocol = play.protocol.unwrap_or(world.protocol);
     world.start = play.start.start.unwrap_or(world.start);
     if let Some(name) = reward {
         world.reward = name.parse()?;
     }
-    Ok((world, profile.profile.unwrap_or(trained_under)))
+    Ok((world, profile))
 }
 
 #[cfg(test)]
