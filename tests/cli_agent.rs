@@ -2,8 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-mod common;
-use common::{ROLE_ON_GRID, blockstack, model_metadata, path, scratch, stderr, stdout, train, train_model};
+use crate::common::{ROLE_ON_GRID, blockstack, model_metadata, path, scratch, stderr, stdout, train, train_model};
 
 /// Trains the role learner on one goal, on the grid backend (quick), and returns the model.
 fn train_role(dir: &Path, name: &str, games: &str) -> PathBuf {

@@ -2,8 +2,7 @@
 //! (played through), and flags that do not apply, each answered in one line with exit
 //! status 2.
 
-mod common;
-use common::{blockstack, stderr, stdout};
+use crate::common::{blockstack, stderr, stdout};
 
 #[test]
 fn too_many_goals_are_refused_in_one_short_line() {

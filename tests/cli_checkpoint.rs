@@ -6,8 +6,7 @@ use std::path::Path;
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-mod common;
-use common::{BIN, blockstack, file_metadata, path, scratch, stderr, train};
+use crate::common::{BIN, blockstack, file_metadata, path, scratch, stderr, train};
 
 /// The role recipe on two goals, on the grid backend: its final replay makes the
 /// checkpoint carry a replay memory.

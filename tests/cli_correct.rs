@@ -7,8 +7,7 @@ use std::time::{Duration, Instant};
 
 use agent::DemoRecord;
 
-mod common;
-use common::{blockstack, path, scratch, stderr, train_model};
+use crate::common::{blockstack, path, scratch, stderr, train_model};
 
 /// The paper's learner, briefly trained on two goals on the grid backend.
 fn base_model(dir: &Path) -> PathBuf {

@@ -3,8 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-mod common;
-use common::{blockstack, file_metadata, path, scratch, stderr, stdout};
+use crate::common::{blockstack, file_metadata, path, scratch, stderr, stdout};
 
 /// A tiny DQfD run on 2 blocks (seconds), saved under `name`.
 fn train(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {

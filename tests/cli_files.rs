@@ -11,8 +11,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-mod common;
-use common::{BIN, ROLE_ON_GRID, blockstack, path, scratch, stderr, stdout, train_model};
+use crate::common::{BIN, ROLE_ON_GRID, blockstack, path, scratch, stderr, stdout, train_model};
 
 /// Trains a small role model (grid backend, a few hundred games) at `dir/name`.
 fn small_model(dir: &Path, name: &str) -> PathBuf {

@@ -3,8 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-mod common;
-use common::{blockstack, model_metadata, path, scratch, stderr, stdout, train, train_model};
+use crate::common::{blockstack, model_metadata, path, scratch, stderr, stdout, train, train_model};
 
 fn json(args: &[&str]) -> serde_json::Value {
     let o = blockstack(args);

@@ -1,8 +1,7 @@
 //! `train --preset`: the role representation trains with the role recipe by default, the
 //! paper's representations with the paper's learner, and every flag overrides its preset.
 
-mod common;
-use common::{blockstack, model_metadata, path, scratch, stderr, stdout, train, train_model};
+use crate::common::{blockstack, model_metadata, path, scratch, stderr, stdout, train, train_model};
 
 #[test]
 fn the_role_learner_with_its_default_preset_plays_every_goal_greedily() {

@@ -7,8 +7,7 @@
 
 use std::path::{Path, PathBuf};
 
-mod common;
-use common::{blockstack, scratch, stderr};
+use crate::common::{blockstack, scratch, stderr};
 
 /// The quick report: CI's, or one made now.
 fn quick_report() -> PathBuf {

@@ -5,8 +5,7 @@ use std::process::Output;
 
 use sim::{Action, Cell, Goal, Grid, GridWorld, State, World};
 
-mod common;
-use common::{blockstack, stderr, stdout};
+use crate::common::{blockstack, stderr, stdout};
 
 fn json(o: &Output) -> serde_json::Value {
     assert!(o.status.success(), "{}", stderr(o));

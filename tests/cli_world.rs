@@ -1,7 +1,6 @@
 //! `blockstack run` and `render` end to end, and their answers to bad input.
 
-mod common;
-use common::{blockstack, scratch, stderr, stdout};
+use crate::common::{blockstack, scratch, stderr, stdout};
 
 #[test]
 fn run_reports_failures_and_steps_as_json() {

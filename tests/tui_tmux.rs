@@ -13,8 +13,7 @@ use std::time::{Duration, Instant};
 
 use agent::DemoRecord;
 
-mod common;
-use common::{BIN, blockstack, path, scratch, stderr, train_model};
+use crate::common::{BIN, blockstack, path, scratch, stderr, train_model};
 
 /// A tmux server of our own (its socket in the test's folder), killed when dropped.
 struct Tmux {

@@ -2,8 +2,7 @@
 //! the action protocol, the `paper-code` schedule updates as the authors' code did, and a
 //! model trained under `original` remembers it.
 
-mod common;
-use common::temp_path;
+use crate::common::temp_path;
 
 use agent::correction::{CorrectionConfig, CorrectionRule, person_steps, session_world};
 use agent::demonstrator::PlannerKind;

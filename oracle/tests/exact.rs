@@ -2,9 +2,7 @@
 //! heuristic's proofs checked on every state, its plans replayed in the physics world, the
 //! oracle's optimality gap, and the errors both planners report.
 
-mod common;
-
-use common::{BfsTable, all_placements, all_states, replay};
+use crate::common::{BfsTable, all_placements, all_states, replay};
 use oracle::gap;
 use oracle::{ExactSolver, Oracle, OracleError};
 use rand::RngExt;

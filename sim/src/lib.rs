@@ -53,6 +53,7 @@ pub mod error;
 pub mod goal;
 pub mod grid;
 pub mod grid_world;
+pub mod names;
 pub mod obs_kind;
 pub mod observation;
 pub mod occupancy;

@@ -12,11 +12,9 @@
 //! | reward | `sparse` | `paper-code` |
 //! | training games end | at the goal | at a step reward above 70 |
 
-use std::fmt;
-
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Result, SimError};
+use crate::error::SimError;
 use crate::protocol::ActionProtocol;
 use crate::reward::{PaperCode, RewardModel};
 use crate::start::StartRule;
@@ -33,18 +31,15 @@ pub enum Profile {
     Original,
 }
 
-impl Profile {
-    /// The names the profiles are chosen by.
-    pub const NAMES: [&'static str; 2] = ["spec", "original"];
-
-    /// This profile's name.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Profile::Spec => "spec",
-            Profile::Original => "original",
-        }
+crate::names!(Profile { Spec = "spec", Original = "original" } unknown(name) -> SimError {
+    SimError::Parse {
+        what: "profile",
+        text: name.to_string(),
+        reason: format!("choose one of {}", Profile::NAMES.join(", ")),
     }
+});
 
+impl Profile {
     /// The action protocol: `free` or `paper`.
     pub const fn protocol(self) -> ActionProtocol {
         match self {
@@ -75,28 +70,6 @@ impl Profile {
         match self {
             Profile::Spec => Termination::Goal,
             Profile::Original => Termination::paper_training(),
-        }
-    }
-}
-
-impl fmt::Display for Profile {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for Profile {
-    type Err = SimError;
-
-    fn from_str(name: &str) -> Result<Profile> {
-        match name {
-            "spec" => Ok(Profile::Spec),
-            "original" => Ok(Profile::Original),
-            _ => Err(SimError::Parse {
-                what: "profile",
-                text: name.to_string(),
-                reason: format!("choose one of {}", Self::NAMES.join(", ")),
-            }),
         }
     }
 }
