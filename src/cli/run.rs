@@ -157,7 +157,7 @@ pub fn run(args: RunArgs) -> Result<()> {
         policy.as_mut(),
         args.episodes,
         args.seed,
-        trajectory.as_mut(),
+        &mut trajectory,
         &mut |_| bar.inc(1),
     )
     .map_err(|e| args.budget.explain(e))?;
