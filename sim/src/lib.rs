@@ -81,7 +81,7 @@ pub use obs_kind::ObsKind;
 pub use observation::{Observation, Pixels, Planes};
 pub use occupancy::Occupancy;
 pub use physics_world::PhysicsWorld;
-pub use profile::Profile;
+pub use profile::{Profile, ProfileParts};
 pub use protocol::{ActionMask, ActionProtocol};
 pub use reward::RewardModel;
 pub use start::StartRule;

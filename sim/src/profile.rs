@@ -11,9 +11,14 @@
 //! | start rule | `uniform` | `paper` |
 //! | reward | `sparse` | `paper-code` |
 //! | training games end | at the goal | at a step reward above 70 |
+//!
+//! A run takes a profile's parts and then any part named on its own in its place
+//! (`--profile original --protocol free`): [`ProfileParts::overridden`] is that one
+//! resolution, which the CLI's commands and Python's environments both call.
 
 use serde::{Deserialize, Serialize};
 
+use crate::env::EnvConfig;
 use crate::error::SimError;
 use crate::protocol::ActionProtocol;
 use crate::reward::{PaperCode, RewardModel};
@@ -74,9 +79,92 @@ impl Profile {
     }
 }
 
+/// The world-level parts of a profile, as resolved for one run (module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProfileParts {
+    /// The profile they came from (reported, and keying the learner-level parts).
+    pub profile: Profile,
+    /// The action protocol.
+    pub protocol: ActionProtocol,
+    /// The start rule.
+    pub start: StartRule,
+    /// The reward.
+    pub reward: RewardModel,
+}
+
+impl ProfileParts {
+    /// `profile`'s parts.
+    pub fn of(profile: Profile) -> ProfileParts {
+        ProfileParts {
+            profile,
+            protocol: profile.protocol(),
+            start: profile.start_rule(),
+            reward: profile.reward(),
+        }
+    }
+
+    /// These parts under a run's choices: `profile`, if given, replaces them all with its
+    /// own; then each part given replaces that part.
+    pub fn overridden(
+        self,
+        profile: Option<Profile>,
+        protocol: Option<ActionProtocol>,
+        start: Option<StartRule>,
+        reward: Option<RewardModel>,
+    ) -> ProfileParts {
+        let parts = profile.map_or(self, ProfileParts::of);
+        ProfileParts {
+            protocol: protocol.unwrap_or(parts.protocol),
+            start: start.unwrap_or(parts.start),
+            reward: reward.unwrap_or(parts.reward),
+            ..parts
+        }
+    }
+
+    /// `config` with these parts' protocol, start rule and reward.
+    pub fn apply(self, config: EnvConfig) -> EnvConfig {
+        EnvConfig {
+            protocol: self.protocol,
+            start: self.start,
+            reward: self.reward,
+            ..config
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_part_named_on_its_own_replaces_the_profiles() {
+        let spec = ProfileParts::of(Profile::Spec);
+        assert_eq!(
+            spec.overridden(Some(Profile::Original), None, None, None),
+            ProfileParts::of(Profile::Original)
+        );
+        let mixed = spec.overridden(
+            Some(Profile::Original),
+            Some(ActionProtocol::Free),
+            None,
+            Some(RewardModel::default()),
+        );
+        assert_eq!(
+            (mixed.profile, mixed.protocol, mixed.start, mixed.reward),
+            (
+                Profile::Original,
+                ActionProtocol::Free,
+                StartRule::Paper,
+                RewardModel::default()
+            )
+        );
+        assert_eq!(spec.overridden(None, None, None, None), spec);
+        let config = mixed.apply(EnvConfig::default());
+        assert_eq!(
+            (config.protocol, config.start),
+            (ActionProtocol::Free, StartRule::Paper)
+        );
+    }
 
     #[test]
     fn profiles_parse_print_and_serialise_by_name() {
