@@ -11,6 +11,7 @@ mod cli_original;
 mod cli_preset;
 mod cli_readers;
 mod cli_reproduce;
+mod cli_serve;
 mod cli_solve;
 mod cli_world;
 mod common;

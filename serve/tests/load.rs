@@ -3,17 +3,15 @@
 //! action to new state measured. Ignored by default (it takes a minute or more):
 //!
 //! ```text
-//! SERVE_LOAD_SECONDS=60 cargo test -p serve --release --test load -- --ignored --nocapture
+//! SERVE_LOAD_SECONDS=60 cargo test -p serve --release --test integration load:: -- --ignored --nocapture
 //! ```
 //!
 //! `SERVE_LOAD_PARTICIPANTS` (default 50) and `SERVE_LOAD_RATE` (actions per second each,
 //! default 10) change the load.
 
-mod common;
-
 use std::time::{Duration, Instant};
 
-use common::*;
+use crate::common::*;
 use serde_json::json;
 use serve::{Limits, ServeConfig};
 

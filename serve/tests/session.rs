@@ -2,9 +2,7 @@
 //! watches it; bad input changes nothing; sessions cannot reach each other; a study hands
 //! out conditions in turn; a killed server keeps every acknowledged line.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use futures_util::SinkExt;
 use serde_json::{Value, json};
 use serve::ServeConfig;
@@ -474,7 +472,7 @@ async fn recordings_survive_a_kill() {
     let dir = tempfile::tempdir().unwrap();
     let mut child = std::process::Command::new(std::env::current_exe().unwrap())
         .args([
-            "child_server",
+            "session::child_server",
             "--exact",
             "--ignored",
             "--nocapture",

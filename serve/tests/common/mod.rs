@@ -1,6 +1,6 @@
 //! A test client of our own over loopback: joins over HTTP, plays over the WebSocket.
 
-#![allow(dead_code, reason = "each test file uses its own part of the helpers")]
+#![allow(dead_code, reason = "not every helper is used by every run")]
 
 use std::net::SocketAddr;
 use std::path::Path;
