@@ -1,7 +1,9 @@
 """`blockstack serve` in a real browser: headless Chromium (Debian's package) driven by
 Playwright. Opens the page, plays an episode with key presses and clicks, corrects an
 agent, watches it, checks the recording on disk line by line against what was pressed, and
-saves a screenshot of each mode into docs/img/serve-*.png.
+saves a screenshot of each mode as serve-*.png: into target/browser-shots, or into the folder
+``BLOCKSTACK_SCREENSHOTS`` names (``BLOCKSTACK_SCREENSHOTS=docs/img`` refreshes the
+pictures the docs show; a plain test run leaves the checkout as it was).
 
 Skipped, with the reason, when Playwright or /usr/bin/chromium is absent. Run with
 ``pytest tests/browser`` after ``cargo build --release`` (scripts/test does both).
@@ -28,7 +30,7 @@ CHROMIUM_ARGS = [
     "--disable-component-update",
     "--disable-sync",
 ]
-SHOTS = ROOT / "docs" / "img"
+SHOTS = pathlib.Path(os.environ.get("BLOCKSTACK_SCREENSHOTS", ROOT / "target" / "browser-shots"))
 NAMES = ["up", "down", "left", "right", "drop"]
 
 playwright = pytest.importorskip("playwright.sync_api", reason="Playwright is not installed (pip install playwright)")
