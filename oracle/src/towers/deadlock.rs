@@ -19,29 +19,22 @@
 use super::goal::TowerGoal;
 use super::state::NONE;
 
-/// Calls `edge(a, b)` for each "a moves before b" edge between misplaced blocks of the
-/// state `below` (see the module docs); `wp` says which blocks are well placed.
-/// Each block has at most three out-edges.
-pub(crate) fn for_each_edge(below: &[usize], goal: &TowerGoal, wp: &[bool], mut edge: impl FnMut(usize, usize)) {
-    for a in (0..below.len()).filter(|&a| !wp[a]) {
-        let s = below[a];
-        if s != NONE && !wp[s] {
-            // 1: a stands on s.
-            edge(a, s);
-        }
-        let g = goal.above_of(a);
-        if g != NONE {
-            // 2: g must stand on a, so a (misplaced) is final before g (misplaced too).
-            edge(a, g);
-        }
-        if s != NONE && wp[s] {
-            // 3: a stands on the well-placed s, where another block must go.
-            let x = goal.above_of(s);
-            if x != NONE {
-                edge(a, x);
-            }
-        }
+/// The "a moves before b" edges out of the misplaced block `a` in the state `below` (see
+/// the module docs; [`NONE`] pads); `wp` says which blocks are well placed.
+fn edges_of(a: usize, below: &[usize], goal: &TowerGoal, wp: &[bool]) -> [usize; 3] {
+    let s = below[a];
+    let mut out = [NONE; 3];
+    if s != NONE && !wp[s] {
+        // 1: a stands on s.
+        out[0] = s;
     }
+    // 2: the block that must stand on a is final after a (both are misplaced).
+    out[1] = goal.above_of(a);
+    if s != NONE && wp[s] {
+        // 3: a stands on the well-placed s, where another block must go.
+        out[2] = goal.above_of(s);
+    }
+    out
 }
 
 /// The lower bound on the block moves from a state of at most 32 blocks: one per
@@ -57,7 +50,11 @@ pub(crate) fn lower_bound(below: &[usize], above: &[usize], goal: &TowerGoal) ->
             misplaced |= 1 << b;
         }
     }
-    for_each_edge(below, goal, &wp, |a, b| succ[a] |= 1 << b);
+    for a in bits(misplaced) {
+        for b in edges_of(a, below, goal, &wp).into_iter().filter(|&b| b != NONE) {
+            succ[a] |= 1 << b;
+        }
+    }
     misplaced.count_ones() + disjoint_cycles(&succ, misplaced)
 }
 
@@ -147,66 +144,4 @@ fn bits(mut mask: u32) -> impl Iterator<Item = usize> {
             b
         })
     })
-}
-
-/// Which misplaced blocks lie on a cycle of the "moves before" graph (Tarjan's strongly
-/// connected components, iteratively; linear in the number of blocks).
-pub(crate) fn on_cycle(below: &[usize], goal: &TowerGoal, wp: &[bool]) -> Vec<bool> {
-    let n = below.len();
-    let mut succ = vec![[NONE; 3]; n];
-    let mut degree = vec![0u8; n];
-    for_each_edge(below, goal, wp, |a, b| {
-        succ[a][degree[a] as usize] = b;
-        degree[a] += 1;
-    });
-    let mut index = vec![NONE; n];
-    let mut low = vec![0usize; n];
-    let mut on_stack = vec![false; n];
-    let mut stack = Vec::new();
-    let mut result = vec![false; n];
-    let mut next_index = 0;
-    // Each frame: the node and how many of its out-edges are done.
-    let mut frames: Vec<(usize, u8)> = Vec::new();
-    for root in 0..n {
-        if wp[root] || index[root] != NONE {
-            continue;
-        }
-        frames.push((root, 0));
-        index[root] = next_index;
-        low[root] = next_index;
-        next_index += 1;
-        stack.push(root);
-        on_stack[root] = true;
-        while let Some(&mut (v, ref mut done)) = frames.last_mut() {
-            if *done < degree[v] {
-                let w = succ[v][*done as usize];
-                *done += 1;
-                if index[w] == NONE {
-                    index[w] = next_index;
-                    low[w] = next_index;
-                    next_index += 1;
-                    stack.push(w);
-                    on_stack[w] = true;
-                    frames.push((w, 0));
-                } else if on_stack[w] {
-                    low[v] = low[v].min(index[w]);
-                }
-                continue;
-            }
-            frames.pop();
-            if let Some(&(parent, _)) = frames.last() {
-                low[parent] = low[parent].min(low[v]);
-            }
-            if low[v] == index[v] {
-                // v's component is the stack from v up.
-                let from = stack.iter().rposition(|&w| w == v).unwrap_or(0);
-                let component = stack.split_off(from);
-                for &w in &component {
-                    on_stack[w] = false;
-                    result[w] = component.len() > 1;
-                }
-            }
-        }
-    }
-    result
 }

@@ -1,37 +1,46 @@
 //! The near-optimal block-move planner: constructive moves first, deadlocks broken at the
-//! table (the US / GN1 family of Slaney & Thiebaux, after Gupta & Nau).
+//! table (the GN1 algorithm of Slaney & Thiebaux, after Gupta & Nau).
 //!
 //! Repeat until the goal holds:
 //!
 //! 1. if a misplaced clear block can go where it ends, move it there: a named block onto
 //!    its goal support once that is well placed and clear (or to the table if it is a
 //!    bottom block), a free block to the table;
-//! 2. otherwise move a misplaced clear block that stands on another block to the table,
-//!    chosen to break a deadlock: one on a cycle of the "moves before" graph if one is
-//!    clear, else the clear top with the fewest blocks above such a cycle.
+//! 2. otherwise break a deadlock: move to the table a clear block that stands in the way
+//!    of a cycle of waiting blocks (found as below).
 //!
-//! When no move of step 1 exists a block of step 2 does (if every misplaced clear block
-//! stood alone on the table, the lowest misplaced block of some goal tower could be
-//! placed). A block moves in step 2 at most once (it then waits alone on the table until
-//! step 1 places it) and in step 1 at most once (it lands for good), so the plan has at
-//! most twice as many moves as there are misplaced blocks, which every plan must move: at
-//! most twice the optimum. Step 1 is driven by a work list of blocks whose status a move
-//! may have changed (constant work per move); step 2 recomputes the deadlock cycles
-//! (linear), so the planner takes linear time plus linear time per deadlock broken.
+//! When no move of step 1 exists, every misplaced clear block `x` is named and waits: its
+//! goal support `y` is misplaced, or well placed with a block on it. The tower holding `y`
+//! (or the block on it) has a clear top, itself a waiting block: call it `next(x)`.
+//! Following `next` from any waiting block must close a cycle, and `next(x)` is "in the
+//! way" of `x` unless it is `y` itself. Not every block of the cycle can be its
+//! predecessor's goal support (goal towers have no cycles), so one is in the way; as the
+//! top of a tower above `y`, or on `y`, it stands on a block, and moving it to the table
+//! breaks this cycle of waiting (it is a deadlock in the sense of the `deadlock` module).
+//!
+//! # Guarantee and cost
+//!
+//! A block moves in step 2 at most once (it then waits alone on the table until step 1
+//! places it) and in step 1 at most once (it lands for good), so the plan has at most two
+//! moves per misplaced block, and every plan moves each misplaced block at least once: at
+//! most twice the optimum (Gupta & Nau 1992). Step 1 is driven by a work list of the
+//! blocks a move may have made ready (constant work per move); `next` is constant time
+//! (each block knows the bottom of its tower, each bottom its top); a cycle is sought from
+//! the block that waited on the last one broken, so the walks mostly retrace what is left
+//! of the cycle just broken.
 //!
 //! Tower heights: the plan builds only goal towers and moves other blocks to the table, so
 //! no tower grows taller than the tallest of the start and the goal.
 
 use crate::error::Result;
 
-use super::deadlock::on_cycle;
 use super::error::{Part, TowersError};
 use super::goal::TowerGoal;
 use super::plan::TowerPlan;
 use super::state::{Move, NONE, Place, Table, Towers};
 
 /// The near-optimal block-move planner (see the module docs): at most twice the optimum,
-/// in near-linear time, for any number of blocks.
+/// for any number of blocks.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct NearOptimal {
     /// The table the plan must fit.
@@ -84,6 +93,17 @@ struct Run<'g> {
     misplaced: usize,
     /// Blocks that may have a constructive move.
     work: Vec<usize>,
+    /// The bottom block of each block's tower.
+    bottom: Vec<usize>,
+    /// The top block of the tower standing on each bottom block.
+    top: Vec<usize>,
+    /// Where to start the next search for a cycle of waiting: the block that waited on
+    /// the last block moved in step 2.
+    resume: usize,
+    /// The search each block was last seen in, and its place on that search's path.
+    seen: Vec<(u32, usize)>,
+    /// The number of the current search.
+    search: u32,
     /// The moves made.
     moves: Vec<Move>,
     /// The most towers standing at once.
@@ -93,9 +113,17 @@ struct Run<'g> {
 impl<'g> Run<'g> {
     /// A run from `state`: every clear block is worth a look.
     fn new(state: Towers, goal: &'g TowerGoal) -> Self {
+        let n = state.blocks();
         let wp = goal.well_placed(state.below(), state.above());
         let misplaced = wp.iter().filter(|&&w| !w).count();
-        let work = (0..state.blocks()).rev().filter(|&b| state.is_clear(b)).collect();
+        let work: Vec<usize> = (0..n).rev().filter(|&b| state.is_clear(b)).collect();
+        let (mut bottom, mut top) = (vec![NONE; n], vec![NONE; n]);
+        for tower in state.towers() {
+            for &b in &tower {
+                bottom[b] = tower[0];
+            }
+            top[tower[0]] = tower[tower.len() - 1];
+        }
         let most_towers = state.tower_count();
         Run {
             state,
@@ -103,6 +131,11 @@ impl<'g> Run<'g> {
             wp,
             misplaced,
             work,
+            bottom,
+            top,
+            resume: NONE,
+            seen: vec![(0, 0); n],
+            search: 0,
             moves: Vec::new(),
             most_towers,
         }
@@ -117,11 +150,8 @@ impl<'g> Run<'g> {
                 }
             }
             if self.misplaced > 0 {
-                let x = self.deadlock_breaker();
-                self.make(Move {
-                    block: x,
-                    to: Place::Table,
-                });
+                let mv = self.break_deadlock();
+                self.make(mv);
             }
         }
     }
@@ -143,26 +173,52 @@ impl<'g> Run<'g> {
         }
     }
 
-    /// The block step 2 moves to the table (see the module docs).
-    fn deadlock_breaker(&self) -> usize {
-        let below = self.state.below();
-        let cycle = on_cycle(below, self.goal, &self.wp);
-        let mut best: Option<(usize, usize)> = None;
-        for x in (0..self.state.blocks()).filter(|&x| !self.wp[x] && self.state.is_clear(x) && below[x] != NONE) {
-            // Blocks above the highest cycle block of x's tower (none: no cycle below).
-            let mut depth = 0;
-            let mut b = x;
-            while b != NONE && !cycle[b] {
-                b = below[b];
-                depth += 1;
+    /// Step 2: the move that breaks a cycle of waiting blocks (see the module docs), or a
+    /// constructive move if the search meets one.
+    fn break_deadlock(&mut self) -> Move {
+        let n = self.state.blocks();
+        let start = if self.resume != NONE && self.waits(self.resume) {
+            self.resume
+        } else {
+            // A waiting block: the top of a tower with a misplaced block (its top is one).
+            (0..n).find(|&b| self.waits(b)).unwrap_or(0)
+        };
+        self.search += 1;
+        let mut path: Vec<usize> = Vec::new();
+        let mut v = start;
+        while self.seen[v].0 != self.search {
+            if let Some(to) = self.constructive(v) {
+                return Move { block: v, to };
             }
-            let rank = if b == NONE { usize::MAX } else { depth };
-            if best.is_none_or(|(r, _)| rank < r) {
-                best = Some((rank, x));
-            }
+            self.seen[v] = (self.search, path.len());
+            path.push(v);
+            v = self.next(v);
         }
-        // The module docs show a candidate exists whenever the goal does not hold.
-        best.map_or(0, |(_, x)| x)
+        // path[from..] is a cycle, each block waiting on the next (the last on path[from]).
+        let from = self.seen[v].1;
+        let cycle = &path[from..];
+        let k = cycle.len();
+        let i = (0..k)
+            .find(|&i| cycle[(i + 1) % k] != self.goal.below_of(cycle[i]))
+            .unwrap_or(0);
+        self.resume = cycle[i];
+        Move {
+            block: cycle[(i + 1) % k],
+            to: Place::Table,
+        }
+    }
+
+    /// Whether `x` is a clear misplaced block with no constructive move.
+    fn waits(&self, x: usize) -> bool {
+        self.state.is_clear(x) && !self.wp[x] && self.constructive(x).is_none()
+    }
+
+    /// The clear top of the tower that holds what the waiting block `x` waits for: its
+    /// goal support if misplaced, else the block on that support.
+    fn next(&self, x: usize) -> usize {
+        let y = self.goal.below_of(x);
+        let target = if self.wp[y] { self.state.above()[y] } else { y };
+        self.top[self.bottom[target]]
     }
 
     /// Makes a move and queues the blocks whose constructive move it may have enabled.
@@ -172,6 +228,15 @@ impl<'g> Run<'g> {
         self.state.apply_unchecked(mv);
         self.most_towers = self.most_towers.max(self.state.tower_count());
         self.moves.push(mv);
+        if from != NONE {
+            self.top[self.bottom[from]] = from;
+        }
+        let bottom = match mv.to {
+            Place::Table => x,
+            Place::On(y) => self.bottom[y],
+        };
+        self.bottom[x] = bottom;
+        self.top[bottom] = x;
         let now = match mv.to {
             Place::Table => !self.goal.is_named(x) || self.goal.below_of(x) == NONE,
             Place::On(y) => self.wp[y] && self.goal.is_named(x) && self.goal.below_of(x) == y,
