@@ -107,7 +107,11 @@ fn ratios() -> Result<(), Box<dyn std::error::Error>> {
             compare(start, goal, &mut all)?;
         }
     }
-    all.print(&format!("5 blocks, every start ({}) x every goal of 1-3 towers ({})", states.len(), goals.len()));
+    all.print(&format!(
+        "5 blocks, every start ({}) x every goal of 1-3 towers ({})",
+        states.len(),
+        goals.len()
+    ));
     for n in 6..=10 {
         let mut summary = Summary::default();
         for seed in 0..200u64 {
