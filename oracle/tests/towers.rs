@@ -113,6 +113,7 @@ fn exact_is_optimal_and_near_optimal_within_twice_on_every_start() {
 
 #[test]
 fn exact_is_optimal_on_a_narrow_table() {
+    let mut fitted = 0;
     for (n, columns) in [(4, 1), (4, 2), (5, 2), (5, 3)] {
         let table = Table::Columns(columns);
         for goal in goals(n) {
@@ -128,9 +129,14 @@ fn exact_is_optimal_on_a_narrow_table() {
                     | (None, Err(OracleError::Towers(TowersError::TooManyTowers { part: Part::Goal, .. }))) => {}
                     (d, other) => panic!("{start} -> {goal} on {columns}: distance {d:?}, solver {other:?}"),
                 }
-                // The near-optimal planner either fits the table or says it does not.
+                // The near-optimal planner either fits the table, within twice the optimum
+                // there, or says it ran out of room.
                 match NearOptimal::new().with_table(table).plan(start, &goal) {
-                    Ok(plan) => assert_reaches(&plan, start, &goal, table),
+                    Ok(plan) => {
+                        assert_reaches(&plan, start, &goal, table);
+                        assert!(plan.len() <= 2 * d.unwrap(), "{start} -> {goal} on {columns}: {plan}");
+                        fitted += 1;
+                    }
                     Err(OracleError::Towers(
                         TowersError::TableTooNarrow { .. } | TowersError::TooManyTowers { part: Part::Goal, .. },
                     )) => {}
@@ -139,6 +145,31 @@ fn exact_is_optimal_on_a_narrow_table() {
             }
         }
     }
+    // Parking on blocks nothing must stand on lets many plans fit two or three columns.
+    assert!(fitted > 1000, "{fitted}");
+}
+
+#[test]
+fn near_optimal_parks_when_the_table_is_full() {
+    // Three columns, all taken: 1 stands on 2, which stands where 1 must go (on 0). 1
+    // parks on the free block 5, 2 on 4 (the top of the finished tower 3,4, where nothing
+    // must stand), and both come home.
+    let start = Towers::new(&[vec![0, 2, 1], vec![3, 4], vec![5]]).unwrap();
+    let goal = TowerGoal::new(&[vec![3, 4], vec![0, 1, 2]]).unwrap();
+    let table = Table::Columns(3);
+    let plan = NearOptimal::new().with_table(table).plan(&start, &goal).unwrap();
+    assert_eq!(plan.to_string(), "1->5, 2->4, 1->0, 2->1");
+    assert_reaches(&plan, &start, &goal, table);
+    assert_eq!(
+        plan.len(),
+        ExactMoves::new().with_table(table).solve(&start, &goal).unwrap().len()
+    );
+    // With one column nothing can move aside.
+    let one = Towers::new(&[vec![0, 1]]).unwrap();
+    let e = NearOptimal::new()
+        .with_table(Table::Columns(1))
+        .plan(&one, &TowerGoal::new(&[vec![1, 0]]).unwrap());
+    assert_eq!(e.unwrap_err(), TowersError::TableTooNarrow { columns: 1 }.into());
 }
 
 #[test]

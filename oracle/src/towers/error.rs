@@ -105,16 +105,15 @@ pub enum TowersError {
         /// Columns of the table.
         columns: usize,
     },
-    /// The near-optimal plan would need more towers at once than the table has columns.
+    /// The near-optimal planner ran out of room: every column holds a tower and no block
+    /// it could park on is free.
     #[error(
-        "the near-optimal plan needs {needed} towers at once but the table has {columns} columns: \
+        "the near-optimal planner ran out of room on a table of {columns} columns: \
          use the exact solver, or a wider table"
     )]
     TableTooNarrow {
         /// Columns of the table.
         columns: usize,
-        /// Towers the plan needs at once.
-        needed: usize,
     },
     /// A random goal of this shape cannot be drawn.
     #[error("cannot draw a goal of {stacks} towers naming {named} of {blocks} blocks")]

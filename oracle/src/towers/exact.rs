@@ -1,6 +1,6 @@
 //! The exact block-move solver: A* over whole states with an admissible heuristic.
 //!
-//! The heuristic is [the deadlock bound](super::deadlock): one move per misplaced block
+//! The heuristic is the deadlock bound (the `deadlock` module): one move per misplaced block
 //! plus one per vertex-disjoint cycle of "moves before" constraints. Both parts are lower
 //! bounds on what any plan from the state still needs, so A* returns a shortest plan
 //! (`pathfinding`'s A* reopens a state reached again more cheaply, so the bound need not

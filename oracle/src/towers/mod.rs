@@ -7,8 +7,9 @@
 //! clear block; a plan's length is its number of moves, the count the planning literature
 //! reports. The table is unbounded by default (a move to the table is always possible);
 //! [`Table::Columns`] bounds how many towers stand at once, as a grid's width does: the
-//! exact solver plans within it, the near-optimal planner refuses a plan that would not
-//! fit. Tower heights are not bounded.
+//! exact solver plans within it, the near-optimal planner parks blocks instead of moving them
+//! to a full table and gives up when it finds no room ([`near_optimal`] says how). Tower
+//! heights are not bounded (the side view's grid height is the caller's to check).
 //!
 //! A goal ([`TowerGoal`]) is a list of towers, each bottom to top; it holds when each
 //! stands from the table up in that order, whatever it carries on top. Blocks it does not
