@@ -236,7 +236,7 @@ impl<'g> Run<'g> {
             self.resume
         } else {
             // A waiting block: the top of a tower with a misplaced block (its top is one).
-            (0..n).find(|&b| self.waits(b)).unwrap_or(0)
+            (0..n).find(|&b| self.waits(b))?
         };
         self.search += 1;
         let mut path: Vec<usize> = Vec::new();
@@ -249,10 +249,12 @@ impl<'g> Run<'g> {
             path.push(v);
             v = match self.next(v) {
                 Some(next) => next,
-                // v waits for a column; parking it uncovers what it stands on, unless
-                // that is a parking place already (then moving it gains nothing).
-                None if !self.wp[self.state.below()[v]] => return Some(Move { block: v, to: room }),
-                None => return None,
+                None => {
+                    // v waits for a column; parking it uncovers what it stands on, unless
+                    // that is a parking place already (then moving it gains nothing).
+                    let s = self.state.below()[v];
+                    return (s != NONE && !self.wp[s]).then_some(Move { block: v, to: room });
+                }
             };
         }
         // path[from..] is a cycle, each block waiting on the next (the last on path[from]).
@@ -288,6 +290,7 @@ impl<'g> Run<'g> {
 
     /// Makes a move and queues the blocks whose constructive move it may have enabled.
     fn make(&mut self, mv: Move) {
+        debug_assert!(self.state.check(mv, self.table).is_ok(), "{mv} in {}", self.state);
         let x = mv.block;
         let from = self.state.below()[x];
         self.state.apply_unchecked(mv);
