@@ -12,7 +12,7 @@ use std::path::Path;
 use agent::eval::{EvalPlan, Evaluation};
 use agent::{Policy, QAgent};
 use oracle::ExactSolver;
-use sim::{EnvConfig, Goal, GoalSpec, Grid, Profile, RewardModel};
+use sim::{EnvConfig, Goal, GoalSpec, Grid, Profile, ProfileParts, RewardModel};
 
 use crate::error::Result;
 use crate::model::{Dqn, FORMAT, MAX_NETWORK_BYTES};
@@ -74,6 +74,26 @@ impl AnyModel {
         match self {
             AnyModel::Q(q) => q.training().map_or(Profile::Spec, |t| t.profile),
             AnyModel::Dqn(_) => Profile::Spec,
+        }
+    }
+
+    /// The profile parts of its training world, as a run starts from them before its own
+    /// flags: a tabular model's protocol and start rule with its profile's reward; a
+    /// network's protocol and reward in the `spec` profile's world (`blockstack dqn` trains
+    /// there, from uniform starts).
+    pub fn parts(&self) -> ProfileParts {
+        let world = self.world();
+        match self {
+            AnyModel::Q(_) => ProfileParts {
+                protocol: world.protocol,
+                start: world.start,
+                ..ProfileParts::of(self.profile())
+            },
+            AnyModel::Dqn(_) => ProfileParts {
+                protocol: world.protocol,
+                reward: world.reward,
+                ..ProfileParts::of(Profile::Spec)
+            },
         }
     }
 

@@ -97,28 +97,9 @@ pub enum LossKind {
     Dqfd,
 }
 
-impl fmt::Display for LossKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            LossKind::Dqn => "dqn",
-            LossKind::Dqfd => "dqfd",
-        })
-    }
-}
-
-impl std::str::FromStr for LossKind {
-    type Err = NeuralError;
-
-    fn from_str(text: &str) -> Result<LossKind> {
-        match text {
-            "dqn" => Ok(LossKind::Dqn),
-            "dqfd" => Ok(LossKind::Dqfd),
-            _ => Err(NeuralError::Config(format!(
-                "unknown loss {text:?}: choose dqfd or dqn"
-            ))),
-        }
-    }
-}
+sim::names!(LossKind { Dqn = "dqn", Dqfd = "dqfd" } unknown(text) -> NeuralError {
+    NeuralError::Config(format!("unknown loss {text:?}: choose dqfd or dqn"))
+});
 
 /// How a TD error is penalised.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -130,19 +111,9 @@ pub enum TdLoss {
     Mse,
 }
 
-impl std::str::FromStr for TdLoss {
-    type Err = NeuralError;
-
-    fn from_str(text: &str) -> Result<TdLoss> {
-        match text {
-            "huber" => Ok(TdLoss::Huber),
-            "mse" => Ok(TdLoss::Mse),
-            _ => Err(NeuralError::Config(format!(
-                "unknown TD loss {text:?}: choose huber or mse"
-            ))),
-        }
-    }
-}
+sim::names!(TdLoss { Huber = "huber", Mse = "mse" } unknown(text) -> NeuralError {
+    NeuralError::Config(format!("unknown TD loss {text:?}: choose huber or mse"))
+});
 
 /// When the target network is refreshed from the online one.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

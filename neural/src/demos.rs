@@ -185,7 +185,7 @@ mod tests {
         let path = dir.join("t.jsonl");
         let out = files::OutputPath::check(&path).unwrap();
         let mut writer = sim::trajectory::TrajectoryWriter::create(&out).unwrap();
-        let results = agent::play(&mut env, &mut policy, 3, 9, Some(&mut writer)).unwrap();
+        let results = agent::play(&mut env, &mut policy, 3, 9, &mut writer).unwrap();
         writer.finish().unwrap();
         let episodes = read(&path, c.grid, 3).unwrap();
         assert_eq!(episodes.len(), 3);

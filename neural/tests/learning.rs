@@ -36,7 +36,7 @@ fn score(policy: &mut dyn agent::Policy) -> (usize, f64) {
             ..sim::EnvConfig::with_goal(goal)
         })
         .unwrap();
-        all.extend(agent::play(&mut env, policy, 40, 77, None).unwrap());
+        all.extend(agent::play(&mut env, policy, 40, 77, &mut ()).unwrap());
     }
     let s = Summary::of(&all);
     (s.failures, agent::optimality::mean_steps_failures_as_horizon(&all, 200))
