@@ -5,3 +5,4 @@ mod common;
 mod exact;
 mod protocol;
 mod soundness;
+mod towers;
