@@ -179,26 +179,19 @@ impl Epsilon {
 }
 
 /// A training run: the world, the network, the learner, the budget and the seed.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+///
+/// A network file stores it in a frozen form of its own (`crate::model`'s metadata), so
+/// regrouping these fields changes no file.
+#[derive(Clone, Debug, PartialEq)]
 pub struct DqnConfig {
-    /// The grid.
-    pub grid: Grid,
-    /// Number of blocks.
-    pub blocks: usize,
+    /// The world the training games are played in: `sim`'s one world value (grid, blocks,
+    /// horizon, reward, backend, protocol, start rule). Its goal is drawn (the games' goals
+    /// are [`DqnConfig::goals`]) and its observation is the network's.
+    pub world: EnvConfig,
     /// Goals trained on, in turn (game `k` plays `goals[k % len]`).
     pub goals: Vec<Goal>,
     /// The network (its kind says which observation it reads).
     pub net: NetConfig,
-    /// The reward model the learner learns from.
-    pub reward: RewardModel,
-    /// Steps before a training game is cut off.
-    pub horizon: u32,
-    /// The world backend of the training games.
-    pub backend: Backend,
-    /// The action protocol: which actions are legal (every choice is masked to them).
-    #[serde(default)]
-    pub protocol: ActionProtocol,
     /// Seed of the weights, starts, demonstrations and every random choice.
     pub seed: u64,
     /// Environment steps of self-play.
@@ -275,15 +268,21 @@ pub const PRESETS: [&str; 4] = ["paper", "paper-dqfd", "dqn-planes", "dqfd-plane
 impl DqnConfig {
     /// The paper's DQN (module docs) on `blocks` blocks, every goal.
     pub fn paper(blocks: usize) -> Result<DqnConfig> {
+        let net = NetConfig::paper();
         Ok(DqnConfig {
-            grid: Grid::default(),
-            blocks,
+            world: EnvConfig {
+                grid: Grid::default(),
+                blocks,
+                goal: GoalSpec::Random,
+                horizon: sim::DEFAULT_HORIZON,
+                reward: RewardModel::from_name("sparse")?,
+                backend: Backend::Grid,
+                protocol: ActionProtocol::Free,
+                obs: net.obs(),
+                ..EnvConfig::default()
+            },
             goals: Goal::all(blocks)?,
-            net: NetConfig::paper(),
-            reward: RewardModel::from_name("sparse")?,
-            horizon: sim::DEFAULT_HORIZON,
-            backend: Backend::Grid,
-            protocol: ActionProtocol::Free,
+            net,
             seed: 1,
             // A gradient step of the paper network costs about 100 ms here: 5,000 steps
             // are minutes, where the paper trained for 2-8 hours.
@@ -355,9 +354,14 @@ impl DqnConfig {
 
     fn dqn_planes(paper: DqnConfig) -> DqnConfig {
         // Exploration alone must find the goal: far longer on 3 blocks than on 2.
-        let steps = if paper.blocks <= 2 { 50_000 } else { 300_000 };
+        let steps = if paper.world.blocks <= 2 { 50_000 } else { 300_000 };
+        let net = NetConfig::small();
         DqnConfig {
-            net: NetConfig::small(),
+            world: EnvConfig {
+                obs: net.obs(),
+                ..paper.world
+            },
+            net,
             steps,
             td_loss: TdLoss::Huber,
             optimizer: OptimizerKind::Adam,
@@ -384,20 +388,25 @@ impl DqnConfig {
         self.net.obs()
     }
 
-    /// The world the training games are played in (`sim`'s one world value), the goal
-    /// drawn: the grid, blocks, horizon, reward, backend and protocol of this config, from
-    /// uniform starts, ended at the goal, the network's observation kind.
-    pub fn world(&self) -> EnvConfig {
-        EnvConfig {
-            grid: self.grid,
-            blocks: self.blocks,
-            goal: GoalSpec::Random,
-            horizon: self.horizon,
-            reward: self.reward,
-            backend: self.backend,
-            protocol: self.protocol,
-            obs: self.obs(),
-            ..EnvConfig::default()
+    /// The grid.
+    pub fn grid(&self) -> Grid {
+        self.world.grid
+    }
+
+    /// Number of blocks.
+    pub fn blocks(&self) -> usize {
+        self.world.blocks
+    }
+
+    /// This config with the network `net`, the world's observation made the one it reads.
+    pub fn with_net(self, net: NetConfig) -> DqnConfig {
+        DqnConfig {
+            world: EnvConfig {
+                obs: net.obs(),
+                ..self.world
+            },
+            net,
+            ..self
         }
     }
 
@@ -405,7 +414,7 @@ impl DqnConfig {
     pub fn env_config(&self, goal: Goal) -> EnvConfig {
         EnvConfig {
             goal: GoalSpec::Fixed(goal),
-            ..self.world()
+            ..self.world
         }
     }
 
@@ -422,7 +431,7 @@ impl DqnConfig {
         format!(
             "{net}; {} loss, {} reward, gamma {}, {} lr {}{}, buffer {}, batch {}; demonstrations {}{}; {} self-play steps{}",
             self.loss,
-            self.reward,
+            self.world.reward,
             self.gamma,
             self.optimizer,
             self.lr,
@@ -452,6 +461,23 @@ impl DqnConfig {
     pub fn validate(&self) -> Result<()> {
         let bad = |what: String| Err(NeuralError::Config(what));
         self.net.validate(self.obs())?;
+        if self.world.obs != self.obs() {
+            return bad(format!(
+                "the world shows {} and the {} network reads {}",
+                self.world.obs,
+                self.net.kind,
+                self.obs()
+            ));
+        }
+        if self.world.goal != GoalSpec::Random {
+            return bad("a training config names its goals in `goals`: its world's goal must be drawn".into());
+        }
+        if self.world.termination != sim::Termination::default() {
+            return bad(format!(
+                "training games end at the goal, not by the {} termination",
+                self.world.termination
+            ));
+        }
         if self.goals.is_empty() {
             return bad("no goals to train on".into());
         }
@@ -472,7 +498,9 @@ impl DqnConfig {
         }
         // Checked before anything is allocated: a batch's inputs, the buffer and the planned
         // demonstrations are all made in memory, and a size too large to allocate would abort.
-        let values = self.batch.saturating_mul(self.net.input(self.grid, self.blocks)?.len());
+        let values = self
+            .batch
+            .saturating_mul(self.net.input(self.world.grid, self.world.blocks)?.len());
         if values > MAX_BATCH_VALUES {
             return bad(format!(
                 "the batch (--batch {}) needs {values} input values, more than the {MAX_BATCH_VALUES} allowed: \
@@ -544,13 +572,13 @@ impl DqnConfig {
             }
             _ => Ok(()),
         }?;
-        if self.protocol != ActionProtocol::Free
+        if self.world.protocol != ActionProtocol::Free
             && (self.correct_loops || matches!(self.demos, DemoSource::Exact(_) | DemoSource::Oracle(_)))
         {
             return bad(format!(
                 "the planners demonstrate in the free protocol (a pick may switch blocks), not the {} one: \
                  drop their demonstrations and corrections, or choose the free protocol",
-                self.protocol
+                self.world.protocol
             ));
         }
         if self.pretrain_steps > 0 && self.demos == DemoSource::None {
@@ -575,7 +603,7 @@ mod tests {
             (1000, 64, 1e-4, ObsKind::PaperScreen)
         );
         assert_eq!(p.optimizer, OptimizerKind::Rmsprop);
-        assert_eq!(p.reward.name(), "sparse");
+        assert_eq!(p.world.reward.name(), "sparse");
         assert!(DqnConfig::preset("nope", 3).is_err());
     }
 

@@ -104,7 +104,7 @@ impl Trainer {
     /// A run of `config` with these demonstrations (whatever `config.demos` says).
     pub fn with_demos(config: DqnConfig, episodes: &[DemoEpisode]) -> Result<Trainer> {
         config.validate()?;
-        let input = config.net.input(config.grid, config.blocks)?;
+        let input = config.net.input(config.world.grid, config.world.blocks)?;
         let mut init = seeding::rng(config.seed);
         init.set_stream(2);
         let net = QNet::new(config.net, input, &mut init)?;
@@ -144,8 +144,8 @@ impl Trainer {
             visited: HashSet::new(),
             corrected: false,
             corrector: match config.demos {
-                DemoSource::Oracle(_) => Box::new(Oracle::new(config.grid)),
-                _ => Box::new(ExactSolver::new(config.grid)),
+                DemoSource::Oracle(_) => Box::new(Oracle::new(config.world.grid)),
+                _ => Box::new(ExactSolver::new(config.world.grid)),
             },
             config,
         })
@@ -335,7 +335,7 @@ impl Trainer {
         if epsilon > 0.0 && self.rng.random_bool(epsilon) {
             let allowed = ActionSet::allowed(obs, self.config.mask_noops);
             let a = allowed.random(&mut self.rng).expect("some action is always allowed");
-            return Ok(Action::from_index(a, self.config.blocks)?);
+            return Ok(Action::from_index(a, self.config.world.blocks)?);
         }
         self.learner.online().greedy_action(obs, self.config.mask_noops)
     }

@@ -149,26 +149,26 @@ impl DqnArgs {
             }
         };
         let mut c = DqnConfig::preset(&preset, self.blocks)?;
-        c.grid = self.grid.parse::<Grid>()?;
+        c.world.grid = self.grid.parse::<Grid>()?;
         c.goals = parse_goals(self.goals.as_deref(), self.blocks)?;
         c.seed = self.seed;
         if let Some(kind) = self.net {
-            c.net = match kind {
+            c = c.with_net(match kind {
                 NetKind::Paper => neural::NetConfig::paper(),
                 _ => neural::NetConfig {
                     kind,
                     ..neural::NetConfig::small()
                 },
-            };
+            });
             if let Some(obs) = self.obs {
                 c.net.validate(obs)?;
             }
         } else if let Some(obs) = self.obs {
             if obs != c.obs() {
-                c.net = match obs {
+                c = c.with_net(match obs {
                     ObsKind::PaperScreen => neural::NetConfig::paper(),
                     _ => neural::NetConfig::small(),
-                };
+                });
             }
         }
         if let Some(d) = demos {
@@ -195,8 +195,10 @@ impl DqnArgs {
             mask_noops = self.mask_noops,
             margin = self.margin,
             demo_share = self.demo_share,
-            horizon = self.horizon,
         );
+        if let Some(h) = self.horizon {
+            c.world.horizon = h;
+        }
         if let Some(lr) = self.lr {
             c.lr_final *= lr / c.lr;
             c.lr = lr;
@@ -205,13 +207,13 @@ impl DqnArgs {
             c.lr_final = lr;
         }
         if let Some(r) = &self.reward {
-            c.reward = RewardModel::from_name(r)?;
+            c.world.reward = RewardModel::from_name(r)?;
         }
         if let Some(b) = &self.backend {
-            c.backend = b.parse::<Backend>()?;
+            c.world.backend = b.parse::<Backend>()?;
         }
         if let Some(p) = &self.protocol {
-            c.protocol = p.parse::<sim::ActionProtocol>()?;
+            c.world.protocol = p.parse::<sim::ActionProtocol>()?;
         }
         if let Some(h) = self.hidden {
             c.net.hidden = h;

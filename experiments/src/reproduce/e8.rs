@@ -152,7 +152,6 @@ fn arms(budget: Budget, seed: u64) -> Result<Vec<Arm>> {
     // Our learner on the paper's pixels and network, at the paper-dqfd budget: what the
     // screen and the network cost.
     let ours_pixels2 = DqnConfig {
-        net: NetConfig::paper(),
         demos: DemoSource::Exact(500),
         pretrain_steps: 3_000,
         steps: 3_000,
@@ -161,7 +160,7 @@ fn arms(budget: Budget, seed: u64) -> Result<Vec<Arm>> {
             end: 0.01,
             steps: 1_500,
         },
-        ..preset("dqfd-planes", 2, seed, 1.0)?
+        ..preset("dqfd-planes", 2, seed, 1.0)?.with_net(NetConfig::paper())
     };
     // The ablation's runs: half our recipe's budget each, to fit the hour.
     let ours3 = preset("dqfd-planes", 3, seed, 0.5)?;
@@ -193,7 +192,10 @@ fn arms(budget: Budget, seed: u64) -> Result<Vec<Arm>> {
         ablate(
             "the paper's dense reward",
             DqnConfig {
-                reward: dense,
+                world: sim::EnvConfig {
+                    reward: dense,
+                    ..ours3.world
+                },
                 ..ours3.clone()
             },
         ),
@@ -291,9 +293,9 @@ fn suite(ctx: &Context, blocks: usize, games: u64) -> Result<Suite> {
 fn run_arm(ctx: &Context, arm: &Arm, budget: Budget) -> Result<Outcome> {
     let c = &arm.config;
     let (curve_games, points) = budget.curve();
-    let curve_suite = suite(ctx, c.blocks, curve_games)?;
+    let curve_suite = suite(ctx, c.blocks(), curve_games)?;
     let curve_optimum = curve_suite.optimum()?;
-    let test_suite = suite(ctx, c.blocks, budget.test_games())?;
+    let test_suite = suite(ctx, c.blocks(), budget.test_games())?;
     let mut trainer = Trainer::new(c.clone())?;
     let total = c.pretrain_steps + c.steps;
     let mut done = 0;
@@ -365,7 +367,7 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
             let rows: Vec<Row> = arms
                 .iter()
                 .zip(&outcomes)
-                .filter(|(a, _)| a.part == part && a.config.blocks == blocks)
+                .filter(|(a, _)| a.part == part && a.config.blocks() == blocks)
                 .map(|(_, o)| Row::spec(None, o.arm.clone(), Vec::new()))
                 .collect();
             if !rows.is_empty() {
