@@ -23,6 +23,9 @@
 //!   to 0.01, the learning rate falling from 1e-3 to 1e-4, and loops corrected: the first
 //!   time a game comes back to a state it was in, the exact solver demonstrates from there
 //!   (the paper's demonstrators correcting the agent, section VI-C, as DQfD data).
+//! - `her-planes`: `dqn-planes` with hindsight relabelling (HER, Andrychowicz et al. 2017,
+//!   [`crate::hindsight`]): no demonstrations; every step stored again with 4 goals that
+//!   stood later in its game.
 //!
 //! Why each of our choices, measured, is in the E8 section of `blockstack reproduce --only
 //! E8 --long`'s report.
@@ -248,6 +251,10 @@ pub struct DqnConfig {
     /// of [`DqnConfig::demos`]; the exact solver for a recording or none) plans from there
     /// and its plan joins the demonstrations; the agent plays on.
     pub correct_loops: bool,
+    /// Hindsight relabelling ([`crate::hindsight`]): every self-play step is stored again
+    /// with up to this many goals that stood later in its game (HER's `future` strategy and
+    /// its `k`); 0 for none.
+    pub hindsight: usize,
 }
 
 /// The most input values one batch may hold (a batch's inputs are made in memory at every
@@ -263,7 +270,7 @@ pub const MAX_BUFFER_BYTES: u64 = 8 << 30;
 pub const MAX_DEMO_EPISODES: u64 = 1_000_000;
 
 /// The preset names, in the order the CLI lists them.
-pub const PRESETS: [&str; 4] = ["paper", "paper-dqfd", "dqn-planes", "dqfd-planes"];
+pub const PRESETS: [&str; 5] = ["paper", "paper-dqfd", "dqn-planes", "dqfd-planes", "her-planes"];
 
 impl DqnConfig {
     /// The paper's DQN (module docs) on `blocks` blocks, every goal.
@@ -315,6 +322,7 @@ impl DqnConfig {
             demo_share: 0.25,
             mask_noops: false,
             correct_loops: false,
+            hindsight: 0,
         })
     }
 
@@ -345,11 +353,17 @@ impl DqnConfig {
                 correct_loops: true,
                 ..DqnConfig::dqn_planes(paper)
             }),
+            "her-planes" => Ok(DqnConfig::her_planes(paper)),
             _ => Err(NeuralError::Config(format!(
                 "unknown preset {name:?}: choose {}",
                 PRESETS.join(", ")
             ))),
         }
+    }
+
+    fn her_planes(paper: DqnConfig) -> DqnConfig {
+        let planes = DqnConfig::dqn_planes(paper);
+        DqnConfig { hindsight: 4, ..planes }
     }
 
     fn dqn_planes(paper: DqnConfig) -> DqnConfig {
@@ -450,7 +464,11 @@ impl DqnConfig {
             },
             self.steps,
             if self.mask_noops { "; no-op actions masked" } else { "" },
-        ) + if self.correct_loops {
+        ) + &if self.hindsight > 0 {
+            format!("; hindsight relabelling (future, k = {})", self.hindsight)
+        } else {
+            String::new()
+        } + if self.correct_loops {
             "; loops corrected by the demonstrator"
         } else {
             ""

@@ -68,6 +68,14 @@ pub struct TrainReport {
     pub gradient_steps: u64,
     /// Demonstrations from a loop of a self-play game ([`DqnConfig::correct_loops`]).
     pub corrections: u64,
+    /// Relabelled transitions stored ([`DqnConfig::hindsight`]); absent from a file at 0,
+    /// as in every file before it.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub relabelled: u64,
+}
+
+fn is_zero(v: &u64) -> bool {
+    *v == 0
 }
 
 /// A network and how it was trained.
@@ -309,6 +317,9 @@ struct StoredConfig {
     // Optional: absent at the default (uniform starts), as in every file before it.
     #[serde(default, skip_serializing_if = "is_default")]
     start: StartRule,
+    // Optional: absent at 0 (no hindsight relabelling), as in every file before it.
+    #[serde(default, skip_serializing_if = "is_default")]
+    hindsight: usize,
 }
 
 fn is_default<T: Default + PartialEq>(value: &T) -> bool {
@@ -355,6 +366,7 @@ impl StoredConfig {
             mask_noops: c.mask_noops,
             correct_loops: c.correct_loops,
             start: w.start,
+            hindsight: c.hindsight,
         }
     }
 
@@ -402,6 +414,7 @@ impl StoredConfig {
             demo_share: self.demo_share,
             mask_noops: self.mask_noops,
             correct_loops: self.correct_loops,
+            hindsight: self.hindsight,
         }
     }
 }

@@ -17,6 +17,7 @@ use sim::{Action, Env, GridWorld, Observation, State};
 use crate::config::{DemoSource, DqnConfig, TargetEvery};
 use crate::demos::{self, DemoEpisode};
 use crate::error::{NeuralError, Result};
+use crate::hindsight::{self, Step};
 use crate::learner::{Learner, Losses};
 use crate::mask::ActionSet;
 use crate::model::{Dqn, TrainReport};
@@ -91,6 +92,8 @@ pub struct Trainer {
     corrected: bool,
     /// Who corrects loops.
     corrector: Box<dyn Planner + Send + Sync>,
+    /// The current game's steps, for hindsight relabelling (kept only with it).
+    game: Vec<Step>,
 }
 
 impl Trainer {
@@ -143,6 +146,7 @@ impl Trainer {
             target_games: 0,
             visited: HashSet::new(),
             corrected: false,
+            game: Vec::new(),
             corrector: match config.demos {
                 DemoSource::Oracle(_) => Box::new(Oracle::new(config.world.grid)),
                 _ => Box::new(ExactSolver::new(config.world.grid)),
@@ -267,6 +271,7 @@ impl Trainer {
                 self.report.games += 1;
                 self.visited.clear();
                 self.corrected = false;
+                self.game.clear();
                 (i, obs)
             }
         };
@@ -278,6 +283,13 @@ impl Trainer {
         let step = self.envs[env_index].step(action)?;
         self.report.steps += 1;
         let done = step.terminated || step.truncated;
+        if self.config.hindsight > 0 {
+            self.game.push(Step {
+                obs,
+                action,
+                next: step.observation,
+            });
+        }
         if let Some(t) = self.n_step.push(
             obs,
             action,
@@ -291,6 +303,10 @@ impl Trainer {
         if done {
             for t in self.n_step.finish() {
                 self.buffer.push(t);
+            }
+            for t in hindsight::relabel(&self.game, self.config.hindsight, &self.config, &mut self.rng) {
+                self.buffer.push(t);
+                self.report.relabelled += 1;
             }
             self.recent.push_back(step.terminated);
             if self.recent.len() > RECENT_GAMES {

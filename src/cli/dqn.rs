@@ -18,7 +18,8 @@ use super::train::parse_goals;
 pub struct DqnArgs {
     /// Start from this preset: paper (the paper's DQN on pixels), paper-dqfd (the same with
     /// DQfD on 500 exact-solver demonstrations), dqn-planes (ours, no demonstrations),
-    /// dqfd-planes (ours with DQfD: the recommended recipe). Default: from --obs and --loss.
+    /// dqfd-planes (ours with DQfD: the recommended recipe), her-planes (ours without
+    /// demonstrations, with hindsight relabelling). Default: from --obs and --loss.
     #[arg(long)]
     pub preset: Option<String>,
     /// What the network sees: role-planes or paper-screen (default: the preset's, else
@@ -93,6 +94,10 @@ pub struct DqnArgs {
     /// The large-margin loss's margin.
     #[arg(long)]
     pub margin: Option<f64>,
+    /// Hindsight relabelling: store every self-play step again with up to K goals that stood
+    /// later in its game (HER's future strategy); 0 for none.
+    #[arg(long, value_name = "K")]
+    pub hindsight: Option<usize>,
     /// Share of every self-play batch drawn from the demonstrations.
     #[arg(long)]
     pub demo_share: Option<f64>,
@@ -195,6 +200,7 @@ impl DqnArgs {
             mask_noops = self.mask_noops,
             margin = self.margin,
             demo_share = self.demo_share,
+            hindsight = self.hindsight,
         );
         if let Some(h) = self.horizon {
             c.world.horizon = h;
@@ -298,7 +304,7 @@ pub fn dqn(args: DqnArgs) -> Result<()> {
     line(format_args!("trained {}: {}", dqn.name(), config.describe()))?;
     line(format_args!(
         "{} demonstrated episodes ({} transitions, {demo_seconds:.1} s to make), {} pre-training steps; \
-         {} self-play steps in {} games, {} reached the goal; {} demonstrations from a loop; {} gradient steps",
+         {} self-play steps in {} games, {} reached the goal; {} demonstrations from a loop; {} relabelled transitions; {} gradient steps",
         r.demo_episodes,
         r.demo_transitions,
         r.pretrain_steps,
@@ -306,6 +312,7 @@ pub fn dqn(args: DqnArgs) -> Result<()> {
         r.games,
         r.successes,
         r.corrections,
+        r.relabelled,
         r.gradient_steps
     ))?;
     line(format_args!(
