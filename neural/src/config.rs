@@ -26,6 +26,11 @@
 //! - `her-planes`: `dqn-planes` with hindsight relabelling (HER, Andrychowicz et al. 2017,
 //!   [`crate::hindsight`]): no demonstrations; every step stored again with 4 goals that
 //!   stood later in its game.
+//! - `dqfd-pixels`: `dqfd-planes` on the paper's screen with the paper's network (batch
+//!   normalisation): the paper's network and input, our learner. Its budget is a few
+//!   thousand steps (a step of that network costs twenty times one of ours): 1,000
+//!   demonstrations, 4,000 pre-training and 4,000 self-play steps on 2 blocks; 5,000 and
+//!   15,000 on more.
 //!
 //! Why each of our choices, measured, is in the E8 section of `blockstack reproduce --only
 //! E8 --long`'s report.
@@ -270,7 +275,14 @@ pub const MAX_BUFFER_BYTES: u64 = 8 << 30;
 pub const MAX_DEMO_EPISODES: u64 = 1_000_000;
 
 /// The preset names, in the order the CLI lists them.
-pub const PRESETS: [&str; 5] = ["paper", "paper-dqfd", "dqn-planes", "dqfd-planes", "her-planes"];
+pub const PRESETS: [&str; 6] = [
+    "paper",
+    "paper-dqfd",
+    "dqn-planes",
+    "dqfd-planes",
+    "her-planes",
+    "dqfd-pixels",
+];
 
 impl DqnConfig {
     /// The paper's DQN (module docs) on `blocks` blocks, every goal.
@@ -339,25 +351,51 @@ impl DqnConfig {
                 ..paper
             }),
             "dqn-planes" => Ok(DqnConfig::dqn_planes(paper)),
-            "dqfd-planes" => Ok(DqnConfig {
-                steps: 30_000,
-                pretrain_steps: 30_000,
-                demos: DemoSource::Exact(10_000),
-                loss: LossKind::Dqfd,
-                learning_starts: 1_000,
-                epsilon: Epsilon {
-                    start: 0.1,
-                    end: 0.01,
-                    steps: 15_000,
-                },
-                correct_loops: true,
-                ..DqnConfig::dqn_planes(paper)
-            }),
+            "dqfd-planes" => Ok(DqnConfig::dqfd_planes(paper)),
             "her-planes" => Ok(DqnConfig::her_planes(paper)),
+            "dqfd-pixels" => Ok(DqnConfig::dqfd_pixels(paper)),
             _ => Err(NeuralError::Config(format!(
                 "unknown preset {name:?}: choose {}",
                 PRESETS.join(", ")
             ))),
+        }
+    }
+
+    fn dqfd_planes(paper: DqnConfig) -> DqnConfig {
+        DqnConfig {
+            steps: 30_000,
+            pretrain_steps: 30_000,
+            demos: DemoSource::Exact(10_000),
+            loss: LossKind::Dqfd,
+            learning_starts: 1_000,
+            epsilon: Epsilon {
+                start: 0.1,
+                end: 0.01,
+                steps: 15_000,
+            },
+            correct_loops: true,
+            ..DqnConfig::dqn_planes(paper)
+        }
+    }
+
+    fn dqfd_pixels(paper: DqnConfig) -> DqnConfig {
+        let blocks = paper.world.blocks;
+        // A DQfD step of the paper network costs about 40 ms here, a step of the small one
+        // 2 ms: a budget of minutes buys a few thousand steps, so the demonstrations carry
+        // most of the learning and the budget grows with the blocks.
+        let (demos, steps) = if blocks <= 2 { (1_000, 4_000) } else { (5_000, 15_000) };
+        let net = paper.net;
+        DqnConfig {
+            demos: DemoSource::Exact(demos),
+            pretrain_steps: steps,
+            steps,
+            learning_starts: 500,
+            epsilon: Epsilon {
+                start: 0.1,
+                end: 0.01,
+                steps: steps / 2,
+            },
+            ..DqnConfig::dqfd_planes(paper).with_net(net)
         }
     }
 

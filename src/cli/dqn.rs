@@ -19,7 +19,8 @@ pub struct DqnArgs {
     /// Start from this preset: paper (the paper's DQN on pixels), paper-dqfd (the same with
     /// DQfD on 500 exact-solver demonstrations), dqn-planes (ours, no demonstrations),
     /// dqfd-planes (ours with DQfD: the recommended recipe), her-planes (ours without
-    /// demonstrations, with hindsight relabelling). Default: from --obs and --loss.
+    /// demonstrations, with hindsight relabelling), dqfd-pixels (our DQfD recipe with the
+    /// paper network on the paper screen). Default: from --obs and --loss.
     #[arg(long)]
     pub preset: Option<String>,
     /// What the network sees: role-planes or paper-screen (default: the preset's, else
