@@ -455,3 +455,36 @@ impl Policy for DqnPolicy<'_> {
         Ok(a)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_stored_config_gives_back_the_config_and_leaves_out_defaults() {
+        for name in crate::config::PRESETS {
+            let config = DqnConfig::preset(name, 3).unwrap();
+            let json = serde_json::to_string(&StoredConfig::of(&config)).unwrap();
+            // The fields added since the first files are absent at their defaults.
+            assert!(!json.contains("\"start\":\""), "{name}");
+            assert_eq!(json.contains("\"hindsight\""), config.hindsight > 0, "{name}");
+            let back: StoredConfig = serde_json::from_str(&json).unwrap();
+            assert_eq!(back.config(), config, "{name}");
+        }
+        let her = DqnConfig::preset("her-planes", 3).unwrap();
+        let moved = DqnConfig {
+            world: EnvConfig {
+                start: StartRule::Paper,
+                ..her.world
+            },
+            ..her
+        };
+        let json = serde_json::to_string(&StoredConfig::of(&moved)).unwrap();
+        assert!(
+            json.contains("\"start\":\"paper\"") && json.contains("\"hindsight\":4"),
+            "{json}"
+        );
+        let back: StoredConfig = serde_json::from_str(&json).unwrap();
+        assert_eq!(back.config(), moved);
+    }
+}
