@@ -9,8 +9,10 @@ runs on it unchanged: every game is stored again under stacks that stood later i
 
 It trains, then plays ``--test`` greedy games from seeded starts and prints the share that
 reached the goal, the mean steps of those against the exact solver's shortest plans, and
-the wall time. What it reached on our 2-core machine (shared with other builds) is in
-docs/dqn.md ("Hindsight relabelling in Python").
+the wall time. On our 2-core machine, shared with other builds, the command above reached
+5.5 % of 200 greedy games (1.46x the shortest plan) after 3,101 s of training: it shows
+that SB3's HER runs unchanged, not a tuned recipe (docs/dqn.md, "Hindsight relabelling in
+Python", says more).
 """
 
 from __future__ import annotations
