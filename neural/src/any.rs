@@ -64,7 +64,7 @@ impl AnyModel {
     pub fn training_reward(&self) -> Option<RewardModel> {
         match self {
             AnyModel::Q(q) => q.training().map(|t| t.world.reward),
-            AnyModel::Dqn(d) => Some(d.config().reward),
+            AnyModel::Dqn(d) => Some(d.config().world.reward),
         }
     }
 
@@ -106,7 +106,7 @@ impl AnyModel {
             AnyModel::Q(q) => q
                 .training()
                 .map_or_else(|| EnvConfig::for_profile(Profile::Spec), |t| t.world),
-            AnyModel::Dqn(d) => d.config().world(),
+            AnyModel::Dqn(d) => d.config().world,
         };
         EnvConfig {
             grid: self.grid(),

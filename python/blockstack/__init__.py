@@ -10,6 +10,9 @@ Importing the package registers ``blockstack/Stack-v0`` with Gymnasium::
     obs, reward, terminated, truncated, info = env.step(env.unwrapped.expert_action())
 
 - :class:`StackEnv`: the Gymnasium environment (``gymnasium.make``).
+- :class:`StackGoalEnv`: the same world as a goal-conditioned environment
+  (``blockstack/StackGoal-v0``: observation, achieved and desired goals, and
+  ``compute_reward``), on which Stable-Baselines3's ``HerReplayBuffer`` runs.
 - :class:`blockstack.vector.StackVectorEnv`: a batch of environments stepped in one Rust
   call into preallocated numpy arrays.
 - :func:`solve`: a shortest (or the oracle's) plan from any state.
@@ -30,6 +33,7 @@ from gymnasium.envs.registration import register, registry
 from blockstack._native import REWARDS, episode_seed
 from blockstack.demonstrations import demonstrations, read_recording
 from blockstack.env import StackEnv
+from blockstack.goal_env import StackGoalEnv
 from blockstack.model import Model, load
 from blockstack import vector
 from blockstack.planning import solve
@@ -39,6 +43,7 @@ __all__ = [
     "REWARDS",
     "Model",
     "StackEnv",
+    "StackGoalEnv",
     "demonstrations",
     "episode_seed",
     "load",
@@ -56,3 +61,8 @@ if ENV_ID not in registry:
         entry_point="blockstack.env:StackEnv",
         vector_entry_point="blockstack.vector:StackVectorEnv",
     )
+
+GOAL_ENV_ID = "blockstack/StackGoal-v0"
+
+if GOAL_ENV_ID not in registry:
+    register(id=GOAL_ENV_ID, entry_point="blockstack.goal_env:StackGoalEnv")
