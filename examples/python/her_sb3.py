@@ -5,7 +5,7 @@ The environment is Gymnasium-Robotics' goal-env convention (``observation``,
 runs on it unchanged: every game is stored again under stacks that stood later in it.
 
     pip install stable-baselines3        # brings torch
-    python python/examples/her_sb3.py --blocks 2 --timesteps 30000
+    python examples/python/her_sb3.py --blocks 2 --timesteps 30000
 
 It trains, then plays ``--test`` greedy games from seeded starts and prints the share that
 reached the goal, the mean steps of those against the exact solver's shortest plans, and
