@@ -19,6 +19,7 @@ use crate::seeding::{self, SimRng};
 use crate::start::StartRule;
 use crate::state::{BlockId, MAX_BLOCKS, MIN_BLOCKS, State};
 use crate::termination::Termination;
+use crate::view::{self, View};
 use crate::world::{Effect, World};
 
 /// The default episode length limit.
@@ -99,6 +100,11 @@ pub struct EnvConfig {
     /// environments return and what a network reads. The world's rules do not depend on it.
     #[serde(default)]
     pub obs: ObsKind,
+    /// Which world (default `top`, the paper's): seen from above, or from the side with
+    /// gravity and towers (docs/world.md, "The side view"). A config written before the side
+    /// view existed reads back as the top view.
+    #[serde(default)]
+    pub view: View,
 }
 
 impl Default for EnvConfig {
@@ -114,6 +120,7 @@ impl Default for EnvConfig {
             start: StartRule::default(),
             termination: Termination::default(),
             obs: ObsKind::default(),
+            view: View::default(),
         }
     }
 }
@@ -160,23 +167,39 @@ impl EnvConfig {
                 height: self.grid.height(),
             });
         }
-        if self.blocks > self.grid.height() {
-            return Err(SimError::StackTooTall {
-                blocks: self.blocks,
-                height: self.grid.height(),
-            });
-        }
-        if let GoalSpec::Fixed(goal) = self.goal {
-            if goal.block_count() != self.blocks {
-                return Err(SimError::BlockCountMismatch {
-                    expected: self.blocks,
-                    what: "the goal",
-                    found: goal.block_count(),
+        match self.goal {
+            GoalSpec::Fixed(goal) => {
+                if goal.block_count() != self.blocks {
+                    return Err(SimError::BlockCountMismatch {
+                        expected: self.blocks,
+                        what: "the goal",
+                        found: goal.block_count(),
+                    });
+                }
+                goal.check_fits(self.grid)?;
+                self.reward.check_goal(&goal)?;
+                if goal.pair_count() == 0 && (self.view == View::Top || self.grid.height() == 1) {
+                    // Every start would meet it: the uniform start rule would draw forever.
+                    return Err(SimError::BadGoal {
+                        goal: goal.to_string(),
+                        count: self.blocks,
+                        reason: format!("it holds in every state of the {} view", self.view),
+                    });
+                }
+            }
+            GoalSpec::Random if self.blocks > self.grid.height() => {
+                return Err(SimError::StackTooTall {
+                    blocks: self.blocks,
+                    height: self.grid.height(),
                 });
             }
+            GoalSpec::Random => {}
         }
         if self.horizon == 0 {
             return Err(SimError::ZeroHorizon);
+        }
+        if self.view == View::Side && self.start != StartRule::Uniform {
+            return Err(SimError::SideViewStart { rule: self.start });
         }
         self.start.check_fits(self.grid, self.blocks)
     }
@@ -283,12 +306,14 @@ impl Env {
             GoalSpec::Fixed(g) => g,
             GoalSpec::Random => Goal::identity(config.blocks)?,
         };
-        // A placeholder start on the bottom rows; `reset` replaces it.
+        // A placeholder start on the bottom rows (standing, for the side view); `reset`
+        // replaces it.
         let cells: Vec<Cell> = (0..config.blocks).map(|i| grid.cell_at(i)).collect();
         let start = State::new(&cells, None)?;
+        let view = config.view;
         let world = match config.backend {
-            Backend::Grid => AnyWorld::Grid(GridWorld::new(grid, start)?),
-            Backend::Physics => AnyWorld::Physics(Box::new(PhysicsWorld::new(grid, start)?)),
+            Backend::Grid => AnyWorld::Grid(GridWorld::new_in(view, grid, start)?),
+            Backend::Physics => AnyWorld::Physics(Box::new(PhysicsWorld::new_in(view, grid, start)?)),
         };
         Ok(Env {
             config,
@@ -315,7 +340,10 @@ impl Env {
         if let GoalSpec::Random = self.config.goal {
             self.goal = Goal::random(self.config.blocks, &mut self.rng).expect("the config was validated");
         }
-        let start = self.config.start.draw(self.config.grid, &self.goal, &mut self.rng);
+        let start = self
+            .config
+            .start
+            .draw_in(self.config.view, self.config.grid, &self.goal, &mut self.rng);
         // Drawn for this world's grid and block count: it fits without a check.
         self.world.world_mut().put(&start);
         self.begin(start, self.config.start.keeps_goal_starts())
@@ -333,6 +361,8 @@ impl Env {
                 found: goal.block_count(),
             });
         }
+        goal.check_fits(self.config.grid)?;
+        self.config.reward.check_goal(&goal)?;
         self.world.world_mut().place(&state)?;
         self.goal = goal;
         Ok(self.begin(state, false))
@@ -344,7 +374,7 @@ impl Env {
     fn begin(&mut self, start: State, keeps_goal_start: bool) -> Observation {
         self.steps = 0;
         self.previous_action = None;
-        let over = matches!(self.config.termination, Termination::Goal) && !keeps_goal_start && self.goal.holds(&start);
+        let over = matches!(self.config.termination, Termination::Goal) && !keeps_goal_start && self.goal.holds_in(self.config.view, &start);
         self.phase = if over { Phase::Over } else { Phase::Running };
         self.observation()
     }
@@ -357,15 +387,17 @@ impl Env {
         self.check_running()?;
         let before = self.world.world().state();
         // Under `free` every action that exists is legal, and `act` refuses one that does
-        // not before changing anything: the SPEC world's step pays for no check.
-        if !matches!(self.config.protocol, ActionProtocol::Free) {
-            self.check_legal(before.held_block(), action)?;
+        // not before changing anything: the SPEC world's step pays for no check. The side
+        // view's rules always restrict.
+        if !matches!(self.config.protocol, ActionProtocol::Free) || self.config.view == View::Side {
+            self.check_legal(&before, action)?;
         }
         let effect = self.world.world_mut().act(action)?;
         let after = self.world.world().state();
         self.steps += 1;
         let transition = Transition {
             grid: self.config.grid,
+            view: self.config.view,
             goal: &self.goal,
             before: &before,
             action,
@@ -374,7 +406,10 @@ impl Env {
         };
         let reward = self.config.reward.reward(&transition);
         let pairs_in_place = self.goal.pairs_in_place(&after);
-        let goal_holds = pairs_in_place + 1 == self.goal.block_count();
+        let goal_holds = match self.config.view {
+            View::Top => pairs_in_place == self.goal.pair_count(),
+            View::Side => self.goal.holds_in(View::Side, &after),
+        };
         let terminated = self.config.termination.ends(reward, goal_holds);
         let truncated = !terminated && self.steps >= self.config.horizon;
         self.previous_action = Some(action);
@@ -387,6 +422,7 @@ impl Env {
                 state: after,
                 goal: self.goal,
                 protocol: self.config.protocol,
+                view: self.config.view,
             },
             reward,
             terminated,
@@ -396,7 +432,7 @@ impl Env {
                 blocked: effect == Effect::Blocked,
                 pairs_in_place,
                 steps: self.steps,
-                action_mask: self.legal_for(after.held_block()),
+                action_mask: self.legal_in(&after),
                 final_observation: None,
             },
         })
@@ -406,7 +442,7 @@ impl Env {
     /// (episode not started or over, no such block, illegal under the action protocol).
     pub fn check_action(&self, action: Action) -> Result<()> {
         self.check_running()?;
-        self.check_legal(self.held_block(), action)
+        self.check_legal(&self.state(), action)
     }
 
     /// An error unless an episode is running.
@@ -419,21 +455,26 @@ impl Env {
         }
     }
 
-    /// An error unless `action` exists and the protocol allows it with `held` in hand.
+    /// An error unless `action` exists and the protocol (the side view's rules, in the side
+    /// view) allows it in `state`.
     #[inline]
-    fn check_legal(&self, held: Option<BlockId>, action: Action) -> Result<()> {
-        if self.legal_for(held).contains(action) {
+    fn check_legal(&self, state: &State, action: Action) -> Result<()> {
+        if self.legal_in(state).contains(action) {
             Ok(())
         } else {
-            // The protocol names what is wrong: no such block, or an illegal action.
-            self.config.protocol.check_when(held, self.config.blocks, action)
+            // The rules name what is wrong: no such block, or an illegal action.
+            self.config.view.check(self.config.protocol, state, action)
         }
     }
 
-    /// The legal actions with `held` in hand.
+    /// The legal actions in `state`: in the top view the protocol's, which look only at
+    /// whether a block is held; in the side view the side view's rules.
     #[inline]
-    fn legal_for(&self, held: Option<BlockId>) -> ActionMask {
-        self.legal[usize::from(held.is_some())]
+    fn legal_in(&self, state: &State) -> ActionMask {
+        match self.config.view {
+            View::Top => self.legal[usize::from(state.held_block().is_some())],
+            View::Side => view::side_mask(state),
+        }
     }
 
     /// Takes the action with index `index` (docs/world.md section 2's table); an error for an index
@@ -449,12 +490,14 @@ impl Env {
             state: self.state(),
             goal: self.goal,
             protocol: self.config.protocol,
+            view: self.config.view,
         }
     }
 
-    /// The legal actions in the current state, by the config's action protocol.
+    /// The legal actions in the current state, by the config's action protocol (in the side
+    /// view, by its rules).
     pub fn legal_actions(&self) -> ActionMask {
-        self.legal_for(self.held_block())
+        self.legal_in(&self.state())
     }
 
     /// The current state, read back from the backend.

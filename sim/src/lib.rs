@@ -67,6 +67,7 @@ pub mod state;
 pub mod termination;
 pub mod trajectory;
 pub mod vec_env;
+pub mod view;
 pub mod world;
 
 pub use action::Action;
@@ -87,4 +88,5 @@ pub use start::StartRule;
 pub use state::{BlockId, MAX_BLOCKS, MIN_BLOCKS, State};
 pub use termination::Termination;
 pub use vec_env::{Autoreset, VecEnv, VecStep};
+pub use view::View;
 pub use world::{Effect, World};

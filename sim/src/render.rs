@@ -299,6 +299,7 @@ mod tests {
             state: State::new(&cells, Some(BlockId(0))).unwrap(),
             goal: Goal::from_indices(&(0..blocks).collect::<Vec<_>>()).unwrap(),
             protocol: crate::ActionProtocol::Free,
+            view: crate::View::Top,
         }
     }
 
