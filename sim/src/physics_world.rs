@@ -38,19 +38,35 @@
 //!   the shape without its skin, so moves are decided as in the top view.
 //! - Rotations are locked: unit blocks land square on what is below (the fall is vertical),
 //!   and a locked body cannot creep sideways by tipping, which keeps the read-back on cells.
-//! - Gravity [`SIDE_GRAVITY`] (four times Earth's in cells per second squared) shortens a
-//!   fall to a few dozen steps of 1/60 s; CCD is on for the falling block so a fall from
-//!   the top row cannot tunnel through a block (its speed can exceed half a block per step).
-//! - Solver iterations [`SIDE_SOLVER_ITERATIONS`] (rapier's default is 4): a tower of up to
-//!   16 blocks wakes when a block lands on it, and more iterations keep its contacts from
-//!   compressing it by more than the alignment tolerance.
-//! - Rest is decided by speed ([`SIDE_REST_SPEED`] for every body, for
-//!   [`SIDE_REST_STEPS`] steps running), not by rapier's sleep timer, which waits about
-//!   two simulated seconds (120 steps) before a body sleeps: at rest is at rest, and a
-//!   drop costs its fall and a few steps more. [`SIDE_MAX_SETTLE_STEPS`] bounds a drop.
+//! - Gravity [`SIDE_GRAVITY`] (four times Earth's, in cells per second squared) shortens a
+//!   fall of six rows to about 35 steps of 1/60 s. Stronger gravity was tried: at 150 a
+//!   tower of four compressed under its own weight by more than the alignment tolerance.
+//!   CCD is on, so that no fall (up to 15 rows, faster than half a block per step) can pass
+//!   through a block.
+//! - Solver iterations [`SIDE_SOLVER_ITERATIONS`] (rapier's default, 4): a tower that a
+//!   block lands on comes to rest within the alignment tolerance with them (the tests drop
+//!   onto a tower of six), and each iteration costs time on every step of every drop.
+//! - Rest is rapier's own sleep: a drop steps the pipeline until every block sleeps, and a
+//!   block sleeps once it has moved less than 0.05 cells per second (rapier's threshold,
+//!   which counts the solver's position corrections as motion too) for
+//!   [`SIDE_TIME_UNTIL_SLEEP`] (three steps, not rapier's default half second, which would
+//!   add 30 steps to every drop). Sleeping blocks cost the solver nothing, so only the
+//!   falling block and the tower it lands on are solved. Bodies are never put to sleep by
+//!   hand: one put to sleep before rapier had solved its contacts fell through the table
+//!   once woken. [`SIDE_MAX_SETTLE_STEPS`] bounds a drop.
 //! - `enhanced-determinism` (on in the workspace's Cargo.toml) makes rapier's arithmetic
 //!   the same on every machine, so a drop comes to rest the same way everywhere; the
 //!   snap to cell centres then makes the logical state exact.
+//!
+//! # Why the side view casts against each collider
+//!
+//! In the top view the cast goes through the broad phase's tree, which only our own
+//! updates change. In the side view rapier's pipeline steps update and reorganise that tree
+//! too (its deferred optimisation pass), and a soak of random play found a cast through it
+//! that missed a wall right beside the held block (the block left the grid) while a cast
+//! against the wall itself hit. So the side view casts the held block's shape against
+//! every other collider directly (at most 16 blocks and 4 walls, a fraction of a
+//! microsecond each): the same shape cast, without the tree.
 //!
 //! # State read-back
 //!
@@ -58,7 +74,7 @@
 //! second copy of where the blocks are. Only the held block (a property of the controller,
 //! not of the bodies) is stored beside them.
 
-use rapier2d::parry::query::{DefaultQueryDispatcher, ShapeCastOptions};
+use rapier2d::parry::query::{DefaultQueryDispatcher, ShapeCastOptions, cast_shapes};
 use rapier2d::prelude::*;
 
 use crate::error::{Result, SimError};
@@ -93,13 +109,11 @@ pub const SIDE_CONTACT_SKIN: f32 = 0.05;
 pub const SIDE_GRAVITY: f32 = 4.0 * 9.81;
 
 /// Side view: the constraint solver's iterations per step.
-pub const SIDE_SOLVER_ITERATIONS: usize = 8;
+pub const SIDE_SOLVER_ITERATIONS: usize = 4;
 
-/// Side view: the speed (cells per second) under which a body counts as at rest.
-pub const SIDE_REST_SPEED: f32 = 1e-3;
-
-/// Side view: steps in a row with every body at rest that end a drop.
-pub const SIDE_REST_STEPS: u32 = 2;
+/// Side view: how long (simulated seconds) a block must stay still (rapier's sleep
+/// threshold, 0.05 cells per second) before it sleeps; a drop ends when every block sleeps.
+pub const SIDE_TIME_UNTIL_SLEEP: f32 = 3.0 / 60.0;
 
 /// Side view: the most pipeline steps a drop may take before it is an error.
 pub const SIDE_MAX_SETTLE_STEPS: u32 = 2000;
@@ -168,6 +182,8 @@ pub struct PhysicsWorld {
     moves_since_update: u32,
     /// The side view's dynamics; `None` in the top view, where nothing ever moves by force.
     dynamics: Option<Box<Dynamics>>,
+    /// Pipeline steps the last drop took to come to rest (side view).
+    settle_steps: u32,
 }
 
 impl PhysicsWorld {
@@ -197,6 +213,9 @@ impl PhysicsWorld {
                     RigidBodyBuilder::kinematic_position_based()
                 };
                 let body = bodies.insert(body.translation(centre(cell)));
+                // Side view: rapier's own sleep decides rest (module docs), sooner than its
+                // default half second.
+                bodies[body].activation_mut().time_until_sleep = SIDE_TIME_UNTIL_SLEEP;
                 let shape = if side {
                     ColliderBuilder::cuboid(SIDE_HALF_WIDTH, SIDE_HALF_HEIGHT).contact_skin(SIDE_CONTACT_SKIN)
                 } else {
@@ -231,12 +250,19 @@ impl PhysicsWorld {
             held: None,
             moves_since_update: 0,
             dynamics: side.then(|| Box::new(Dynamics::new())),
+            settle_steps: 0,
         };
         let all: Vec<ColliderHandle> = world.colliders.iter().map(|(h, _)| h).collect();
         world.update_broad_phase(&all);
         world.set_held(state.held_block());
         world.rest_all();
         Ok(world)
+    }
+
+    /// Side view: how many rapier pipeline steps the last drop took to bring every block to
+    /// rest (0 before any drop, and in the top view).
+    pub fn settle_steps(&self) -> u32 {
+        self.settle_steps
     }
 
     /// Side view: zeroes every block's velocity (they stand exactly on their cells, at
@@ -257,15 +283,9 @@ impl PhysicsWorld {
     fn run_to_rest(&mut self, dropped: BlockId) -> Result<u32> {
         let gravity = Vector::new(0.0, -SIDE_GRAVITY);
         let params = self.params;
-        let mut resting = 0;
         for step in 1..=SIDE_MAX_SETTLE_STEPS {
             self.step_pipeline(&params, gravity);
-            let at_rest = self
-                .blocks
-                .iter()
-                .all(|b| self.bodies[b.body].linvel().length() < SIDE_REST_SPEED);
-            resting = if at_rest { resting + 1 } else { 0 };
-            if resting >= SIDE_REST_STEPS {
+            if self.blocks.iter().all(|b| self.bodies[b.body].is_sleeping()) {
                 return Ok(step);
             }
         }
@@ -408,7 +428,7 @@ impl World for PhysicsWorld {
 
     fn settle(&mut self, block: BlockId) -> Result<()> {
         self.bodies[self.blocks[block.index()].body].wake_up(true);
-        self.run_to_rest(block)?;
+        self.settle_steps = self.run_to_rest(block)?;
         // Read back every block's resting cell, check it, and put the block exactly on it.
         for i in 0..self.blocks.len() {
             let b = self.blocks[i];
@@ -431,6 +451,37 @@ impl World for PhysicsWorld {
         let b = self.blocks[block.index()];
         let (dx, dy) = dir.delta();
         let collider = &self.colliders[b.collider];
+        let options = ShapeCastOptions {
+            max_time_of_impact: 1.0,
+            target_distance: 0.0,
+            stop_at_penetration: true,
+            compute_impact_geometry_on_penetration: false,
+        };
+        let travel = Vector::new(dx as f32, dy as f32);
+        if self.dynamics.is_some() {
+            // Side view: the cast goes against every other collider (module docs, "Why the
+            // side view casts against each collider").
+            let blocked = self.colliders.iter().any(|(h, other)| {
+                h != b.collider
+                    && cast_shapes(
+                        collider.position(),
+                        travel,
+                        collider.shape(),
+                        other.position(),
+                        Vector::ZERO,
+                        other.shape(),
+                        options,
+                    )
+                    .is_ok_and(|hit| hit.is_some())
+            });
+            if blocked {
+                return false;
+            }
+            let from = self.cell_of(block);
+            let to = Cell::new((i32::from(from.x) + dx) as u8, (i32::from(from.y) + dy) as u8);
+            self.teleport(block, to);
+            return true;
+        }
         let query = self.broad_phase.as_query_pipeline(
             &DefaultQueryDispatcher,
             &self.bodies,
@@ -438,17 +489,7 @@ impl World for PhysicsWorld {
             QueryFilter::default().exclude_rigid_body(b.body),
         );
         // One cell's travel: anything hit before the neighbouring centre blocks the move.
-        let hit = query.cast_shape(
-            collider.position(),
-            Vector::new(dx as f32, dy as f32),
-            collider.shape(),
-            ShapeCastOptions {
-                max_time_of_impact: 1.0,
-                target_distance: 0.0,
-                stop_at_penetration: true,
-                compute_impact_geometry_on_penetration: false,
-            },
-        );
+        let hit = query.cast_shape(collider.position(), travel, collider.shape(), options);
         if hit.is_some() {
             return false;
         }

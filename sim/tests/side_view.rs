@@ -197,3 +197,14 @@ fn random_play_on_physics_and_grid_agrees() {
     }
     eprintln!("{done} random steps, {drops} drops, {episode} episodes: physics and grid agree");
 }
+
+#[test]
+fn a_drop_comes_to_rest_in_a_bounded_number_of_steps() {
+    // From the top row of 7 x 7 to the table: the fall and a few steps at rest.
+    let grid = Grid::default();
+    let state = State::new(&[Cell::new(0, 0), Cell::new(0, 1), Cell::new(4, 6)], Some(BlockId(2))).unwrap();
+    let mut p = PhysicsWorld::new_in(View::Side, grid, state).unwrap();
+    p.act(Action::Drop).unwrap();
+    eprintln!("a fall of 6 rows took {} steps", p.settle_steps());
+    assert!((1..=120).contains(&p.settle_steps()), "{} steps", p.settle_steps());
+}
