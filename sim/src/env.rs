@@ -5,6 +5,7 @@ use std::fmt;
 use serde::{Deserialize, Serialize};
 
 use crate::action::Action;
+use crate::block_move::{self, BlockMove};
 use crate::error::{Result, SimError};
 use crate::goal::Goal;
 use crate::grid::{Cell, Grid};
@@ -242,6 +243,15 @@ pub struct Step {
     pub info: Info,
 }
 
+/// The result of a block move ([`Env::step_block_move`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MoveStep {
+    /// The last gripper step the move took (its Drop, unless the episode ended first).
+    pub step: Step,
+    /// How many gripper steps the move took.
+    pub gripper_steps: u32,
+}
+
 /// Either backend, chosen at run time.
 #[derive(Clone)]
 enum AnyWorld {
@@ -436,6 +446,43 @@ impl Env {
                 final_observation: None,
             },
         })
+    }
+
+    /// Carries out the block move `mv` (side view only) as the gripper actions
+    /// [`block_move::expand`] gives, each one an [`Env::step`] through the backend. An error,
+    /// with nothing changed, if the episode is not running or the move cannot be carried out
+    /// now. The episode may end before the move's last action (at the horizon); the result
+    /// says how many gripper steps were taken and holds the last one.
+    pub fn step_block_move(&mut self, mv: BlockMove) -> Result<MoveStep> {
+        if self.config.view != View::Side {
+            return Err(SimError::MovesNeedSideView);
+        }
+        self.check_running()?;
+        let actions = block_move::expand(&self.state(), self.config.grid, mv)?;
+        let mut last = None;
+        for (k, &action) in actions.iter().enumerate() {
+            let step = self.step(action)?;
+            let over = step.terminated || step.truncated;
+            last = Some((step, k + 1));
+            if over {
+                break;
+            }
+        }
+        let (step, taken) = last.expect("a move has at least a pick and a drop");
+        Ok(MoveStep {
+            step,
+            gripper_steps: taken as u32,
+        })
+    }
+
+    /// The block moves legal now, by index ([`block_move::legal_moves`]); all `false` in
+    /// the top view.
+    pub fn legal_moves(&self) -> Vec<bool> {
+        let n = self.config.blocks;
+        match self.config.view {
+            View::Top => vec![false; BlockMove::count(n, self.config.grid)],
+            View::Side => block_move::legal_moves(&self.state(), self.config.grid),
+        }
     }
 
     /// `Ok` if [`Env::step`] would take `action` now; otherwise the error it would return

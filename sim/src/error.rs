@@ -144,6 +144,25 @@ pub enum SimError {
         /// The start rule.
         rule: StartRule,
     },
+    /// A block move that cannot be carried out in the current state.
+    #[error("cannot {mv}: {reason}")]
+    IllegalMove {
+        /// The move, in words.
+        mv: String,
+        /// Why not.
+        reason: String,
+    },
+    /// A block move index past the world's moves.
+    #[error("block move {index} is out of range: the moves are 0..{count}")]
+    MoveOutOfRange {
+        /// The index given.
+        index: usize,
+        /// `N * (N + W)`.
+        count: usize,
+    },
+    /// Block moves asked of a top-view world.
+    #[error("block moves are carried out in the side view only (--view side)")]
+    MovesNeedSideView,
     /// A buffer for an action mask whose length is not the world's number of actions.
     #[error("an action mask needs a buffer of {expected} bytes (5 + blocks), not {found}")]
     MaskLength {

@@ -47,6 +47,7 @@
 //! ```
 
 pub mod action;
+pub mod block_move;
 pub mod coded_state;
 pub mod env;
 pub mod error;
@@ -71,8 +72,9 @@ pub mod view;
 pub mod world;
 
 pub use action::Action;
+pub use block_move::BlockMove;
 pub use coded_state::CodedState;
-pub use env::{Backend, DEFAULT_HORIZON, Env, EnvConfig, GoalSpec, Info, Step};
+pub use env::{Backend, DEFAULT_HORIZON, Env, EnvConfig, GoalSpec, Info, MoveStep, Step};
 pub use error::{Result, SimError};
 pub use goal::Goal;
 pub use grid::{Cell, Direction, Grid, MAX_CELLS};

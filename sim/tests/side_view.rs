@@ -208,3 +208,35 @@ fn a_drop_comes_to_rest_in_a_bounded_number_of_steps() {
     eprintln!("a fall of 6 rows took {} steps", p.settle_steps());
     assert!((1..=120).contains(&p.settle_steps()), "{} steps", p.settle_steps());
 }
+
+#[test]
+fn block_moves_are_carried_out_by_the_gripper_through_either_backend() {
+    use sim::BlockMove;
+    for backend in [Backend::Grid, Backend::Physics] {
+        let mut env = Env::new(EnvConfig {
+            goal: GoalSpec::Fixed("2,0,1".parse().unwrap()),
+            ..side(Grid::new(4, 4).unwrap(), 3, backend)
+        })
+        .unwrap();
+        let start = State::new(&[Cell::new(0, 0), Cell::new(0, 1), Cell::new(2, 0)], None).unwrap();
+        env.reset_to(start, env.goal()).unwrap();
+        let onto = |block, target| BlockMove::Onto {
+            block: BlockId(block),
+            target: BlockId(target),
+        };
+        assert!(env.step_block_move(onto(0, 2)).is_err(), "0 is not clear");
+        assert_eq!(env.steps(), 0, "a refused move takes no step");
+        let m = env.step_block_move(BlockMove::ToTable { block: BlockId(1), column: 3 }).unwrap();
+        assert_eq!(m.gripper_steps, 5, "{backend}: pick, right x3, drop");
+        let m = env.step_block_move(onto(0, 2)).unwrap();
+        assert_eq!(m.gripper_steps, 5, "pick, up, right x2, drop");
+        assert!(!m.step.terminated);
+        let m = env.step_block_move(onto(1, 0)).unwrap();
+        assert!(m.step.terminated, "{backend}");
+        assert_eq!(m.gripper_steps, 5, "pick, up x2 (over 2 and 0), left, drop");
+        assert_eq!(env.steps(), 15);
+    }
+    let mut top = Env::new(EnvConfig::default()).unwrap();
+    top.reset(0);
+    assert!(top.step_block_move(sim::BlockMove::ToTable { block: BlockId(0), column: 0 }).is_err());
+}
