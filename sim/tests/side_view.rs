@@ -240,3 +240,23 @@ fn block_moves_are_carried_out_by_the_gripper_through_either_backend() {
     top.reset(0);
     assert!(top.step_block_move(sim::BlockMove::ToTable { block: BlockId(0), column: 0 }).is_err());
 }
+
+#[test]
+fn the_side_view_is_drawn_over_a_table_with_the_goal_towers_beside_it() {
+    let mut env = Env::new(EnvConfig {
+        goal: GoalSpec::Fixed("0/1,2".parse().unwrap()),
+        ..side(Grid::new(3, 3).unwrap(), 3, Backend::Grid)
+    })
+    .unwrap();
+    let start = State::new(&[Cell::new(0, 0), Cell::new(0, 1), Cell::new(2, 0)], None).unwrap();
+    let obs = env.reset_to(start, env.goal()).unwrap();
+    let text = sim::render::ascii(&obs, sim::render::Colour::Never);
+    // The goal's towers: 1 on 2 (top first), a gap, then 0.
+    assert_eq!(
+        text,
+        " .  .  .    goal\n 1  .  .     2\n 0  .  2     1\n=========\n\n             0\nheld: none\n"
+    );
+    let img = obs.rgb();
+    // The table's colour along the bottom edge of the grid.
+    assert_eq!(img.get_pixel(1, 3 * sim::render::CELL_PIXELS - 1).0, [110, 80, 50]);
+}
