@@ -48,7 +48,8 @@ pub fn play_episode(
     let obs = env.reset(seed);
     let config = *env.config();
     if let Some(t) = trajectory.as_deref_mut() {
-        t.write(&Record::episode(
+        t.write(&Record::episode_in(
+            config.view,
             episode,
             seed,
             config.grid,
