@@ -60,6 +60,10 @@ pub fn env_config(
             Some(name) => name.parse().or_value_error()?,
             None => defaults.start,
         },
+        view: match rules.view {
+            Some(name) => name.parse().or_value_error()?,
+            None => defaults.view,
+        },
         ..defaults
     };
     config.validate().or_value_error()?;
@@ -73,6 +77,8 @@ pub struct PlayRules<'a> {
     pub protocol: Option<&'a str>,
     /// The start rule's name (`uniform` or `paper`).
     pub start: Option<&'a str>,
+    /// The world's name (`top` or `side`).
+    pub view: Option<&'a str>,
 }
 
 /// A grid from Python: text such as `"7x7"` or a `(width, height)` pair, as every function

@@ -397,9 +397,9 @@ impl Env {
         self.check_running()?;
         let before = self.world.world().state();
         // Under `free` every action that exists is legal, and `act` refuses one that does
-        // not before changing anything: the SPEC world's step pays for no check. The side
-        // view's rules always restrict.
-        if !matches!(self.config.protocol, ActionProtocol::Free) || self.config.view == View::Side {
+        // not before changing anything: the SPEC world's step pays for no check. In the side
+        // view too the world's rules make an action outside the mask a no-op.
+        if !matches!(self.config.protocol, ActionProtocol::Free) {
             self.check_legal(&before, action)?;
         }
         let effect = self.world.world_mut().act(action)?;
@@ -502,12 +502,22 @@ impl Env {
         }
     }
 
-    /// An error unless `action` exists and the protocol (the side view's rules, in the side
-    /// view) allows it in `state`.
+    /// An error unless `action` exists and the protocol allows it in `state`: under `free`
+    /// every action that exists, in either view; under a restricting protocol in the side
+    /// view, the side view's mask.
     #[inline]
     fn check_legal(&self, state: &State, action: Action) -> Result<()> {
-        if self.legal_in(state).contains(action) {
+        let free = matches!(self.config.protocol, ActionProtocol::Free);
+        let mask = if free {
+            self.legal[usize::from(state.held_block().is_some())]
+        } else {
+            self.legal_in(state)
+        };
+        if mask.contains(action) {
             Ok(())
+        } else if free {
+            // Only a pick of a block that does not exist.
+            self.config.protocol.check(state, action)
         } else {
             // The rules name what is wrong: no such block, or an illegal action.
             self.config.view.check(self.config.protocol, state, action)

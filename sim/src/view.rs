@@ -48,7 +48,8 @@ impl View {
 
     /// The legal actions in `state` in this view: `protocol`'s in the top view; in the side
     /// view, whatever the protocol, the picks of clear blocks with nothing held, and the
-    /// moves and Drop while holding ([`side_mask`]).
+    /// moves and Drop while holding ([`side_mask`]). (Under the `free` protocol an action
+    /// outside the side view's mask may still be taken: the rules make it change nothing.)
     #[inline]
     pub fn legal_actions(self, protocol: ActionProtocol, state: &State) -> ActionMask {
         match self {

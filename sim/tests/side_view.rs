@@ -90,9 +90,12 @@ fn side_rules_pick_clear_blocks_and_drop_them_onto_towers() {
         let start = State::new(&[Cell::new(0, 0), Cell::new(0, 1), Cell::new(2, 0)], None).unwrap();
         let obs = env.reset_to(start, Goal::parse("2,0,1", None).unwrap()).unwrap();
         assert_eq!(obs.legal_actions().iter().collect::<Vec<_>>(), [Action::Pick(BlockId(1)), Action::Pick(BlockId(2))]);
-        assert!(env.step(Action::Pick(BlockId(0))).is_err(), "0 is not clear");
-        assert!(env.step(Action::Up).is_err(), "nothing held");
+        // Under the free protocol an action outside the mask is a step that changes nothing.
+        let s = env.step(Action::Pick(BlockId(0))).unwrap();
+        assert_eq!((s.info.effect, s.observation.held_block()), (sim::Effect::Unchanged, None), "0 is not clear");
+        assert_eq!(env.step(Action::Up).unwrap().info.effect, sim::Effect::NothingHeld);
         let s = env.step(Action::Pick(BlockId(1))).unwrap();
+        assert_eq!(env.step(Action::Pick(BlockId(2))).unwrap().info.effect, sim::Effect::Unchanged, "1 is held");
         assert_eq!(s.info.action_mask.indices().collect::<Vec<_>>(), [0, 1, 2, 3, 4]);
         env.step(Action::Up).unwrap();
         env.step(Action::Right).unwrap();
@@ -114,6 +117,23 @@ fn side_rules_pick_clear_blocks_and_drop_them_onto_towers() {
         assert!(s.terminated, "{backend}");
         assert_eq!(s.observation.state.cell(BlockId(1)), Cell::new(2, 2));
     }
+}
+
+#[test]
+fn under_the_paper_protocol_the_side_view_refuses_what_its_mask_leaves_out() {
+    let mut env = Env::new(EnvConfig {
+        protocol: sim::ActionProtocol::Paper,
+        ..side(Grid::new(4, 4).unwrap(), 3, Backend::Grid)
+    })
+    .unwrap();
+    let start = State::new(&[Cell::new(0, 0), Cell::new(0, 1), Cell::new(2, 0)], None).unwrap();
+    env.reset_to(start, Goal::parse("2,0,1", None).unwrap()).unwrap();
+    let err = env.step(Action::Pick(BlockId(0))).unwrap_err();
+    assert!(err.to_string().contains("only a clear block can be picked"), "{err}");
+    assert!(env.check_action(Action::Up).is_err());
+    assert_eq!(env.steps(), 0);
+    env.step(Action::Pick(BlockId(1))).unwrap();
+    assert!(env.step(Action::Pick(BlockId(2))).is_err());
 }
 
 #[test]
