@@ -169,8 +169,14 @@ fn side_view(c: &mut Criterion) {
     let held_high = State::new(&[Cell::new(0, 0), Cell::new(0, 1), Cell::new(4, 6)], Some(BlockId(2))).unwrap();
     let worlds = |state: State| -> [(Backend, Box<dyn World>); 2] {
         [
-            (Backend::Grid, Box::new(GridWorld::new_in(View::Side, grid, state).unwrap())),
-            (Backend::Physics, Box::new(PhysicsWorld::new_in(View::Side, grid, state).unwrap())),
+            (
+                Backend::Grid,
+                Box::new(GridWorld::new_in(View::Side, grid, state).unwrap()),
+            ),
+            (
+                Backend::Physics,
+                Box::new(PhysicsWorld::new_in(View::Side, grid, state).unwrap()),
+            ),
         ]
     };
     let mut group = c.benchmark_group("side_step");
@@ -181,7 +187,11 @@ fn side_view(c: &mut Criterion) {
         group.bench_function(backend.to_string(), |b| {
             b.iter(|| {
                 k += 1;
-                black_box(world.act(if k & 1 == 0 { Action::Left } else { Action::Right }).unwrap())
+                black_box(
+                    world
+                        .act(if k & 1 == 0 { Action::Left } else { Action::Right })
+                        .unwrap(),
+                )
             })
         });
     }
@@ -231,5 +241,13 @@ fn side_view(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, world_step, env_step, env_step_original, reset, vec_step, side_view);
+criterion_group!(
+    benches,
+    world_step,
+    env_step,
+    env_step_original,
+    reset,
+    vec_step,
+    side_view
+);
 criterion_main!(benches);

@@ -7,7 +7,9 @@ use common::{blockstack, scratch, stderr, stdout};
 
 #[test]
 fn render_draws_the_side_view_over_a_table() {
-    let o = blockstack(&["render", "--view", "side", "--blocks", "4", "--goal", "0,1/2,3", "--seed", "3", "--ascii"]);
+    let o = blockstack(&[
+        "render", "--view", "side", "--blocks", "4", "--goal", "0,1/2,3", "--seed", "3", "--ascii",
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = stdout(&o);
     assert!(text.lines().any(|l| l == "=".repeat(21)), "{text}");

@@ -170,9 +170,16 @@ impl NativeEnv {
     fn step<'py>(&mut self, py: Python<'py>, action: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyTuple>> {
         let config = *self.env.config();
         let (step, gripper_steps) = if self.moves {
-            let index: i64 = action.extract().map_err(|_| value_error("a block move is one whole number"))?;
+            let index: i64 = action
+                .extract()
+                .map_err(|_| value_error("a block move is one whole number"))?;
             let mv = usize::try_from(index)
-                .map_err(|_| value_error(format!("block move {index} is out of range: the moves are 0..{}", self.count())))
+                .map_err(|_| {
+                    value_error(format!(
+                        "block move {index} is out of range: the moves are 0..{}",
+                        self.count()
+                    ))
+                })
                 .and_then(|i| BlockMove::from_index(i, config.blocks, config.grid).or_value_error())?;
             let m = guard(|| self.env.step_block_move(mv).or_value_error())?;
             (m.step, m.gripper_steps)
@@ -181,7 +188,10 @@ impl NativeEnv {
             (guard(|| self.env.step_index(index).or_value_error())?, 1)
         };
         let (o, i) = self.obs_info(py, &step.observation, step.info.blocked)?;
-        i.cast::<pyo3::types::PyDict>()?.set_item("gripper_steps", gripper_steps)?;
+        if self.moves {
+            i.cast::<pyo3::types::PyDict>()?
+                .set_item("gripper_steps", gripper_steps)?;
+        }
         PyTuple::new(
             py,
             [

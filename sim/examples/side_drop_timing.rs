@@ -17,9 +17,19 @@ fn main() {
         p.act(Action::Drop).unwrap();
     }
     let per = t.elapsed().as_secs_f64() / f64::from(n);
-    println!("drop of 6 rows: {} steps, {:.1} us per drop", p.settle_steps(), per * 1e6);
+    println!(
+        "drop of 6 rows: {} steps, {:.1} us per drop",
+        p.settle_steps(),
+        per * 1e6
+    );
     for backend in [Backend::Physics, Backend::Grid] {
-        let mut env = Env::new(EnvConfig { blocks: 5, backend, view: View::Side, ..EnvConfig::default() }).unwrap();
+        let mut env = Env::new(EnvConfig {
+            blocks: 5,
+            backend,
+            view: View::Side,
+            ..EnvConfig::default()
+        })
+        .unwrap();
         let mut rng = sim::seeding::rng(3);
         let mut legal = env.reset(1).legal_actions();
         let steps = if backend == Backend::Grid { 20_000_000 } else { 300_000 };

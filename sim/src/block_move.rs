@@ -121,13 +121,26 @@ pub fn check(state: &State, grid: Grid, mv: BlockMove) -> Result<()> {
 pub fn expand(state: &State, grid: Grid, mv: BlockMove) -> Result<Vec<Action>> {
     let n = state.block_count();
     let block = mv.block();
-    let illegal = |reason: String| SimError::IllegalMove { mv: mv.to_string(), reason };
-    for b in [Some(block), if let BlockMove::Onto { target, .. } = mv { Some(target) } else { None }]
-        .into_iter()
-        .flatten()
+    let illegal = |reason: String| SimError::IllegalMove {
+        mv: mv.to_string(),
+        reason,
+    };
+    for b in [
+        Some(block),
+        if let BlockMove::Onto { target, .. } = mv {
+            Some(target)
+        } else {
+            None
+        },
+    ]
+    .into_iter()
+    .flatten()
     {
         if b.index() >= n {
-            return Err(SimError::NoSuchBlock { block: b.index(), blocks: n });
+            return Err(SimError::NoSuchBlock {
+                block: b.index(),
+                blocks: n,
+            });
         }
         if let Some(top) = view::block_on(state, b) {
             return Err(illegal(format!("block {top} stands on block {b}")));
@@ -222,7 +235,10 @@ mod tests {
             block: BlockId(2),
             column: 1,
         };
-        assert_eq!(expand(&s, grid, to_table).unwrap(), [Action::Pick(BlockId(2)), Action::Left, Action::Drop]);
+        assert_eq!(
+            expand(&s, grid, to_table).unwrap(),
+            [Action::Pick(BlockId(2)), Action::Left, Action::Drop]
+        );
     }
 
     #[test]
@@ -236,7 +252,10 @@ mod tests {
         };
         assert_eq!(err(onto(0, 2)), "cannot move 0 onto 2: block 1 stands on block 0");
         assert_eq!(err(onto(2, 0)), "cannot move 2 onto 0: block 1 stands on block 0");
-        assert_eq!(err(onto(1, 1)), "cannot move 1 onto 1: a block cannot be put onto itself");
+        assert_eq!(
+            err(onto(1, 1)),
+            "cannot move 1 onto 1: a block cannot be put onto itself"
+        );
         let table = |block, column| BlockMove::ToTable {
             block: BlockId(block),
             column,
@@ -248,10 +267,17 @@ mod tests {
         let low = Grid::new(3, 2).unwrap();
         let t = state(&[(1, 0), (1, 1), (2, 0)]);
         assert!(
-            check(&t, low, BlockMove::ToTable { block: BlockId(2), column: 0 })
-                .unwrap_err()
-                .to_string()
-                .contains("no free row")
+            check(
+                &t,
+                low,
+                BlockMove::ToTable {
+                    block: BlockId(2),
+                    column: 0
+                }
+            )
+            .unwrap_err()
+            .to_string()
+            .contains("no free row")
         );
     }
 

@@ -384,7 +384,9 @@ impl Env {
     fn begin(&mut self, start: State, keeps_goal_start: bool) -> Observation {
         self.steps = 0;
         self.previous_action = None;
-        let over = matches!(self.config.termination, Termination::Goal) && !keeps_goal_start && self.goal.holds_in(self.config.view, &start);
+        let over = matches!(self.config.termination, Termination::Goal)
+            && !keeps_goal_start
+            && self.goal.holds_in(self.config.view, &start);
         self.phase = if over { Phase::Over } else { Phase::Running };
         self.observation()
     }

@@ -139,7 +139,9 @@ pub enum SimError {
         what: &'static str,
     },
     /// A start rule the side view does not use.
-    #[error("the {rule} start rule places blocks in the air; the side view starts from random towers: use the uniform start rule")]
+    #[error(
+        "the {rule} start rule places blocks in the air; the side view starts from random towers: use the uniform start rule"
+    )]
     SideViewStart {
         /// The start rule.
         rule: StartRule,

@@ -303,11 +303,13 @@ impl Goal {
     /// The towers, each bottom to top.
     pub fn towers(&self) -> impl Iterator<Item = &[BlockId]> + '_ {
         let mut start = 0;
-        (0..self.named as usize).filter(|&i| self.tops & (1 << i) != 0).map(move |top| {
-            let tower = &self.order[start..=top];
-            start = top + 1;
-            tower
-        })
+        (0..self.named as usize)
+            .filter(|&i| self.tops & (1 << i) != 0)
+            .map(move |top| {
+                let tower = &self.order[start..=top];
+                start = top + 1;
+                tower
+            })
     }
 
     /// The towers as plain indices, each bottom to top (what the block-move planners take).

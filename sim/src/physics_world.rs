@@ -415,7 +415,10 @@ impl World for PhysicsWorld {
     fn set_held(&mut self, held: Option<BlockId>) {
         if self.dynamics.is_some() && self.held != held {
             // Side view: the held block is carried (kinematic); every other one falls.
-            for (b, kind) in [(self.held, RigidBodyType::Dynamic), (held, RigidBodyType::KinematicPositionBased)] {
+            for (b, kind) in [
+                (self.held, RigidBodyType::Dynamic),
+                (held, RigidBodyType::KinematicPositionBased),
+            ] {
                 if let Some(b) = b {
                     let body = &mut self.bodies[self.blocks[b.index()].body];
                     body.set_body_type(kind, false);
@@ -438,7 +441,10 @@ impl World for PhysicsWorld {
             if error > SIDE_ALIGN_TOLERANCE {
                 return Err(SimError::NotAtRest {
                     block: i,
-                    reason: format!("it rests at ({:.3}, {:.3}), {error:.3} from the centre of {cell}", at.x, at.y),
+                    reason: format!(
+                        "it rests at ({:.3}, {:.3}), {error:.3} from the centre of {cell}",
+                        at.x, at.y
+                    ),
                 });
             }
             self.teleport(BlockId(i as u8), cell);

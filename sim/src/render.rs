@@ -232,7 +232,14 @@ pub fn frame(obs: &Observation, cell: u32) -> RgbImage {
     }
     if obs.view == View::Side {
         // The table: a dark band over the bottom edge of the bottom row.
-        fill(&mut img, 0, h * cell - border.max(2), w * cell, border.max(2), [110, 80, 50]);
+        fill(
+            &mut img,
+            0,
+            h * cell - border.max(2),
+            w * cell,
+            border.max(2),
+            [110, 80, 50],
+        );
     }
     // The goal stack, top block first, in the top-right margin; towers one under the
     // other, the last first, half a block apart.

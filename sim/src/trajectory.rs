@@ -42,12 +42,12 @@ use crate::error::{Result, SimError};
 use crate::goal::Goal;
 use crate::grid::{Cell, Grid};
 use crate::grid_world::GridWorld;
+use crate::protocol::ActionProtocol;
 use crate::reward::{RewardModel, Transition};
 use crate::state::{BlockId, State};
 use crate::termination::Termination;
 use crate::view::View;
 use crate::world::World;
-use crate::protocol::ActionProtocol;
 
 /// The longest line of a trajectory file, and of a demonstration recording (`agent`'s
 /// `demos::format` shares it): 64 KiB (a step line of 16 blocks takes well under 1 KiB).

@@ -148,7 +148,9 @@ fn check_side(state: &State, action: Action) -> Result<()> {
         }),
         (Action::Pick(_), Some(h)) => illegal(format!("block {h} is held; drop it first")),
         (Action::Pick(b), None) => match block_on(state, b) {
-            Some(top) => illegal(format!("block {top} stands on block {b}; only a clear block can be picked")),
+            Some(top) => illegal(format!(
+                "block {top} stands on block {b}; only a clear block can be picked"
+            )),
             None => Ok(()),
         },
         (_, None) => illegal("nothing is held; pick a clear block first".into()),
@@ -215,7 +217,10 @@ pub fn state_of_towers(grid: Grid, towers: &[Vec<usize>]) -> Result<State> {
             }
         }
     }
-    let cells: Vec<Cell> = cells.into_iter().map(|c| c.expect("n blocks placed once each")).collect();
+    let cells: Vec<Cell> = cells
+        .into_iter()
+        .map(|c| c.expect("n blocks placed once each"))
+        .collect();
     let state = State::new(&cells, None)?;
     state.check_fits(grid)?;
     Ok(state)
@@ -272,8 +277,13 @@ mod tests {
     fn only_clear_blocks_are_picked_and_only_a_held_block_moves() {
         // 0 on the table, 1 on 0, 2 alone.
         let s = state(&[(0, 0), (0, 1), (3, 0)], None);
-        assert_eq!(side_mask(&s).iter().collect::<Vec<_>>(), [Action::Pick(BlockId(1)), Action::Pick(BlockId(2))]);
-        let err = View::Side.check(ActionProtocol::Free, &s, Action::Pick(BlockId(0))).unwrap_err();
+        assert_eq!(
+            side_mask(&s).iter().collect::<Vec<_>>(),
+            [Action::Pick(BlockId(1)), Action::Pick(BlockId(2))]
+        );
+        let err = View::Side
+            .check(ActionProtocol::Free, &s, Action::Pick(BlockId(0)))
+            .unwrap_err();
         assert_eq!(
             err.to_string(),
             "pick 0 is not legal in the side view: block 1 stands on block 0; only a clear block can be picked"
@@ -281,7 +291,11 @@ mod tests {
         assert!(View::Side.check(ActionProtocol::Free, &s, Action::Up).is_err());
         let held = state(&[(0, 0), (0, 1), (3, 0)], Some(1));
         assert_eq!(side_mask(&held).indices().collect::<Vec<_>>(), [0, 1, 2, 3, 4]);
-        assert!(View::Side.check(ActionProtocol::Free, &held, Action::Pick(BlockId(2))).is_err());
+        assert!(
+            View::Side
+                .check(ActionProtocol::Free, &held, Action::Pick(BlockId(2)))
+                .is_err()
+        );
         assert_eq!(
             View::Side.check(ActionProtocol::Free, &s, Action::Pick(BlockId(5))),
             Err(SimError::NoSuchBlock { block: 5, blocks: 3 })
@@ -302,7 +316,10 @@ mod tests {
         assert!(check_stands(&state(&[(0, 0), (0, 1), (3, 0)], None)).is_ok());
         assert!(check_stands(&state(&[(0, 0), (0, 2), (3, 0)], Some(1))).is_ok());
         let err = check_stands(&state(&[(0, 0), (0, 2), (3, 0)], None)).unwrap_err();
-        assert_eq!(err.to_string(), "block 1 floats at (0, 2) in the side view: a block that is not held must stand on the table or on another block");
+        assert_eq!(
+            err.to_string(),
+            "block 1 floats at (0, 2) in the side view: a block that is not held must stand on the table or on another block"
+        );
         // A block standing on the held block floats once it is let go.
         assert!(check_stands(&state(&[(0, 0), (0, 1), (3, 0)], Some(0))).is_err());
     }

@@ -1,7 +1,9 @@
 //! The side view (docs/world.md, "The side view"): its rules, and the physics backend's
 //! drops (rapier dynamics to rest) against the grid backend's prediction.
 
-use sim::{Action, Backend, BlockId, Cell, Env, EnvConfig, Goal, GoalSpec, Grid, GridWorld, PhysicsWorld, State, View, World};
+use sim::{
+    Action, Backend, BlockId, Cell, Env, EnvConfig, Goal, GoalSpec, Grid, GridWorld, PhysicsWorld, State, View, World,
+};
 
 fn side(grid: Grid, blocks: usize, backend: Backend) -> EnvConfig {
     EnvConfig {
@@ -89,22 +91,43 @@ fn side_rules_pick_clear_blocks_and_drop_them_onto_towers() {
         // 0 on the table, 1 on 0, 2 on the table at column 2.
         let start = State::new(&[Cell::new(0, 0), Cell::new(0, 1), Cell::new(2, 0)], None).unwrap();
         let obs = env.reset_to(start, Goal::parse("2,0,1", None).unwrap()).unwrap();
-        assert_eq!(obs.legal_actions().iter().collect::<Vec<_>>(), [Action::Pick(BlockId(1)), Action::Pick(BlockId(2))]);
+        assert_eq!(
+            obs.legal_actions().iter().collect::<Vec<_>>(),
+            [Action::Pick(BlockId(1)), Action::Pick(BlockId(2))]
+        );
         // Under the free protocol an action outside the mask is a step that changes nothing.
         let s = env.step(Action::Pick(BlockId(0))).unwrap();
-        assert_eq!((s.info.effect, s.observation.held_block()), (sim::Effect::Unchanged, None), "0 is not clear");
+        assert_eq!(
+            (s.info.effect, s.observation.held_block()),
+            (sim::Effect::Unchanged, None),
+            "0 is not clear"
+        );
         assert_eq!(env.step(Action::Up).unwrap().info.effect, sim::Effect::NothingHeld);
         let s = env.step(Action::Pick(BlockId(1))).unwrap();
-        assert_eq!(env.step(Action::Pick(BlockId(2))).unwrap().info.effect, sim::Effect::Unchanged, "1 is held");
+        assert_eq!(
+            env.step(Action::Pick(BlockId(2))).unwrap().info.effect,
+            sim::Effect::Unchanged,
+            "1 is held"
+        );
         assert_eq!(s.info.action_mask.indices().collect::<Vec<_>>(), [0, 1, 2, 3, 4]);
         env.step(Action::Up).unwrap();
         env.step(Action::Right).unwrap();
         env.step(Action::Right).unwrap();
         env.step(Action::Right).unwrap();
         let s = env.step(Action::Drop).unwrap();
-        assert_eq!(s.observation.state.cell(BlockId(1)), Cell::new(3, 0), "{backend}: fell to the table");
+        assert_eq!(
+            s.observation.state.cell(BlockId(1)),
+            Cell::new(3, 0),
+            "{backend}: fell to the table"
+        );
         // 0 onto 2, then 1 onto 0: the goal 2,0,1 holds only once 1 is let go.
-        for a in [Action::Pick(BlockId(0)), Action::Up, Action::Right, Action::Right, Action::Drop] {
+        for a in [
+            Action::Pick(BlockId(0)),
+            Action::Up,
+            Action::Right,
+            Action::Right,
+            Action::Drop,
+        ] {
             env.step(a).unwrap();
         }
         assert_eq!(env.state().cell(BlockId(0)), Cell::new(2, 1));
@@ -246,7 +269,12 @@ fn block_moves_are_carried_out_by_the_gripper_through_either_backend() {
         };
         assert!(env.step_block_move(onto(0, 2)).is_err(), "0 is not clear");
         assert_eq!(env.steps(), 0, "a refused move takes no step");
-        let m = env.step_block_move(BlockMove::ToTable { block: BlockId(1), column: 3 }).unwrap();
+        let m = env
+            .step_block_move(BlockMove::ToTable {
+                block: BlockId(1),
+                column: 3,
+            })
+            .unwrap();
         assert_eq!(m.gripper_steps, 5, "{backend}: pick, right x3, drop");
         let m = env.step_block_move(onto(0, 2)).unwrap();
         assert_eq!(m.gripper_steps, 5, "pick, up, right x2, drop");
@@ -258,7 +286,13 @@ fn block_moves_are_carried_out_by_the_gripper_through_either_backend() {
     }
     let mut top = Env::new(EnvConfig::default()).unwrap();
     top.reset(0);
-    assert!(top.step_block_move(sim::BlockMove::ToTable { block: BlockId(0), column: 0 }).is_err());
+    assert!(
+        top.step_block_move(sim::BlockMove::ToTable {
+            block: BlockId(0),
+            column: 0
+        })
+        .is_err()
+    );
 }
 
 #[test]

@@ -14,7 +14,10 @@ fn one_tower_goals_read_as_before() {
     assert_eq!(g.to_string(), "1,0,2");
     assert_eq!(serde_json::to_string(&g).unwrap(), "[1,0,2]");
     assert_eq!(serde_json::from_str::<Goal>("[1,0,2]").unwrap(), g);
-    assert_eq!(g.pairs().collect::<Vec<_>>(), [(BlockId(1), BlockId(0)), (BlockId(0), BlockId(2))]);
+    assert_eq!(
+        g.pairs().collect::<Vec<_>>(),
+        [(BlockId(1), BlockId(0)), (BlockId(0), BlockId(2))]
+    );
     assert!("0,3".parse::<Goal>().is_err(), "a tower still names every block 0..N");
     assert!(Goal::parse("0,1", Some(3)).is_err());
 }
@@ -34,8 +37,14 @@ fn towers_parse_print_and_round_trip() {
     assert_eq!(serde_json::from_str::<Goal>(&json).unwrap(), g);
     // Unnamed blocks are free; a lone partial tower prints with a trailing '/'.
     let free = Goal::parse("2,0/", Some(4)).unwrap();
-    assert_eq!((free.block_count(), free.tower_count(), free.to_string()), (4, 1, "2,0/".to_string()));
-    assert_eq!(free.to_string().parse::<Goal>().unwrap().tower_lists(), free.tower_lists());
+    assert_eq!(
+        (free.block_count(), free.tower_count(), free.to_string()),
+        (4, 1, "2,0/".to_string())
+    );
+    assert_eq!(
+        free.to_string().parse::<Goal>().unwrap().tower_lists(),
+        free.tower_lists()
+    );
     assert!(!free.names(BlockId(1)));
     for bad in ["0,1/1", "0,x/2", "/", "0,1/5"] {
         assert!(Goal::parse(bad, Some(4)).is_err(), "{bad}");
@@ -59,7 +68,10 @@ fn towers_stand_anywhere_from_above_and_on_the_table_from_the_side() {
     let raised = at([(0, 3), (0, 4), (2, 0), (2, 1)], None);
     assert!(g.holds(&raised) && !g.holds_in(View::Side, &raised));
     let held = at([(0, 0), (0, 1), (2, 0), (2, 1)], Some(3));
-    assert!(g.holds(&held) && !g.holds_in(View::Side, &held), "a held block stands on nothing");
+    assert!(
+        g.holds(&held) && !g.holds_in(View::Side, &held),
+        "a held block stands on nothing"
+    );
     // More blocks on top of a tower do not spoil it.
     let g3: Goal = "0/1,2".parse().unwrap();
     assert!(g3.holds_in(View::Side, &at([(0, 0), (3, 0), (3, 1), (3, 2)], None)));
@@ -78,7 +90,10 @@ fn rewards_that_need_one_tower_refuse_towers_and_trivial_goals_are_refused() {
     for view in [View::Top, View::Side] {
         assert!(Env::new(config("sparse", view)).is_ok());
         assert!(Env::new(config("dense", view)).is_ok());
-        assert!(matches!(Env::new(config("paper", view)).err(), Some(SimError::NotOneTower { .. })));
+        assert!(matches!(
+            Env::new(config("paper", view)).err(),
+            Some(SimError::NotOneTower { .. })
+        ));
     }
     let trivial = EnvConfig {
         blocks: 3,
@@ -86,7 +101,14 @@ fn rewards_that_need_one_tower_refuse_towers_and_trivial_goals_are_refused() {
         ..EnvConfig::default()
     };
     assert!(Env::new(trivial).is_err(), "it holds in every state from above");
-    assert!(Env::new(EnvConfig { view: View::Side, ..trivial }).is_ok(), "from the side it asks all on the table");
+    assert!(
+        Env::new(EnvConfig {
+            view: View::Side,
+            ..trivial
+        })
+        .is_ok(),
+        "from the side it asks all on the table"
+    );
 }
 
 #[test]
@@ -122,7 +144,12 @@ fn a_towers_episode_in_the_side_view_ends_when_its_towers_stand() {
     ];
     for (k, a) in plan.iter().enumerate() {
         let s = env.step(*a).unwrap();
-        assert_eq!(s.terminated, k + 1 == plan.len(), "step {k}: {a}, {:?}", s.observation.state);
+        assert_eq!(
+            s.terminated,
+            k + 1 == plan.len(),
+            "step {k}: {a}, {:?}",
+            s.observation.state
+        );
     }
 }
 
@@ -130,7 +157,11 @@ fn a_towers_episode_in_the_side_view_ends_when_its_towers_stand() {
 fn trajectory_headers_record_the_view_and_the_towers_and_old_headers_read_as_top() {
     let old = r#"{"type":"episode","episode":0,"seed":1,"grid":[7,7],"goal":[1,0,2],"horizon":1000,"start":[[6,0],[3,5],[0,5]]}"#;
     let record: Record = serde_json::from_str(old).unwrap();
-    assert_eq!(serde_json::to_string(&record).unwrap(), old, "top-view headers are written as before");
+    assert_eq!(
+        serde_json::to_string(&record).unwrap(),
+        old,
+        "top-view headers are written as before"
+    );
     let mut env = Env::new(EnvConfig {
         blocks: 3,
         backend: Backend::Grid,
@@ -140,8 +171,23 @@ fn trajectory_headers_record_the_view_and_the_towers_and_old_headers_read_as_top
     })
     .unwrap();
     let obs = env.reset(5);
-    let mut lines = vec![serde_json::to_string(&Record::episode_in(View::Side, 0, 5, obs.grid, obs.goal, 1000, &obs.state)).unwrap()];
-    assert!(lines[0].contains(r#""view":"side""#) && lines[0].contains(r#""towers":[[0],[1,2]]"#), "{}", lines[0]);
+    let mut lines = vec![
+        serde_json::to_string(&Record::episode_in(
+            View::Side,
+            0,
+            5,
+            obs.grid,
+            obs.goal,
+            1000,
+            &obs.state,
+        ))
+        .unwrap(),
+    ];
+    assert!(
+        lines[0].contains(r#""view":"side""#) && lines[0].contains(r#""towers":[[0],[1,2]]"#),
+        "{}",
+        lines[0]
+    );
     let mut mask = obs.legal_actions();
     for k in 0..40 {
         let action = mask.nth(k % mask.count()).unwrap();
@@ -153,7 +199,9 @@ fn trajectory_headers_record_the_view_and_the_towers_and_old_headers_read_as_top
         }
     }
     let text = lines.join("\n") + "\n";
-    let episodes: Vec<_> = TrajectoryReader::new(text.as_bytes(), "side.jsonl").collect::<Result<_, _>>().unwrap();
+    let episodes: Vec<_> = TrajectoryReader::new(text.as_bytes(), "side.jsonl")
+        .collect::<Result<_, _>>()
+        .unwrap();
     assert_eq!(episodes.len(), 1);
     assert_eq!((episodes[0].view, episodes[0].goal), (View::Side, obs.goal));
     assert_eq!(episodes[0].steps.len(), lines.len() - 1);

@@ -143,7 +143,9 @@ pub fn run(args: RunArgs) -> Result<()> {
     anyhow::ensure!(
         config.view == sim::View::Top || args.agent == AgentKind::Random,
         "--agent {} plays the top view only; in the side view use --agent random",
-        args.agent.to_possible_value().map_or_else(String::new, |v| v.get_name().to_string())
+        args.agent
+            .to_possible_value()
+            .map_or_else(String::new, |v| v.get_name().to_string())
     );
     let oracle = args.oracle.unwrap_or(LearnerProfile::of(rules.profile).oracle);
     let mut policy: Box<dyn Policy + '_> = match (args.agent, &model) {
