@@ -2,8 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-mod common;
-use common::{ROLE_ON_GRID, blockstack, model_metadata, path, scratch, stderr, stdout, train, train_model};
+use crate::common::{ROLE_ON_GRID, blockstack, cli, model_metadata, path, scratch, stderr, stdout, train, train_model};
 
 /// Trains the role learner on one goal, on the grid backend (quick), and returns the model.
 fn train_role(dir: &Path, name: &str, games: &str) -> PathBuf {
@@ -63,15 +62,11 @@ fn train_then_eval_on_unseen_goals() {
     // No timings: the same command prints the same line.
     assert_eq!(stdout(&eval_json()), stdout(&o));
     // The text form: a line per goal and one for all.
-    let text = blockstack(&[
-        "eval",
-        "--model",
-        path(&model),
-        "--goals",
-        "2,1,0:1,2,0",
-        "--episodes",
-        "5",
-    ]);
+    let text = cli("eval")
+        .flag("model", path(&model))
+        .flag("goals", "2,1,0:1,2,0")
+        .flag("episodes", "5")
+        .run();
     assert!(text.status.success(), "{}", stderr(&text));
     let out = stdout(&text);
     for label in ["2,1,0", "1,2,0", "all", "failures", "mean steps", "mean ratio"] {
@@ -96,24 +91,16 @@ fn run_plays_a_q_model_and_writes_trajectories() {
     let dir = scratch("run-q");
     let model = train_role(&dir, "role.safetensors", "3000");
     let trajectory = dir.join("t.jsonl");
-    let o = blockstack(&[
-        "run",
-        "--agent",
-        "q",
-        "--model",
-        path(&model),
-        "--epsilon",
-        "0.1",
-        "--goal",
-        "1,0,2",
-        "--episodes",
-        "5",
-        "--seed",
-        "3",
-        "--trajectory",
-        path(&trajectory),
-        "--json",
-    ]);
+    let o = cli("run")
+        .flag("agent", "q")
+        .flag("model", path(&model))
+        .flag("epsilon", "0.1")
+        .flag("goal", "1,0,2")
+        .flag("episodes", "5")
+        .flag("seed", "3")
+        .flag("trajectory", path(&trajectory))
+        .arg("--json")
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
     assert_eq!(v["agent"], "q-role");

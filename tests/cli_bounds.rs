@@ -2,13 +2,16 @@
 //! (played through), and flags that do not apply, each answered in one line with exit
 //! status 2.
 
-mod common;
-use common::{blockstack, stderr, stdout};
+use crate::common::{blockstack, cli, stderr, stdout};
 
 #[test]
 fn too_many_goals_are_refused_in_one_short_line() {
     for (blocks, grid, goals) in [("12", "12x12", "479001600"), ("8", "8x9", "40320")] {
-        let o = blockstack(&["train", "--blocks", blocks, "--grid", grid, "--out", "unused.st"]);
+        let o = cli("train")
+            .flag("blocks", blocks)
+            .flag("grid", grid)
+            .flag("out", "unused.st")
+            .run();
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(2), "{err}");
         assert_eq!(err.lines().count(), 1, "{err}");
@@ -19,31 +22,27 @@ fn too_many_goals_are_refused_in_one_short_line() {
 
 #[test]
 fn the_exact_solver_budget_is_a_flag_named_when_it_runs_out() {
-    let o = blockstack(&[
-        "solve",
-        "--start",
-        "0,0;3,0;5,2",
-        "--goal",
-        "1,0,2",
-        "--solver-budget",
-        "2",
-    ]);
+    let o = cli("solve")
+        .flag("start", "0,0;3,0;5,2")
+        .flag("goal", "1,0,2")
+        .flag("solver-budget", "2")
+        .run();
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.starts_with("blockstack: --solver-budget 2: "), "{err}");
     assert!(err.contains("raise the budget"), "{err}");
-    let o = blockstack(&[
-        "solve",
-        "--start",
-        "0,0;3,0;5,2",
-        "--goal",
-        "1,0,2",
-        "--solver-budget",
-        "100000",
-    ]);
+    let o = cli("solve")
+        .flag("start", "0,0;3,0;5,2")
+        .flag("goal", "1,0,2")
+        .flag("solver-budget", "100000")
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
 
-    let o = blockstack(&["run", "--agent", "exact", "--episodes", "3", "--solver-budget", "2"]);
+    let o = cli("run")
+        .flag("agent", "exact")
+        .flag("episodes", "3")
+        .flag("solver-budget", "2")
+        .run();
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("--solver-budget 2"), "{err}");
@@ -94,20 +93,14 @@ fn the_exact_solver_budget_is_a_flag_named_when_it_runs_out() {
 #[test]
 fn the_oracle_plays_every_episode_on_a_grid_one_cell_wide() {
     for oracle in ["astar", "paper"] {
-        let o = blockstack(&[
-            "run",
-            "--agent",
-            "oracle",
-            "--oracle",
-            oracle,
-            "--grid",
-            "1x6",
-            "--blocks",
-            "3",
-            "--episodes",
-            "200",
-            "--json",
-        ]);
+        let o = cli("run")
+            .flag("agent", "oracle")
+            .flag("oracle", oracle)
+            .flag("grid", "1x6")
+            .flag("blocks", "3")
+            .flag("episodes", "200")
+            .arg("--json")
+            .run();
         assert!(o.status.success(), "{oracle}: {}", stderr(&o));
         let report: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("json");
         assert_eq!(report["episodes"], 200, "{report}");

@@ -6,8 +6,7 @@ use std::path::Path;
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-mod common;
-use common::{BIN, blockstack, file_metadata, path, scratch, stderr, train};
+use crate::common::{BIN, blockstack, cli, file_metadata, path, scratch, stderr, train};
 
 /// The role recipe on two goals, on the grid backend: its final replay makes the
 /// checkpoint carry a replay memory.
@@ -160,15 +159,11 @@ fn checkpoint_misuse_is_one_line_and_exit_status_2() {
     // checkpoint (no process has this id). The next run on that checkpoint removes it.
     let stale = dir.join(".ck.999999999-0.tmp");
     std::fs::write(&stale, b"half a checkpoint").unwrap();
-    let o = blockstack(&[
-        "train",
-        "--resume",
-        path(&ck),
-        "--games",
-        "30",
-        "--out",
-        path(&dir.join("r.st")),
-    ]);
+    let o = cli("train")
+        .flag("resume", path(&ck))
+        .flag("games", "30")
+        .flag("out", path(&dir.join("r.st")))
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(!stale.exists(), "the stale temporary file is removed");
     for (args, message) in [
@@ -193,7 +188,7 @@ fn checkpoint_misuse_is_one_line_and_exit_status_2() {
         assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
         assert!(err.contains(message), "{args:?}: {err}");
     }
-    let o = blockstack(&["train", "--resume", path(&ck), "--out", path(&ck)]);
+    let o = cli("train").flag("resume", path(&ck)).flag("out", path(&ck)).run();
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     let err = stderr(&o);
     assert!(
@@ -202,28 +197,20 @@ fn checkpoint_misuse_is_one_line_and_exit_status_2() {
     );
     // Both flags named, whether the file exists yet or not.
     for same in [ck.clone(), dir.join("new.st")] {
-        let o = blockstack(&[
-            "train",
-            "--games",
-            "5",
-            "--checkpoint",
-            path(&same),
-            "--out",
-            path(&same),
-        ]);
+        let o = cli("train")
+            .flag("games", "5")
+            .flag("checkpoint", path(&same))
+            .flag("out", path(&same))
+            .run();
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(2), "{err}");
         assert_eq!(err.lines().count(), 1, "{err}");
         assert!(err.contains("--out") && err.contains("--checkpoint"), "{err}");
     }
-    let o = blockstack(&[
-        "train",
-        "--resume",
-        path(&ck),
-        "--checkpoint",
-        path(&model),
-        "--out",
-        path(&model),
-    ]);
+    let o = cli("train")
+        .flag("resume", path(&ck))
+        .flag("checkpoint", path(&model))
+        .flag("out", path(&model))
+        .run();
     assert!(stderr(&o).contains("--checkpoint"), "{}", stderr(&o));
 }

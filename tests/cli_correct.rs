@@ -7,8 +7,7 @@ use std::time::{Duration, Instant};
 
 use agent::DemoRecord;
 
-mod common;
-use common::{blockstack, path, scratch, stderr, train_model};
+use crate::common::{blockstack, cli, path, scratch, stderr, train_model};
 
 /// The paper's learner, briefly trained on two goals on the grid backend.
 fn base_model(dir: &Path) -> PathBuf {
@@ -29,50 +28,34 @@ fn replaying_a_recorded_correction_session_gives_the_same_model() {
         dir.join("replayed.safetensors"),
     );
     for demonstrator in ["1", "3"] {
-        let o = blockstack(&[
-            "correct",
-            "--model",
-            path(&base),
-            "--demonstrator",
-            demonstrator,
-            "--demos",
-            "6",
-            "--goals",
-            "0,1,2:2,1,0",
-            "--seed",
-            "3",
-            "--out",
-            path(&live),
-            "--record",
-            path(&demos),
-        ]);
+        let o = cli("correct")
+            .flag("model", path(&base))
+            .flag("demonstrator", demonstrator)
+            .flag("demos", "6")
+            .flag("goals", "0,1,2:2,1,0")
+            .flag("seed", "3")
+            .flag("out", path(&live))
+            .flag("record", path(&demos))
+            .run();
         assert!(o.status.success(), "{}", stderr(&o));
         assert!(String::from_utf8_lossy(&o.stdout).contains("corrections"));
         // Each session is replayed from a file of its own (recordings are appended to).
-        let o = blockstack(&[
-            "learn-from-demos",
-            path(&demos),
-            "--model",
-            path(&base),
-            "--out",
-            path(&replayed),
-            "--on-bad-line",
-            "fail",
-        ]);
+        let o = cli("learn-from-demos")
+            .arg(path(&demos))
+            .flag("model", path(&base))
+            .flag("out", path(&replayed))
+            .flag("on-bad-line", "fail")
+            .run();
         assert!(o.status.success(), "{}", stderr(&o));
         assert_eq!(std::fs::read(&live).unwrap(), std::fs::read(&replayed).unwrap());
         std::fs::remove_file(&demos).unwrap();
     }
     // A bad demonstrator number is refused by name.
-    let o = blockstack(&[
-        "correct",
-        "--model",
-        path(&base),
-        "--demonstrator",
-        "4",
-        "--out",
-        path(&live),
-    ]);
+    let o = cli("correct")
+        .flag("model", path(&base))
+        .flag("demonstrator", "4")
+        .flag("out", path(&live))
+        .run();
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("demonstrator"), "{}", stderr(&o));
 }
@@ -121,14 +104,11 @@ fn a_killed_session_leaves_a_recording_whose_complete_lines_all_parse() {
     assert!(steps > 1000);
     assert!(!dir.join("never.safetensors").exists());
     // The recording is usable as it is: a cut-off last line, if any, is skipped and named.
-    let o = blockstack(&[
-        "learn-from-demos",
-        path(&demos),
-        "--model",
-        path(&base),
-        "--out",
-        path(&dir.join("from-killed.safetensors")),
-    ]);
+    let o = cli("learn-from-demos")
+        .arg(path(&demos))
+        .flag("model", path(&base))
+        .flag("out", path(&dir.join("from-killed.safetensors")))
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     if complete.len() < text.len() {
         assert!(stderr(&o).contains("cut off"), "{}", stderr(&o));
@@ -142,19 +122,13 @@ fn malformed_lines_are_skipped_by_number_or_stop_the_command() {
     let dir = scratch("malformed");
     let base = base_model(&dir);
     let demos = dir.join("demos.jsonl");
-    let o = blockstack(&[
-        "correct",
-        "--model",
-        path(&base),
-        "--demonstrator",
-        "2",
-        "--demos",
-        "2",
-        "--out",
-        path(&dir.join("live.safetensors")),
-        "--record",
-        path(&demos),
-    ]);
+    let o = cli("correct")
+        .flag("model", path(&base))
+        .flag("demonstrator", "2")
+        .flag("demos", "2")
+        .flag("out", path(&dir.join("live.safetensors")))
+        .flag("record", path(&demos))
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     let text = std::fs::read_to_string(&demos).unwrap();
     let mut lines: Vec<String> = text.lines().map(String::from).collect();
@@ -162,14 +136,11 @@ fn malformed_lines_are_skipped_by_number_or_stop_the_command() {
     lines[4] = lines[4].replace("\"type\":", "\"tpye\":");
     std::fs::write(&demos, lines.join("\n") + "\n").unwrap();
     let out = dir.join("out.safetensors");
-    let o = blockstack(&[
-        "learn-from-demos",
-        path(&demos),
-        "--model",
-        path(&base),
-        "--out",
-        path(&out),
-    ]);
+    let o = cli("learn-from-demos")
+        .arg(path(&demos))
+        .flag("model", path(&base))
+        .flag("out", path(&out))
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     let err = stderr(&o);
     assert!(
@@ -179,29 +150,22 @@ fn malformed_lines_are_skipped_by_number_or_stop_the_command() {
     assert!(String::from_utf8_lossy(&o.stdout).contains("2 of"));
     assert!(out.exists());
     std::fs::remove_file(&out).unwrap();
-    let o = blockstack(&[
-        "learn-from-demos",
-        path(&demos),
-        "--model",
-        path(&base),
-        "--out",
-        path(&out),
-        "--on-bad-line",
-        "fail",
-    ]);
+    let o = cli("learn-from-demos")
+        .arg(path(&demos))
+        .flag("model", path(&base))
+        .flag("out", path(&out))
+        .flag("on-bad-line", "fail")
+        .run();
     assert_eq!(o.status.code(), Some(2));
     let err = stderr(&o);
     assert!(err.contains("line 4") && err.lines().count() == 1, "{err}");
     assert!(!out.exists(), "nothing is written when the command fails");
     // A missing file is one clear line too.
-    let o = blockstack(&[
-        "learn-from-demos",
-        path(&dir.join("missing.jsonl")),
-        "--model",
-        path(&base),
-        "--out",
-        path(&out),
-    ]);
+    let o = cli("learn-from-demos")
+        .arg(path(&dir.join("missing.jsonl")))
+        .flag("model", path(&base))
+        .flag("out", path(&out))
+        .run();
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("missing.jsonl"));
 }
@@ -211,19 +175,13 @@ fn learn_from_demos_refuses_what_cannot_be_learnt_from() {
     let dir = scratch("refusals");
     let base = base_model(&dir);
     let demos = dir.join("demos.jsonl");
-    let o = blockstack(&[
-        "correct",
-        "--model",
-        path(&base),
-        "--demonstrator",
-        "1",
-        "--demos",
-        "2",
-        "--out",
-        path(&dir.join("live.safetensors")),
-        "--record",
-        path(&demos),
-    ]);
+    let o = cli("correct")
+        .flag("model", path(&base))
+        .flag("demonstrator", "1")
+        .flag("demos", "2")
+        .flag("out", path(&dir.join("live.safetensors")))
+        .flag("record", path(&demos))
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     let lines: Vec<String> = std::fs::read_to_string(&demos)
         .unwrap()
@@ -288,14 +246,11 @@ fn learn_from_demos_refuses_what_cannot_be_learnt_from() {
         assert!(!out.exists(), "{needle}: nothing is written");
     }
     // Skipping, the line written twice is reported and the rest learnt.
-    let o = blockstack(&[
-        "learn-from-demos",
-        path(&twice),
-        "--model",
-        path(&base),
-        "--out",
-        path(&out),
-    ]);
+    let o = cli("learn-from-demos")
+        .arg(path(&twice))
+        .flag("model", path(&base))
+        .flag("out", path(&out))
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("twice.jsonl:5: skipped"), "{}", stderr(&o));
 }

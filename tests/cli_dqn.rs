@@ -3,8 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-mod common;
-use common::{blockstack, file_metadata, path, scratch, stderr, stdout};
+use crate::common::{blockstack, cli, file_metadata, path, scratch, stderr, stdout};
 
 /// A tiny DQfD run on 2 blocks (seconds), saved under `name`.
 fn train(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {
@@ -40,39 +39,27 @@ fn train(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {
 fn a_trained_network_is_evaluated_and_played_like_a_tabular_model() {
     let dir = scratch("dqn-eval");
     let net = train(&dir, "net.safetensors", &[]);
-    let o = blockstack(&[
-        "eval",
-        "--model",
-        path(&net),
-        "--episodes",
-        "20",
-        "--epsilon",
-        "0",
-        "--backend",
-        "grid",
-        "--json",
-    ]);
+    let o = cli("eval")
+        .flag("model", path(&net))
+        .flag("episodes", "20")
+        .flag("epsilon", "0")
+        .flag("backend", "grid")
+        .arg("--json")
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
     assert_eq!(v["agent"], "dqn-small");
     assert_eq!(v["episodes"], 40);
     assert_eq!(v["per_goal"].as_array().unwrap().len(), 2);
-    let o = blockstack(&[
-        "run",
-        "--agent",
-        "dqn",
-        "--model",
-        path(&net),
-        "--blocks",
-        "2",
-        "--goal",
-        "1,0",
-        "--episodes",
-        "5",
-        "--epsilon",
-        "0",
-        "--json",
-    ]);
+    let o = cli("run")
+        .flag("agent", "dqn")
+        .flag("model", path(&net))
+        .flag("blocks", "2")
+        .flag("goal", "1,0")
+        .flag("episodes", "5")
+        .flag("epsilon", "0")
+        .arg("--json")
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stdout(&o).contains("\"agent\":\"dqn-small\""), "{}", stdout(&o));
     // The same seed gives the same tensors, byte for byte (the file's metadata is a map
@@ -98,16 +85,24 @@ fn bad_files_and_arguments_are_one_line_and_status_2() {
     let truncated = dir.join("truncated.safetensors");
     std::fs::write(&truncated, &bytes[..n / 2]).unwrap();
     for (file, says) in [(&corrupt, "checksum"), (&truncated, "truncated")] {
-        let o = blockstack(&["eval", "--model", path(file), "--episodes", "1"]);
+        let o = cli("eval").flag("model", path(file)).flag("episodes", "1").run();
         assert_eq!(o.status.code(), Some(2));
         let err = stderr(&o);
         assert!(err.contains(says) && err.lines().count() == 1, "{err}");
     }
     // A network is not what --agent q plays, and a 2-block network does not play 3 blocks.
-    let o = blockstack(&["run", "--agent", "q", "--model", path(&net), "--blocks", "2"]);
+    let o = cli("run")
+        .flag("agent", "q")
+        .flag("model", path(&net))
+        .flag("blocks", "2")
+        .run();
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("not what --agent q plays"), "{}", stderr(&o));
-    let o = blockstack(&["run", "--agent", "dqn", "--model", path(&net), "--blocks", "3"]);
+    let o = cli("run")
+        .flag("agent", "dqn")
+        .flag("model", path(&net))
+        .flag("blocks", "3")
+        .run();
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("does not fit"), "{}", stderr(&o));
     let x = dir.join("x.safetensors");
@@ -151,48 +146,31 @@ fn bad_files_and_arguments_are_one_line_and_status_2() {
 fn demonstrations_come_from_a_trajectory_file_too() {
     let dir = scratch("dqn-demos-file");
     let trajectory = dir.join("t.jsonl");
-    let o = blockstack(&[
-        "run",
-        "--agent",
-        "exact",
-        "--blocks",
-        "2",
-        "--episodes",
-        "30",
-        "--backend",
-        "grid",
-        "--trajectory",
-        path(&trajectory),
-    ]);
+    let o = cli("run")
+        .flag("agent", "exact")
+        .flag("blocks", "2")
+        .flag("episodes", "30")
+        .flag("backend", "grid")
+        .flag("trajectory", path(&trajectory))
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     let out = dir.join("net.safetensors");
-    let o = blockstack(&[
-        "dqn",
-        "--blocks",
-        "2",
-        "--demos-file",
-        path(&trajectory),
-        "--pretrain",
-        "50",
-        "--steps",
-        "50",
-        "--hidden",
-        "32",
-        "--out",
-        path(&out),
-    ]);
+    let o = cli("dqn")
+        .flag("blocks", "2")
+        .flag("demos-file", path(&trajectory))
+        .flag("pretrain", "50")
+        .flag("steps", "50")
+        .flag("hidden", "32")
+        .flag("out", path(&out))
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stdout(&o).contains("30 demonstrated episodes"), "{}", stdout(&o));
     let missing = dir.join("missing.jsonl");
-    let o = blockstack(&[
-        "dqn",
-        "--blocks",
-        "2",
-        "--demos-file",
-        path(&missing),
-        "--out",
-        path(&out),
-    ]);
+    let o = cli("dqn")
+        .flag("blocks", "2")
+        .flag("demos-file", path(&missing))
+        .flag("out", path(&out))
+        .run();
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("missing.jsonl"), "{}", stderr(&o));
 }
@@ -203,19 +181,13 @@ fn an_untrained_network_is_warned_about_and_marked_in_its_file() {
     // No steps at all, and fewer steps than self-play's learning start: no gradient step.
     for steps in ["0", "50"] {
         let out = dir.join(format!("untrained-{steps}.safetensors"));
-        let o = blockstack(&[
-            "dqn",
-            "--blocks",
-            "2",
-            "--loss",
-            "dqn",
-            "--steps",
-            steps,
-            "--hidden",
-            "16",
-            "--out",
-            path(&out),
-        ]);
+        let o = cli("dqn")
+            .flag("blocks", "2")
+            .flag("loss", "dqn")
+            .flag("steps", steps)
+            .flag("hidden", "16")
+            .flag("out", path(&out))
+            .run();
         assert!(o.status.success(), "{}", stderr(&o));
         let err = stderr(&o);
         assert!(err.contains("warning: the network is untrained"), "{err}");
@@ -223,7 +195,7 @@ fn an_untrained_network_is_warned_about_and_marked_in_its_file() {
         let warnings = &file_metadata(&out, "blockstack-dqn")["warnings"];
         assert!(warnings[0].as_str().unwrap().contains("untrained"), "{warnings}");
         // The file still reads and plays.
-        let o = blockstack(&["eval", "--model", path(&out), "--episodes", "1"]);
+        let o = cli("eval").flag("model", path(&out)).flag("episodes", "1").run();
         assert!(o.status.success(), "{}", stderr(&o));
     }
     // A trained network carries no warnings (and its metadata no such field).

@@ -11,8 +11,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-mod common;
-use common::{BIN, ROLE_ON_GRID, blockstack, path, scratch, stderr, stdout, train_model};
+use crate::common::{BIN, ROLE_ON_GRID, blockstack, cli, path, scratch, stderr, stdout, train_model};
 
 /// Trains a small role model (grid backend, a few hundred games) at `dir/name`.
 fn small_model(dir: &Path, name: &str) -> PathBuf {
@@ -85,7 +84,10 @@ fn a_closed_pipe_ends_a_command_quietly_and_after_its_model_is_saved() {
     let o = with_closed_stdout(&["train", "--games", "20", "--backend", "grid", "--out", path(&out)]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert!(
-        blockstack(&["eval", "--model", path(&out), "--episodes", "1"])
+        cli("eval")
+            .flag("model", path(&out))
+            .flag("episodes", "1")
+            .run()
             .status
             .success()
     );
@@ -127,19 +129,13 @@ fn a_fifo_destination_is_written_directly_and_stays_a_fifo() {
             text
         })
     };
-    let o = blockstack(&[
-        "run",
-        "--goal",
-        "1,0,2",
-        "--episodes",
-        "2",
-        "--seed",
-        "7",
-        "--backend",
-        "grid",
-        "--trajectory",
-        path(&fifo),
-    ]);
+    let o = cli("run")
+        .flag("goal", "1,0,2")
+        .flag("episodes", "2")
+        .flag("seed", "7")
+        .flag("backend", "grid")
+        .flag("trajectory", path(&fifo))
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     // Checked before joining the reader: had the FIFO been replaced, its reader would wait
     // for a writer forever.
@@ -209,16 +205,17 @@ fn a_symlink_destination_is_followed_and_stays_a_link() {
     let link = dir.join("latest.safetensors");
     std::os::unix::fs::symlink("models/m1.safetensors", &link).unwrap();
     for games in ["20", "40"] {
-        let o = blockstack(&["train", "--games", games, "--backend", "grid", "--out", path(&link)]);
+        let o = cli("train")
+            .flag("games", games)
+            .flag("backend", "grid")
+            .flag("out", path(&link))
+            .run();
         assert!(o.status.success(), "{}", stderr(&o));
         assert!(fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
-        let eval = blockstack(&[
-            "eval",
-            "--model",
-            path(&dir.join("models/m1.safetensors")),
-            "--episodes",
-            "1",
-        ]);
+        let eval = cli("eval")
+            .flag("model", path(&dir.join("models/m1.safetensors")))
+            .flag("episodes", "1")
+            .run();
         assert!(eval.status.success(), "{}", stderr(&eval));
     }
     assert_eq!(listing(&dir.join("models")), ["m1.safetensors"]);
@@ -229,19 +226,13 @@ fn bad_destinations_fail_before_any_work() {
     let dir = scratch("destinations");
     let model = small_model(&dir, "m.safetensors");
     let demos = dir.join("demos.jsonl");
-    let o = blockstack(&[
-        "correct",
-        "--model",
-        path(&model),
-        "--demonstrator",
-        "1",
-        "--demos",
-        "1",
-        "--out",
-        path(&dir.join("c.safetensors")),
-        "--record",
-        path(&demos),
-    ]);
+    let o = cli("correct")
+        .flag("model", path(&model))
+        .flag("demonstrator", "1")
+        .flag("demos", "1")
+        .flag("out", path(&dir.join("c.safetensors")))
+        .flag("record", path(&demos))
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     let missing = dir.join("no-such-folder").join("out.safetensors");
     let ok = dir.join("ok.safetensors");
@@ -308,19 +299,13 @@ fn an_output_that_is_an_input_is_refused() {
     let model = small_model(&dir, "m.safetensors");
     let before = fs::read(&model).unwrap();
     let demos = dir.join("demos.jsonl");
-    let record = blockstack(&[
-        "correct",
-        "--model",
-        path(&model),
-        "--demonstrator",
-        "2",
-        "--demos",
-        "1",
-        "--out",
-        path(&dir.join("c.safetensors")),
-        "--record",
-        path(&demos),
-    ]);
+    let record = cli("correct")
+        .flag("model", path(&model))
+        .flag("demonstrator", "2")
+        .flag("demos", "1")
+        .flag("out", path(&dir.join("c.safetensors")))
+        .flag("record", path(&demos))
+        .run();
     assert!(record.status.success(), "{}", stderr(&record));
     let recorded = fs::read(&demos).unwrap();
     let alias = dir.join("alias.safetensors");
@@ -397,24 +382,19 @@ fn model_files_that_cannot_be_read_are_one_line_errors() {
 fn values_the_table_cannot_hold_are_refused_up_front() {
     let dir = scratch("float-guard");
     let out = dir.join("m.safetensors");
-    let o = blockstack(&["train", "--initial-q", "1e300", "--out", path(&out)]);
+    let o = cli("train").flag("initial-q", "1e300").flag("out", path(&out)).run();
     assert_eq!(o.status.code(), Some(2));
     let err = stderr(&o);
     assert_eq!(err.lines().count(), 1, "{err}");
     assert!(err.contains("1e300") && err.contains("32-bit floats"), "{err}");
     assert!(!out.exists());
     let model = small_model(&dir, "base.safetensors");
-    let o = blockstack(&[
-        "correct",
-        "--model",
-        path(&model),
-        "--demonstrator",
-        "1",
-        "--margin",
-        "1e39",
-        "--out",
-        path(&out),
-    ]);
+    let o = cli("correct")
+        .flag("model", path(&model))
+        .flag("demonstrator", "1")
+        .flag("margin", "1e39")
+        .flag("out", path(&out))
+        .run();
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("the margin 1e39 does not fit"), "{}", stderr(&o));
     assert!(!out.exists());
@@ -429,7 +409,7 @@ fn pictures_are_written_in_the_format_their_name_says() {
         ("w.jpeg", &b"\xff\xd8\xff"[..]),
     ] {
         let out = dir.join(name);
-        let o = blockstack(&["render", "--seed", "2", "--out", path(&out)]);
+        let o = cli("render").flag("seed", "2").flag("out", path(&out)).run();
         assert!(o.status.success(), "{}", stderr(&o));
         assert!(fs::read(&out).unwrap().starts_with(magic), "{name}");
     }
@@ -460,21 +440,14 @@ fn an_error_mid_run_leaves_no_temporary_file() {
     let out = dir.join("t.jsonl");
     // On a one-cell-wide grid some starts cannot reach the goal: the oracle gives up on
     // one of them after earlier episodes were written.
-    let o = blockstack(&[
-        "run",
-        "--agent",
-        "oracle",
-        "--grid",
-        "1x5",
-        "--blocks",
-        "2",
-        "--goal",
-        "0,1",
-        "--episodes",
-        "50",
-        "--trajectory",
-        path(&out),
-    ]);
+    let o = cli("run")
+        .flag("agent", "oracle")
+        .flag("grid", "1x5")
+        .flag("blocks", "2")
+        .flag("goal", "0,1")
+        .flag("episodes", "50")
+        .flag("trajectory", path(&out))
+        .run();
     assert!(temporaries(&dir).is_empty(), "{:?}", listing(&dir));
     if o.status.code() == Some(2) {
         assert!(listing(&dir).is_empty(), "{:?}", listing(&dir));
@@ -522,41 +495,36 @@ fn a_signal_mid_run_leaves_no_temporary_file() {
 fn standard_output_as_a_destination_carries_the_data_alone() {
     let dir = scratch("stdout-data");
     // The trajectory on standard output, the report on standard error.
-    let o = blockstack(&[
-        "run",
-        "--goal",
-        "1,0,2",
-        "--episodes",
-        "2",
-        "--seed",
-        "7",
-        "--backend",
-        "grid",
-        "--json",
-        "--trajectory",
-        "-",
-    ]);
+    let o = cli("run")
+        .flag("goal", "1,0,2")
+        .flag("episodes", "2")
+        .flag("seed", "7")
+        .flag("backend", "grid")
+        .arg("--json")
+        .arg("--trajectory")
+        .arg("-")
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     let file = dir.join("t.jsonl");
-    let to_file = blockstack(&[
-        "run",
-        "--goal",
-        "1,0,2",
-        "--episodes",
-        "2",
-        "--seed",
-        "7",
-        "--backend",
-        "grid",
-        "--json",
-        "--trajectory",
-        path(&file),
-    ]);
+    let to_file = cli("run")
+        .flag("goal", "1,0,2")
+        .flag("episodes", "2")
+        .flag("seed", "7")
+        .flag("backend", "grid")
+        .arg("--json")
+        .flag("trajectory", path(&file))
+        .run();
     assert_eq!(stdout(&o), fs::read_to_string(&file).unwrap());
     assert_eq!(stderr(&o), stdout(&to_file), "the report moved to standard error");
     // A model on standard output is the file's bytes.
     let model = dir.join("m.safetensors");
-    let train = |out: &str| blockstack(&["train", "--games", "30", "--backend", "grid", "--out", out]);
+    let train = |out: &str| {
+        cli("train")
+            .flag("games", "30")
+            .flag("backend", "grid")
+            .flag("out", out)
+            .run()
+    };
     let piped = train("-");
     assert!(piped.status.success(), "{}", stderr(&piped));
     assert!(train(path(&model)).status.success());

@@ -3,8 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-mod common;
-use common::{blockstack, model_metadata, path, scratch, stderr, stdout, train, train_model};
+use crate::common::{blockstack, cli, model_metadata, path, scratch, stderr, stdout, train, train_model};
 
 fn json(args: &[&str]) -> serde_json::Value {
     let o = blockstack(args);
@@ -68,21 +67,14 @@ fn run_under_the_original_profile_plays_the_authors_world() {
 fn trajectories_under_the_paper_protocol_hold_only_legal_actions() {
     let dir = scratch("trajectory");
     let file = dir.join("t.jsonl");
-    let o = blockstack(&[
-        "run",
-        "--profile",
-        "original",
-        "--agent",
-        "random",
-        "--episodes",
-        "5",
-        "--seed",
-        "1",
-        "--backend",
-        "grid",
-        "--trajectory",
-        path(&file),
-    ]);
+    let o = cli("run")
+        .flag("profile", "original")
+        .flag("agent", "random")
+        .flag("episodes", "5")
+        .flag("seed", "1")
+        .flag("backend", "grid")
+        .flag("trajectory", path(&file))
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     let text = std::fs::read_to_string(&file).unwrap();
     let mut held: Option<serde_json::Value> = None;
@@ -229,12 +221,16 @@ fn train_flags_override_the_profile_part_by_part() {
     // --schedule alone sets the games' length with it.
     assert_eq!(t["horizon"], 1000);
     // The profile's own defaults: 100 games of up to 5000 steps.
-    let o = blockstack(&["train", "--profile", "original", "--games", "0", "--out", path(&out)]);
+    let o = cli("train")
+        .flag("profile", "original")
+        .flag("games", "0")
+        .flag("out", path(&out))
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     let file = model_metadata(&out);
     assert_eq!(file["training"]["horizon"], 5000);
     // Without a profile nothing changed: the paper's learner in our world.
-    let o = blockstack(&["train", "--games", "0", "--out", path(&out)]);
+    let o = cli("train").flag("games", "0").flag("out", path(&out)).run();
     assert!(o.status.success(), "{}", stderr(&o));
     let file = model_metadata(&out);
     let t = &file["training"];
@@ -261,39 +257,25 @@ fn corrections_under_original_use_the_plain_update_and_the_authors_goals() {
     let dir = scratch("correct");
     let model = train_original(&dir);
     let (out, record) = (dir.join("corrected.safetensors"), dir.join("demos.jsonl"));
-    let o = blockstack(&[
-        "correct",
-        "--model",
-        path(&model),
-        "--demonstrator",
-        "2",
-        "--demos",
-        "2",
-        "--seed",
-        "3",
-        "--out",
-        path(&out),
-        "--record",
-        path(&record),
-        "--backend-note-unused",
-    ]);
+    let o = cli("correct")
+        .flag("model", path(&model))
+        .flag("demonstrator", "2")
+        .flag("demos", "2")
+        .flag("seed", "3")
+        .flag("out", path(&out))
+        .flag("record", path(&record))
+        .arg("--backend-note-unused")
+        .run();
     // A flag that does not exist is refused before anything runs.
     assert_eq!(o.status.code(), Some(2));
-    let o = blockstack(&[
-        "correct",
-        "--model",
-        path(&model),
-        "--demonstrator",
-        "2",
-        "--demos",
-        "2",
-        "--seed",
-        "3",
-        "--out",
-        path(&out),
-        "--record",
-        path(&record),
-    ]);
+    let o = cli("correct")
+        .flag("model", path(&model))
+        .flag("demonstrator", "2")
+        .flag("demos", "2")
+        .flag("seed", "3")
+        .flag("out", path(&out))
+        .flag("record", path(&record))
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stdout(&o).contains("on 0,1,2:2,1,0:1,2,0:1,0,2"), "{}", stdout(&o));
     let first: serde_json::Value =
@@ -301,14 +283,11 @@ fn corrections_under_original_use_the_plain_update_and_the_authors_goals() {
     assert_eq!(first["rule"]["margin"], serde_json::Value::Null);
     // learn-from-demos replays it to the same table.
     let replayed = dir.join("replayed.safetensors");
-    let o = blockstack(&[
-        "learn-from-demos",
-        path(&record),
-        "--model",
-        path(&model),
-        "--out",
-        path(&replayed),
-    ]);
+    let o = cli("learn-from-demos")
+        .arg(path(&record))
+        .flag("model", path(&model))
+        .flag("out", path(&replayed))
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(std::fs::read(&replayed).unwrap(), std::fs::read(&out).unwrap());
 }
@@ -325,10 +304,10 @@ fn flags_that_do_not_apply_are_not_offered() {
         assert_eq!(o.status.code(), Some(2), "{args:?}");
         assert!(stderr(&o).contains("unexpected argument"), "{args:?}: {}", stderr(&o));
     }
-    let o = blockstack(&["run", "--profile", "paper"]);
+    let o = cli("run").flag("profile", "paper").run();
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("spec, original"), "{}", stderr(&o));
-    let o = blockstack(&["render", "--profile", "original", "--start", "corner"]);
+    let o = cli("render").flag("profile", "original").flag("start", "corner").run();
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("uniform, paper"), "{}", stderr(&o));
 }

@@ -1,8 +1,7 @@
 //! `train --preset`: the role representation trains with the role recipe by default, the
 //! paper's representations with the paper's learner, and every flag overrides its preset.
 
-mod common;
-use common::{blockstack, model_metadata, path, scratch, stderr, stdout, train, train_model};
+use crate::common::{cli, model_metadata, path, scratch, stderr, stdout, train, train_model};
 
 #[test]
 fn the_role_learner_with_its_default_preset_plays_every_goal_greedily() {
@@ -21,16 +20,12 @@ fn the_role_learner_with_its_default_preset_plays_every_goal_greedily() {
     let training = &model_metadata(&model)["training"];
     assert_eq!(training["params"]["gamma"], 1.0, "{training}");
     assert_eq!(training["final_replay"], true, "{training}");
-    let o = blockstack(&[
-        "eval",
-        "--model",
-        path(&model),
-        "--episodes",
-        "100",
-        "--epsilon",
-        "0",
-        "--json",
-    ]);
+    let o = cli("eval")
+        .flag("model", path(&model))
+        .flag("episodes", "100")
+        .flag("epsilon", "0")
+        .arg("--json")
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
     assert_eq!(report["episodes"], 600, "{report}");
@@ -104,19 +99,15 @@ fn presets_set_the_learner_and_flags_override_them() {
         (Some("role"), &true.into()),
         "{t}"
     );
-    let o = blockstack(&[
-        "train",
-        "--profile",
-        "original",
-        "--preset",
-        "optimal",
-        "--out",
-        path(&model),
-    ]);
+    let o = cli("train")
+        .flag("profile", "original")
+        .flag("preset", "optimal")
+        .flag("out", path(&model))
+        .run();
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("add --schedule spec"), "{}", stderr(&o));
 
-    let help = stdout(&blockstack(&["train", "--help"]));
+    let help = stdout(&cli("train").arg("--help").run());
     assert!(
         help.contains("--preset") && help.contains("optimal") && help.contains("an explicit flag beats both"),
         "{help}"

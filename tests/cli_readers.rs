@@ -5,8 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-mod common;
-use common::{blockstack, path, scratch, stderr, stdout};
+use crate::common::{cli, path, scratch, stderr, stdout};
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures").join(name)
@@ -14,19 +13,13 @@ fn fixture(name: &str) -> PathBuf {
 
 /// `blockstack dqn --demos-file FILE` on the default 3-block world, with a tiny network.
 fn dqn(demos: &Path, out: &Path) -> std::process::Output {
-    blockstack(&[
-        "dqn",
-        "--demos-file",
-        path(demos),
-        "--pretrain",
-        "20",
-        "--steps",
-        "20",
-        "--hidden",
-        "16",
-        "--out",
-        path(out),
-    ])
+    cli("dqn")
+        .flag("demos-file", path(demos))
+        .flag("pretrain", "20")
+        .flag("steps", "20")
+        .flag("hidden", "16")
+        .flag("out", path(out))
+        .run()
 }
 
 /// The run was refused with exit 2 and one line naming `needle`.
@@ -68,16 +61,12 @@ fn a_device_given_as_demonstrations_is_refused_at_its_first_line() {
 fn files_written_by_the_previous_release_still_read() {
     let dir = scratch("readers-fixtures");
     let out = dir.join("learnt.safetensors");
-    let o = blockstack(&[
-        "learn-from-demos",
-        path(&fixture("recording-v2.jsonl")),
-        "--model",
-        path(&fixture("model.safetensors")),
-        "--on-bad-line",
-        "fail",
-        "--out",
-        path(&out),
-    ]);
+    let o = cli("learn-from-demos")
+        .arg(path(&fixture("recording-v2.jsonl")))
+        .flag("model", path(&fixture("model.safetensors")))
+        .flag("on-bad-line", "fail")
+        .flag("out", path(&out))
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
         stdout(&o).contains("in 2 episodes of 1 sessions; 0 of 24 lines skipped"),

@@ -7,8 +7,7 @@
 
 use std::path::{Path, PathBuf};
 
-mod common;
-use common::{blockstack, scratch, stderr};
+use crate::common::{cli, scratch, stderr};
 
 /// The quick report: CI's, or one made now.
 fn quick_report() -> PathBuf {
@@ -18,7 +17,7 @@ fn quick_report() -> PathBuf {
     // Under the target folder, one per checkout: a later run replaces it.
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli-reproduce-quick");
     let _ = std::fs::remove_dir_all(&dir);
-    let o = blockstack(&["reproduce", "--quick", "--out", dir.to_str().unwrap()]);
+    let o = cli("reproduce").arg("--quick").flag("out", dir.to_str().unwrap()).run();
     assert!(o.status.success(), "{}", stderr(&o));
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(out.contains("reproduced E1, E2, E3, E4, E5, E6, E7, E8"), "{out}");
@@ -175,20 +174,14 @@ fn the_quick_report_holds_every_experiment() {
         let e1 = &row[world]["arm"];
         let replicates = e1["replicates"].as_f64().unwrap();
         let games = (e1["games"].as_u64().unwrap() * e1["replicates"].as_u64().unwrap()).to_string();
-        let o = blockstack(&[
-            "run",
-            "--profile",
-            world,
-            "--agent",
-            "random",
-            "--blocks",
-            "2",
-            "--episodes",
-            &games,
-            "--seed",
-            &seed,
-            "--json",
-        ]);
+        let o = cli("run")
+            .flag("profile", world)
+            .flag("agent", "random")
+            .flag("blocks", "2")
+            .flag("episodes", &games)
+            .flag("seed", &seed)
+            .arg("--json")
+            .run();
         assert!(o.status.success(), "{}", stderr(&o));
         let run: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
         assert_eq!(
@@ -210,16 +203,12 @@ fn the_quick_report_holds_every_experiment() {
 fn only_runs_the_experiments_asked_for() {
     let dir = scratch("reproduce-only");
     let out = dir.join("report");
-    let o = blockstack(&[
-        "reproduce",
-        "--quick",
-        "--only",
-        "e1",
-        "--jobs",
-        "1",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = cli("reproduce")
+        .arg("--quick")
+        .flag("only", "e1")
+        .flag("jobs", "1")
+        .flag("out", out.to_str().unwrap())
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(String::from_utf8_lossy(&o.stdout).contains("reproduced E1 (quick run, seed 1, 1 thread)"));
     let json = read_json(&out.join("results.json"));
@@ -231,7 +220,11 @@ fn only_runs_the_experiments_asked_for() {
         .collect();
     assert_eq!(ids, ["E1"]);
     assert_eq!(json["ran"]["threads"], 1);
-    let o = blockstack(&["reproduce", "--quick", "--only", "E9", "--out", out.to_str().unwrap()]);
+    let o = cli("reproduce")
+        .arg("--quick")
+        .flag("only", "E9")
+        .flag("out", out.to_str().unwrap())
+        .run();
     assert_eq!(o.status.code(), Some(2));
     assert_eq!(stderr(&o).trim_end().lines().count(), 1, "{}", stderr(&o));
     assert!(
@@ -246,14 +239,17 @@ fn a_report_directory_that_cannot_be_made_fails_at_once() {
     let dir = scratch("reproduce-file");
     let file = dir.join("file");
     std::fs::write(&file, "not a directory").unwrap();
-    let o = blockstack(&["reproduce", "--quick", "--out", file.join("report").to_str().unwrap()]);
+    let o = cli("reproduce")
+        .arg("--quick")
+        .flag("out", file.join("report").to_str().unwrap())
+        .run();
     assert_eq!(o.status.code(), Some(2));
     let err = stderr(&o);
     assert!(
         err.contains("cannot make the folder") && err.lines().count() == 1,
         "{err}"
     );
-    let o = blockstack(&["reproduce", "--jobs", "0"]);
+    let o = cli("reproduce").flag("jobs", "0").run();
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     std::fs::remove_file(&file).unwrap();
 }

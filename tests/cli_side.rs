@@ -2,8 +2,7 @@
 //! towers into a trajectory file that records the view, and the agents that play only the
 //! top view refusing it with one line.
 
-mod common;
-use common::{blockstack, scratch, stderr, stdout};
+use crate::common::{blockstack, scratch, stderr, stdout};
 
 #[test]
 fn render_draws_the_side_view_over_a_table() {

@@ -5,8 +5,7 @@ use std::process::Output;
 
 use sim::{Action, Cell, Goal, Grid, GridWorld, State, World};
 
-mod common;
-use common::{blockstack, stderr, stdout};
+use crate::common::{blockstack, cli, stderr, stdout};
 
 fn json(o: &Output) -> serde_json::Value {
     assert!(o.status.success(), "{}", stderr(o));
@@ -27,7 +26,11 @@ fn reaches(start: &[(u8, u8)], held: Option<u8>, goal: &str, actions: &[usize]) 
 
 #[test]
 fn solve_prints_a_shortest_plan_as_json() {
-    let o = blockstack(&["solve", "--start", "0,0;3,0;5,2", "--goal", "1,0,2", "--json"]);
+    let o = cli("solve")
+        .flag("start", "0,0;3,0;5,2")
+        .flag("goal", "1,0,2")
+        .arg("--json")
+        .run();
     let v = json(&o);
     assert_eq!(v["solver"], "exact");
     let actions: Vec<usize> = v["actions"]
@@ -61,7 +64,11 @@ fn solve_with_a_held_block_and_the_oracle() {
 
 #[test]
 fn solve_prints_action_names_and_length() {
-    let o = blockstack(&["solve", "--start", "0,0;3,0", "--goal", "1,0", "--grid", "7x7"]);
+    let o = cli("solve")
+        .flag("start", "0,0;3,0")
+        .flag("goal", "1,0")
+        .flag("grid", "7x7")
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     let out = stdout(&o);
     assert!(out.contains("exact plan, goal 1,0, grid 7x7: 5 actions"), "{out}");
@@ -111,20 +118,16 @@ fn solve_rejects_bad_input_with_one_line_and_exit_2() {
 #[test]
 fn run_plays_the_planners_in_the_physics_world() {
     let run = |agent: &str| {
-        json(&blockstack(&[
-            "run",
-            "--agent",
-            agent,
-            "--blocks",
-            "3",
-            "--goal",
-            "2,0,1",
-            "--episodes",
-            "20",
-            "--seed",
-            "4",
-            "--json",
-        ]))
+        json(
+            &cli("run")
+                .flag("agent", agent)
+                .flag("blocks", "3")
+                .flag("goal", "2,0,1")
+                .flag("episodes", "20")
+                .flag("seed", "4")
+                .arg("--json")
+                .run(),
+        )
     };
     let (exact, oracle) = (run("exact"), run("oracle"));
     for (v, name) in [(&exact, "exact"), (&oracle, "oracle")] {

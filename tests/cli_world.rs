@@ -1,24 +1,16 @@
 //! `blockstack run` and `render` end to end, and their answers to bad input.
 
-mod common;
-use common::{blockstack, scratch, stderr, stdout};
+use crate::common::{blockstack, cli, scratch, stderr, stdout};
 
 #[test]
 fn run_reports_failures_and_steps_as_json() {
-    let o = blockstack(&[
-        "run",
-        "--agent",
-        "random",
-        "--blocks",
-        "2",
-        "--goal",
-        "0,1",
-        "--episodes",
-        "20",
-        "--seed",
-        "7",
-        "--json",
-    ]);
+    let base = cli("run")
+        .flag("blocks", 2)
+        .flag("goal", "0,1")
+        .flag("episodes", 20)
+        .flag("seed", 7)
+        .arg("--json");
+    let o = base.clone().flag("agent", "random").run();
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
     assert_eq!(v["episodes"], 20);
@@ -27,42 +19,19 @@ fn run_reports_failures_and_steps_as_json() {
     assert!(v["median_steps"].as_f64().unwrap() > 1.0);
     assert_eq!(v["agent"], "random");
     // Same seed, same figures; both backends play the same episodes.
-    assert_eq!(
-        stdout(&blockstack(&[
-            "run",
-            "--blocks",
-            "2",
-            "--goal",
-            "0,1",
-            "--episodes",
-            "20",
-            "--seed",
-            "7",
-            "--json"
-        ])),
-        stdout(&o)
-    );
-    let grid = blockstack(&[
-        "run",
-        "--blocks",
-        "2",
-        "--goal",
-        "0,1",
-        "--episodes",
-        "20",
-        "--seed",
-        "7",
-        "--backend",
-        "grid",
-        "--json",
-    ]);
+    assert_eq!(base.ok(), stdout(&o));
+    let grid = base.flag("backend", "grid").run();
     let g: serde_json::Value = serde_json::from_str(&stdout(&grid)).unwrap();
     assert_eq!((&g["failures"], &g["mean_steps"]), (&v["failures"], &v["mean_steps"]));
 }
 
 #[test]
 fn run_prints_a_readable_summary() {
-    let o = blockstack(&["run", "--blocks", "3", "--episodes", "5", "--seed", "1"]);
+    let o = cli("run")
+        .flag("blocks", "3")
+        .flag("episodes", "5")
+        .flag("seed", "1")
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     let out = stdout(&o);
     for label in ["failures", "mean steps", "median steps"] {
@@ -75,21 +44,14 @@ fn the_same_seed_writes_the_same_trajectory_byte_for_byte() {
     let dir = scratch("trajectory");
     let (a, b) = (dir.join("a.jsonl"), dir.join("b.jsonl"));
     for path in [&a, &b] {
-        let o = blockstack(&[
-            "run",
-            "--blocks",
-            "3",
-            "--goal",
-            "1,0,2",
-            "--episodes",
-            "3",
-            "--seed",
-            "11",
-            "--horizon",
-            "50",
-            "--trajectory",
-            path.to_str().unwrap(),
-        ]);
+        let o = cli("run")
+            .flag("blocks", "3")
+            .flag("goal", "1,0,2")
+            .flag("episodes", "3")
+            .flag("seed", "11")
+            .flag("horizon", "50")
+            .flag("trajectory", path.to_str().unwrap())
+            .run();
         assert!(o.status.success(), "{}", stderr(&o));
     }
     let (ta, tb) = (std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
@@ -131,18 +93,13 @@ fn the_same_seed_writes_the_same_trajectory_byte_for_byte() {
 fn render_writes_a_png_and_prints_ascii() {
     let dir = scratch("render");
     let png = dir.join("world.png");
-    let o = blockstack(&[
-        "render",
-        "--blocks",
-        "3",
-        "--goal",
-        "0,1,2",
-        "--seed",
-        "7",
-        "--out",
-        png.to_str().unwrap(),
-        "--ascii",
-    ]);
+    let o = cli("render")
+        .flag("blocks", "3")
+        .flag("goal", "0,1,2")
+        .flag("seed", "7")
+        .flag("out", png.to_str().unwrap())
+        .arg("--ascii")
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     let img = image::open(&png).unwrap().to_rgb8();
     assert!(img.width() >= 7 * 48 && img.height() >= 7 * 48);

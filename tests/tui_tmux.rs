@@ -13,8 +13,7 @@ use std::time::{Duration, Instant};
 
 use agent::DemoRecord;
 
-mod common;
-use common::{BIN, blockstack, path, scratch, stderr, train_model};
+use crate::common::{BIN, blockstack, cli, path, scratch, stderr, train_model};
 
 /// A tmux server of our own (its socket in the test's folder), killed when dropped.
 struct Tmux {
@@ -208,16 +207,12 @@ fn a_person_corrects_the_agent_in_the_terminal_and_quits() {
     );
     // Replaying the recording gives the model the session saved on quitting.
     let replayed = dir.join("replayed.safetensors");
-    let o = blockstack(&[
-        "learn-from-demos",
-        path(&demos),
-        "--model",
-        path(&base),
-        "--out",
-        path(&replayed),
-        "--on-bad-line",
-        "fail",
-    ]);
+    let o = cli("learn-from-demos")
+        .arg(path(&demos))
+        .flag("model", path(&base))
+        .flag("out", path(&replayed))
+        .flag("on-bad-line", "fail")
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(std::fs::read(&corrected).unwrap(), std::fs::read(&replayed).unwrap());
 }
@@ -335,8 +330,19 @@ fn blocks_past_9_are_picked_by_letter_and_a_small_terminal_stops_the_agent() {
     // ...and not while the terminal is too small to show the world.
     tmux.resize("demo", (40, 10));
     tmux.wait_for("demo", "the polite message", |s| s.contains("too small"));
-    std::thread::sleep(Duration::from_millis(300));
-    let shown = records(&demos).len();
+    // A step already under way when the message came may still land: wait until the
+    // recording has been still for half a second (however loaded the machine), then check
+    // that it stays still.
+    let mut shown = records(&demos).len();
+    let (deadline, mut still_since) = (Instant::now() + Duration::from_secs(30), Instant::now());
+    while still_since.elapsed() < Duration::from_millis(500) {
+        assert!(Instant::now() < deadline, "the agent keeps stepping behind the message");
+        std::thread::sleep(Duration::from_millis(50));
+        let now = records(&demos).len();
+        if now != shown {
+            (shown, still_since) = (now, Instant::now());
+        }
+    }
     std::thread::sleep(Duration::from_millis(1500));
     assert_eq!(records(&demos).len(), shown, "the agent stepped behind the message");
     tmux.resize("demo", roomy);

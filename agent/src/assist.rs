@@ -104,38 +104,9 @@ pub enum OracleKind {
     Paper,
 }
 
-impl OracleKind {
-    /// The names the oracles are chosen by.
-    pub const NAMES: [&'static str; 2] = ["astar", "paper"];
-
-    /// This oracle's name.
-    pub const fn name(self) -> &'static str {
-        match self {
-            OracleKind::Astar => "astar",
-            OracleKind::Paper => "paper",
-        }
-    }
-}
-
-impl fmt::Display for OracleKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for OracleKind {
-    type Err = AgentError;
-
-    fn from_str(text: &str) -> Result<OracleKind> {
-        match text {
-            "astar" => Ok(OracleKind::Astar),
-            "paper" => Ok(OracleKind::Paper),
-            _ => Err(AgentError::Config(format!(
-                "unknown oracle {text:?}: choose astar (ours) or paper (the authors' greedy walker)"
-            ))),
-        }
-    }
-}
+sim::names!(OracleKind { Astar = "astar", Paper = "paper" } unknown(text) -> AgentError {
+    AgentError::Config(format!("unknown oracle {text:?}: choose astar (ours) or paper (the authors' greedy walker)"))
+});
 
 /// How oscillation is read (module docs).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -149,38 +120,9 @@ pub enum Oscillation {
     Distances,
 }
 
-impl Oscillation {
-    /// The names the tests are chosen by.
-    pub const NAMES: [&'static str; 2] = ["actions", "distances"];
-
-    /// This test's name.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Oscillation::Actions => "actions",
-            Oscillation::Distances => "distances",
-        }
-    }
-}
-
-impl fmt::Display for Oscillation {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for Oscillation {
-    type Err = AgentError;
-
-    fn from_str(text: &str) -> Result<Oscillation> {
-        match text {
-            "actions" => Ok(Oscillation::Actions),
-            "distances" => Ok(Oscillation::Distances),
-            _ => Err(AgentError::Config(format!(
-                "unknown oscillation test {text:?}: choose actions (ours) or distances (the authors')"
-            ))),
-        }
-    }
-}
+sim::names!(Oscillation { Actions = "actions", Distances = "distances" } unknown(text) -> AgentError {
+    AgentError::Config(format!("unknown oscillation test {text:?}: choose actions (ours) or distances (the authors')"))
+});
 
 /// What one game has shown of oscillation so far, by one [`Oscillation`] test.
 #[derive(Clone, Copy, Debug)]

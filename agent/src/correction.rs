@@ -159,6 +159,30 @@ pub fn session_world(agent: &QAgent) -> EnvConfig {
     }
 }
 
+/// The world of a session of `agent` under `profile` ([`session_world`], then the
+/// profile's protocol, start rule and learner's reward), and the profile whose correction
+/// rule applies: `profile`, else the one the agent was trained under. What `blockstack
+/// demo --profile` and `blockstack serve --profile` play.
+pub fn session_world_under(agent: &QAgent, profile: Option<Profile>) -> (EnvConfig, Profile) {
+    let mut world = session_world(agent);
+    if let Some(p) = profile {
+        world.protocol = p.protocol();
+        world.start = p.start_rule();
+        world.reward = crate::LearnerProfile::of(p).reward;
+    }
+    let trained_under = agent.training().map_or(Profile::Spec, |t| t.profile);
+    (world, profile.unwrap_or(trained_under))
+}
+
+/// The goals a session plays when none are given: every goal of `blocks` blocks, or under
+/// the `original` profile with 3 blocks the authors' four ([`DEMONSTRATED_GOALS`]).
+pub fn default_goals(blocks: usize, profile: Profile) -> Result<Vec<Goal>> {
+    match profile {
+        Profile::Original if blocks == 3 => Ok(demonstrated_goals()),
+        _ => Ok(Goal::all(blocks)?),
+    }
+}
+
 /// A person's command as the steps the session's protocol allows (module docs): the
 /// action itself when it is legal in `obs`; under a protocol that forbids picking while
 /// holding, a pick of another block becomes a Drop and then the Pick, and a pick of the
@@ -315,6 +339,11 @@ impl<S: DemoSink> CorrectionSession<S> {
     /// Whether no episode is under way (none begun, or the current one ended).
     pub fn is_over(&self) -> bool {
         self.episode.as_ref().is_none_or(|(_, env, _)| env.is_over())
+    }
+
+    /// The sink the session records to (e.g. to count the lines written so far).
+    pub fn sink(&self) -> &S {
+        &self.sink
     }
 
     /// The agent's proposal for the current state (`None` when no episode is under way).
@@ -601,6 +630,25 @@ mod tests {
         };
         let q = rule.learn(&mut a, &drop).unwrap();
         assert_eq!(q, (9.0f64 + 0.8) as f32);
+    }
+
+    #[test]
+    fn a_profile_given_replaces_the_world_rules_and_the_rule_of_the_session() {
+        let a = agent();
+        let (world, profile) = session_world_under(&a, None);
+        assert_eq!((world, profile), (session_world(&a), Profile::Spec));
+        let (world, profile) = session_world_under(&a, Some(Profile::Original));
+        assert_eq!(profile, Profile::Original);
+        assert_eq!(world.protocol, sim::ActionProtocol::Paper);
+        assert_eq!(world.start, Profile::Original.start_rule());
+        assert_eq!(
+            world.horizon,
+            session_world(&a).horizon,
+            "the agent's schedule keeps its horizon"
+        );
+        assert_eq!(default_goals(3, Profile::Original).unwrap(), demonstrated_goals());
+        assert_eq!(default_goals(3, Profile::Spec).unwrap().len(), 6);
+        assert_eq!(default_goals(2, Profile::Original).unwrap().len(), 2);
     }
 
     #[test]

@@ -174,7 +174,7 @@ pub fn evaluate<'a>(
         let mut policy = make_policy()?;
         let played = (0..plan.episodes)
             .map(|k| {
-                let result = play_episode(&mut env, policy.as_mut(), k, episode_seed(plan.seed, k), None)?;
+                let result = play_episode(&mut env, policy.as_mut(), k, episode_seed(plan.seed, k), &mut ())?;
                 tick()?;
                 Ok(result)
             })

@@ -55,6 +55,6 @@ pub use profile::LearnerProfile;
 pub use qlearning::{QAgent, QPolicy};
 pub use qtable::QTable;
 pub use repr::{Repr, ReprKind, Representation};
-pub use rollout::{EpisodeResult, Summary, play, play_episode};
+pub use rollout::{EpisodeObserver, EpisodeResult, Summary, play, play_episode};
 pub use schedule::Schedule;
 pub use train::{Progress, TrainReport, Trained, Trainer, train};

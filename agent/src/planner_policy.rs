@@ -163,8 +163,8 @@ mod tests {
         };
         let grid = config.grid;
         let mut env = Env::new(config).unwrap();
-        let exact = play(&mut env, &mut ExactPolicy::new(grid), 30, 5, None).unwrap();
-        let oracle = play(&mut env, &mut OraclePolicy::new(grid), 30, 5, None).unwrap();
+        let exact = play(&mut env, &mut ExactPolicy::new(grid), 30, 5, &mut ()).unwrap();
+        let oracle = play(&mut env, &mut OraclePolicy::new(grid), 30, 5, &mut ()).unwrap();
         for (e, o) in exact.iter().zip(&oracle) {
             assert!(e.reached_goal && o.reached_goal);
             assert_eq!(e.start, o.start);

@@ -14,8 +14,6 @@
 //! else `paper`. The CLI's `blockstack train` and Python's `blockstack.train` both call
 //! [`TrainConfig::resolve`], so the same settings give the same model file, byte for byte.
 
-use std::fmt;
-
 use serde::{Deserialize, Serialize};
 use sim::{Backend, EnvConfig, Goal, Grid, Profile, RewardModel, StartRule};
 
@@ -39,45 +37,17 @@ pub enum Preset {
     Optimal,
 }
 
+sim::names!(Preset { Paper = "paper", Optimal = "optimal" } unknown(name) -> AgentError {
+    AgentError::Config(format!("unknown preset {name:?}: choose one of {}", Preset::NAMES.join(", ")))
+});
+
 impl Preset {
-    /// The names the presets are chosen by.
-    pub const NAMES: [&'static str; 2] = ["paper", "optimal"];
-
-    /// This preset's name.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Preset::Paper => "paper",
-            Preset::Optimal => "optimal",
-        }
-    }
-
     /// The preset a run takes when none is named: `optimal` for the role representation
     /// under the `spec` profile, `paper` otherwise.
     pub fn default_for(profile: Profile, repr: Option<ReprKind>) -> Preset {
         match (profile, repr) {
             (Profile::Spec, Some(ReprKind::Role)) => Preset::Optimal,
             _ => Preset::Paper,
-        }
-    }
-}
-
-impl fmt::Display for Preset {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for Preset {
-    type Err = AgentError;
-
-    fn from_str(name: &str) -> Result<Preset> {
-        match name {
-            "paper" => Ok(Preset::Paper),
-            "optimal" => Ok(Preset::Optimal),
-            _ => Err(AgentError::Config(format!(
-                "unknown preset {name:?}: choose one of {}",
-                Preset::NAMES.join(", ")
-            ))),
         }
     }
 }

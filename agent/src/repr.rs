@@ -11,8 +11,6 @@
 //! of field sizes; a representation whose key count would not fit in a `u64` cannot be
 //! built (an error, e.g. `raw` with 16 blocks on a 16 x 16 grid).
 
-use std::fmt;
-
 use serde::{Deserialize, Serialize};
 use sim::coded_state::{CodedState, Distance, Horizontal, Vertical};
 use sim::{Action, ActionMask, BlockId, Goal, Grid, MAX_BLOCKS, MIN_BLOCKS, State};
@@ -35,45 +33,9 @@ pub enum ReprKind {
     Role,
 }
 
-impl ReprKind {
-    /// All five: the SPEC's four in its order, `chasing-code` after `chasing`.
-    pub const ALL: [ReprKind; 5] = [
-        ReprKind::Raw,
-        ReprKind::Pairwise,
-        ReprKind::Chasing,
-        ReprKind::ChasingCode,
-        ReprKind::Role,
-    ];
-
-    /// The name it is chosen by on the command line and written under in model files.
-    pub fn name(self) -> &'static str {
-        match self {
-            ReprKind::Raw => "raw",
-            ReprKind::Pairwise => "pairwise",
-            ReprKind::Chasing => "chasing",
-            ReprKind::ChasingCode => "chasing-code",
-            ReprKind::Role => "role",
-        }
-    }
-}
-
-impl fmt::Display for ReprKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for ReprKind {
-    type Err = AgentError;
-
-    fn from_str(text: &str) -> Result<ReprKind> {
-        ReprKind::ALL.into_iter().find(|k| k.name() == text).ok_or_else(|| {
-            AgentError::Config(format!(
-                "unknown representation {text:?}: choose raw, pairwise, chasing, chasing-code or role"
-            ))
-        })
-    }
-}
+sim::names!(ReprKind { Raw = "raw", Pairwise = "pairwise", Chasing = "chasing", ChasingCode = "chasing-code", Role = "role" } unknown(text) -> AgentError {
+    AgentError::Config(format!("unknown representation {text:?}: choose raw, pairwise, chasing, chasing-code or role"))
+});
 
 /// What every representation offers the Q-table.
 pub trait Representation {

@@ -1,9 +1,13 @@
 //! Playing episodes: the loop every command and experiment shares, and its statistics.
+//!
+//! What watches an episode (a trajectory file, Python's columns of transitions, the frames
+//! of a picture) is an [`EpisodeObserver`] handed to the one loop, [`play_episode`], rather
+//! than a copy of the loop with its own additions.
 
 use serde::Serialize;
 use sim::seeding::{self, SimRng};
 use sim::trajectory::{Record, TrajectoryWriter};
-use sim::{Env, Goal, State};
+use sim::{Action, Env, EnvConfig, Goal, Observation, State, Step};
 
 use crate::error::Result;
 use crate::policy::Policy;
@@ -36,28 +40,81 @@ pub fn policy_rng(episode_seed: u64) -> SimRng {
     rng
 }
 
-/// Plays one episode of `policy` in `env`, reset with `seed`; writes it to `trajectory`
-/// as episode `episode` when given.
+/// What watches episodes as [`play_episode`] plays them. Both methods do nothing unless
+/// implemented; an error stops the episode (e.g. [`AgentError::Interrupted`](crate::AgentError)
+/// when a person pressed Ctrl-C).
+pub trait EpisodeObserver {
+    /// Episode `episode` of a world `config` was reset with `seed` to `start`.
+    fn start(&mut self, episode: u64, seed: u64, config: &EnvConfig, start: &Observation) -> Result<()> {
+        let _ = (episode, seed, config, start);
+        Ok(())
+    }
+
+    /// `action`, taken in `before`, gave `step`.
+    fn step(&mut self, episode: u64, before: &Observation, action: Action, step: &Step) -> Result<()> {
+        let _ = (episode, before, action, step);
+        Ok(())
+    }
+}
+
+/// Watches nothing.
+impl EpisodeObserver for () {}
+
+/// Writes each episode to the trajectory file: its episode line, then one line per step.
+impl EpisodeObserver for TrajectoryWriter {
+    fn start(&mut self, episode: u64, seed: u64, config: &EnvConfig, start: &Observation) -> Result<()> {
+        Ok(self.write(&Record::episode_in(
+            config.view,
+            episode,
+            seed,
+            config.grid,
+            start.goal,
+            config.horizon,
+            &start.state,
+        ))?)
+    }
+
+    fn step(&mut self, episode: u64, _: &Observation, action: Action, step: &Step) -> Result<()> {
+        Ok(self.write(&Record::step(episode, action.index(), step))?)
+    }
+}
+
+/// Watches when there is something to watch with.
+impl<O: EpisodeObserver> EpisodeObserver for Option<O> {
+    fn start(&mut self, episode: u64, seed: u64, config: &EnvConfig, start: &Observation) -> Result<()> {
+        self.as_mut().map_or(Ok(()), |o| o.start(episode, seed, config, start))
+    }
+
+    fn step(&mut self, episode: u64, before: &Observation, action: Action, step: &Step) -> Result<()> {
+        self.as_mut().map_or(Ok(()), |o| o.step(episode, before, action, step))
+    }
+}
+
+/// Keeps every observation of the episodes, each start first (e.g. for a picture of them).
+impl EpisodeObserver for Vec<Observation> {
+    fn start(&mut self, _: u64, _: u64, _: &EnvConfig, start: &Observation) -> Result<()> {
+        self.push(*start);
+        Ok(())
+    }
+
+    fn step(&mut self, _: u64, _: &Observation, _: Action, step: &Step) -> Result<()> {
+        self.push(step.observation);
+        Ok(())
+    }
+}
+
+/// Plays one episode of `policy` in `env`, reset with `seed`, as episode `episode` of the
+/// run, shown to `observer` as it goes.
 pub fn play_episode(
     env: &mut Env,
     policy: &mut dyn Policy,
     episode: u64,
     seed: u64,
-    mut trajectory: Option<&mut TrajectoryWriter>,
+    observer: &mut dyn EpisodeObserver,
 ) -> Result<EpisodeResult> {
     let obs = env.reset(seed);
     let config = *env.config();
-    if let Some(t) = trajectory.as_deref_mut() {
-        t.write(&Record::episode_in(
-            config.view,
-            episode,
-            seed,
-            config.grid,
-            obs.goal,
-            config.horizon,
-            &obs.state,
-        ))?;
-    }
+    observer.start(episode, seed, &config, &obs)?;
     let start = obs.state;
     let mut rng = policy_rng(seed);
     policy.begin_episode(&obs);
@@ -67,9 +124,7 @@ pub fn play_episode(
     while !env.is_over() {
         let action = policy.act(&obs, &mut rng)?;
         let step = env.step(action)?;
-        if let Some(t) = trajectory.as_deref_mut() {
-            t.write(&Record::step(episode, action.index(), &step))?;
-        }
+        observer.step(episode, &obs, action, &step)?;
         total_reward += step.reward;
         reached_goal = step.terminated;
         obs = step.observation;
@@ -85,38 +140,32 @@ pub fn play_episode(
     })
 }
 
-/// Plays `episodes` episodes of `policy` in `env`; episode `k` is reset with
-/// [`seeding::episode_seed`]`(base_seed, k)`, so any two policies run with the same base
-/// seed play the same starts.
+/// Plays `episodes` episodes of `policy` in `env`, shown to `observer`; episode `k` is
+/// reset with [`seeding::episode_seed`]`(base_seed, k)`, so any two policies run with the
+/// same base seed play the same starts.
 pub fn play(
     env: &mut Env,
     policy: &mut dyn Policy,
     episodes: u64,
     base_seed: u64,
-    trajectory: Option<&mut TrajectoryWriter>,
+    observer: &mut dyn EpisodeObserver,
 ) -> Result<Vec<EpisodeResult>> {
-    play_observed(env, policy, episodes, base_seed, trajectory, &mut |_| {})
+    play_observed(env, policy, episodes, base_seed, observer, &mut |_| {})
 }
 
-/// [`play`], calling `observe` after each episode (a progress bar's hook).
+/// [`play`], calling `done` after each episode (a progress bar's hook).
 pub fn play_observed(
     env: &mut Env,
     policy: &mut dyn Policy,
     episodes: u64,
     base_seed: u64,
-    mut trajectory: Option<&mut TrajectoryWriter>,
-    observe: &mut dyn FnMut(&EpisodeResult),
+    observer: &mut dyn EpisodeObserver,
+    done: &mut dyn FnMut(&EpisodeResult),
 ) -> Result<Vec<EpisodeResult>> {
     (0..episodes)
         .map(|k| {
-            let result = play_episode(
-                env,
-                policy,
-                k,
-                seeding::episode_seed(base_seed, k),
-                trajectory.as_deref_mut(),
-            )?;
-            observe(&result);
+            let result = play_episode(env, policy, k, seeding::episode_seed(base_seed, k), observer)?;
+            done(&result);
             Ok(result)
         })
         .collect()

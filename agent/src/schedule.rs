@@ -31,12 +31,10 @@
 //! The SPEC learners never track seen entries, so they compute and store exactly what they
 //! did before this module existed.
 
-use std::fmt;
-
 use serde::{Deserialize, Serialize};
 use sim::Termination;
 
-use crate::error::{AgentError, Result};
+use crate::error::AgentError;
 
 /// Steps of a training game under [`Schedule::PaperCode`] (the authors' `iteration_count`).
 pub const PAPER_GAME_STEPS: u32 = 5000;
@@ -68,18 +66,11 @@ pub enum Schedule {
     PaperCode,
 }
 
+sim::names!(Schedule { Spec = "spec", PaperCode = "paper-code" } unknown(text) -> AgentError {
+    AgentError::Config(format!("unknown schedule {text:?}: choose {}", Schedule::NAMES.join(" or ")))
+});
+
 impl Schedule {
-    /// The names the schedules are chosen by.
-    pub const NAMES: [&'static str; 2] = ["spec", "paper-code"];
-
-    /// This schedule's name.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Schedule::Spec => "spec",
-            Schedule::PaperCode => "paper-code",
-        }
-    }
-
     /// The length of a training game of `blocks` blocks when nothing else says:
     /// [`sim::DEFAULT_HORIZON`] under `spec`, 5000 (1000 with two blocks) under
     /// `paper-code`.
@@ -130,27 +121,6 @@ impl Schedule {
                 }
                 a.max(0.0)
             }
-        }
-    }
-}
-
-impl fmt::Display for Schedule {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for Schedule {
-    type Err = AgentError;
-
-    fn from_str(text: &str) -> Result<Schedule> {
-        match text {
-            "spec" => Ok(Schedule::Spec),
-            "paper-code" => Ok(Schedule::PaperCode),
-            _ => Err(AgentError::Config(format!(
-                "unknown schedule {text:?}: choose {}",
-                Schedule::NAMES.join(" or ")
-            ))),
         }
     }
 }

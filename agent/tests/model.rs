@@ -3,8 +3,7 @@
 
 use std::path::Path;
 
-mod common;
-use common::{TempPath, temp_path};
+use crate::common::{TempPath, temp_path};
 
 use agent::model::{MAX_MODEL_BYTES, MODEL_FORMAT, MODEL_VERSION};
 use agent::{CorrectionRule, QAgent, QParams, QTable, ReprKind, TrainConfig};

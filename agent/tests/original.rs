@@ -2,8 +2,7 @@
 //! the action protocol, the `paper-code` schedule updates as the authors' code did, and a
 //! model trained under `original` remembers it.
 
-mod common;
-use common::temp_path;
+use crate::common::temp_path;
 
 use agent::correction::{CorrectionConfig, CorrectionRule, person_steps, session_world};
 use agent::demonstrator::PlannerKind;
@@ -362,8 +361,8 @@ fn planners_play_the_authors_world_to_the_goal_legally() {
     };
     let grid = config.grid;
     let mut env = Env::new(config).unwrap();
-    let exact = agent::play(&mut env, &mut ExactPolicy::new(grid), 40, 3, None).unwrap();
-    let oracle = agent::play(&mut env, &mut OraclePolicy::new(grid), 40, 3, None).unwrap();
+    let exact = agent::play(&mut env, &mut ExactPolicy::new(grid), 40, 3, &mut ()).unwrap();
+    let oracle = agent::play(&mut env, &mut OraclePolicy::new(grid), 40, 3, &mut ()).unwrap();
     assert_eq!(Summary::of(&exact).failures, 0);
     assert_eq!(Summary::of(&oracle).failures, 0);
     let solver = oracle::ExactSolver::new(grid).with_protocol(ActionProtocol::Paper);
@@ -375,6 +374,6 @@ fn planners_play_the_authors_world_to_the_goal_legally() {
         assert!(o.steps >= e.steps);
     }
     // The paper's oracle plays too (it may get stuck: the episodes end either way).
-    let walker = agent::play(&mut env, &mut PaperOraclePolicy::new(grid), 40, 3, None).unwrap();
+    let walker = agent::play(&mut env, &mut PaperOraclePolicy::new(grid), 40, 3, &mut ()).unwrap();
     assert!(Summary::of(&walker).failures < 40);
 }

@@ -170,7 +170,7 @@ fn same_seed_same_table_and_evaluation() {
         })
         .unwrap();
         let mut policy = q.policy(0.1).unwrap();
-        agent::play(&mut env, &mut policy, 20, 9, None).unwrap()
+        agent::play(&mut env, &mut policy, 20, 9, &mut ()).unwrap()
     };
     assert_eq!(evaluate(&a.agent), evaluate(&b.agent));
 }
@@ -303,6 +303,6 @@ fn a_model_for_another_world_is_refused() {
     })
     .unwrap();
     let mut policy = q.policy(0.0).unwrap();
-    assert!(agent::play(&mut env, &mut policy, 1, 0, None).is_err());
+    assert!(agent::play(&mut env, &mut policy, 1, 0, &mut ()).is_err());
     assert_eq!(policy.name(), "q-role");
 }

@@ -12,9 +12,7 @@ const EXPECT: Expect<'static> = Expect {
     what: "a test file",
 };
 
-#[path = "../../tests/common/scratch.rs"]
-mod scratch;
-use scratch::scratch;
+use crate::scratch::scratch;
 
 fn sample() -> Vec<u8> {
     let tensors = [

@@ -9,9 +9,7 @@ use std::process::Command;
 
 use files::{Destination, OutputPath, Special, live_temp_files, prepare_folder, refuse_same_file};
 
-#[path = "../../tests/common/scratch.rs"]
-mod scratch;
-use scratch::scratch;
+use crate::scratch::scratch;
 
 /// Every file in `dir` whose name says it is a temporary file.
 fn temps(dir: &Path) -> Vec<String> {

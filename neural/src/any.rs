@@ -12,7 +12,7 @@ use std::path::Path;
 use agent::eval::{EvalPlan, Evaluation};
 use agent::{Policy, QAgent};
 use oracle::ExactSolver;
-use sim::{EnvConfig, Goal, GoalSpec, Grid, Profile, RewardModel};
+use sim::{Action, EnvConfig, Goal, GoalSpec, Grid, Observation, Profile, ProfileParts, RewardModel};
 
 use crate::error::Result;
 use crate::model::{Dqn, FORMAT, MAX_NETWORK_BYTES};
@@ -64,7 +64,7 @@ impl AnyModel {
     pub fn training_reward(&self) -> Option<RewardModel> {
         match self {
             AnyModel::Q(q) => q.training().map(|t| t.world.reward),
-            AnyModel::Dqn(d) => Some(d.config().reward),
+            AnyModel::Dqn(d) => Some(d.config().world.reward),
         }
     }
 
@@ -77,6 +77,26 @@ impl AnyModel {
         }
     }
 
+    /// The profile parts of its training world, as a run starts from them before its own
+    /// flags: a tabular model's protocol and start rule with its profile's reward; a
+    /// network's protocol and reward in the `spec` profile's world (`blockstack dqn` trains
+    /// there, from uniform starts).
+    pub fn parts(&self) -> ProfileParts {
+        let world = self.world();
+        match self {
+            AnyModel::Q(_) => ProfileParts {
+                protocol: world.protocol,
+                start: world.start,
+                ..ProfileParts::of(self.profile())
+            },
+            AnyModel::Dqn(_) => ProfileParts {
+                protocol: world.protocol,
+                reward: world.reward,
+                ..ProfileParts::of(Profile::Spec)
+            },
+        }
+    }
+
     /// The world it was trained in, as games are played in to test it: its grid, blocks,
     /// reward, backend, action protocol and start rule, games ending at the goal after at
     /// most 1000 steps (the paper's tests), the goal drawn. A tabular model whose file does
@@ -86,7 +106,7 @@ impl AnyModel {
             AnyModel::Q(q) => q
                 .training()
                 .map_or_else(|| EnvConfig::for_profile(Profile::Spec), |t| t.world),
-            AnyModel::Dqn(d) => d.config().world(),
+            AnyModel::Dqn(d) => d.config().world,
         };
         EnvConfig {
             grid: self.grid(),
@@ -118,6 +138,26 @@ impl AnyModel {
             AnyModel::Dqn(d) => d.check_world(grid, blocks)?,
         }
         Ok(())
+    }
+
+    /// The Q-value of every action legal in `obs`, in action-index order: a tabular
+    /// model's table row, a network's forward pass (its output columns mapped back to
+    /// actions). What a person watching the model is shown beside its greedy choice.
+    pub fn legal_q_values(&self, obs: &Observation) -> Result<Vec<(Action, f32)>> {
+        let legal = obs.legal_actions();
+        let by_action = match self {
+            AnyModel::Q(q) => q.q_values(obs)?,
+            AnyModel::Dqn(d) => {
+                let by_column = d.q_values(obs)?;
+                let input = d.net().input();
+                let mut by_action = vec![0.0; by_column.len()];
+                for (column, &v) in by_column.iter().enumerate() {
+                    by_action[input.action(&obs.goal, column).index()] = v;
+                }
+                by_action
+            }
+        };
+        Ok(legal.iter().map(|a| (a, by_action[a.index()])).collect())
     }
 
     /// The model playing with a random legal action with probability `epsilon`.

@@ -23,6 +23,14 @@
 //!   to 0.01, the learning rate falling from 1e-3 to 1e-4, and loops corrected: the first
 //!   time a game comes back to a state it was in, the exact solver demonstrates from there
 //!   (the paper's demonstrators correcting the agent, section VI-C, as DQfD data).
+//! - `her-planes`: `dqn-planes` with hindsight relabelling (HER, Andrychowicz et al. 2017,
+//!   [`crate::hindsight`]): no demonstrations; every step stored again with 4 goals that
+//!   stood later in its game.
+//! - `dqfd-pixels`: `dqfd-planes` on the paper's screen with the paper's network (batch
+//!   normalisation): the paper's network and input, our learner. Its budget is a few
+//!   thousand steps (a step of that network costs twenty times one of ours): 1,000
+//!   demonstrations, 4,000 pre-training and 4,000 self-play steps on 2 blocks; 5,000 and
+//!   15,000 on more.
 //!
 //! Why each of our choices, measured, is in the E8 section of `blockstack reproduce --only
 //! E8 --long`'s report.
@@ -97,28 +105,9 @@ pub enum LossKind {
     Dqfd,
 }
 
-impl fmt::Display for LossKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            LossKind::Dqn => "dqn",
-            LossKind::Dqfd => "dqfd",
-        })
-    }
-}
-
-impl std::str::FromStr for LossKind {
-    type Err = NeuralError;
-
-    fn from_str(text: &str) -> Result<LossKind> {
-        match text {
-            "dqn" => Ok(LossKind::Dqn),
-            "dqfd" => Ok(LossKind::Dqfd),
-            _ => Err(NeuralError::Config(format!(
-                "unknown loss {text:?}: choose dqfd or dqn"
-            ))),
-        }
-    }
-}
+sim::names!(LossKind { Dqn = "dqn", Dqfd = "dqfd" } unknown(text) -> NeuralError {
+    NeuralError::Config(format!("unknown loss {text:?}: choose dqfd or dqn"))
+});
 
 /// How a TD error is penalised.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -130,19 +119,9 @@ pub enum TdLoss {
     Mse,
 }
 
-impl std::str::FromStr for TdLoss {
-    type Err = NeuralError;
-
-    fn from_str(text: &str) -> Result<TdLoss> {
-        match text {
-            "huber" => Ok(TdLoss::Huber),
-            "mse" => Ok(TdLoss::Mse),
-            _ => Err(NeuralError::Config(format!(
-                "unknown TD loss {text:?}: choose huber or mse"
-            ))),
-        }
-    }
-}
+sim::names!(TdLoss { Huber = "huber", Mse = "mse" } unknown(text) -> NeuralError {
+    NeuralError::Config(format!("unknown TD loss {text:?}: choose huber or mse"))
+});
 
 /// When the target network is refreshed from the online one.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -179,26 +158,19 @@ impl Epsilon {
 }
 
 /// A training run: the world, the network, the learner, the budget and the seed.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+///
+/// A network file stores it in a frozen form of its own (`crate::model`'s metadata), so
+/// regrouping these fields changes no file.
+#[derive(Clone, Debug, PartialEq)]
 pub struct DqnConfig {
-    /// The grid.
-    pub grid: Grid,
-    /// Number of blocks.
-    pub blocks: usize,
+    /// The world the training games are played in: `sim`'s one world value (grid, blocks,
+    /// horizon, reward, backend, protocol, start rule). Its goal is drawn (the games' goals
+    /// are [`DqnConfig::goals`]) and its observation is the network's.
+    pub world: EnvConfig,
     /// Goals trained on, in turn (game `k` plays `goals[k % len]`).
     pub goals: Vec<Goal>,
     /// The network (its kind says which observation it reads).
     pub net: NetConfig,
-    /// The reward model the learner learns from.
-    pub reward: RewardModel,
-    /// Steps before a training game is cut off.
-    pub horizon: u32,
-    /// The world backend of the training games.
-    pub backend: Backend,
-    /// The action protocol: which actions are legal (every choice is masked to them).
-    #[serde(default)]
-    pub protocol: ActionProtocol,
     /// Seed of the weights, starts, demonstrations and every random choice.
     pub seed: u64,
     /// Environment steps of self-play.
@@ -255,6 +227,10 @@ pub struct DqnConfig {
     /// of [`DqnConfig::demos`]; the exact solver for a recording or none) plans from there
     /// and its plan joins the demonstrations; the agent plays on.
     pub correct_loops: bool,
+    /// Hindsight relabelling ([`crate::hindsight`]): every self-play step is stored again
+    /// with up to this many goals that stood later in its game (HER's `future` strategy and
+    /// its `k`); 0 for none.
+    pub hindsight: usize,
 }
 
 /// The most input values one batch may hold (a batch's inputs are made in memory at every
@@ -270,20 +246,33 @@ pub const MAX_BUFFER_BYTES: u64 = 8 << 30;
 pub const MAX_DEMO_EPISODES: u64 = 1_000_000;
 
 /// The preset names, in the order the CLI lists them.
-pub const PRESETS: [&str; 4] = ["paper", "paper-dqfd", "dqn-planes", "dqfd-planes"];
+pub const PRESETS: [&str; 6] = [
+    "paper",
+    "paper-dqfd",
+    "dqn-planes",
+    "dqfd-planes",
+    "her-planes",
+    "dqfd-pixels",
+];
 
 impl DqnConfig {
     /// The paper's DQN (module docs) on `blocks` blocks, every goal.
     pub fn paper(blocks: usize) -> Result<DqnConfig> {
+        let net = NetConfig::paper();
         Ok(DqnConfig {
-            grid: Grid::default(),
-            blocks,
+            world: EnvConfig {
+                grid: Grid::default(),
+                blocks,
+                goal: GoalSpec::Random,
+                horizon: sim::DEFAULT_HORIZON,
+                reward: RewardModel::from_name("sparse")?,
+                backend: Backend::Grid,
+                protocol: ActionProtocol::Free,
+                obs: net.obs(),
+                ..EnvConfig::default()
+            },
             goals: Goal::all(blocks)?,
-            net: NetConfig::paper(),
-            reward: RewardModel::from_name("sparse")?,
-            horizon: sim::DEFAULT_HORIZON,
-            backend: Backend::Grid,
-            protocol: ActionProtocol::Free,
+            net,
             seed: 1,
             // A gradient step of the paper network costs about 100 ms here: 5,000 steps
             // are minutes, where the paper trained for 2-8 hours.
@@ -316,6 +305,7 @@ impl DqnConfig {
             demo_share: 0.25,
             mask_noops: false,
             correct_loops: false,
+            hindsight: 0,
         })
     }
 
@@ -332,20 +322,9 @@ impl DqnConfig {
                 ..paper
             }),
             "dqn-planes" => Ok(DqnConfig::dqn_planes(paper)),
-            "dqfd-planes" => Ok(DqnConfig {
-                steps: 30_000,
-                pretrain_steps: 30_000,
-                demos: DemoSource::Exact(10_000),
-                loss: LossKind::Dqfd,
-                learning_starts: 1_000,
-                epsilon: Epsilon {
-                    start: 0.1,
-                    end: 0.01,
-                    steps: 15_000,
-                },
-                correct_loops: true,
-                ..DqnConfig::dqn_planes(paper)
-            }),
+            "dqfd-planes" => Ok(DqnConfig::dqfd_planes(paper)),
+            "her-planes" => Ok(DqnConfig::her_planes(paper)),
+            "dqfd-pixels" => Ok(DqnConfig::dqfd_pixels(paper)),
             _ => Err(NeuralError::Config(format!(
                 "unknown preset {name:?}: choose {}",
                 PRESETS.join(", ")
@@ -353,11 +332,59 @@ impl DqnConfig {
         }
     }
 
+    fn dqfd_planes(paper: DqnConfig) -> DqnConfig {
+        DqnConfig {
+            steps: 30_000,
+            pretrain_steps: 30_000,
+            demos: DemoSource::Exact(10_000),
+            loss: LossKind::Dqfd,
+            learning_starts: 1_000,
+            epsilon: Epsilon {
+                start: 0.1,
+                end: 0.01,
+                steps: 15_000,
+            },
+            correct_loops: true,
+            ..DqnConfig::dqn_planes(paper)
+        }
+    }
+
+    fn dqfd_pixels(paper: DqnConfig) -> DqnConfig {
+        let blocks = paper.world.blocks;
+        // A DQfD step of the paper network costs about 40 ms here, a step of the small one
+        // 2 ms: a budget of minutes buys a few thousand steps, so the demonstrations carry
+        // most of the learning and the budget grows with the blocks.
+        let (demos, steps) = if blocks <= 2 { (1_000, 4_000) } else { (5_000, 15_000) };
+        let net = paper.net;
+        DqnConfig {
+            demos: DemoSource::Exact(demos),
+            pretrain_steps: steps,
+            steps,
+            learning_starts: 500,
+            epsilon: Epsilon {
+                start: 0.1,
+                end: 0.01,
+                steps: steps / 2,
+            },
+            ..DqnConfig::dqfd_planes(paper).with_net(net)
+        }
+    }
+
+    fn her_planes(paper: DqnConfig) -> DqnConfig {
+        let planes = DqnConfig::dqn_planes(paper);
+        DqnConfig { hindsight: 4, ..planes }
+    }
+
     fn dqn_planes(paper: DqnConfig) -> DqnConfig {
         // Exploration alone must find the goal: far longer on 3 blocks than on 2.
-        let steps = if paper.blocks <= 2 { 50_000 } else { 300_000 };
+        let steps = if paper.world.blocks <= 2 { 50_000 } else { 300_000 };
+        let net = NetConfig::small();
         DqnConfig {
-            net: NetConfig::small(),
+            world: EnvConfig {
+                obs: net.obs(),
+                ..paper.world
+            },
+            net,
             steps,
             td_loss: TdLoss::Huber,
             optimizer: OptimizerKind::Adam,
@@ -384,20 +411,25 @@ impl DqnConfig {
         self.net.obs()
     }
 
-    /// The world the training games are played in (`sim`'s one world value), the goal
-    /// drawn: the grid, blocks, horizon, reward, backend and protocol of this config, from
-    /// uniform starts, ended at the goal, the network's observation kind.
-    pub fn world(&self) -> EnvConfig {
-        EnvConfig {
-            grid: self.grid,
-            blocks: self.blocks,
-            goal: GoalSpec::Random,
-            horizon: self.horizon,
-            reward: self.reward,
-            backend: self.backend,
-            protocol: self.protocol,
-            obs: self.obs(),
-            ..EnvConfig::default()
+    /// The grid.
+    pub fn grid(&self) -> Grid {
+        self.world.grid
+    }
+
+    /// Number of blocks.
+    pub fn blocks(&self) -> usize {
+        self.world.blocks
+    }
+
+    /// This config with the network `net`, the world's observation made the one it reads.
+    pub fn with_net(self, net: NetConfig) -> DqnConfig {
+        DqnConfig {
+            world: EnvConfig {
+                obs: net.obs(),
+                ..self.world
+            },
+            net,
+            ..self
         }
     }
 
@@ -405,7 +437,7 @@ impl DqnConfig {
     pub fn env_config(&self, goal: Goal) -> EnvConfig {
         EnvConfig {
             goal: GoalSpec::Fixed(goal),
-            ..self.world()
+            ..self.world
         }
     }
 
@@ -422,7 +454,7 @@ impl DqnConfig {
         format!(
             "{net}; {} loss, {} reward, gamma {}, {} lr {}{}, buffer {}, batch {}; demonstrations {}{}; {} self-play steps{}",
             self.loss,
-            self.reward,
+            self.world.reward,
             self.gamma,
             self.optimizer,
             self.lr,
@@ -441,7 +473,11 @@ impl DqnConfig {
             },
             self.steps,
             if self.mask_noops { "; no-op actions masked" } else { "" },
-        ) + if self.correct_loops {
+        ) + &if self.hindsight > 0 {
+            format!("; hindsight relabelling (future, k = {})", self.hindsight)
+        } else {
+            String::new()
+        } + if self.correct_loops {
             "; loops corrected by the demonstrator"
         } else {
             ""
@@ -452,6 +488,23 @@ impl DqnConfig {
     pub fn validate(&self) -> Result<()> {
         let bad = |what: String| Err(NeuralError::Config(what));
         self.net.validate(self.obs())?;
+        if self.world.obs != self.obs() {
+            return bad(format!(
+                "the world shows {} and the {} network reads {}",
+                self.world.obs,
+                self.net.kind,
+                self.obs()
+            ));
+        }
+        if self.world.goal != GoalSpec::Random {
+            return bad("a training config names its goals in `goals`: its world's goal must be drawn".into());
+        }
+        if self.world.termination != sim::Termination::default() {
+            return bad(format!(
+                "training games end at the goal, not by the {} termination",
+                self.world.termination
+            ));
+        }
         if self.goals.is_empty() {
             return bad("no goals to train on".into());
         }
@@ -472,7 +525,9 @@ impl DqnConfig {
         }
         // Checked before anything is allocated: a batch's inputs, the buffer and the planned
         // demonstrations are all made in memory, and a size too large to allocate would abort.
-        let values = self.batch.saturating_mul(self.net.input(self.grid, self.blocks)?.len());
+        let values = self
+            .batch
+            .saturating_mul(self.net.input(self.world.grid, self.world.blocks)?.len());
         if values > MAX_BATCH_VALUES {
             return bad(format!(
                 "the batch (--batch {}) needs {values} input values, more than the {MAX_BATCH_VALUES} allowed: \
@@ -544,13 +599,13 @@ impl DqnConfig {
             }
             _ => Ok(()),
         }?;
-        if self.protocol != ActionProtocol::Free
+        if self.world.protocol != ActionProtocol::Free
             && (self.correct_loops || matches!(self.demos, DemoSource::Exact(_) | DemoSource::Oracle(_)))
         {
             return bad(format!(
                 "the planners demonstrate in the free protocol (a pick may switch blocks), not the {} one: \
                  drop their demonstrations and corrections, or choose the free protocol",
-                self.protocol
+                self.world.protocol
             ));
         }
         if self.pretrain_steps > 0 && self.demos == DemoSource::None {
@@ -575,7 +630,7 @@ mod tests {
             (1000, 64, 1e-4, ObsKind::PaperScreen)
         );
         assert_eq!(p.optimizer, OptimizerKind::Rmsprop);
-        assert_eq!(p.reward.name(), "sparse");
+        assert_eq!(p.world.reward.name(), "sparse");
         assert!(DqnConfig::preset("nope", 3).is_err());
     }
 

@@ -45,15 +45,15 @@ impl DemoEpisode {
     /// The episode's transitions for a learner with `reward`, discount `gamma` and n-step
     /// `n` on `grid`.
     pub fn transitions(&self, config: &DqnConfig) -> Vec<Transition> {
-        let (grid, reward) = (config.grid, &config.reward);
+        let (grid, reward) = (config.world.grid, &config.world.reward);
         let mut builder = NStep::new(config.n_step, config.gamma);
         let mut out = Vec::with_capacity(self.actions.len());
         let obs = |state: State| Observation {
             grid,
             state,
             goal: self.goal,
-            protocol: config.protocol,
-            view: sim::View::Top,
+            protocol: config.world.protocol,
+            view: config.world.view,
         };
         for (k, &action) in self.actions.iter().enumerate() {
             let (before, after) = (&self.states[k], &self.states[k + 1]);
@@ -86,9 +86,9 @@ pub fn demo_seed(seed: u64) -> u64 {
 pub fn load(config: &DqnConfig) -> Result<Vec<DemoEpisode>> {
     match &config.demos {
         DemoSource::None => Ok(Vec::new()),
-        DemoSource::Exact(k) => planned(config, *k, &ExactSolver::new(config.grid)),
-        DemoSource::Oracle(k) => planned(config, *k, &Oracle::new(config.grid)),
-        DemoSource::File(path) => read(Path::new(path), config.grid, config.blocks),
+        DemoSource::Exact(k) => planned(config, *k, &ExactSolver::new(config.world.grid)),
+        DemoSource::Oracle(k) => planned(config, *k, &Oracle::new(config.world.grid)),
+        DemoSource::File(path) => read(Path::new(path), config.world.grid, config.world.blocks),
     }
 }
 
@@ -112,7 +112,7 @@ pub fn planned<P: Planner + Sync>(config: &DqnConfig, count: u64, planner: &P) -
         .par_iter()
         .map(|&(start, goal)| {
             let plan = planner.plan(&start, &goal)?;
-            let states = GridWorld::new(config.grid, start)?.replay(&plan.actions)?;
+            let states = GridWorld::new(config.world.grid, start)?.replay(&plan.actions)?;
             Ok(DemoEpisode {
                 goal,
                 states,
@@ -164,7 +164,7 @@ mod tests {
         let c = config(DemoSource::Exact(12));
         let episodes = load(&c).unwrap();
         assert_eq!(episodes.len(), 12);
-        let solver = ExactSolver::new(c.grid);
+        let solver = ExactSolver::new(c.world.grid);
         for (k, e) in episodes.iter().enumerate() {
             assert_eq!(e.goal, c.goals[k % c.goals.len()]);
             assert!(e.goal.holds(e.states.last().unwrap()));
@@ -181,15 +181,15 @@ mod tests {
     fn a_trajectory_file_replays_into_demonstrations_and_a_wrong_one_is_refused() {
         let c = config(DemoSource::None);
         let mut env = Env::new(c.env_config(c.goals[1])).unwrap();
-        let mut policy = agent::ExactPolicy::new(c.grid);
+        let mut policy = agent::ExactPolicy::new(c.world.grid);
         let dir = tempfile::tempdir().unwrap();
         let dir = dir.path();
         let path = dir.join("t.jsonl");
         let out = files::OutputPath::check(&path).unwrap();
         let mut writer = sim::trajectory::TrajectoryWriter::create(&out).unwrap();
-        let results = agent::play(&mut env, &mut policy, 3, 9, Some(&mut writer)).unwrap();
+        let results = agent::play(&mut env, &mut policy, 3, 9, &mut writer).unwrap();
         writer.finish().unwrap();
-        let episodes = read(&path, c.grid, 3).unwrap();
+        let episodes = read(&path, c.world.grid, 3).unwrap();
         assert_eq!(episodes.len(), 3);
         for (e, r) in episodes.iter().zip(&results) {
             assert_eq!((e.states[0], e.actions.len() as u32), (r.start, r.steps));
@@ -197,7 +197,7 @@ mod tests {
         let text = std::fs::read_to_string(&path).unwrap();
         let broken = text.replacen("\"action\":", "\"action\":1,\"x\":", 1);
         std::fs::write(&path, broken).unwrap();
-        let err = read(&path, c.grid, 3).unwrap_err().to_string();
+        let err = read(&path, c.world.grid, 3).unwrap_err().to_string();
         assert!(err.contains("line 2"), "{err}");
     }
 

@@ -8,6 +8,7 @@
 //! - [`mask`]: which actions may be chosen, and the masked argmax every choice goes through.
 //! - [`replay`], [`learner`], [`optim`]: experience replay with n-step returns; one gradient
 //!   step of the DQN and DQfD losses; RMSprop and Adam.
+//! - [`hindsight`]: hindsight relabelling (HER): a game stored again under the stacks it built.
 //! - [`demos`]: demonstrations from the exact solver, the oracle, or a recording.
 //! - [`config`], [`train`]: a run's settings and presets, and the trainer.
 //! - [`model`]: a trained network ([`Dqn`]), played through [`agent::Policy`] (so
@@ -20,6 +21,7 @@ pub mod any;
 pub mod config;
 pub mod demos;
 pub mod error;
+pub mod hindsight;
 pub mod input;
 pub mod kernels;
 pub mod learner;

@@ -24,12 +24,13 @@ use files::{FilesError, OutputPath};
 use agent::Policy;
 use serde::{Deserialize, Serialize};
 use sim::seeding::SimRng;
-use sim::{Action, Grid, Observation};
+use sim::{Action, ActionProtocol, Backend, EnvConfig, Goal, GoalSpec, Grid, Observation, RewardModel, StartRule};
 
-use crate::config::DqnConfig;
+use crate::config::{DemoSource, DqnConfig, Epsilon, LossKind, TargetEvery, TdLoss};
 use crate::error::{NeuralError, Result};
 use crate::mask::ActionSet;
-use crate::net::QNet;
+use crate::net::{NetConfig, QNet};
+use crate::optim::OptimizerKind;
 
 /// The format name of a network file.
 pub const FORMAT: &str = "blockstack-dqn";
@@ -67,6 +68,14 @@ pub struct TrainReport {
     pub gradient_steps: u64,
     /// Demonstrations from a loop of a self-play game ([`DqnConfig::correct_loops`]).
     pub corrections: u64,
+    /// Relabelled transitions stored ([`DqnConfig::hindsight`]); absent from a file at 0,
+    /// as in every file before it.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub relabelled: u64,
+}
+
+fn is_zero(v: &u64) -> bool {
+    *v == 0
 }
 
 /// A network and how it was trained.
@@ -112,12 +121,12 @@ impl Dqn {
 
     /// The grid it plays on.
     pub fn grid(&self) -> Grid {
-        self.config.grid
+        self.config.grid()
     }
 
     /// The number of blocks it plays with.
     pub fn blocks(&self) -> usize {
-        self.config.blocks
+        self.config.blocks()
     }
 
     /// A short name for reports: `dqn-<network>`.
@@ -127,10 +136,11 @@ impl Dqn {
 
     /// An error unless a world of `blocks` blocks on `grid` is the network's.
     pub fn check_world(&self, grid: Grid, blocks: usize) -> Result<()> {
-        if grid != self.config.grid || blocks != self.config.blocks {
+        if grid != self.config.grid() || blocks != self.config.blocks() {
             return Err(NeuralError::Mismatch(format!(
                 "the network plays {} blocks on a {} grid, the world has {blocks} blocks on a {grid} grid",
-                self.config.blocks, self.config.grid
+                self.config.blocks(),
+                self.config.grid()
             )));
         }
         Ok(())
@@ -174,7 +184,7 @@ impl Dqn {
             })
             .collect();
         let metadata = Metadata {
-            config: self.config.clone(),
+            config: StoredConfig::of(&self.config),
             report: self.report,
             warnings: self.warnings.clone(),
         };
@@ -201,10 +211,11 @@ impl Dqn {
         } = container
             .metadata()
             .map_err(|e| fail(format!("the file is corrupt: its metadata does not read ({e})")))?;
+        let config = config.config();
         config
             .validate()
             .map_err(|e| fail(format!("its training config is not valid: {e}")))?;
-        let input = config.net.input(config.grid, config.blocks)?;
+        let input = config.net.input(config.grid(), config.blocks())?;
         let mut net = QNet::new(config.net, input, &mut sim::seeding::rng(0))?;
         let names = container.names();
         let expected = net.tensors().count();
@@ -251,11 +262,161 @@ fn training_warnings(config: &DqnConfig, report: &TrainReport) -> Vec<String> {
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Metadata {
-    config: DqnConfig,
+    config: StoredConfig,
     report: TrainReport,
     /// [`Dqn::warnings`]; absent when there are none, and in files from before it was kept.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     warnings: Vec<String>,
+}
+
+/// A training run as network files (version 1) store it: the flat field layout those files
+/// were written with, frozen here, converted explicitly from and to [`DqnConfig`] (which
+/// holds the world as `sim`'s one world value). A regrouping of `DqnConfig` changes no file;
+/// changing this struct is changing the format. Fields added since the first files are
+/// optional and left out at their default value, so a run that does not use them writes
+/// the bytes it always did.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StoredConfig {
+    grid: Grid,
+    blocks: usize,
+    goals: Vec<Goal>,
+    net: NetConfig,
+    reward: RewardModel,
+    horizon: u32,
+    backend: Backend,
+    // Absent in files written before protocols existed.
+    #[serde(default)]
+    protocol: ActionProtocol,
+    seed: u64,
+    steps: u64,
+    pretrain_steps: u64,
+    demos: DemoSource,
+    loss: LossKind,
+    td_loss: TdLoss,
+    optimizer: OptimizerKind,
+    lr: f64,
+    lr_final: f64,
+    gamma: f64,
+    buffer: usize,
+    batch: usize,
+    train_every: u64,
+    learning_starts: u64,
+    target_every: TargetEvery,
+    epsilon: Epsilon,
+    double: bool,
+    clip_norm: Option<f64>,
+    n_step: usize,
+    margin: f64,
+    lambda_n_step: f64,
+    lambda_margin: f64,
+    l2: f64,
+    demo_share: f64,
+    mask_noops: bool,
+    correct_loops: bool,
+    // Optional: absent at the default (uniform starts), as in every file before it.
+    #[serde(default, skip_serializing_if = "is_default")]
+    start: StartRule,
+    // Optional: absent at 0 (no hindsight relabelling), as in every file before it.
+    #[serde(default, skip_serializing_if = "is_default")]
+    hindsight: usize,
+}
+
+fn is_default<T: Default + PartialEq>(value: &T) -> bool {
+    *value == T::default()
+}
+
+impl StoredConfig {
+    /// The stored form of `c`.
+    fn of(c: &DqnConfig) -> StoredConfig {
+        let w = &c.world;
+        StoredConfig {
+            grid: w.grid,
+            blocks: w.blocks,
+            goals: c.goals.clone(),
+            net: c.net,
+            reward: w.reward,
+            horizon: w.horizon,
+            backend: w.backend,
+            protocol: w.protocol,
+            seed: c.seed,
+            steps: c.steps,
+            pretrain_steps: c.pretrain_steps,
+            demos: c.demos.clone(),
+            loss: c.loss,
+            td_loss: c.td_loss,
+            optimizer: c.optimizer,
+            lr: c.lr,
+            lr_final: c.lr_final,
+            gamma: c.gamma,
+            buffer: c.buffer,
+            batch: c.batch,
+            train_every: c.train_every,
+            learning_starts: c.learning_starts,
+            target_every: c.target_every,
+            epsilon: c.epsilon,
+            double: c.double,
+            clip_norm: c.clip_norm,
+            n_step: c.n_step,
+            margin: c.margin,
+            lambda_n_step: c.lambda_n_step,
+            lambda_margin: c.lambda_margin,
+            l2: c.l2,
+            demo_share: c.demo_share,
+            mask_noops: c.mask_noops,
+            correct_loops: c.correct_loops,
+            start: w.start,
+            hindsight: c.hindsight,
+        }
+    }
+
+    /// The config this stored form describes: games ending at the goal, the goal drawn,
+    /// the network's observation.
+    fn config(self) -> DqnConfig {
+        DqnConfig {
+            world: EnvConfig {
+                grid: self.grid,
+                blocks: self.blocks,
+                goal: GoalSpec::Random,
+                horizon: self.horizon,
+                reward: self.reward,
+                backend: self.backend,
+                protocol: self.protocol,
+                start: self.start,
+                obs: self.net.obs(),
+                ..EnvConfig::default()
+            },
+            goals: self.goals,
+            net: self.net,
+            seed: self.seed,
+            steps: self.steps,
+            pretrain_steps: self.pretrain_steps,
+            demos: self.demos,
+            loss: self.loss,
+            td_loss: self.td_loss,
+            optimizer: self.optimizer,
+            lr: self.lr,
+            lr_final: self.lr_final,
+            gamma: self.gamma,
+            buffer: self.buffer,
+            batch: self.batch,
+            train_every: self.train_every,
+            learning_starts: self.learning_starts,
+            target_every: self.target_every,
+            epsilon: self.epsilon,
+            double: self.double,
+            clip_norm: self.clip_norm,
+            n_step: self.n_step,
+            margin: self.margin,
+            lambda_n_step: self.lambda_n_step,
+            lambda_margin: self.lambda_margin,
+            l2: self.l2,
+            demo_share: self.demo_share,
+            mask_noops: self.mask_noops,
+            correct_loops: self.correct_loops,
+            hindsight: self.hindsight,
+        }
+    }
 }
 
 /// A trained network playing without learning. Borrows the network.
@@ -284,7 +445,7 @@ impl Policy for DqnPolicy<'_> {
         if self.epsilon > 0.0 && rng.random_bool(self.epsilon) {
             let allowed = ActionSet::allowed(obs, self.dqn.config.mask_noops);
             let a = allowed.random(rng).expect("some action is always allowed");
-            return Ok(Action::from_index(a, self.dqn.config.blocks)?);
+            return Ok(Action::from_index(a, self.dqn.config.blocks())?);
         }
         if let Some(&a) = self.greedy.get(obs) {
             return Ok(a);
@@ -292,5 +453,38 @@ impl Policy for DqnPolicy<'_> {
         let a = self.dqn.greedy_action(obs)?;
         self.greedy.insert(*obs, a);
         Ok(a)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_stored_config_gives_back_the_config_and_leaves_out_defaults() {
+        for name in crate::config::PRESETS {
+            let config = DqnConfig::preset(name, 3).unwrap();
+            let json = serde_json::to_string(&StoredConfig::of(&config)).unwrap();
+            // The fields added since the first files are absent at their defaults.
+            assert!(!json.contains("\"start\":\""), "{name}");
+            assert_eq!(json.contains("\"hindsight\""), config.hindsight > 0, "{name}");
+            let back: StoredConfig = serde_json::from_str(&json).unwrap();
+            assert_eq!(back.config(), config, "{name}");
+        }
+        let her = DqnConfig::preset("her-planes", 3).unwrap();
+        let moved = DqnConfig {
+            world: EnvConfig {
+                start: StartRule::Paper,
+                ..her.world
+            },
+            ..her
+        };
+        let json = serde_json::to_string(&StoredConfig::of(&moved)).unwrap();
+        assert!(
+            json.contains("\"start\":\"paper\"") && json.contains("\"hindsight\":4"),
+            "{json}"
+        );
+        let back: StoredConfig = serde_json::from_str(&json).unwrap();
+        assert_eq!(back.config(), moved);
     }
 }

@@ -46,8 +46,6 @@
 //! Weights start as PyTorch's defaults do, uniform in `±1/sqrt(fan_in)`, drawn from the
 //! seeded generator: same seed, same network.
 
-use std::fmt;
-
 use std::cell::RefCell;
 
 use rand::RngExt;
@@ -71,37 +69,9 @@ pub enum NetKind {
     Mlp,
 }
 
-impl NetKind {
-    /// The name it is chosen by.
-    pub fn name(self) -> &'static str {
-        match self {
-            NetKind::Paper => "paper",
-            NetKind::Small => "small",
-            NetKind::Mlp => "mlp",
-        }
-    }
-}
-
-impl fmt::Display for NetKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for NetKind {
-    type Err = NeuralError;
-
-    fn from_str(text: &str) -> Result<NetKind> {
-        match text {
-            "paper" => Ok(NetKind::Paper),
-            "small" => Ok(NetKind::Small),
-            "mlp" => Ok(NetKind::Mlp),
-            _ => Err(NeuralError::Config(format!(
-                "unknown network {text:?}: choose paper, small or mlp"
-            ))),
-        }
-    }
-}
+sim::names!(NetKind { Paper = "paper", Small = "small", Mlp = "mlp" } unknown(text) -> NeuralError {
+    NeuralError::Config(format!("unknown network {text:?}: choose paper, small or mlp"))
+});
 
 /// A network's shape.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

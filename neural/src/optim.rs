@@ -7,11 +7,9 @@
 //! that adds the L2 term and measures the norm, one that updates the moments and the
 //! weights. Nothing is allocated after the optimiser is made.
 
-use std::fmt;
-
 use serde::{Deserialize, Serialize};
 
-use crate::error::{NeuralError, Result};
+use crate::error::NeuralError;
 
 /// Which optimiser.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -23,35 +21,9 @@ pub enum OptimizerKind {
     Adam,
 }
 
-impl OptimizerKind {
-    /// The name it is chosen by.
-    pub fn name(self) -> &'static str {
-        match self {
-            OptimizerKind::Rmsprop => "rmsprop",
-            OptimizerKind::Adam => "adam",
-        }
-    }
-}
-
-impl fmt::Display for OptimizerKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for OptimizerKind {
-    type Err = NeuralError;
-
-    fn from_str(text: &str) -> Result<OptimizerKind> {
-        match text {
-            "rmsprop" => Ok(OptimizerKind::Rmsprop),
-            "adam" => Ok(OptimizerKind::Adam),
-            _ => Err(NeuralError::Config(format!(
-                "unknown optimiser {text:?}: choose rmsprop or adam"
-            ))),
-        }
-    }
-}
+sim::names!(OptimizerKind { Rmsprop = "rmsprop", Adam = "adam" } unknown(text) -> NeuralError {
+    NeuralError::Config(format!("unknown optimiser {text:?}: choose rmsprop or adam"))
+});
 
 const RMS_ALPHA: f32 = 0.99;
 const ADAM_BETAS: (f32, f32) = (0.9, 0.999);

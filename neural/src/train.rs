@@ -17,6 +17,7 @@ use sim::{Action, Env, GridWorld, Observation, State};
 use crate::config::{DemoSource, DqnConfig, TargetEvery};
 use crate::demos::{self, DemoEpisode};
 use crate::error::{NeuralError, Result};
+use crate::hindsight::{self, Step};
 use crate::learner::{Learner, Losses};
 use crate::mask::ActionSet;
 use crate::model::{Dqn, TrainReport};
@@ -91,6 +92,8 @@ pub struct Trainer {
     corrected: bool,
     /// Who corrects loops.
     corrector: Box<dyn Planner + Send + Sync>,
+    /// The current game's steps, for hindsight relabelling (kept only with it).
+    game: Vec<Step>,
 }
 
 impl Trainer {
@@ -104,7 +107,7 @@ impl Trainer {
     /// A run of `config` with these demonstrations (whatever `config.demos` says).
     pub fn with_demos(config: DqnConfig, episodes: &[DemoEpisode]) -> Result<Trainer> {
         config.validate()?;
-        let input = config.net.input(config.grid, config.blocks)?;
+        let input = config.net.input(config.world.grid, config.world.blocks)?;
         let mut init = seeding::rng(config.seed);
         init.set_stream(2);
         let net = QNet::new(config.net, input, &mut init)?;
@@ -143,9 +146,10 @@ impl Trainer {
             target_games: 0,
             visited: HashSet::new(),
             corrected: false,
+            game: Vec::new(),
             corrector: match config.demos {
-                DemoSource::Oracle(_) => Box::new(Oracle::new(config.grid)),
-                _ => Box::new(ExactSolver::new(config.grid)),
+                DemoSource::Oracle(_) => Box::new(Oracle::new(config.world.grid)),
+                _ => Box::new(ExactSolver::new(config.world.grid)),
             },
             config,
         })
@@ -267,6 +271,7 @@ impl Trainer {
                 self.report.games += 1;
                 self.visited.clear();
                 self.corrected = false;
+                self.game.clear();
                 (i, obs)
             }
         };
@@ -278,6 +283,13 @@ impl Trainer {
         let step = self.envs[env_index].step(action)?;
         self.report.steps += 1;
         let done = step.terminated || step.truncated;
+        if self.config.hindsight > 0 {
+            self.game.push(Step {
+                obs,
+                action,
+                next: step.observation,
+            });
+        }
         if let Some(t) = self.n_step.push(
             obs,
             action,
@@ -291,6 +303,10 @@ impl Trainer {
         if done {
             for t in self.n_step.finish() {
                 self.buffer.push(t);
+            }
+            for t in hindsight::relabel(&self.game, self.config.hindsight, &self.config, &mut self.rng) {
+                self.buffer.push(t);
+                self.report.relabelled += 1;
             }
             self.recent.push_back(step.terminated);
             if self.recent.len() > RECENT_GAMES {
@@ -335,7 +351,7 @@ impl Trainer {
         if epsilon > 0.0 && self.rng.random_bool(epsilon) {
             let allowed = ActionSet::allowed(obs, self.config.mask_noops);
             let a = allowed.random(&mut self.rng).expect("some action is always allowed");
-            return Ok(Action::from_index(a, self.config.blocks)?);
+            return Ok(Action::from_index(a, self.config.world.blocks)?);
         }
         self.learner.online().greedy_action(obs, self.config.mask_noops)
     }

@@ -36,7 +36,7 @@ fn score(policy: &mut dyn agent::Policy) -> (usize, f64) {
             ..sim::EnvConfig::with_goal(goal)
         })
         .unwrap();
-        all.extend(agent::play(&mut env, policy, 40, 77, None).unwrap());
+        all.extend(agent::play(&mut env, policy, 40, 77, &mut ()).unwrap());
     }
     let s = Summary::of(&all);
     (s.failures, agent::optimality::mean_steps_failures_as_horizon(&all, 200))
@@ -137,4 +137,34 @@ fn a_network_file_gives_back_the_same_network() {
     std::fs::write(&bad, bytes).unwrap();
     let err = Dqn::load(&bad).err().unwrap().to_string();
     assert!(err.contains("bad.safetensors") && err.contains("does not fit"), "{err}");
+}
+
+#[test]
+fn hindsight_stores_the_games_again_and_is_seeded() {
+    let config = |hindsight| DqnConfig {
+        seed: 5,
+        steps: 3_000,
+        learning_starts: 500,
+        hindsight,
+        net: NetConfig {
+            hidden: 32,
+            ..NetConfig::small()
+        },
+        ..DqnConfig::preset("her-planes", 2).unwrap()
+    };
+    let quiet = &mut |_: &neural::Progress| {};
+    let her = Trainer::new(config(4)).unwrap().run(quiet).unwrap();
+    let again = Trainer::new(config(4)).unwrap().run(quiet).unwrap();
+    let plain = Trainer::new(config(0)).unwrap().run(quiet).unwrap();
+    // Random play on 2 blocks builds stacks: up to 4 relabelled copies of most steps.
+    assert!(her.report().relabelled > 3_000, "{:?}", her.report());
+    assert_eq!(plain.report().relabelled, 0);
+    assert_eq!(weights(&her), weights(&again), "same seed, same network");
+    assert_ne!(weights(&her), weights(&plain));
+    // The network file keeps the setting.
+    let path = std::env::temp_dir().join(format!("blockstack-her-{}.safetensors", std::process::id()));
+    her.save(&path).unwrap();
+    let loaded = Dqn::load(&path).unwrap();
+    std::fs::remove_file(&path).unwrap();
+    assert_eq!((loaded.config(), loaded.report()), (her.config(), her.report()));
 }

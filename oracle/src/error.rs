@@ -19,6 +19,9 @@ pub enum OracleError {
     /// taller than it, too many blocks).
     #[error(transparent)]
     Sim(#[from] sim::SimError),
+    /// A block-move problem or search of [`crate::towers`] was refused.
+    #[error(transparent)]
+    Towers(#[from] crate::towers::TowersError),
     /// The goal holds already, so there is no next action to give.
     #[error("goal {goal} already holds: there is no next action")]
     GoalAlreadyHolds {

@@ -10,6 +10,8 @@
 //!   towards a stack laid around the blocks' centroid, with a random block when nothing is
 //!   held. It plans nothing and can get stuck; Table I of the paper assisted its learner
 //!   with it.
+//! - [`towers`]: block-move planners for the classic Blocks World seen from the side (an
+//!   exact A* solver and a near-optimal planner that scales to thousands of blocks).
 //!
 //! Both planners plan under an action protocol ([`Planner::protocol`]; `free` unless
 //! [`ExactSolver::with_protocol`] / [`Oracle::with_protocol`] say otherwise): under `paper`
@@ -67,6 +69,7 @@ pub mod oracle;
 mod placement;
 pub mod plan;
 mod route;
+pub mod towers;
 
 pub use centroid_walker::{CentroidWalker, SweepOrder};
 pub use error::{OracleError, Result};

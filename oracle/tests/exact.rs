@@ -2,9 +2,7 @@
 //! heuristic's proofs checked on every state, its plans replayed in the physics world, the
 //! oracle's optimality gap, and the errors both planners report.
 
-mod common;
-
-use common::{BfsTable, all_placements, all_states, replay};
+use crate::common::{BfsTable, all_placements, all_states, replay};
 use oracle::gap;
 use oracle::{ExactSolver, Oracle, OracleError};
 use rand::RngExt;
@@ -84,7 +82,7 @@ fn the_heuristic_is_admissible_and_consistent_on_every_three_block_state() {
 
 #[test]
 fn mean_optimum_from_uniform_starts_matches_the_notes() {
-    // shared/NOTES.md: 5.92 actions for 2 blocks and 10.16 for 3, over every placement with
+    // Measured once by brute force and kept: 5.92 actions for 2 blocks and 10.16 for 3, over every placement with
     // nothing held (the few where the goal holds count as 0).
     let grid = Grid::default();
     for (blocks, expected) in [(2, 5.92), (3, 10.16)] {

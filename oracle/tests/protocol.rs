@@ -2,9 +2,7 @@
 //! shortest legal ones (against a breadth-first search over legal actions), and every plan
 //! of either planner replays in an environment that refuses illegal actions.
 
-mod common;
-
-use common::{BfsTable, all_placements, all_states};
+use crate::common::{BfsTable, all_placements, all_states};
 use oracle::{ExactSolver, Oracle, Planner};
 use rand::RngExt;
 use rayon::prelude::*;

@@ -2,9 +2,7 @@
 //! on random mid-episode states with a held block, with many blocks, and on small grids
 //! against a breadth-first search of every state.
 
-mod common;
-
-use common::{BfsTable, all_placements, all_states, replay};
+use crate::common::{BfsTable, all_placements, all_states, replay};
 use oracle::{ExactSolver, Oracle, OracleError};
 use rand::{Rng, RngExt};
 use rayon::prelude::*;

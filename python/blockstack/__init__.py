@@ -11,6 +11,9 @@ the classic Blocks World seen from the side) with Gymnasium::
     obs, reward, terminated, truncated, info = env.step(env.unwrapped.expert_action())
 
 - :class:`StackEnv`: the Gymnasium environment (``gymnasium.make``).
+- :class:`StackGoalEnv`: the same world as a goal-conditioned environment
+  (``blockstack/StackGoal-v0``: observation, achieved and desired goals, and
+  ``compute_reward``), on which Stable-Baselines3's ``HerReplayBuffer`` runs.
 - :class:`blockstack.vector.StackVectorEnv`: a batch of environments stepped in one Rust
   call into preallocated numpy arrays.
 - :func:`solve`: a shortest (or the oracle's) plan from any state.
@@ -31,6 +34,7 @@ from gymnasium.envs.registration import register, registry
 from blockstack._native import REWARDS, episode_seed
 from blockstack.demonstrations import demonstrations, read_recording
 from blockstack.env import BlocksWorldEnv, StackEnv
+from blockstack.goal_env import StackGoalEnv
 from blockstack.model import Model, load
 from blockstack import vector
 from blockstack.planning import solve
@@ -41,6 +45,7 @@ __all__ = [
     "BlocksWorldEnv",
     "Model",
     "StackEnv",
+    "StackGoalEnv",
     "demonstrations",
     "episode_seed",
     "load",
@@ -64,3 +69,8 @@ BLOCKS_WORLD_ID = "blockstack/BlocksWorld-v0"
 
 if BLOCKS_WORLD_ID not in registry:
     register(id=BLOCKS_WORLD_ID, entry_point="blockstack.env:BlocksWorldEnv")
+
+GOAL_ENV_ID = "blockstack/StackGoal-v0"
+
+if GOAL_ENV_ID not in registry:
+    register(id=GOAL_ENV_ID, entry_point="blockstack.goal_env:StackGoalEnv")

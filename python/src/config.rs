@@ -1,7 +1,7 @@
 //! Python arguments into the crates' configs, checked by the crates themselves.
 
 use pyo3::prelude::*;
-use sim::{Backend, EnvConfig, Goal, GoalSpec, Grid, Profile, RewardModel};
+use sim::{Backend, EnvConfig, Goal, GoalSpec, Grid, Profile, ProfileParts, RewardModel};
 
 use crate::boundary::{OrValueError, value_error};
 
@@ -36,9 +36,13 @@ pub fn env_config(
     profile: &str,
     rules: PlayRules<'_>,
 ) -> PyResult<EnvConfig> {
-    let profile = self::profile(profile)?;
-    let defaults = EnvConfig::for_profile(profile);
-    let config = EnvConfig {
+    let parts = ProfileParts::of(Profile::Spec).overridden(
+        Some(self::profile(profile)?),
+        rules.protocol.map(str::parse).transpose().or_value_error()?,
+        rules.start.map(str::parse).transpose().or_value_error()?,
+        reward.map(RewardModel::from_name).transpose().or_value_error()?,
+    );
+    let config = parts.apply(EnvConfig {
         grid: Grid::new(grid.0, grid.1).or_value_error()?,
         blocks,
         goal: match goal {
@@ -46,26 +50,13 @@ pub fn env_config(
             None => GoalSpec::Random,
         },
         horizon,
-        // The profile's reward unless one is named.
-        reward: match reward {
-            Some(name) => RewardModel::from_name(name).or_value_error()?,
-            None => defaults.reward,
-        },
         backend: backend.parse::<Backend>().or_value_error()?,
-        protocol: match rules.protocol {
-            Some(name) => name.parse().or_value_error()?,
-            None => defaults.protocol,
-        },
-        start: match rules.start {
-            Some(name) => name.parse().or_value_error()?,
-            None => defaults.start,
-        },
         view: match rules.view {
             Some(name) => name.parse().or_value_error()?,
-            None => defaults.view,
+            None => sim::View::default(),
         },
-        ..defaults
-    };
+        ..EnvConfig::default()
+    });
     config.validate().or_value_error()?;
     Ok(config)
 }

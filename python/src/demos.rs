@@ -3,17 +3,15 @@
 //! `correct --record`) read back into the same arrays.
 
 use std::path::PathBuf;
-use std::time::{Duration, Instant};
 
-use agent::rollout::policy_rng;
-use agent::{ExactPolicy, OraclePolicy, Policy};
+use agent::{EpisodeObserver, ExactPolicy, OraclePolicy, Policy};
 use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sim::seeding::episode_seed;
-use sim::{Action, Env, Grid, Observation};
+use sim::{Action, Env, EnvConfig, Grid, Observation, Step};
 
-use crate::boundary::{OrValueError, guard, value_error};
+use crate::boundary::{OrValueError, guard, raise_signal, signal_checker, value_error};
 use crate::config::{self, ObsKind, env_config};
 use crate::observe;
 
@@ -28,6 +26,8 @@ struct Columns {
     truncations: Vec<bool>,
     episode_starts: Vec<bool>,
     episodes: Vec<i64>,
+    /// The next step pushed is an episode's first.
+    starting: bool,
 }
 
 impl Columns {
@@ -160,6 +160,29 @@ fn encode<'py>(
     }
 }
 
+/// The columns of the episodes a planner plays (`demonstrations`).
+impl EpisodeObserver for Columns {
+    fn start(&mut self, _: u64, _: u64, _: &EnvConfig, _: &Observation) -> agent::Result<()> {
+        self.starting = true;
+        Ok(())
+    }
+
+    fn step(&mut self, episode: u64, before: &Observation, action: Action, step: &Step) -> agent::Result<()> {
+        let first = std::mem::take(&mut self.starting);
+        self.push(
+            episode,
+            *before,
+            action,
+            step.reward,
+            step.observation,
+            step.terminated,
+            step.truncated,
+            first,
+        );
+        Ok(())
+    }
+}
+
 /// Expert episodes as arrays for behaviour cloning or DQfD: episode `k` starts from
 /// `reset(episode_seed(seed, k))`, the start `blockstack run --seed SEED` plays, and the
 /// expert (`exact`: shortest plans; `oracle`) acts until the goal holds.
@@ -208,38 +231,18 @@ pub fn demonstrations<'py>(
     };
     let columns = py.detach(|| {
         guard(|| {
+            // Ctrl-C stops a long run: the checker looks for signals at most every 100 ms,
+            // with the GIL taken back only for that.
+            let mut signal = None;
+            let mut check = signal_checker(&mut signal);
             let mut env = Env::new(config).or_value_error()?;
             let mut columns = Columns::default();
-            // Ctrl-C stops a long run: signals are looked at every 50 ms, with the GIL
-            // taken back only for that.
-            let mut looked = Instant::now();
-            for k in 0..episodes {
-                if looked.elapsed() >= Duration::from_millis(50) {
-                    Python::attach(|py| py.check_signals())?;
-                    looked = Instant::now();
-                }
-                let episode_seed = episode_seed(seed, k);
-                let mut obs = env.reset(episode_seed);
-                let mut rng = policy_rng(episode_seed);
-                policy.begin_episode(&obs);
-                let mut first = true;
-                while !env.is_over() {
-                    let action = policy.act(&obs, &mut rng).or_value_error()?;
-                    let step = env.step(action).or_value_error()?;
-                    columns.push(
-                        k,
-                        obs,
-                        action,
-                        step.reward,
-                        step.observation,
-                        step.terminated,
-                        step.truncated,
-                        first,
-                    );
-                    obs = step.observation;
-                    first = false;
-                }
-            }
+            let played = (0..episodes).try_for_each(|k| {
+                check()?;
+                agent::play_episode(&mut env, policy.as_mut(), k, episode_seed(seed, k), &mut columns).map(drop)
+            });
+            drop(check);
+            played.map_err(|e| raise_signal(signal, e))?;
             Ok(columns)
         })
     })?;

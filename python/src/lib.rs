@@ -7,6 +7,8 @@
 //! - [`env::NativeEnv`]: one environment, behind the Gymnasium class `blockstack.StackEnv`.
 //! - [`vector::NativeVecEnv`]: a batch stepped in one call with the GIL released, writing
 //!   into preallocated numpy arrays, behind `blockstack.vector.StackVectorEnv`.
+//! - [`goal_env`]: the goal a state achieves and the goal rewards, behind
+//!   `blockstack.StackGoalEnv` (Gymnasium-Robotics' `GoalEnv`, for hindsight relabelling).
 //! - [`planning`]: the exact solver and the oracle (`blockstack.solve`).
 //! - [`demos`]: expert demonstrations and recorded episodes as arrays.
 //! - [`training`]: the tabular trainer, in-process (`blockstack.train`, the Ray sweep).
@@ -23,6 +25,7 @@ mod boundary;
 mod config;
 mod demos;
 mod env;
+mod goal_env;
 mod model;
 mod observe;
 mod output;
@@ -37,6 +40,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<vector::NativeVecEnv>()?;
     m.add_class::<model::NativeModel>()?;
     m.add_function(wrap_pyfunction!(planning::solve, m)?)?;
+    m.add_function(wrap_pyfunction!(goal_env::achieved_goal, m)?)?;
+    m.add_function(wrap_pyfunction!(goal_env::goal_rewards, m)?)?;
     m.add_function(wrap_pyfunction!(demos::demonstrations, m)?)?;
     m.add_function(wrap_pyfunction!(demos::read_recording, m)?)?;
     m.add_function(wrap_pyfunction!(training::train, m)?)?;

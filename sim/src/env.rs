@@ -1,7 +1,5 @@
 //! A Gymnasium-style environment over either backend.
 
-use std::fmt;
-
 use serde::{Deserialize, Serialize};
 
 use crate::action::Action;
@@ -37,30 +35,13 @@ pub enum Backend {
     Grid,
 }
 
-impl fmt::Display for Backend {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            Backend::Physics => "physics",
-            Backend::Grid => "grid",
-        })
+crate::names!(Backend { Physics = "physics", Grid = "grid" } unknown(name) -> SimError {
+    SimError::Parse {
+        what: "backend",
+        text: name.to_string(),
+        reason: "choose physics or grid".into(),
     }
-}
-
-impl std::str::FromStr for Backend {
-    type Err = SimError;
-
-    fn from_str(s: &str) -> Result<Backend> {
-        match s {
-            "physics" => Ok(Backend::Physics),
-            "grid" => Ok(Backend::Grid),
-            _ => Err(SimError::Parse {
-                what: "backend",
-                text: s.into(),
-                reason: "choose physics or grid".into(),
-            }),
-        }
-    }
-}
+});
 
 /// Where an episode's goal comes from.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]

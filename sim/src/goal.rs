@@ -391,6 +391,16 @@ impl Goal {
         }
     }
 
+    /// The goal that holds in `state`, if one does: every block in one column, each
+    /// directly on the one below (a goal is the whole stack, so at most one holds). Hindsight
+    /// relabelling and Python's goal environment read a state's achieved goal here.
+    pub fn standing(state: &State) -> Option<Goal> {
+        let mut order: Vec<BlockId> = state.blocks().collect();
+        order.sort_by_key(|&b| state.cell(b).y);
+        let goal = Goal::new(&order).ok()?;
+        goal.holds(state).then_some(goal)
+    }
+
     /// The block `block` chases (docs/world.md section 6): the one above it in the goal, or, for the
     /// top block, the one below it. For a goal of one tower of every block
     /// ([`Goal::is_one_tower`]).
@@ -517,5 +527,26 @@ impl<'de> Deserialize<'de> for Goal {
             GoalRepr::Towers { towers, blocks } => Goal::of_towers(&towers, blocks),
         }
         .map_err(serde::de::Error::custom)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_standing_goal_is_the_whole_stack_or_none() {
+        let grid = Grid::default();
+        let stacked = State::parse("1,1;1,3;1,2", None, grid).unwrap();
+        assert_eq!(Goal::standing(&stacked), Some("0,2,1".parse().unwrap()));
+        // Two of three stacked, or a gap in the column: no goal holds.
+        for text in ["1,1;1,2;4,4", "1,1;1,2;1,4", "0,0;1,1;2,2"] {
+            let state = State::parse(text, None, grid).unwrap();
+            assert_eq!(Goal::standing(&state), None, "{text}");
+        }
+        for goal in Goal::all(3).unwrap() {
+            let held = Goal::standing(&stacked).is_some_and(|g| g == goal);
+            assert_eq!(goal.holds(&stacked), held);
+        }
     }
 }

@@ -16,8 +16,6 @@
 //! and the paper's screen in the networks. Both spellings are refused with a message that
 //! names the new ones, so that no old script silently trains on the other picture.
 
-use std::fmt;
-
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, SimError};
@@ -42,30 +40,27 @@ pub enum ObsKind {
     State,
 }
 
-impl ObsKind {
-    /// Every kind, in the order of [`ObsKind::NAMES`].
-    pub const ALL: [ObsKind; 5] = [
-        ObsKind::Planes,
-        ObsKind::RolePlanes,
-        ObsKind::Frame,
-        ObsKind::PaperScreen,
-        ObsKind::State,
-    ];
-
-    /// The names the kinds are chosen by.
-    pub const NAMES: [&'static str; 5] = ["planes", "role-planes", "frame", "paper-screen", "state"];
-
-    /// This kind's name.
-    pub const fn name(self) -> &'static str {
-        match self {
-            ObsKind::Planes => "planes",
-            ObsKind::RolePlanes => "role-planes",
-            ObsKind::Frame => "frame",
-            ObsKind::PaperScreen => "paper-screen",
-            ObsKind::State => "state",
-        }
+crate::names!(ObsKind {
+    Planes = "planes",
+    RolePlanes = "role-planes",
+    Frame = "frame",
+    PaperScreen = "paper-screen",
+    State = "state",
+} unknown(name) -> SimError {
+    SimError::Parse {
+        what: "observation kind",
+        text: name.to_string(),
+        reason: match name {
+            "pixels" => "\"pixels\" named two different pictures in earlier releases: choose frame (the rendered \
+                         picture, Python's old \"pixels\") or paper-screen (the paper's 100 x 100 input, the \
+                         networks' old \"pixels\")"
+                .to_string(),
+            _ => format!("choose one of {}", ObsKind::NAMES.join(", ")),
+        },
     }
+});
 
+impl ObsKind {
     /// The shape of this kind's `u8` array in a world of `blocks` blocks on `grid`, or
     /// `None` for `state`, which is not one array.
     pub fn shape(self, grid: Grid, blocks: usize) -> Option<[usize; 3]> {
@@ -109,34 +104,6 @@ impl ObsKind {
             ObsKind::State => unreachable!("refused above: state is not one array"),
         }
         Ok(())
-    }
-}
-
-impl fmt::Display for ObsKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for ObsKind {
-    type Err = SimError;
-
-    fn from_str(name: &str) -> Result<ObsKind> {
-        if let Some(kind) = ObsKind::ALL.into_iter().find(|k| k.name() == name) {
-            return Ok(kind);
-        }
-        let reason = match name {
-            "pixels" => "\"pixels\" named two different pictures in earlier releases: choose frame (the rendered \
-                         picture, Python's old \"pixels\") or paper-screen (the paper's 100 x 100 input, the \
-                         networks' old \"pixels\")"
-                .to_string(),
-            _ => format!("choose one of {}", ObsKind::NAMES.join(", ")),
-        };
-        Err(SimError::Parse {
-            what: "observation kind",
-            text: name.to_string(),
-            reason,
-        })
     }
 }
 

@@ -11,12 +11,15 @@
 //! | start rule | `uniform` | `paper` |
 //! | reward | `sparse` | `paper-code` |
 //! | training games end | at the goal | at a step reward above 70 |
-
-use std::fmt;
+//!
+//! A run takes a profile's parts and then any part named on its own in its place
+//! (`--profile original --protocol free`): [`ProfileParts::overridden`] is that one
+//! resolution, which the CLI's commands and Python's environments both call.
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Result, SimError};
+use crate::env::EnvConfig;
+use crate::error::SimError;
 use crate::protocol::ActionProtocol;
 use crate::reward::{PaperCode, RewardModel};
 use crate::start::StartRule;
@@ -33,18 +36,15 @@ pub enum Profile {
     Original,
 }
 
-impl Profile {
-    /// The names the profiles are chosen by.
-    pub const NAMES: [&'static str; 2] = ["spec", "original"];
-
-    /// This profile's name.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Profile::Spec => "spec",
-            Profile::Original => "original",
-        }
+crate::names!(Profile { Spec = "spec", Original = "original" } unknown(name) -> SimError {
+    SimError::Parse {
+        what: "profile",
+        text: name.to_string(),
+        reason: format!("choose one of {}", Profile::NAMES.join(", ")),
     }
+});
 
+impl Profile {
     /// The action protocol: `free` or `paper`.
     pub const fn protocol(self) -> ActionProtocol {
         match self {
@@ -79,24 +79,55 @@ impl Profile {
     }
 }
 
-impl fmt::Display for Profile {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
+/// The world-level parts of a profile, as resolved for one run (module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProfileParts {
+    /// The profile they came from (reported, and keying the learner-level parts).
+    pub profile: Profile,
+    /// The action protocol.
+    pub protocol: ActionProtocol,
+    /// The start rule.
+    pub start: StartRule,
+    /// The reward.
+    pub reward: RewardModel,
 }
 
-impl std::str::FromStr for Profile {
-    type Err = SimError;
+impl ProfileParts {
+    /// `profile`'s parts.
+    pub fn of(profile: Profile) -> ProfileParts {
+        ProfileParts {
+            profile,
+            protocol: profile.protocol(),
+            start: profile.start_rule(),
+            reward: profile.reward(),
+        }
+    }
 
-    fn from_str(name: &str) -> Result<Profile> {
-        match name {
-            "spec" => Ok(Profile::Spec),
-            "original" => Ok(Profile::Original),
-            _ => Err(SimError::Parse {
-                what: "profile",
-                text: name.to_string(),
-                reason: format!("choose one of {}", Self::NAMES.join(", ")),
-            }),
+    /// These parts under a run's choices: `profile`, if given, replaces them all with its
+    /// own; then each part given replaces that part.
+    pub fn overridden(
+        self,
+        profile: Option<Profile>,
+        protocol: Option<ActionProtocol>,
+        start: Option<StartRule>,
+        reward: Option<RewardModel>,
+    ) -> ProfileParts {
+        let parts = profile.map_or(self, ProfileParts::of);
+        ProfileParts {
+            protocol: protocol.unwrap_or(parts.protocol),
+            start: start.unwrap_or(parts.start),
+            reward: reward.unwrap_or(parts.reward),
+            ..parts
+        }
+    }
+
+    /// `config` with these parts' protocol, start rule and reward.
+    pub fn apply(self, config: EnvConfig) -> EnvConfig {
+        EnvConfig {
+            protocol: self.protocol,
+            start: self.start,
+            reward: self.reward,
+            ..config
         }
     }
 }
@@ -104,6 +135,36 @@ impl std::str::FromStr for Profile {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_part_named_on_its_own_replaces_the_profiles() {
+        let spec = ProfileParts::of(Profile::Spec);
+        assert_eq!(
+            spec.overridden(Some(Profile::Original), None, None, None),
+            ProfileParts::of(Profile::Original)
+        );
+        let mixed = spec.overridden(
+            Some(Profile::Original),
+            Some(ActionProtocol::Free),
+            None,
+            Some(RewardModel::default()),
+        );
+        assert_eq!(
+            (mixed.profile, mixed.protocol, mixed.start, mixed.reward),
+            (
+                Profile::Original,
+                ActionProtocol::Free,
+                StartRule::Paper,
+                RewardModel::default()
+            )
+        );
+        assert_eq!(spec.overridden(None, None, None, None), spec);
+        let config = mixed.apply(EnvConfig::default());
+        assert_eq!(
+            (config.protocol, config.start),
+            (ActionProtocol::Free, StartRule::Paper)
+        );
+    }
 
     #[test]
     fn profiles_parse_print_and_serialise_by_name() {

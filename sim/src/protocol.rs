@@ -35,18 +35,15 @@ pub enum ActionProtocol {
     Paper,
 }
 
-impl ActionProtocol {
-    /// The names the protocols are chosen by.
-    pub const NAMES: [&'static str; 2] = ["free", "paper"];
-
-    /// This protocol's name.
-    pub const fn name(self) -> &'static str {
-        match self {
-            ActionProtocol::Free => "free",
-            ActionProtocol::Paper => "paper",
-        }
+crate::names!(ActionProtocol { Free = "free", Paper = "paper" } unknown(name) -> SimError {
+    SimError::Parse {
+        what: "action protocol",
+        text: name.to_string(),
+        reason: format!("choose one of {}", ActionProtocol::NAMES.join(", ")),
     }
+});
 
+impl ActionProtocol {
     /// The legal actions in `state`.
     #[inline]
     pub fn legal_actions(self, state: &State) -> ActionMask {
@@ -105,28 +102,6 @@ impl ActionProtocol {
             (ActionProtocol::Free, _) => "every action is allowed",
             (ActionProtocol::Paper, false) => "only pick N is allowed",
             (ActionProtocol::Paper, true) => "only up, down, left, right and drop are allowed",
-        }
-    }
-}
-
-impl fmt::Display for ActionProtocol {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for ActionProtocol {
-    type Err = SimError;
-
-    fn from_str(name: &str) -> Result<ActionProtocol> {
-        match name {
-            "free" => Ok(ActionProtocol::Free),
-            "paper" => Ok(ActionProtocol::Paper),
-            _ => Err(SimError::Parse {
-                what: "action protocol",
-                text: name.to_string(),
-                reason: format!("choose one of {}", Self::NAMES.join(", ")),
-            }),
         }
     }
 }

@@ -21,8 +21,6 @@
 //!   the draws are independent and identically distributed, so that shuffle changes nothing
 //!   and is left out.
 
-use std::fmt;
-
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
 
@@ -45,18 +43,15 @@ pub enum StartRule {
     Paper,
 }
 
-impl StartRule {
-    /// The names the rules are chosen by.
-    pub const NAMES: [&'static str; 2] = ["uniform", "paper"];
-
-    /// This rule's name.
-    pub const fn name(self) -> &'static str {
-        match self {
-            StartRule::Uniform => "uniform",
-            StartRule::Paper => "paper",
-        }
+crate::names!(StartRule { Uniform = "uniform", Paper = "paper" } unknown(name) -> SimError {
+    SimError::Parse {
+        what: "start rule",
+        text: name.to_string(),
+        reason: format!("choose one of {}", StartRule::NAMES.join(", ")),
     }
+});
 
+impl StartRule {
     /// Whether a start in which the goal already holds is kept (the episode then runs)
     /// rather than drawn again.
     pub const fn keeps_goal_starts(self) -> bool {
@@ -156,26 +151,4 @@ fn paper(grid: Grid, n: usize, rng: &mut SimRng) -> State {
         }
     }
     State::new(&cells[..n], None).expect("distinct cells")
-}
-
-impl fmt::Display for StartRule {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for StartRule {
-    type Err = SimError;
-
-    fn from_str(name: &str) -> Result<StartRule> {
-        match name {
-            "uniform" => Ok(StartRule::Uniform),
-            "paper" => Ok(StartRule::Paper),
-            _ => Err(SimError::Parse {
-                what: "start rule",
-                text: name.to_string(),
-                reason: format!("choose one of {}", Self::NAMES.join(", ")),
-            }),
-        }
-    }
 }

@@ -44,9 +44,9 @@ pub struct DemoArgs {
 /// The goals of a correction session: `text`'s, else every goal of `blocks` blocks, or the
 /// authors' demonstrated goals under the original profile (with their 3 blocks).
 pub fn demonstration_goals(text: Option<&str>, blocks: usize, profile: Profile) -> Result<Vec<sim::Goal>> {
-    match (text, profile) {
-        (None, Profile::Original) if blocks == 3 => Ok(agent::correction::demonstrated_goals()),
-        _ => parse_goals(text, blocks),
+    match text {
+        None => agent::correction::default_goals(blocks, profile).context("without --goals every goal is used"),
+        Some(_) => parse_goals(text, blocks),
     }
 }
 

@@ -18,7 +18,9 @@ use super::train::parse_goals;
 pub struct DqnArgs {
     /// Start from this preset: paper (the paper's DQN on pixels), paper-dqfd (the same with
     /// DQfD on 500 exact-solver demonstrations), dqn-planes (ours, no demonstrations),
-    /// dqfd-planes (ours with DQfD: the recommended recipe). Default: from --obs and --loss.
+    /// dqfd-planes (ours with DQfD: the recommended recipe), her-planes (ours without
+    /// demonstrations, with hindsight relabelling), dqfd-pixels (our DQfD recipe with the
+    /// paper network on the paper screen). Default: from --obs and --loss.
     #[arg(long)]
     pub preset: Option<String>,
     /// What the network sees: role-planes or paper-screen (default: the preset's, else
@@ -93,6 +95,10 @@ pub struct DqnArgs {
     /// The large-margin loss's margin.
     #[arg(long)]
     pub margin: Option<f64>,
+    /// Hindsight relabelling: store every self-play step again with up to K goals that stood
+    /// later in its game (HER's future strategy); 0 for none.
+    #[arg(long, value_name = "K")]
+    pub hindsight: Option<usize>,
     /// Share of every self-play batch drawn from the demonstrations.
     #[arg(long)]
     pub demo_share: Option<f64>,
@@ -149,26 +155,26 @@ impl DqnArgs {
             }
         };
         let mut c = DqnConfig::preset(&preset, self.blocks)?;
-        c.grid = self.grid.parse::<Grid>()?;
+        c.world.grid = self.grid.parse::<Grid>()?;
         c.goals = parse_goals(self.goals.as_deref(), self.blocks)?;
         c.seed = self.seed;
         if let Some(kind) = self.net {
-            c.net = match kind {
+            c = c.with_net(match kind {
                 NetKind::Paper => neural::NetConfig::paper(),
                 _ => neural::NetConfig {
                     kind,
                     ..neural::NetConfig::small()
                 },
-            };
+            });
             if let Some(obs) = self.obs {
                 c.net.validate(obs)?;
             }
         } else if let Some(obs) = self.obs {
             if obs != c.obs() {
-                c.net = match obs {
+                c = c.with_net(match obs {
                     ObsKind::PaperScreen => neural::NetConfig::paper(),
                     _ => neural::NetConfig::small(),
-                };
+                });
             }
         }
         if let Some(d) = demos {
@@ -195,8 +201,11 @@ impl DqnArgs {
             mask_noops = self.mask_noops,
             margin = self.margin,
             demo_share = self.demo_share,
-            horizon = self.horizon,
+            hindsight = self.hindsight,
         );
+        if let Some(h) = self.horizon {
+            c.world.horizon = h;
+        }
         if let Some(lr) = self.lr {
             c.lr_final *= lr / c.lr;
             c.lr = lr;
@@ -205,13 +214,13 @@ impl DqnArgs {
             c.lr_final = lr;
         }
         if let Some(r) = &self.reward {
-            c.reward = RewardModel::from_name(r)?;
+            c.world.reward = RewardModel::from_name(r)?;
         }
         if let Some(b) = &self.backend {
-            c.backend = b.parse::<Backend>()?;
+            c.world.backend = b.parse::<Backend>()?;
         }
         if let Some(p) = &self.protocol {
-            c.protocol = p.parse::<sim::ActionProtocol>()?;
+            c.world.protocol = p.parse::<sim::ActionProtocol>()?;
         }
         if let Some(h) = self.hidden {
             c.net.hidden = h;
@@ -296,7 +305,7 @@ pub fn dqn(args: DqnArgs) -> Result<()> {
     line(format_args!("trained {}: {}", dqn.name(), config.describe()))?;
     line(format_args!(
         "{} demonstrated episodes ({} transitions, {demo_seconds:.1} s to make), {} pre-training steps; \
-         {} self-play steps in {} games, {} reached the goal; {} demonstrations from a loop; {} gradient steps",
+         {} self-play steps in {} games, {} reached the goal; {} demonstrations from a loop; {} relabelled transitions; {} gradient steps",
         r.demo_episodes,
         r.demo_transitions,
         r.pretrain_steps,
@@ -304,6 +313,7 @@ pub fn dqn(args: DqnArgs) -> Result<()> {
         r.games,
         r.successes,
         r.corrections,
+        r.relabelled,
         r.gradient_steps
     ))?;
     line(format_args!(

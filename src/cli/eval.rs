@@ -11,7 +11,7 @@ use clap::Args;
 use neural::AnyModel;
 use sim::{Backend, EnvConfig};
 
-use super::profile::{PlayRulesArgs, ProfileArg, Rules};
+use super::profile::{PlayRulesArgs, ProfileArg, played};
 use super::solver_budget::SolverBudgetArg;
 use super::stdout::line;
 use super::train::parse_goals;
@@ -59,7 +59,7 @@ pub fn eval(args: EvalArgs) -> Result<()> {
     let backend: Backend = args.backend.parse()?;
     // The model's own world (protocol, start rule) unless the command line says otherwise;
     // the reward only sums up in trajectories, so it is the model's training reward.
-    let rules = Rules::of_model(&model).played(args.profile, args.play, None)?;
+    let rules = played(model.parts(), args.profile, args.play, None)?;
     let reward = match (args.profile.profile, model.training_reward()) {
         (None, Some(r)) => r,
         _ => rules.reward,

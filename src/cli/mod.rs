@@ -17,6 +17,7 @@ mod progress;
 mod render;
 mod reproduce;
 mod run;
+mod serve;
 mod solve;
 mod solver_budget;
 pub mod stdout;
@@ -57,6 +58,8 @@ pub enum Command {
     LearnFromDemos(learn_from_demos::LearnFromDemosArgs),
     /// Train a deep Q-network (DQN, or DQfD from demonstrations) and save it as a network file.
     Dqn(Box<dqn::DqnArgs>),
+    /// Serve a page where people play, watch and correct the agent in a browser; studies.
+    Serve(serve::ServeArgs),
 }
 
 /// Carries out `cli`'s command.
@@ -72,5 +75,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Correct(args) => correct::correct(args),
         Command::LearnFromDemos(args) => learn_from_demos::learn_from_demos(args),
         Command::Dqn(args) => dqn::dqn(*args),
+        Command::Serve(args) => serve::serve(args),
     }
 }

@@ -8,10 +8,9 @@
 //! in (its protocol and start rule, its profile's reward) unless `--profile` or a part's
 //! flag says otherwise.
 
-use agent::LearnerProfile;
 use anyhow::Result;
 use clap::Args;
-use sim::{ActionProtocol, Profile, RewardModel, StartRule};
+use sim::{ActionProtocol, Profile, ProfileParts, StartRule};
 
 /// `--profile`.
 #[derive(Debug, Clone, Copy, Args)]
@@ -43,77 +42,33 @@ pub struct StartArg {
     pub start: Option<StartRule>,
 }
 
-/// The world's parts a profile sets, as resolved for one command.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Rules {
-    /// The profile they came from.
-    pub profile: Profile,
-    /// The action protocol.
-    pub protocol: ActionProtocol,
-    /// The start rule.
-    pub start: StartRule,
-    /// The world's reward.
-    pub reward: RewardModel,
+/// `parts` under the command line's choices ([`ProfileParts::overridden`]): `--profile`
+/// replaces them all with its own, then each part given (`reward` by a reward model's
+/// name) replaces that part.
+pub fn overridden(
+    parts: ProfileParts,
+    profile: ProfileArg,
+    protocol: Option<ActionProtocol>,
+    start: Option<StartRule>,
+    reward: Option<&str>,
+) -> Result<ProfileParts> {
+    let reward = reward.map(str::parse).transpose()?;
+    Ok(parts.overridden(profile.profile, protocol, start, reward))
 }
 
-impl Rules {
-    /// `profile`'s parts.
-    pub fn of(profile: Profile) -> Rules {
-        Rules {
-            profile,
-            protocol: profile.protocol(),
-            start: profile.start_rule(),
-            reward: profile.reward(),
-        }
-    }
-
-    /// The rules of a model's training world: a tabular model's protocol and start rule
-    /// with its profile's reward ([`Rules::of`] the `spec` profile for a model that does not
-    /// say); a network's protocol and reward in the `spec` profile's world (`blockstack dqn`
-    /// trains there, from uniform starts).
-    pub fn of_model(model: &neural::AnyModel) -> Rules {
-        let world = model.world();
-        match model {
-            neural::AnyModel::Q(_) => Rules {
-                protocol: world.protocol,
-                start: world.start,
-                ..Rules::of(model.profile())
-            },
-            neural::AnyModel::Dqn(_) => Rules {
-                protocol: world.protocol,
-                reward: world.reward,
-                ..Rules::of(Profile::Spec)
-            },
-        }
-    }
-
-    /// These rules under the command line's choices: `--profile` replaces them all with
-    /// its own, then each part given (`reward` by a reward model's name) replaces that part.
-    pub fn overridden(
-        self,
-        profile: ProfileArg,
-        protocol: Option<ActionProtocol>,
-        start: Option<StartRule>,
-        reward: Option<&str>,
-    ) -> Result<Rules> {
-        let mut rules = profile.profile.map_or(self, Rules::of);
-        rules.protocol = protocol.unwrap_or(rules.protocol);
-        rules.start = start.unwrap_or(rules.start);
-        if let Some(name) = reward {
-            rules.reward = name.parse()?;
-        }
-        Ok(rules)
-    }
-
-    /// [`Rules::overridden`] by `--protocol` and `--start`.
-    pub fn played(self, profile: ProfileArg, play: PlayRulesArgs, reward: Option<&str>) -> Result<Rules> {
-        self.overridden(profile, play.protocol, play.start.start, reward)
-    }
+/// [`overridden`] by `--profile`, `--protocol`, `--start` and `--reward`.
+pub fn played(
+    parts: ProfileParts,
+    profile: ProfileArg,
+    play: PlayRulesArgs,
+    reward: Option<&str>,
+) -> Result<ProfileParts> {
+    overridden(parts, profile, play.protocol, play.start.start, reward)
 }
 
 /// The world of a correction session of `agent` (`demo`, `correct`): the one it was trained
-/// in ([`agent::correction::session_world`]), then `--profile`'s protocol, start rule and learner's reward,
-/// then each part's own flag. Also the profile whose correction rule applies: `--profile`,
+/// in under `--profile` ([`agent::correction::session_world_under`]), then each part's own
+/// flag. Also the profile whose correction rule applies: `--profile`,
 /// else the one the agent was trained under.
 pub fn session_world(
     agent: &agent::QAgent,
@@ -121,19 +76,13 @@ pub fn session_world(
     play: PlayRulesArgs,
     reward: Option<&str>,
 ) -> Result<(sim::EnvConfig, Profile)> {
-    let mut world = agent::correction::session_world(agent);
-    let trained_under = agent.training().map_or(Profile::Spec, |t| t.profile);
-    if let Some(p) = profile.profile {
-        world.protocol = p.protocol();
-        world.start = p.start_rule();
-        world.reward = LearnerProfile::of(p).reward;
-    }
+    let (mut world, profile) = agent::correction::session_world_under(agent, profile.profile);
     world.protocol = play.protocol.unwrap_or(world.protocol);
     world.start = play.start.start.unwrap_or(world.start);
     if let Some(name) = reward {
         world.reward = name.parse()?;
     }
-    Ok((world, profile.profile.unwrap_or(trained_under)))
+    Ok((world, profile))
 }
 
 #[cfg(test)]
@@ -142,23 +91,20 @@ mod tests {
 
     #[test]
     fn flags_override_the_profile_part_by_part() {
-        let spec = Rules::of(Profile::Spec);
+        let spec = ProfileParts::of(Profile::Spec);
         let original = ProfileArg {
             profile: Some(Profile::Original),
         };
         let none = ProfileArg { profile: None };
-        let rules = spec.overridden(original, None, None, None).unwrap();
-        assert_eq!(rules, Rules::of(Profile::Original));
         let play = PlayRulesArgs {
             protocol: Some(ActionProtocol::Free),
             start: StartArg { start: None },
         };
-        let rules = spec.played(original, play, Some("sparse")).unwrap();
+        let parts = played(spec, original, play, Some("sparse")).unwrap();
         assert_eq!(
-            (rules.profile, rules.protocol, rules.start, rules.reward.name()),
+            (parts.profile, parts.protocol, parts.start, parts.reward.name()),
             (Profile::Original, ActionProtocol::Free, StartRule::Paper, "sparse")
         );
-        assert_eq!(spec.overridden(none, None, None, None).unwrap(), spec);
-        assert!(spec.overridden(none, None, None, Some("lots")).is_err());
+        assert!(overridden(spec, none, None, None, Some("lots")).is_err());
     }
 }

@@ -8,7 +8,7 @@ use files::OutputPath;
 use sim::Env;
 use sim::render::{self, Colour};
 
-use super::profile::{ProfileArg, Rules, StartArg};
+use super::profile::{ProfileArg, StartArg, overridden};
 use super::stdout;
 use super::world::WorldArgs;
 
@@ -51,8 +51,13 @@ pub fn render(args: RenderArgs) -> Result<()> {
     }
     let out = args.out.as_deref().map(OutputPath::check).transpose()?;
     stdout::claim_for_data(&[out.as_ref()])?;
-    let rules =
-        Rules::of(sim::Profile::Spec).overridden(args.profile, None, args.start.start, args.world.reward.as_deref())?;
+    let rules = overridden(
+        sim::ProfileParts::of(sim::Profile::Spec),
+        args.profile,
+        None,
+        args.start.start,
+        args.world.reward.as_deref(),
+    )?;
     let config = args.world.config(&rules)?;
     if let Some(out) = &out {
         render::PictureFormat::of(out.path())?;

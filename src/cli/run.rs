@@ -8,7 +8,7 @@ use files::OutputPath;
 use sim::trajectory::TrajectoryWriter;
 use sim::{Env, GoalSpec};
 
-use super::profile::{PlayRulesArgs, ProfileArg, Rules};
+use super::profile::{PlayRulesArgs, ProfileArg, played};
 use super::solver_budget::SolverBudgetArg;
 use super::stdout::line;
 use super::world::WorldArgs;
@@ -132,8 +132,10 @@ pub fn run(args: RunArgs) -> Result<()> {
         _ => None,
     };
     // A model's own world unless the command line says otherwise.
-    let base = model.as_ref().map_or(Rules::of(sim::Profile::Spec), Rules::of_model);
-    let rules = base.played(args.profile, args.play, args.world.reward.as_deref())?;
+    let base = model
+        .as_ref()
+        .map_or(sim::ProfileParts::of(sim::Profile::Spec), neural::AnyModel::parts);
+    let rules = played(base, args.profile, args.play, args.world.reward.as_deref())?;
     let config = args.world.config(&rules)?;
     if let Some(m) = &model {
         m.check_world(config.grid, config.blocks)?;
@@ -166,7 +168,7 @@ pub fn run(args: RunArgs) -> Result<()> {
         policy.as_mut(),
         args.episodes,
         args.seed,
-        trajectory.as_mut(),
+        &mut trajectory,
         &mut |_| bar.inc(1),
     )
     .map_err(|e| args.budget.explain(e))?;

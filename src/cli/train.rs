@@ -1,5 +1,6 @@
 //! `blockstack train`: train a tabular Q-learner and save it as a model file.
 
+use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -151,6 +152,10 @@ pub struct TrainArgs {
     /// the checkpoint fixes them, so the run ends as if it had never stopped.
     #[arg(long, value_name = "FILE", conflicts_with_all = RUN_FLAGS)]
     pub resume: Option<PathBuf>,
+    /// Show the learning curve live in a browser, served on this loopback port while the run
+    /// lasts (0: any free port; the link is printed on standard error).
+    #[arg(long, value_name = "PORT", num_args = 0..=1, default_missing_value = "8080")]
+    pub serve: Option<u16>,
 }
 
 /// Reads goals separated by ':' (e.g. `0,1,2:1,0,2`), each with `blocks` blocks; every goal
@@ -238,8 +243,28 @@ pub fn train(args: TrainArgs) -> Result<()> {
         ProgressStyle::with_template("{bar:30} {pos}/{len} games  {msg}  [{elapsed_precise}, eta {eta}]")
             .expect("a valid template"),
     );
+    let curve = match args.serve {
+        Some(port) => {
+            let name = args
+                .out
+                .file_name()
+                .map_or("-".into(), |n| n.to_string_lossy().into_owned());
+            let title = format!("blockstack train: {name}, {} games", total);
+            let handle = serve::serve_curve([127, 0, 0, 1].into(), port, &title, total)?;
+            writeln!(std::io::stderr(), "learning curve: {}", handle.url)?;
+            Some(handle)
+        }
+        None => None,
+    };
     let mut show = |p: &agent::Progress| {
         if p.games_played % 64 == 0 || p.games_played == p.games_target {
+            if let Some(curve) = &curve {
+                curve.push(serve::CurvePoint {
+                    games: p.games_played,
+                    success_rate: p.recent_success_rate(),
+                    mean_steps: p.recent_mean_steps,
+                });
+            }
             bar.set_position(p.games_played);
             let steps = p.recent_mean_steps.map_or("-".to_string(), |s| format!("{s:.1}"));
             bar.set_message(format!(

@@ -4,10 +4,10 @@ use anyhow::Result;
 use clap::Args;
 use sim::{Backend, EnvConfig, Goal, GoalSpec, Grid, View};
 
-use super::profile::Rules;
+use sim::ProfileParts;
 
 /// The world: grid, blocks, goal, horizon, reward, backend (the rules a profile sets come
-/// with [`Rules`]).
+/// with [`ProfileParts`]).
 #[derive(Debug, Clone, Args)]
 pub struct WorldArgs {
     /// Number of blocks.
@@ -39,7 +39,7 @@ pub struct WorldArgs {
 impl WorldArgs {
     /// The environment config these arguments describe under `rules` (whose reward is
     /// already this command's), checked. Episodes end at the goal.
-    pub fn config(&self, rules: &Rules) -> Result<EnvConfig> {
+    pub fn config(&self, rules: &ProfileParts) -> Result<EnvConfig> {
         let grid: Grid = self.grid.parse()?;
         let goal = match &self.goal {
             Some(text) => GoalSpec::Fixed(Goal::parse(text, Some(self.blocks))?),

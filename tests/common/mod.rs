@@ -19,6 +19,56 @@ pub fn blockstack(args: &[&str]) -> Output {
     Command::new(BIN).args(args).output().expect("the binary runs")
 }
 
+/// A `blockstack` command line, built flag by flag: `cli("run").flag("blocks", 2).arg("--json")`.
+/// Clone one to vary a shared base.
+#[derive(Clone, Debug)]
+pub struct Cli {
+    args: Vec<String>,
+}
+
+/// The command line `blockstack COMMAND`.
+pub fn cli(command: &str) -> Cli {
+    Cli {
+        args: vec![command.to_string()],
+    }
+}
+
+impl Cli {
+    /// Adds one argument as it is.
+    pub fn arg(mut self, arg: impl ToString) -> Cli {
+        self.args.push(arg.to_string());
+        self
+    }
+
+    /// Adds each of `args` as it is.
+    pub fn args(mut self, args: &[&str]) -> Cli {
+        self.args.extend(args.iter().map(|a| a.to_string()));
+        self
+    }
+
+    /// Adds `--NAME VALUE`.
+    pub fn flag(self, name: &str, value: impl ToString) -> Cli {
+        self.arg(format!("--{name}")).arg(value)
+    }
+
+    /// The arguments, the command first.
+    pub fn argv(&self) -> Vec<&str> {
+        self.args.iter().map(String::as_str).collect()
+    }
+
+    /// Runs it and waits.
+    pub fn run(&self) -> Output {
+        blockstack(&self.argv())
+    }
+
+    /// Runs it, checks that it succeeded, and returns what it printed.
+    pub fn ok(&self) -> String {
+        let o = self.run();
+        assert!(o.status.success(), "{:?}: {}", self.args, stderr(&o));
+        stdout(&o)
+    }
+}
+
 /// What a run printed on standard output.
 pub fn stdout(o: &Output) -> String {
     String::from_utf8_lossy(&o.stdout).into_owned()

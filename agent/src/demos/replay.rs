@@ -52,20 +52,9 @@ pub enum BadLines {
     Fail,
 }
 
-impl std::str::FromStr for BadLines {
-    type Err = AgentError;
-
-    /// Reads `skip` or `fail`.
-    fn from_str(text: &str) -> Result<BadLines> {
-        match text {
-            "skip" => Ok(BadLines::Skip),
-            "fail" => Ok(BadLines::Fail),
-            _ => Err(AgentError::Config(format!(
-                "unknown policy {text:?} for bad lines: choose skip or fail"
-            ))),
-        }
-    }
-}
+sim::names!(BadLines { Skip = "skip", Fail = "fail" } unknown(text) -> AgentError {
+    AgentError::Config(format!("unknown policy {text:?} for bad lines: choose skip or fail"))
+});
 
 /// A line that could not be used.
 #[derive(Clone, Debug, PartialEq, Eq)]

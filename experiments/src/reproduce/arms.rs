@@ -135,7 +135,7 @@ impl Suite {
     pub fn play(&self, policy: &mut dyn Policy) -> Result<Vec<EpisodeResult>> {
         let mut results = Vec::with_capacity(self.games() as usize);
         for mut env in self.envs()? {
-            results.extend(agent::play(&mut env, policy, self.episodes, self.seed, None)?);
+            results.extend(agent::play(&mut env, policy, self.episodes, self.seed, &mut ())?);
         }
         Ok(results)
     }
@@ -145,15 +145,15 @@ impl Suite {
     pub fn record(&self, policy: &mut dyn Policy, index: usize) -> Result<Vec<Observation>> {
         let per_env = self.episodes as usize;
         let mut env = self.envs()?.swap_remove(index / per_env);
-        let seed = sim::seeding::episode_seed(self.seed, (index % per_env) as u64);
-        let mut obs = env.reset(seed);
-        let mut rng = agent::rollout::policy_rng(seed);
-        policy.begin_episode(&obs);
-        let mut observations = vec![obs];
-        while !env.is_over() {
-            obs = env.step(policy.act(&obs, &mut rng)?)?.observation;
-            observations.push(obs);
-        }
+        let k = (index % per_env) as u64;
+        let mut observations = Vec::new();
+        agent::play_episode(
+            &mut env,
+            policy,
+            k,
+            sim::seeding::episode_seed(self.seed, k),
+            &mut observations,
+        )?;
         Ok(observations)
     }
 

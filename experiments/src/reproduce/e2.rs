@@ -132,7 +132,7 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
         },
         Setting {
             name: "the paper's means".into(),
-            value: "over the games that reached the goal, as ORIGINAL.md reads them: the paper gives no failures, \
+            value: "over the games that reached the goal, as docs/world.md section 9 reads them: the paper gives no failures, \
                     and a nearly greedy table is trapped in some games"
                 .into(),
         },

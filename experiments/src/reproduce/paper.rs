@@ -182,7 +182,7 @@ impl PaperCurve {
 const FIG3_SOURCE: &str = "Fig. 3 (section VI-B), values read from its image file `Project \
                            Report/3b-avg-num-fail.png` in the authors' repository \
                            (tanmaybinaykiya/YODO-Inverse-Reinforcement-Learning, commit f4007f8), as \
-                           ORIGINAL.md gives them; its error bars are +-10% of each value, not a \
+                           docs/world.md section 9 gives them; its error bars are +-10% of each value, not a \
                            measured spread";
 
 /// E4: Fig. 3, "Performance of 3 Block world": failures (of 100 test games) and mean steps

@@ -96,10 +96,10 @@ pub fn markdown(r: &Reproduction, ran: &Ran) -> String {
     let _ = writeln!(md, "Ran at {}.\n", ran.describe());
     let _ = writeln!(
         md,
-        "Written by `{command}`: every experiment of SPEC section 9 on the paper's 7 x 7 grid (horizon {}, rapier2d \
+        "Written by `{command}`: every experiment of docs/world.md section 9 on the paper's 7 x 7 grid (horizon {}, rapier2d \
          physics), the figures of \"Interactive Robot Learning\" section VI beside ours in two worlds: `original`, \
          the paper's world as its authors coded it (their action protocol, start rule, reward, representation and \
-         schedule), and `spec`, ours (SPEC.md). E1-E6 are run in both; E7 and our own learner in the SPEC world. \
+         schedule), and `spec`, ours (docs/world.md). E1-E6 are run in both; E7 and our own learner in the SPEC world. \
          Every figure below is computed by the run; the paper's come from `experiments::reproduce::paper`. The same \
          figures, and more, are in [`results.json`](results.json).{}\n",
         r.paper_settings.horizon,
@@ -182,7 +182,7 @@ fn paper_beside_ours(md: &mut String, r: &Reproduction) {
         "Every row of the paper's tables: its failures and mean steps, ours in the `original` and the `spec` \
          world (mean over replicates, and the range), and whether the paper's figures lie inside the spread of \
          each world's replicates. Mean steps count a failure as 1000 (mean steps*), except where marked † (over \
-         the games that reached the goal: E2, as ORIGINAL.md reads the paper's).\n"
+         the games that reached the goal: E2, as docs/world.md section 9 reads the paper's).\n"
     );
     let _ = writeln!(
         md,

@@ -1,0 +1,8 @@
+//! The integration tests of this crate, in one test binary (ripgrep's `autotests = false`
+//! pattern): one link step instead of one per file, and the helpers compiled once.
+
+mod container;
+mod input;
+mod output;
+#[path = "../../tests/common/scratch.rs"]
+mod scratch;

@@ -1,0 +1,62 @@
+//! Block-move planning speed (`oracle::towers`): the near-optimal planner for 100, 1,000
+//! and 10,000 blocks, and the exact solver for 8 and 10 blocks.
+//!
+//! `cargo bench -p oracle --bench towers`. Each figure is the mean time per plan over 20
+//! seeded random problems taken in turn: a uniformly random start and a random goal naming
+//! every block in one to three towers.
+
+use std::hint::black_box;
+use std::time::Duration;
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use oracle::towers::{ExactMoves, NearOptimal, TowerGoal, Towers, random_goal, random_state};
+
+/// Problems per size.
+const PROBLEMS: u64 = 20;
+
+/// The seeded problems of `blocks` blocks.
+fn problems(blocks: usize) -> Vec<(Towers, TowerGoal)> {
+    (0..PROBLEMS)
+        .map(|seed| {
+            let goal = random_goal(blocks, 1 + seed as usize % 3, blocks, seed ^ 0xfeed).unwrap();
+            (random_state(blocks, seed), goal)
+        })
+        .collect()
+}
+
+fn near_optimal(c: &mut Criterion) {
+    let planner = NearOptimal::new();
+    let mut group = c.benchmark_group("towers_near_optimal");
+    group.measurement_time(Duration::from_secs(10));
+    for blocks in [100, 1_000, 10_000] {
+        let problems = problems(blocks);
+        let mut i = 0;
+        group.bench_function(BenchmarkId::from_parameter(blocks), |b| {
+            b.iter(|| {
+                i = (i + 1) % problems.len();
+                let (start, goal) = &problems[i];
+                black_box(planner.plan(start, goal).unwrap())
+            })
+        });
+    }
+}
+
+fn exact(c: &mut Criterion) {
+    let solver = ExactMoves::new();
+    let mut group = c.benchmark_group("towers_exact");
+    group.sample_size(20).measurement_time(Duration::from_secs(10));
+    for blocks in [8, 10] {
+        let problems = problems(blocks);
+        let mut i = 0;
+        group.bench_function(BenchmarkId::from_parameter(blocks), |b| {
+            b.iter(|| {
+                i = (i + 1) % problems.len();
+                let (start, goal) = &problems[i];
+                black_box(solver.solve(start, goal).unwrap())
+            })
+        });
+    }
+}
+
+criterion_group!(benches, near_optimal, exact);
+criterion_main!(benches);

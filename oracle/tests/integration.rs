@@ -1,0 +1,8 @@
+//! The integration tests of this crate, in one test binary (ripgrep's `autotests = false`
+//! pattern): one link step instead of one per file, and the helpers compiled once.
+
+mod common;
+mod exact;
+mod protocol;
+mod soundness;
+mod towers;

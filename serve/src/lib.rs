@@ -1,0 +1,26 @@
+//! `blockstack serve`: a page in the browser where a person plays, watches and corrects the
+//! agent, and studies with many participants at once (docs/serve.md).
+//!
+//! Terminal tools (`blockstack demo`) leave out the people a study needs; a page reaches
+//! them. Nothing here re-implements a rule: play and correct mode drive the library's
+//! [`agent::CorrectionSession`] (the session `blockstack demo` drives) and record through
+//! its [`agent::DemoWriter`], watch mode plays a [`neural::AnyModel`], the shortest plan is
+//! [`oracle::ExactSolver`]'s, and the page's colours and labels are `sim::render`'s.
+//!
+//! - [`protocol`]: the messages between page and server.
+//! - [`participant`]: one participant's state machine, with no network in it.
+//! - [`config`]: settings, the study file and the conditions it makes.
+//! - [`server`]: the routes, the WebSocket loop and the bounds.
+//! - [`curve`]: a training run's learning curve, live (`blockstack train ... --serve`).
+
+pub mod config;
+pub mod curve;
+pub mod error;
+pub mod participant;
+pub mod protocol;
+pub mod server;
+
+pub use config::{Limits, ServeConfig, StudyFile};
+pub use curve::{CurveHandle, CurvePoint, serve_curve};
+pub use error::{Result, ServeError};
+pub use server::{Links, Server, run};

@@ -1,0 +1,515 @@
+//! One participant's state, with no network in it: what each message does.
+//!
+//! Play and correct mode drive one [`CorrectionSession`], the library session
+//! `blockstack demo` drives, so the rules (a person's pick while holding under the `paper`
+//! protocol is a Drop and then the Pick, the learning rule, the recording) are that
+//! session's: in play mode every step is the person's, in correct mode the person accepts
+//! the agent's proposal or overrides it. One session per participant makes one recording
+//! that `learn-from-demos` replays from the condition's model. Watch mode plays the
+//! condition's model (tabular or network) through its [`agent::Policy`] in an
+//! environment of its own, greedy, and records nothing.
+//!
+//! Every message either changes the state and gets a [`View`], or changes nothing and gets
+//! an error line.
+
+use std::sync::Arc;
+
+use agent::correction::{CorrectionSession, person_steps};
+use agent::demos::DemoSink;
+use agent::{DemoRecord, DemoWriter};
+use files::Output;
+use oracle::ExactSolver;
+use sim::render::{colour, label};
+use sim::seeding::{SimRng, episode_seed};
+use sim::{Action, Env, EnvConfig, GoalSpec, Observation};
+
+use crate::config::Condition;
+use crate::protocol::{ActionValue, ClientMessage, Mode, Progress, View};
+
+/// The agent's probability of a random proposal in correct mode: the paper's test policy,
+/// as `blockstack demo`'s default.
+const PROPOSAL_EPSILON: f64 = agent::profile::TEST_EPSILON;
+
+/// Where a participant's lines go: the recording file, or nowhere; counts what it wrote.
+pub struct Recorder {
+    writer: Option<DemoWriter<Output>>,
+    lines: u64,
+}
+
+impl Recorder {
+    /// Records to `writer` (none: nothing is recorded).
+    pub fn new(writer: Option<DemoWriter<Output>>) -> Self {
+        Recorder { writer, lines: 0 }
+    }
+
+    /// Lines written and flushed.
+    pub fn lines(&self) -> u64 {
+        self.lines
+    }
+}
+
+impl DemoSink for Recorder {
+    fn record(&mut self, line: &DemoRecord) -> agent::Result<()> {
+        if let Some(w) = &mut self.writer {
+            w.record(line)?;
+            self.lines += 1;
+        }
+        Ok(())
+    }
+}
+
+/// Watch mode's episode: the environment, its number, the policy's generator and the
+/// action the model takes next.
+struct Watching {
+    k: u64,
+    env: Env,
+    rng: SimRng,
+    next: Option<Action>,
+    shortest: Option<u32>,
+}
+
+/// One participant.
+pub struct Participant {
+    condition: Arc<Condition>,
+    mode: Mode,
+    session: CorrectionSession<Recorder>,
+    /// The shortest plan from the session episode's start.
+    shortest: Option<u32>,
+    watching: Option<Watching>,
+    progress: Progress,
+    message: String,
+}
+
+/// A message's outcome: the new view, or a line saying why nothing changed.
+pub type Outcome = std::result::Result<View, String>;
+
+impl Participant {
+    /// A participant in `condition`, recording to `recorder`, in the condition's first mode.
+    pub fn new(condition: Arc<Condition>, recorder: Recorder) -> agent::Result<Participant> {
+        let c = &condition;
+        let session = CorrectionSession::new(
+            c.agent.clone(),
+            c.rule,
+            c.world,
+            c.goals.clone(),
+            c.seed,
+            PROPOSAL_EPSILON,
+            "person",
+            c.model_file.as_deref().filter(|_| c.agent_is_model),
+            recorder,
+        )?;
+        let mode = c.modes[0];
+        let mut p = Participant {
+            progress: Progress {
+                episodes_total: c.episodes,
+                ..Progress::default()
+            },
+            condition,
+            mode,
+            session,
+            shortest: None,
+            watching: None,
+            message: String::new(),
+        };
+        p.enter(mode)?;
+        Ok(p)
+    }
+
+    /// The condition.
+    pub fn condition(&self) -> &Condition {
+        &self.condition
+    }
+
+    /// The current mode.
+    pub fn mode(&self) -> Mode {
+        self.mode
+    }
+
+    /// Totals.
+    pub fn progress(&self) -> Progress {
+        Progress {
+            steps: self.session.report().steps,
+            corrections: self.session.report().corrections,
+            ..self.progress.clone()
+        }
+    }
+
+    /// Whether every episode asked for is done.
+    pub fn is_done(&self) -> bool {
+        self.progress.episodes_total > 0 && self.progress.episodes_done >= self.progress.episodes_total
+    }
+
+    /// Carries out `message`: the new view, or why nothing changed. An error of the
+    /// session itself (a recording that cannot be written) is also returned as a line.
+    pub fn handle(&mut self, message: &ClientMessage) -> Outcome {
+        let id = message.id();
+        match message {
+            ClientMessage::Mode { mode, .. } => {
+                if !self.condition.modes.contains(mode) {
+                    return Err(format!("the {} mode is not offered here", mode.name()));
+                }
+                if *mode != self.mode {
+                    self.enter(*mode).map_err(|e| e.to_string())?;
+                }
+            }
+            ClientMessage::Act { action, .. } => self.act(action)?,
+            ClientMessage::Accept { .. } => self.accept()?,
+            ClientMessage::Step { .. } => self.watch_step()?,
+            ClientMessage::Next { .. } => match self.mode {
+                Mode::Watch => self.begin_watch().map_err(|e| e.to_string())?,
+                _ => {
+                    self.refuse_when_done()?;
+                    self.begin_session_episode().map_err(|e| e.to_string())?;
+                    self.message = "Next episode.".into();
+                }
+            },
+        }
+        Ok(self.view(id))
+    }
+
+    /// Switches to `mode`: play and correct begin a fresh episode of the session (an
+    /// episode belongs to one mode), watch one of its own.
+    fn enter(&mut self, mode: Mode) -> agent::Result<()> {
+        self.mode = mode;
+        match mode {
+            Mode::Watch => {
+                self.begin_watch()?;
+                self.message = "The agent plays: step it, or let it run at your pace.".into();
+            }
+            Mode::Play | Mode::Correct => {
+                if !self.is_done() {
+                    self.begin_session_episode()?;
+                }
+                self.message = match mode {
+                    Mode::Play => "Solve it: click a block (or press its label), move it with the arrows, drop with d.",
+                    _ => "The agent proposes: accept (Enter) or choose another action yourself.",
+                }
+                .into();
+            }
+        }
+        Ok(())
+    }
+
+    fn begin_session_episode(&mut self) -> agent::Result<()> {
+        let obs = self.session.next_episode()?;
+        self.shortest = shortest(&self.condition.world, &obs);
+        Ok(())
+    }
+
+    fn begin_watch(&mut self) -> agent::Result<()> {
+        let c = &self.condition;
+        let model = c
+            .model
+            .as_ref()
+            .ok_or_else(|| agent::AgentError::Config("no model to watch".into()))?;
+        let k = self.watching.as_ref().map_or(0, |w| w.k + 1);
+        let goals: Vec<_> = c.goals.iter().filter(|g| g.block_count() == model.blocks()).collect();
+        let world = EnvConfig {
+            goal: goals
+                .get((k % goals.len().max(1) as u64) as usize)
+                .map_or(GoalSpec::Random, |g| GoalSpec::Fixed(**g)),
+            ..c.watch_world
+        };
+        let seed = episode_seed(c.seed, k);
+        let mut env = Env::new(world)?;
+        let obs = env.reset(seed);
+        let mut w = Watching {
+            k,
+            env,
+            rng: agent::rollout::policy_rng(seed),
+            next: None,
+            shortest: shortest(&world, &obs),
+        };
+        w.next = Some(model.policy(0.0)?.act(&obs, &mut w.rng)?);
+        self.watching = Some(w);
+        Ok(())
+    }
+
+    fn refuse_when_done(&self) -> std::result::Result<(), String> {
+        if self.is_done() {
+            Err("you have finished every episode of this session: thank you".into())
+        } else {
+            Ok(())
+        }
+    }
+
+    /// The session's current observation in play or correct mode, or why not.
+    fn live(&self, what: &str) -> std::result::Result<Observation, String> {
+        if self.mode == Mode::Watch {
+            return Err(format!("{what} is not part of watch mode: choose play or correct"));
+        }
+        self.refuse_when_done()?;
+        match self.session.observation() {
+            Some(obs) if !self.session.is_over() => Ok(obs),
+            _ => Err("the episode is over: press n for the next".into()),
+        }
+    }
+
+    fn act(&mut self, name: &str) -> std::result::Result<(), String> {
+        let obs = self.live("an action of your own")?;
+        let action =
+            Action::parse(name, obs.state.block_count()).map_err(|e| format!("{name:?} is not an action here: {e}"))?;
+        let steps = person_steps(&obs, action).map_err(|e| format!("not now: {e}"))?;
+        if steps.is_empty() {
+            self.message = format!("{action}: that block is held already.");
+            return Ok(());
+        }
+        let proposed = self.session.proposal();
+        for &step in &steps {
+            if !self.session.is_over() {
+                self.session.step(Some(step)).map_err(|e| e.to_string())?;
+            }
+        }
+        self.message = match (self.mode, proposed) {
+            (Mode::Correct, Some(p)) if steps == [p] => format!("You confirmed {action}; the agent learnt it."),
+            (Mode::Correct, Some(p)) => format!("You chose {} instead of {p}; the agent learnt it.", join(&steps)),
+            _ => format!("You chose {}.", join(&steps)),
+        };
+        self.after_session_step();
+        Ok(())
+    }
+
+    fn accept(&mut self) -> std::result::Result<(), String> {
+        if self.mode != Mode::Correct {
+            return Err(format!("accept is part of correct mode, not {}", self.mode.name()));
+        }
+        self.live("accept")?;
+        let step = self.session.step(None).map_err(|e| e.to_string())?;
+        self.message = format!("The agent took {}.", step.action);
+        self.after_session_step();
+        Ok(())
+    }
+
+    fn after_session_step(&mut self) {
+        if self.session.is_over() {
+            self.progress.episodes_done += 1;
+            let steps = self.session.steps();
+            let reached = self.session.observation().is_some_and(|o| o.goal.holds(&o.state));
+            let shortest = self
+                .shortest
+                .map_or(String::new(), |s| format!("; the shortest plan takes {s}"));
+            self.message = if reached {
+                format!("Goal reached in {steps} steps{shortest}.")
+            } else {
+                format!("Cut off after {steps} steps{shortest}.")
+            };
+            if self.is_done() {
+                self.message.push_str(" That was the last episode: thank you.");
+            }
+        }
+    }
+
+    fn watch_step(&mut self) -> std::result::Result<(), String> {
+        if self.mode != Mode::Watch {
+            return Err(format!("step is part of watch mode, not {}", self.mode.name()));
+        }
+        let over = self.watching.as_ref().is_none_or(|w| w.env.is_over());
+        if over {
+            self.begin_watch().map_err(|e| e.to_string())?;
+            self.message = "Next episode.".into();
+            return Ok(());
+        }
+        let model = self.condition.model.clone().expect("watch mode has a model");
+        let w = self.watching.as_mut().expect("an episode under way");
+        let action = w.next.expect("a state not over has a next action");
+        let step = w.env.step(action).map_err(|e| e.to_string())?;
+        w.next = if w.env.is_over() {
+            None
+        } else {
+            let obs = w.env.observation();
+            let mut policy = model.policy(0.0).map_err(|e| e.to_string())?;
+            Some(policy.act(&obs, &mut w.rng).map_err(|e| e.to_string())?)
+        };
+        let steps = w.env.steps();
+        let shortest = w
+            .shortest
+            .map_or(String::new(), |s| format!("; the shortest plan takes {s}"));
+        self.message = if step.terminated {
+            format!("The agent reached the goal in {steps} steps{shortest}.")
+        } else if step.truncated {
+            format!("The agent was cut off after {steps} steps{shortest}.")
+        } else {
+            format!("The agent took {action}.")
+        };
+        Ok(())
+    }
+
+    /// What the page shows now.
+    pub fn view(&self, id: Option<u64>) -> View {
+        let c = &self.condition;
+        let (obs, episode, steps, over, shortest, proposal, greedy) = match (self.mode, &self.watching) {
+            (Mode::Watch, Some(w)) => (
+                w.env.observation(),
+                w.k,
+                w.env.steps(),
+                w.env.is_over(),
+                w.shortest,
+                None,
+                w.next.map(|a| a.to_string()),
+            ),
+            _ => (
+                self.session.observation().expect("the session has begun an episode"),
+                self.session.episode_number().unwrap_or(0),
+                self.session.steps(),
+                self.session.is_over(),
+                self.shortest,
+                self.session
+                    .proposal()
+                    .filter(|_| self.mode == Mode::Correct)
+                    .map(|a| a.to_string()),
+                None,
+            ),
+        };
+        let q = match self.mode {
+            Mode::Watch => c.model.as_ref().and_then(|m| m.legal_q_values(&obs).ok()),
+            Mode::Correct if !over => {
+                let agent = self.session.agent();
+                agent
+                    .q_values(&obs)
+                    .ok()
+                    .map(|qs| obs.legal_actions().iter().map(|a| (a, qs[a.index()])).collect())
+            }
+            _ => None,
+        };
+        let q = q
+            .unwrap_or_default()
+            .into_iter()
+            .map(|(a, q)| ActionValue {
+                action: a.to_string(),
+                q,
+            })
+            .collect();
+        let outcome = over.then(|| if obs.goal.holds(&obs.state) { "goal" } else { "cut off" }.to_string());
+        View {
+            kind: "view".into(),
+            id,
+            mode: self.mode,
+            modes: c.modes.clone(),
+            condition: c.name.clone(),
+            grid: [obs.grid.width(), obs.grid.height()],
+            blocks: obs.blocks().iter().map(|cell| [cell.x, cell.y]).collect(),
+            held: obs.held_block().map(|b| b.0),
+            goal: obs.goal.order().iter().map(|b| b.0).collect(),
+            colours: obs
+                .state
+                .blocks()
+                .map(|b| {
+                    let [r, g, bl] = colour(b);
+                    format!("#{r:02x}{g:02x}{bl:02x}")
+                })
+                .collect(),
+            labels: obs.state.blocks().map(|b| label(b).to_string()).collect(),
+            legal: if over {
+                Vec::new()
+            } else {
+                obs.legal_actions().iter().map(|a| a.to_string()).collect()
+            },
+            episode,
+            steps,
+            over,
+            outcome,
+            shortest: shortest.filter(|_| over),
+            proposal,
+            greedy,
+            q,
+            message: self.message.clone(),
+            progress: Progress {
+                recorded_lines: self.session_lines(),
+                ..self.progress()
+            },
+            done: self.is_done(),
+            recording: self.session_recording(),
+        }
+    }
+
+    fn session_lines(&self) -> u64 {
+        self.session_sink().lines()
+    }
+
+    fn session_recording(&self) -> bool {
+        self.session_sink().writer.is_some()
+    }
+
+    fn session_sink(&self) -> &Recorder {
+        self.session.sink()
+    }
+}
+
+/// The length of a shortest plan from `obs` under `world`'s protocol, if the exact solver
+/// finds one within its budget.
+fn shortest(world: &EnvConfig, obs: &Observation) -> Option<u32> {
+    ExactSolver::new(world.grid)
+        .with_protocol(world.protocol)
+        .distance(&obs.state, &obs.goal)
+        .ok()
+}
+
+fn join(steps: &[Action]) -> String {
+    steps
+        .iter()
+        .map(ToString::to_string)
+        .collect::<Vec<_>>()
+        .join(", then ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use sim::Profile;
+
+    fn participant(profile: Profile) -> Participant {
+        let c = Condition::prepare("c", None, Some(profile), Some("0,1,2"), 2, None, 7).unwrap();
+        Participant::new(Arc::new(c), Recorder::new(None)).unwrap()
+    }
+
+    fn act(p: &mut Participant, action: &str) -> Outcome {
+        p.handle(&ClientMessage::Act {
+            id: None,
+            action: action.into(),
+        })
+    }
+
+    #[test]
+    fn under_the_paper_protocol_a_pick_while_holding_is_a_drop_and_the_pick() {
+        let mut p = participant(Profile::Original);
+        let refused = act(&mut p, "up").unwrap_err();
+        assert!(refused.contains("only pick"), "{refused}");
+        assert_eq!(p.progress().steps, 0);
+        act(&mut p, "pick 1").unwrap();
+        let view = act(&mut p, "pick 2").unwrap();
+        assert_eq!(view.held, Some(2));
+        assert_eq!((view.steps, view.progress.corrections), (3, 3));
+        assert!(view.message.contains("drop, then pick 2"), "{}", view.message);
+    }
+
+    #[test]
+    fn an_episode_ends_with_the_shortest_plan_and_the_limit_is_kept() {
+        let mut p = participant(Profile::Spec);
+        for _ in 0..2 {
+            let obs = p.session.observation().unwrap();
+            let plan = ExactSolver::new(obs.grid).solve(&obs.state, &obs.goal).unwrap();
+            let mut view = None;
+            for a in &plan.actions {
+                view = Some(act(&mut p, &a.to_string()).unwrap());
+            }
+            let view = view.unwrap();
+            assert_eq!(view.shortest, Some(plan.len() as u32));
+            assert_eq!(view.outcome.as_deref(), Some("goal"));
+            if !p.is_done() {
+                p.handle(&ClientMessage::Next { id: None }).unwrap();
+            }
+        }
+        assert!(p.is_done());
+        assert!(
+            p.handle(&ClientMessage::Next { id: None })
+                .unwrap_err()
+                .contains("finished")
+        );
+        // Watch and correct need a model: not offered.
+        let mode = ClientMessage::Mode {
+            id: None,
+            mode: Mode::Correct,
+        };
+        assert!(p.handle(&mode).unwrap_err().contains("not offered"));
+    }
+}
