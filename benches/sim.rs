@@ -3,13 +3,17 @@
 //! `cargo bench --bench sim`. Actions are drawn up front from a seeded generator so the
 //! timing is of the world, not of the generator. `env_step` is the SPEC world;
 //! `env_step_original` the `original` profile (paper protocol, `paper-code` reward), whose
-//! actions are chosen among the legal ones of each step's mask.
+//! actions are chosen among the legal ones of each step's mask. `side_*` is the side view
+//! (docs/world.md, "The side view"): a gripper step, a drop (on the physics backend, rapier's
+//! dynamics to rest), and random play among the legal actions, on both backends.
 
 use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use rand::RngExt;
-use sim::{Action, Backend, Env, EnvConfig, Grid, GridWorld, PhysicsWorld, Profile, VecEnv, World};
+use sim::{
+    Action, Backend, BlockId, Cell, Env, EnvConfig, Grid, GridWorld, PhysicsWorld, Profile, State, VecEnv, View, World,
+};
 
 /// Random actions of a world with `blocks` blocks.
 fn random_actions(blocks: usize, count: usize) -> Vec<Action> {
@@ -159,5 +163,91 @@ fn vec_step(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, world_step, env_step, env_step_original, reset, vec_step);
+fn side_view(c: &mut Criterion) {
+    let grid = Grid::default();
+    // Block 0 on the table at column 0, block 1 on it, block 2 held on the top row.
+    let held_high = State::new(&[Cell::new(0, 0), Cell::new(0, 1), Cell::new(4, 6)], Some(BlockId(2))).unwrap();
+    let worlds = |state: State| -> [(Backend, Box<dyn World>); 2] {
+        [
+            (
+                Backend::Grid,
+                Box::new(GridWorld::new_in(View::Side, grid, state).unwrap()),
+            ),
+            (
+                Backend::Physics,
+                Box::new(PhysicsWorld::new_in(View::Side, grid, state).unwrap()),
+            ),
+        ]
+    };
+    let mut group = c.benchmark_group("side_step");
+    group.throughput(Throughput::Elements(1));
+    for (backend, mut world) in worlds(held_high) {
+        // A gripper step: the held block carried left and right along the top row.
+        let mut k = 0u32;
+        group.bench_function(backend.to_string(), |b| {
+            b.iter(|| {
+                k += 1;
+                black_box(
+                    world
+                        .act(if k & 1 == 0 { Action::Left } else { Action::Right })
+                        .unwrap(),
+                )
+            })
+        });
+    }
+    group.finish();
+    let mut group = c.benchmark_group("side_drop");
+    group.throughput(Throughput::Elements(1));
+    for (backend, mut world) in worlds(held_high) {
+        // A fall of six rows to the table (the state put back first, which costs little).
+        group.bench_function(backend.to_string(), |b| {
+            b.iter(|| {
+                world.place(&held_high).unwrap();
+                black_box(world.act(Action::Drop).unwrap())
+            })
+        });
+    }
+    group.finish();
+    let mut group = c.benchmark_group("side_random_play");
+    group.throughput(Throughput::Elements(1));
+    let mut rng = sim::seeding::rng(42);
+    // Draws below 5 * 7 * 9 * 11 * 13 * 16: uniform over the legal actions of any mask.
+    let draws: Vec<usize> = (0..1 << 16).map(|_| rng.random_range(0..720_720)).collect();
+    for blocks in [3, 5] {
+        for backend in [Backend::Grid, Backend::Physics] {
+            let mut env = Env::new(EnvConfig {
+                blocks,
+                backend,
+                view: View::Side,
+                ..EnvConfig::default()
+            })
+            .unwrap();
+            let mut legal = env.reset(1).legal_actions();
+            let mut i = 0;
+            group.bench_function(BenchmarkId::new(backend.to_string(), blocks), |b| {
+                b.iter(|| {
+                    i = (i + 1) & 0xFFFF;
+                    let action = legal.nth(draws[i] % legal.count()).unwrap();
+                    let step = env.step(action).unwrap();
+                    legal = step.info.action_mask;
+                    if step.terminated || step.truncated {
+                        legal = env.reset(None).legal_actions();
+                    }
+                    black_box(step.reward)
+                })
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(
+    benches,
+    world_step,
+    env_step,
+    env_step_original,
+    reset,
+    vec_step,
+    side_view
+);
 criterion_main!(benches);

@@ -12,6 +12,7 @@ mod cli_preset;
 mod cli_readers;
 mod cli_reproduce;
 mod cli_serve;
+mod cli_side;
 mod cli_solve;
 mod cli_world;
 mod common;

@@ -216,6 +216,7 @@ mod tests {
             state: State::new(&[Cell::new(3, 2), Cell::new(top.0, top.1)], held.map(BlockId)).unwrap(),
             goal: "0,1".parse::<Goal>().unwrap(),
             protocol: sim::ActionProtocol::Paper,
+            view: sim::View::Top,
         }
     }
 

@@ -54,6 +54,7 @@ mod tests {
             state: State::new(&[Cell::new(0, 0), Cell::new(3, 3), Cell::new(6, 6)], held.map(BlockId)).unwrap(),
             goal: "0,1,2".parse().unwrap(),
             protocol,
+            view: sim::View::Top,
         }
     }
 

@@ -209,6 +209,8 @@ impl QAgent {
             )));
         }
         obs.state.check_fits(self.grid)?;
+        // The representations name blocks by their place in one tower of every block.
+        obs.goal.one_tower("the tabular learner")?;
         Ok(())
     }
 

@@ -63,7 +63,8 @@ impl EpisodeObserver for () {}
 /// Writes each episode to the trajectory file: its episode line, then one line per step.
 impl EpisodeObserver for TrajectoryWriter {
     fn start(&mut self, episode: u64, seed: u64, config: &EnvConfig, start: &Observation) -> Result<()> {
-        Ok(self.write(&Record::episode(
+        Ok(self.write(&Record::episode_in(
+            config.view,
             episode,
             seed,
             config.grid,

@@ -27,6 +27,7 @@ fn obs(cells: &[(u8, u8)], held: Option<u8>, goal: Goal, protocol: ActionProtoco
         state: State::new(&cells, held.map(BlockId)).unwrap(),
         goal,
         protocol,
+        view: sim::View::Top,
     }
 }
 
@@ -277,7 +278,7 @@ proptest! {
         let goal = Goal::all(3).unwrap()[g];
         let state = state_from(&picks, held);
         prop_assume!(!goal.holds(&state));
-        let o = Observation { grid: Grid::default(), state, goal, protocol: ActionProtocol::Paper };
+        let o = Observation { grid: Grid::default(), state, goal, protocol: ActionProtocol::Paper, view: sim::View::Top };
         let mut rng = sim::seeding::rng(seed);
         let grid = o.grid;
         let mut policies: Vec<Box<dyn Policy>> = vec![

@@ -95,6 +95,7 @@ fn greedy_choice_breaks_ties_at_random_and_follows_the_table() {
         state,
         goal: g,
         protocol: ActionProtocol::Free,
+        view: sim::View::Top,
     };
     let mut r = rng(5);
     let seen: std::collections::HashSet<Action> = (0..200).map(|_| q.greedy_action(&obs, &mut r).unwrap()).collect();
@@ -120,6 +121,7 @@ fn a_trained_agent_finishes_an_easy_stack() {
         state: State::new(&cells, Some(BlockId(2))).unwrap(),
         goal: goal("0,1,2"),
         protocol: ActionProtocol::Free,
+        view: sim::View::Top,
     };
     let free = Observation {
         state: held.state.with_held(None).unwrap(),
@@ -135,6 +137,7 @@ fn a_trained_agent_finishes_an_easy_stack() {
         goal: goal("1,2,0"),
         grid,
         protocol: ActionProtocol::Free,
+        view: sim::View::Top,
     };
     assert_eq!(q.greedy_action(&unseen, &mut r).unwrap(), Action::Down);
 }
@@ -277,6 +280,7 @@ fn bad_configs_are_errors_not_panics() {
         state: State::new(&[Cell::new(0, 0), Cell::new(1, 1)], None).unwrap(),
         goal: goal("0,1"),
         protocol: ActionProtocol::Free,
+        view: sim::View::Top,
     };
     assert!(matches!(q.key(&two), Err(AgentError::ModelMismatch(_))));
     let mut r = rng(0);

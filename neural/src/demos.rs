@@ -53,11 +53,13 @@ impl DemoEpisode {
             state,
             goal: self.goal,
             protocol: config.world.protocol,
+            view: config.world.view,
         };
         for (k, &action) in self.actions.iter().enumerate() {
             let (before, after) = (&self.states[k], &self.states[k + 1]);
             let r = reward.reward(&RewardTransition {
                 grid,
+                view: sim::View::Top,
                 goal: &self.goal,
                 before,
                 action,

@@ -68,6 +68,7 @@ fn transition(steps: &[Step], t: usize, goal: Goal, config: &DqnConfig) -> Trans
         let s = &steps[i];
         config.world.reward.reward(&RewardTransition {
             grid: s.obs.grid,
+            view: s.obs.view,
             goal: &goal,
             before: &s.obs.state,
             action: s.action,
@@ -118,6 +119,7 @@ mod tests {
             grid,
             state,
             protocol: sim::ActionProtocol::Free,
+            view: sim::View::Top,
             goal,
         };
         (0..actions.len())

@@ -214,6 +214,7 @@ mod tests {
             state: State::new(&cells, held.map(BlockId)).unwrap(),
             protocol: sim::ActionProtocol::Free,
             goal: "2,0,1".parse().unwrap(),
+            view: sim::View::Top,
         }
     }
 

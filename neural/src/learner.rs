@@ -383,6 +383,7 @@ mod tests {
             state: State::new(&[Cell::new(2, 2), Cell::new(4, 4)], Some(BlockId(0))).unwrap(),
             protocol: sim::ActionProtocol::Free,
             goal: Goal::identity(2).unwrap(),
+            view: sim::View::Top,
         };
         // The expert took Left (index 2): J = max(1 + .8, 2 + .8, 0.5, -1 + .8, .8, 1.1, .9) - 0.5
         // = 2.3; its gradient on the last bias is +1 at Down (the max) and -1 at Left.

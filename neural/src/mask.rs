@@ -126,6 +126,7 @@ mod tests {
             state: State::new(&[Cell::new(0, 0), Cell::new(1, 0)], Some(BlockId(0))).unwrap(),
             protocol: sim::ActionProtocol::Free,
             goal: "0,1".parse().unwrap(),
+            view: sim::View::Top,
         };
         assert_eq!(ActionSet::allowed(&obs, false).len(), 7);
         let allowed: Vec<usize> = ActionSet::allowed(&obs, true).iter().collect();

@@ -210,6 +210,7 @@ mod tests {
             state: State::new(&[Cell::new(x % 7, 0), Cell::new(x % 7, 3)], None).unwrap(),
             protocol: sim::ActionProtocol::Free,
             goal: Goal::identity(2).unwrap(),
+            view: sim::View::Top,
         }
     }
 

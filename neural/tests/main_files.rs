@@ -52,6 +52,7 @@ fn recorded_choices(trajectory: &str) -> Vec<(Observation, usize)> {
                     state: State::new(&cells(&v["start"]), None).unwrap(),
                     protocol: sim::ActionProtocol::Free,
                     goal: Goal::new(&order).unwrap(),
+                    view: sim::View::Top,
                 });
             }
             "step" => {

@@ -91,6 +91,7 @@ pub(crate) fn check_problem(grid: Grid, state: &State, goal: &Goal) -> Result<()
     }
     state.check_fits(grid)?;
     goal.check_fits(grid)?;
+    goal.one_tower("a top-view planner (the oracle, the exact solver)")?;
     if !goal.can_be_reached(grid, state) {
         let mut standing: Vec<BlockId> = state.blocks().collect();
         standing.sort_by_key(|&b| state.cell(b).y);

@@ -1,6 +1,7 @@
 """blockstack: a physics-backed 2D block-stacking world for reinforcement learning.
 
-Importing the package registers ``blockstack/Stack-v0`` with Gymnasium::
+Importing the package registers ``blockstack/Stack-v0`` (and ``blockstack/BlocksWorld-v0``,
+the classic Blocks World seen from the side) with Gymnasium::
 
     import gymnasium as gym
     import blockstack
@@ -32,7 +33,7 @@ from gymnasium.envs.registration import register, registry
 
 from blockstack._native import REWARDS, episode_seed
 from blockstack.demonstrations import demonstrations, read_recording
-from blockstack.env import StackEnv
+from blockstack.env import BlocksWorldEnv, StackEnv
 from blockstack.goal_env import StackGoalEnv
 from blockstack.model import Model, load
 from blockstack import vector
@@ -41,6 +42,7 @@ from blockstack.training import train
 
 __all__ = [
     "REWARDS",
+    "BlocksWorldEnv",
     "Model",
     "StackEnv",
     "StackGoalEnv",
@@ -61,6 +63,12 @@ if ENV_ID not in registry:
         entry_point="blockstack.env:StackEnv",
         vector_entry_point="blockstack.vector:StackVectorEnv",
     )
+
+#: The classic Blocks World, seen from the side (:class:`BlocksWorldEnv`).
+BLOCKS_WORLD_ID = "blockstack/BlocksWorld-v0"
+
+if BLOCKS_WORLD_ID not in registry:
+    register(id=BLOCKS_WORLD_ID, entry_point="blockstack.env:BlocksWorldEnv")
 
 GOAL_ENV_ID = "blockstack/StackGoal-v0"
 

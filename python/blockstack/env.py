@@ -6,6 +6,7 @@ from typing import Any, Optional, Tuple
 
 import gymnasium as gym
 import numpy as np
+from gymnasium import spaces
 
 from blockstack import _native
 from blockstack._checks import U32_MAX, optional_whole, whole
@@ -26,11 +27,15 @@ def check_seed(seed: Any) -> Optional[int]:
 RESET_OPTIONS = ("cells", "held", "goal")
 
 
-def check_action(action: Any, blocks: int) -> Any:
+def check_action(action: Any, blocks: int, count: Optional[int] = None) -> Any:
     """``action`` unchanged, or a ``ValueError`` for an integer outside the action range
-    (the native side reads 64-bit integers only, and would call ``2**70`` "not an int")."""
+    (the native side reads 64-bit integers only, and would call ``2**70`` "not an int").
+    ``count`` is the number of actions when they are not the gripper's ``5 + blocks``."""
     if isinstance(action, (int, np.integer)) and not isinstance(action, bool):
-        if not 0 <= int(action) < 5 + blocks:
+        if count is not None:
+            if not 0 <= int(action) < count:
+                raise ValueError(f"block move {int(action)} is out of range: the moves are 0..{count}")
+        elif not 0 <= int(action) < 5 + blocks:
             raise ValueError(
                 f"action {int(action)} is out of range: with {blocks} blocks the actions are 0..{5 + blocks}"
             )
@@ -84,6 +89,17 @@ class StackEnv(gym.Env):
       actions, so it passes in ``spec`` only.)
     - ``protocol`` (``free`` or ``paper``) and ``start`` (``uniform`` or ``paper``): one rule
       of the profile each, set otherwise; ``None`` (the default) keeps the profile's.
+    - ``view``: ``top`` (the default, the paper's world seen from above) or ``side`` (the
+      classic Blocks World seen from the side: towers on a table, only a clear block can be
+      picked, a released block falls; ``blockstack/BlocksWorld-v0``). In the side view the
+      legal actions are its own whatever the protocol (``info["action_mask"]``).
+    - ``actions``: ``gripper`` (the default, the ``5 + N`` actions) or, in the side view,
+      ``moves``: block moves, ``x * (N + W) + d`` puts block ``x`` onto block ``d`` for
+      ``d < N`` and onto the table at column ``d - N`` otherwise, each carried out as the
+      gripper steps it takes (``info["gripper_steps"]``); ``info["action_mask"]`` marks the
+      legal moves.
+    - ``goal`` may also name several towers, ``"0,1/2"``: each bottom to top, blocks no
+      tower names free (in the side view a tower stands on the table).
     - ``render_mode``: ``None``, ``rgb_array`` (the frame) or ``ansi`` (text).
     - ``max_episode_steps``: the horizon: an episode that has not reached the goal after
       this many steps is truncated, by the Rust environment itself. (``gymnasium.make``
@@ -122,6 +138,8 @@ class StackEnv(gym.Env):
         horizon: Optional[int] = None,
         protocol: Optional[str] = None,
         start: Optional[str] = None,
+        view: str = "top",
+        actions: str = "gripper",
     ):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"cannot read render mode from {render_mode!r}: choose None, rgb_array or ansi")
@@ -130,10 +148,13 @@ class StackEnv(gym.Env):
         steps = whole("max_episode_steps", max_episode_steps, 0, U32_MAX)
         if horizon is not None:
             steps = whole("horizon", horizon, 0, U32_MAX)
-        self._native = _native.NativeEnv(blocks, goal_text(goal), grid, reward, backend, steps, profile, obs, protocol, start)
+        self._native = _native.NativeEnv(
+            blocks, goal_text(goal), grid, reward, backend, steps, profile, obs, protocol, start, view, actions
+        )
         self.render_mode = render_mode
         self.obs_kind = obs
-        self.action_space = action_space(blocks)
+        self._moves = actions == "moves"
+        self.action_space = spaces.Discrete(self._native.action_count) if self._moves else action_space(blocks)
         self.observation_space = observation_space(obs, blocks, grid)
         self._mask = np.ones(self.action_space.n, dtype=np.int8)
 
@@ -151,7 +172,8 @@ class StackEnv(gym.Env):
         return obs, info
 
     def step(self, action):
-        obs, reward, terminated, truncated, info = self._native.step(check_action(action, self._native.blocks))
+        count = self._native.action_count if self._moves else None
+        obs, reward, terminated, truncated, info = self._native.step(check_action(action, self._native.blocks, count))
         self._mask = info["action_mask"]
         return obs, reward, terminated, truncated, info
 
@@ -187,3 +209,18 @@ class StackEnv(gym.Env):
     def state(self):
         """``(cells, held, goal)``: every block's ``(x, y)``, the held block or ``None``, the goal."""
         return self._native.state()
+
+
+class BlocksWorldEnv(StackEnv):
+    """``blockstack/BlocksWorld-v0``: :class:`StackEnv` in the side view, the classic Blocks
+    World (``view="side"``): blocks stand on a table or on one another, only a clear block
+    can be picked, and a released block falls to the top of the column below it (rapier's
+    dynamics decide where on the ``physics`` backend). ``goal`` may name several towers,
+    ``"0,1/2"``; ``actions`` is ``gripper`` or ``moves`` (block moves). The other arguments
+    are :class:`StackEnv`'s.
+    """
+
+    def __init__(self, blocks: int = 3, goal: Goal = None, actions: str = "gripper", **kwargs):
+        if "view" in kwargs:
+            raise ValueError("BlocksWorld-v0 is the side view: use blockstack/Stack-v0 to choose a view")
+        super().__init__(blocks=blocks, goal=goal, actions=actions, view="side", **kwargs)

@@ -52,6 +52,8 @@ class StackVectorEnv(VectorEnv):
       an episode ends resets that environment, ignoring its action, with reward 0) or
       ``SAME_STEP`` (the ending step resets it and reports the last observation and info
       in ``infos["final_obs"]`` / ``infos["final_info"]``). Declared in ``metadata``.
+    - ``view``: ``top`` (the paper's world) or ``side`` (the Blocks World seen from the side,
+      as ``blockstack/BlocksWorld-v0``; gripper actions).
     - ``copy``: ``True`` (Gymnasium's default) returns copies; ``False`` returns the
       buffers themselves, overwritten by the next call (the fastest way to read them).
 
@@ -82,6 +84,7 @@ class StackVectorEnv(VectorEnv):
         threads: Optional[int] = None,
         autoreset_mode: Union[AutoresetMode, str] = AutoresetMode.NEXT_STEP,
         copy: bool = True,
+        view: str = "top",
     ):
         key = autoreset_mode.value if isinstance(autoreset_mode, AutoresetMode) else autoreset_mode
         mode = _SPELLINGS.get(key) if isinstance(key, str) else None
@@ -103,7 +106,7 @@ class StackVectorEnv(VectorEnv):
         per_env = observation_bytes(obs, blocks, grid) + 8 * (blocks + 2) + (5 + blocks) + 3 + ENV_BYTES
         fits_in_memory(f"num_envs={num_envs}", num_envs * per_env)
         self._native = _native.NativeVecEnv(
-            num_envs, blocks, goal_text(goal), grid, reward, backend, steps, profile, obs, threads, _MODES[mode]
+            num_envs, blocks, goal_text(goal), grid, reward, backend, steps, profile, obs, threads, _MODES[mode], view
         )
         self._lock = threading.Lock()
         self.metadata = dict(self.metadata, autoreset_mode=mode)

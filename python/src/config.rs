@@ -51,6 +51,10 @@ pub fn env_config(
         },
         horizon,
         backend: backend.parse::<Backend>().or_value_error()?,
+        view: match rules.view {
+            Some(name) => name.parse().or_value_error()?,
+            None => sim::View::default(),
+        },
         ..EnvConfig::default()
     });
     config.validate().or_value_error()?;
@@ -64,6 +68,8 @@ pub struct PlayRules<'a> {
     pub protocol: Option<&'a str>,
     /// The start rule's name (`uniform` or `paper`).
     pub start: Option<&'a str>,
+    /// The world's name (`top` or `side`).
+    pub view: Option<&'a str>,
 }
 
 /// A grid from Python: text such as `"7x7"` or a `(width, height)` pair, as every function

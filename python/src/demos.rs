@@ -296,6 +296,7 @@ pub fn read_recording<'py>(
                 state: e.start,
                 goal: e.goal,
                 protocol,
+                view: sim::View::Top,
             };
             for (k, step) in e.steps.iter().enumerate() {
                 let next = Observation {

@@ -3,7 +3,7 @@
 use oracle::{ExactSolver, Oracle, Planner};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyTuple};
-use sim::{Action, BlockId, Cell, Env, Observation, State, Termination};
+use sim::{Action, BlockId, BlockMove, Cell, Env, Observation, State, Termination, View};
 
 use crate::boundary::{OrValueError, guard, value_error};
 use crate::config::{self, ObsKind, env_config, goal_from};
@@ -14,6 +14,9 @@ use crate::observe;
 pub struct NativeEnv {
     env: Env,
     kind: ObsKind,
+    /// `actions="moves"`: an action is a block move (`sim::BlockMove`'s index), carried out
+    /// as the gripper steps it takes.
+    moves: bool,
 }
 
 /// The index of `action`, one integer (a Python int, a numpy integer or a 0-d integer
@@ -60,10 +63,23 @@ impl NativeEnv {
         obs: &Observation,
         blocked: bool,
     ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-        Ok((
-            observe::to_python(py, self.kind, obs)?,
-            observe::info(py, obs, blocked)?.into_any(),
-        ))
+        let info = observe::info(py, obs, blocked)?;
+        if self.moves {
+            // The legal block moves replace the gripper's mask.
+            let legal: Vec<i8> = self.env.legal_moves().into_iter().map(i8::from).collect();
+            info.set_item("action_mask", numpy::PyArray1::from_vec(py, legal))?;
+        }
+        Ok((observe::to_python(py, self.kind, obs)?, info.into_any()))
+    }
+
+    /// Number of actions: `5 + N` gripper actions, or `N * (N + W)` block moves.
+    fn count(&self) -> usize {
+        let config = self.env.config();
+        if self.moves {
+            BlockMove::count(config.blocks, config.grid)
+        } else {
+            Action::count(config.blocks)
+        }
     }
 }
 
@@ -72,7 +88,7 @@ impl NativeEnv {
     /// An environment of the given world; a `ValueError` with the crate's message for a
     /// config that cannot make one.
     #[new]
-    #[pyo3(signature = (blocks=3, goal=None, grid=(7, 7), reward=None, backend="physics", horizon=1000, profile="spec", obs="planes", protocol=None, start=None))]
+    #[pyo3(signature = (blocks=3, goal=None, grid=(7, 7), reward=None, backend="physics", horizon=1000, profile="spec", obs="planes", protocol=None, start=None, view=None, actions="gripper"))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         blocks: usize,
@@ -85,14 +101,33 @@ impl NativeEnv {
         obs: &str,
         protocol: Option<&str>,
         start: Option<&str>,
+        view: Option<&str>,
+        actions: &str,
     ) -> PyResult<Self> {
         let kind = config::obs_kind(obs)?;
-        let rules = config::PlayRules { protocol, start };
+        let rules = config::PlayRules { protocol, start, view };
         let config = env_config(blocks, goal, grid, reward, backend, horizon, profile, rules)?;
+        let moves = match actions {
+            "gripper" => false,
+            "moves" if config.view == View::Side => true,
+            "moves" => return Err(value_error("actions=\"moves\" (block moves) needs view=\"side\"")),
+            _ => {
+                return Err(value_error(format!(
+                    "cannot read actions from {actions:?}: choose gripper or moves"
+                )));
+            }
+        };
         Ok(NativeEnv {
             env: guard(|| Env::new(config).or_value_error())?,
             kind,
+            moves,
         })
+    }
+
+    /// Number of actions: `5 + N` gripper actions, or `N * (N + W)` block moves.
+    #[getter]
+    fn action_count(&self) -> usize {
+        self.count()
     }
 
     /// Starts an episode, as `sim::Env::reset(seed)` does (`None` continues the generator);
@@ -121,7 +156,7 @@ impl NativeEnv {
         };
         let state = state_from(&cells, held)?;
         // Refused before the reset: a refused start leaves the episode as it was.
-        if matches!(self.env.config().termination, Termination::Goal) && goal.holds(&state) {
+        if matches!(self.env.config().termination, Termination::Goal) && goal.holds_in(self.env.config().view, &state) {
             return Err(value_error(format!(
                 "goal {goal} already holds in that state: an episode needs a start where it does not"
             )));
@@ -133,9 +168,30 @@ impl NativeEnv {
 
     /// Takes one action; `(observation, reward, terminated, truncated, info)`.
     fn step<'py>(&mut self, py: Python<'py>, action: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyTuple>> {
-        let index = action_index(action, self.env.config().blocks)?;
-        let step = guard(|| self.env.step_index(index).or_value_error())?;
+        let config = *self.env.config();
+        let (step, gripper_steps) = if self.moves {
+            let index: i64 = action
+                .extract()
+                .map_err(|_| value_error("a block move is one whole number"))?;
+            let mv = usize::try_from(index)
+                .map_err(|_| {
+                    value_error(format!(
+                        "block move {index} is out of range: the moves are 0..{}",
+                        self.count()
+                    ))
+                })
+                .and_then(|i| BlockMove::from_index(i, config.blocks, config.grid).or_value_error())?;
+            let m = guard(|| self.env.step_block_move(mv).or_value_error())?;
+            (m.step, m.gripper_steps)
+        } else {
+            let index = action_index(action, config.blocks)?;
+            (guard(|| self.env.step_index(index).or_value_error())?, 1)
+        };
         let (o, i) = self.obs_info(py, &step.observation, step.info.blocked)?;
+        if self.moves {
+            i.cast::<pyo3::types::PyDict>()?
+                .set_item("gripper_steps", gripper_steps)?;
+        }
         PyTuple::new(
             py,
             [

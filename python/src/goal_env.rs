@@ -60,6 +60,7 @@ pub fn goal_rewards(reward: &str, blocks: usize, grid: (usize, usize)) -> PyResu
         let step = |after: &State| {
             model.reward(&Transition {
                 grid,
+                view: sim::View::Top,
                 goal: &goal,
                 before: &missed,
                 action: Action::Drop,

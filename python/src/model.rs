@@ -100,6 +100,7 @@ impl NativeModel {
             state,
             goal,
             protocol: world.protocol,
+            view: sim::View::Top,
         };
         let (model, rng) = (&self.model, &mut self.rng);
         guard(|| {

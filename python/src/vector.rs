@@ -242,7 +242,7 @@ impl NativeVecEnv {
     /// `num_envs` environments of one world, stepped on `threads` threads (1: on the
     /// caller's thread; 0: one per core), with autoreset `next-step` or `same-step`.
     #[new]
-    #[pyo3(signature = (num_envs, blocks=3, goal=None, grid=(7, 7), reward=None, backend="physics", horizon=1000, profile="spec", obs="planes", threads=1, autoreset="next-step"))]
+    #[pyo3(signature = (num_envs, blocks=3, goal=None, grid=(7, 7), reward=None, backend="physics", horizon=1000, profile="spec", obs="planes", threads=1, autoreset="next-step", view=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -257,6 +257,7 @@ impl NativeVecEnv {
         obs: &str,
         threads: usize,
         autoreset: &str,
+        view: Option<&str>,
     ) -> PyResult<Self> {
         let kind = config::obs_kind(obs)?;
         let mode = match autoreset {
@@ -279,7 +280,10 @@ impl NativeVecEnv {
             backend,
             horizon,
             profile,
-            config::PlayRules::default(),
+            config::PlayRules {
+                view,
+                ..config::PlayRules::default()
+            },
         )?;
         let vec = guard(|| VecEnv::new(config, num_envs, threads).or_value_error())?.with_autoreset(mode);
         let n = blocks;

@@ -44,6 +44,7 @@ fn main() -> Result<(), sim::SimError> {
                 state: physics.state(),
                 goal: env.goal(),
                 protocol: sim::ActionProtocol::Free,
+                view: sim::View::Top,
             },
             sim::render::Colour::Never
         )

@@ -3,6 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::action::Action;
+use crate::block_move::{self, BlockMove};
 use crate::error::{Result, SimError};
 use crate::goal::Goal;
 use crate::grid::{Cell, Grid};
@@ -17,6 +18,7 @@ use crate::seeding::{self, SimRng};
 use crate::start::StartRule;
 use crate::state::{BlockId, MAX_BLOCKS, MIN_BLOCKS, State};
 use crate::termination::Termination;
+use crate::view::{self, View};
 use crate::world::{Effect, World};
 
 /// The default episode length limit.
@@ -80,6 +82,11 @@ pub struct EnvConfig {
     /// environments return and what a network reads. The world's rules do not depend on it.
     #[serde(default)]
     pub obs: ObsKind,
+    /// Which world (default `top`, the paper's): seen from above, or from the side with
+    /// gravity and towers (docs/world.md, "The side view"). A config written before the side
+    /// view existed reads back as the top view.
+    #[serde(default)]
+    pub view: View,
 }
 
 impl Default for EnvConfig {
@@ -95,6 +102,7 @@ impl Default for EnvConfig {
             start: StartRule::default(),
             termination: Termination::default(),
             obs: ObsKind::default(),
+            view: View::default(),
         }
     }
 }
@@ -141,23 +149,39 @@ impl EnvConfig {
                 height: self.grid.height(),
             });
         }
-        if self.blocks > self.grid.height() {
-            return Err(SimError::StackTooTall {
-                blocks: self.blocks,
-                height: self.grid.height(),
-            });
-        }
-        if let GoalSpec::Fixed(goal) = self.goal {
-            if goal.block_count() != self.blocks {
-                return Err(SimError::BlockCountMismatch {
-                    expected: self.blocks,
-                    what: "the goal",
-                    found: goal.block_count(),
+        match self.goal {
+            GoalSpec::Fixed(goal) => {
+                if goal.block_count() != self.blocks {
+                    return Err(SimError::BlockCountMismatch {
+                        expected: self.blocks,
+                        what: "the goal",
+                        found: goal.block_count(),
+                    });
+                }
+                goal.check_fits(self.grid)?;
+                self.reward.check_goal(&goal)?;
+                if goal.pair_count() == 0 && (self.view == View::Top || self.grid.height() == 1) {
+                    // Every start would meet it: the uniform start rule would draw forever.
+                    return Err(SimError::BadGoal {
+                        goal: goal.to_string(),
+                        count: self.blocks,
+                        reason: format!("it holds in every state of the {} view", self.view),
+                    });
+                }
+            }
+            GoalSpec::Random if self.blocks > self.grid.height() => {
+                return Err(SimError::StackTooTall {
+                    blocks: self.blocks,
+                    height: self.grid.height(),
                 });
             }
+            GoalSpec::Random => {}
         }
         if self.horizon == 0 {
             return Err(SimError::ZeroHorizon);
+        }
+        if self.view == View::Side && self.start != StartRule::Uniform {
+            return Err(SimError::SideViewStart { rule: self.start });
         }
         self.start.check_fits(self.grid, self.blocks)
     }
@@ -198,6 +222,15 @@ pub struct Step {
     pub truncated: bool,
     /// Extra facts.
     pub info: Info,
+}
+
+/// The result of a block move ([`Env::step_block_move`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MoveStep {
+    /// The last gripper step the move took (its Drop, unless the episode ended first).
+    pub step: Step,
+    /// How many gripper steps the move took.
+    pub gripper_steps: u32,
 }
 
 /// Either backend, chosen at run time.
@@ -264,12 +297,14 @@ impl Env {
             GoalSpec::Fixed(g) => g,
             GoalSpec::Random => Goal::identity(config.blocks)?,
         };
-        // A placeholder start on the bottom rows; `reset` replaces it.
+        // A placeholder start on the bottom rows (standing, for the side view); `reset`
+        // replaces it.
         let cells: Vec<Cell> = (0..config.blocks).map(|i| grid.cell_at(i)).collect();
         let start = State::new(&cells, None)?;
+        let view = config.view;
         let world = match config.backend {
-            Backend::Grid => AnyWorld::Grid(GridWorld::new(grid, start)?),
-            Backend::Physics => AnyWorld::Physics(Box::new(PhysicsWorld::new(grid, start)?)),
+            Backend::Grid => AnyWorld::Grid(GridWorld::new_in(view, grid, start)?),
+            Backend::Physics => AnyWorld::Physics(Box::new(PhysicsWorld::new_in(view, grid, start)?)),
         };
         Ok(Env {
             config,
@@ -296,7 +331,10 @@ impl Env {
         if let GoalSpec::Random = self.config.goal {
             self.goal = Goal::random(self.config.blocks, &mut self.rng).expect("the config was validated");
         }
-        let start = self.config.start.draw(self.config.grid, &self.goal, &mut self.rng);
+        let start = self
+            .config
+            .start
+            .draw_in(self.config.view, self.config.grid, &self.goal, &mut self.rng);
         // Drawn for this world's grid and block count: it fits without a check.
         self.world.world_mut().put(&start);
         self.begin(start, self.config.start.keeps_goal_starts())
@@ -314,6 +352,8 @@ impl Env {
                 found: goal.block_count(),
             });
         }
+        goal.check_fits(self.config.grid)?;
+        self.config.reward.check_goal(&goal)?;
         self.world.world_mut().place(&state)?;
         self.goal = goal;
         Ok(self.begin(state, false))
@@ -325,7 +365,9 @@ impl Env {
     fn begin(&mut self, start: State, keeps_goal_start: bool) -> Observation {
         self.steps = 0;
         self.previous_action = None;
-        let over = matches!(self.config.termination, Termination::Goal) && !keeps_goal_start && self.goal.holds(&start);
+        let over = matches!(self.config.termination, Termination::Goal)
+            && !keeps_goal_start
+            && self.goal.holds_in(self.config.view, &start);
         self.phase = if over { Phase::Over } else { Phase::Running };
         self.observation()
     }
@@ -338,15 +380,17 @@ impl Env {
         self.check_running()?;
         let before = self.world.world().state();
         // Under `free` every action that exists is legal, and `act` refuses one that does
-        // not before changing anything: the SPEC world's step pays for no check.
+        // not before changing anything: the SPEC world's step pays for no check. In the side
+        // view too the world's rules make an action outside the mask a no-op.
         if !matches!(self.config.protocol, ActionProtocol::Free) {
-            self.check_legal(before.held_block(), action)?;
+            self.check_legal(&before, action)?;
         }
         let effect = self.world.world_mut().act(action)?;
         let after = self.world.world().state();
         self.steps += 1;
         let transition = Transition {
             grid: self.config.grid,
+            view: self.config.view,
             goal: &self.goal,
             before: &before,
             action,
@@ -355,7 +399,10 @@ impl Env {
         };
         let reward = self.config.reward.reward(&transition);
         let pairs_in_place = self.goal.pairs_in_place(&after);
-        let goal_holds = pairs_in_place + 1 == self.goal.block_count();
+        let goal_holds = match self.config.view {
+            View::Top => pairs_in_place == self.goal.pair_count(),
+            View::Side => self.goal.holds_in(View::Side, &after),
+        };
         let terminated = self.config.termination.ends(reward, goal_holds);
         let truncated = !terminated && self.steps >= self.config.horizon;
         self.previous_action = Some(action);
@@ -368,6 +415,7 @@ impl Env {
                 state: after,
                 goal: self.goal,
                 protocol: self.config.protocol,
+                view: self.config.view,
             },
             reward,
             terminated,
@@ -377,17 +425,54 @@ impl Env {
                 blocked: effect == Effect::Blocked,
                 pairs_in_place,
                 steps: self.steps,
-                action_mask: self.legal_for(after.held_block()),
+                action_mask: self.legal_in(&after),
                 final_observation: None,
             },
         })
+    }
+
+    /// Carries out the block move `mv` (side view only) as the gripper actions
+    /// [`block_move::expand`] gives, each one an [`Env::step`] through the backend. An error,
+    /// with nothing changed, if the episode is not running or the move cannot be carried out
+    /// now. The episode may end before the move's last action (at the horizon); the result
+    /// says how many gripper steps were taken and holds the last one.
+    pub fn step_block_move(&mut self, mv: BlockMove) -> Result<MoveStep> {
+        if self.config.view != View::Side {
+            return Err(SimError::MovesNeedSideView);
+        }
+        self.check_running()?;
+        let actions = block_move::expand(&self.state(), self.config.grid, mv)?;
+        let mut last = None;
+        for (k, &action) in actions.iter().enumerate() {
+            let step = self.step(action)?;
+            let over = step.terminated || step.truncated;
+            last = Some((step, k + 1));
+            if over {
+                break;
+            }
+        }
+        let (step, taken) = last.expect("a move has at least a pick and a drop");
+        Ok(MoveStep {
+            step,
+            gripper_steps: taken as u32,
+        })
+    }
+
+    /// The block moves legal now, by index ([`block_move::legal_moves`]); all `false` in
+    /// the top view.
+    pub fn legal_moves(&self) -> Vec<bool> {
+        let n = self.config.blocks;
+        match self.config.view {
+            View::Top => vec![false; BlockMove::count(n, self.config.grid)],
+            View::Side => block_move::legal_moves(&self.state(), self.config.grid),
+        }
     }
 
     /// `Ok` if [`Env::step`] would take `action` now; otherwise the error it would return
     /// (episode not started or over, no such block, illegal under the action protocol).
     pub fn check_action(&self, action: Action) -> Result<()> {
         self.check_running()?;
-        self.check_legal(self.held_block(), action)
+        self.check_legal(&self.state(), action)
     }
 
     /// An error unless an episode is running.
@@ -400,21 +485,36 @@ impl Env {
         }
     }
 
-    /// An error unless `action` exists and the protocol allows it with `held` in hand.
+    /// An error unless `action` exists and the protocol allows it in `state`: under `free`
+    /// every action that exists, in either view; under a restricting protocol in the side
+    /// view, the side view's mask.
     #[inline]
-    fn check_legal(&self, held: Option<BlockId>, action: Action) -> Result<()> {
-        if self.legal_for(held).contains(action) {
-            Ok(())
+    fn check_legal(&self, state: &State, action: Action) -> Result<()> {
+        let free = matches!(self.config.protocol, ActionProtocol::Free);
+        let mask = if free {
+            self.legal[usize::from(state.held_block().is_some())]
         } else {
-            // The protocol names what is wrong: no such block, or an illegal action.
-            self.config.protocol.check_when(held, self.config.blocks, action)
+            self.legal_in(state)
+        };
+        if mask.contains(action) {
+            Ok(())
+        } else if free {
+            // Only a pick of a block that does not exist.
+            self.config.protocol.check(state, action)
+        } else {
+            // The rules name what is wrong: no such block, or an illegal action.
+            self.config.view.check(self.config.protocol, state, action)
         }
     }
 
-    /// The legal actions with `held` in hand.
+    /// The legal actions in `state`: in the top view the protocol's, which look only at
+    /// whether a block is held; in the side view the side view's rules.
     #[inline]
-    fn legal_for(&self, held: Option<BlockId>) -> ActionMask {
-        self.legal[usize::from(held.is_some())]
+    fn legal_in(&self, state: &State) -> ActionMask {
+        match self.config.view {
+            View::Top => self.legal[usize::from(state.held_block().is_some())],
+            View::Side => view::side_mask(state),
+        }
     }
 
     /// Takes the action with index `index` (docs/world.md section 2's table); an error for an index
@@ -430,12 +530,14 @@ impl Env {
             state: self.state(),
             goal: self.goal,
             protocol: self.config.protocol,
+            view: self.config.view,
         }
     }
 
-    /// The legal actions in the current state, by the config's action protocol.
+    /// The legal actions in the current state, by the config's action protocol (in the side
+    /// view, by its rules).
     pub fn legal_actions(&self) -> ActionMask {
-        self.legal_for(self.held_block())
+        self.legal_in(&self.state())
     }
 
     /// The current state, read back from the backend.

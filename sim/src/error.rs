@@ -93,6 +93,78 @@ pub enum SimError {
         /// The protocol that forbids it.
         protocol: ActionProtocol,
     },
+    /// An action the side view's rules forbid in the current state (docs/world.md, "The side
+    /// view"): a pick while holding or of a block that is not clear, a move or Drop with
+    /// nothing held.
+    #[error("{action} is not legal in the side view: {reason}")]
+    IllegalInSideView {
+        /// The action given.
+        action: Action,
+        /// Why not.
+        reason: String,
+    },
+    /// A side-view state with a block that is not held standing on nothing.
+    #[error(
+        "block {block} floats at ({x}, {y}) in the side view: a block that is not held must stand on the table or on another block"
+    )]
+    Floating {
+        /// The block.
+        block: usize,
+        /// Column.
+        x: u8,
+        /// Row.
+        y: u8,
+    },
+    /// Towers asked of a side-view state in which a block is held.
+    #[error("block {block} is held: a state's towers are read with nothing held")]
+    HeldInTowers {
+        /// The held block.
+        block: usize,
+    },
+    /// A side-view drop whose dynamics did not bring a block to rest on a cell centre.
+    #[error("the physics did not bring block {block} to rest on a cell: {reason}")]
+    NotAtRest {
+        /// The block.
+        block: usize,
+        /// What was found (where it is, how fast it moves).
+        reason: String,
+    },
+    /// A goal of several towers (or of a tower naming only some blocks) given to something
+    /// that handles only a goal of one tower of every block.
+    #[error("goal {goal} is not one tower of every block: {what} handles only such goals (e.g. 0,1,2)")]
+    NotOneTower {
+        /// The goal as written.
+        goal: String,
+        /// What refuses it ("the paper reward", "the exact top-view solver", ...).
+        what: &'static str,
+    },
+    /// A start rule the side view does not use.
+    #[error(
+        "the {rule} start rule places blocks in the air; the side view starts from random towers: use the uniform start rule"
+    )]
+    SideViewStart {
+        /// The start rule.
+        rule: StartRule,
+    },
+    /// A block move that cannot be carried out in the current state.
+    #[error("cannot {mv}: {reason}")]
+    IllegalMove {
+        /// The move, in words.
+        mv: String,
+        /// Why not.
+        reason: String,
+    },
+    /// A block move index past the world's moves.
+    #[error("block move {index} is out of range: the moves are 0..{count}")]
+    MoveOutOfRange {
+        /// The index given.
+        index: usize,
+        /// `N * (N + W)`.
+        count: usize,
+    },
+    /// Block moves asked of a top-view world.
+    #[error("block moves are carried out in the side view only (--view side)")]
+    MovesNeedSideView,
     /// A buffer for an action mask whose length is not the world's number of actions.
     #[error("an action mask needs a buffer of {expected} bytes (5 + blocks), not {found}")]
     MaskLength {

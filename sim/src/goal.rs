@@ -1,5 +1,6 @@
 //! Goals: the order of the stack, bottom to top, and what it asks of every block
-//! (docs/world.md sections 3 and 6).
+//! (docs/world.md sections 3 and 6); or several towers, each bottom to top (docs/world.md,
+//! "The side view"), in either view.
 
 use std::fmt;
 
@@ -9,17 +10,34 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use crate::error::{Result, SimError};
 use crate::grid::{Cell, Grid};
 use crate::state::{BlockId, MAX_BLOCKS, MIN_BLOCKS, State};
+use crate::view::View;
 
 /// The most goals [`Goal::all`] builds: every goal of 7 blocks (`7! = 5040`).
 pub const MAX_ALL_GOALS: usize = 5040;
 
-/// A goal: every block id once, bottom to top. `[1, 0, 2]` asks for block 1 at the bottom,
-/// 0 on top of 1 and 2 on top of 0, anywhere on the grid. Written `1,0,2`.
+/// A goal: towers of blocks, each bottom to top.
+///
+/// The classic goal is one tower of every block: `[1, 0, 2]` asks for block 1 at the
+/// bottom, 0 on top of 1 and 2 on top of 0, anywhere on the grid. Written `1,0,2`.
+///
+/// A goal of several towers is written with `/` between them: `0,1,2/3,4` asks for two
+/// towers, each anywhere (as a single tower is). Blocks a goal of towers leaves unnamed are
+/// free, and a tower may carry more blocks on top. In the side view a tower's bottom block
+/// must also stand on the table ([`Goal::holds_in`]). Everything that handles only the
+/// classic goal asks [`Goal::is_one_tower`] (or [`Goal::one_tower`]) first and refuses
+/// others with [`SimError::NotOneTower`].
 #[derive(Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Goal {
+    /// The named blocks, tower by tower, each bottom to top.
     order: [BlockId; MAX_BLOCKS],
-    /// `place[b]` is block `b`'s position in `order` (0 = bottom).
+    /// `place[b]` is block `b`'s position in `order` (0 = bottom of the first tower);
+    /// `u8::MAX` for a block the goal leaves free.
     place: [u8; MAX_BLOCKS],
+    /// Bit `i` set: `order[i]` is the top of its tower.
+    tops: u32,
+    /// How many blocks `order` names.
+    named: u8,
+    /// How many blocks the world has.
     count: u8,
 }
 
@@ -55,7 +73,58 @@ impl Goal {
         Ok(Goal {
             order: all,
             place,
+            tops: 1 << (count - 1),
+            named: count as u8,
             count: count as u8,
+        })
+    }
+
+    /// A goal of `towers` (each bottom to top, each non-empty) in a world of `blocks`
+    /// blocks; blocks no tower names are free. An error if a block does not exist or is
+    /// named twice, or if the block count is out of range.
+    pub fn of_towers(towers: &[Vec<usize>], blocks: usize) -> Result<Goal> {
+        let text = towers_text(towers);
+        let bad = |reason: String| SimError::BadGoal {
+            goal: text.clone(),
+            count: blocks,
+            reason,
+        };
+        if !(MIN_BLOCKS..=MAX_BLOCKS).contains(&blocks) {
+            return Err(SimError::BadBlockCount {
+                count: blocks,
+                min: MIN_BLOCKS,
+                max: MAX_BLOCKS,
+            });
+        }
+        let mut order = [BlockId::default(); MAX_BLOCKS];
+        let mut place = [u8::MAX; MAX_BLOCKS];
+        let (mut named, mut tops) = (0usize, 0u32);
+        for tower in towers {
+            if tower.is_empty() {
+                return Err(bad("a tower names no block".into()));
+            }
+            for &b in tower {
+                if b >= blocks {
+                    return Err(bad(format!("block {b} does not exist")));
+                }
+                if place[b] != u8::MAX {
+                    return Err(bad(format!("block {b} appears twice")));
+                }
+                place[b] = named as u8;
+                order[named] = BlockId(b as u8);
+                named += 1;
+            }
+            tops |= 1 << (named - 1);
+        }
+        if named == 0 {
+            return Err(bad("it names no block".into()));
+        }
+        Ok(Goal {
+            order,
+            place,
+            tops,
+            named: named as u8,
+            count: blocks as u8,
         })
     }
 
@@ -73,8 +142,15 @@ impl Goal {
         Goal::new(&ids)
     }
 
-    /// Reads `"1,0,2"`; `blocks`, when given, is the block count the goal must have.
+    /// Reads `"1,0,2"`, one tower of every block, or towers separated by `/`
+    /// (`"0,1,2/3,4"`, a goal of towers: [`Goal::of_towers`]); `blocks`, when given, is the
+    /// block count the goal must have (a goal of towers then leaves the blocks it does not
+    /// name free; without it, its blocks are `0..` one past the largest it names). A single
+    /// tower naming only some blocks is written with a trailing `/` (`"0,1/"`).
     pub fn parse(text: &str, blocks: Option<usize>) -> Result<Goal> {
+        if text.contains('/') {
+            return Goal::parse_towers(text, blocks);
+        }
         let mut order = Vec::new();
         for part in text.split(',') {
             let b = part.trim().parse::<usize>().map_err(|_| SimError::Parse {
@@ -98,6 +174,29 @@ impl Goal {
             }
         }
         Ok(goal)
+    }
+
+    /// Reads a goal of towers, `"0,1,2/3,4"` ([`Goal::parse`]).
+    fn parse_towers(text: &str, blocks: Option<usize>) -> Result<Goal> {
+        let mut towers = Vec::new();
+        for part in text.split('/').map(str::trim).filter(|p| !p.is_empty()) {
+            let tower = part
+                .split(',')
+                .map(|b| {
+                    b.trim().parse::<usize>().map_err(|_| SimError::Parse {
+                        what: "goal",
+                        text: text.to_string(),
+                        reason: format!(
+                            "{:?} is not a block number; write each tower bottom to top, towers separated by '/', e.g. 0,1,2/3,4",
+                            b.trim()
+                        ),
+                    })
+                })
+                .collect::<Result<Vec<usize>>>()?;
+            towers.push(tower);
+        }
+        let largest = towers.iter().flatten().max().map_or(0, |&b| b + 1);
+        Goal::of_towers(&towers, blocks.unwrap_or(largest))
     }
 
     /// Reads goals separated by `:`, e.g. `"0,1,2:1,0,2"`, each of `blocks` blocks (the
@@ -161,33 +260,90 @@ impl Goal {
     /// On a grid one cell wide blocks cannot pass each other, so it can exactly when the
     /// blocks stand, bottom to top, in the goal's order.
     pub fn can_be_reached(&self, grid: Grid, state: &State) -> bool {
-        grid.width() > 1 || self.order().windows(2).all(|p| state.cell(p[0]).y < state.cell(p[1]).y)
+        grid.width() > 1 || self.pairs().all(|(a, b)| state.cell(a).y < state.cell(b).y)
     }
 
-    /// An error if the stack cannot stand in `grid` (taller than its rows).
+    /// An error if a tower cannot stand in `grid` (taller than its rows).
     pub fn check_fits(&self, grid: Grid) -> Result<()> {
-        if self.block_count() > grid.height() {
+        let tallest = self.towers().map(<[BlockId]>::len).max().unwrap_or(0);
+        if tallest > grid.height() {
             return Err(SimError::StackTooTall {
-                blocks: self.block_count(),
+                blocks: tallest,
                 height: grid.height(),
             });
         }
         Ok(())
     }
 
-    /// Number of blocks.
+    /// Number of blocks of the world the goal is for.
     #[inline]
     pub const fn block_count(&self) -> usize {
         self.count as usize
     }
 
-    /// The blocks bottom to top.
+    /// Whether this is the classic goal: one tower of every block.
     #[inline]
-    pub fn order(&self) -> &[BlockId] {
-        &self.order[..self.count as usize]
+    pub const fn is_one_tower(&self) -> bool {
+        self.named == self.count && self.tops == 1 << (self.count - 1)
     }
 
-    /// Where `block` stands in the stack: 0 at the bottom.
+    /// The goal's one tower, bottom to top, if it is one tower of every block; otherwise
+    /// [`SimError::NotOneTower`] naming `what` refuses it.
+    pub fn one_tower(&self, what: &'static str) -> Result<&[BlockId]> {
+        if self.is_one_tower() {
+            Ok(self.order())
+        } else {
+            Err(SimError::NotOneTower {
+                goal: self.to_string(),
+                what,
+            })
+        }
+    }
+
+    /// The towers, each bottom to top.
+    pub fn towers(&self) -> impl Iterator<Item = &[BlockId]> + '_ {
+        let mut start = 0;
+        (0..self.named as usize)
+            .filter(|&i| self.tops & (1 << i) != 0)
+            .map(move |top| {
+                let tower = &self.order[start..=top];
+                start = top + 1;
+                tower
+            })
+    }
+
+    /// The towers as plain indices, each bottom to top (what the block-move planners take).
+    pub fn tower_lists(&self) -> Vec<Vec<usize>> {
+        self.towers().map(|t| t.iter().map(|b| b.index()).collect()).collect()
+    }
+
+    /// Number of consecutive pairs `(below, above)` the goal asks for ([`Goal::pairs`]).
+    #[inline]
+    pub const fn pair_count(&self) -> usize {
+        self.named as usize - self.tower_count()
+    }
+
+    /// Number of towers.
+    #[inline]
+    pub const fn tower_count(&self) -> usize {
+        self.tops.count_ones() as usize
+    }
+
+    /// Whether the goal names `block` (a goal of towers may leave blocks free).
+    #[inline]
+    pub fn names(&self, block: BlockId) -> bool {
+        self.place[block.index()] != u8::MAX
+    }
+
+    /// The blocks bottom to top: for a goal of one tower of every block, all of them; for
+    /// a goal of towers, the named blocks tower by tower ([`Goal::towers`] keeps them apart).
+    #[inline]
+    pub fn order(&self) -> &[BlockId] {
+        &self.order[..self.named as usize]
+    }
+
+    /// Where `block` stands in [`Goal::order`]: 0 at the bottom. Meaningful for a block the
+    /// goal names ([`Goal::names`]).
     #[inline]
     pub fn place_of(&self, block: BlockId) -> usize {
         self.place[block.index()] as usize
@@ -199,9 +355,11 @@ impl Goal {
         self.order[place]
     }
 
-    /// The goal's consecutive pairs `(below, above)`, bottom first.
+    /// The goal's consecutive pairs `(below, above)` within each tower, bottom first.
     pub fn pairs(&self) -> impl Iterator<Item = (BlockId, BlockId)> + '_ {
-        self.order().windows(2).map(|w| (w[0], w[1]))
+        (0..(self.named as usize).saturating_sub(1))
+            .filter(|&i| self.tops & (1 << i) == 0)
+            .map(|i| (self.order[i], self.order[i + 1]))
     }
 
     /// How many consecutive pairs of the goal stand in place (`above` directly on `below`).
@@ -211,10 +369,26 @@ impl Goal {
             .count()
     }
 
-    /// Whether the goal holds: every consecutive pair in place. The held block does not matter.
+    /// Whether the goal holds in the top view: every consecutive pair in place. The held
+    /// block does not matter. [`Goal::holds_in`] with [`View::Top`].
     #[inline]
     pub fn holds(&self, state: &State) -> bool {
         self.pairs().all(|(a, b)| on_top(state.cell(a), state.cell(b)))
+    }
+
+    /// Whether the goal holds in `view`: every consecutive pair in place; in the side view
+    /// also every tower's bottom block on the table (row 0) and no block of a tower held (a
+    /// held block stands on nothing).
+    #[inline]
+    pub fn holds_in(&self, view: View, state: &State) -> bool {
+        match view {
+            View::Top => self.holds(state),
+            View::Side => {
+                self.holds(state)
+                    && state.held_block().is_none_or(|h| !self.names(h))
+                    && self.towers().all(|t| state.cell(t[0]).y == 0)
+            }
+        }
     }
 
     /// The goal that holds in `state`, if one does: every block in one column, each
@@ -228,7 +402,8 @@ impl Goal {
     }
 
     /// The block `block` chases (docs/world.md section 6): the one above it in the goal, or, for the
-    /// top block, the one below it.
+    /// top block, the one below it. For a goal of one tower of every block
+    /// ([`Goal::is_one_tower`]).
     pub fn chased_block(&self, block: BlockId) -> BlockId {
         let p = self.place_of(block);
         if p + 1 < self.block_count() {
@@ -240,7 +415,7 @@ impl Goal {
 
     /// The cell `block` chases (docs/world.md section 6): directly below the block above it in the
     /// goal, or, for the top block, directly above the block below it. `None` when that cell
-    /// is outside the grid.
+    /// is outside the grid. For a goal of one tower of every block.
     pub fn chased_cell(&self, block: BlockId, state: &State, grid: Grid) -> Option<Cell> {
         let p = self.place_of(block);
         if p + 1 < self.block_count() {
@@ -252,7 +427,7 @@ impl Goal {
 
     /// The Manhattan distance from `block` to the cell it chases. The chased cell may lie
     /// just outside the grid (below a block on the bottom row, above one on the top row);
-    /// its distance is measured all the same.
+    /// its distance is measured all the same. For a goal of one tower of every block.
     pub fn chased_distance(&self, block: BlockId, state: &State) -> u32 {
         let p = self.place_of(block);
         let (target, dy) = if p + 1 < self.block_count() {
@@ -281,9 +456,28 @@ fn join(order: &[BlockId]) -> String {
     order.iter().map(|b| b.to_string()).collect::<Vec<_>>().join(",")
 }
 
+/// Towers written as the parser reads them: `0,1,2/3,4`.
+fn towers_text(towers: &[Vec<usize>]) -> String {
+    towers
+        .iter()
+        .map(|t| t.iter().map(|b| b.to_string()).collect::<Vec<_>>().join(","))
+        .collect::<Vec<_>>()
+        .join("/")
+}
+
 impl fmt::Display for Goal {
+    /// `1,0,2` for one tower of every block; `0,1,2/3,4` for towers (a single tower naming
+    /// only some blocks gets a trailing `/`, `0,1/`, so that it reads back the same).
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&join(self.order()))
+        if self.is_one_tower() {
+            return f.write_str(&join(self.order()));
+        }
+        let towers: Vec<String> = self.towers().map(join).collect();
+        f.write_str(&towers.join("/"))?;
+        if towers.len() == 1 {
+            f.write_str("/")?;
+        }
+        Ok(())
     }
 }
 
@@ -301,17 +495,38 @@ impl std::str::FromStr for Goal {
     }
 }
 
+/// How a goal is written in JSON: one tower of every block as its list of ids bottom to
+/// top (as before goals of towers existed), others as their towers and block count.
+#[derive(Serialize, Deserialize)]
+#[serde(untagged)]
+enum GoalRepr {
+    OneTower(Vec<usize>),
+    Towers { towers: Vec<Vec<usize>>, blocks: usize },
+}
+
 impl Serialize for Goal {
-    /// A goal is written as its list of block ids, bottom to top.
+    /// One tower of every block is written as its list of block ids, bottom to top
+    /// (`[1,0,2]`); a goal of towers as `{"towers":[[0,1],[2]],"blocks":4}`.
     fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        self.order().serialize(s)
+        if self.is_one_tower() {
+            self.order().serialize(s)
+        } else {
+            GoalRepr::Towers {
+                towers: self.tower_lists(),
+                blocks: self.block_count(),
+            }
+            .serialize(s)
+        }
     }
 }
 
 impl<'de> Deserialize<'de> for Goal {
     fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Goal, D::Error> {
-        let order = Vec::<usize>::deserialize(d)?;
-        Goal::from_indices(&order).map_err(serde::de::Error::custom)
+        match GoalRepr::deserialize(d)? {
+            GoalRepr::OneTower(order) => Goal::from_indices(&order),
+            GoalRepr::Towers { towers, blocks } => Goal::of_towers(&towers, blocks),
+        }
+        .map_err(serde::de::Error::custom)
     }
 }
 

@@ -1,10 +1,14 @@
 //! The pure occupancy-grid backend: the reference model, and what planners search over.
+//!
+//! In the side view it predicts where a released block comes to rest without any dynamics:
+//! on the top of the column below it ([`crate::view::landing_cell`]).
 
 use crate::action::Action;
 use crate::error::Result;
 use crate::grid::{Cell, Direction, Grid};
 use crate::occupancy::Occupancy;
 use crate::state::{BlockId, State};
+use crate::view::View;
 use crate::world::World;
 
 /// Blocks on a grid, with an occupancy bit per cell deciding every move.
@@ -15,16 +19,25 @@ pub struct GridWorld {
     grid: Grid,
     state: State,
     occupancy: Occupancy,
+    view: View,
 }
 
 impl GridWorld {
-    /// A world on `grid` in `state`; an error if the state does not fit the grid.
+    /// A top-view world on `grid` in `state`; an error if the state does not fit the grid.
     pub fn new(grid: Grid, state: State) -> Result<Self> {
+        Self::new_in(View::Top, grid, state)
+    }
+
+    /// A world of `view` on `grid` in `state`; an error if the state does not fit the grid
+    /// (or, in the side view, has a block standing on nothing).
+    pub fn new_in(view: View, grid: Grid, state: State) -> Result<Self> {
         state.check_fits(grid)?;
+        view.check_state(&state)?;
         Ok(Self {
             grid,
             state,
             occupancy: Occupancy::of(grid, &state),
+            view,
         })
     }
 
@@ -66,6 +79,11 @@ impl World for GridWorld {
     }
 
     #[inline]
+    fn view(&self) -> View {
+        self.view
+    }
+
+    #[inline]
     fn block_count(&self) -> usize {
         self.state.block_count()
     }
@@ -101,6 +119,22 @@ impl World for GridWorld {
             }
             None => false,
         }
+    }
+
+    #[inline]
+    fn is_occupied(&self, cell: Cell) -> bool {
+        self.occupancy.contains(self.grid, cell)
+    }
+
+    #[inline]
+    fn settle(&mut self, block: BlockId) -> Result<()> {
+        let from = self.state.cell(block);
+        let to = self.landing_cell(from);
+        if to != from {
+            self.occupancy.move_index(self.grid.index(from), self.grid.index(to));
+            self.state.set_cell(block, to);
+        }
+        Ok(())
     }
 
     fn put(&mut self, state: &State) {

@@ -47,6 +47,7 @@
 //! ```
 
 pub mod action;
+pub mod block_move;
 pub mod coded_state;
 pub mod env;
 pub mod error;
@@ -68,11 +69,13 @@ pub mod state;
 pub mod termination;
 pub mod trajectory;
 pub mod vec_env;
+pub mod view;
 pub mod world;
 
 pub use action::Action;
+pub use block_move::BlockMove;
 pub use coded_state::CodedState;
-pub use env::{Backend, DEFAULT_HORIZON, Env, EnvConfig, GoalSpec, Info, Step};
+pub use env::{Backend, DEFAULT_HORIZON, Env, EnvConfig, GoalSpec, Info, MoveStep, Step};
 pub use error::{Result, SimError};
 pub use goal::Goal;
 pub use grid::{Cell, Direction, Grid, MAX_CELLS};
@@ -88,4 +91,5 @@ pub use start::StartRule;
 pub use state::{BlockId, MAX_BLOCKS, MIN_BLOCKS, State};
 pub use termination::Termination;
 pub use vec_env::{Autoreset, VecEnv, VecStep};
+pub use view::View;
 pub use world::{Effect, World};

@@ -119,6 +119,7 @@ mod tests {
             state: State::new(&cells, Some(BlockId(0))).unwrap(),
             goal: "1,0,2".parse().unwrap(),
             protocol: ActionProtocol::Free,
+            view: crate::View::Top,
         }
     }
 

@@ -6,6 +6,7 @@ use crate::goal::Goal;
 use crate::grid::{Cell, Grid};
 use crate::protocol::{ActionMask, ActionProtocol};
 use crate::state::{BlockId, State};
+use crate::view::View;
 
 /// The full observation: grid, every block's cell, the held block, the goal, and the
 /// action protocol that says which actions are legal.
@@ -20,6 +21,8 @@ pub struct Observation {
     /// The environment's action protocol: a policy handed this observation chooses among
     /// [`Observation::legal_actions`].
     pub protocol: ActionProtocol,
+    /// The world: seen from above or from the side (whose rules decide the legal actions).
+    pub view: View,
 }
 
 impl Observation {
@@ -33,10 +36,17 @@ impl Observation {
         self.state.held_block()
     }
 
-    /// The actions legal in this state under the environment's protocol.
+    /// The actions legal in this state under the environment's protocol (in the side view,
+    /// by its rules).
     #[inline]
     pub fn legal_actions(&self) -> ActionMask {
-        self.protocol.legal_actions(&self.state)
+        self.view.legal_actions(self.protocol, &self.state)
+    }
+
+    /// Whether the goal holds in this observation, in its view.
+    #[inline]
+    pub fn goal_holds(&self) -> bool {
+        self.goal.holds_in(self.view, &self.state)
     }
 
     /// A `W x H x (N + 1)` one-hot array: plane `i < N` marks block `i`'s cell, plane `N`
@@ -264,6 +274,7 @@ mod tests {
             state: State::new(&cells, Some(BlockId(0))).unwrap(),
             goal: "1,0,2".parse().unwrap(),
             protocol: ActionProtocol::Free,
+            view: crate::View::Top,
         }
     }
 

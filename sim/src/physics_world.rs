@@ -20,18 +20,67 @@
 //! current with `BroadPhaseBvh::set_aabb` after every move, and a periodic
 //! `BroadPhaseBvh::update` clears the list of changed leaves that `set_aabb` grows.
 //!
+//! # The side view: dynamics for a drop
+//!
+//! In the side view ([`View::Side`]) every block is a **dynamic** body under gravity, except
+//! the held one, which is kinematic and moved by the same shape-cast controller. A Drop
+//! makes the held block dynamic and runs rapier's pipeline until every body is at rest; the
+//! resting cell of every block is then read back, checked to be within
+//! [`SIDE_ALIGN_TOLERANCE`] of a cell centre (an error otherwise), and the bodies are put
+//! exactly on their cells and to sleep, so that rounding never accumulates across drops.
+//! The settings, and why:
+//!
+//! - Colliders are [`SIDE_HALF_WIDTH`] x [`SIDE_HALF_HEIGHT`] with a contact skin of
+//!   [`SIDE_CONTACT_SKIN`]: a block resting on the table or on another block keeps its skin
+//!   between them, so a stack's centres are exactly one cell apart (0.9 of height plus two
+//!   skins of 0.05), while blocks side by side stay 0.2 apart, further than two skins, and
+//!   never touch (no friction from a neighbouring tower slows a fall). The shape cast sees
+//!   the shape without its skin, so moves are decided as in the top view.
+//! - Rotations are locked: unit blocks land square on what is below (the fall is vertical),
+//!   and a locked body cannot creep sideways by tipping, which keeps the read-back on cells.
+//! - Gravity [`SIDE_GRAVITY`] (four times Earth's, in cells per second squared) shortens a
+//!   fall of six rows to about 35 steps of 1/60 s. Stronger gravity was tried: at 150 a
+//!   tower of four compressed under its own weight by more than the alignment tolerance.
+//!   CCD is on, so that no fall (up to 15 rows, faster than half a block per step) can pass
+//!   through a block.
+//! - Solver iterations [`SIDE_SOLVER_ITERATIONS`] (rapier's default, 4): a tower that a
+//!   block lands on comes to rest within the alignment tolerance with them (the tests drop
+//!   onto a tower of six), and each iteration costs time on every step of every drop.
+//! - Rest is rapier's own sleep: a drop steps the pipeline until every block sleeps, and a
+//!   block sleeps once it has moved less than 0.05 cells per second (rapier's threshold,
+//!   which counts the solver's position corrections as motion too) for
+//!   [`SIDE_TIME_UNTIL_SLEEP`] (three steps, not rapier's default half second, which would
+//!   add 30 steps to every drop). Sleeping blocks cost the solver nothing, so only the
+//!   falling block and the tower it lands on are solved. Bodies are never put to sleep by
+//!   hand: one put to sleep before rapier had solved its contacts fell through the table
+//!   once woken. [`SIDE_MAX_SETTLE_STEPS`] bounds a drop.
+//! - `enhanced-determinism` (on in the workspace's Cargo.toml) makes rapier's arithmetic
+//!   the same on every machine, so a drop comes to rest the same way everywhere; the
+//!   snap to cell centres then makes the logical state exact.
+//!
+//! # Why the side view casts against each collider
+//!
+//! In the top view the cast goes through the broad phase's tree, which only our own
+//! updates change. In the side view rapier's pipeline steps update and reorganise that tree
+//! too (its deferred optimisation pass), and a soak of random play found a cast through it
+//! that missed a wall right beside the held block (the block left the grid) while a cast
+//! against the wall itself hit. So the side view casts the held block's shape against
+//! every other collider directly (at most 16 blocks and 4 walls, a fraction of a
+//! microsecond each): the same shape cast, without the tree.
+//!
 //! # State read-back
 //!
 //! [`World::cell_of`] and [`World::state`] read the bodies' translations; nothing keeps a
 //! second copy of where the blocks are. Only the held block (a property of the controller,
 //! not of the bodies) is stored beside them.
 
-use rapier2d::parry::query::{DefaultQueryDispatcher, ShapeCastOptions};
+use rapier2d::parry::query::{DefaultQueryDispatcher, ShapeCastOptions, cast_shapes};
 use rapier2d::prelude::*;
 
-use crate::error::Result;
+use crate::error::{Result, SimError};
 use crate::grid::{Cell, Direction, Grid};
 use crate::state::{BlockId, MAX_BLOCKS, State};
+use crate::view::View;
 use crate::world::World;
 
 /// Half the side of a block's collider, in world units (a cell is 1.0): blocks are
@@ -44,6 +93,74 @@ const MOVES_PER_BROAD_PHASE_UPDATE: u32 = 1024;
 
 /// Half the thickness of a wall collider.
 const WALL_HALF_THICKNESS: f32 = 0.5;
+
+/// Side view: half the width of a block's collider (module docs: blocks side by side stay
+/// 0.2 apart).
+pub const SIDE_HALF_WIDTH: f32 = 0.40;
+
+/// Side view: half the height of a block's collider; with two contact skins a stack's
+/// centres are one cell apart.
+pub const SIDE_HALF_HEIGHT: f32 = 0.45;
+
+/// Side view: the contact skin of a block's collider.
+pub const SIDE_CONTACT_SKIN: f32 = 0.05;
+
+/// Side view: gravity, in cells per second squared (downward).
+pub const SIDE_GRAVITY: f32 = 4.0 * 9.81;
+
+/// Side view: the constraint solver's iterations per step.
+pub const SIDE_SOLVER_ITERATIONS: usize = 4;
+
+/// Side view: how long (simulated seconds) a block must stay still (rapier's sleep
+/// threshold, 0.05 cells per second) before it sleeps; a drop ends when every block sleeps.
+pub const SIDE_TIME_UNTIL_SLEEP: f32 = 3.0 / 60.0;
+
+/// Side view: the most pipeline steps a drop may take before it is an error.
+pub const SIDE_MAX_SETTLE_STEPS: u32 = 2000;
+
+/// Side view: how far from a cell centre a resting block may be read back (module docs).
+pub const SIDE_ALIGN_TOLERANCE: f32 = 0.05;
+
+/// rapier's dynamics state, side view only: what `PhysicsPipeline::step` needs beside the
+/// bodies, colliders and broad phase. The pipeline and the CCD solver are workspaces, so a
+/// clone starts fresh ones (and no joints are ever made).
+struct Dynamics {
+    pipeline: PhysicsPipeline,
+    islands: IslandManager,
+    narrow_phase: NarrowPhase,
+    impulse_joints: ImpulseJointSet,
+    multibody_joints: MultibodyJointSet,
+    soft_bodies: SoftBodySet,
+    ccd_solver: CCDSolver,
+}
+
+impl Dynamics {
+    fn new() -> Self {
+        Dynamics {
+            pipeline: PhysicsPipeline::new(),
+            islands: IslandManager::new(),
+            narrow_phase: NarrowPhase::new(),
+            impulse_joints: ImpulseJointSet::new(),
+            multibody_joints: MultibodyJointSet::new(),
+            soft_bodies: SoftBodySet::new(),
+            ccd_solver: CCDSolver::new(),
+        }
+    }
+}
+
+impl Clone for Dynamics {
+    fn clone(&self) -> Self {
+        Dynamics {
+            pipeline: PhysicsPipeline::new(),
+            islands: self.islands.clone(),
+            narrow_phase: self.narrow_phase.clone(),
+            impulse_joints: ImpulseJointSet::new(),
+            multibody_joints: self.multibody_joints.clone(),
+            soft_bodies: self.soft_bodies.clone(),
+            ccd_solver: CCDSolver::new(),
+        }
+    }
+}
 
 /// One block: its body and the collider attached to it.
 #[derive(Clone, Copy, Debug)]
@@ -63,26 +180,48 @@ pub struct PhysicsWorld {
     blocks: Vec<BlockBody>,
     held: Option<BlockId>,
     moves_since_update: u32,
+    /// The side view's dynamics; `None` in the top view, where nothing ever moves by force.
+    dynamics: Option<Box<Dynamics>>,
+    /// Pipeline steps the last drop took to come to rest (side view).
+    settle_steps: u32,
 }
 
 impl PhysicsWorld {
-    /// A world on `grid` with its blocks placed as `state` says; an error if the state
-    /// does not fit the grid.
+    /// A top-view world on `grid` with its blocks placed as `state` says; an error if the
+    /// state does not fit the grid.
     pub fn new(grid: Grid, state: State) -> Result<Self> {
+        Self::new_in(View::Top, grid, state)
+    }
+
+    /// A world of `view` on `grid` with its blocks placed as `state` says; an error if the
+    /// state does not fit the grid (or, in the side view, has a block standing on nothing).
+    pub fn new_in(view: View, grid: Grid, state: State) -> Result<Self> {
         state.check_fits(grid)?;
+        view.check_state(&state)?;
+        let side = view == View::Side;
         let mut bodies = RigidBodySet::new();
         let mut colliders = ColliderSet::new();
         let blocks = state
             .cells()
             .iter()
             .map(|&cell| {
-                // Kinematic: the controller, not a force, decides where a block goes.
-                let body = bodies.insert(RigidBodyBuilder::kinematic_position_based().translation(centre(cell)));
-                let collider = colliders.insert_with_parent(
-                    ColliderBuilder::cuboid(BLOCK_HALF_EXTENT, BLOCK_HALF_EXTENT),
-                    body,
-                    &mut bodies,
-                );
+                let body = if side {
+                    // Dynamic under gravity (module docs); `put` makes the held one kinematic.
+                    RigidBodyBuilder::dynamic().lock_rotations().ccd_enabled(true)
+                } else {
+                    // Kinematic: the controller, not a force, decides where a block goes.
+                    RigidBodyBuilder::kinematic_position_based()
+                };
+                let body = bodies.insert(body.translation(centre(cell)));
+                // Side view: rapier's own sleep decides rest (module docs), sooner than its
+                // default half second.
+                bodies[body].activation_mut().time_until_sleep = SIDE_TIME_UNTIL_SLEEP;
+                let shape = if side {
+                    ColliderBuilder::cuboid(SIDE_HALF_WIDTH, SIDE_HALF_HEIGHT).contact_skin(SIDE_CONTACT_SKIN)
+                } else {
+                    ColliderBuilder::cuboid(BLOCK_HALF_EXTENT, BLOCK_HALF_EXTENT)
+                };
+                let collider = colliders.insert_with_parent(shape, body, &mut bodies);
                 BlockBody { body, collider }
             })
             .collect();
@@ -97,19 +236,74 @@ impl PhysicsWorld {
         ] {
             colliders.insert(ColliderBuilder::cuboid(hx, hy).translation(Vector::new(x, y)));
         }
+        let mut params = IntegrationParameters::default();
+        if side {
+            params.num_solver_iterations = SIDE_SOLVER_ITERATIONS;
+        }
         let mut world = PhysicsWorld {
             grid,
             bodies,
             colliders,
             broad_phase: BroadPhaseBvh::new(),
-            params: IntegrationParameters::default(),
+            params,
             blocks,
-            held: state.held_block(),
+            held: None,
             moves_since_update: 0,
+            dynamics: side.then(|| Box::new(Dynamics::new())),
+            settle_steps: 0,
         };
         let all: Vec<ColliderHandle> = world.colliders.iter().map(|(h, _)| h).collect();
         world.update_broad_phase(&all);
+        world.set_held(state.held_block());
+        world.rest_all();
         Ok(world)
+    }
+
+    /// Side view: how many rapier pipeline steps the last drop took to bring every block to
+    /// rest (0 before any drop, and in the top view).
+    pub fn settle_steps(&self) -> u32 {
+        self.settle_steps
+    }
+
+    /// Side view: zeroes every block's velocity (they stand exactly on their cells, at
+    /// rest). They are not put to sleep by hand: a body put to sleep before rapier had solved
+    /// its contacts fell through the table once woken, so rapier's own sleep timer decides.
+    fn rest_all(&mut self) {
+        if self.dynamics.is_none() {
+            return;
+        }
+        for b in &self.blocks {
+            self.bodies[b.body].set_linvel(Vector::ZERO, false);
+        }
+    }
+
+    /// Side view: runs the pipeline until every block is at rest (module docs); the number
+    /// of steps it took, or an error if they do not come to rest in
+    /// [`SIDE_MAX_SETTLE_STEPS`].
+    fn run_to_rest(&mut self, dropped: BlockId) -> Result<u32> {
+        let gravity = Vector::new(0.0, -SIDE_GRAVITY);
+        let params = self.params;
+        for step in 1..=SIDE_MAX_SETTLE_STEPS {
+            self.step_pipeline(&params, gravity);
+            if self.blocks.iter().all(|b| self.bodies[b.body].is_sleeping()) {
+                return Ok(step);
+            }
+        }
+        let _ = dropped;
+        let (block, speed, at) = self
+            .blocks
+            .iter()
+            .enumerate()
+            .map(|(i, b)| (i, self.bodies[b.body].linvel(), self.bodies[b.body].translation()))
+            .max_by(|x, y| x.1.length().total_cmp(&y.1.length()))
+            .expect("a world has blocks");
+        Err(SimError::NotAtRest {
+            block,
+            reason: format!(
+                "still moving at ({:.5}, {:.5}) cells/s at ({:.4}, {:.4}) after {SIDE_MAX_SETTLE_STEPS} steps",
+                speed.x, speed.y, at.x, at.y
+            ),
+        })
     }
 
     /// The largest distance, over all blocks, between a body's translation (or its
@@ -144,12 +338,43 @@ impl PhysicsWorld {
     }
 
     /// Runs a broad-phase update: inserts `modified` colliders' leaves and clears the
-    /// changed-leaf list. The pair events it reports are not needed.
+    /// changed-leaf list. In the top view the pair events it reports are not needed. In the
+    /// side view the narrow phase needs them (a pair reported once and dropped would never
+    /// collide), so the update is a pipeline step of zero length, which only runs the
+    /// collision detection (rapier's `IntegrationParameters::dt` docs) and moves nothing.
     fn update_broad_phase(&mut self, modified: &[ColliderHandle]) {
+        self.moves_since_update = 0;
+        if self.dynamics.is_some() {
+            let mut params = self.params;
+            params.dt = 0.0;
+            self.step_pipeline(&params, Vector::ZERO);
+            return;
+        }
         let mut events = Vec::new();
         self.broad_phase
             .update(&self.params, &self.colliders, &self.bodies, modified, &[], &mut events);
-        self.moves_since_update = 0;
+    }
+
+    /// Side view: one step of rapier's pipeline with `params` under `gravity`.
+    fn step_pipeline(&mut self, params: &IntegrationParameters, gravity: Vector) {
+        let Some(dynamics) = self.dynamics.as_deref_mut() else {
+            return;
+        };
+        dynamics.pipeline.step(
+            gravity,
+            params,
+            &mut dynamics.islands,
+            &mut self.broad_phase,
+            &mut dynamics.narrow_phase,
+            &mut self.bodies,
+            &mut self.colliders,
+            &mut dynamics.impulse_joints,
+            &mut dynamics.multibody_joints,
+            &mut dynamics.soft_bodies,
+            &mut dynamics.ccd_solver,
+            &(),
+            &(),
+        );
     }
 }
 
@@ -170,6 +395,10 @@ impl World for PhysicsWorld {
         self.grid
     }
 
+    fn view(&self) -> View {
+        if self.dynamics.is_some() { View::Side } else { View::Top }
+    }
+
     fn block_count(&self) -> usize {
         self.blocks.len()
     }
@@ -184,13 +413,81 @@ impl World for PhysicsWorld {
     }
 
     fn set_held(&mut self, held: Option<BlockId>) {
+        if self.dynamics.is_some() && self.held != held {
+            // Side view: the held block is carried (kinematic); every other one falls.
+            for (b, kind) in [
+                (self.held, RigidBodyType::Dynamic),
+                (held, RigidBodyType::KinematicPositionBased),
+            ] {
+                if let Some(b) = b {
+                    let body = &mut self.bodies[self.blocks[b.index()].body];
+                    body.set_body_type(kind, false);
+                    body.set_linvel(Vector::ZERO, false);
+                }
+            }
+        }
         self.held = held;
+    }
+
+    fn settle(&mut self, block: BlockId) -> Result<()> {
+        self.bodies[self.blocks[block.index()].body].wake_up(true);
+        self.settle_steps = self.run_to_rest(block)?;
+        // Read back every block's resting cell, check it, and put the block exactly on it.
+        for i in 0..self.blocks.len() {
+            let b = self.blocks[i];
+            let at = self.bodies[b.body].translation();
+            let cell = cell_at(at);
+            let error = (at - centre(cell)).length();
+            if error > SIDE_ALIGN_TOLERANCE {
+                return Err(SimError::NotAtRest {
+                    block: i,
+                    reason: format!(
+                        "it rests at ({:.3}, {:.3}), {error:.3} from the centre of {cell}",
+                        at.x, at.y
+                    ),
+                });
+            }
+            self.teleport(BlockId(i as u8), cell);
+        }
+        self.rest_all();
+        Ok(())
     }
 
     fn try_move(&mut self, block: BlockId, dir: Direction) -> bool {
         let b = self.blocks[block.index()];
         let (dx, dy) = dir.delta();
         let collider = &self.colliders[b.collider];
+        let options = ShapeCastOptions {
+            max_time_of_impact: 1.0,
+            target_distance: 0.0,
+            stop_at_penetration: true,
+            compute_impact_geometry_on_penetration: false,
+        };
+        let travel = Vector::new(dx as f32, dy as f32);
+        if self.dynamics.is_some() {
+            // Side view: the cast goes against every other collider (module docs, "Why the
+            // side view casts against each collider").
+            let blocked = self.colliders.iter().any(|(h, other)| {
+                h != b.collider
+                    && cast_shapes(
+                        collider.position(),
+                        travel,
+                        collider.shape(),
+                        other.position(),
+                        Vector::ZERO,
+                        other.shape(),
+                        options,
+                    )
+                    .is_ok_and(|hit| hit.is_some())
+            });
+            if blocked {
+                return false;
+            }
+            let from = self.cell_of(block);
+            let to = Cell::new((i32::from(from.x) + dx) as u8, (i32::from(from.y) + dy) as u8);
+            self.teleport(block, to);
+            return true;
+        }
         let query = self.broad_phase.as_query_pipeline(
             &DefaultQueryDispatcher,
             &self.bodies,
@@ -198,17 +495,7 @@ impl World for PhysicsWorld {
             QueryFilter::default().exclude_rigid_body(b.body),
         );
         // One cell's travel: anything hit before the neighbouring centre blocks the move.
-        let hit = query.cast_shape(
-            collider.position(),
-            Vector::new(dx as f32, dy as f32),
-            collider.shape(),
-            ShapeCastOptions {
-                max_time_of_impact: 1.0,
-                target_distance: 0.0,
-                stop_at_penetration: true,
-                compute_impact_geometry_on_penetration: false,
-            },
-        );
+        let hit = query.cast_shape(collider.position(), travel, collider.shape(), options);
         if hit.is_some() {
             return false;
         }
@@ -223,7 +510,8 @@ impl World for PhysicsWorld {
         for (i, &cell) in state.cells().iter().enumerate() {
             self.teleport(BlockId(i as u8), cell);
         }
-        self.held = state.held_block();
+        self.set_held(state.held_block());
+        self.rest_all();
     }
 
     fn state(&self) -> State {

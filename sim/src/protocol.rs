@@ -134,6 +134,16 @@ impl ActionMask {
         }
     }
 
+    /// The set with bits `bits` (bit `i`: action `i`) of a world with `blocks` blocks; the
+    /// caller keeps to the world's actions.
+    #[inline]
+    pub(crate) const fn from_bits(bits: u32, blocks: usize) -> ActionMask {
+        ActionMask {
+            bits,
+            actions: Action::count(blocks) as u8,
+        }
+    }
+
     /// No action of a world with `blocks` blocks (at most [`MAX_BLOCKS`]).
     pub const fn none(blocks: usize) -> ActionMask {
         ActionMask {

@@ -1,7 +1,9 @@
 //! Pictures of the world: ASCII for terminals, RGB frames, and PNG or JPEG files.
 //!
 //! Both show every block in its colour, mark the held block, and draw the goal as a small
-//! stack in the top-right corner, as the paper's screen does. A picture file's format is
+//! stack in the top-right corner, as the paper's screen does (a goal of several towers as
+//! its towers, one under the other, a gap between them). The side view is drawn the same
+//! way (`y` is up in both), with the table under the bottom row. A picture file's format is
 //! the one its name says ([`PictureFormat::of`]); a picture is at most
 //! [`MAX_PICTURE_SIDE`] pixels a side and [`MAX_PICTURE_PIXELS`] in all, so that no cell
 //! size asks for gigabytes.
@@ -16,6 +18,7 @@ use crate::error::{Result, SimError};
 use crate::grid::Grid;
 use crate::observation::Observation;
 use crate::state::{BlockId, MAX_BLOCKS};
+use crate::view::View;
 
 /// Side of a cell in pixels in [`Observation::rgb`] frames.
 pub const CELL_PIXELS: u32 = 48;
@@ -74,7 +77,9 @@ impl Colour {
 }
 
 /// The world as text, top row first: `.` for a free cell, the block's label for a block,
-/// the held block in brackets, and the goal stack beside the top rows.
+/// the held block in brackets, and the goal stack beside the top rows (a goal of towers:
+/// its towers, a blank line between them); in the side view a line of `=` under the bottom
+/// row is the table.
 pub fn ascii(obs: &Observation, colour: Colour) -> String {
     let (w, h) = (obs.grid.width(), obs.grid.height());
     let paint = |b: BlockId, text: String| match colour {
@@ -84,7 +89,14 @@ pub fn ascii(obs: &Observation, colour: Colour) -> String {
             format!("\x1b[1;38;2;{r};{g};{bl}m{text}\x1b[0m")
         }
     };
-    let order = obs.goal.order();
+    // The goal column, top first: each tower top block first, `None` for the gap between.
+    let mut order: Vec<Option<BlockId>> = Vec::new();
+    for tower in obs.goal.towers().collect::<Vec<_>>().iter().rev() {
+        if !order.is_empty() {
+            order.push(None);
+        }
+        order.extend(tower.iter().rev().map(|&b| Some(b)));
+    }
     let mut out = String::new();
     for row in 0..h.max(order.len() + 1) {
         if row < h {
@@ -103,13 +115,17 @@ pub fn ascii(obs: &Observation, colour: Colour) -> String {
         // The goal column: a header, then the stack top first.
         if row == 0 {
             out.push_str("   goal");
-        } else if let Some(&b) = order.len().checked_sub(row).and_then(|i| order.get(i)) {
+        } else if let Some(&Some(b)) = order.get(row - 1) {
             out.push_str("    ");
             out.push_str(&paint(b, label(b).to_string()));
         }
         let trimmed = out.trim_end_matches(' ').len();
         out.truncate(trimmed);
         out.push('\n');
+        if row + 1 == h && obs.view == View::Side {
+            out.push_str(&"=".repeat(3 * w));
+            out.push('\n');
+        }
     }
     match obs.held_block() {
         Some(b) => writeln!(out, "held: {}", label(b)),
@@ -214,12 +230,30 @@ pub fn frame(obs: &Observation, cell: u32) -> RgbImage {
             );
         }
     }
-    // The goal stack, top block first, in the top-right margin.
+    if obs.view == View::Side {
+        // The table: a dark band over the bottom edge of the bottom row.
+        fill(
+            &mut img,
+            0,
+            h * cell - border.max(2),
+            w * cell,
+            border.max(2),
+            [110, 80, 50],
+        );
+    }
+    // The goal stack, top block first, in the top-right margin; towers one under the
+    // other, the last first, half a block apart.
     let gx = w * cell + pad + (margin - mini) / 2;
-    for (k, &b) in obs.goal.order().iter().rev().enumerate() {
-        let gy = pad + k as u32 * mini;
-        fill(&mut img, gx, gy, mini, mini, [40, 40, 40]);
-        fill(&mut img, gx + 1, gy + 1, mini - 2, mini - 2, colour(b));
+    let mut gy = pad;
+    for (t, tower) in obs.goal.towers().collect::<Vec<_>>().iter().rev().enumerate() {
+        if t > 0 {
+            gy += mini / 2;
+        }
+        for &b in tower.iter().rev() {
+            fill(&mut img, gx, gy, mini, mini, [40, 40, 40]);
+            fill(&mut img, gx + 1, gy + 1, mini - 2, mini - 2, colour(b));
+            gy += mini;
+        }
     }
     img
 }
@@ -299,6 +333,7 @@ mod tests {
             state: State::new(&cells, Some(BlockId(0))).unwrap(),
             goal: Goal::from_indices(&(0..blocks).collect::<Vec<_>>()).unwrap(),
             protocol: crate::ActionProtocol::Free,
+            view: crate::View::Top,
         }
     }
 

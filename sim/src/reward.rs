@@ -11,12 +11,15 @@ use crate::error::{Result, SimError};
 use crate::goal::Goal;
 use crate::grid::Grid;
 use crate::state::State;
+use crate::view::View;
 
 /// One step, as a reward model sees it.
 #[derive(Clone, Copy, Debug)]
 pub struct Transition<'a> {
     /// The grid.
     pub grid: Grid,
+    /// The world: seen from above or from the side (where the goal asks more).
+    pub view: View,
     /// The goal of the episode.
     pub goal: &'a Goal,
     /// The state before the action.
@@ -32,7 +35,7 @@ pub struct Transition<'a> {
 impl Transition<'_> {
     /// Whether the goal holds after the action.
     pub fn reaches_goal(&self) -> bool {
-        self.goal.holds(self.after)
+        self.goal.holds_in(self.view, self.after)
     }
 }
 
@@ -292,6 +295,17 @@ impl Default for RewardModel {
 impl RewardModel {
     /// The names the models are chosen by.
     pub const NAMES: [&'static str; 5] = ["sparse", "dense", "paper", "step-cost", "paper-code"];
+
+    /// An error ([`SimError::NotOneTower`]) if this model cannot score `goal`: `paper` and
+    /// `paper-code` measure how far a block is from its partner in the one tower, so they
+    /// take only a goal of one tower of every block.
+    pub fn check_goal(&self, goal: &Goal) -> Result<()> {
+        match self {
+            RewardModel::Paper(_) => goal.one_tower("the paper reward").map(drop),
+            RewardModel::PaperCode(_) => goal.one_tower("the paper-code reward").map(drop),
+            _ => Ok(()),
+        }
+    }
 
     /// The model called `name`, with the SPEC's constants.
     pub fn from_name(name: &str) -> Result<RewardModel> {

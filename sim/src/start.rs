@@ -29,6 +29,7 @@ use crate::goal::Goal;
 use crate::grid::{Cell, Grid};
 use crate::seeding::SimRng;
 use crate::state::{MAX_BLOCKS, State};
+use crate::view::{self, View};
 
 /// How a reset places the blocks.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -88,6 +89,21 @@ impl StartRule {
         match self {
             StartRule::Uniform => uniform(grid, goal, rng),
             StartRule::Paper => paper(grid, goal.block_count(), rng),
+        }
+    }
+
+    /// A start for `goal` on `grid` in `view`. In the top view [`StartRule::draw`]; in the
+    /// side view (which takes only [`StartRule::Uniform`]) random towers
+    /// ([`view::random_towers`]), drawn again while the goal holds, as the uniform rule does.
+    pub fn draw_in(self, view: View, grid: Grid, goal: &Goal, rng: &mut SimRng) -> State {
+        match view {
+            View::Top => self.draw(grid, goal, rng),
+            View::Side => loop {
+                let state = view::random_towers(grid, goal.block_count(), rng);
+                if !goal.holds_in(View::Side, &state) {
+                    return state;
+                }
+            },
         }
     }
 }

@@ -5,6 +5,11 @@
 //! {"type":"step","episode":0,"step":1,"action":5,"blocks":[[1,2],[4,0],[6,6]],"held":0,"reward":0.0,"terminated":false,"truncated":false}
 //! ```
 //!
+//! A side-view episode's header also says `"view":"side"` (a top-view header leaves the view
+//! out, so files written before the side view existed read back as the top view, and top-view
+//! files are written as before), and a goal of several towers is written
+//! `{"towers":[[0,1],[2]],"blocks":3}` ([`Goal`]'s JSON form).
+//!
 //! A step line holds the state *after* the action; `step` counts the actions taken in the
 //! episode, 1 for the first; `action` is the index of docs/world.md section 2's table; `held` is a
 //! block id or `null`. Other tools read this format: it is stable, and a change to it is a
@@ -37,9 +42,11 @@ use crate::error::{Result, SimError};
 use crate::goal::Goal;
 use crate::grid::{Cell, Grid};
 use crate::grid_world::GridWorld;
+use crate::protocol::ActionProtocol;
 use crate::reward::{RewardModel, Transition};
 use crate::state::{BlockId, State};
 use crate::termination::Termination;
+use crate::view::View;
 use crate::world::World;
 
 /// The longest line of a trajectory file, and of a demonstration recording (`agent`'s
@@ -152,12 +159,15 @@ pub enum Record {
         seed: u64,
         /// `[W, H]`.
         grid: [usize; 2],
-        /// The goal, bottom to top.
+        /// The goal: one tower bottom to top, or towers.
         goal: Goal,
         /// The horizon.
         horizon: u32,
         /// Every block's start cell `[x, y]`, by block id.
         start: Vec<[u8; 2]>,
+        /// The world: written only for the side view.
+        #[serde(default, skip_serializing_if = "is_top")]
+        view: View,
     },
     /// One action and the state after it.
     Step {
@@ -180,13 +190,30 @@ pub enum Record {
     },
 }
 
+fn is_top(view: &View) -> bool {
+    *view == View::Top
+}
+
 fn cells(state: &State) -> Vec<[u8; 2]> {
     state.cells().iter().map(|c| [c.x, c.y]).collect()
 }
 
 impl Record {
-    /// The header of episode `episode`.
+    /// The header of top-view episode `episode`.
     pub fn episode(episode: u64, seed: u64, grid: Grid, goal: Goal, horizon: u32, start: &State) -> Record {
+        Record::episode_in(View::Top, episode, seed, grid, goal, horizon, start)
+    }
+
+    /// The header of episode `episode` in `view`.
+    pub fn episode_in(
+        view: View,
+        episode: u64,
+        seed: u64,
+        grid: Grid,
+        goal: Goal,
+        horizon: u32,
+        start: &State,
+    ) -> Record {
         Record::Episode {
             episode,
             seed,
@@ -194,6 +221,7 @@ impl Record {
             goal,
             horizon,
             start: cells(start),
+            view,
         }
     }
 
@@ -247,6 +275,8 @@ pub struct Episode {
     pub seed: u64,
     /// The grid.
     pub grid: Grid,
+    /// The world: seen from above or from the side.
+    pub view: View,
     /// The goal.
     pub goal: Goal,
     /// The horizon.
@@ -344,6 +374,7 @@ impl<R: BufRead> TrajectoryReader<R> {
             goal,
             horizon,
             start,
+            view,
         } = record
         else {
             unreachable!("called with a header");
@@ -363,13 +394,14 @@ impl<R: BufRead> TrajectoryReader<R> {
             return Err(self.error(SimError::ZeroHorizon.to_string()));
         }
         let start = self.state(&start, None, grid, &goal)?;
-        let world = GridWorld::new(grid, start).map_err(|e| self.error(e.to_string()))?;
+        let world = GridWorld::new_in(view, grid, start).map_err(|e| self.error(e.to_string()))?;
         self.next_episode = episode.checked_add(1);
         let ended = self.current.replace((
             Episode {
                 episode,
                 seed,
                 grid,
+                view,
                 goal,
                 horizon,
                 start,
@@ -435,13 +467,20 @@ impl<R: BufRead> TrajectoryReader<R> {
                 open.horizon
             )));
         }
-        let (grid, goal) = (open.grid, open.goal);
+        let (grid, goal, view) = (open.grid, open.goal, open.view);
         let previous_action = open.steps.last().map(|s| s.action);
         let action = Action::from_index(action, goal.block_count()).map_err(|e| self.error(e.to_string()))?;
         let state = self.state(&blocks, held, grid, &goal)?;
-        let (_, world) = self.current.as_mut().expect("an open episode");
+        let mut world = self.current.as_ref().expect("an open episode").1;
         let before = world.state();
+        if view == View::Side {
+            // The side view's rules refuse what the world would take as a no-op.
+            View::Side
+                .check(ActionProtocol::Free, &before, action)
+                .map_err(|e| self.error(e.to_string()))?;
+        }
         world.act(action).expect("an action of the world's blocks");
+        self.current.as_mut().expect("an open episode").1 = world;
         if world.state() != state {
             let after = world.state();
             return Err(self.error(format!(
@@ -453,6 +492,7 @@ impl<R: BufRead> TrajectoryReader<R> {
         }
         let transition = Transition {
             grid,
+            view,
             goal: &goal,
             before: &before,
             action,

@@ -2,12 +2,14 @@
 //!
 //! A backend ([`GridWorld`](crate::GridWorld), [`PhysicsWorld`](crate::PhysicsWorld)) only
 //! knows how to read its blocks back and how to decide and carry out a one-cell move of a
-//! block; [`World::act`] is the only code that says what an action does.
+//! block, and (in the side view) where a released block comes to rest; [`World::act`] is
+//! the only code that says what an action does, in both views ([`View`]).
 
 use crate::action::Action;
 use crate::error::{Result, SimError};
 use crate::grid::{Cell, Direction, Grid};
 use crate::state::{BlockId, State};
+use crate::view::{self, View};
 
 /// What an action did to the world.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
@@ -34,6 +36,9 @@ pub trait World {
     /// The grid the blocks stand on.
     fn grid(&self) -> Grid;
 
+    /// Which world: seen from above or from the side.
+    fn view(&self) -> View;
+
     /// Number of blocks.
     fn block_count(&self) -> usize;
 
@@ -50,12 +55,22 @@ pub trait World {
     /// and not occupied); returns whether it moved.
     fn try_move(&mut self, block: BlockId, dir: Direction) -> bool;
 
+    /// Side view: lets the just released `block` fall until it comes to rest, on the top of
+    /// the column below it. An error only if the backend finds it resting off a cell.
+    fn settle(&mut self, block: BlockId) -> Result<()>;
+
+    /// Whether a block stands on `cell`.
+    fn is_occupied(&self, cell: Cell) -> bool {
+        (0..self.block_count()).any(|i| self.cell_of(BlockId(i as u8)) == cell)
+    }
+
     /// Puts every block where `state` says and holds what it holds; `state` has been
     /// checked to fit this world. Callers use [`World::place`], which checks.
     fn put(&mut self, state: &State);
 
     /// Puts every block where `state` says and holds what it holds; an error if `state`
-    /// does not fit this world (block count, grid bounds).
+    /// does not fit this world (block count, grid bounds; in the side view, a block that is
+    /// not held standing on nothing).
     fn place(&mut self, state: &State) -> Result<()> {
         if state.block_count() != self.block_count() {
             return Err(SimError::BlockCountMismatch {
@@ -65,6 +80,7 @@ pub trait World {
             });
         }
         state.check_fits(self.grid())?;
+        self.view().check_state(state)?;
         self.put(state);
         Ok(())
     }
@@ -72,11 +88,15 @@ pub trait World {
     /// The whole logical state, read back from the backend.
     fn state(&self) -> State;
 
-    /// Carries out `action` by the rules of docs/world.md section 2; an error only for a pick of a
-    /// block that does not exist.
+    /// Carries out `action` by the rules of docs/world.md section 2 and, in the side view,
+    /// its section "The side view": a pick only with nothing held and only of a clear block
+    /// (otherwise nothing changes), and a released block falls to the top of the column
+    /// below it. An error only for a pick of a block that does not exist (and for a drop the
+    /// physics does not bring to rest on a cell).
     #[inline]
     fn act(&mut self, action: Action) -> Result<Effect> {
         let held = self.held_block();
+        let side = self.view() == View::Side;
         Ok(match action {
             Action::Pick(b) if b.index() >= self.block_count() => {
                 return Err(SimError::NoSuchBlock {
@@ -85,15 +105,21 @@ pub trait World {
                 });
             }
             Action::Pick(b) if held == Some(b) => Effect::Unchanged,
+            Action::Pick(b) if side && (held.is_some() || !self.is_clear(b)) => Effect::Unchanged,
             Action::Pick(b) => {
                 self.set_held(Some(b));
                 Effect::Picked
             }
-            Action::Drop if held.is_none() => Effect::Unchanged,
-            Action::Drop => {
-                self.set_held(None);
-                Effect::Dropped
-            }
+            Action::Drop => match held {
+                None => Effect::Unchanged,
+                Some(b) => {
+                    self.set_held(None);
+                    if side {
+                        self.settle(b)?;
+                    }
+                    Effect::Dropped
+                }
+            },
             Action::Up | Action::Down | Action::Left | Action::Right => {
                 let dir = action.direction().expect("a move has a direction");
                 match held {
@@ -103,5 +129,19 @@ pub trait World {
                 }
             }
         })
+    }
+
+    /// Whether nothing stands on `block`.
+    #[inline]
+    fn is_clear(&self, block: BlockId) -> bool {
+        let c = self.cell_of(block);
+        c.y as usize + 1 >= self.grid().height() || !self.is_occupied(Cell::new(c.x, c.y + 1))
+    }
+
+    /// Side view: the cell a block released on `from` comes to rest on (the top of the
+    /// column below it), as the occupancy predicts it.
+    #[inline]
+    fn landing_cell(&self, from: Cell) -> Cell {
+        view::landing_cell(from, |c| self.is_occupied(c))
     }
 }

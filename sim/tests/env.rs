@@ -184,6 +184,7 @@ fn transition<'a>(
 ) -> Transition<'a> {
     Transition {
         grid: Grid::default(),
+        view: sim::View::Top,
         goal: g,
         before,
         action,

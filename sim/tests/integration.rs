@@ -5,3 +5,5 @@ mod env;
 mod original;
 mod physics_matches_grid;
 mod rules;
+mod side_view;
+mod towers;

@@ -287,6 +287,7 @@ fn reward_above_ends_on_the_reward_not_on_the_goal() {
 fn paper_code(goal: &Goal, before: &State, action: Action, after: &State) -> f64 {
     RewardModel::PaperCode(PaperCode::default()).reward(&Transition {
         grid: Grid::default(),
+        view: sim::View::Top,
         goal,
         before,
         action,

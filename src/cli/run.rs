@@ -140,6 +140,15 @@ pub fn run(args: RunArgs) -> Result<()> {
     if let Some(m) = &model {
         m.check_world(config.grid, config.blocks)?;
     }
+    // The planners and learners play the top view's rules; the side view's come with its
+    // own planners.
+    anyhow::ensure!(
+        config.view == sim::View::Top || args.agent == AgentKind::Random,
+        "--agent {} plays the top view only; in the side view use --agent random",
+        args.agent
+            .to_possible_value()
+            .map_or_else(String::new, |v| v.get_name().to_string())
+    );
     let oracle = args.oracle.unwrap_or(LearnerProfile::of(rules.profile).oracle);
     let mut policy: Box<dyn Policy + '_> = match (args.agent, &model) {
         (AgentKind::Random, _) => Box::new(RandomPolicy),

@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use clap::Args;
-use sim::{Backend, EnvConfig, Goal, GoalSpec, Grid};
+use sim::{Backend, EnvConfig, Goal, GoalSpec, Grid, View};
 
 use sim::ProfileParts;
 
@@ -13,7 +13,8 @@ pub struct WorldArgs {
     /// Number of blocks.
     #[arg(long, default_value_t = 3)]
     pub blocks: usize,
-    /// The goal, bottom to top, e.g. 1,0,2 (default: drawn at random every episode).
+    /// The goal, bottom to top, e.g. 1,0,2; or towers separated by '/', e.g. 0,1/2 (blocks
+    /// no tower names are free) (default: one tower drawn at random every episode).
     #[arg(long)]
     pub goal: Option<String>,
     /// Grid size, WxH.
@@ -29,6 +30,10 @@ pub struct WorldArgs {
     /// World backend: physics (rapier2d) or grid (occupancy model).
     #[arg(long, default_value = "physics")]
     pub backend: String,
+    /// The world: top (the paper's, seen from above) or side (the classic Blocks World:
+    /// towers on a table, gravity, only clear blocks picked).
+    #[arg(long, default_value = "top")]
+    pub view: String,
 }
 
 impl WorldArgs {
@@ -41,6 +46,7 @@ impl WorldArgs {
             None => GoalSpec::Random,
         };
         let backend: Backend = self.backend.parse()?;
+        let view: View = self.view.parse()?;
         let config = EnvConfig {
             grid,
             blocks: self.blocks,
@@ -52,6 +58,7 @@ impl WorldArgs {
             start: rules.start,
             termination: sim::Termination::Goal,
             obs: sim::ObsKind::default(),
+            view,
         };
         config.validate()?;
         Ok(config)

@@ -399,6 +399,7 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
             state: s.state.state(session.grid)?,
             goal: episode.goal,
             protocol: ActionProtocol::Free,
+            view: sim::View::Top,
         };
         let next = Observation {
             state: s.next.state(session.grid)?,
@@ -430,6 +431,7 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
             // The previous action is known only on a step that follows the last one used.
             let transition = Transition {
                 grid: session.grid,
+                view: obs.view,
                 goal: &episode.goal,
                 before: &obs.state,
                 action,

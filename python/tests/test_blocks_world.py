@@ -1,0 +1,85 @@
+"""``blockstack/BlocksWorld-v0``: the side view (towers on a table, gravity), goals of
+several towers, block moves, and ``view=`` on the vector environment."""
+
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import blockstack
+
+ENV_ID = "blockstack/BlocksWorld-v0"
+
+
+@pytest.mark.parametrize("backend", ["physics", "grid"])
+@pytest.mark.parametrize("obs", ["planes", "frame", "state"])
+def test_env_checker_passes_without_a_warning(backend, obs):
+    env = gym.make(ENV_ID, blocks=4, goal="0,1/2", obs=obs, backend=backend, render_mode="ansi", disable_env_checker=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        check_env(env.unwrapped, skip_render_check=False)
+
+
+def test_the_side_view_picks_only_clear_blocks_and_drops_them_onto_towers():
+    env = gym.make(ENV_ID, blocks=3, goal="2,0,1", grid=(4, 4), backend="physics")
+    # 0 on the table, 1 on 0, 2 on the table at column 2.
+    _, info = env.reset(options={"cells": [(0, 0), (0, 1), (2, 0)]})
+    assert list(np.flatnonzero(info["action_mask"])) == [6, 7]
+    # Under the default free protocol an action outside the mask changes nothing.
+    env.step(5)
+    assert env.unwrapped.state()[1] is None
+    for action in [6, 0, 3, 3, 3, 4]:  # pick 1, up, right x3, drop: it falls to the table
+        env.step(action)
+    assert env.unwrapped.state()[0][1] == (3, 0)
+    for action in [5, 0, 3, 3, 4]:  # 0 onto 2
+        env.step(action)
+    *_, terminated, _, _ = env.step(6)
+    for action in [0, 0, 2]:
+        *_, terminated, _, _ = env.step(action)
+        assert not terminated, "a held block stands on nothing"
+    *_, terminated, _, _ = env.step(4)
+    assert terminated
+
+
+def test_block_moves_count_moves_and_gripper_steps():
+    env = gym.make(ENV_ID, blocks=3, goal="2,0,1", grid=(4, 4), actions="moves")
+    assert env.action_space.n == 3 * (3 + 4)
+    _, info = env.reset(options={"cells": [(0, 0), (0, 1), (2, 0)]})
+    per = 3 + 4
+
+    def move(block, dest):
+        return block * per + dest
+
+    assert info["action_mask"][move(1, 2)] == 1 and info["action_mask"][move(0, 2)] == 0
+    with pytest.raises(ValueError, match="block 1 stands on block 0"):
+        env.step(move(0, 2))
+    _, _, _, _, info = env.step(move(1, 3 + 3))  # 1 onto the table at column 3
+    assert info["gripper_steps"] == 5
+    env.step(move(0, 2))  # 0 onto 2
+    _, _, terminated, _, info = env.step(move(1, 0))  # 1 onto 0
+    assert terminated and info["gripper_steps"] == 5
+    with pytest.raises(ValueError, match='needs view="side"'):
+        gym.make("blockstack/Stack-v0", actions="moves")
+
+
+def test_seeded_starts_stand_and_follow_the_seed():
+    a = gym.make(ENV_ID, blocks=5, backend="physics")
+    b = gym.make(ENV_ID, blocks=5, backend="grid")
+    for seed in range(10):
+        (oa, _), (ob, _) = a.reset(seed=seed), b.reset(seed=seed)
+        assert np.array_equal(oa, ob)
+        cells, held, _ = a.unwrapped.state()
+        assert held is None
+        assert all(y == 0 or (x, y - 1) in cells for x, y in cells)
+
+
+def test_the_vector_env_takes_the_view():
+    vec = blockstack.vector.StackVectorEnv(4, blocks=3, view="side", backend="grid")
+    _, infos = vec.reset(seed=1)
+    assert infos["action_mask"][:, :5].sum() == 0, "nothing held: picks only"
+    one = gym.make(ENV_ID, blocks=3, backend="grid")
+    obs, _ = one.reset(seed=1)
+    first, _ = vec.reset(seed=1)
+    assert np.array_equal(first[0], obs)
