@@ -2,13 +2,17 @@
 //! towers into a trajectory file that records the view, and the agents that play only the
 //! top view refusing it with one line.
 
-use crate::common::{blockstack, scratch, stderr, stdout};
+use crate::common::{blockstack, cli, scratch, stderr, stdout};
 
 #[test]
 fn render_draws_the_side_view_over_a_table() {
-    let o = blockstack(&[
-        "render", "--view", "side", "--blocks", "4", "--goal", "0,1/2,3", "--seed", "3", "--ascii",
-    ]);
+    let o = cli("render")
+        .flag("view", "side")
+        .flag("blocks", "4")
+        .flag("goal", "0,1/2,3")
+        .flag("seed", "3")
+        .arg("--ascii")
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     let text = stdout(&o);
     assert!(text.lines().any(|l| l == "=".repeat(21)), "{text}");
@@ -21,22 +25,15 @@ fn render_draws_the_side_view_over_a_table() {
 fn run_plays_the_side_view_and_records_it() {
     let dir = scratch("side");
     let traj = dir.join("side.jsonl");
-    let o = blockstack(&[
-        "run",
-        "--view",
-        "side",
-        "--blocks",
-        "3",
-        "--goal",
-        "0,1/2",
-        "--episodes",
-        "3",
-        "--seed",
-        "5",
-        "--json",
-        "--trajectory",
-        traj.to_str().unwrap(),
-    ]);
+    let o = cli("run")
+        .flag("view", "side")
+        .flag("blocks", "3")
+        .flag("goal", "0,1/2")
+        .flag("episodes", "3")
+        .flag("seed", "5")
+        .arg("--json")
+        .flag("trajectory", traj.to_str().unwrap())
+        .run();
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
     assert_eq!(v["goal"], "0,1/2");
@@ -67,5 +64,63 @@ fn top_view_agents_and_rules_refuse_the_side_view_in_one_line() {
         assert!(!o.status.success(), "{args:?}");
         let err = stderr(&o);
         assert!(err.contains(says) && err.lines().count() == 1, "{args:?}: {err}");
+    }
+}
+
+/// `solve --view side`: block-move plans by the exact solver and the near-optimal planner.
+#[test]
+fn solve_plans_block_moves_in_the_side_view() {
+    // 1 on 0, 2 on 1; 3 alone. Goal: 1 on the table, 3 on 1, 2 on 3 (0 free): 2 must leave
+    // 1 before 1 moves and come back after 3, so the optimum is 4 moves.
+    let base = cli("solve")
+        .flag("view", "side")
+        .flag("start", "0,0;0,1;0,2;1,0")
+        .flag("goal", "1,3,2/");
+    let exact: serde_json::Value = serde_json::from_str(&base.clone().arg("--json").ok()).unwrap();
+    assert_eq!(exact["length"], 4);
+    assert_eq!(exact["cost"], "moves");
+    assert_eq!(exact["moves"][0], serde_json::json!({"block": 2, "onto": "table"}));
+    assert_eq!(exact["moves"][3], serde_json::json!({"block": 2, "onto": 3}));
+    let near = base.clone().flag("solver", "near-optimal").ok();
+    assert!(
+        near.starts_with("near-optimal plan, goal 1,3,2/, grid 7x7, side view: 4 block moves"),
+        "{near}"
+    );
+    // Two towers, one move.
+    let two: serde_json::Value = serde_json::from_str(
+        &cli("solve")
+            .flag("view", "side")
+            .flag("start", "0,0;0,1;0,2;1,0")
+            .flag("goal", "0,1/3,2")
+            .arg("--json")
+            .ok(),
+    )
+    .unwrap();
+    assert_eq!(two["length"], 1);
+    // What the side view does not plan is refused in one line.
+    for (args, message) in [
+        (base.clone().flag("cost", "steps"), "use --cost moves"),
+        (base.clone().flag("solver", "oracle"), "choose exact or near-optimal"),
+        (base.clone().flag("held", 2), "starts with nothing held"),
+        (
+            cli("solve")
+                .flag("view", "side")
+                .flag("start", "0,0;0,2")
+                .flag("goal", "0,1"),
+            "floats",
+        ),
+        (
+            cli("solve")
+                .flag("start", "0,0;0,2")
+                .flag("goal", "0,1")
+                .flag("cost", "moves"),
+            "add --view side",
+        ),
+    ] {
+        let o = args.run();
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(message), "{args:?}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
     }
 }

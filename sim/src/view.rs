@@ -11,8 +11,6 @@
 //! the mask of legal actions, the start rule (random towers) and the towers of a state that
 //! planners search over.
 
-use std::fmt;
-
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
 
@@ -34,18 +32,15 @@ pub enum View {
     Side,
 }
 
-impl View {
-    /// The names the views are chosen by.
-    pub const NAMES: [&'static str; 2] = ["top", "side"];
-
-    /// This view's name.
-    pub const fn name(self) -> &'static str {
-        match self {
-            View::Top => "top",
-            View::Side => "side",
-        }
+crate::names!(View { Top = "top", Side = "side" } unknown(name) -> SimError {
+    SimError::Parse {
+        what: "view",
+        text: name.to_string(),
+        reason: format!("choose one of {}", View::NAMES.join(", ")),
     }
+});
 
+impl View {
     /// The legal actions in `state` in this view: `protocol`'s in the top view; in the side
     /// view, whatever the protocol, the picks of clear blocks with nothing held, and the
     /// moves and Drop while holding ([`side_mask`]). (Under the `free` protocol an action
@@ -74,28 +69,6 @@ impl View {
         match self {
             View::Top => Ok(()),
             View::Side => check_stands(state),
-        }
-    }
-}
-
-impl fmt::Display for View {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for View {
-    type Err = SimError;
-
-    fn from_str(name: &str) -> Result<View> {
-        match name {
-            "top" => Ok(View::Top),
-            "side" => Ok(View::Side),
-            _ => Err(SimError::Parse {
-                what: "view",
-                text: name.to_string(),
-                reason: format!("choose one of {}", Self::NAMES.join(", ")),
-            }),
         }
     }
 }

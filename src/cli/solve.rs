@@ -1,10 +1,12 @@
-//! `blockstack solve`: a plan from a given state, by the exact solver or the oracle.
+//! `blockstack solve`: a plan from a given state, by the exact solver or the oracle in the
+//! top view, or by the block-move planners of `oracle::towers` in the side view.
 
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use oracle::Oracle;
+use oracle::towers::{ExactMoves, NearOptimal, Place, Table, TowerGoal, Towers};
 use serde::Serialize;
-use sim::{Goal, Grid, State};
+use sim::{Goal, Grid, State, View};
 
 use super::solver_budget::SolverBudgetArg;
 use super::stdout::line;
@@ -14,8 +16,11 @@ use super::stdout::line;
 pub enum SolverKind {
     /// The exact solver: a shortest plan.
     Exact,
-    /// The centroid + A* oracle.
+    /// The centroid + A* oracle (top view).
     Oracle,
+    /// The near-optimal block-move planner (side view): at most twice the optimum, for
+    /// any number of blocks.
+    NearOptimal,
 }
 
 impl SolverKind {
@@ -23,8 +28,19 @@ impl SolverKind {
         match self {
             SolverKind::Exact => "exact",
             SolverKind::Oracle => "oracle",
+            SolverKind::NearOptimal => "near-optimal",
         }
     }
+}
+
+/// What a plan's length counts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Cost {
+    /// Gripper actions (pick, moves, drop): the environment's steps.
+    Steps,
+    /// Block moves (a clear block onto the table or another block): the planning
+    /// literature's count, in the side view.
+    Moves,
 }
 
 /// Arguments of `blockstack solve`.
@@ -42,6 +58,14 @@ pub struct SolveArgs {
     /// Grid size, WxH.
     #[arg(long, default_value = "7x7")]
     pub grid: String,
+    /// The world: top (the paper's, seen from above) or side (the classic Blocks World; the
+    /// goal may be several towers, e.g. 0,1/2).
+    #[arg(long, default_value = "top")]
+    pub view: View,
+    /// What the plan's length counts: steps (gripper actions; the top view's default) or
+    /// moves (block moves; the side view's, and its only count so far).
+    #[arg(long, value_enum)]
+    pub cost: Option<Cost>,
     /// The planner.
     #[arg(long, value_enum, default_value_t = SolverKind::Exact)]
     pub solver: SolverKind,
@@ -68,6 +92,17 @@ struct SolveReport {
 /// Plans and prints the plan.
 pub fn solve(args: SolveArgs) -> Result<()> {
     let grid: Grid = args.grid.parse().context("--grid")?;
+    if args.view == View::Side {
+        return solve_side(&args, grid);
+    }
+    anyhow::ensure!(
+        args.cost != Some(Cost::Moves),
+        "--cost moves counts block moves, which the side view plans: add --view side"
+    );
+    anyhow::ensure!(
+        args.solver != SolverKind::NearOptimal,
+        "--solver near-optimal plans block moves in the side view: add --view side"
+    );
     let state = State::parse(&args.start, args.held, grid).with_context(|| {
         if args.held.is_some() {
             "--start and --held"
@@ -89,6 +124,7 @@ pub fn solve(args: SolveArgs) -> Result<()> {
             .solve(&state, &goal)
             .map_err(|e| args.budget.explain(e))?,
         SolverKind::Oracle => Oracle::new(grid).with_protocol(args.protocol).plan(&state, &goal)?,
+        SolverKind::NearOptimal => unreachable!("refused above: near-optimal is the side view's"),
     };
     if args.json {
         let report = SolveReport {
@@ -108,4 +144,83 @@ pub fn solve(args: SolveArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The machine-readable block-move plan.
+#[derive(Debug, Serialize)]
+struct MovesReport {
+    length: usize,
+    cost: &'static str,
+    /// Each move as `{"block": B, "onto": "table"}` or `{"block": B, "onto": C}`.
+    moves: Vec<serde_json::Value>,
+    solver: &'static str,
+}
+
+/// `solve --view side`: a block-move plan from the towers of `--start` to `--goal`'s, on a
+/// table as wide as the grid.
+fn solve_side(args: &SolveArgs, grid: Grid) -> Result<()> {
+    anyhow::ensure!(args.held.is_none(), "--held: a side-view plan starts with nothing held");
+    anyhow::ensure!(
+        args.cost != Some(Cost::Steps),
+        "--cost steps: the side view's planners count block moves so far; use --cost moves"
+    );
+    anyhow::ensure!(
+        args.solver != SolverKind::Oracle,
+        "--solver oracle plans gripper steps in the top view; in the side view choose exact or near-optimal"
+    );
+    anyhow::ensure!(
+        args.budget.solver_budget.is_none(),
+        "--solver-budget is the top view's exact solver's: it does not apply to --view side"
+    );
+    let state = State::parse(&args.start, None, grid).context("--start")?;
+    View::Side.check_state(&state).context("--start")?;
+    let goal = Goal::parse(&args.goal, Some(state.block_count())).context("--goal")?;
+    goal.check_fits(grid).context("--goal")?;
+    let start = Towers::new(&sim::view::towers(&state)?)?;
+    let towers = TowerGoal::new(&goal.tower_lists())?;
+    let table = Table::Columns(grid.width());
+    let plan = match args.solver {
+        SolverKind::NearOptimal => NearOptimal::new().with_table(table).plan(&start, &towers)?,
+        _ => ExactMoves::new().with_table(table).solve(&start, &towers)?,
+    };
+    // The planners do not know the grid's height: a plan that stacks higher is refused.
+    let mut now = start;
+    for &mv in &plan.moves {
+        now.apply(mv, table)?;
+        let tallest = now.towers().iter().map(Vec::len).max().unwrap_or(0);
+        anyhow::ensure!(
+            tallest <= grid.height(),
+            "the {} plan stacks {tallest} blocks, more than the grid's {} rows: give a taller --grid",
+            args.solver.name(),
+            grid.height()
+        );
+    }
+    if args.json {
+        let moves = plan
+            .moves
+            .iter()
+            .map(|m| match m.to {
+                Place::Table => serde_json::json!({"block": m.block, "onto": "table"}),
+                Place::On(b) => serde_json::json!({"block": m.block, "onto": b}),
+            })
+            .collect();
+        let report = MovesReport {
+            length: plan.len(),
+            cost: "moves",
+            moves,
+            solver: args.solver.name(),
+        };
+        line(serde_json::to_string(&report)?)
+    } else {
+        line(format_args!(
+            "{} plan, goal {goal}, grid {grid}, side view: {} block moves",
+            args.solver.name(),
+            plan.len()
+        ))?;
+        if plan.is_empty() {
+            return Ok(());
+        }
+        let moves: Vec<String> = plan.moves.iter().map(ToString::to_string).collect();
+        line(moves.join(" "))
+    }
 }
