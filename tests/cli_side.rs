@@ -2,7 +2,7 @@
 //! towers into a trajectory file that records the view, and the agents that play only the
 //! top view refusing it with one line.
 
-use crate::common::{blockstack, cli, scratch, stderr, stdout};
+use crate::common::{ROLE_ON_GRID, blockstack, cli, path, scratch, stderr, stdout, train_model};
 
 #[test]
 fn render_draws_the_side_view_over_a_table() {
@@ -45,10 +45,12 @@ fn run_plays_the_side_view_and_records_it() {
 
 #[test]
 fn top_view_agents_and_rules_refuse_the_side_view_in_one_line() {
+    let dir = scratch("side-refusals");
+    let model = train_model(&dir, "q.safetensors", &[&ROLE_ON_GRID[..], &["--games", "5"]].concat());
     for (args, says) in [
         (
-            vec!["run", "--view", "side", "--agent", "oracle"],
-            "--agent oracle plays the top view only",
+            vec!["run", "--view", "side", "--agent", "q", "--model", path(&model)],
+            "--agent q plays the top view only",
         ),
         (
             vec!["run", "--agent", "exact", "--goal", "0,1/2"],
@@ -122,5 +124,26 @@ fn solve_plans_block_moves_in_the_side_view() {
         assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
         assert!(err.contains(message), "{args:?}: {err}");
         assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+    }
+}
+
+/// The side view's planners play it as agents (`--agent exact`: the fewest block moves,
+/// `--agent oracle`: the near-optimal planner), on the physics backend, to the goal every
+/// time.
+#[test]
+fn the_planners_play_the_side_view() {
+    for agent in ["exact", "oracle"] {
+        let out = cli("run")
+            .flag("view", "side")
+            .flag("agent", agent)
+            .flag("blocks", 4)
+            .flag("goal", "0,1/2,3")
+            .flag("episodes", 10)
+            .flag("seed", 5)
+            .arg("--json")
+            .ok();
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(v["episodes"], 10, "{agent}");
+        assert_eq!(v["failures"], 0, "{agent}: {out}");
     }
 }

@@ -40,6 +40,7 @@ pub mod repr;
 pub mod rollout;
 pub mod rule;
 pub mod schedule;
+pub mod towers_policy;
 pub mod train;
 
 pub use assist::{Assist, OracleKind, Oscillation};
@@ -57,4 +58,5 @@ pub use qtable::QTable;
 pub use repr::{Repr, ReprKind, Representation};
 pub use rollout::{EpisodeObserver, EpisodeResult, Summary, play, play_episode};
 pub use schedule::Schedule;
+pub use towers_policy::TowersPolicy;
 pub use train::{Progress, TrainReport, Trained, Trainer, train};

@@ -14,13 +14,21 @@ def solve(
     held: Optional[int] = None,
     grid: Tuple[int, int] = (7, 7),
     solver: str = "exact",
+    protocol: str = "free",
+    view: str = "top",
 ) -> list:
     """A plan, as a list of action indices, from the state where block ``i`` stands on
     ``cells[i]`` (``(x, y)``, ``y`` upward) with ``held`` held, to ``goal`` (bottom to top,
     ``"1,0,2"`` or ``[1, 0, 2]``).
 
-    ``solver="exact"`` gives a shortest plan (A* over the joint state); ``"oracle"`` the
+    ``solver="exact"`` gives a shortest plan (A* over the joint state) under ``protocol``
+    (``"free"`` or ``"paper"``, as ``blockstack solve --protocol``); ``"oracle"`` the
     centroid + A* oracle's. An empty list when the goal holds already; ``ValueError`` for a
     state or goal that does not fit the grid.
+
+    ``view="side"`` plans block moves in the classic Blocks World seen from the side (the
+    goal may be several towers, ``"0,1/2"``): a list of ``{"block": B, "onto": "table" | C}``,
+    the fewest (``solver="exact"``) or the near-optimal planner's (``"near-optimal"``), as
+    ``blockstack solve --view side --json`` prints them.
     """
-    return _native.solve([tuple(c) for c in cells], goal, held, tuple(grid), solver)
+    return _native.solve([tuple(c) for c in cells], goal, held, tuple(grid), solver, protocol, view)

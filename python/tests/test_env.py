@@ -127,6 +127,35 @@ def test_solve_reads_held_blocks_and_gives_nothing_when_the_goal_holds():
     assert len(plan) == 4  # left x3 then up: block 1 is held already
 
 
+def test_solve_takes_the_protocol_as_the_cli_does(cli):
+    cells, goal = [(0, 0), (3, 0), (5, 2)], "1,0,2"
+    for protocol in ["free", "paper"]:
+        plan = blockstack.solve(cells, goal, protocol=protocol)
+        printed = cli("solve", "--start", "0,0;3,0;5,2", "--goal", goal, "--protocol", protocol, "--json")
+        assert plan == json.loads(printed)["actions"]
+    with pytest.raises(ValueError, match="choose one of free, paper"):
+        blockstack.solve(cells, goal, protocol="strict")
+
+
+def test_solve_plans_block_moves_in_the_side_view():
+    # 1 on 0, 2 on 1; 3 alone. Goal: 1 on the table, 3 on 1, 2 on 3: four moves at least.
+    cells = [(0, 0), (0, 1), (0, 2), (1, 0)]
+    exact = blockstack.solve(cells, "1,3,2/", view="side")
+    assert exact == [
+        {"block": 2, "onto": "table"},
+        {"block": 1, "onto": "table"},
+        {"block": 3, "onto": 1},
+        {"block": 2, "onto": 3},
+    ]
+    near = blockstack.solve(cells, "1,3,2/", view="side", solver="near-optimal")
+    assert len(near) <= 2 * len(exact)
+    assert blockstack.solve(cells, "0,1/3,2", view="side") == [{"block": 2, "onto": 3}]
+    with pytest.raises(ValueError, match="floats"):
+        blockstack.solve([(0, 0), (0, 2)], "0,1", view="side")
+    with pytest.raises(ValueError, match="choose exact or near-optimal"):
+        blockstack.solve(cells, "1,3,2/", view="side", solver="oracle")
+
+
 @pytest.mark.parametrize(
     "kwargs, message",
     [

@@ -13,7 +13,9 @@ use super::solver_budget::SolverBudgetArg;
 use super::stdout::line;
 use super::world::WorldArgs;
 use agent::eval::RunReport;
-use agent::{ExactPolicy, LearnerProfile, OracleKind, OraclePolicy, PaperOraclePolicy, Policy, RandomPolicy};
+use agent::{
+    ExactPolicy, LearnerProfile, OracleKind, OraclePolicy, PaperOraclePolicy, Policy, RandomPolicy, TowersPolicy,
+};
 use neural::AnyModel;
 
 /// Which agent plays.
@@ -140,18 +142,20 @@ pub fn run(args: RunArgs) -> Result<()> {
     if let Some(m) = &model {
         m.check_world(config.grid, config.blocks)?;
     }
-    // The planners and learners play the top view's rules; the side view's come with its
-    // own planners.
+    // The learners play the top view's rules; the side view has its own planners.
     anyhow::ensure!(
-        config.view == sim::View::Top || args.agent == AgentKind::Random,
-        "--agent {} plays the top view only; in the side view use --agent random",
+        config.view == sim::View::Top || !matches!(args.agent, AgentKind::Q | AgentKind::Dqn),
+        "--agent {} plays the top view only; in the side view use --agent random, exact or oracle",
         args.agent
             .to_possible_value()
             .map_or_else(String::new, |v| v.get_name().to_string())
     );
     let oracle = args.oracle.unwrap_or(LearnerProfile::of(rules.profile).oracle);
+    let side = config.view == sim::View::Side;
     let mut policy: Box<dyn Policy + '_> = match (args.agent, &model) {
         (AgentKind::Random, _) => Box::new(RandomPolicy),
+        (AgentKind::Exact, _) if side => Box::new(TowersPolicy::new(oracle::towers::MovePlanner::Exact)),
+        (AgentKind::Oracle, _) if side => Box::new(TowersPolicy::new(oracle::towers::MovePlanner::NearOptimal)),
         (AgentKind::Oracle, _) => match oracle {
             OracleKind::Astar => Box::new(OraclePolicy::new(config.grid)),
             OracleKind::Paper => Box::new(PaperOraclePolicy::new(config.grid)),

@@ -4,7 +4,7 @@
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use oracle::Oracle;
-use oracle::towers::{ExactMoves, NearOptimal, Place, Table, TowerGoal, Towers};
+use oracle::towers::{MovePlanner, Place, plan_side};
 use serde::Serialize;
 use sim::{Goal, Grid, State, View};
 
@@ -176,25 +176,11 @@ fn solve_side(args: &SolveArgs, grid: Grid) -> Result<()> {
     View::Side.check_state(&state).context("--start")?;
     let goal = Goal::parse(&args.goal, Some(state.block_count())).context("--goal")?;
     goal.check_fits(grid).context("--goal")?;
-    let start = Towers::new(&sim::view::towers(&state)?)?;
-    let towers = TowerGoal::new(&goal.tower_lists())?;
-    let table = Table::Columns(grid.width());
-    let plan = match args.solver {
-        SolverKind::NearOptimal => NearOptimal::new().with_table(table).plan(&start, &towers)?,
-        _ => ExactMoves::new().with_table(table).solve(&start, &towers)?,
+    let planner = match args.solver {
+        SolverKind::NearOptimal => MovePlanner::NearOptimal,
+        _ => MovePlanner::Exact,
     };
-    // The planners do not know the grid's height: a plan that stacks higher is refused.
-    let mut now = start;
-    for &mv in &plan.moves {
-        now.apply(mv, table)?;
-        let tallest = now.towers().iter().map(Vec::len).max().unwrap_or(0);
-        anyhow::ensure!(
-            tallest <= grid.height(),
-            "the {} plan stacks {tallest} blocks, more than the grid's {} rows: give a taller --grid",
-            args.solver.name(),
-            grid.height()
-        );
-    }
+    let plan = plan_side(planner, grid, &state, &goal)?;
     if args.json {
         let moves = plan
             .moves

@@ -115,6 +115,20 @@ pub enum TowersError {
         /// Columns of the table.
         columns: usize,
     },
+    /// A plan stacks more blocks than the grid has rows.
+    #[error("the plan stacks {tallest} blocks, more than the grid's {rows} rows: use a taller grid")]
+    TooTall {
+        /// The tallest tower the plan builds.
+        tallest: usize,
+        /// Rows of the grid.
+        rows: usize,
+    },
+    /// A planner name that is not one.
+    #[error("unknown block-move planner {name:?}: choose exact or near-optimal")]
+    UnknownPlanner {
+        /// The name given.
+        name: String,
+    },
     /// A random goal of this shape cannot be drawn.
     #[error("cannot draw a goal of {stacks} towers naming {named} of {blocks} blocks")]
     GoalShape {

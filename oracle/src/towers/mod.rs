@@ -61,6 +61,7 @@ pub mod goal;
 pub mod near_optimal;
 pub mod plan;
 pub mod random;
+pub mod side;
 pub mod state;
 
 pub use error::{Part, TowersError};
@@ -69,4 +70,5 @@ pub use goal::TowerGoal;
 pub use near_optimal::NearOptimal;
 pub use plan::TowerPlan;
 pub use random::{random_goal, random_state};
+pub use side::{MovePlanner, plan_side};
 pub use state::{Move, Place, Table, Towers};
