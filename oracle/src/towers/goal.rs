@@ -11,7 +11,7 @@ use std::fmt;
 use crate::error::Result;
 
 use super::error::{Part, TowersError};
-use super::state::{NONE, Place, Towers};
+use super::state::{Chains, NONE, Place, Towers};
 
 /// A goal: towers of named blocks, each bottom to top; unnamed blocks are free.
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
@@ -31,32 +31,10 @@ impl TowerGoal {
     /// named twice; whether the blocks exist is checked against a state
     /// ([`TowerGoal::check_blocks`]).
     pub fn new(towers: &[Vec<usize>]) -> Result<Self> {
+        // Every block it names is below this bound, so only empty towers and blocks named
+        // twice are errors here.
         let len = towers.iter().flatten().max().map_or(0, |&m| m + 1);
-        let mut named = vec![false; len];
-        let mut below = vec![NONE; len];
-        let mut above = vec![NONE; len];
-        for (t, tower) in towers.iter().enumerate() {
-            if tower.is_empty() {
-                return Err(TowersError::EmptyTower {
-                    part: Part::Goal,
-                    tower: t,
-                }
-                .into());
-            }
-            for (i, &b) in tower.iter().enumerate() {
-                if std::mem::replace(&mut named[b], true) {
-                    return Err(TowersError::DuplicateBlock {
-                        part: Part::Goal,
-                        block: b,
-                    }
-                    .into());
-                }
-                if i > 0 {
-                    below[b] = tower[i - 1];
-                    above[tower[i - 1]] = b;
-                }
-            }
-        }
+        let Chains { named, below, above } = Chains::of(towers, len, Part::Goal)?;
         Ok(TowerGoal {
             towers: towers.to_vec(),
             named,

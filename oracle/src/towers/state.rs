@@ -105,49 +105,63 @@ pub struct Towers {
     towers: usize,
 }
 
+/// Towers (each bottom to top) as links between blocks: what a state and a goal are both
+/// read from.
+pub(crate) struct Chains {
+    /// Whether each block is in a tower.
+    pub(crate) named: Vec<bool>,
+    /// The block each stands on ([`NONE`]: the table, or not named).
+    pub(crate) below: Vec<usize>,
+    /// The block standing on each ([`NONE`]: nothing).
+    pub(crate) above: Vec<usize>,
+}
+
+impl Chains {
+    /// The links of `towers` over the block ids `0..len`; an error for an empty tower, a
+    /// block not below `len`, or a block named twice, in the `part` it names.
+    pub(crate) fn of(towers: &[Vec<usize>], len: usize, part: Part) -> Result<Chains> {
+        let mut chains = Chains {
+            named: vec![false; len],
+            below: vec![NONE; len],
+            above: vec![NONE; len],
+        };
+        for (t, tower) in towers.iter().enumerate() {
+            if tower.is_empty() {
+                return Err(TowersError::EmptyTower { part, tower: t }.into());
+            }
+            for (i, &b) in tower.iter().enumerate() {
+                if b >= len {
+                    return Err(TowersError::UnknownBlock {
+                        part,
+                        block: b,
+                        blocks: len,
+                    }
+                    .into());
+                }
+                if std::mem::replace(&mut chains.named[b], true) {
+                    return Err(TowersError::DuplicateBlock { part, block: b }.into());
+                }
+                if i > 0 {
+                    chains.below[b] = tower[i - 1];
+                    chains.above[tower[i - 1]] = b;
+                }
+            }
+        }
+        Ok(chains)
+    }
+}
+
 impl Towers {
     /// The state with these towers, each listed bottom to top. The blocks must be `0..n`,
     /// each once, and no tower empty.
     pub fn new(towers: &[Vec<usize>]) -> Result<Self> {
         let n: usize = towers.iter().map(Vec::len).sum();
-        let mut below = vec![NONE; n];
-        let mut above = vec![NONE; n];
-        let mut seen = vec![false; n];
-        for (t, tower) in towers.iter().enumerate() {
-            if tower.is_empty() {
-                return Err(TowersError::EmptyTower {
-                    part: Part::State,
-                    tower: t,
-                }
-                .into());
-            }
-            for (i, &b) in tower.iter().enumerate() {
-                if b >= n {
-                    return Err(TowersError::UnknownBlock {
-                        part: Part::State,
-                        block: b,
-                        blocks: n,
-                    }
-                    .into());
-                }
-                if std::mem::replace(&mut seen[b], true) {
-                    return Err(TowersError::DuplicateBlock {
-                        part: Part::State,
-                        block: b,
-                    }
-                    .into());
-                }
-                if i > 0 {
-                    below[b] = tower[i - 1];
-                    above[tower[i - 1]] = b;
-                }
-            }
-        }
+        let chains = Chains::of(towers, n, Part::State)?;
         // n blocks with ids below n, none twice: all of 0..n are there.
-        debug_assert!(seen.iter().all(|&s| s));
+        debug_assert!(chains.named.iter().all(|&s| s));
         Ok(Towers {
-            below,
-            above,
+            below: chains.below,
+            above: chains.above,
             towers: towers.len(),
         })
     }
