@@ -206,3 +206,54 @@ fn trajectory_headers_record_the_view_and_the_towers_and_old_headers_read_as_top
     assert_eq!((episodes[0].view, episodes[0].goal), (View::Side, obs.goal));
     assert_eq!(episodes[0].steps.len(), lines.len() - 1);
 }
+
+/// The towers of `goal` as a set (their order in the goal does not change what it asks).
+fn tower_set(goal: &Goal) -> std::collections::BTreeSet<Vec<usize>> {
+    goal.tower_lists().into_iter().collect()
+}
+
+#[test]
+fn all_towers_lists_every_split_of_the_blocks_once() {
+    for (blocks, count) in [(2, 3), (3, 13), (4, 73), (5, 501)] {
+        let goals = Goal::all_towers(blocks).unwrap();
+        assert_eq!(goals.len(), count, "{blocks} blocks");
+        let sets: std::collections::BTreeSet<_> = goals.iter().map(tower_set).collect();
+        assert_eq!(sets.len(), count, "no goal twice, whatever its towers' order");
+        assert!(goals.iter().all(|g| g.order().len() == blocks), "every block named");
+        assert_eq!(goals[..(1..=blocks).product::<usize>()], Goal::all(blocks).unwrap()[..]);
+    }
+    assert!(Goal::all_towers(3).unwrap().contains(&"0,1/2".parse().unwrap()));
+    assert!(Goal::all_towers(3).unwrap().contains(&"0/1/2".parse().unwrap()));
+    assert!(matches!(Goal::all_towers(7), Err(SimError::TooManyGoals { .. })));
+    assert!(Goal::all_towers(100).is_err());
+}
+
+#[test]
+fn random_towers_draws_every_goal_of_that_many_towers_alike_and_by_seed() {
+    use rand::SeedableRng;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+    let mut counts = std::collections::BTreeMap::new();
+    for _ in 0..6000 {
+        let g = Goal::random_towers(3, 2, &mut rng).unwrap();
+        assert_eq!(g.tower_count(), 2);
+        *counts.entry(g.to_string()).or_insert(0) += 1;
+    }
+    let two_towers: Vec<String> = Goal::all_towers(3)
+        .unwrap()
+        .iter()
+        .filter(|g| g.tower_count() == 2)
+        .map(|g| g.to_string())
+        .collect();
+    assert_eq!(counts.keys().cloned().collect::<Vec<_>>().len(), two_towers.len());
+    assert!(two_towers.iter().all(|g| counts.contains_key(g)), "{counts:?}");
+    assert!(counts.values().all(|&n| (850..1150).contains(&n)), "{counts:?}");
+    let draw = |seed| {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        (0..20)
+            .map(|_| Goal::random_towers(8, 3, &mut rng).unwrap())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(draw(3), draw(3));
+    assert!(Goal::random_towers(3, 0, &mut rng).is_err());
+    assert!(Goal::random_towers(3, 4, &mut rng).is_err());
+}
