@@ -19,43 +19,6 @@ fn side_states(grid: Grid, blocks: usize) -> Vec<State> {
         .collect()
 }
 
-/// Every goal naming all `blocks` blocks, in one to `blocks` towers (each set of towers
-/// once).
-fn goals_naming_all(blocks: usize) -> Vec<Goal> {
-    fn permutations(rest: Vec<usize>, prefix: &mut Vec<usize>, out: &mut Vec<Vec<usize>>) {
-        if rest.is_empty() {
-            out.push(prefix.clone());
-        }
-        for (i, &b) in rest.iter().enumerate() {
-            let mut r = rest.clone();
-            r.remove(i);
-            prefix.push(b);
-            permutations(r, prefix, out);
-            prefix.pop();
-        }
-    }
-    let mut orders = Vec::new();
-    permutations((0..blocks).collect(), &mut Vec::new(), &mut orders);
-    let mut goals = Vec::new();
-    for order in orders {
-        // Each subset of the gaps between consecutive blocks cuts the order into towers.
-        for cuts in 0u32..1 << (blocks - 1) {
-            let mut towers = vec![vec![order[0]]];
-            for (i, &b) in order.iter().enumerate().skip(1) {
-                if cuts & (1 << (i - 1)) != 0 {
-                    towers.push(Vec::new());
-                }
-                towers.last_mut().unwrap().push(b);
-            }
-            // The same towers in another order are the same goal: keep them by bottom block.
-            if towers.windows(2).all(|w| w[0][0] < w[1][0]) {
-                goals.push(Goal::of_towers(&towers, blocks).unwrap());
-            }
-        }
-    }
-    goals
-}
-
 /// The fewest steps from `start` to every state it reaches, by breadth-first search over
 /// every action (no-ops included) through `World::act` in the side view.
 fn distances_from(grid: Grid, start: State) -> HashMap<State, u32> {
@@ -88,7 +51,7 @@ fn replay_side(grid: Grid, start: &State, actions: &[Action]) -> State {
 
 #[test]
 fn side_distances_equal_breadth_first_search_on_small_worlds() {
-    let goal_sets: Vec<(usize, Vec<Goal>)> = (2..=3).map(|n| (n, goals_naming_all(n))).collect();
+    let goal_sets: Vec<(usize, Vec<Goal>)> = (2..=3).map(|n| (n, Goal::all_towers(n).unwrap())).collect();
     assert_eq!(
         goal_sets[1].1.len(),
         13,
@@ -135,7 +98,7 @@ fn side_distances_equal_breadth_first_search_on_small_worlds() {
 #[test]
 fn side_heuristic_is_consistent_on_every_state_of_a_small_world() {
     let grid = Grid::new(4, 3).unwrap();
-    for goal in goals_naming_all(3) {
+    for goal in Goal::all_towers(3).unwrap() {
         let solver = ExactSolver::new(grid).with_view(View::Side);
         for s in side_states(grid, 3) {
             let h = solver.lower_bound(&s, &goal).unwrap();
@@ -205,7 +168,7 @@ fn side_steps_lie_between_three_times_the_fewest_moves_and_the_expanded_exact_pl
     let mut compared = 0;
     let mut problems: Vec<(Grid, State, Goal)> = Vec::new();
     let small = Grid::new(4, 3).unwrap();
-    for goal in goals_naming_all(3) {
+    for goal in Goal::all_towers(3).unwrap() {
         for s in side_states(small, 3).into_iter().filter(|s| s.held_block().is_none()) {
             problems.push((small, s, goal));
         }
