@@ -101,8 +101,6 @@ fn solve_plans_block_moves_in_the_side_view() {
     assert_eq!(two["length"], 1);
     // What the side view does not plan is refused in one line.
     for (args, message) in [
-        (base.clone().flag("cost", "steps"), "use --cost moves"),
-        (base.clone().flag("solver", "oracle"), "choose exact or near-optimal"),
         (base.clone().flag("held", 2), "starts with nothing held"),
         (
             cli("solve")
