@@ -140,6 +140,14 @@ impl ExactSolver {
         self
     }
 
+    /// The solver of `world`'s grid, protocol and view: the yardstick of an evaluation
+    /// played in that world.
+    pub fn for_world(world: &sim::EnvConfig) -> Self {
+        ExactSolver::new(world.grid)
+            .with_protocol(world.protocol)
+            .with_view(world.view)
+    }
+
     /// The world it plans in.
     pub fn view(&self) -> View {
         self.view
