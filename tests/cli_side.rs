@@ -50,7 +50,7 @@ fn top_view_agents_and_rules_refuse_the_side_view_in_one_line() {
     for (args, says) in [
         (
             vec!["run", "--view", "side", "--agent", "q", "--model", path(&model)],
-            "--agent q plays the top view only",
+            "the model learnt the top view; it cannot play the side view",
         ),
         (
             vec!["run", "--agent", "exact", "--goal", "0,1/2"],
