@@ -153,7 +153,7 @@ fn bad_models_and_arguments_are_one_line_errors() {
     let out = dir.join("x.safetensors");
     check(
         &["train", "--repr", "deep", "--out", path(&out)],
-        "choose raw, pairwise, chasing, chasing-code or role",
+        "choose raw, pairwise, chasing, chasing-code, role or role-towers",
     );
     check(&["train", "--alpha", "0", "--out", path(&out)], "alpha 0");
     check(

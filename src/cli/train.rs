@@ -61,15 +61,16 @@ pub struct TrainArgs {
     pub play: PlayRulesArgs,
     /// The learner's recipe: paper (the profile's
     /// learner) or optimal (the role recipe: role, step-cost, alpha 1, gamma 1, epsilon 0,
-    /// backward and final replay) [default: optimal for --repr role under the spec
-    /// profile, paper otherwise]. A profile sets the world and the learner as coded; a preset
+    /// backward and final replay; role-towers in the side view) [default: optimal for --repr
+    /// role or role-towers under the spec profile and in the side view, paper otherwise]. A profile sets the world and the learner as coded; a preset
     /// then sets the representation, reward, alpha, gamma, epsilon, initial value and
     /// replays; an explicit flag beats both.
     #[arg(long)]
     pub preset: Option<Preset>,
     /// State representation: raw, pairwise, chasing (the paper's prose), chasing-code (the
-    /// paper's code) or role (ours) [default: the preset's: chasing under spec,
-    /// chasing-code under original, role under --preset optimal]
+    /// paper's code), role (ours) or role-towers (ours, for goals of towers) [default: the
+    /// preset's: chasing under spec, chasing-code under original, role under --preset
+    /// optimal, role-towers in the side view]
     #[arg(long)]
     pub repr: Option<ReprKind>,
     /// Reward model: sparse, dense, paper, step-cost or paper-code [default: the preset's:
@@ -91,10 +92,10 @@ pub struct TrainArgs {
     #[arg(long)]
     pub oscillation: Option<Oscillation>,
     /// Goals to train on, bottom to top, separated by ':', e.g. 0,1,2:1,0,2 (default: every
-    /// goal).
+    /// goal; in the side view one goal of each shape, 0,1,2:0,1/2:0/1/2 for 3 blocks).
     #[arg(long)]
     pub goals: Option<String>,
-    /// Training games [default: 5000 under spec, 100 under original]
+    /// Training games [default: 5000 under spec, 100 under original, 100000 in the side view]
     #[arg(long)]
     pub games: Option<u64>,
     /// Seed of the starts and of every random choice.
@@ -207,7 +208,13 @@ impl TrainArgs {
             backend: Some(self.backend.parse::<Backend>()?),
             view: Some(self.view.parse::<View>()?),
         };
-        Ok(TrainConfig::resolve(&overrides)?)
+        TrainConfig::resolve(&overrides).map_err(|e| match e {
+            // The goals were the default's: say which flag chooses others.
+            agent::AgentError::Sim(sim::SimError::TooManyGoals { .. }) if self.goals.is_none() => {
+                anyhow::Error::new(e).context("without --goals every goal is used")
+            }
+            e => e.into(),
+        })
     }
 }
 
