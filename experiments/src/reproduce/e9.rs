@@ -1,0 +1,612 @@
+//! E9 (ours, issue 17): the classic Blocks World, seen from the side (docs/world.md section
+//! 12), where planning and learning research measures itself: for 3 to 10 blocks and random
+//! goals of one to three towers, the fewest block moves (A*), the near-optimal planner, and
+//! how the planners' moves come out as gripper steps when the gripper carries them out
+//! through the physics; reported by the number of stacking steps, as Duan et al. ("One-Shot
+//! Imitation Learning", 2017) report their success; and how often the physics backend and
+//! the grid model agreed.
+//!
+//! # How a problem is drawn
+//!
+//! Problem `j` of `N` blocks and `k` towers has the seed `episode_seed(episode_seed(test
+//! seed, 1000 N + k), j)`: its goal is `Goal::random_towers(N, k)` drawn from that seed's
+//! generator on a stream of its own, its start the side view's `reset(seed)` (random towers
+//! in which the goal does not hold). So the quick run's problems are the first of the
+//! default run's, and a cell's problems do not depend on how many the other cells have.
+//!
+//! # The grid
+//!
+//! The classic world's table is unbounded. Ours is as wide as the grid, so the grid has at
+//! least as many columns as blocks (the table never runs out: the planners plan exactly as
+//! on an unbounded table) and a row more than blocks (a tower of every block, and a row to
+//! carry a block over it): the paper's 7 x 7 up to 6 blocks, `N x (N + 1)` beyond.
+//!
+//! # The stacking steps
+//!
+//! Duan et al. group their tasks by the number of stacking steps a task takes; ours are the
+//! fewest block moves from the start (each move stacks one block on another or on the
+//! table), the exact planner's count.
+
+use agent::{EpisodeObserver, Policy, RandomPolicy, TowersPolicy};
+use oracle::towers::{MovePlanner, plan_side};
+use rayon::prelude::*;
+use serde::Serialize;
+use sim::seeding::{self, episode_seed};
+use sim::{Action, Backend, Env, EnvConfig, Goal, GoalSpec, Grid, Observation, State, Step, View};
+
+use super::e8::Budget;
+use super::shared::Shared;
+use super::text::num;
+use super::{Context, Drawing, Experiment, Figure, HORIZON, Result, Setting};
+use plots::{CurvesChart, Series};
+
+/// The numbers of blocks, as the issue lists them.
+pub const BLOCKS: [usize; 6] = [3, 4, 5, 6, 8, 10];
+
+/// Goals have one to this many towers.
+pub const MAX_TOWERS: usize = 3;
+
+/// The progress stage E9 reports under.
+const STAGE: &str = "E9";
+
+/// Problems per number of blocks and of towers.
+fn problems_per_cell(budget: Budget) -> u64 {
+    match budget {
+        Budget::Quick => 2,
+        Budget::Default => 40,
+        Budget::Long => 200,
+    }
+}
+
+/// Random steps per number of blocks in the agreement table.
+fn agreement_steps(budget: Budget) -> u64 {
+    match budget {
+        Budget::Quick => 1_000,
+        Budget::Default => 20_000,
+        Budget::Long => 200_000,
+    }
+}
+
+/// The grid of `blocks` blocks (module docs).
+pub fn grid_for(blocks: usize) -> Grid {
+    let (width, height) = (blocks.max(7), (blocks + 1).max(7));
+    Grid::new(width, height).expect("at most 10 x 11 cells")
+}
+
+/// The agents that play the problems through the gripper, in the tables' order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Agent {
+    /// The exact block-move planner's moves, carried out by the gripper.
+    Exact,
+    /// The near-optimal planner's moves, carried out by the gripper.
+    NearOptimal,
+}
+
+const AGENTS: [Agent; 2] = [Agent::Exact, Agent::NearOptimal];
+
+impl Agent {
+    fn name(self) -> &'static str {
+        match self {
+            Agent::Exact => "exact planner",
+            Agent::NearOptimal => "near-optimal planner",
+        }
+    }
+
+    /// Whether the agent plays problems of `blocks` blocks.
+    fn plays(self, _blocks: usize) -> bool {
+        true
+    }
+
+    fn policy(self) -> Box<dyn Policy> {
+        match self {
+            Agent::Exact => Box::new(TowersPolicy::new(MovePlanner::Exact)),
+            Agent::NearOptimal => Box::new(TowersPolicy::new(MovePlanner::NearOptimal)),
+        }
+    }
+}
+
+/// How an agent's game of a problem went.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Played {
+    /// The goal was reached before the horizon.
+    pub reached_goal: bool,
+    /// Gripper steps taken.
+    pub steps: u32,
+    /// Block moves taken: the Drops.
+    pub moves: u32,
+}
+
+/// One (start, goal) problem and how it was solved.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Problem {
+    /// Blocks.
+    pub blocks: usize,
+    /// Towers of the goal.
+    pub towers: usize,
+    /// The problem's seed (module docs).
+    pub seed: u64,
+    /// The goal.
+    pub goal: Goal,
+    /// The start.
+    pub start: State,
+    /// The fewest block moves (the exact planner's plan): the problem's stacking steps.
+    pub fewest_moves: u32,
+    /// The near-optimal planner's plan from the start, in block moves.
+    pub near_optimal_moves: u32,
+    /// The fewest gripper steps, where computed.
+    pub fewest_steps: Option<u32>,
+    /// Each agent's game, in the agents' order (`None`: it does not play this many blocks).
+    pub played: Vec<Option<Played>>,
+}
+
+/// An agent's figures over a group of problems.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct AgentFigures {
+    /// The agent.
+    pub agent: String,
+    /// Games played.
+    pub games: usize,
+    /// Share of the games that reached the goal.
+    pub success: f64,
+    /// Mean block moves over the successes.
+    pub mean_moves: Option<f64>,
+    /// Mean ratio of the block moves to the fewest, over the successes.
+    pub moves_ratio: Option<f64>,
+    /// Mean gripper steps over the successes.
+    pub mean_steps: Option<f64>,
+    /// Mean ratio of the gripper steps to the fewest, over the successes whose fewest is
+    /// known.
+    pub steps_ratio: Option<f64>,
+}
+
+/// The figures of a group of problems: all those of a number of blocks, of a number of
+/// goal towers, or of a number of stacking steps.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Group {
+    /// The number of blocks, towers or stacking steps the group shares.
+    pub key: usize,
+    /// Problems in the group.
+    pub problems: usize,
+    /// Mean fewest block moves.
+    pub fewest_moves: f64,
+    /// Mean block moves of the near-optimal planner's plans.
+    pub near_optimal_moves: f64,
+    /// Mean ratio of the near-optimal plan to the fewest moves.
+    pub near_optimal_ratio: f64,
+    /// The largest such ratio.
+    pub near_optimal_worst: f64,
+    /// Mean fewest gripper steps, when known for every problem of the group.
+    pub fewest_steps: Option<f64>,
+    /// Each agent that played the group's problems.
+    pub agents: Vec<AgentFigures>,
+}
+
+/// The physics backend against the grid model: the same random play on both.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct Agreement {
+    /// Blocks.
+    pub blocks: usize,
+    /// The grid, "W x H".
+    pub grid: String,
+    /// Episodes begun.
+    pub episodes: u64,
+    /// Starts that were the same on both.
+    pub same_starts: u64,
+    /// Random steps taken on both.
+    pub steps: u64,
+    /// Steps whose outcomes (state, reward, end, info) were the same on both.
+    pub same_steps: u64,
+    /// Drops among the steps.
+    pub drops: u64,
+    /// Drops whose block came to rest on the same cell on both.
+    pub same_landings: u64,
+}
+
+impl Agreement {
+    /// Whether the two agreed on everything.
+    pub fn total(&self) -> bool {
+        self.same_starts == self.episodes && self.same_steps == self.steps && self.same_landings == self.drops
+    }
+}
+
+/// E9's results beside its tables: what `results.json` holds of it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BlocksWorld {
+    /// Problems per number of blocks and of towers.
+    pub problems_per_cell: u64,
+    /// The backend the agents played on.
+    pub backend: Backend,
+    /// By number of blocks.
+    pub by_blocks: Vec<Group>,
+    /// By number of goal towers.
+    pub by_towers: Vec<Group>,
+    /// By number of stacking steps (the fewest block moves).
+    pub by_stacking_steps: Vec<Group>,
+    /// Physics against the grid model, by number of blocks.
+    pub agreement: Vec<Agreement>,
+    /// Every problem (not written: the groups are its figures).
+    #[serde(skip)]
+    pub problems: Vec<Problem>,
+}
+
+/// Jobs reported: one per number of blocks and of towers, and one agreement run per number
+/// of blocks.
+pub(super) fn jobs(_: &Context) -> u64 {
+    (BLOCKS.len() * MAX_TOWERS + BLOCKS.len()) as u64
+}
+
+/// The backend the agents play on.
+const BACKEND: Backend = Backend::Physics;
+
+/// Runs E9.
+pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
+    let per_cell = problems_per_cell(ctx.budget);
+    let cells: Vec<(usize, usize)> = BLOCKS
+        .iter()
+        .flat_map(|&n| (1..=MAX_TOWERS).map(move |k| (n, k)))
+        .collect();
+    let (problems, agreement) = rayon::join(
+        || -> Result<Vec<Problem>> {
+            let per: Vec<Vec<Problem>> = cells
+                .par_iter()
+                .map(|&(n, k)| {
+                    let cell_seed = episode_seed(ctx.seeds.test, 1000 * n as u64 + k as u64);
+                    let problems = (0..per_cell)
+                        .into_par_iter()
+                        .map(|j| problem(n, k, episode_seed(cell_seed, j)))
+                        .collect::<Result<Vec<_>>>()?;
+                    ctx.progress.advance(STAGE);
+                    Ok(problems)
+                })
+                .collect::<Result<_>>()?;
+            Ok(per.into_iter().flatten().collect())
+        },
+        || -> Result<Vec<Agreement>> {
+            BLOCKS
+                .par_iter()
+                .map(|&n| {
+                    let a = agreement(n, agreement_steps(ctx.budget), episode_seed(ctx.seeds.test, 9000 + n as u64))?;
+                    ctx.progress.advance(STAGE);
+                    Ok(a)
+                })
+                .collect()
+        },
+    );
+    let (problems, agreement) = (problems?, agreement?);
+    let world = BlocksWorld {
+        problems_per_cell: per_cell,
+        backend: BACKEND,
+        by_blocks: groups(&problems, |p| p.blocks),
+        by_towers: groups(&problems, |p| p.towers),
+        by_stacking_steps: groups(&problems, |p| p.fewest_moves as usize),
+        agreement,
+        problems,
+    };
+    Ok(experiment(ctx, world))
+}
+
+/// Counts the Drops of an episode: its block moves.
+#[derive(Default)]
+struct Drops(u32);
+
+impl EpisodeObserver for Drops {
+    fn step(&mut self, _: u64, _: &Observation, action: Action, _: &Step) -> agent::Result<()> {
+        self.0 += u32::from(action == Action::Drop);
+        Ok(())
+    }
+}
+
+/// The generator a problem's goal is drawn from: the problem seed's, on a stream the
+/// start's draw does not use.
+fn goal_rng(seed: u64) -> seeding::SimRng {
+    let mut rng = seeding::rng(seed);
+    rng.set_stream(2);
+    rng
+}
+
+/// Draws problem `seed` of `blocks` blocks and `towers` towers, plans it and plays it.
+fn problem(blocks: usize, towers: usize, seed: u64) -> Result<Problem> {
+    let grid = grid_for(blocks);
+    let goal = Goal::random_towers(blocks, towers, &mut goal_rng(seed))?;
+    let mut env = Env::new(EnvConfig {
+        grid,
+        blocks,
+        goal: GoalSpec::Fixed(goal),
+        horizon: HORIZON,
+        backend: BACKEND,
+        view: View::Side,
+        ..EnvConfig::default()
+    })?;
+    let start = env.reset(seed).state;
+    let fewest_moves = plan_side(MovePlanner::Exact, grid, &start, &goal)?.len() as u32;
+    let near_optimal_moves = plan_side(MovePlanner::NearOptimal, grid, &start, &goal)?.len() as u32;
+    let played = AGENTS
+        .iter()
+        .map(|&a| {
+            if !a.plays(blocks) {
+                return Ok(None);
+            }
+            let mut drops = Drops::default();
+            let r = agent::play_episode(&mut env, a.policy().as_mut(), 0, seed, &mut drops)?;
+            Ok(Some(Played {
+                reached_goal: r.reached_goal,
+                steps: r.steps,
+                moves: drops.0,
+            }))
+        })
+        .collect::<Result<_>>()?;
+    Ok(Problem {
+        blocks,
+        towers,
+        seed,
+        goal,
+        start,
+        fewest_moves,
+        near_optimal_moves,
+        fewest_steps: None,
+        played,
+    })
+}
+
+/// The mean of `values`, `None` for none.
+fn mean(values: impl IntoIterator<Item = f64>) -> Option<f64> {
+    let (sum, n) = values.into_iter().fold((0.0, 0usize), |(s, n), v| (s + v, n + 1));
+    (n > 0).then(|| sum / n as f64)
+}
+
+/// The problems grouped by `key`, in increasing order of it.
+fn groups(problems: &[Problem], key: impl Fn(&Problem) -> usize) -> Vec<Group> {
+    let mut keys: Vec<usize> = problems.iter().map(&key).collect();
+    keys.sort_unstable();
+    keys.dedup();
+    keys.into_iter()
+        .map(|k| {
+            let members: Vec<&Problem> = problems.iter().filter(|p| key(p) == k).collect();
+            group(k, &members)
+        })
+        .collect()
+}
+
+fn group(key: usize, members: &[&Problem]) -> Group {
+    let ratio = |p: &Problem| f64::from(p.near_optimal_moves) / f64::from(p.fewest_moves);
+    let agents = AGENTS
+        .iter()
+        .enumerate()
+        .filter_map(|(i, a)| {
+            let games: Vec<(&Problem, Played)> = members.iter().filter_map(|p| p.played[i].map(|g| (*p, g))).collect();
+            if games.is_empty() {
+                return None;
+            }
+            let wins: Vec<&(&Problem, Played)> = games.iter().filter(|(_, g)| g.reached_goal).collect();
+            Some(AgentFigures {
+                agent: a.name().into(),
+                games: games.len(),
+                success: wins.len() as f64 / games.len() as f64,
+                mean_moves: mean(wins.iter().map(|(_, g)| f64::from(g.moves))),
+                moves_ratio: mean(wins.iter().map(|(p, g)| f64::from(g.moves) / f64::from(p.fewest_moves))),
+                mean_steps: mean(wins.iter().map(|(_, g)| f64::from(g.steps))),
+                steps_ratio: mean(
+                    wins.iter()
+                        .filter_map(|(p, g)| p.fewest_steps.map(|f| f64::from(g.steps) / f64::from(f))),
+                ),
+            })
+        })
+        .collect();
+    Group {
+        key,
+        problems: members.len(),
+        fewest_moves: mean(members.iter().map(|p| f64::from(p.fewest_moves))).unwrap_or(0.0),
+        near_optimal_moves: mean(members.iter().map(|p| f64::from(p.near_optimal_moves))).unwrap_or(0.0),
+        near_optimal_ratio: mean(members.iter().map(|p| ratio(p))).unwrap_or(0.0),
+        near_optimal_worst: members.iter().map(|p| ratio(p)).fold(0.0, f64::max),
+        fewest_steps: members
+            .iter()
+            .map(|p| p.fewest_steps.map(f64::from))
+            .collect::<Option<Vec<f64>>>()
+            .and_then(mean),
+        agents,
+    }
+}
+
+/// Seeded random play on the physics backend and the same actions on the grid model,
+/// `steps` steps of `blocks` blocks on their grid: how often the two agreed. An episode
+/// whose outcomes part stops there (the next starts both afresh).
+fn agreement(blocks: usize, steps: u64, seed: u64) -> Result<Agreement> {
+    let grid = grid_for(blocks);
+    let config = |backend| EnvConfig {
+        grid,
+        blocks,
+        horizon: HORIZON,
+        backend,
+        view: View::Side,
+        ..EnvConfig::default()
+    };
+    let (mut physics, mut model) = (Env::new(config(Backend::Physics))?, Env::new(config(Backend::Grid))?);
+    let mut a = Agreement {
+        blocks,
+        grid: format!("{} x {}", grid.width(), grid.height()),
+        episodes: 0,
+        same_starts: 0,
+        steps: 0,
+        same_steps: 0,
+        drops: 0,
+        same_landings: 0,
+    };
+    let mut random = RandomPolicy;
+    // Starts drawn alike by both (the same code draws them); the bound on episodes only
+    // guards against a loop that never steps.
+    while a.steps < steps && a.episodes < steps {
+        let episode = episode_seed(seed, a.episodes);
+        a.episodes += 1;
+        let mut obs = physics.reset(episode);
+        if obs != model.reset(episode) {
+            continue;
+        }
+        a.same_starts += 1;
+        let mut rng = agent::rollout::policy_rng(episode);
+        while !physics.is_over() && a.steps < steps {
+            let action = random.act(&obs, &mut rng)?;
+            let held = obs.held_block();
+            let (p, g) = (physics.step(action)?, model.step(action)?);
+            a.steps += 1;
+            if let (Action::Drop, Some(block)) = (action, held) {
+                a.drops += 1;
+                a.same_landings += u64::from(p.observation.state.cell(block) == g.observation.state.cell(block));
+            }
+            if p != g {
+                break;
+            }
+            a.same_steps += 1;
+            obs = p.observation;
+        }
+    }
+    Ok(a)
+}
+
+/// The report's section from the results.
+fn experiment(ctx: &Context, world: BlocksWorld) -> Experiment {
+    let all = &world.problems;
+    let everything = group(0, &all.iter().collect::<Vec<_>>());
+    let figures_of = |agent: Agent| everything.agents.iter().find(|f| f.agent == agent.name());
+    let (exact, near) = (figures_of(Agent::Exact), figures_of(Agent::NearOptimal));
+    let success = |f: Option<&AgentFigures>| num(f.map(|f| 100.0 * f.success), 1);
+    let agreed_drops: u64 = world.agreement.iter().map(|a| a.same_landings).sum();
+    let drops: u64 = world.agreement.iter().map(|a| a.drops).sum();
+    let agreed_steps: u64 = world.agreement.iter().map(|a| a.same_steps).sum();
+    let steps: u64 = world.agreement.iter().map(|a| a.steps).sum();
+    let deepest = world.by_stacking_steps.last().map_or(0, |g| g.key);
+    let reading = format!(
+        "Over {} problems of 3 to 10 blocks (up to {deepest} stacking steps), the near-optimal planner's plans were \
+         {}x the fewest block moves on average (worst {}x); carried out by the gripper through the physics, the \
+         exact planner reached the goal in {}% of the problems and the near-optimal planner in {}%, with {} and {} \
+         gripper steps per block move. Physics and grid agreed on {agreed_steps} of {steps} random steps and \
+         {agreed_drops} of {drops} drops.",
+        all.len(),
+        num(Some(everything.near_optimal_ratio), 3),
+        num(Some(everything.near_optimal_worst), 2),
+        success(exact),
+        success(near),
+        num(exact.and_then(|f| Some(f.mean_steps? / f.mean_moves?)), 1),
+        num(near.and_then(|f| Some(f.mean_steps? / f.mean_moves?)), 1),
+    );
+    let mut series = vec![Series {
+        name: "near-optimal plan".into(),
+        points: world
+            .by_stacking_steps
+            .iter()
+            .map(|g| (g.key as f64, g.near_optimal_ratio))
+            .collect(),
+    }];
+    for agent in AGENTS {
+        series.push(Series {
+            name: format!("{}, played", agent.name()),
+            points: world
+                .by_stacking_steps
+                .iter()
+                .filter_map(|g| {
+                    let f = g.agents.iter().find(|f| f.agent == agent.name())?;
+                    Some((g.key as f64, f.moves_ratio?))
+                })
+                .collect(),
+        });
+    }
+    series.retain(|s| !s.points.is_empty());
+    let chart = CurvesChart {
+        title: "E9: block moves against the fewest, by stacking steps".into(),
+        x_label: "stacking steps (the fewest block moves)".into(),
+        y_label: "block moves / fewest (mean)".into(),
+        y_range: None,
+        series,
+        note: format!(
+            "{} problems, 3-10 blocks, goals of 1-{MAX_TOWERS} towers; a game that failed has no ratio.",
+            all.len()
+        ),
+    };
+    let grids = BLOCKS
+        .iter()
+        .map(|&n| {
+            let g = grid_for(n);
+            format!("{n}: {} x {}", g.width(), g.height())
+        })
+        .collect::<Vec<_>>()
+        .join(", ");
+    Experiment {
+        id: "E9".into(),
+        title: "The classic Blocks World, seen from the side (ours)".into(),
+        setup: vec![
+            Setting {
+                name: "world".into(),
+                value: "the side view (docs/world.md section 12): towers under gravity, only a clear block picked, a \
+                        released block falls to the top of the column below; the classic Blocks World of Gupta & Nau \
+                        (\"On the complexity of blocks-world planning\", 1992) and Slaney & Thiebaux (\"Blocks World \
+                        revisited\", 2001)"
+                    .into(),
+            },
+            Setting {
+                name: "problems".into(),
+                value: format!(
+                    "{per} per number of blocks ({}) and of goal towers (1 to {MAX_TOWERS}), {} in all: the goal \
+                     drawn uniformly among those of that many towers naming every block, the start random towers in \
+                     which it does not hold; problem j of N blocks and k towers from seed \
+                     episode_seed(episode_seed({}, 1000 N + k), j)",
+                    BLOCKS.map(|n| n.to_string()).join(", "),
+                    all.len(),
+                    ctx.seeds.test,
+                    per = world.problems_per_cell,
+                ),
+            },
+            Setting {
+                name: "grids".into(),
+                value: format!(
+                    "by blocks, {grids}: as many columns as blocks at least, so the table never runs out (the \
+                     classic world's table is unbounded), and a row more than blocks, for a tower of every block \
+                     and a block carried over it"
+                ),
+            },
+            Setting {
+                name: "planners".into(),
+                value: "the fewest block moves by A* (`oracle::towers::ExactMoves`), the near-optimal planner \
+                        (`NearOptimal`, at most twice the fewest); each also played by the gripper \
+                        (`agent::TowersPolicy`: at each block-move boundary it plans from the state it sees and \
+                        carries the first move out as gripper actions), its Drops counted as block moves"
+                    .into(),
+            },
+            Setting {
+                name: "backend".into(),
+                value: format!(
+                    "the games on the {} backend (rapier2d dynamics to rest at every Drop), horizon {HORIZON}",
+                    world.backend
+                ),
+            },
+            Setting {
+                name: "stacking steps".into(),
+                value: "a problem's fewest block moves, as Duan et al. (\"One-Shot Imitation Learning\", 2017) \
+                        group their tasks by stacking steps"
+                    .into(),
+            },
+            Setting {
+                name: "agreement".into(),
+                value: format!(
+                    "per number of blocks, {} uniformly random legal steps on the physics backend and the same \
+                     actions on the grid model, episodes reset with episode_seed(episode_seed({}, 9000 + N), e); an \
+                     episode whose outcomes part ends there",
+                    agreement_steps(ctx.budget),
+                    ctx.seeds.test
+                ),
+            },
+        ],
+        tables: Vec::new(),
+        curves: Vec::new(),
+        decomposition: None,
+        paper_notes: Vec::new(),
+        reading,
+        figures: vec![Figure::new(
+            "e9-moves",
+            "Block moves against the fewest, by stacking steps: the near-optimal planner's plans, and each planner \
+             carried out by the gripper"
+                .into(),
+            Drawing::Curves(chart),
+        )],
+        blocks_world: Some(world),
+    }
+}
