@@ -53,8 +53,8 @@ const STAGE: &str = "E9";
 fn problems_per_cell(budget: Budget) -> u64 {
     match budget {
         Budget::Quick => 2,
-        Budget::Default => 40,
-        Budget::Long => 200,
+        Budget::Default => 200,
+        Budget::Long => 1000,
     }
 }
 
@@ -62,10 +62,13 @@ fn problems_per_cell(budget: Budget) -> u64 {
 fn agreement_steps(budget: Budget) -> u64 {
     match budget {
         Budget::Quick => 1_000,
-        Budget::Default => 20_000,
-        Budget::Long => 200_000,
+        Budget::Default => 50_000,
+        Budget::Long => 1_000_000,
     }
 }
+
+/// The horizon of the agreement table's random episodes: short, so that it plays many starts.
+const AGREEMENT_HORIZON: u32 = 200;
 
 /// The grid of `blocks` blocks (module docs).
 pub fn grid_for(blocks: usize) -> Grid {
@@ -416,7 +419,7 @@ fn agreement(blocks: usize, steps: u64, seed: u64) -> Result<Agreement> {
     let config = |backend| EnvConfig {
         grid,
         blocks,
-        horizon: HORIZON,
+        horizon: AGREEMENT_HORIZON,
         backend,
         view: View::Side,
         ..EnvConfig::default()
@@ -588,8 +591,9 @@ fn experiment(ctx: &Context, world: BlocksWorld) -> Experiment {
                 name: "agreement".into(),
                 value: format!(
                     "per number of blocks, {} uniformly random legal steps on the physics backend and the same \
-                     actions on the grid model, episodes reset with episode_seed(episode_seed({}, 9000 + N), e); an \
-                     episode whose outcomes part ends there",
+                     actions on the grid model, in episodes of up to {AGREEMENT_HORIZON} steps (a goal drawn per \
+                     episode) reset with episode_seed(episode_seed({}, 9000 + N), e); an episode whose outcomes part \
+                     ends there",
                     agreement_steps(ctx.budget),
                     ctx.seeds.test
                 ),
@@ -608,5 +612,97 @@ fn experiment(ctx: &Context, world: BlocksWorld) -> Experiment {
             Drawing::Curves(chart),
         )],
         blocks_world: Some(world),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{Options, reproduce};
+    use super::*;
+
+    /// E9 alone, at the quick budget.
+    fn quick() -> Experiment {
+        let options = Options {
+            seed: 3,
+            quick: true,
+            long: false,
+            only: vec!["E9".into()],
+        };
+        reproduce(&options, &()).unwrap().experiments.swap_remove(0)
+    }
+
+    #[test]
+    fn every_grid_holds_a_tower_of_every_block_and_a_column_per_block() {
+        for n in BLOCKS {
+            let g = grid_for(n);
+            assert!(g.width() >= n && g.height() > n, "{n}");
+        }
+        assert_eq!(grid_for(6), Grid::default(), "the paper's 7 x 7 while it is wide enough");
+    }
+
+    #[test]
+    fn e9_alone_draws_its_problems_plans_them_and_the_planners_reach_every_goal() {
+        let e = quick();
+        assert_eq!(e.id, "E9");
+        let world = e.blocks_world.as_ref().unwrap();
+        let per = problems_per_cell(Budget::Quick) as usize;
+        assert_eq!(world.problems.len(), BLOCKS.len() * MAX_TOWERS * per);
+        for p in &world.problems {
+            assert_eq!(p.goal.tower_lists().len(), p.towers, "{}", p.goal);
+            assert_eq!((p.goal.block_count(), p.start.block_count()), (p.blocks, p.blocks));
+            assert!(!p.goal.holds_in(View::Side, &p.start), "a start that needs no move");
+            // The exact planner's count is the fewest; the near-optimal planner's at most twice.
+            assert!(p.fewest_moves >= 1);
+            assert!(p.fewest_moves <= p.near_optimal_moves && p.near_optimal_moves <= 2 * p.fewest_moves);
+            let [exact, near] = [p.played[0].unwrap(), p.played[1].unwrap()];
+            assert!(exact.reached_goal && near.reached_goal, "{}", p.goal);
+            assert_eq!(exact.moves, p.fewest_moves, "played as planned");
+            assert!(near.moves >= p.fewest_moves);
+            // A block move takes a Pick, a Drop and at least one move between.
+            assert!(exact.steps >= 3 * exact.moves);
+        }
+        // Each grouping splits the same problems.
+        for groups in [&world.by_blocks, &world.by_towers, &world.by_stacking_steps] {
+            assert_eq!(groups.iter().map(|g| g.problems).sum::<usize>(), world.problems.len());
+            for g in groups.iter() {
+                assert!(g.near_optimal_ratio >= 1.0 && g.near_optimal_worst <= 2.0);
+                assert!(g.agents.iter().all(|a| a.success == 1.0), "{g:?}");
+            }
+        }
+        assert_eq!(world.by_blocks.iter().map(|g| g.key).collect::<Vec<_>>(), BLOCKS);
+        assert_eq!(world.by_towers.iter().map(|g| g.key).collect::<Vec<_>>(), [1, 2, 3]);
+        for g in &world.by_stacking_steps {
+            assert_eq!(g.fewest_moves, g.key as f64, "a group of stacking steps is one count");
+        }
+        // Physics and grid agree, on drops too.
+        for a in &world.agreement {
+            assert!(a.total(), "{a:?}");
+            assert_eq!(a.steps, agreement_steps(Budget::Quick));
+            assert!(a.drops > 0 && a.episodes > 1, "{a:?}");
+        }
+        assert_eq!(e.figures.len(), 1);
+        assert!(e.reading.contains("reached the goal in 100.0% of the problems"), "{}", e.reading);
+        // Seeded: the same run again gives the same problems and figures.
+        assert_eq!(quick(), e);
+    }
+
+    #[test]
+    fn a_disagreement_is_counted_where_it_happens() {
+        let mut a = Agreement {
+            blocks: 3,
+            grid: "7 x 7".into(),
+            episodes: 2,
+            same_starts: 2,
+            steps: 10,
+            same_steps: 10,
+            drops: 2,
+            same_landings: 2,
+        };
+        assert!(a.total());
+        a.same_landings = 1;
+        assert!(!a.total());
+        a.same_landings = 2;
+        a.same_steps = 9;
+        assert!(!a.total());
     }
 }

@@ -99,7 +99,8 @@ pub fn markdown(r: &Reproduction, ran: &Ran) -> String {
         "Written by `{command}`: every experiment of docs/world.md section 9 on the paper's 7 x 7 grid (horizon {}, rapier2d \
          physics), the figures of \"Interactive Robot Learning\" section VI beside ours in two worlds: `original`, \
          the paper's world as its authors coded it (their action protocol, start rule, reward, representation and \
-         schedule), and `spec`, ours (docs/world.md). E1-E6 are run in both; E7 and our own learner in the SPEC world. \
+         schedule), and `spec`, ours (docs/world.md). E1-E6 are run in both; E7 and our own learner in the SPEC world; \
+         E9, ours, in the classic Blocks World seen from the side (docs/world.md section 12). \
          Every figure below is computed by the run; the paper's come from `experiments::reproduce::paper`. The same \
          figures, and more, are in [`results.json`](results.json).{}\n",
         r.paper_settings.horizon,
