@@ -117,6 +117,9 @@ pub struct Played {
     pub steps: u32,
     /// Block moves taken: the Drops.
     pub moves: u32,
+    /// The game ended, failed, at a Drop the physics did not bring to rest on a cell
+    /// ([`sim::SimError::NotAtRest`]).
+    pub physics_error: bool,
 }
 
 /// One (start, goal) problem and how it was solved.
@@ -160,6 +163,8 @@ pub struct AgentFigures {
     /// Mean ratio of the gripper steps to the fewest, over the successes whose fewest is
     /// known.
     pub steps_ratio: Option<f64>,
+    /// Games ended, failed, by a Drop the physics did not bring to rest on a cell.
+    pub physics_errors: usize,
 }
 
 /// The figures of a group of problems: all those of a number of blocks, of a number of
@@ -203,12 +208,20 @@ pub struct Agreement {
     pub drops: u64,
     /// Drops whose block came to rest on the same cell on both.
     pub same_landings: u64,
+    /// Steps the physics backend refused with an error (a Drop it did not bring to rest on a
+    /// cell): each ends its episode, and counts as a step, and a drop, not the same.
+    pub physics_errors: u64,
+    /// The first such error: the episode's seed, the step and the message, to replay it.
+    pub first_error: Option<String>,
 }
 
 impl Agreement {
     /// Whether the two agreed on everything.
     pub fn total(&self) -> bool {
-        self.same_starts == self.episodes && self.same_steps == self.steps && self.same_landings == self.drops
+        self.same_starts == self.episodes
+            && self.same_steps == self.steps
+            && self.same_landings == self.drops
+            && self.physics_errors == 0
     }
 }
 
@@ -330,12 +343,25 @@ fn problem(blocks: usize, towers: usize, seed: u64) -> Result<Problem> {
                 return Ok(None);
             }
             let mut drops = Drops::default();
-            let r = agent::play_episode(&mut env, a.policy().as_mut(), 0, seed, &mut drops)?;
-            Ok(Some(Played {
-                reached_goal: r.reached_goal,
-                steps: r.steps,
-                moves: drops.0,
-            }))
+            Ok(Some(
+                match agent::play_episode(&mut env, a.policy().as_mut(), 0, seed, &mut drops) {
+                    Ok(r) => Played {
+                        reached_goal: r.reached_goal,
+                        steps: r.steps,
+                        moves: drops.0,
+                        physics_error: false,
+                    },
+                    // A failure of the physics, measured (the agreement table counts them too),
+                    // rather than the end of the run.
+                    Err(agent::AgentError::Sim(sim::SimError::NotAtRest { .. })) => Played {
+                        reached_goal: false,
+                        steps: env.steps(),
+                        moves: drops.0,
+                        physics_error: true,
+                    },
+                    Err(e) => return Err(e.into()),
+                },
+            ))
         })
         .collect::<Result<_>>()?;
     Ok(Problem {
@@ -392,6 +418,7 @@ fn group(key: usize, members: &[&Problem]) -> Group {
                     wins.iter()
                         .filter_map(|(p, g)| p.fewest_steps.map(|f| f64::from(g.steps) / f64::from(f))),
                 ),
+                physics_errors: games.iter().filter(|(_, g)| g.physics_error).count(),
             })
         })
         .collect();
@@ -434,6 +461,8 @@ fn agreement(blocks: usize, steps: u64, seed: u64) -> Result<Agreement> {
         same_steps: 0,
         drops: 0,
         same_landings: 0,
+        physics_errors: 0,
+        first_error: None,
     };
     let mut random = RandomPolicy;
     // Starts drawn alike by both (the same code draws them); the bound on episodes only
@@ -447,13 +476,28 @@ fn agreement(blocks: usize, steps: u64, seed: u64) -> Result<Agreement> {
         }
         a.same_starts += 1;
         let mut rng = agent::rollout::policy_rng(episode);
+        let mut step = 0u32;
         while !physics.is_over() && a.steps < steps {
+            step += 1;
             let action = random.act(&obs, &mut rng)?;
             let held = obs.held_block();
-            let (p, g) = (physics.step(action)?, model.step(action)?);
+            let g = model.step(action)?;
             a.steps += 1;
-            if let (Action::Drop, Some(block)) = (action, held) {
-                a.drops += 1;
+            let dropped = matches!((action, held), (Action::Drop, Some(_)));
+            a.drops += u64::from(dropped);
+            let p = match physics.step(action) {
+                Ok(p) => p,
+                // Measured, not the end of the run: the table is there to find these.
+                Err(e @ sim::SimError::NotAtRest { .. }) => {
+                    a.physics_errors += 1;
+                    a.first_error.get_or_insert_with(|| {
+                        format!("{blocks} blocks, episode reset with {episode}, step {step}: {e}")
+                    });
+                    break;
+                }
+                Err(e) => return Err(e.into()),
+            };
+            if let (true, Some(block)) = (dropped, held) {
                 a.same_landings += u64::from(p.observation.state.cell(block) == g.observation.state.cell(block));
             }
             if p != g {
@@ -477,13 +521,29 @@ fn experiment(ctx: &Context, world: BlocksWorld) -> Experiment {
     let drops: u64 = world.agreement.iter().map(|a| a.drops).sum();
     let agreed_steps: u64 = world.agreement.iter().map(|a| a.same_steps).sum();
     let steps: u64 = world.agreement.iter().map(|a| a.steps).sum();
+    let physics_errors: u64 = world.agreement.iter().map(|a| a.physics_errors).sum();
+    let game_errors: usize = everything.agents.iter().map(|f| f.physics_errors).sum();
+    let errors = if physics_errors + game_errors as u64 == 0 {
+        String::new()
+    } else {
+        format!(
+            " The physics did not bring a dropped block to rest on a cell in {physics_errors} random steps and {} \
+             planner games (first: {}).",
+            game_errors,
+            world
+                .agreement
+                .iter()
+                .find_map(|a| a.first_error.as_deref())
+                .unwrap_or("in a planner's game")
+        )
+    };
     let deepest = world.by_stacking_steps.last().map_or(0, |g| g.key);
     let reading = format!(
         "Over {} problems of 3 to 10 blocks (up to {deepest} stacking steps), the near-optimal planner's plans were \
          {}x the fewest block moves on average (worst {}x); carried out by the gripper through the physics, the \
          exact planner reached the goal in {}% of the problems and the near-optimal planner in {}%, with {} and {} \
          gripper steps per block move. Physics and grid agreed on {agreed_steps} of {steps} random steps and \
-         {agreed_drops} of {drops} drops.",
+         {agreed_drops} of {drops} drops.{errors}",
         all.len(),
         num(Some(everything.near_optimal_ratio), 3),
         num(Some(everything.near_optimal_worst), 2),
@@ -697,12 +757,17 @@ mod tests {
             same_steps: 10,
             drops: 2,
             same_landings: 2,
+            physics_errors: 0,
+            first_error: None,
         };
         assert!(a.total());
         a.same_landings = 1;
         assert!(!a.total());
         a.same_landings = 2;
         a.same_steps = 9;
+        assert!(!a.total());
+        a.same_steps = 10;
+        a.physics_errors = 1;
         assert!(!a.total());
     }
 }

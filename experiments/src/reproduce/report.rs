@@ -481,15 +481,26 @@ fn blocks_world(md: &mut String, w: &BlocksWorld) {
     let _ = writeln!(md, "\n### Physics against the grid model\n");
     let _ = writeln!(
         md,
-        "| blocks | grid | episodes | same starts | random steps | same outcome | drops | landed on the same cell |\n\
-         |---|---|---|---|---|---|---|---|"
+        "| blocks | grid | episodes | same starts | random steps | same outcome | drops | landed on the same cell | \
+         physics errors |\n|---|---|---|---|---|---|---|---|---|"
     );
     for a in &w.agreement {
         let _ = writeln!(
             md,
-            "| {} | {} | {} | {} | {} | {} | {} | {} |",
-            a.blocks, a.grid, a.episodes, a.same_starts, a.steps, a.same_steps, a.drops, a.same_landings
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            a.blocks,
+            a.grid,
+            a.episodes,
+            a.same_starts,
+            a.steps,
+            a.same_steps,
+            a.drops,
+            a.same_landings,
+            a.physics_errors
         );
+    }
+    for e in w.agreement.iter().filter_map(|a| a.first_error.as_ref()) {
+        let _ = writeln!(md, "\nThe first physics error: {e}.");
     }
 }
 
