@@ -154,7 +154,11 @@ fn the_quick_report_holds_every_experiment() {
     }
     for a in e9["agreement"].as_array().unwrap() {
         assert!(a["drops"].as_u64().unwrap() > 0, "{a}");
-        assert_eq!((&a["same_steps"], &a["same_landings"]), (&a["steps"], &a["drops"]), "{a}");
+        assert_eq!(
+            (&a["same_steps"], &a["same_landings"]),
+            (&a["steps"], &a["drops"]),
+            "{a}"
+        );
     }
     assert!(readme.contains("### Physics against the grid model"));
 

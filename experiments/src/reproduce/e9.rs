@@ -281,7 +281,11 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
             BLOCKS
                 .par_iter()
                 .map(|&n| {
-                    let a = agreement(n, agreement_steps(ctx.budget), episode_seed(ctx.seeds.test, 9000 + n as u64))?;
+                    let a = agreement(
+                        n,
+                        agreement_steps(ctx.budget),
+                        episode_seed(ctx.seeds.test, 9000 + n as u64),
+                    )?;
                     ctx.progress.advance(STAGE);
                     Ok(a)
                 })
@@ -526,10 +530,18 @@ fn experiment(ctx: &Context, world: BlocksWorld) -> Experiment {
     let errors = if physics_errors + game_errors as u64 == 0 {
         String::new()
     } else {
+        let times = |n: u64| {
+            if n == 1 {
+                "once".to_string()
+            } else {
+                format!("{n} times")
+            }
+        };
         format!(
-            " The physics did not bring a dropped block to rest on a cell in {physics_errors} random steps and {} \
-             planner games (first: {}).",
-            game_errors,
+            " The physics did not bring a dropped block to rest on a cell {} in random play and {} in the \
+             planners' games (first: {}).",
+            times(physics_errors),
+            times(game_errors as u64),
             world
                 .agreement
                 .iter()
@@ -697,7 +709,11 @@ mod tests {
             let g = grid_for(n);
             assert!(g.width() >= n && g.height() > n, "{n}");
         }
-        assert_eq!(grid_for(6), Grid::default(), "the paper's 7 x 7 while it is wide enough");
+        assert_eq!(
+            grid_for(6),
+            Grid::default(),
+            "the paper's 7 x 7 while it is wide enough"
+        );
     }
 
     #[test]
@@ -741,7 +757,11 @@ mod tests {
             assert!(a.drops > 0 && a.episodes > 1, "{a:?}");
         }
         assert_eq!(e.figures.len(), 1);
-        assert!(e.reading.contains("reached the goal in 100.0% of the problems"), "{}", e.reading);
+        assert!(
+            e.reading.contains("reached the goal in 100.0% of the problems"),
+            "{}",
+            e.reading
+        );
         // Seeded: the same run again gives the same problems and figures.
         assert_eq!(quick(), e);
     }

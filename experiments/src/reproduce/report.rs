@@ -475,7 +475,13 @@ fn blocks_world(md: &mut String, w: &BlocksWorld) {
         let g = super::e9::grid_for(blocks);
         format!("{} x {}", g.width(), g.height())
     };
-    groups(md, "By stacking steps (the fewest block moves)", "stacking steps", &w.by_stacking_steps, None);
+    groups(
+        md,
+        "By stacking steps (the fewest block moves)",
+        "stacking steps",
+        &w.by_stacking_steps,
+        None,
+    );
     groups(md, "By number of blocks", "blocks", &w.by_blocks, Some(&grid));
     groups(md, "By number of goal towers", "towers", &w.by_towers, None);
     let _ = writeln!(md, "\n### Physics against the grid model\n");
@@ -544,7 +550,11 @@ fn groups(md: &mut String, title: &str, key: &str, groups: &[Group], grid: Optio
             g.problems.to_string(),
             num(Some(g.fewest_moves), 2),
             num(Some(g.near_optimal_moves), 2),
-            format!("{} ({})", num(Some(g.near_optimal_ratio), 3), num(Some(g.near_optimal_worst), 2)),
+            format!(
+                "{} ({})",
+                num(Some(g.near_optimal_ratio), 3),
+                num(Some(g.near_optimal_worst), 2)
+            ),
             num(g.fewest_steps, 1),
         ]);
         for a in &agents {
