@@ -183,6 +183,11 @@ impl TrainConfig {
         if self.goals.is_empty() {
             return Err(AgentError::Config("no goals to train on".into()));
         }
+        if self.world.view == sim::View::Side && self.assist != Assist::None {
+            return Err(AgentError::Config(
+                "the assisting oracles plan the top view: train the side view with --assist none".into(),
+            ));
+        }
         for goal in &self.goals {
             self.env_config(*goal).validate()?;
         }

@@ -174,12 +174,13 @@ pub fn session_world_under(agent: &QAgent, profile: Option<Profile>) -> (EnvConf
     (world, profile.unwrap_or(trained_under))
 }
 
-/// The goals a session plays when none are given: every goal of `blocks` blocks, or under
-/// the `original` profile with 3 blocks the authors' four ([`DEMONSTRATED_GOALS`]).
-pub fn default_goals(blocks: usize, profile: Profile) -> Result<Vec<Goal>> {
+/// The goals a session in `world` plays when none are given: every goal of its world
+/// ([`Goal::all_in`]: of towers in the side view), or under the `original` profile with 3
+/// blocks from above the authors' four ([`DEMONSTRATED_GOALS`]).
+pub fn default_goals(world: &EnvConfig, profile: Profile) -> Result<Vec<Goal>> {
     match profile {
-        Profile::Original if blocks == 3 => Ok(demonstrated_goals()),
-        _ => Ok(Goal::all(blocks)?),
+        Profile::Original if world.blocks == 3 && world.view == sim::View::Top => Ok(demonstrated_goals()),
+        _ => Ok(Goal::all_in(world.view, world.blocks)?),
     }
 }
 
@@ -493,6 +494,12 @@ pub struct Corrected<S> {
 pub fn correct<S: DemoSink>(agent: QAgent, config: &CorrectionConfig, sink: S) -> Result<Corrected<S>> {
     config.demonstrator.validate()?;
     let world = config.world.unwrap_or_else(|| session_world(&agent));
+    if world.view != sim::View::Top {
+        return Err(AgentError::Config(
+            "the simulated demonstrators plan the top view; correct a side-view agent in person (blockstack demo)"
+                .into(),
+        ));
+    }
     let rule = config
         .rule
         .unwrap_or_else(|| CorrectionRule::for_profile(agent.training().map_or(Profile::Spec, |t| t.profile)));
@@ -646,9 +653,29 @@ mod tests {
             session_world(&a).horizon,
             "the agent's schedule keeps its horizon"
         );
-        assert_eq!(default_goals(3, Profile::Original).unwrap(), demonstrated_goals());
-        assert_eq!(default_goals(3, Profile::Spec).unwrap().len(), 6);
-        assert_eq!(default_goals(2, Profile::Original).unwrap().len(), 2);
+        let world = |blocks, view| EnvConfig {
+            blocks,
+            view,
+            ..EnvConfig::default()
+        };
+        assert_eq!(
+            default_goals(&world(3, sim::View::Top), Profile::Original).unwrap(),
+            demonstrated_goals()
+        );
+        assert_eq!(
+            default_goals(&world(3, sim::View::Top), Profile::Spec).unwrap().len(),
+            6
+        );
+        assert_eq!(
+            default_goals(&world(2, sim::View::Top), Profile::Original)
+                .unwrap()
+                .len(),
+            2
+        );
+        assert_eq!(
+            default_goals(&world(3, sim::View::Side), Profile::Spec).unwrap().len(),
+            13
+        );
     }
 
     #[test]

@@ -65,7 +65,7 @@ use std::path::Path;
 
 use files::{Container, Dtype, Element, Expect, FilesError, OutputPath, Tensor};
 use serde::{Deserialize, Serialize};
-use sim::{Action, ActionProtocol, Backend, EnvConfig, Goal, GoalSpec, Grid, Profile, RewardModel, StartRule};
+use sim::{Action, ActionProtocol, Backend, EnvConfig, Goal, GoalSpec, Grid, Profile, RewardModel, StartRule, View};
 
 use crate::assist::{Assist, OracleKind, Oscillation};
 use crate::config::TrainConfig;
@@ -143,6 +143,10 @@ pub struct TrainingMeta {
     oracle: OracleKind,
     #[serde(default)]
     oscillation: Oscillation,
+    // Absent for the top view (and in files written before the side view existed), so
+    // a top-view model's bytes are what they were.
+    #[serde(default, skip_serializing_if = "is_top")]
+    view: View,
 }
 
 impl TrainingMeta {
@@ -170,6 +174,7 @@ impl TrainingMeta {
             schedule: config.schedule,
             oracle: config.oracle,
             oscillation: config.oscillation,
+            view: w.view,
         }
     }
 
@@ -187,6 +192,7 @@ impl TrainingMeta {
                 protocol: self.protocol,
                 start: self.start,
                 termination: self.schedule.training_termination(),
+                view: self.view,
                 ..EnvConfig::default()
             },
             goals: self.goals,
@@ -204,6 +210,10 @@ impl TrainingMeta {
             oscillation: self.oscillation,
         }
     }
+}
+
+fn is_top(view: &View) -> bool {
+    *view == View::Top
 }
 
 fn is_spec(schedule: &Schedule) -> bool {

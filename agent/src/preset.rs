@@ -15,7 +15,7 @@
 //! [`TrainConfig::resolve`], so the same settings give the same model file, byte for byte.
 
 use serde::{Deserialize, Serialize};
-use sim::{Backend, EnvConfig, Goal, Grid, Profile, RewardModel, StartRule};
+use sim::{Backend, EnvConfig, Goal, Grid, Profile, RewardModel, StartRule, View};
 
 use crate::assist::{Assist, OracleKind, Oscillation};
 use crate::config::{QParams, TrainConfig};
@@ -42,11 +42,14 @@ sim::names!(Preset { Paper = "paper", Optimal = "optimal" } unknown(name) -> Age
 });
 
 impl Preset {
-    /// The preset a run takes when none is named: `optimal` for the role representation
-    /// under the `spec` profile, `paper` otherwise.
-    pub fn default_for(profile: Profile, repr: Option<ReprKind>) -> Preset {
+    /// The preset a run takes when none is named: `optimal` for the role representations
+    /// under the `spec` profile, and for goals of towers (`towers`: the side view, or a goal
+    /// that is not one tower of every block) when no representation is named; `paper`
+    /// otherwise.
+    pub fn default_for(profile: Profile, repr: Option<ReprKind>, towers: bool) -> Preset {
         match (profile, repr) {
-            (Profile::Spec, Some(ReprKind::Role)) => Preset::Optimal,
+            (Profile::Spec, Some(ReprKind::Role | ReprKind::RoleTowers)) => Preset::Optimal,
+            (Profile::Spec, None) if towers => Preset::Optimal,
             _ => Preset::Paper,
         }
     }
@@ -105,6 +108,9 @@ pub struct TrainOverrides {
     pub horizon: Option<u32>,
     /// `--backend` (default physics).
     pub backend: Option<Backend>,
+    /// `--view` (default top). In the side view the goals default to every goal of towers
+    /// ([`Goal::all_towers`]) and the optimal preset's representation is `role-towers`.
+    pub view: Option<View>,
 }
 
 impl TrainConfig {
@@ -205,11 +211,13 @@ impl TrainConfig {
         let s = settings;
         let profile = s.profile.unwrap_or_default();
         let blocks = s.blocks.unwrap_or(3);
+        let view = s.view.unwrap_or_default();
         let goals = match &s.goals {
             Some(goals) => goals.clone(),
-            None => Goal::all(blocks)?,
+            None => Goal::all_in(view, blocks)?,
         };
-        let preset = s.preset.unwrap_or(Preset::default_for(profile, s.repr));
+        let towers = view == View::Side || goals.iter().any(|g| !g.is_one_tower());
+        let preset = s.preset.unwrap_or(Preset::default_for(profile, s.repr, towers));
         let profile_learner = TrainConfig::for_profile(profile, goals.clone());
         // The preset's parts of the learner over the profile's world and learner.
         let base = match preset {
@@ -221,7 +229,7 @@ impl TrainConfig {
                         reward: recipe.world.reward,
                         ..profile_learner.world
                     },
-                    repr: recipe.repr,
+                    repr: if towers { ReprKind::RoleTowers } else { recipe.repr },
                     params: recipe.params,
                     backward_replay: recipe.backward_replay,
                     final_replay: recipe.final_replay,
@@ -248,6 +256,7 @@ impl TrainConfig {
                 backend: s.backend.unwrap_or(base.world.backend),
                 protocol: s.protocol.unwrap_or(base.world.protocol),
                 start: s.start.unwrap_or(base.world.start),
+                view,
                 ..base.world
             },
             repr: s.repr.unwrap_or(base.repr),

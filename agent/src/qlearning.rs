@@ -209,8 +209,12 @@ impl QAgent {
             )));
         }
         obs.state.check_fits(self.grid)?;
-        // The representations name blocks by their place in one tower of every block.
-        obs.goal.one_tower("the tabular learner")?;
+        // The other representations name blocks by their place in one tower of every block.
+        if !self.kind().takes_towers() {
+            obs.goal.one_tower(
+                "the tabular learner's representation (train with --repr role-towers for goals of towers)",
+            )?;
+        }
         Ok(())
     }
 
@@ -270,7 +274,15 @@ impl QAgent {
     /// The table columns of the actions legal in `obs`, as bits (bit `c`: column `c`).
     #[inline]
     pub(crate) fn legal_columns(&self, obs: &Observation) -> u32 {
-        self.repr.column_mask(&obs.goal, obs.legal_actions())
+        // Under the free protocol every action may be taken (in the side view the rules
+        // make one outside its mask change nothing), and the learner tries them all: its
+        // bootstrap, the best value in the next state's row, is right only over actions it
+        // tries, and an action never tried keeps its optimistic initial value.
+        let legal = match obs.protocol {
+            sim::ActionProtocol::Free => sim::ActionMask::all(obs.state.block_count()),
+            _ => obs.legal_actions(),
+        };
+        self.repr.column_mask(&obs.goal, legal)
     }
 
     /// The legal action with the highest Q-value in `obs`, ties broken uniformly at random.

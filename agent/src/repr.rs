@@ -31,11 +31,21 @@ pub enum ReprKind {
     ChasingCode,
     /// See [`Role`].
     Role,
+    /// See [`RoleTowers`].
+    RoleTowers,
 }
 
-sim::names!(ReprKind { Raw = "raw", Pairwise = "pairwise", Chasing = "chasing", ChasingCode = "chasing-code", Role = "role" } unknown(text) -> AgentError {
-    AgentError::Config(format!("unknown representation {text:?}: choose raw, pairwise, chasing, chasing-code or role"))
+sim::names!(ReprKind { Raw = "raw", Pairwise = "pairwise", Chasing = "chasing", ChasingCode = "chasing-code", Role = "role", RoleTowers = "role-towers" } unknown(text) -> AgentError {
+    AgentError::Config(format!("unknown representation {text:?}: choose raw, pairwise, chasing, chasing-code, role or role-towers"))
 });
+
+impl ReprKind {
+    /// Whether the representation takes goals of towers (docs/world.md section 12); the
+    /// others take one tower of every block only.
+    pub fn takes_towers(self) -> bool {
+        self == ReprKind::RoleTowers
+    }
+}
 
 /// What every representation offers the Q-table.
 pub trait Representation {
@@ -504,6 +514,126 @@ impl Representation for Role {
     }
 }
 
+/// [`Role`] for goals of towers (docs/world.md section 12): every block's cell and the
+/// held block, blocks named by their place, where the places run through the goal's towers
+/// longest first (then the free blocks, by id); and one more field, the goal's shape (how
+/// many blocks it names and where its towers end). Goals of the same shape are the same
+/// problem under the renaming ("0,1/2" and "2,0/1" alike), so one table serves every goal
+/// of a shape, and a table trained on every shape serves every goal.
+///
+/// Key count `C^N (N + 1) N 2^(N-1)` for `C` cells: 5.6 million keys for 3 blocks on 7 x 7,
+/// of which a side-view game meets few (blocks stand in towers), so the table keeps the
+/// rows it meets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RoleTowers {
+    role: Role,
+    key_count: u64,
+}
+
+/// A goal of towers as [`RoleTowers`] reads it: which block has which place, and the shape.
+struct Places {
+    block_at: [BlockId; MAX_BLOCKS],
+    place_of: [u8; MAX_BLOCKS],
+    shape: u64,
+}
+
+impl Places {
+    #[inline]
+    fn of(goal: &Goal) -> Places {
+        let blocks = goal.block_count();
+        let mut towers: [&[BlockId]; MAX_BLOCKS] = [&[]; MAX_BLOCKS];
+        let mut count = 0;
+        for t in goal.towers() {
+            towers[count] = t;
+            count += 1;
+        }
+        // Longest first; a stable sort keeps the goal's order among towers of one length.
+        towers[..count].sort_by_key(|t| std::cmp::Reverse(t.len()));
+        let mut places = Places {
+            block_at: [BlockId::default(); MAX_BLOCKS],
+            place_of: [0; MAX_BLOCKS],
+            shape: 0,
+        };
+        let (mut next, mut tops) = (0usize, 0u64);
+        for t in &towers[..count] {
+            for &b in *t {
+                places.block_at[next] = b;
+                places.place_of[b.index()] = next as u8;
+                next += 1;
+            }
+            tops |= 1 << (next - 1);
+        }
+        let named = next;
+        for b in (0..blocks).map(|i| BlockId(i as u8)).filter(|&b| !goal.names(b)) {
+            places.block_at[next] = b;
+            places.place_of[b.index()] = next as u8;
+            next += 1;
+        }
+        // The last named place always ends a tower: the other ends and the named count
+        // say the shape.
+        let ends = tops & !(1 << (named - 1));
+        places.shape = (((named - 1) as u64) << (blocks - 1)) | ends;
+        places
+    }
+}
+
+impl RoleTowers {
+    /// The representation of `blocks` blocks on `grid`.
+    pub fn new(grid: Grid, blocks: usize) -> Result<RoleTowers> {
+        let cells = grid.cell_count() as u64;
+        let role = (0..blocks)
+            .fold(KeySpace::new(), |s, _| s.field(cells))
+            .field(blocks as u64 + 1);
+        let shapes = blocks as u64 * (1u64 << blocks.saturating_sub(1).min(63));
+        let key_count = role.field(shapes).count(ReprKind::RoleTowers, grid, blocks)?;
+        let role = Role {
+            grid,
+            blocks,
+            // A factor of a count that fits fits too.
+            key_count: role.0.expect("checked with the shapes"),
+        };
+        Ok(RoleTowers { role, key_count })
+    }
+}
+
+impl Representation for RoleTowers {
+    fn key_count(&self) -> u64 {
+        self.key_count
+    }
+
+    #[inline]
+    fn key(&self, state: &State, goal: &Goal) -> u64 {
+        let places = Places::of(goal);
+        let cells = self.role.grid.cell_count() as u64;
+        let key = places.block_at[..self.role.blocks]
+            .iter()
+            .fold(0, |k, &b| push(k, cells, self.role.grid.index(state.cell(b)) as u64));
+        let key = push(
+            key,
+            self.role.blocks as u64 + 1,
+            held_slot(state.held_block().map(|b| places.place_of[b.index()] as usize)),
+        );
+        places.shape * self.role.key_count + key
+    }
+
+    #[inline]
+    fn column(&self, goal: &Goal, action: Action) -> usize {
+        match action {
+            Action::Pick(b) => 5 + Places::of(goal).place_of[b.index()] as usize,
+            a => a.index(),
+        }
+    }
+
+    #[inline]
+    fn action(&self, goal: &Goal, column: usize) -> Action {
+        if column >= 5 {
+            Action::Pick(Places::of(goal).block_at[column - 5])
+        } else {
+            action_of_index(column)
+        }
+    }
+}
+
 /// Any of the representations, chosen at run time, for a given grid and block count.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Repr {
@@ -517,6 +647,8 @@ pub enum Repr {
     ChasingCode(ChasingCode),
     /// See [`Role`].
     Role(Role),
+    /// See [`RoleTowers`].
+    RoleTowers(RoleTowers),
 }
 
 impl Repr {
@@ -529,6 +661,7 @@ impl Repr {
             ReprKind::Chasing => Repr::Chasing(Chasing::new(grid, blocks)?),
             ReprKind::ChasingCode => Repr::ChasingCode(ChasingCode::new(grid, blocks)?),
             ReprKind::Role => Repr::Role(Role::new(grid, blocks)?),
+            ReprKind::RoleTowers => Repr::RoleTowers(RoleTowers::new(grid, blocks)?),
         })
     }
 
@@ -540,6 +673,7 @@ impl Repr {
             Repr::Chasing(_) => ReprKind::Chasing,
             Repr::ChasingCode(_) => ReprKind::ChasingCode,
             Repr::Role(_) => ReprKind::Role,
+            Repr::RoleTowers(_) => ReprKind::RoleTowers,
         }
     }
 
@@ -550,6 +684,9 @@ impl Repr {
         match self {
             // Every action legal is every column, whatever the renaming.
             Repr::Role(r) if mask.count() < mask.action_count() => {
+                mask.iter().fold(0, |bits, a| bits | 1 << r.column(goal, a))
+            }
+            Repr::RoleTowers(r) if mask.count() < mask.action_count() => {
                 mask.iter().fold(0, |bits, a| bits | 1 << r.column(goal, a))
             }
             _ => mask.bits(),
@@ -565,6 +702,7 @@ impl Representation for Repr {
             Repr::Chasing(r) => r.key_count(),
             Repr::ChasingCode(r) => r.key_count(),
             Repr::Role(r) => r.key_count(),
+            Repr::RoleTowers(r) => r.key_count(),
         }
     }
 
@@ -576,6 +714,7 @@ impl Representation for Repr {
             Repr::Chasing(r) => r.key(state, goal),
             Repr::ChasingCode(r) => r.key(state, goal),
             Repr::Role(r) => r.key(state, goal),
+            Repr::RoleTowers(r) => r.key(state, goal),
         }
     }
 
@@ -583,6 +722,7 @@ impl Representation for Repr {
     fn column(&self, goal: &Goal, action: Action) -> usize {
         match self {
             Repr::Role(r) => r.column(goal, action),
+            Repr::RoleTowers(r) => r.column(goal, action),
             _ => action.index(),
         }
     }
@@ -591,6 +731,7 @@ impl Representation for Repr {
     fn action(&self, goal: &Goal, column: usize) -> Action {
         match self {
             Repr::Role(r) => r.action(goal, column),
+            Repr::RoleTowers(r) => r.action(goal, column),
             _ => action_of_index(column),
         }
     }

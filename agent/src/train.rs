@@ -285,7 +285,12 @@ impl Trainer {
             }
             key = next_key;
             obs = step.observation;
-            if reached.is_none() && step.info.pairs_in_place + 1 == self.config.world.blocks {
+            if reached.is_none()
+                && step
+                    .observation
+                    .goal
+                    .holds_in(self.config.world.view, &step.observation.state)
+            {
                 reached = Some(step_number);
             }
         }

@@ -9,19 +9,10 @@ use agent::{Assist, TrainConfig, TrainOverrides, Trainer};
 use oracle::ExactSolver;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use sim::{Backend, EnvConfig, Goal, RewardModel};
+use sim::{Backend, EnvConfig, Goal, RewardModel, View};
 
 use crate::boundary::{OrValueError, guard, raise_signal, signal_checker, value_error};
 use crate::config;
-
-/// Goals separated by `:` (`"0,1,2:1,0,2"`), as `blockstack train --goals` reads them, each
-/// with `blocks` blocks; every goal when `None`.
-fn goals(text: Option<&str>, blocks: usize) -> PyResult<Vec<Goal>> {
-    match text {
-        None => Goal::all(blocks).or_value_error(),
-        Some(text) => Goal::parse_list(text, blocks).or_value_error(),
-    }
-}
 
 /// A setting given by name (`None` keeps the profile's and preset's).
 fn named<T: std::str::FromStr>(name: Option<&str>) -> PyResult<Option<T>>
@@ -45,7 +36,7 @@ where
 /// `eval_mean_steps_failures_as_horizon`, `eval_mean_optimal_steps`,
 /// `eval_mean_ratio_to_optimum` (`None` where no episode reached the goal).
 #[pyfunction]
-#[pyo3(signature = (*, blocks=3, grid=None, profile=None, preset=None, protocol=None, start=None, repr=None, reward=None, schedule=None, oracle=None, oscillation=None, goals=None, games=None, seed=1, alpha=None, gamma=None, epsilon=None, initial_q=None, exploring_starts=false, backward_replay=None, final_replay=None, assist="none", horizon=None, backend="physics", eval_episodes=0, eval_goals=None, eval_seed=2, eval_epsilon=0.1, out=None))]
+#[pyo3(signature = (*, blocks=3, grid=None, profile=None, preset=None, protocol=None, start=None, repr=None, reward=None, schedule=None, oracle=None, oscillation=None, goals=None, games=None, seed=1, alpha=None, gamma=None, epsilon=None, initial_q=None, exploring_starts=false, backward_replay=None, final_replay=None, assist="none", horizon=None, backend="physics", view="top", eval_episodes=0, eval_goals=None, eval_seed=2, eval_epsilon=0.1, out=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn train<'py>(
     py: Python<'py>,
@@ -73,6 +64,7 @@ pub fn train<'py>(
     assist: &str,
     horizon: Option<u32>,
     backend: &str,
+    view: &str,
     eval_episodes: u64,
     eval_goals: Option<&str>,
     eval_seed: u64,
@@ -90,7 +82,10 @@ pub fn train<'py>(
         preset: named(preset)?,
         blocks: Some(blocks),
         grid: grid.map(config::grid_from).transpose()?,
-        goals: Some(self::goals(goals, blocks)?),
+        goals: goals
+            .map(|text| Goal::parse_list(text, blocks))
+            .transpose()
+            .or_value_error()?,
         protocol: named(protocol)?,
         start: named(start)?,
         repr: named(repr)?,
@@ -110,10 +105,11 @@ pub fn train<'py>(
         assist: named::<Assist>(Some(assist))?,
         horizon,
         backend: named::<Backend>(Some(backend))?,
+        view: named::<View>(Some(view))?,
     };
     let config = TrainConfig::resolve(&overrides).or_value_error()?;
     let eval_goals = match eval_goals {
-        Some(text) => self::goals(Some(text), blocks)?,
+        Some(text) => Goal::parse_list(text, blocks).or_value_error()?,
         None => config.goals.clone(),
     };
     let (trained, seconds, evaluation) = py.detach(|| {
@@ -186,6 +182,7 @@ pub fn train<'py>(
     d.set_item("initial_q", config.params.initial_q)?;
     d.set_item("assist", config.assist.to_string())?;
     d.set_item("backend", config.world.backend.to_string())?;
+    d.set_item("view", config.world.view.to_string())?;
     let r = trained.report;
     d.set_item("games", r.games)?;
     d.set_item("successes", r.successes)?;

@@ -221,7 +221,7 @@ impl Condition {
         let (world, profile) = session_world_under(&agent, profile);
         let goals = match goals {
             Some(text) => Goal::parse_list(text, agent.blocks())?,
-            None => default_goals(agent.blocks(), profile)?,
+            None => default_goals(&world, profile)?,
         };
         let offered: Vec<Mode> = Mode::ALL
             .into_iter()

@@ -290,6 +290,16 @@ impl Goal {
         Ok(out)
     }
 
+    /// Every goal a world of `view` is trained and tested on by default: one tower of every
+    /// block from above ([`Goal::all`]), every goal of towers naming every block from the
+    /// side ([`Goal::all_towers`]).
+    pub fn all_in(view: View, blocks: usize) -> Result<Vec<Goal>> {
+        match view {
+            View::Top => Goal::all(blocks),
+            View::Side => Goal::all_towers(blocks),
+        }
+    }
+
     /// A goal naming every one of `blocks` blocks in exactly `towers` towers, drawn
     /// uniformly among them, its towers listed by their bottom block. An error unless
     /// `1 <= towers <= blocks`.

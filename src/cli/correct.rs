@@ -58,7 +58,7 @@ pub fn correct(args: CorrectArgs) -> Result<()> {
     let profile = DemonstratorProfile::preset(args.demonstrator)?;
     let l = &args.learning;
     let (world, rules_of) = session_world(&agent, l.profile, l.play, l.reward.as_deref())?;
-    let goals = demonstration_goals(args.goals.as_deref(), agent.blocks(), rules_of)?;
+    let goals = demonstration_goals(args.goals.as_deref(), &world, rules_of)?;
     let config = CorrectionConfig {
         rule: Some(l.rule(rules_of)?),
         world: Some(world),

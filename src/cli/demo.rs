@@ -11,7 +11,6 @@ use sim::Profile;
 
 use super::profile::{PlayRulesArgs, ProfileArg, session_world};
 use super::stdout::line;
-use super::train::parse_goals;
 use crate::tui::{self, app::DemoApp, app::SavePolicy};
 
 /// Arguments of `blockstack demo`.
@@ -41,12 +40,12 @@ pub struct DemoArgs {
     pub seed: u64,
 }
 
-/// The goals of a correction session: `text`'s, else every goal of `blocks` blocks, or the
-/// authors' demonstrated goals under the original profile (with their 3 blocks).
-pub fn demonstration_goals(text: Option<&str>, blocks: usize, profile: Profile) -> Result<Vec<sim::Goal>> {
+/// The goals of a correction session in `world`: `text`'s, else every goal of the world, or
+/// the authors' demonstrated goals under the original profile (with their 3 blocks).
+pub fn demonstration_goals(text: Option<&str>, world: &sim::EnvConfig, profile: Profile) -> Result<Vec<sim::Goal>> {
     match text {
-        None => agent::correction::default_goals(blocks, profile).context("without --goals every goal is used"),
-        Some(_) => parse_goals(text, blocks),
+        None => agent::correction::default_goals(world, profile).context("without --goals every goal is used"),
+        Some(text) => Ok(sim::Goal::parse_list(text, world.blocks)?),
     }
 }
 
@@ -128,7 +127,7 @@ pub fn demo(args: DemoArgs) -> Result<()> {
     let record = record.as_ref().map(DemoWriter::append).transpose()?;
     let l = &args.learning;
     let (world, profile) = session_world(&agent, l.profile, l.play, l.reward.as_deref())?;
-    let goals = demonstration_goals(args.goals.as_deref(), agent.blocks(), profile)?;
+    let goals = demonstration_goals(args.goals.as_deref(), &world, profile)?;
     let session = CorrectionSession::new(
         agent,
         l.rule(profile)?,

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use agent::Summary;
 use agent::eval::EvalReport;
 use agent::optimality::Optimality;
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Args;
 use neural::AnyModel;
 use sim::{Backend, EnvConfig};
@@ -14,7 +14,6 @@ use sim::{Backend, EnvConfig};
 use super::profile::{PlayRulesArgs, ProfileArg, played};
 use super::solver_budget::SolverBudgetArg;
 use super::stdout::line;
-use super::train::parse_goals;
 
 /// Arguments of `blockstack eval`.
 #[derive(Debug, Args)]
@@ -22,7 +21,8 @@ pub struct EvalArgs {
     /// The model file to evaluate: a tabular agent (`train`) or a network (`dqn`).
     #[arg(long)]
     pub model: PathBuf,
-    /// Goals to evaluate on, separated by ':', e.g. 2,1,0:1,2,0 (default: every goal).
+    /// Goals to evaluate on, separated by ':', e.g. 2,1,0:1,2,0 (default: every goal of the
+    /// model's world: one tower of every block from above, every goal of towers from the side).
     #[arg(long)]
     pub goals: Option<String>,
     /// Episodes per goal.
@@ -55,7 +55,11 @@ pub struct EvalArgs {
 /// and prints the figures.
 pub fn eval(args: EvalArgs) -> Result<()> {
     let model = load_model(&args.model)?;
-    let goals = parse_goals(args.goals.as_deref(), model.blocks())?;
+    let goals = match args.goals.as_deref() {
+        Some(text) => sim::Goal::parse_list(text, model.blocks())?,
+        None => sim::Goal::all_in(model.world().view, model.blocks())
+            .context("without --goals every goal of the model's world is used")?,
+    };
     let backend: Backend = args.backend.parse()?;
     // The model's own world (protocol, start rule) unless the command line says otherwise;
     // the reward only sums up in trajectories, so it is the model's training reward.

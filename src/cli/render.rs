@@ -58,7 +58,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
         args.start.start,
         args.world.reward.as_deref(),
     )?;
-    let config = args.world.config(&rules)?;
+    let config = args.world.config(&rules, sim::View::Top)?;
     if let Some(out) = &out {
         render::PictureFormat::of(out.path())?;
         anyhow::ensure!(

@@ -138,18 +138,18 @@ pub fn run(args: RunArgs) -> Result<()> {
         .as_ref()
         .map_or(sim::ProfileParts::of(sim::Profile::Spec), neural::AnyModel::parts);
     let rules = played(base, args.profile, args.play, args.world.reward.as_deref())?;
-    let config = args.world.config(&rules)?;
+    let trained_in = model.as_ref().map(|m| m.world().view);
+    let config = args.world.config(&rules, trained_in.unwrap_or_default())?;
     if let Some(m) = &model {
         m.check_world(config.grid, config.blocks)?;
     }
-    // The learners play the top view's rules; the side view has its own planners.
-    anyhow::ensure!(
-        config.view == sim::View::Top || !matches!(args.agent, AgentKind::Q | AgentKind::Dqn),
-        "--agent {} plays the top view only; in the side view use --agent random, exact or oracle",
-        args.agent
-            .to_possible_value()
-            .map_or_else(String::new, |v| v.get_name().to_string())
-    );
+    // A model plays the world it learnt.
+    if let Some(view) = trained_in.filter(|&v| v != config.view) {
+        anyhow::bail!(
+            "the model learnt the {view} view; it cannot play the {} view (leave --view out to play its own)",
+            config.view
+        );
+    }
     let oracle = args.oracle.unwrap_or(LearnerProfile::of(rules.profile).oracle);
     let side = config.view == sim::View::Side;
     let mut policy: Box<dyn Policy + '_> = match (args.agent, &model) {

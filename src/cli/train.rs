@@ -8,7 +8,7 @@ use agent::{Assist, OracleKind, Oscillation, Preset, ReprKind, Schedule, TrainCo
 use anyhow::{Context, Result};
 use clap::{ArgGroup, Args};
 use indicatif::{ProgressBar, ProgressStyle};
-use sim::{Backend, Goal, Grid, RewardModel};
+use sim::{Backend, Goal, Grid, RewardModel, View};
 
 use super::profile::{PlayRulesArgs, ProfileArg};
 
@@ -18,7 +18,7 @@ use super::stdout::line;
 const DEFAULT_CHECKPOINT_EVERY: u64 = 1000;
 
 /// The flags that set up a run, which `--resume` takes from its checkpoint instead.
-const RUN_FLAGS: [&str; 23] = [
+const RUN_FLAGS: [&str; 24] = [
     "preset",
     "blocks",
     "grid",
@@ -42,6 +42,7 @@ const RUN_FLAGS: [&str; 23] = [
     "assist",
     "horizon",
     "backend",
+    "view",
 ];
 
 /// Arguments of `blockstack train`.
@@ -135,6 +136,10 @@ pub struct TrainArgs {
     /// World backend: physics (rapier2d) or grid (occupancy model).
     #[arg(long, default_value = "physics")]
     pub backend: String,
+    /// The world: top (the paper's) or side (the classic Blocks World: goals default to
+    /// every goal of towers, --goals 0,1/2:..., and the learner to --repr role-towers).
+    #[arg(long, default_value = "top")]
+    pub view: String,
     /// Where to write the trained model (a .safetensors file; checked before training).
     #[arg(long)]
     pub out: PathBuf,
@@ -176,7 +181,11 @@ impl TrainArgs {
             preset: self.preset,
             blocks: Some(self.blocks),
             grid: Some(self.grid.parse::<Grid>()?),
-            goals: Some(parse_goals(self.goals.as_deref(), self.blocks)?),
+            goals: self
+                .goals
+                .as_deref()
+                .map(|text| Goal::parse_list(text, self.blocks))
+                .transpose()?,
             protocol: self.play.protocol,
             start: self.play.start.start,
             repr: self.repr,
@@ -196,6 +205,7 @@ impl TrainArgs {
             assist: Some(self.assist),
             horizon: self.horizon,
             backend: Some(self.backend.parse::<Backend>()?),
+            view: Some(self.view.parse::<View>()?),
         };
         Ok(TrainConfig::resolve(&overrides)?)
     }

@@ -31,22 +31,24 @@ pub struct WorldArgs {
     #[arg(long, default_value = "physics")]
     pub backend: String,
     /// The world: top (the paper's, seen from above) or side (the classic Blocks World:
-    /// towers on a table, gravity, only clear blocks picked).
-    #[arg(long, default_value = "top")]
-    pub view: String,
+    /// towers on a table, gravity, only clear blocks picked) [default: a model's own, else
+    /// top]
+    #[arg(long)]
+    pub view: Option<String>,
 }
 
 impl WorldArgs {
     /// The environment config these arguments describe under `rules` (whose reward is
-    /// already this command's), checked. Episodes end at the goal.
-    pub fn config(&self, rules: &ProfileParts) -> Result<EnvConfig> {
+    /// already this command's), in `view` unless `--view` says otherwise, checked. Episodes
+    /// end at the goal.
+    pub fn config(&self, rules: &ProfileParts, view: View) -> Result<EnvConfig> {
         let grid: Grid = self.grid.parse()?;
         let goal = match &self.goal {
             Some(text) => GoalSpec::Fixed(Goal::parse(text, Some(self.blocks))?),
             None => GoalSpec::Random,
         };
         let backend: Backend = self.backend.parse()?;
-        let view: View = self.view.parse()?;
+        let view: View = self.view.as_deref().map_or(Ok(view), str::parse)?;
         let config = EnvConfig {
             grid,
             blocks: self.blocks,

@@ -335,6 +335,33 @@ pub(crate) mod tests {
         KeyEvent::new(code, KeyModifiers::NONE)
     }
 
+    /// A session of an untrained `role-towers` agent in the side view, on goal 0,1/2.
+    pub(crate) fn side_app(dir: &std::path::Path) -> DemoApp<Vec<DemoRecord>> {
+        let agent = QAgent::new(ReprKind::RoleTowers, Grid::default(), 3, QParams::default()).unwrap();
+        let world = sim::EnvConfig {
+            view: sim::View::Side,
+            reward: "step-cost".parse().unwrap(),
+            ..session_world(&agent)
+        };
+        let session = CorrectionSession::new(
+            agent,
+            CorrectionRule::default(),
+            world,
+            vec!["0,1/2".parse().unwrap()],
+            7,
+            0.0,
+            "person",
+            None,
+            Vec::new(),
+        )
+        .unwrap();
+        let save = SavePolicy {
+            path: dir.join("corrected.safetensors"),
+            every: 2,
+        };
+        DemoApp::new(session, save).unwrap()
+    }
+
     pub(crate) fn app(dir: &std::path::Path) -> DemoApp<Vec<DemoRecord>> {
         let agent = QAgent::new(ReprKind::Chasing, Grid::default(), 3, QParams::default()).unwrap();
         let goals: Vec<Goal> = vec!["1,0,2".parse().unwrap(), "0,1,2".parse().unwrap()];

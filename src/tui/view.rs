@@ -102,12 +102,18 @@ pub fn draw<S: DemoSink>(frame: &mut Frame, app: &DemoApp<S>) {
             ..world
         };
         frame.render_widget(
-            Paragraph::new(grid_lines(&obs, cell)).block(Block::bordered().title(" world ")),
+            // In the side view the box's bottom edge is the table row 0 stands on.
+            Paragraph::new(grid_lines(&obs, cell)).block(Block::bordered().title(match obs.view {
+                sim::View::Top => " world ",
+                sim::View::Side => " world, side view ",
+            })),
             world,
         );
-        let [info, corner] = Layout::horizontal([Constraint::Min(0), Constraint::Length(GOAL_BOX_WIDTH)]).areas(panel);
+        let [info, corner] =
+            Layout::horizontal([Constraint::Min(0), Constraint::Length(goal_box_width(&obs))]).areas(panel);
+        let tallest = obs.goal.towers().map(|t| t.len()).max().unwrap_or(0);
         let corner = Rect {
-            height: corner.height.min(obs.goal.block_count() as u16 + 2),
+            height: corner.height.min(tallest as u16 + 2),
             ..corner
         };
         frame.render_widget(
@@ -191,22 +197,32 @@ fn grid_lines(obs: &Observation, cell: CellSize) -> Vec<Line<'static>> {
     lines
 }
 
-/// The goal as a small stack, top block first.
+/// The goal as small stacks side by side, top blocks first: one for each tower.
 fn goal_lines(obs: &Observation) -> Vec<Line<'static>> {
-    obs.goal
-        .order()
-        .iter()
+    let towers: Vec<&[BlockId]> = obs.goal.towers().collect();
+    let height = towers.iter().map(|t| t.len()).max().unwrap_or(0);
+    (0..height)
         .rev()
-        .map(|&b| {
-            Line::from(vec![
-                Span::raw("  "),
-                Span::styled(
-                    format!(" {} ", label(b)),
-                    Style::new().bg(block_colour(b)).fg(Color::White),
-                ),
-            ])
+        .map(|row| {
+            let mut spans = vec![Span::raw("  ")];
+            for tower in &towers {
+                spans.push(match tower.get(row) {
+                    Some(&b) => Span::styled(
+                        format!(" {} ", label(b)),
+                        Style::new().bg(block_colour(b)).fg(Color::White),
+                    ),
+                    None => Span::raw("   "),
+                });
+                spans.push(Span::raw(" "));
+            }
+            Line::from(spans)
         })
         .collect()
+}
+
+/// The goal box's width: one tower's room per tower (the box holds one at least).
+fn goal_box_width(obs: &Observation) -> u16 {
+    GOAL_BOX_WIDTH.max(obs.goal.tower_count() as u16 * 4 + 3)
 }
 
 /// The panel's figures.
@@ -311,5 +327,17 @@ mod tests {
         let text = screen(&app, w, h);
         assert!(!text.contains("too small"), "{text}");
         assert!(text.contains("goal 1,0,2"));
+    }
+
+    #[test]
+    fn the_side_view_is_named_and_a_goal_of_towers_drawn_tower_by_tower() {
+        let dir = tempdir();
+        let app = crate::tui::app::tests::side_app(dir.path());
+        let text = screen(&app, 80, 24);
+        assert!(text.contains("world, side view"), "{text}");
+        assert!(text.contains("goal 0,1/2"), "{text}");
+        // Tower 0,1 and tower 2 side by side: 2 on the bottom row beside 0, 1 above 0.
+        assert!(text.lines().any(|l| l.contains(" 0   2 ")), "{text}");
+        assert!(text.lines().any(|l| l.contains(" 1     ")), "{text}");
     }
 }
