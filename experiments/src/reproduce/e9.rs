@@ -27,7 +27,7 @@
 //! fewest block moves from the start (each move stacks one block on another or on the
 //! table), the exact planner's count.
 
-use agent::{EpisodeObserver, Policy, RandomPolicy, TowersPolicy};
+use agent::{EpisodeObserver, Policy, QAgent, RandomPolicy, TowersPolicy, TrainConfig, TrainOverrides};
 use oracle::towers::{MovePlanner, plan_side};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -76,6 +76,20 @@ pub fn grid_for(blocks: usize) -> Grid {
     Grid::new(width, height).expect("at most 10 x 11 cells")
 }
 
+/// The learner plays the problems of this many blocks: it trains on every goal of them (the
+/// role representation's table grows fast with the blocks: on 4 blocks its preset's 5,000
+/// games take a minute here and reach few goals).
+pub const LEARNER_BLOCKS: usize = 3;
+
+/// Training games of the learner: its preset's, or few in a quick run (a check of the
+/// pipeline).
+fn learner_games(budget: Budget, preset: u64) -> u64 {
+    match budget {
+        Budget::Quick => preset.min(1000),
+        Budget::Default | Budget::Long => preset,
+    }
+}
+
 /// The agents that play the problems through the gripper, in the tables' order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Agent {
@@ -83,29 +97,51 @@ enum Agent {
     Exact,
     /// The near-optimal planner's moves, carried out by the gripper.
     NearOptimal,
+    /// The tabular learner of the side view, greedy.
+    Learner,
 }
 
-const AGENTS: [Agent; 2] = [Agent::Exact, Agent::NearOptimal];
+const AGENTS: [Agent; 3] = [Agent::Exact, Agent::NearOptimal, Agent::Learner];
 
 impl Agent {
     fn name(self) -> &'static str {
         match self {
             Agent::Exact => "exact planner",
             Agent::NearOptimal => "near-optimal planner",
+            Agent::Learner => "learner",
         }
     }
 
     /// Whether the agent plays problems of `blocks` blocks.
-    fn plays(self, _blocks: usize) -> bool {
-        true
+    fn plays(self, blocks: usize) -> bool {
+        self != Agent::Learner || blocks == LEARNER_BLOCKS
     }
 
-    fn policy(self) -> Box<dyn Policy> {
-        match self {
+    /// The agent's policy; the learner's is `learner`'s, greedy.
+    fn policy(self, learner: &QAgent) -> Result<Box<dyn Policy + '_>> {
+        Ok(match self {
             Agent::Exact => Box::new(TowersPolicy::new(MovePlanner::Exact)),
             Agent::NearOptimal => Box::new(TowersPolicy::new(MovePlanner::NearOptimal)),
-        }
+            Agent::Learner => Box::new(learner.policy(0.0)?),
+        })
     }
+}
+
+/// The learner's training: the side view's preset (`blockstack train --view side`: the
+/// role-towers representation, the step-cost reward, every goal of towers of
+/// [`LEARNER_BLOCKS`] blocks), our learner's seed.
+fn learner_config(ctx: &Context) -> Result<TrainConfig> {
+    let preset = TrainConfig::resolve(&TrainOverrides {
+        view: Some(View::Side),
+        blocks: Some(LEARNER_BLOCKS),
+        grid: Some(grid_for(LEARNER_BLOCKS)),
+        seed: Some(ctx.seeds.ours),
+        ..TrainOverrides::default()
+    })?;
+    Ok(TrainConfig {
+        games: learner_games(ctx.budget, preset.games),
+        ..preset
+    })
 }
 
 /// How an agent's game of a problem went.
@@ -245,10 +281,10 @@ pub struct BlocksWorld {
     pub problems: Vec<Problem>,
 }
 
-/// Jobs reported: one per number of blocks and of towers, and one agreement run per number
-/// of blocks.
+/// Jobs reported: the learner's training, one per number of blocks and of towers, and one
+/// agreement run per number of blocks.
 pub(super) fn jobs(_: &Context) -> u64 {
-    (BLOCKS.len() * MAX_TOWERS + BLOCKS.len()) as u64
+    (1 + BLOCKS.len() * MAX_TOWERS + BLOCKS.len()) as u64
 }
 
 /// The backend the agents play on.
@@ -261,21 +297,14 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
         .iter()
         .flat_map(|&n| (1..=MAX_TOWERS).map(move |k| (n, k)))
         .collect();
-    let (problems, agreement) = rayon::join(
-        || -> Result<Vec<Problem>> {
-            let per: Vec<Vec<Problem>> = cells
-                .par_iter()
-                .map(|&(n, k)| {
-                    let cell_seed = episode_seed(ctx.seeds.test, 1000 * n as u64 + k as u64);
-                    let problems = (0..per_cell)
-                        .into_par_iter()
-                        .map(|j| problem(n, k, episode_seed(cell_seed, j)))
-                        .collect::<Result<Vec<_>>>()?;
-                    ctx.progress.advance(STAGE);
-                    Ok(problems)
-                })
-                .collect::<Result<_>>()?;
-            Ok(per.into_iter().flatten().collect())
+    let config = learner_config(ctx)?;
+    // The learner trains while the physics is checked against the grid; then every agent
+    // plays.
+    let (learner, agreement) = rayon::join(
+        || -> Result<QAgent> {
+            let trained = agent::train(&config, None)?;
+            ctx.progress.advance(STAGE);
+            Ok(trained.agent)
         },
         || -> Result<Vec<Agreement>> {
             BLOCKS
@@ -292,7 +321,20 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
                 .collect()
         },
     );
-    let (problems, agreement) = (problems?, agreement?);
+    let (learner, agreement) = (learner?, agreement?);
+    let per: Vec<Vec<Problem>> = cells
+        .par_iter()
+        .map(|&(n, k)| {
+            let cell_seed = episode_seed(ctx.seeds.test, 1000 * n as u64 + k as u64);
+            let problems = (0..per_cell)
+                .into_par_iter()
+                .map(|j| problem(n, k, episode_seed(cell_seed, j), &learner))
+                .collect::<Result<Vec<_>>>()?;
+            ctx.progress.advance(STAGE);
+            Ok(problems)
+        })
+        .collect::<Result<_>>()?;
+    let problems: Vec<Problem> = per.into_iter().flatten().collect();
     let world = BlocksWorld {
         problems_per_cell: per_cell,
         backend: BACKEND,
@@ -302,16 +344,16 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
         agreement,
         problems,
     };
-    Ok(experiment(ctx, world))
+    Ok(experiment(ctx, world, &config))
 }
 
-/// Counts the Drops of an episode: its block moves.
+/// Counts the Drops of an episode that let a block go: its block moves.
 #[derive(Default)]
 struct Drops(u32);
 
 impl EpisodeObserver for Drops {
-    fn step(&mut self, _: u64, _: &Observation, action: Action, _: &Step) -> agent::Result<()> {
-        self.0 += u32::from(action == Action::Drop);
+    fn step(&mut self, _: u64, before: &Observation, action: Action, _: &Step) -> agent::Result<()> {
+        self.0 += u32::from(action == Action::Drop && before.held_block().is_some());
         Ok(())
     }
 }
@@ -324,8 +366,9 @@ fn goal_rng(seed: u64) -> seeding::SimRng {
     rng
 }
 
-/// Draws problem `seed` of `blocks` blocks and `towers` towers, plans it and plays it.
-fn problem(blocks: usize, towers: usize, seed: u64) -> Result<Problem> {
+/// Draws problem `seed` of `blocks` blocks and `towers` towers, plans it and plays it with
+/// every agent (`learner`: the learner's agent).
+fn problem(blocks: usize, towers: usize, seed: u64, learner: &QAgent) -> Result<Problem> {
     let grid = grid_for(blocks);
     let goal = Goal::random_towers(blocks, towers, &mut goal_rng(seed))?;
     let mut env = Env::new(EnvConfig {
@@ -348,7 +391,7 @@ fn problem(blocks: usize, towers: usize, seed: u64) -> Result<Problem> {
             }
             let mut drops = Drops::default();
             Ok(Some(
-                match agent::play_episode(&mut env, a.policy().as_mut(), 0, seed, &mut drops) {
+                match agent::play_episode(&mut env, a.policy(learner)?.as_mut(), 0, seed, &mut drops) {
                     Ok(r) => Played {
                         reached_goal: r.reached_goal,
                         steps: r.steps,
@@ -514,12 +557,16 @@ fn agreement(blocks: usize, steps: u64, seed: u64) -> Result<Agreement> {
     Ok(a)
 }
 
-/// The report's section from the results.
-fn experiment(ctx: &Context, world: BlocksWorld) -> Experiment {
+/// The report's section from the results; `learner` is how the learner was trained.
+fn experiment(ctx: &Context, world: BlocksWorld, learner: &TrainConfig) -> Experiment {
     let all = &world.problems;
     let everything = group(0, &all.iter().collect::<Vec<_>>());
     let figures_of = |agent: Agent| everything.agents.iter().find(|f| f.agent == agent.name());
-    let (exact, near) = (figures_of(Agent::Exact), figures_of(Agent::NearOptimal));
+    let (exact, near, learned) = (
+        figures_of(Agent::Exact),
+        figures_of(Agent::NearOptimal),
+        figures_of(Agent::Learner),
+    );
     let success = |f: Option<&AgentFigures>| num(f.map(|f| 100.0 * f.success), 1);
     let agreed_drops: u64 = world.agreement.iter().map(|a| a.same_landings).sum();
     let drops: u64 = world.agreement.iter().map(|a| a.drops).sum();
@@ -539,30 +586,44 @@ fn experiment(ctx: &Context, world: BlocksWorld) -> Experiment {
         };
         format!(
             " The physics did not bring a dropped block to rest on a cell {} in random play and {} in the \
-             planners' games (first: {}).",
+             agents' games (first: {}).",
             times(physics_errors),
             times(game_errors as u64),
             world
                 .agreement
                 .iter()
                 .find_map(|a| a.first_error.as_deref())
-                .unwrap_or("in a planner's game")
+                .unwrap_or("in an agent's game")
         )
     };
     let deepest = world.by_stacking_steps.last().map_or(0, |g| g.key);
+    let per_move = |f: Option<&AgentFigures>| num(f.and_then(|f| Some(f.mean_steps? / f.mean_moves?)), 1);
+    let learner_reading = learned.map_or(String::new(), |f| {
+        format!(
+            " The learner, greedy, reached the goal in {}% of its {} problems of {LEARNER_BLOCKS} blocks, with {}x the \
+             fewest block moves{}.",
+            num(Some(100.0 * f.success), 1),
+            f.games,
+            num(f.moves_ratio, 3),
+            f.steps_ratio.map_or(String::new(), |r| format!(
+                " and {}x the fewest gripper steps",
+                num(Some(r), 3)
+            ))
+        )
+    });
     let reading = format!(
         "Over {} problems of 3 to 10 blocks (up to {deepest} stacking steps), the near-optimal planner's plans were \
          {}x the fewest block moves on average (worst {}x); carried out by the gripper through the physics, the \
          exact planner reached the goal in {}% of the problems and the near-optimal planner in {}%, with {} and {} \
-         gripper steps per block move. Physics and grid agreed on {agreed_steps} of {steps} random steps and \
-         {agreed_drops} of {drops} drops.{errors}",
+         gripper steps per block move.{learner_reading} Physics and grid agreed on {agreed_steps} of {steps} random \
+         steps and {agreed_drops} of {drops} drops.{errors}",
         all.len(),
         num(Some(everything.near_optimal_ratio), 3),
         num(Some(everything.near_optimal_worst), 2),
         success(exact),
         success(near),
-        num(exact.and_then(|f| Some(f.mean_steps? / f.mean_moves?)), 1),
-        num(near.and_then(|f| Some(f.mean_steps? / f.mean_moves?)), 1),
+        per_move(exact),
+        per_move(near),
     );
     // The ratios lie within a few per cent of 1: drawn as the per cent above it.
     let extra = |ratio: f64| 100.0 * (ratio - 1.0);
@@ -574,7 +635,9 @@ fn experiment(ctx: &Context, world: BlocksWorld) -> Experiment {
             .map(|g| (g.key as f64, extra(g.near_optimal_ratio)))
             .collect(),
     }];
-    for agent in AGENTS {
+    // The planners only: the learner's extra moves would flatten theirs (the success chart
+    // and the tables have it).
+    for agent in [Agent::Exact, Agent::NearOptimal] {
         series.push(Series {
             name: format!("{}, played", agent.name()),
             points: world
@@ -596,6 +659,32 @@ fn experiment(ctx: &Context, world: BlocksWorld) -> Experiment {
         series,
         note: format!(
             "{} problems, 3-10 blocks, goals of 1-{MAX_TOWERS} towers; a game that failed has no ratio.",
+            all.len()
+        ),
+    };
+    let reached = CurvesChart {
+        title: "E9: reached the goal, by stacking steps".into(),
+        x_label: "stacking steps (the fewest block moves)".into(),
+        y_label: "reached the goal (%)".into(),
+        y_range: Some((0.0, 100.0)),
+        series: AGENTS
+            .iter()
+            .map(|agent| Series {
+                name: agent.name().into(),
+                points: world
+                    .by_stacking_steps
+                    .iter()
+                    .filter_map(|g| {
+                        let f = g.agents.iter().find(|f| f.agent == agent.name())?;
+                        Some((g.key as f64, 100.0 * f.success))
+                    })
+                    .collect(),
+            })
+            .filter(|s| !s.points.is_empty())
+            .collect(),
+        note: format!(
+            "{} problems, 3-10 blocks, goals of 1-{MAX_TOWERS} towers; the learner plays those of {LEARNER_BLOCKS} \
+             blocks. Duan et al. (\"One-Shot Imitation Learning\", 2017) report success by stacking steps alike.",
             all.len()
         ),
     };
@@ -649,6 +738,25 @@ fn experiment(ctx: &Context, world: BlocksWorld) -> Experiment {
                     .into(),
             },
             Setting {
+                name: "learner".into(),
+                value: format!(
+                    "the tabular learner of the side view (`blockstack train --view side`'s preset: {} \
+                     representation, {} reward, alpha {}, gamma {}, epsilon {}), {} training games on all {} goals \
+                     of towers of {LEARNER_BLOCKS} blocks on {} x {}, seed {}; it plays the problems of \
+                     {LEARNER_BLOCKS} blocks greedily (epsilon 0)",
+                    learner.repr,
+                    learner.world.reward.name(),
+                    learner.params.alpha,
+                    learner.params.gamma,
+                    learner.params.epsilon,
+                    learner.games,
+                    learner.goals.len(),
+                    learner.world.grid.width(),
+                    learner.world.grid.height(),
+                    learner.seed
+                ),
+            },
+            Setting {
                 name: "backend".into(),
                 value: format!(
                     "the games on the {} backend (rapier2d dynamics to rest at every Drop), horizon {HORIZON}",
@@ -678,13 +786,20 @@ fn experiment(ctx: &Context, world: BlocksWorld) -> Experiment {
         decomposition: None,
         paper_notes: Vec::new(),
         reading,
-        figures: vec![Figure::new(
-            "e9-moves",
-            "Block moves beyond the fewest, in per cent, by stacking steps: the near-optimal planner's plans, and \
-             each planner carried out by the gripper"
-                .into(),
-            Drawing::Curves(chart),
-        )],
+        figures: vec![
+            Figure::new(
+                "e9-reached",
+                "Games that reached the goal, by stacking steps: every agent through the gripper".into(),
+                Drawing::Curves(reached),
+            ),
+            Figure::new(
+                "e9-moves",
+                "Block moves beyond the fewest, in per cent, by stacking steps: the near-optimal planner's plans, \
+                 and each planner carried out by the gripper"
+                    .into(),
+                Drawing::Curves(chart),
+            ),
+        ],
         blocks_world: Some(world),
     }
 }
@@ -738,13 +853,20 @@ mod tests {
             assert!(near.moves >= p.fewest_moves);
             // A block move takes a Pick, a Drop and at least one move between.
             assert!(exact.steps >= 3 * exact.moves);
+            // The learner plays the problems of its blocks only.
+            assert_eq!(p.played[2].is_some(), p.blocks == LEARNER_BLOCKS);
         }
         // Each grouping splits the same problems.
         for groups in [&world.by_blocks, &world.by_towers, &world.by_stacking_steps] {
             assert_eq!(groups.iter().map(|g| g.problems).sum::<usize>(), world.problems.len());
             for g in groups.iter() {
                 assert!(g.near_optimal_ratio >= 1.0 && g.near_optimal_worst <= 2.0);
-                assert!(g.agents.iter().all(|a| a.success == 1.0), "{g:?}");
+                let planners: Vec<&AgentFigures> =
+                    g.agents.iter().filter(|a| a.agent != Agent::Learner.name()).collect();
+                assert!(
+                    planners.len() == 2 && planners.iter().all(|a| a.success == 1.0),
+                    "{g:?}"
+                );
             }
         }
         assert_eq!(world.by_blocks.iter().map(|g| g.key).collect::<Vec<_>>(), BLOCKS);
@@ -758,7 +880,7 @@ mod tests {
             assert_eq!(a.steps, agreement_steps(Budget::Quick));
             assert!(a.drops > 0 && a.episodes > 1, "{a:?}");
         }
-        assert_eq!(e.figures.len(), 1);
+        assert_eq!(e.figures.len(), 2);
         assert!(
             e.reading.contains("reached the goal in 100.0% of the problems"),
             "{}",
