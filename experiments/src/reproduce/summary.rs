@@ -279,25 +279,35 @@ fn e9(e: &Value) -> Option<Vec<String>> {
         .collect::<Option<Vec<f64>>>()?
         .into_iter()
         .fold(0.0, f64::max);
-    // Every agent's success over all its games.
-    let mut agents: Vec<(String, f64, f64)> = Vec::new();
+    // Every agent's success over all its games, and the numbers of blocks it played when not
+    // all of them.
+    let mut agents: Vec<(String, f64, f64, Vec<String>)> = Vec::new();
     for g in blocks {
         for a in g["agents"].as_array()? {
             let name = a["agent"].as_str()?;
             let games = a["games"].as_f64()?;
             let won = a["success"].as_f64()? * games;
-            match agents.iter_mut().find(|(n, _, _)| n == name) {
+            let n = g["key"].to_string();
+            match agents.iter_mut().find(|(agent, ..)| agent == name) {
                 Some(entry) => {
                     entry.1 += won;
                     entry.2 += games;
+                    entry.3.push(n);
                 }
-                None => agents.push((name.to_string(), won, games)),
+                None => agents.push((name.to_string(), won, games, vec![n])),
             }
         }
     }
     let reached: Vec<String> = agents
         .iter()
-        .map(|(name, won, games)| format!("{name} {}", percent(Some(won / games))))
+        .map(|(name, won, games, played)| {
+            let on = if played.len() < blocks.len() {
+                format!(" ({} blocks)", played.join(", "))
+            } else {
+                String::new()
+            };
+            format!("{name}{on} {}", percent(Some(won / games)))
+        })
         .collect();
     let agreement = world["agreement"].as_array()?;
     let count = |field: &str| -> Option<u64> { agreement.iter().map(|a| a[field].as_u64()).sum() };
