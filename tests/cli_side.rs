@@ -50,7 +50,7 @@ fn top_view_agents_and_rules_refuse_the_side_view_in_one_line() {
     for (args, says) in [
         (
             vec!["run", "--view", "side", "--agent", "q", "--model", path(&model)],
-            "--agent q plays the top view only",
+            "the model learnt the top view; it cannot play the side view",
         ),
         (
             vec!["run", "--agent", "exact", "--goal", "0,1/2"],
@@ -101,8 +101,6 @@ fn solve_plans_block_moves_in_the_side_view() {
     assert_eq!(two["length"], 1);
     // What the side view does not plan is refused in one line.
     for (args, message) in [
-        (base.clone().flag("cost", "steps"), "use --cost moves"),
-        (base.clone().flag("solver", "oracle"), "choose exact or near-optimal"),
         (base.clone().flag("held", 2), "starts with nothing held"),
         (
             cli("solve")

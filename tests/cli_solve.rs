@@ -3,7 +3,7 @@
 
 use std::process::Output;
 
-use sim::{Action, Cell, Goal, Grid, GridWorld, State, World};
+use sim::{Action, Cell, Goal, Grid, GridWorld, State, View, World};
 
 use crate::common::{blockstack, cli, stderr, stdout};
 
@@ -136,4 +136,112 @@ fn run_plays_the_planners_in_the_physics_world() {
         assert_eq!(v["failures"], 0);
     }
     assert!(oracle["mean_steps"].as_f64() >= exact["mean_steps"].as_f64());
+}
+
+/// Replays action indices from the side-view state `start` on `grid`: the end state.
+fn replay_side(grid: Grid, start: State, actions: &[usize]) -> State {
+    let mut world = GridWorld::new_in(View::Side, grid, start).unwrap();
+    for &i in actions {
+        world.act(Action::from_index(i, start.block_count()).unwrap()).unwrap();
+    }
+    *world.state_ref()
+}
+
+fn indices(v: &serde_json::Value) -> Vec<usize> {
+    v["actions"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| a.as_u64().unwrap() as usize)
+        .collect()
+}
+
+/// `solve --view side --cost steps`: the fewest gripper steps by the exact solver, and the
+/// near-optimal block-move plan carried out by the gripper (also `--solver oracle`).
+#[test]
+fn solve_counts_gripper_steps_in_the_side_view() {
+    // 1 on 0, 2 on 1; 3 alone. Goal: 1 on the table, 3 on 1, 2 on 3 (0 free).
+    let grid = Grid::default();
+    let start = State::new(
+        &[Cell::new(0, 0), Cell::new(0, 1), Cell::new(0, 2), Cell::new(1, 0)],
+        None,
+    )
+    .unwrap();
+    let goal = Goal::parse("1,3,2/", Some(4)).unwrap();
+    let base = cli("solve")
+        .flag("view", "side")
+        .flag("start", "0,0;0,1;0,2;1,0")
+        .flag("goal", "1,3,2/")
+        .flag("cost", "steps");
+    let exact = json(&base.clone().arg("--json").run());
+    let optimum = oracle::ExactSolver::new(grid)
+        .with_view(View::Side)
+        .distance(&start, &goal)
+        .unwrap();
+    assert_eq!(exact["length"], optimum);
+    assert_eq!(
+        (exact["cost"].as_str(), exact["solver"].as_str()),
+        (Some("steps"), Some("exact"))
+    );
+    let actions = indices(&exact);
+    assert_eq!(actions.len() as u32, optimum);
+    assert!(goal.holds_in(View::Side, &replay_side(grid, start, &actions)));
+    // The near-optimal plan, 4 block moves, carried out: no shorter than the optimum, and
+    // the oracle of the side view is the same plan.
+    let near = json(&base.clone().flag("solver", "near-optimal").arg("--json").run());
+    let oracle = json(&base.clone().flag("solver", "oracle").arg("--json").run());
+    assert_eq!(indices(&near), indices(&oracle));
+    assert_eq!(oracle["solver"], "oracle");
+    let carried = indices(&near);
+    assert!(carried.len() >= actions.len() && near["length"] == carried.len());
+    assert!(goal.holds_in(View::Side, &replay_side(grid, start, &carried)));
+    let picks = carried.iter().filter(|&&i| i >= 5).count();
+    assert_eq!(picks, 4, "one pick per block move");
+    // Text: the count, then the gripper actions.
+    let text = base.clone().ok();
+    assert!(
+        text.starts_with(&format!(
+            "exact plan, goal 1,3,2/, grid 7x7, side view: {optimum} gripper steps\npick 2, "
+        )),
+        "{text}"
+    );
+    // From a held block, by the exact solver.
+    let held = json(
+        &cli("solve")
+            .flag("view", "side")
+            .flag("start", "0,0;0,1;0,2;1,3")
+            .flag("held", 3)
+            .flag("goal", "1,3,2/")
+            .flag("cost", "steps")
+            .arg("--json")
+            .run(),
+    );
+    let cells = [Cell::new(0, 0), Cell::new(0, 1), Cell::new(0, 2), Cell::new(1, 3)];
+    let held_start = State::new(&cells, Some(sim::BlockId(3))).unwrap();
+    assert!(goal.holds_in(View::Side, &replay_side(grid, held_start, &indices(&held))));
+    // What is refused, in one line.
+    for (args, message) in [
+        (
+            base.clone().flag("solver-budget", 5),
+            "use --solver near-optimal or --cost moves",
+        ),
+        (
+            base.clone().flag("solver", "near-optimal").flag("held", 2),
+            "starts with nothing held",
+        ),
+        (
+            cli("solve")
+                .flag("view", "side")
+                .flag("start", "0,0;0,1;0,2;1,0")
+                .flag("goal", "1,3,2/")
+                .flag("solver-budget", 100),
+            "only with --cost steps --solver exact",
+        ),
+    ] {
+        let o = args.run();
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(message), "{args:?}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+    }
 }

@@ -108,8 +108,9 @@ pub struct TrainOverrides {
     pub horizon: Option<u32>,
     /// `--backend` (default physics).
     pub backend: Option<Backend>,
-    /// `--view` (default top). In the side view the goals default to every goal of towers
-    /// ([`Goal::all_towers`]) and the optimal preset's representation is `role-towers`.
+    /// `--view` (default top). In the side view the goals default to one goal of each
+    /// shape ([`Goal::shapes`]), and the optimal preset (the default there) trains
+    /// `role-towers` for the recipe's 100,000 games.
     pub view: Option<View>,
 }
 
@@ -214,7 +215,11 @@ impl TrainConfig {
         let view = s.view.unwrap_or_default();
         let goals = match &s.goals {
             Some(goals) => goals.clone(),
-            None => Goal::all_in(view, blocks)?,
+            // Role-towers names blocks by their place in the goal, so one goal of each shape
+            // is every goal, and each shape is trained as often (every goal would play the
+            // one-tower shape six times as often as towers of one block each, with 3 blocks).
+            None if view == View::Side => Goal::shapes(blocks)?,
+            None => Goal::all(blocks)?,
         };
         let towers = view == View::Side || goals.iter().any(|g| !g.is_one_tower());
         let preset = s.preset.unwrap_or(Preset::default_for(profile, s.repr, towers));
@@ -230,6 +235,9 @@ impl TrainConfig {
                         ..profile_learner.world
                     },
                     repr: if towers { ReprKind::RoleTowers } else { recipe.repr },
+                    // Goals of towers are a new world with no earlier results to keep: they
+                    // take the recipe's game count too.
+                    games: if towers { recipe.games } else { profile_learner.games },
                     params: recipe.params,
                     backward_replay: recipe.backward_replay,
                     final_replay: recipe.final_replay,

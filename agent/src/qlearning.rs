@@ -271,18 +271,24 @@ impl QAgent {
         Ok(())
     }
 
-    /// The table columns of the actions legal in `obs`, as bits (bit `c`: column `c`).
+    /// The table columns of the actions legal in `obs`, as bits (bit `c`: column `c`): what
+    /// the agent plays among.
     #[inline]
     pub(crate) fn legal_columns(&self, obs: &Observation) -> u32 {
-        // Under the free protocol every action may be taken (in the side view the rules
-        // make one outside its mask change nothing), and the learner tries them all: its
-        // bootstrap, the best value in the next state's row, is right only over actions it
-        // tries, and an action never tried keeps its optimistic initial value.
-        let legal = match obs.protocol {
-            sim::ActionProtocol::Free => sim::ActionMask::all(obs.state.block_count()),
-            _ => obs.legal_actions(),
-        };
-        self.repr.column_mask(&obs.goal, legal)
+        self.repr.column_mask(&obs.goal, obs.legal_actions())
+    }
+
+    /// The table columns the learner tries while training in `obs`: under the free protocol
+    /// every action (in the side view the rules make one outside its mask change nothing),
+    /// since its bootstrap, the best value in the next state's row, is right only over
+    /// actions it tries (one never tried keeps its optimistic initial value); the legal ones
+    /// otherwise. In the top view under `free` every action is legal, so the two agree.
+    #[inline]
+    pub(crate) fn training_columns(&self, obs: &Observation) -> u32 {
+        match obs.protocol {
+            sim::ActionProtocol::Free => all_columns(self.table.columns()),
+            _ => self.legal_columns(obs),
+        }
     }
 
     /// The legal action with the highest Q-value in `obs`, ties broken uniformly at random.

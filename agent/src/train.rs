@@ -258,7 +258,7 @@ impl Trainer {
                     (action, agent.column(&obs.goal, action)?)
                 }
                 _ => {
-                    let column = agent.choose_column(key, agent.legal_columns(&obs), epsilon, &mut rng);
+                    let column = agent.choose_column(key, agent.training_columns(&obs), epsilon, &mut rng);
                     (agent.action_of_column(&obs.goal, column), column)
                 }
             };

@@ -168,8 +168,8 @@ impl AnyModel {
         })
     }
 
-    /// Evaluates the model on `plan` ([`agent::eval::evaluate`]) with the exact solver under
-    /// the plan's protocol, `model` naming where it came from; `tick` after every episode
+    /// Evaluates the model on `plan` ([`agent::eval::evaluate`]) with the exact solver of the
+    /// plan's world (protocol and view), `model` naming where it came from; `tick` after every episode
     /// played and every start solved.
     pub fn evaluate(
         &self,
@@ -178,7 +178,7 @@ impl AnyModel {
         epsilon: f64,
         tick: &mut dyn FnMut() -> agent::Result<()>,
     ) -> Result<Evaluation> {
-        let solver = ExactSolver::new(plan.world.grid).with_protocol(plan.world.protocol);
+        let solver = ExactSolver::for_world(&plan.world);
         self.evaluate_with(plan, model, epsilon, &solver, tick)
     }
 

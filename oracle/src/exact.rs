@@ -1,6 +1,11 @@
 //! The exact solver: A* over the joint state (every block's cell and the held block) with
 //! an admissible, consistent heuristic, so the plan it returns is a shortest one.
 //!
+//! These docs are the top view's (the paper's world, the default). In the side view
+//! ([`ExactSolver::with_view`]) the same search finds the fewest gripper steps to a goal of
+//! towers, with the side view's successors and its own heuristic: [`side`] says which and
+//! proves it.
+//!
 //! # The heuristic and why it is admissible and consistent
 //!
 //! For a placement `P` of the stack (its column and bottom row), let `D` be the blocks not
@@ -60,11 +65,13 @@
 use std::cell::Cell as Counter;
 
 use pathfinding::directed::astar::astar;
-use sim::{Action, ActionProtocol, Effect, Goal, Grid, GridWorld, State, World};
+use sim::{Action, ActionProtocol, Effect, Goal, Grid, GridWorld, State, View, World};
 
 use crate::error::{OracleError, Result};
 use crate::placement::{self, check_problem};
 use crate::plan::{Plan, Planner};
+
+pub mod side;
 
 /// The default budget of the exact search: the most states it may store.
 pub const DEFAULT_NODE_BUDGET: usize = 4_000_000;
@@ -97,6 +104,7 @@ pub struct ExactSolver {
     grid: Grid,
     budget: usize,
     protocol: ActionProtocol,
+    view: View,
 }
 
 impl ExactSolver {
@@ -106,7 +114,43 @@ impl ExactSolver {
             grid,
             budget: DEFAULT_NODE_BUDGET,
             protocol: ActionProtocol::Free,
+            view: View::Top,
         }
+    }
+
+    /// This solver planning in `view`: in the side view it finds the fewest gripper steps
+    /// (Pick, moves, Drop) from a side-view state to any goal (towers included) as
+    /// [`Goal::holds_in`] the side view checks it ([`side`]: the actions searched, the
+    /// heuristic and its proofs). The top view is the default.
+    ///
+    /// ```
+    /// use oracle::ExactSolver;
+    /// use sim::{Cell, Goal, Grid, State, View};
+    ///
+    /// let solver = ExactSolver::new(Grid::default()).with_view(View::Side);
+    /// // Blocks 0 and 1 on the table, two columns apart; the goal puts 1 on 0.
+    /// let state = State::new(&[Cell::new(0, 0), Cell::new(2, 0)], None)?;
+    /// let goal: Goal = "0,1".parse()?;
+    /// // Pick 1, up, left twice, Drop: it falls onto 0.
+    /// assert_eq!(solver.distance(&state, &goal)?, 5);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn with_view(mut self, view: View) -> Self {
+        self.view = view;
+        self
+    }
+
+    /// The solver of `world`'s grid, protocol and view: the yardstick of an evaluation
+    /// played in that world.
+    pub fn for_world(world: &sim::EnvConfig) -> Self {
+        ExactSolver::new(world.grid)
+            .with_protocol(world.protocol)
+            .with_view(world.view)
+    }
+
+    /// The world it plans in.
+    pub fn view(&self) -> View {
+        self.view
     }
 
     /// This solver planning under `protocol`: its plans take only actions the protocol
@@ -150,14 +194,52 @@ impl ExactSolver {
 
     /// The heuristic's value: a lower bound on [`ExactSolver::distance`] (module docs).
     pub fn lower_bound(&self, state: &State, goal: &Goal) -> Result<u32> {
-        check_problem(self.grid, state, goal)?;
-        Ok(placement::lower_bound(self.grid, state, goal))
+        match self.view {
+            View::Top => {
+                check_problem(self.grid, state, goal)?;
+                Ok(placement::lower_bound(self.grid, state, goal))
+            }
+            View::Side => Ok(side::SideProblem::new(self.grid, state, goal)?.lower_bound(state)),
+        }
     }
 
     /// A shortest plan and what the search did to find it.
     pub fn solve_with_stats(&self, state: &State, goal: &Goal) -> Result<(Plan, SearchStats)> {
-        check_problem(self.grid, state, goal)?;
         let (grid, protocol) = (self.grid, self.protocol);
+        match self.view {
+            View::Top => {
+                check_problem(grid, state, goal)?;
+                self.search(
+                    state,
+                    goal,
+                    |s| successors(grid, protocol, s),
+                    |s| placement::lower_bound(grid, s, goal),
+                    |s| goal.holds(s),
+                )
+            }
+            View::Side => {
+                let problem = side::SideProblem::new(grid, state, goal)?;
+                self.search(
+                    state,
+                    goal,
+                    |s| side::successors(grid, s),
+                    |s| problem.lower_bound(s),
+                    |s| goal.holds_in(View::Side, s),
+                )
+            }
+        }
+    }
+
+    /// A* from `state` over `successors` with the heuristic `bound` to a state where `done`
+    /// holds, within the budget; the plan is read back from the path's states.
+    fn search(
+        &self,
+        state: &State,
+        goal: &Goal,
+        successors: impl Fn(&State) -> Vec<(Action, State)>,
+        bound: impl Fn(&State) -> u32,
+        done: impl Fn(&State) -> bool,
+    ) -> Result<(Plan, SearchStats)> {
         let expanded = Counter::new(0usize);
         let generated = Counter::new(0usize);
         let over_budget = || generated.get() > self.budget;
@@ -169,12 +251,12 @@ impl ExactSolver {
                     return Vec::new();
                 }
                 expanded.set(expanded.get() + 1);
-                let next = successors(grid, protocol, s);
+                let next = successors(s);
                 generated.set(generated.get() + next.len());
                 next.into_iter().map(|(_, t)| (t, 1u32)).collect()
             },
-            |s| placement::lower_bound(grid, s, goal),
-            |s| goal.holds(s),
+            |s| bound(s),
+            |s| done(s),
         );
         let stats = SearchStats {
             expanded: expanded.get(),
@@ -185,7 +267,7 @@ impl ExactSolver {
             return Err(OracleError::BudgetExceeded {
                 budget: self.budget,
                 blocks: state.block_count(),
-                grid: grid.to_string(),
+                grid: self.grid.to_string(),
             });
         }
         let Some((path, _)) = found else {
@@ -197,7 +279,7 @@ impl ExactSolver {
         let actions = path
             .windows(2)
             .map(|w| {
-                successors(grid, protocol, &w[0])
+                successors(&w[0])
                     .into_iter()
                     .find(|&(_, t)| t == w[1])
                     .map(|(a, _)| a)

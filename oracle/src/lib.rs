@@ -5,7 +5,9 @@
 //!   it plans from any state, a held block included, so learners and demonstrators can
 //!   hand control to it mid-episode ([`Oracle::next_action`]).
 //! - [`ExactSolver`]: A* over the joint state with an admissible, consistent heuristic; its
-//!   plans are provably shortest, the yardstick for every "steps to goal" figure.
+//!   plans are provably shortest, the yardstick for every "steps to goal" figure. In the
+//!   side view ([`ExactSolver::with_view`]) it finds the fewest gripper steps to a goal of
+//!   towers.
 //! - [`CentroidWalker`]: the paper's oracle as its authors coded it, a greedy walker
 //!   towards a stack laid around the blocks' centroid, with a random block when nothing is
 //!   held. It plans nothing and can get stuck; Table I of the paper assisted its learner

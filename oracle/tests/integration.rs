@@ -4,5 +4,6 @@
 mod common;
 mod exact;
 mod protocol;
+mod side_steps;
 mod soundness;
 mod towers;

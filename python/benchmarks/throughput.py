@@ -1,6 +1,6 @@
 """Steps per second of blockstack beside MiniGrid and FrozenLake, through the same paths.
 
-    python python/benchmarks/throughput.py [--seconds 2] [--quick]
+    python python/benchmarks/throughput.py [--seconds 2] [--quick] [--view top|side] [--blocks 3]
 
 Prints one table: (a) ``blockstack/Stack-v0`` through ``gymnasium.make``, one env, random
 legal actions; (b) the same through ``gymnasium.vector.SyncVectorEnv`` of 64; (c)
@@ -10,6 +10,12 @@ FrozenLake through (a) and (b). Every row uses the physics backend and ``planes`
 observations unless it says otherwise; actions are drawn uniformly from the legal ones
 (``info["action_mask"]``), and episodes reset as they end. MiniGrid is optional
 (``pip install minigrid``); its rows are skipped without it.
+
+``--view side`` measures the side view instead (``blockstack/BlocksWorld-v0``, and
+``StackVectorEnv(view="side")``), where the random legal actions include drops that run
+rapier's dynamics until the blocks rest; the native vector env's actions are then drawn
+among the legal ones (``action_masks()``) too, that draw included in the time. The peers
+are left out. ``--blocks`` sets the block count of every blockstack row (3 by default).
 """
 
 from __future__ import annotations
@@ -76,9 +82,20 @@ def native(num_envs: int, threads: int, seconds: float, **kwargs) -> float:
     envs.reset(seed=0)
     rng = np.random.default_rng(0)
     n = envs.single_action_space.n
+    k = [0]
+    if kwargs.get("view") == "side":
+        # Only some actions are legal in the side view: each env takes the legal action with
+        # the largest of n random keys, drawn ahead in batches.
+        keys = [rng.random((num_envs, n)) + 1.0 for _ in range(16)]
+
+        def step():
+            k[0] = (k[0] + 1) % len(keys)
+            envs.step(np.argmax(keys[k[0]] * envs.action_masks(), axis=1))
+            return num_envs
+
+        return timed(step, seconds)
     # Every action is legal in the spec world; a batch of random ones per step, drawn ahead.
     batches = [rng.integers(0, n, size=num_envs) for _ in range(16)]
-    k = [0]
 
     def step():
         k[0] = (k[0] + 1) % len(batches)
@@ -92,24 +109,31 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=2.0, help="time per row")
     parser.add_argument("--quick", action="store_true", help="skip 4096 envs and the peers")
+    parser.add_argument("--view", choices=["top", "side"], default="top", help="the world measured")
+    parser.add_argument("--blocks", type=int, default=3, help="blocks in every blockstack env")
     args = parser.parse_args()
     s = args.seconds
+    side = args.view == "side"
+    name = "blockstack/BlocksWorld-v0" if side else "blockstack/Stack-v0"
+    world = {"blocks": args.blocks, "view": args.view}
     rows = []
 
     def row(name, path, value):
         rows.append((name, path, value))
         print(f"  {name:<34} {path:<36} {value:>14,.0f}", flush=True)
 
-    stack = lambda: gym.make("blockstack/Stack-v0")  # noqa: E731
+    stack = lambda: gym.make(name, blocks=args.blocks)  # noqa: E731
+    print(f"  {args.blocks} blocks, {args.view} view")
     print(f"  {'environment':<34} {'path':<36} {'env-steps/s':>14}")
-    row("blockstack/Stack-v0", "gymnasium.make, 1 env", single(stack, s))
-    row("blockstack/Stack-v0", "SyncVectorEnv, 64 envs", sync(stack, 64, s))
+    row(name, "gymnasium.make, 1 env", single(stack, s))
+    row(name, "SyncVectorEnv, 64 envs", sync(stack, 64, s))
     sizes = [64, 256, 1024] if args.quick else [64, 256, 1024, 4096]
     for num_envs in sizes:
         for threads in (1, 2):
-            row("blockstack/Stack-v0", f"StackVectorEnv, {num_envs} envs, {threads} thr", native(num_envs, threads, s))
+            row(name, f"StackVectorEnv, {num_envs} envs, {threads} thr", native(num_envs, threads, s, **world))
     if not args.quick:
-        row("blockstack/Stack-v0 (grid backend)", "StackVectorEnv, 4096 envs, 2 thr", native(4096, 2, s, backend="grid"))
+        row(f"{name} (grid backend)", "StackVectorEnv, 4096 envs, 2 thr", native(4096, 2, s, backend="grid", **world))
+    if not args.quick and not side:
         peers = [("FrozenLake-v1", lambda: gym.make("FrozenLake-v1"))]
         try:
             import minigrid  # noqa: F401  (registers MiniGrid-*)
@@ -117,12 +141,12 @@ def main() -> None:
             peers.insert(0, ("MiniGrid-Empty-8x8-v0", lambda: gym.make("MiniGrid-Empty-8x8-v0")))
         except ImportError:
             print("  (MiniGrid is not installed: pip install minigrid)")
-        for name, make in peers:
-            row(name, "gymnasium.make, 1 env", single(make, s))
-            row(name, "SyncVectorEnv, 64 envs", sync(make, 64, s))
+        for peer, make in peers:
+            row(peer, "gymnasium.make, 1 env", single(make, s))
+            row(peer, "SyncVectorEnv, 64 envs", sync(make, 64, s))
     values = {(n, p): v for n, p, v in rows}
-    one = values.get(("blockstack/Stack-v0", "StackVectorEnv, 4096 envs, 1 thr"))
-    two = values.get(("blockstack/Stack-v0", "StackVectorEnv, 4096 envs, 2 thr"))
+    one = values.get((name, "StackVectorEnv, 4096 envs, 1 thr"))
+    two = values.get((name, "StackVectorEnv, 4096 envs, 2 thr"))
     minigrid_single = values.get(("MiniGrid-Empty-8x8-v0", "gymnasium.make, 1 env"))
     if one and two:
         print(f"\n  4096 envs, 2 threads / 1 thread: {two / one:.2f}x")

@@ -16,6 +16,7 @@ def solve(
     solver: str = "exact",
     protocol: str = "free",
     view: str = "top",
+    cost: Optional[str] = None,
 ) -> list:
     """A plan, as a list of action indices, from the state where block ``i`` stands on
     ``cells[i]`` (``(x, y)``, ``y`` upward) with ``held`` held, to ``goal`` (bottom to top,
@@ -26,9 +27,13 @@ def solve(
     centroid + A* oracle's. An empty list when the goal holds already; ``ValueError`` for a
     state or goal that does not fit the grid.
 
-    ``view="side"`` plans block moves in the classic Blocks World seen from the side (the
-    goal may be several towers, ``"0,1/2"``): a list of ``{"block": B, "onto": "table" | C}``,
-    the fewest (``solver="exact"``) or the near-optimal planner's (``"near-optimal"``), as
-    ``blockstack solve --view side --json`` prints them.
+    ``view="side"`` plans in the classic Blocks World seen from the side (the goal may be
+    several towers, ``"0,1/2"``), counting ``cost``. ``cost="moves"`` (the side view's
+    default) gives block moves, a list of ``{"block": B, "onto": "table" | C}``: the fewest
+    (``solver="exact"``) or the near-optimal planner's (``"near-optimal"``, or
+    ``"oracle"``). ``cost="steps"`` gives action indices: the fewest gripper steps
+    (``"exact"``; ``held`` may name a block held at the start) or the near-optimal block-move
+    plan carried out by the gripper (``"near-optimal"`` or ``"oracle"``). Both as
+    ``blockstack solve --view side --cost ... --json`` prints them.
     """
-    return _native.solve([tuple(c) for c in cells], goal, held, tuple(grid), solver, protocol, view)
+    return _native.solve([tuple(c) for c in cells], goal, held, tuple(grid), solver, protocol, view, cost)

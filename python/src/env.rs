@@ -221,7 +221,7 @@ impl NativeEnv {
 
     /// The exact solver's next action from the current state: the first of a shortest plan.
     fn expert_action(&self) -> PyResult<usize> {
-        self.planner_action(&ExactSolver::new(self.env.config().grid))
+        self.planner_action(&ExactSolver::new(self.env.config().grid).with_view(self.env.config().view))
     }
 
     /// The oracle's next action from the current state.
@@ -234,6 +234,7 @@ impl NativeEnv {
         let obs = self.env.observation();
         guard(|| {
             ExactSolver::new(self.env.config().grid)
+                .with_view(self.env.config().view)
                 .distance(&obs.state, &obs.goal)
                 .or_value_error()
         })

@@ -141,7 +141,7 @@ pub fn train<'py>(
                     episodes: eval_episodes,
                     seed: eval_seed,
                 };
-                let solver = ExactSolver::new(config.world.grid).with_protocol(config.world.protocol);
+                let solver = ExactSolver::for_world(&plan.world);
                 let model = &trained.agent;
                 let name = model.name();
                 let mut signal = None;

@@ -152,8 +152,41 @@ def test_solve_plans_block_moves_in_the_side_view():
     assert blockstack.solve(cells, "0,1/3,2", view="side") == [{"block": 2, "onto": 3}]
     with pytest.raises(ValueError, match="floats"):
         blockstack.solve([(0, 0), (0, 2)], "0,1", view="side")
+    # The side view's oracle is the near-optimal planner.
+    assert blockstack.solve(cells, "1,3,2/", view="side", solver="oracle") == near
     with pytest.raises(ValueError, match="choose exact or near-optimal"):
-        blockstack.solve(cells, "1,3,2/", view="side", solver="oracle")
+        blockstack.solve(cells, "1,3,2/", view="side", solver="greedy")
+
+
+def test_solve_counts_gripper_steps_in_the_side_view_as_the_cli_does(cli):
+    cells, goal = [(0, 0), (0, 1), (0, 2), (1, 0)], "1,3,2/"
+    start = ";".join(f"{x},{y}" for x, y in cells)
+    plans = {}
+    for solver in ["exact", "near-optimal", "oracle"]:
+        plan = blockstack.solve(cells, goal, view="side", cost="steps", solver=solver)
+        printed = json.loads(
+            cli("solve", "--view", "side", "--start", start, "--goal", goal, "--cost", "steps",
+                "--solver", solver, "--json")
+        )
+        assert plan == printed["actions"] and printed["length"] == len(plan)
+        plans[solver] = plan
+    assert plans["oracle"] == plans["near-optimal"]
+    assert len(plans["exact"]) <= len(plans["near-optimal"])
+    # Four block moves at the fewest, each at least Pick, a move and Drop.
+    assert len(plans["exact"]) >= 3 * 4
+    # Block moves as before; from a held block, the exact count as the CLI gives it.
+    assert blockstack.solve(cells, goal, view="side", cost="moves") == blockstack.solve(cells, goal, view="side")
+    held_cells = [(0, 0), (0, 1), (0, 2), (1, 3)]
+    held = blockstack.solve(held_cells, goal, held=3, view="side", cost="steps")
+    printed = json.loads(
+        cli("solve", "--view", "side", "--start", "0,0;0,1;0,2;1,3", "--held", 3, "--goal", goal,
+            "--cost", "steps", "--json")
+    )
+    assert held == printed["actions"] and held[-1] == 4  # the last action lets go: Drop
+    with pytest.raises(ValueError, match="choose steps or moves"):
+        blockstack.solve(cells, goal, view="side", cost="seconds")
+    with pytest.raises(ValueError, match='pass view="side"'):
+        blockstack.solve(cells, "0,1,2,3", cost="moves")
 
 
 @pytest.mark.parametrize(

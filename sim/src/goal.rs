@@ -290,6 +290,27 @@ impl Goal {
         Ok(out)
     }
 
+    /// One goal of each shape of `blocks` blocks: for every way to split them into towers
+    /// (tower heights, tallest first), the blocks `0, 1, ...` in towers of those heights
+    /// (`0,1,2`, `0,1/2` and `0/1/2` for 3 blocks). A learner that names blocks by their
+    /// place in the goal meets every goal in these.
+    pub fn shapes(blocks: usize) -> Result<Vec<Goal>> {
+        Goal::identity(blocks)?;
+        let mut out = Vec::new();
+        for heights in partitions(blocks, blocks) {
+            let mut next = 0;
+            let towers: Vec<Vec<usize>> = heights
+                .iter()
+                .map(|&h| {
+                    next += h;
+                    (next - h..next).collect()
+                })
+                .collect();
+            out.push(Goal::of_towers(&towers, blocks)?);
+        }
+        Ok(out)
+    }
+
     /// Every goal a world of `view` is trained and tested on by default: one tower of every
     /// block from above ([`Goal::all`]), every goal of towers naming every block from the
     /// side ([`Goal::all_towers`]).
@@ -600,6 +621,22 @@ impl<'de> Deserialize<'de> for Goal {
         }
         .map_err(serde::de::Error::custom)
     }
+}
+
+/// The partitions of `n` into parts of at most `largest`, each listed tallest first, the
+/// partitions in decreasing order (`[3]`, `[2, 1]`, `[1, 1, 1]`).
+fn partitions(n: usize, largest: usize) -> Vec<Vec<usize>> {
+    if n == 0 {
+        return vec![Vec::new()];
+    }
+    let mut out = Vec::new();
+    for first in (1..=largest.min(n)).rev() {
+        for mut rest in partitions(n - first, first) {
+            rest.insert(0, first);
+            out.push(rest);
+        }
+    }
+    out
 }
 
 /// The Lah number L(n, k): the ways to split `n` labelled blocks into `k` non-empty towers.

@@ -323,6 +323,13 @@ impl PhysicsWorld {
 
     /// Puts `block`'s body and collider on the centre of `cell` and tells the broad phase.
     fn teleport(&mut self, block: BlockId, cell: Cell) {
+        self.set_position(block, cell);
+        self.count_move();
+    }
+
+    /// Puts `block`'s body and collider on `cell`, without the periodic broad-phase update
+    /// ([`PhysicsWorld::count_move`] runs it).
+    fn set_position(&mut self, block: BlockId, cell: Cell) {
         let b = self.blocks[block.index()];
         let target = centre(cell);
         self.bodies[b.body].set_translation(target, false);
@@ -331,9 +338,26 @@ impl PhysicsWorld {
         collider.set_position(Pose::from_translation(target));
         let aabb = collider.compute_aabb();
         self.broad_phase.set_aabb(&self.params, b.collider, aabb);
+    }
+
+    /// Counts one move towards the next broad-phase update, and runs it when due.
+    fn count_move(&mut self) {
         self.moves_since_update += 1;
         if self.moves_since_update >= MOVES_PER_BROAD_PHASE_UPDATE {
             self.update_broad_phase(&[]);
+        }
+    }
+
+    /// Puts every block on its cell of `cells`, then counts the moves: in the side view the
+    /// update is a pipeline step, which must not see a world half rearranged (two blocks on
+    /// one cell for a moment: the narrow phase kept that overlap as a deep contact, and the
+    /// next drop's solver pushed both blocks off their cells).
+    fn set_positions(&mut self, cells: &[Cell]) {
+        for (i, &cell) in cells.iter().enumerate() {
+            self.set_position(BlockId(i as u8), cell);
+        }
+        for _ in cells {
+            self.count_move();
         }
     }
 
@@ -433,6 +457,7 @@ impl World for PhysicsWorld {
         self.bodies[self.blocks[block.index()].body].wake_up(true);
         self.settle_steps = self.run_to_rest(block)?;
         // Read back every block's resting cell, check it, and put the block exactly on it.
+        let mut cells = [Cell::default(); MAX_BLOCKS];
         for i in 0..self.blocks.len() {
             let b = self.blocks[i];
             let at = self.bodies[b.body].translation();
@@ -447,8 +472,9 @@ impl World for PhysicsWorld {
                     ),
                 });
             }
-            self.teleport(BlockId(i as u8), cell);
+            cells[i] = cell;
         }
+        self.set_positions(&cells[..self.blocks.len()]);
         self.rest_all();
         Ok(())
     }
@@ -507,9 +533,7 @@ impl World for PhysicsWorld {
     }
 
     fn put(&mut self, state: &State) {
-        for (i, &cell) in state.cells().iter().enumerate() {
-            self.teleport(BlockId(i as u8), cell);
-        }
+        self.set_positions(state.cells());
         self.set_held(state.held_block());
         self.rest_all();
     }

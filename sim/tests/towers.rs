@@ -257,3 +257,19 @@ fn random_towers_draws_every_goal_of_that_many_towers_alike_and_by_seed() {
     assert!(Goal::random_towers(3, 0, &mut rng).is_err());
     assert!(Goal::random_towers(3, 4, &mut rng).is_err());
 }
+
+#[test]
+fn shapes_give_one_goal_for_each_split_into_towers() {
+    let text = |n| {
+        Goal::shapes(n)
+            .unwrap()
+            .iter()
+            .map(|g| g.to_string())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(text(2), ["0,1", "0/1"]);
+    assert_eq!(text(3), ["0,1,2", "0,1/2", "0/1/2"]);
+    assert_eq!(text(4), ["0,1,2,3", "0,1,2/3", "0,1/2,3", "0,1/2/3", "0/1/2/3"]);
+    assert_eq!(Goal::shapes(10).unwrap().len(), 42, "the partitions of 10");
+    assert!(Goal::shapes(17).is_err());
+}

@@ -79,7 +79,11 @@ pub fn eval(args: EvalArgs) -> Result<()> {
         ..plan.world
     };
     plan.world.validate()?;
-    let solver = args.budget.solver(model.grid()).with_protocol(rules.protocol);
+    let solver = args
+        .budget
+        .solver(model.grid())
+        .with_protocol(rules.protocol)
+        .with_view(plan.world.view);
     // Each episode counts twice: played, then solved exactly.
     let bar = super::progress::bar(
         2 * args.episodes * plan.goals.len() as u64,

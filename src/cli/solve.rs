@@ -1,10 +1,12 @@
 //! `blockstack solve`: a plan from a given state, by the exact solver or the oracle in the
-//! top view, or by the block-move planners of `oracle::towers` in the side view.
+//! top view; in the side view, in block moves by the planners of `oracle::towers`, or in
+//! gripper steps by the exact solver's side-view search or a near-optimal block-move plan
+//! carried out by the gripper.
 
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
-use oracle::Oracle;
-use oracle::towers::{MovePlanner, Place, plan_side};
+use oracle::towers::{MovePlanner, Place, TowerPlan, gripper_actions, plan_side};
+use oracle::{Oracle, OracleError, Plan};
 use serde::Serialize;
 use sim::{Goal, Grid, State, View};
 
@@ -16,7 +18,8 @@ use super::stdout::line;
 pub enum SolverKind {
     /// The exact solver: a shortest plan.
     Exact,
-    /// The centroid + A* oracle (top view).
+    /// The centroid + A* oracle (top view); in the side view, the near-optimal planner
+    /// carried out by the gripper (as `run --agent oracle` carries its moves out).
     Oracle,
     /// The near-optimal block-move planner (side view): at most twice the optimum, for
     /// any number of blocks.
@@ -52,7 +55,8 @@ pub struct SolveArgs {
     /// The goal, bottom to top, e.g. 1,0,2.
     #[arg(long)]
     pub goal: String,
-    /// The block held at the start (default: none).
+    /// The block held at the start (default: none; in the side view only with --cost steps
+    /// --solver exact).
     #[arg(long)]
     pub held: Option<usize>,
     /// Grid size, WxH.
@@ -62,8 +66,8 @@ pub struct SolveArgs {
     /// goal may be several towers, e.g. 0,1/2).
     #[arg(long, default_value = "top")]
     pub view: View,
-    /// What the plan's length counts: steps (gripper actions; the top view's default) or
-    /// moves (block moves; the side view's, and its only count so far).
+    /// What the plan's length counts: steps (gripper actions; the top view's default and
+    /// only count) or moves (block moves; the side view's default).
     #[arg(long, value_enum)]
     pub cost: Option<Cost>,
     /// The planner.
@@ -85,6 +89,9 @@ pub struct SolveArgs {
 #[derive(Debug, Serialize)]
 struct SolveReport {
     length: usize,
+    /// `"steps"` in the side view (where moves may be counted too); absent in the top view.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    cost: Option<&'static str>,
     actions: Vec<usize>,
     solver: &'static str,
 }
@@ -129,6 +136,7 @@ pub fn solve(args: SolveArgs) -> Result<()> {
     if args.json {
         let report = SolveReport {
             length: plan.len(),
+            cost: None,
             actions: plan.actions.iter().map(|a| a.index()).collect(),
             solver: args.solver.name(),
         };
@@ -146,6 +154,78 @@ pub fn solve(args: SolveArgs) -> Result<()> {
     Ok(())
 }
 
+/// `solve --view side`: a plan from the side-view state `--start` to `--goal`'s towers, in
+/// block moves (on a table as wide as the grid) or in gripper steps.
+fn solve_side(args: &SolveArgs, grid: Grid) -> Result<()> {
+    let cost = args.cost.unwrap_or(Cost::Moves);
+    let exact_steps = cost == Cost::Steps && args.solver == SolverKind::Exact;
+    anyhow::ensure!(
+        args.held.is_none() || exact_steps,
+        "--held: a block-move plan starts with nothing held; --cost steps --solver exact plans from a held block"
+    );
+    anyhow::ensure!(
+        args.budget.solver_budget.is_none() || exact_steps,
+        "--solver-budget is the exact gripper-step search's: it applies to --view side only with --cost steps --solver exact"
+    );
+    let state = State::parse(&args.start, args.held, grid).with_context(|| {
+        if args.held.is_some() {
+            "--start and --held"
+        } else {
+            "--start"
+        }
+    })?;
+    View::Side.check_state(&state).context("--start")?;
+    let goal = Goal::parse(&args.goal, Some(state.block_count())).context("--goal")?;
+    goal.check_fits(grid).context("--goal")?;
+    // The oracle of the side view is the near-optimal planner (as `run --agent oracle`).
+    let planner = match args.solver {
+        SolverKind::Exact => MovePlanner::Exact,
+        SolverKind::NearOptimal | SolverKind::Oracle => MovePlanner::NearOptimal,
+    };
+    if cost == Cost::Moves {
+        let plan = plan_side(planner, grid, &state, &goal)?;
+        return print_moves(args, grid, &goal, &plan);
+    }
+    let plan = if exact_steps {
+        args.budget
+            .solver(grid)
+            .with_view(View::Side)
+            .solve(&state, &goal)
+            .map_err(|e| match e {
+                OracleError::BudgetExceeded { budget, blocks, grid } => anyhow::anyhow!(
+                    "the exact gripper-step search stored its budget of {budget} states for {blocks} blocks \
+                     on a {grid} grid without finding a shortest plan: use --solver near-optimal or --cost moves, \
+                     or raise --solver-budget"
+                ),
+                e => e.into(),
+            })?
+    } else {
+        let moves = plan_side(planner, grid, &state, &goal)?;
+        Plan {
+            actions: gripper_actions(grid, &state, &moves)?,
+        }
+    };
+    if args.json {
+        let report = SolveReport {
+            length: plan.len(),
+            cost: Some("steps"),
+            actions: plan.actions.iter().map(|a| a.index()).collect(),
+            solver: args.solver.name(),
+        };
+        line(serde_json::to_string(&report)?)
+    } else {
+        line(format_args!(
+            "{} plan, goal {goal}, grid {grid}, side view: {} gripper steps",
+            args.solver.name(),
+            plan.len()
+        ))?;
+        if plan.is_empty() {
+            return Ok(());
+        }
+        line(&plan)
+    }
+}
+
 /// The machine-readable block-move plan.
 #[derive(Debug, Serialize)]
 struct MovesReport {
@@ -156,31 +236,8 @@ struct MovesReport {
     solver: &'static str,
 }
 
-/// `solve --view side`: a block-move plan from the towers of `--start` to `--goal`'s, on a
-/// table as wide as the grid.
-fn solve_side(args: &SolveArgs, grid: Grid) -> Result<()> {
-    anyhow::ensure!(args.held.is_none(), "--held: a side-view plan starts with nothing held");
-    anyhow::ensure!(
-        args.cost != Some(Cost::Steps),
-        "--cost steps: the side view's planners count block moves so far; use --cost moves"
-    );
-    anyhow::ensure!(
-        args.solver != SolverKind::Oracle,
-        "--solver oracle plans gripper steps in the top view; in the side view choose exact or near-optimal"
-    );
-    anyhow::ensure!(
-        args.budget.solver_budget.is_none(),
-        "--solver-budget is the top view's exact solver's: it does not apply to --view side"
-    );
-    let state = State::parse(&args.start, None, grid).context("--start")?;
-    View::Side.check_state(&state).context("--start")?;
-    let goal = Goal::parse(&args.goal, Some(state.block_count())).context("--goal")?;
-    goal.check_fits(grid).context("--goal")?;
-    let planner = match args.solver {
-        SolverKind::NearOptimal => MovePlanner::NearOptimal,
-        _ => MovePlanner::Exact,
-    };
-    let plan = plan_side(planner, grid, &state, &goal)?;
+/// Prints a block-move plan, as JSON or text.
+fn print_moves(args: &SolveArgs, grid: Grid, goal: &Goal, plan: &TowerPlan) -> Result<()> {
     if args.json {
         let moves = plan
             .moves

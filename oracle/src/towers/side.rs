@@ -5,10 +5,14 @@
 //! The table is as wide as the grid (a move to the table needs an empty column), and a plan
 //! that would stack more blocks than the grid has rows is refused, since the planners do
 //! not know the grid's height.
+//!
+//! [`gripper_actions`] carries a block-move plan out as gripper actions (a move to the table
+//! going to the leftmost empty column), for the plans counted in gripper steps.
 
-use sim::{Goal, Grid, State};
+use sim::block_move::{self, BlockMove};
+use sim::{Action, BlockId, Goal, Grid, GridWorld, State, View, World};
 
-use super::{ExactMoves, NearOptimal, Table, TowerGoal, TowerPlan, Towers, TowersError};
+use super::{ExactMoves, NearOptimal, Place, Table, TowerGoal, TowerPlan, Towers, TowersError};
 use crate::error::{OracleError, Result};
 
 /// Which block-move planner.
@@ -49,4 +53,42 @@ pub fn plan_side(planner: MovePlanner, grid: Grid, state: &State, goal: &Goal) -
         }
     }
     Ok(plan)
+}
+
+/// The gripper actions that carry out `plan` from the side-view `state` on `grid`, move
+/// after move: each is expanded by [`sim::block_move::expand`] (the fewest gripper actions
+/// for it) from the state the moves before it lead to, and a move to the table goes to the
+/// leftmost empty column. An error if a move cannot be carried out there (no empty column,
+/// no free row to carry the block over).
+pub fn gripper_actions(grid: Grid, state: &State, plan: &TowerPlan) -> Result<Vec<Action>> {
+    let mut world = GridWorld::new_in(View::Side, grid, *state)?;
+    let mut actions = Vec::new();
+    for m in &plan.moves {
+        let now = *world.state_ref();
+        let block = BlockId(m.block as u8);
+        let mv = match m.to {
+            Place::On(target) => BlockMove::Onto {
+                block,
+                target: BlockId(target as u8),
+            },
+            Place::Table => BlockMove::ToTable {
+                block,
+                column: empty_column(&now, grid).ok_or_else(|| TowersError::IllegalMove {
+                    mv: m.to_string(),
+                    reason: "no column of the grid is empty",
+                })?,
+            },
+        };
+        let steps = block_move::expand(&now, grid, mv)?;
+        for &a in &steps {
+            world.act(a)?;
+        }
+        actions.extend(steps);
+    }
+    Ok(actions)
+}
+
+/// The leftmost column of `grid` with no block on the table in `state`, if any.
+pub fn empty_column(state: &State, grid: Grid) -> Option<u8> {
+    (0..grid.width() as u8).find(|&x| state.cells().iter().all(|c| c.x != x || c.y != 0))
 }
