@@ -81,6 +81,10 @@ pub fn grid_for(blocks: usize) -> Grid {
 /// games take a minute here and reach few goals).
 pub const LEARNER_BLOCKS: usize = 3;
 
+/// The fewest gripper steps are searched for problems of up to this many blocks (the exact
+/// solver of the side view is meant for up to 4).
+pub const FEWEST_STEPS_BLOCKS: usize = 4;
+
 /// Training games of the learner: its preset's, or few in a quick run (a check of the
 /// pipeline).
 fn learner_games(budget: Budget, preset: u64) -> u64 {
@@ -383,6 +387,9 @@ fn problem(blocks: usize, towers: usize, seed: u64, learner: &QAgent) -> Result<
     let start = env.reset(seed).state;
     let fewest_moves = plan_side(MovePlanner::Exact, grid, &start, &goal)?.len() as u32;
     let near_optimal_moves = plan_side(MovePlanner::NearOptimal, grid, &start, &goal)?.len() as u32;
+    let fewest_steps = (blocks <= FEWEST_STEPS_BLOCKS)
+        .then(|| oracle::ExactSolver::for_world(env.config()).distance(&start, &goal))
+        .transpose()?;
     let played = AGENTS
         .iter()
         .map(|&a| {
@@ -419,7 +426,7 @@ fn problem(blocks: usize, towers: usize, seed: u64, learner: &QAgent) -> Result<
         start,
         fewest_moves,
         near_optimal_moves,
-        fewest_steps: None,
+        fewest_steps,
         played,
     })
 }
@@ -598,6 +605,30 @@ fn experiment(ctx: &Context, world: BlocksWorld, learner: &TrainConfig) -> Exper
     };
     let deepest = world.by_stacking_steps.last().map_or(0, |g| g.key);
     let per_move = |f: Option<&AgentFigures>| num(f.and_then(|f| Some(f.mean_steps? / f.mean_moves?)), 1);
+    // The gripper steps against their fewest, where searched.
+    let small: Vec<&Problem> = all.iter().filter(|p| p.fewest_steps.is_some()).collect();
+    let small = group(0, &small);
+    let steps_of = |agent: Agent| {
+        num(
+            small
+                .agents
+                .iter()
+                .find(|f| f.agent == agent.name())
+                .and_then(|f| f.steps_ratio),
+            3,
+        )
+    };
+    let steps_reading = if small.problems == 0 {
+        String::new()
+    } else {
+        format!(
+            " On the {} problems of up to {FEWEST_STEPS_BLOCKS} blocks, the exact planner's gripper steps were {}x the \
+             fewest gripper steps, the near-optimal planner's {}x.",
+            small.problems,
+            steps_of(Agent::Exact),
+            steps_of(Agent::NearOptimal)
+        )
+    };
     let learner_reading = learned.map_or(String::new(), |f| {
         format!(
             " The learner, greedy, reached the goal in {}% of its {} problems of {LEARNER_BLOCKS} blocks, with {}x the \
@@ -615,7 +646,7 @@ fn experiment(ctx: &Context, world: BlocksWorld, learner: &TrainConfig) -> Exper
         "Over {} problems of 3 to 10 blocks (up to {deepest} stacking steps), the near-optimal planner's plans were \
          {}x the fewest block moves on average (worst {}x); carried out by the gripper through the physics, the \
          exact planner reached the goal in {}% of the problems and the near-optimal planner in {}%, with {} and {} \
-         gripper steps per block move.{learner_reading} Physics and grid agreed on {agreed_steps} of {steps} random \
+         gripper steps per block move.{steps_reading}{learner_reading} Physics and grid agreed on {agreed_steps} of {steps} random \
          steps and {agreed_drops} of {drops} drops.{errors}",
         all.len(),
         num(Some(everything.near_optimal_ratio), 3),
@@ -734,23 +765,32 @@ fn experiment(ctx: &Context, world: BlocksWorld, learner: &TrainConfig) -> Exper
                 value: "the fewest block moves by A* (`oracle::towers::ExactMoves`), the near-optimal planner \
                         (`NearOptimal`, at most twice the fewest); each also played by the gripper \
                         (`agent::TowersPolicy`: at each block-move boundary it plans from the state it sees and \
-                        carries the first move out as gripper actions), its Drops counted as block moves"
+                        carries the first move out as gripper actions, a move to the table going to the leftmost \
+                        empty column), its Drops counted as block moves"
                     .into(),
+            },
+            Setting {
+                name: "fewest gripper steps".into(),
+                value: format!(
+                    "for problems of up to {FEWEST_STEPS_BLOCKS} blocks, by the exact solver of the side view \
+                     (`oracle::ExactSolver::for_world`: A* over Pick, moves and Drop); every agent's gripper steps \
+                     are set against it"
+                ),
             },
             Setting {
                 name: "learner".into(),
                 value: format!(
                     "the tabular learner of the side view (`blockstack train --view side`'s preset: {} \
-                     representation, {} reward, alpha {}, gamma {}, epsilon {}), {} training games on all {} goals \
-                     of towers of {LEARNER_BLOCKS} blocks on {} x {}, seed {}; it plays the problems of \
-                     {LEARNER_BLOCKS} blocks greedily (epsilon 0)",
+                     representation, {} reward, alpha {}, gamma {}, epsilon {}), {} training games on the goals {} \
+                     of {LEARNER_BLOCKS} blocks on {} x {}, seed {}; it plays the problems of {LEARNER_BLOCKS} blocks \
+                     greedily (epsilon 0)",
                     learner.repr,
                     learner.world.reward.name(),
                     learner.params.alpha,
                     learner.params.gamma,
                     learner.params.epsilon,
                     learner.games,
-                    learner.goals.len(),
+                    learner.goals.iter().map(Goal::to_string).collect::<Vec<_>>().join(", "),
                     learner.world.grid.width(),
                     learner.world.grid.height(),
                     learner.seed
@@ -855,6 +895,13 @@ mod tests {
             assert!(exact.steps >= 3 * exact.moves);
             // The learner plays the problems of its blocks only.
             assert_eq!(p.played[2].is_some(), p.blocks == LEARNER_BLOCKS);
+            // No game that reaches the goal takes fewer gripper steps than the fewest.
+            assert_eq!(p.fewest_steps.is_some(), p.blocks <= FEWEST_STEPS_BLOCKS);
+            if let Some(fewest) = p.fewest_steps {
+                for g in p.played.iter().flatten().filter(|g| g.reached_goal) {
+                    assert!(g.steps >= fewest, "{g:?} against {fewest}");
+                }
+            }
         }
         // Each grouping splits the same problems.
         for groups in [&world.by_blocks, &world.by_towers, &world.by_stacking_steps] {
