@@ -145,3 +145,53 @@ fn the_planners_play_the_side_view() {
         assert_eq!(v["failures"], 0, "{agent}: {out}");
     }
 }
+
+#[test]
+fn train_eval_and_run_a_side_view_learner() {
+    let dir = scratch("side-learner");
+    let model = dir.join("side.safetensors");
+    let o = cli("train")
+        .flag("view", "side")
+        .flag("backend", "grid")
+        .flag("out", path(&model))
+        .run();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("q-role-towers"), "{}", stdout(&o));
+    // eval plays the model's own world: every goal of towers, from the side.
+    let o = cli("eval")
+        .flag("model", path(&model))
+        .flag("episodes", "20")
+        .flag("epsilon", "0")
+        .flag("backend", "grid")
+        .arg("--json")
+        .run();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(v["per_goal"].as_array().unwrap().len(), 13);
+    assert_eq!(v["failures"], 0, "{v}");
+    assert!(v["mean_ratio_to_optimum"].as_f64().unwrap() <= 1.05, "{v}");
+    let o = cli("run")
+        .flag("agent", "q")
+        .flag("model", path(&model))
+        .flag("goal", "2/0,1")
+        .flag("episodes", "5")
+        .flag("epsilon", "0")
+        .arg("--json")
+        .run();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(v["failures"], 0, "{v}");
+    // A side-view model does not play the top view, and one-tower learners refuse towers.
+    let o = cli("run")
+        .flag("agent", "q")
+        .flag("model", path(&model))
+        .flag("view", "top")
+        .run();
+    assert!(stderr(&o).contains("learnt the side view"), "{}", stderr(&o));
+    let o = cli("train")
+        .flag("view", "side")
+        .flag("repr", "role")
+        .flag("out", path(&dir.join("x.safetensors")))
+        .run();
+    assert!(stderr(&o).contains("--repr role-towers"), "{}", stderr(&o));
+}

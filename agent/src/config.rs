@@ -183,6 +183,13 @@ impl TrainConfig {
         if self.goals.is_empty() {
             return Err(AgentError::Config("no goals to train on".into()));
         }
+        if !self.repr.takes_towers() {
+            for goal in &self.goals {
+                goal.one_tower(
+                    "the tabular learner's representation (train with --repr role-towers for goals of towers)",
+                )?;
+            }
+        }
         if self.world.view == sim::View::Side && self.assist != Assist::None {
             return Err(AgentError::Config(
                 "the assisting oracles plan the top view: train the side view with --assist none".into(),

@@ -13,10 +13,10 @@
 
 use std::collections::VecDeque;
 
-use oracle::towers::{MovePlanner, Place, plan_side};
+use oracle::towers::{MovePlanner, block_move_of, plan_side};
 use sim::block_move::{self, BlockMove};
 use sim::seeding::SimRng;
-use sim::{Action, BlockId, Observation, State};
+use sim::{Action, Observation};
 
 use crate::error::{AgentError, Result};
 use crate::policy::Policy;
@@ -47,25 +47,8 @@ impl TowersPolicy {
             }
             .into());
         };
-        let block = BlockId(first.block as u8);
-        Ok(match first.to {
-            Place::On(target) => BlockMove::Onto {
-                block,
-                target: BlockId(target as u8),
-            },
-            Place::Table => BlockMove::ToTable {
-                block,
-                column: empty_column(&obs.state, obs.grid.width()).ok_or_else(|| {
-                    AgentError::Config(format!("no empty column on the table for block {}", first.block))
-                })?,
-            },
-        })
+        Ok(block_move_of(&obs.state, obs.grid, *first)?)
     }
-}
-
-/// The leftmost column with no block on the table, if any.
-fn empty_column(state: &State, width: usize) -> Option<u8> {
-    (0..width as u8).find(|&x| state.blocks().all(|b| state.cell(b).x != x || state.cell(b).y != 0))
 }
 
 impl Policy for TowersPolicy {

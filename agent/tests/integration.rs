@@ -6,3 +6,4 @@ mod model;
 mod original;
 mod qlearning;
 mod repr;
+mod side_view;

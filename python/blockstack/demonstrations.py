@@ -38,8 +38,12 @@ def demonstrations(
     backend: str = "physics",
     max_episode_steps: int = 1000,
     profile: str = "spec",
+    view: str = "top",
 ) -> dict:
     """``episodes`` episodes of an expert (``"exact"``: shortest plans; ``"oracle"``).
+
+    ``view="side"`` plays the classic Blocks World: ``"exact"`` takes the fewest gripper
+    steps, ``"oracle"`` carries out the near-optimal block-move planner's moves.
 
     Episode ``k`` starts from ``reset(episode_seed(seed, k))``: the start that
     ``blockstack run --seed SEED`` plays as its episode ``k``. ``grid`` is ``(width,
@@ -55,7 +59,7 @@ def demonstrations(
     per_step = 2 * observation_bytes(obs, blocks, grid) + (5 + blocks) + 27 + STEP_BYTES
     fits_in_memory(f"episodes={episodes}", episodes * per_step)
     return _native.demonstrations(
-        episodes, expert, blocks, seed, obs, goal_text(goal), grid, reward, backend, steps, profile
+        episodes, expert, blocks, seed, obs, goal_text(goal), grid, reward, backend, steps, profile, view
     )
 
 

@@ -4,8 +4,10 @@
 
 use std::path::PathBuf;
 
-use agent::{EpisodeObserver, ExactPolicy, OraclePolicy, Policy};
+use agent::{EpisodeObserver, ExactPolicy, OraclePolicy, Policy, TowersPolicy};
 use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods};
+use oracle::ExactSolver;
+use oracle::towers::MovePlanner;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sim::seeding::episode_seed;
@@ -185,7 +187,9 @@ impl EpisodeObserver for Columns {
 
 /// Expert episodes as arrays for behaviour cloning or DQfD: episode `k` starts from
 /// `reset(episode_seed(seed, k))`, the start `blockstack run --seed SEED` plays, and the
-/// expert (`exact`: shortest plans; `oracle`) acts until the goal holds.
+/// expert (`exact`: shortest plans; `oracle`) acts until the goal holds. In the side view
+/// (`view="side"`) `exact` plays the fewest gripper steps and `oracle` the near-optimal
+/// block-move planner carried out by the gripper.
 ///
 /// Keys: `observations`, `next_observations` (`(T, *obs shape)`, or dicts of arrays for
 /// `state`), `actions` (int64), `rewards` (float64), `terminations`, `truncations`,
@@ -193,7 +197,7 @@ impl EpisodeObserver for Columns {
 /// episode of each step), `action_masks` (int8, `(T, 5 + N)`, the legal actions in each
 /// observation).
 #[pyfunction]
-#[pyo3(signature = (episodes, expert="exact", blocks=3, seed=0, obs="planes", goal=None, grid=(7, 7), reward=None, backend="physics", horizon=1000, profile="spec"))]
+#[pyo3(signature = (episodes, expert="exact", blocks=3, seed=0, obs="planes", goal=None, grid=(7, 7), reward=None, backend="physics", horizon=1000, profile="spec", view="top"))]
 #[allow(clippy::too_many_arguments)]
 pub fn demonstrations<'py>(
     py: Python<'py>,
@@ -208,6 +212,7 @@ pub fn demonstrations<'py>(
     backend: &str,
     horizon: u32,
     profile: &str,
+    view: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let kind = config::obs_kind(obs)?;
     let config = env_config(
@@ -218,10 +223,17 @@ pub fn demonstrations<'py>(
         backend,
         horizon,
         profile,
-        config::PlayRules::default(),
+        config::PlayRules {
+            view: Some(view),
+            ..config::PlayRules::default()
+        },
     )?;
+    let side = config.view == sim::View::Side;
     let mut policy: Box<dyn Policy + Send> = match expert {
-        "exact" => Box::new(ExactPolicy::new(config.grid)),
+        "exact" => Box::new(ExactPolicy::with_planner(
+            ExactSolver::new(config.grid).with_view(config.view),
+        )),
+        "oracle" if side => Box::new(TowersPolicy::new(MovePlanner::NearOptimal)),
         "oracle" => Box::new(OraclePolicy::new(config.grid)),
         _ => {
             return Err(value_error(format!(

@@ -67,6 +67,7 @@ impl NativeModel {
         d.set_item("protocol", w.protocol.to_string())?;
         d.set_item("start", w.start.to_string())?;
         d.set_item("horizon", w.horizon)?;
+        d.set_item("view", w.view.to_string())?;
         Ok(d)
     }
 
@@ -100,7 +101,7 @@ impl NativeModel {
             state,
             goal,
             protocol: world.protocol,
-            view: sim::View::Top,
+            view: world.view,
         };
         let (model, rng) = (&self.model, &mut self.rng);
         guard(|| {
@@ -128,7 +129,7 @@ impl NativeModel {
         let blocks = self.model.blocks();
         let goals = match goals {
             Some(text) => Goal::parse_list(text, blocks).or_value_error()?,
-            None => Goal::all(blocks).or_value_error()?,
+            None => Goal::all_in(self.model.world().view, blocks).or_value_error()?,
         };
         let mut plan: EvalPlan = self.model.eval_plan(goals, episodes, seed);
         plan.world.backend = backend.parse().or_value_error()?;

@@ -458,8 +458,7 @@ impl World for PhysicsWorld {
         self.settle_steps = self.run_to_rest(block)?;
         // Read back every block's resting cell, check it, and put the block exactly on it.
         let mut cells = [Cell::default(); MAX_BLOCKS];
-        for i in 0..self.blocks.len() {
-            let b = self.blocks[i];
+        for (i, (b, slot)) in self.blocks.iter().zip(&mut cells).enumerate() {
             let at = self.bodies[b.body].translation();
             let cell = cell_at(at);
             let error = (at - centre(cell)).length();
@@ -472,7 +471,7 @@ impl World for PhysicsWorld {
                     ),
                 });
             }
-            cells[i] = cell;
+            *slot = cell;
         }
         self.set_positions(&cells[..self.blocks.len()]);
         self.rest_all();

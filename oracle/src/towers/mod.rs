@@ -70,5 +70,5 @@ pub use goal::TowerGoal;
 pub use near_optimal::NearOptimal;
 pub use plan::TowerPlan;
 pub use random::{random_goal, random_state};
-pub use side::{MovePlanner, gripper_actions, plan_side};
+pub use side::{MovePlanner, block_move_of, gripper_actions, plan_side};
 pub use state::{Move, Place, Table, Towers};

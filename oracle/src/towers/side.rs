@@ -12,7 +12,7 @@
 use sim::block_move::{self, BlockMove};
 use sim::{Action, BlockId, Goal, Grid, GridWorld, State, View, World};
 
-use super::{ExactMoves, NearOptimal, Place, Table, TowerGoal, TowerPlan, Towers, TowersError};
+use super::{ExactMoves, Move, NearOptimal, Place, Table, TowerGoal, TowerPlan, Towers, TowersError};
 use crate::error::{OracleError, Result};
 
 /// Which block-move planner.
@@ -65,21 +65,7 @@ pub fn gripper_actions(grid: Grid, state: &State, plan: &TowerPlan) -> Result<Ve
     let mut actions = Vec::new();
     for m in &plan.moves {
         let now = *world.state_ref();
-        let block = BlockId(m.block as u8);
-        let mv = match m.to {
-            Place::On(target) => BlockMove::Onto {
-                block,
-                target: BlockId(target as u8),
-            },
-            Place::Table => BlockMove::ToTable {
-                block,
-                column: empty_column(&now, grid).ok_or_else(|| TowersError::IllegalMove {
-                    mv: m.to_string(),
-                    reason: "no column of the grid is empty",
-                })?,
-            },
-        };
-        let steps = block_move::expand(&now, grid, mv)?;
+        let steps = block_move::expand(&now, grid, block_move_of(&now, grid, *m)?)?;
         for &a in &steps {
             world.act(a)?;
         }
@@ -88,7 +74,26 @@ pub fn gripper_actions(grid: Grid, state: &State, plan: &TowerPlan) -> Result<Ve
     Ok(actions)
 }
 
-/// The leftmost column of `grid` with no block on the table in `state`, if any.
+/// The world's block move that carries out the plan's move `m` from `state` on `grid`: a
+/// move to the table goes to the leftmost empty column (an error if there is none).
+pub fn block_move_of(state: &State, grid: Grid, m: Move) -> Result<BlockMove> {
+    let block = BlockId(m.block as u8);
+    Ok(match m.to {
+        Place::On(target) => BlockMove::Onto {
+            block,
+            target: BlockId(target as u8),
+        },
+        Place::Table => BlockMove::ToTable {
+            block,
+            column: empty_column(state, grid).ok_or_else(|| TowersError::IllegalMove {
+                mv: m.to_string(),
+                reason: "no column of the grid is empty",
+            })?,
+        },
+    })
+}
+
+/// The leftmost column with no block on the table, if any.
 pub fn empty_column(state: &State, grid: Grid) -> Option<u8> {
     (0..grid.width() as u8).find(|&x| state.cells().iter().all(|c| c.x != x || c.y != 0))
 }
