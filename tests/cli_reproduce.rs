@@ -20,7 +20,7 @@ fn quick_report() -> PathBuf {
     let o = cli("reproduce").arg("--quick").flag("out", dir.to_str().unwrap()).run();
     assert!(o.status.success(), "{}", stderr(&o));
     let out = String::from_utf8_lossy(&o.stdout);
-    assert!(out.contains("reproduced E1, E2, E3, E4, E5, E6, E7, E8"), "{out}");
+    assert!(out.contains("reproduced E1, E2, E3, E4, E5, E6, E7, E8, E9"), "{out}");
     dir
 }
 
@@ -49,10 +49,10 @@ fn the_quick_report_holds_every_experiment() {
     let summary = std::fs::read_to_string(dir.join("summary.md")).expect("summary.md exists");
     let text = std::fs::read_to_string(dir.join("results.json")).unwrap();
     assert_eq!(summary, experiments::reproduce::summary(&text).unwrap());
-    assert_eq!(summary.lines().filter(|l| l.starts_with("| E")).count(), 8, "{summary}");
+    assert_eq!(summary.lines().filter(|l| l.starts_with("| E")).count(), 9, "{summary}");
     let experiments = json["experiments"].as_array().unwrap();
     let ids: Vec<&str> = experiments.iter().map(|e| e["id"].as_str().unwrap()).collect();
-    assert_eq!(ids, ["E1", "E2", "E3", "E4", "E5", "E6", "E7", "E8"]);
+    assert_eq!(ids, ["E1", "E2", "E3", "E4", "E5", "E6", "E7", "E8", "E9"]);
     for e in experiments {
         let id = e["id"].as_str().unwrap();
         assert!(readme.contains(&format!("## {id}: ")), "{id} has no section");
@@ -60,7 +60,13 @@ fn the_quick_report_holds_every_experiment() {
         assert!(!reading.is_empty() && readme.contains(reading), "{id}'s reading");
         let tables = e["tables"].as_array().unwrap();
         let curves = e["curves"].as_array().unwrap();
-        assert!(!tables.is_empty() || !curves.is_empty(), "{id} has no figures");
+        // E9's figures are its own (grouped problems, physics against the grid model).
+        let blocks_world = !e["blocks_world"].is_null();
+        assert_eq!(blocks_world, id == "E9", "{id}");
+        assert!(
+            !tables.is_empty() || !curves.is_empty() || blocks_world,
+            "{id} has no figures"
+        );
         for (t, row) in tables
             .iter()
             .enumerate()
@@ -120,6 +126,8 @@ fn the_quick_report_holds_every_experiment() {
         "e7-steps.png",
         "e7-best.gif",
         "e7-paper.gif",
+        "e9-moves.png",
+        "e9-reached.png",
     ] {
         assert!(dir.join(figure).is_file(), "{figure}");
     }
@@ -135,6 +143,27 @@ fn the_quick_report_holds_every_experiment() {
     for table in e8["tables"].as_array().unwrap() {
         assert!(!table["rows"].as_array().unwrap().is_empty());
     }
+
+    // E9: the planners reach every goal, the near-optimal plans are at most twice the fewest
+    // moves, and the physics and the grid model agree.
+    let e9 = &experiments[8]["blocks_world"];
+    for group in e9["by_blocks"].as_array().unwrap() {
+        assert!(group["near_optimal_worst"].as_f64().unwrap() <= 2.0, "{group}");
+        for agent in group["agents"].as_array().unwrap() {
+            if agent["agent"] != "learner" {
+                assert_eq!(agent["success"], 1.0, "{agent}");
+            }
+        }
+    }
+    for a in e9["agreement"].as_array().unwrap() {
+        assert!(a["drops"].as_u64().unwrap() > 0, "{a}");
+        assert_eq!(
+            (&a["same_steps"], &a["same_landings"]),
+            (&a["steps"], &a["drops"]),
+            "{a}"
+        );
+    }
+    assert!(readme.contains("### Physics against the grid model"));
 
     // E1: the paper's figure, ours in both worlds, and where the paper's lies against the
     // spread of each world's replicates, said in the reading.
@@ -222,13 +251,13 @@ fn only_runs_the_experiments_asked_for() {
     assert_eq!(json["ran"]["threads"], 1);
     let o = cli("reproduce")
         .arg("--quick")
-        .flag("only", "E9")
+        .flag("only", "E10")
         .flag("out", out.to_str().unwrap())
         .run();
     assert_eq!(o.status.code(), Some(2));
     assert_eq!(stderr(&o).trim_end().lines().count(), 1, "{}", stderr(&o));
     assert!(
-        stderr(&o).contains("--only E9: name experiments E1 to E8"),
+        stderr(&o).contains("--only E10: name experiments E1 to E9"),
         "{}",
         stderr(&o)
     );

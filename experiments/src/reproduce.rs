@@ -1,6 +1,7 @@
 //! The reproduction of the paper (docs/world.md section 9): experiments E1-E8, each beside the
 //! paper's figures, with their statistical tests, pictures, a report and machine-readable
-//! results. `blockstack reproduce` is the command over it.
+//! results; and E9, ours, the classic Blocks World seen from the side (docs/world.md section
+//! 12). `blockstack reproduce` is the command over it.
 //!
 //! [`reproduce`] runs the experiments asked for and returns the [`Reproduction`]: data only,
 //! nothing printed, nothing written; [`write_report`] then draws the pictures and writes
@@ -9,7 +10,7 @@
 //!
 //! # How a run is organised
 //!
-//! Every experiment is one module `e1` to `e8` with one signature, `run(&Context, &Shared)`,
+//! Every experiment is one module `e1` to `e9` with one signature, `run(&Context, &Shared)`,
 //! listed once in [`EXPERIMENTS`] with its id, the jobs it reports and the parts of the
 //! shared stage it needs. The shared stage (`Shared`) trains the agents several experiments
 //! play (our learner, the paper's learner in the SPEC world) before the experiments that
@@ -63,6 +64,7 @@ mod e5;
 mod e6;
 mod e7;
 mod e8;
+mod e9;
 pub mod paper;
 mod ran;
 mod report;
@@ -74,6 +76,7 @@ mod text;
 pub use arms::{ArmResult, Goals, Measured, Row, Rules, Suite, Table, TestOutcome};
 pub use e1::{Decomposition, Gap, WorldArm};
 pub use e8::Budget;
+pub use e9::{AgentFigures, Agreement, BlocksWorld, Group, Played, Problem};
 pub use ran::Ran;
 pub use report::{ReportFiles, write_report};
 pub use spread::{PaperInside, Placement, Spread};
@@ -131,7 +134,7 @@ pub enum ReproduceError {
     #[error(transparent)]
     Files(#[from] files::FilesError),
     /// An experiment id that is not in [`EXPERIMENTS`].
-    #[error("no experiment {id}: name experiments E1 to E8")]
+    #[error("no experiment {id}: name experiments E1 to E9")]
     UnknownExperiment {
         /// The id asked for.
         id: String,
@@ -154,9 +157,10 @@ pub struct Options {
     pub seed: u64,
     /// Small counts (a check that the pipeline works), not the paper's.
     pub quick: bool,
-    /// E8's long budget: the pixel runs and the whole ablation ([`Budget::Long`]).
+    /// E8's long budget: the pixel runs and the whole ablation ([`Budget::Long`]); E9's
+    /// many problems.
     pub long: bool,
-    /// The experiments to run, by id ("E1" to "E8", any case); empty for all. The agents
+    /// The experiments to run, by id ("E1" to "E9", any case); empty for all. The agents
     /// they share are trained only when one of them needs them.
     pub only: Vec<String>,
 }
@@ -407,7 +411,7 @@ impl Figure {
 /// One experiment's results, ready for the report.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Experiment {
-    /// "E1" to "E8".
+    /// "E1" to "E9".
     pub id: String,
     /// What it asks.
     pub title: String,
@@ -425,6 +429,10 @@ pub struct Experiment {
     pub reading: String,
     /// Its pictures.
     pub figures: Vec<Figure>,
+    /// E9's problems, grouped, and the physics against the grid model (absent from the
+    /// other experiments' results).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub blocks_world: Option<BlocksWorld>,
 }
 
 /// The whole run's results: what `results.json` holds.
@@ -457,7 +465,7 @@ pub(crate) struct Context<'a> {
 
 /// One experiment of the reproduction, as [`EXPERIMENTS`] lists it.
 pub struct Spec {
-    /// "E1" to "E8".
+    /// "E1" to "E9".
     pub id: &'static str,
     /// The parts of the shared stage it plays.
     needs: &'static [Part],
@@ -468,8 +476,8 @@ pub struct Spec {
 }
 
 /// Every experiment, in the report's order: E1-E7 are the paper's section VI (E7 the table
-/// it never had), E8 its section III-C.
-pub const EXPERIMENTS: [Spec; 8] = [
+/// it never had), E8 its section III-C, E9 the classic Blocks World (ours).
+pub const EXPERIMENTS: [Spec; 9] = [
     Spec {
         id: "E1",
         needs: &[],
@@ -517,6 +525,12 @@ pub const EXPERIMENTS: [Spec; 8] = [
         needs: &[],
         jobs: e8::jobs,
         run: e8::run,
+    },
+    Spec {
+        id: "E9",
+        needs: &[],
+        jobs: e9::jobs,
+        run: e9::run,
     },
 ];
 
@@ -750,7 +764,7 @@ mod tests {
         assert_eq!(announced, jobs(&[]));
         assert_eq!(done, announced);
         let ids: Vec<&str> = one.experiments.iter().map(|e| e.id.as_str()).collect();
-        assert_eq!(ids, ["E1", "E2", "E3", "E4", "E5", "E6", "E7", "E8"]);
+        assert_eq!(ids, ["E1", "E2", "E3", "E4", "E5", "E6", "E7", "E8", "E9"]);
     }
 
     #[test]
@@ -783,10 +797,10 @@ mod tests {
             seed: 5,
             quick: true,
             long: false,
-            only: vec!["E9".into()],
+            only: vec!["E10".into()],
         };
         let err = reproduce_with(&options, tiny(), &()).unwrap_err();
-        assert_eq!(err.to_string(), "no experiment E9: name experiments E1 to E8");
+        assert_eq!(err.to_string(), "no experiment E10: name experiments E1 to E9");
     }
 
     #[test]
@@ -833,14 +847,14 @@ mod tests {
         assert_eq!(summary_md, summary(&text).unwrap());
         assert!(summary_md.contains("at commit abc1234, on a test CPU (4 cores, 2 threads)"));
         let table: Vec<&str> = summary_md.lines().filter(|l| l.starts_with("| E")).collect();
-        assert_eq!(table.len(), 8, "{summary_md}");
+        assert_eq!(table.len(), 9, "{summary_md}");
         assert!(table[0].starts_with("| E1 random agent, 2 blocks"), "{}", table[0]);
         assert!(
             table[0].contains("| 4.0%, 263.55 |"),
             "the paper's E1 figures: {}",
             table[0]
         );
-        assert_eq!(json["experiments"].as_array().unwrap().len(), 8);
+        assert_eq!(json["experiments"].as_array().unwrap().len(), 9);
         // Every arm's figures and the paper's beside them.
         let e5 = &json["experiments"][4]["tables"][0]["rows"];
         assert_eq!(e5[0]["paper"]["failures"], 186);

@@ -157,5 +157,6 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
         paper_notes: Vec::new(),
         reading,
         figures: Vec::new(),
+        blocks_world: None,
     })
 }

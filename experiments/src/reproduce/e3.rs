@@ -201,6 +201,7 @@ pub(super) fn run(ctx: &Context, shared: &Shared) -> Result<Experiment> {
         paper_notes: vec![paper_ks_note()?],
         reading,
         figures: Vec::new(),
+        blocks_world: None,
     })
 }
 

@@ -458,5 +458,6 @@ fn experiment(ctx: &Context, paper_curves: PaperCurves, ours: Curve) -> Experime
         paper_notes: Vec::new(),
         reading,
         figures,
+        blocks_world: None,
     }
 }

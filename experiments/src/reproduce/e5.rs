@@ -236,5 +236,6 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
         paper_notes: Vec::new(),
         reading,
         figures: vec![figure],
+        blocks_world: None,
     })
 }

@@ -268,6 +268,7 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
         paper_notes: Vec::new(),
         reading,
         figures,
+        blocks_world: None,
     })
 }
 

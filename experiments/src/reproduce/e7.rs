@@ -272,6 +272,7 @@ pub(super) fn run(ctx: &Context, shared: &Shared) -> Result<Experiment> {
         paper_notes: Vec::new(),
         reading,
         figures,
+        blocks_world: None,
     })
 }
 

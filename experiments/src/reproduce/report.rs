@@ -11,7 +11,7 @@ use super::ran::Ran;
 use super::spread::Spread;
 use super::summary::summary;
 use super::text::{ALPHA, failures, num, p_value, verdict};
-use super::{Curve, Decomposition, Drawing, Experiment, ReproduceError, Reproduction, Result};
+use super::{BlocksWorld, Curve, Decomposition, Drawing, Experiment, Group, ReproduceError, Reproduction, Result};
 use crate::episode::{GifOptions, episode_gif};
 use plots::{bar_chart, box_plot, curves_chart, learning_curve};
 
@@ -99,7 +99,8 @@ pub fn markdown(r: &Reproduction, ran: &Ran) -> String {
         "Written by `{command}`: every experiment of docs/world.md section 9 on the paper's 7 x 7 grid (horizon {}, rapier2d \
          physics), the figures of \"Interactive Robot Learning\" section VI beside ours in two worlds: `original`, \
          the paper's world as its authors coded it (their action protocol, start rule, reward, representation and \
-         schedule), and `spec`, ours (docs/world.md). E1-E6 are run in both; E7 and our own learner in the SPEC world. \
+         schedule), and `spec`, ours (docs/world.md). E1-E6 are run in both; E7 and our own learner in the SPEC world; \
+         E9, ours, in the classic Blocks World seen from the side (docs/world.md section 12). \
          Every figure below is computed by the run; the paper's come from `experiments::reproduce::paper`. The same \
          figures, and more, are in [`results.json`](results.json).{}\n",
         r.paper_settings.horizon,
@@ -257,6 +258,9 @@ fn experiment(md: &mut String, e: &Experiment) {
     }
     for t in &e.tables {
         table(md, t);
+    }
+    if let Some(w) = &e.blocks_world {
+        blocks_world(md, w);
     }
     if let Some(d) = &e.decomposition {
         decomposition(md, d);
@@ -462,6 +466,109 @@ fn decomposition(md: &mut String, d: &Decomposition) {
             share(g.start),
             share(g.interaction)
         );
+    }
+}
+
+/// E9's tables: the problems grouped three ways, and physics against the grid model.
+fn blocks_world(md: &mut String, w: &BlocksWorld) {
+    let grid = |blocks: usize| {
+        let g = super::e9::grid_for(blocks);
+        format!("{} x {}", g.width(), g.height())
+    };
+    groups(
+        md,
+        "By stacking steps (the fewest block moves)",
+        "stacking steps",
+        &w.by_stacking_steps,
+        None,
+    );
+    groups(md, "By number of blocks", "blocks", &w.by_blocks, Some(&grid));
+    groups(md, "By number of goal towers", "towers", &w.by_towers, None);
+    let _ = writeln!(md, "\n### Physics against the grid model\n");
+    let _ = writeln!(
+        md,
+        "| blocks | grid | episodes | same starts | random steps | same outcome | drops | landed on the same cell | \
+         physics errors |\n|---|---|---|---|---|---|---|---|---|"
+    );
+    for a in &w.agreement {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            a.blocks,
+            a.grid,
+            a.episodes,
+            a.same_starts,
+            a.steps,
+            a.same_steps,
+            a.drops,
+            a.same_landings,
+            a.physics_errors
+        );
+    }
+    for e in w.agreement.iter().filter_map(|a| a.first_error.as_ref()) {
+        let _ = writeln!(md, "\nThe first physics error: {e}.");
+    }
+}
+
+/// A table of E9's groups, keyed by `key`, with a grid column when `grid` is given. Block
+/// moves and gripper steps are over the games that reached the goal.
+fn groups(md: &mut String, title: &str, key: &str, groups: &[Group], grid: Option<&dyn Fn(usize) -> String>) {
+    let _ = writeln!(md, "\n### {title}\n");
+    let mut agents: Vec<&str> = Vec::new();
+    for a in groups.iter().flat_map(|g| &g.agents) {
+        if !agents.contains(&a.agent.as_str()) {
+            agents.push(&a.agent);
+        }
+    }
+    let mut head = vec![key.to_string()];
+    if grid.is_some() {
+        head.push("grid".into());
+    }
+    head.extend(
+        [
+            "problems",
+            "fewest moves",
+            "near-optimal plan",
+            "× fewest (worst)",
+            "fewest gripper steps",
+        ]
+        .map(String::from),
+    );
+    for a in &agents {
+        head.extend(
+            ["reached", "moves × fewest", "gripper steps", "steps × fewest"].map(|figure| format!("{a}: {figure}")),
+        );
+    }
+    let _ = writeln!(md, "| {} |", head.join(" | "));
+    let _ = writeln!(md, "|{}|", vec!["---"; head.len()].join("|"));
+    for g in groups {
+        let mut cells = vec![g.key.to_string()];
+        if let Some(grid) = grid {
+            cells.push(grid(g.key));
+        }
+        cells.extend([
+            g.problems.to_string(),
+            num(Some(g.fewest_moves), 2),
+            num(Some(g.near_optimal_moves), 2),
+            format!(
+                "{} ({})",
+                num(Some(g.near_optimal_ratio), 3),
+                num(Some(g.near_optimal_worst), 2)
+            ),
+            num(g.fewest_steps, 1),
+        ]);
+        for a in &agents {
+            match g.agents.iter().find(|f| f.agent == *a) {
+                Some(f) => cells.extend([
+                    format!("{:.1}%", 100.0 * f.success),
+                    num(f.moves_ratio, 3),
+                    num(f.mean_steps, 1),
+                    num(f.steps_ratio, 3),
+                ]),
+                None => cells.extend(["-".to_string(), "-".into(), "-".into(), "-".into()]),
+            }
+        }
+        let _ = writeln!(md, "| {} |", cells.join(" | "));
     }
 }
 

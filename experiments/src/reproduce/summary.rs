@@ -59,6 +59,7 @@ pub fn summary(results_json: &str) -> Result<String> {
             "E6" => e6(e),
             "E7" => e7(e),
             "E8" => e8(e),
+            "E9" => e9(e),
             _ => None,
         }
         .ok_or_else(|| bad(format!("{id}'s figures are not where a reproduction puts them")))?;
@@ -254,6 +255,76 @@ fn e8(e: &Value) -> Option<Vec<String>> {
         "-".into(),
         "-".into(),
         finals.join("; "),
+    ])
+}
+
+/// E9: the near-optimal planner's plans against the fewest block moves, the planners'
+/// success through the gripper, and how often physics and grid agreed on a drop.
+fn e9(e: &Value) -> Option<Vec<String>> {
+    let world = &e["blocks_world"];
+    let blocks = world["by_blocks"].as_array()?;
+    let problems: f64 = blocks.iter().map(|g| g["problems"].as_f64()).sum::<Option<f64>>()?;
+    // The means over all problems, from the groups' means weighted by their problems.
+    let weighted = |f: &dyn Fn(&Value) -> Option<f64>| -> Option<f64> {
+        let sum: f64 = blocks
+            .iter()
+            .map(|g| Some(f(g)? * g["problems"].as_f64()?))
+            .sum::<Option<f64>>()?;
+        Some(sum / problems)
+    };
+    let ratio = weighted(&|g| g["near_optimal_ratio"].as_f64())?;
+    let worst = blocks
+        .iter()
+        .map(|g| g["near_optimal_worst"].as_f64())
+        .collect::<Option<Vec<f64>>>()?
+        .into_iter()
+        .fold(0.0, f64::max);
+    // Every agent's success over all its games, and the numbers of blocks it played when not
+    // all of them.
+    let mut agents: Vec<(String, f64, f64, Vec<String>)> = Vec::new();
+    for g in blocks {
+        for a in g["agents"].as_array()? {
+            let name = a["agent"].as_str()?;
+            let games = a["games"].as_f64()?;
+            let won = a["success"].as_f64()? * games;
+            let n = g["key"].to_string();
+            match agents.iter_mut().find(|(agent, ..)| agent == name) {
+                Some(entry) => {
+                    entry.1 += won;
+                    entry.2 += games;
+                    entry.3.push(n);
+                }
+                None => agents.push((name.to_string(), won, games, vec![n])),
+            }
+        }
+    }
+    let reached: Vec<String> = agents
+        .iter()
+        .map(|(name, won, games, played)| {
+            let on = if played.len() < blocks.len() {
+                format!(" ({} blocks)", played.join(", "))
+            } else {
+                String::new()
+            };
+            format!("{name}{on} {}", percent(Some(won / games)))
+        })
+        .collect();
+    let agreement = world["agreement"].as_array()?;
+    let count = |field: &str| -> Option<u64> { agreement.iter().map(|a| a[field].as_u64()).sum() };
+    Some(vec![
+        "classic Blocks World, 3-10 blocks, 1-3 towers: block moves against the fewest; reached the goal; physics \
+         against grid"
+            .into(),
+        "-".into(),
+        "-".into(),
+        format!(
+            "near-optimal plans {}x the fewest (worst {}x); reached: {}; drops landing alike {} / {}",
+            number(Some(ratio), 3),
+            number(Some(worst), 2),
+            reached.join(", "),
+            count("same_landings")?,
+            count("drops")?,
+        ),
     ])
 }
 
