@@ -335,19 +335,19 @@ pub(crate) mod tests {
         KeyEvent::new(code, KeyModifiers::NONE)
     }
 
-    /// A session of an untrained `role-towers` agent in the side view, on goal 0,1/2.
-    pub(crate) fn side_app(dir: &std::path::Path) -> DemoApp<Vec<DemoRecord>> {
-        let agent = QAgent::new(ReprKind::RoleTowers, Grid::default(), 3, QParams::default()).unwrap();
-        let world = sim::EnvConfig {
-            view: sim::View::Side,
-            reward: "step-cost".parse().unwrap(),
-            ..session_world(&agent)
-        };
+    /// A person's session of `agent` in `world` on `goals` (seed 7, epsilon 0, the default
+    /// correction rule), saving to `dir` every 2 corrections.
+    fn app_in(
+        dir: &std::path::Path,
+        agent: QAgent,
+        world: sim::EnvConfig,
+        goals: Vec<Goal>,
+    ) -> DemoApp<Vec<DemoRecord>> {
         let session = CorrectionSession::new(
             agent,
             CorrectionRule::default(),
             world,
-            vec!["0,1/2".parse().unwrap()],
+            goals,
             7,
             0.0,
             "person",
@@ -362,29 +362,26 @@ pub(crate) mod tests {
         DemoApp::new(session, save).unwrap()
     }
 
+    /// A session of an untrained `role-towers` agent in the side view, on goal 0,1/2.
+    pub(crate) fn side_app(dir: &std::path::Path) -> DemoApp<Vec<DemoRecord>> {
+        let agent = QAgent::new(ReprKind::RoleTowers, Grid::default(), 3, QParams::default()).unwrap();
+        let world = sim::EnvConfig {
+            view: sim::View::Side,
+            reward: "step-cost".parse().unwrap(),
+            ..session_world(&agent)
+        };
+        app_in(dir, agent, world, vec!["0,1/2".parse().unwrap()])
+    }
+
     pub(crate) fn app(dir: &std::path::Path) -> DemoApp<Vec<DemoRecord>> {
         let agent = QAgent::new(ReprKind::Chasing, Grid::default(), 3, QParams::default()).unwrap();
-        let goals: Vec<Goal> = vec!["1,0,2".parse().unwrap(), "0,1,2".parse().unwrap()];
-        let session = CorrectionSession::new(
-            agent.clone(),
-            CorrectionRule::default(),
-            session_world(&agent),
-            goals,
-            7,
-            0.0,
-            "person",
-            None,
-            Vec::new(),
+        let world = session_world(&agent);
+        app_in(
+            dir,
+            agent,
+            world,
+            vec!["1,0,2".parse().unwrap(), "0,1,2".parse().unwrap()],
         )
-        .unwrap();
-        DemoApp::new(
-            session,
-            SavePolicy {
-                path: dir.join("corrected.safetensors"),
-                every: 2,
-            },
-        )
-        .unwrap()
     }
 
     #[test]
