@@ -28,6 +28,14 @@ fn renamed(state: &State, rename: &[usize]) -> State {
     State::new(&cells, state.held_block().map(|h| BlockId(rename[h.index()] as u8))).unwrap()
 }
 
+/// `action` with its block renamed by `rename` (a Pick of block b picks rename[b]).
+fn renamed_action(action: Action, rename: &[usize]) -> Action {
+    match action {
+        Action::Pick(b) => Action::Pick(BlockId(rename[b.index()] as u8)),
+        other => other,
+    }
+}
+
 fn renamed_goal(goal: &Goal, rename: &[usize]) -> Goal {
     let order: Vec<usize> = goal.order().iter().map(|b| rename[b.index()]).collect();
     Goal::from_indices(&order).unwrap()
@@ -62,10 +70,7 @@ proptest! {
         let (state2, goal2) = (renamed(&state, &rename), renamed_goal(&goal, &rename));
         prop_assert_eq!(repr.key(&state, &goal), repr.key(&state2, &goal2));
         for a in Action::all(3) {
-            let a2 = match a {
-                Action::Pick(b) => Action::Pick(BlockId(rename[b.index()] as u8)),
-                other => other,
-            };
+            let a2 = renamed_action(a, &rename);
             prop_assert_eq!(repr.column(&goal, a), repr.column(&goal2, a2));
             prop_assert_eq!(repr.action(&goal, repr.column(&goal, a)), a);
         }
@@ -108,10 +113,7 @@ proptest! {
         let s1_renamed = renamed(&s1, &rename);
         prop_assert_eq!(repr.key(&s1, &goal), repr.key(&s1_renamed, &goal2));
         for a in Action::all(4) {
-            let a2 = match a {
-                Action::Pick(b) => Action::Pick(BlockId(rename[b.index()] as u8)),
-                other => other,
-            };
+            let a2 = renamed_action(a, &rename);
             prop_assert_eq!(repr.column(&goal, a), repr.column(&goal2, a2));
             prop_assert_eq!(repr.action(&goal, repr.column(&goal, a)), a);
         }
