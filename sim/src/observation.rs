@@ -182,53 +182,92 @@ impl Observation {
     /// used), so a goal block covers about 2 x 2 pixels. A grid of another size is scaled the
     /// same way to the same square.
     pub fn pixels(&self) -> Pixels {
-        let (w, h) = (self.grid.width(), self.grid.height());
-        let (sw, sh) = (w * PAPER_CELL, h * PAPER_CELL);
-        let mut screen = vec![[0u8; 3]; sw * sh];
-        let mut fill = |x: usize, y: usize, fw: usize, fh: usize, rgb: [u8; 3]| {
-            for row in y..(y + fh).min(sh) {
-                for px in &mut screen[row * sw + x.min(sw)..row * sw + (x + fw).min(sw)] {
-                    *px = rgb;
-                }
-            }
-        };
-        for (i, &c) in self.blocks().iter().enumerate() {
-            let b = BlockId(i as u8);
-            let rgb = if self.held_block() == Some(b) {
-                PIXELS_HELD
-            } else {
-                crate::render::colour(b)
-            };
-            // Screen rows grow downward, grid rows upward.
-            fill(
-                usize::from(c.x) * PAPER_CELL,
-                (h - 1 - usize::from(c.y)) * PAPER_CELL,
-                PAPER_CELL,
-                PAPER_CELL,
-                rgb,
-            );
-        }
-        let side = sw / 5;
-        let block = (side / 10).max(1);
-        let (gx, left) = (sw - side, (side - block) / 2);
-        fill(gx, 0, side, side, PIXELS_GOAL_BACKGROUND);
-        let bottom = side.saturating_sub(2 * block);
-        for (place, &b) in self.goal.order().iter().enumerate() {
-            if let Some(y) = bottom.checked_sub(block * place) {
-                fill(gx + left, y, block, block, crate::render::colour(b));
-            }
-        }
+        let screen = PaperScreen::of(self);
         Pixels {
             width: PIXELS_SIDE,
             height: PIXELS_SIDE,
-            data: bilinear(&screen, sw, sh, PIXELS_SIDE, PIXELS_SIDE),
+            data: bilinear(&screen, PIXELS_SIDE, PIXELS_SIDE),
         }
     }
 }
 
-/// `src` (`sw x sh` pixels) resized to `dw x dh` by bilinear interpolation with OpenCV's
-/// pixel-centre convention (`cv2.resize`'s default `INTER_LINEAR`), rounded to bytes.
-fn bilinear(src: &[[u8; 3]], sw: usize, sh: usize, dw: usize, dh: usize) -> Vec<u8> {
+/// The authors' screen (50-pixel cells), drawn one row at a time: the scaling reads two
+/// rows for each row it writes, so the 350 x 350 screen is never held whole.
+struct PaperScreen<'a> {
+    obs: &'a Observation,
+    /// Width and height in screen pixels.
+    width: usize,
+    height: usize,
+    /// The goal picture: its left edge, side, block side, the blocks' left edge within it
+    /// and the bottom block's top row.
+    goal_x: usize,
+    goal_side: usize,
+    goal_block: usize,
+    goal_left: usize,
+    goal_bottom: usize,
+}
+
+impl<'a> PaperScreen<'a> {
+    fn of(obs: &'a Observation) -> PaperScreen<'a> {
+        let (width, height) = (obs.grid.width() * PAPER_CELL, obs.grid.height() * PAPER_CELL);
+        let side = width / 5;
+        let block = (side / 10).max(1);
+        PaperScreen {
+            obs,
+            width,
+            height,
+            goal_x: width - side,
+            goal_side: side,
+            goal_block: block,
+            goal_left: (side - block) / 2,
+            goal_bottom: side.saturating_sub(2 * block),
+        }
+    }
+
+    /// Writes screen row `y` (0 at the top) into `row`, which is [`PaperScreen::width`] long.
+    fn row(&self, y: usize, row: &mut [[u8; 3]]) {
+        let fill = |row: &mut [[u8; 3]], x: usize, width: usize, rgb: [u8; 3]| {
+            row[x.min(self.width)..(x + width).min(self.width)].fill(rgb);
+        };
+        row.fill([0, 0, 0]);
+        // Screen rows grow downward, grid rows upward.
+        let grid_row = self.obs.grid.height() - 1 - y / PAPER_CELL;
+        for (i, &c) in self.obs.blocks().iter().enumerate() {
+            if usize::from(c.y) != grid_row {
+                continue;
+            }
+            let b = BlockId(i as u8);
+            let rgb = if self.obs.held_block() == Some(b) {
+                PIXELS_HELD
+            } else {
+                crate::render::colour(b)
+            };
+            fill(row, usize::from(c.x) * PAPER_CELL, PAPER_CELL, rgb);
+        }
+        if y >= self.goal_side {
+            return;
+        }
+        fill(row, self.goal_x, self.goal_side, PIXELS_GOAL_BACKGROUND);
+        for (place, &b) in self.obs.goal.order().iter().enumerate() {
+            let Some(top) = self.goal_bottom.checked_sub(self.goal_block * place) else {
+                continue;
+            };
+            if (top..top + self.goal_block).contains(&y) {
+                fill(
+                    row,
+                    self.goal_x + self.goal_left,
+                    self.goal_block,
+                    crate::render::colour(b),
+                );
+            }
+        }
+    }
+}
+
+/// `screen` resized to `dw x dh` by bilinear interpolation with OpenCV's pixel-centre
+/// convention (`cv2.resize`'s default `INTER_LINEAR`), rounded to bytes.
+fn bilinear(screen: &PaperScreen<'_>, dw: usize, dh: usize) -> Vec<u8> {
+    let (sw, sh) = (screen.width, screen.height);
     // For each destination coordinate: the two source indices and the second's weight.
     let taps = |d: usize, s: usize| -> Vec<(usize, usize, f32)> {
         let scale = s as f32 / d as f32;
@@ -242,15 +281,20 @@ fn bilinear(src: &[[u8; 3]], sw: usize, sh: usize, dw: usize, dh: usize) -> Vec<
             .collect()
     };
     let (xs, ys) = (taps(dw, sw), taps(dh, sh));
+    let (mut upper, mut lower) = (vec![[0u8; 3]; sw], vec![[0u8; 3]; sw]);
     let mut out = Vec::with_capacity(dw * dh * 3);
     for &(y0, y1, fy) in &ys {
+        screen.row(y0, &mut upper);
+        screen.row(y1, &mut lower);
         for &(x0, x1, fx) in &xs {
-            let [a, b, c, d] = [
-                src[y0 * sw + x0],
-                src[y0 * sw + x1],
-                src[y1 * sw + x0],
-                src[y1 * sw + x1],
-            ];
+            let [a, b, c, d] = [upper[x0], upper[x1], lower[x0], lower[x1]];
+            // Most of the screen is flat (the background, a cell's inside): there the
+            // weighted sum is `a` up to a rounding error far below half a unit, so it
+            // rounds to `a`.
+            if a == b && a == c && a == d {
+                out.extend_from_slice(&a);
+                continue;
+            }
             for ch in 0..3 {
                 let top = f32::from(a[ch]) * (1.0 - fx) + f32::from(b[ch]) * fx;
                 let low = f32::from(c[ch]) * (1.0 - fx) + f32::from(d[ch]) * fx;
@@ -323,5 +367,17 @@ mod tests {
             crate::render::colour(BlockId(0)),
             "block 0 at the centre"
         );
+    }
+
+    proptest::proptest! {
+        /// The shortcut in `bilinear`: four equal neighbours give their own value, whatever
+        /// the weights, exactly as the full weighted sum rounds.
+        #[test]
+        fn four_equal_neighbours_round_to_their_own_value(v in 0u8..=255, fx in 0.0f32..1.0, fy in 0.0f32..1.0) {
+            let v32 = f32::from(v);
+            let top = v32 * (1.0 - fx) + v32 * fx;
+            let low = v32 * (1.0 - fx) + v32 * fx;
+            proptest::prop_assert_eq!((top * (1.0 - fy) + low * fy).round() as u8, v);
+        }
     }
 }
