@@ -113,7 +113,8 @@ class StackEnv(gym.Env):
 
     ``info`` of ``reset`` and ``step``: ``action_mask`` (int8, 1 for every legal action,
     from the Rust ``ActionMask``; all ones in the ``spec`` world), ``blocked`` (a held block's move was
-    stopped), ``pairs_in_place`` (goal pairs standing), ``goal`` (int64, bottom to top).
+    stopped), ``pairs_in_place`` (goal pairs standing), ``goal`` and ``goal_tower`` (int64,
+    as the ``state`` observation has them: :mod:`blockstack.spaces`).
     ``reset(options={"cells": [(x, y), ...], "held": i, "goal": "1,0,2"})`` starts from a
     given state instead (``held`` and ``goal`` only with ``cells``; any other key, or a
     start where the goal already holds, is a ``ValueError`` that changes nothing).

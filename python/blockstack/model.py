@@ -9,7 +9,8 @@ Stable-Baselines3's conventions::
     action, _ = model.predict(obs, deterministic=True)
     report = model.evaluate(episodes=100, seed=2)   # what `blockstack eval --json` prints
 
-``predict`` reads the ``state`` observation (a dict of ``blocks``, ``held`` and ``goal``),
+``predict`` reads the ``state`` observation (a dict of ``blocks``, ``held``, ``goal`` and
+``goal_tower``),
 which holds everything either kind of model needs; ``make_env`` makes environments that
 show it.
 """
@@ -82,9 +83,16 @@ class Model:
             )
         cells = [tuple(int(v) for v in c) for c in np.asarray(observation["blocks"])]
         held = int(observation["held"])
-        goal = [int(b) for b in np.asarray(observation["goal"])]
+        goal = np.asarray(observation["goal"]).tolist()
+        # Without ``goal_tower`` (observations of releases before it) the goal is one tower.
+        towers = np.asarray(observation.get("goal_tower", np.zeros(len(goal)))).tolist()
+        listed: dict = {}
+        for block, tower in zip(goal, towers):
+            if block >= 0:
+                listed.setdefault(int(tower), []).append(str(int(block)))
+        text = "/".join(",".join(t) for t in listed.values()) + "/"
         epsilon = 0.0 if deterministic else TEST_EPSILON
-        action = self._native.act(cells, None if held < 0 else held, goal, epsilon)
+        action = self._native.act(cells, None if held < 0 else held, text, epsilon)
         return action, None
 
     def evaluate(

@@ -28,7 +28,10 @@ def observation_space(obs: str, blocks: int, grid: Tuple[int, int]) -> spaces.Sp
       drawn beside the grid (what ``render_mode="rgb_array"`` returns).
     - ``paper-screen``: ``Box`` of ``uint8``, ``(100, 100, 3)``: the paper's DQN input.
     - ``state``: ``Dict`` of ``blocks`` (``(N, 2)`` int64 cells), ``held`` (the held block's
-      id, -1 for none) and ``goal`` (``(N,)`` int64, bottom to top).
+      id, -1 for none), ``goal`` (``(N,)`` int64: the goal's blocks tower by tower, each
+      bottom to top) and ``goal_tower`` (``(N,)`` int64: the tower of each entry of ``goal``,
+      0 the first; all 0 for a goal of one tower). Entries past the blocks a goal of
+      towers names (it may leave blocks free) are -1 in both.
 
     ``pixels`` (earlier releases) is refused: it meant ``frame`` here and ``paper-screen`` in
     the networks.
@@ -43,6 +46,7 @@ def observation_space(obs: str, blocks: int, grid: Tuple[int, int]) -> spaces.Sp
         {
             "blocks": spaces.Box(np.zeros_like(high), high, dtype=np.int64),
             "held": spaces.Discrete(blocks + 1, start=-1),
-            "goal": spaces.Box(0, blocks - 1, shape=(blocks,), dtype=np.int64),
+            "goal": spaces.Box(-1, blocks - 1, shape=(blocks,), dtype=np.int64),
+            "goal_tower": spaces.Box(-1, blocks - 1, shape=(blocks,), dtype=np.int64),
         }
     )

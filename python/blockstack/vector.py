@@ -31,7 +31,7 @@ PARALLEL_FROM_ENVS = 256
 _MODES = {AutoresetMode.NEXT_STEP: "next-step", AutoresetMode.SAME_STEP: "same-step"}
 #: The spellings taken for each mode: Gymnasium's values and the native side's names.
 _SPELLINGS = {spelling: mode for mode, name in _MODES.items() for spelling in (mode.value, name)}
-_INFO_KEYS = ("action_mask", "blocked", "pairs_in_place", "goal")
+_INFO_KEYS = ("action_mask", "blocked", "pairs_in_place", "goal", "goal_tower")
 
 
 def _cores() -> int:

@@ -104,7 +104,7 @@ impl Columns {
 fn array_bytes(steps: usize, kind: ObsKind, grid: Grid, blocks: usize) -> u128 {
     let obs = match kind.shape(grid, blocks) {
         Some(shape) => shape.iter().map(|&d| d as u128).product::<u128>(),
-        None => 8 * (3 * blocks as u128 + 1),
+        None => 8 * (4 * blocks as u128 + 1),
     };
     steps as u128 * (2 * obs + Action::count(blocks) as u128 + 27)
 }
@@ -138,18 +138,29 @@ fn encode<'py>(
         let cells = PyArrayDyn::<i64>::zeros(py, vec![t, blocks, 2], false);
         let held = PyArray1::<i64>::zeros(py, t, false);
         let goal = PyArray2::<i64>::zeros(py, [t, blocks], false);
+        let goal_tower = PyArray2::<i64>::zeros(py, [t, blocks], false);
         {
-            let (mut c, mut h, mut g) = (cells.readwrite(), held.readwrite(), goal.readwrite());
-            let (c, h, g) = (
+            let (mut c, mut h, mut g, mut gt) = (
+                cells.readwrite(),
+                held.readwrite(),
+                goal.readwrite(),
+                goal_tower.readwrite(),
+            );
+            let (c, h, g, gt) = (
                 c.as_slice_mut().expect("contiguous"),
                 h.as_slice_mut().expect("contiguous"),
                 g.as_slice_mut().expect("contiguous"),
+                gt.as_slice_mut().expect("contiguous"),
             );
             for (i, obs) in observations.iter().enumerate() {
+                let each = blocks * i..blocks * (i + 1);
                 observe::write_state(
                     obs,
                     &mut c[2 * blocks * i..2 * blocks * (i + 1)],
-                    &mut g[blocks * i..blocks * (i + 1)],
+                    observe::GoalOut {
+                        goal: &mut g[each.clone()],
+                        tower: &mut gt[each],
+                    },
                 );
                 h[i] = observe::held_index(obs);
             }
@@ -158,6 +169,7 @@ fn encode<'py>(
         d.set_item("blocks", cells)?;
         d.set_item("held", held)?;
         d.set_item("goal", goal)?;
+        d.set_item("goal_tower", goal_tower)?;
         Ok(d.into_any())
     }
 }

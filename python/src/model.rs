@@ -11,7 +11,7 @@ use pyo3::types::PyDict;
 use sim::seeding::SimRng;
 use sim::{Goal, Observation, State};
 
-use crate::boundary::{OrValueError, guard, raise_signal, signal_checker, value_error};
+use crate::boundary::{OrValueError, guard, raise_signal, signal_checker};
 use crate::env::state_from;
 
 /// A model file of either kind, loaded: `blockstack.Model` wraps it.
@@ -79,23 +79,16 @@ impl NativeModel {
     }
 
     /// The action for a `state` observation (`cells` by block id, `held` a block id or
-    /// `None`, `goal` bottom to top): greedy with `epsilon` 0, else a random legal action
-    /// with probability `epsilon`.
+    /// `None`, `goal` as `blockstack run --goal` reads it, towers included): greedy with
+    /// `epsilon` 0, else a random legal action with probability `epsilon`.
     #[pyo3(signature = (cells, held, goal, epsilon=0.0))]
-    fn act(&mut self, cells: Vec<(u8, u8)>, held: Option<u8>, goal: Vec<usize>, epsilon: f64) -> PyResult<usize> {
+    fn act(&mut self, cells: Vec<(u8, u8)>, held: Option<u8>, goal: &str, epsilon: f64) -> PyResult<usize> {
         let state: State = state_from(&cells, held)?;
-        let goal = Goal::from_indices(&goal).or_value_error()?;
         let world = self.model.world();
         self.model
             .check_world(world.grid, state.block_count())
             .or_value_error()?;
-        if goal.block_count() != state.block_count() {
-            return Err(value_error(format!(
-                "the goal has {} blocks and the state {}",
-                goal.block_count(),
-                state.block_count()
-            )));
-        }
+        let goal = Goal::parse(goal, Some(state.block_count())).or_value_error()?;
         let obs = Observation {
             grid: world.grid,
             state,

@@ -30,19 +30,23 @@ pub fn to_python<'py>(py: Python<'py>, kind: ObsKind, obs: &Observation) -> PyRe
         let n = obs.state.block_count();
         let blocks = PyArray2::<i64>::zeros(py, [n, 2], false);
         let goal = PyArray1::<i64>::zeros(py, n, false);
+        let goal_tower = PyArray1::<i64>::zeros(py, n, false);
         {
-            let mut b = blocks.readwrite();
-            let mut g = goal.readwrite();
+            let (mut b, mut g, mut t) = (blocks.readwrite(), goal.readwrite(), goal_tower.readwrite());
             write_state(
                 obs,
                 b.as_slice_mut().expect("contiguous"),
-                g.as_slice_mut().expect("contiguous"),
+                GoalOut {
+                    goal: g.as_slice_mut().expect("contiguous"),
+                    tower: t.as_slice_mut().expect("contiguous"),
+                },
             );
         }
         let dict = PyDict::new(py);
         dict.set_item("blocks", blocks)?;
         dict.set_item("held", held_index(obs))?;
         dict.set_item("goal", goal)?;
+        dict.set_item("goal_tower", goal_tower)?;
         return Ok(dict.into_any());
     };
     let array = PyArray3::<u8>::zeros(py, shape, false);
@@ -54,9 +58,16 @@ pub fn to_python<'py>(py: Python<'py>, kind: ObsKind, obs: &Observation) -> PyRe
     Ok(array.into_any())
 }
 
-/// Writes every block's `[x, y]` into `blocks` (`N x 2`) and the goal, bottom to top, into
-/// `goal` (`N`).
-pub fn write_state(obs: &Observation, blocks: &mut [i64], goal: &mut [i64]) {
+/// Where a goal is written: `goal` (`N`) and `tower` (`N`).
+pub struct GoalOut<'a> {
+    /// The named blocks, tower by tower, each bottom to top; -1 past them.
+    pub goal: &'a mut [i64],
+    /// The tower (0 the first the goal lists) of each entry of `goal`; -1 past them.
+    pub tower: &'a mut [i64],
+}
+
+/// Writes every block's `[x, y]` into `blocks` (`N x 2`) and the goal into `goal`.
+pub fn write_state(obs: &Observation, blocks: &mut [i64], goal: GoalOut<'_>) {
     for (i, c) in obs.blocks().iter().enumerate() {
         blocks[2 * i] = i64::from(c.x);
         blocks[2 * i + 1] = i64::from(c.y);
@@ -64,25 +75,42 @@ pub fn write_state(obs: &Observation, blocks: &mut [i64], goal: &mut [i64]) {
     write_goal(obs, goal);
 }
 
-/// Writes the goal, bottom to top, into `goal`.
-pub fn write_goal(obs: &Observation, goal: &mut [i64]) {
-    for (g, b) in goal.iter_mut().zip(obs.goal.order()) {
-        *g = i64::from(b.0);
+/// Writes the goal's blocks and their towers (a goal of one tower: every tower 0). A goal
+/// of towers may leave blocks free: their entries are -1, as a block id never is.
+pub fn write_goal(obs: &Observation, out: GoalOut<'_>) {
+    out.goal.fill(-1);
+    out.tower.fill(-1);
+    let named = obs
+        .goal
+        .towers()
+        .enumerate()
+        .flat_map(|(t, tower)| tower.iter().map(move |b| (i64::from(b.0), t as i64)));
+    for ((g, t), (block, tower)) in out.goal.iter_mut().zip(out.tower.iter_mut()).zip(named) {
+        (*g, *t) = (block, tower);
     }
 }
 
 /// The `info` of a reset or a step, as a dict: `action_mask` (int8, 1 for each legal
-/// action), `blocked`, `pairs_in_place` and `goal` (int64, bottom to top).
+/// action), `blocked`, `pairs_in_place`, `goal` and `goal_tower` (int64, as [`write_goal`]
+/// writes them).
 pub fn info<'py>(py: Python<'py>, obs: &Observation, blocked: bool) -> PyResult<Bound<'py, PyDict>> {
     let n = obs.state.block_count();
     let mask = PyArray1::<i8>::zeros(py, Action::count(n), false);
     write_action_mask(obs, mask.readwrite().as_slice_mut().expect("contiguous"));
     let goal = PyArray1::<i64>::zeros(py, n, false);
-    write_goal(obs, goal.readwrite().as_slice_mut().expect("contiguous"));
+    let goal_tower = PyArray1::<i64>::zeros(py, n, false);
+    write_goal(
+        obs,
+        GoalOut {
+            goal: goal.readwrite().as_slice_mut().expect("contiguous"),
+            tower: goal_tower.readwrite().as_slice_mut().expect("contiguous"),
+        },
+    );
     let dict = PyDict::new(py);
     dict.set_item("action_mask", mask)?;
     dict.set_item("blocked", blocked)?;
     dict.set_item("pairs_in_place", obs.goal.pairs_in_place(&obs.state))?;
     dict.set_item("goal", goal)?;
+    dict.set_item("goal_tower", goal_tower)?;
     Ok(dict)
 }

@@ -19,11 +19,13 @@ use crate::observe;
 enum ObsBuffers {
     /// `(num_envs, *shape)` bytes.
     Bytes(Py<PyArrayDyn<u8>>),
-    /// Block cells `(num_envs, N, 2)`, held block `(num_envs,)`, goal `(num_envs, N)`.
+    /// Block cells `(num_envs, N, 2)`, held block `(num_envs,)`, goal and its towers
+    /// `(num_envs, N)` each.
     State {
         blocks: Py<PyArrayDyn<i64>>,
         held: Py<PyArray1<i64>>,
         goal: Py<PyArray2<i64>>,
+        goal_tower: Py<PyArray2<i64>>,
     },
 }
 
@@ -37,6 +39,7 @@ struct Slot<'a> {
     blocked: &'a mut bool,
     pairs: &'a mut i64,
     goal: &'a mut [i64],
+    goal_tower: &'a mut [i64],
     /// Under same-step autoreset, the last observation of an episode that ended in this
     /// step, and whether that step's move was blocked.
     last: &'a mut Option<(Observation, bool)>,
@@ -48,6 +51,7 @@ enum ObsSlot<'a> {
         blocks: &'a mut [i64],
         held: &'a mut i64,
         goal: &'a mut [i64],
+        goal_tower: &'a mut [i64],
     },
 }
 
@@ -57,13 +61,31 @@ impl Slot<'_> {
             ObsSlot::Bytes(out) => kind
                 .write(obs, out)
                 .expect("the buffers are shaped by the kind's shape"),
-            ObsSlot::State { blocks, held, goal } => {
-                observe::write_state(obs, blocks, goal);
+            ObsSlot::State {
+                blocks,
+                held,
+                goal,
+                goal_tower,
+            } => {
+                observe::write_state(
+                    obs,
+                    blocks,
+                    observe::GoalOut {
+                        goal,
+                        tower: goal_tower,
+                    },
+                );
                 **held = observe::held_index(obs);
             }
         }
         observe::write_action_mask(obs, self.mask);
-        observe::write_goal(obs, self.goal);
+        observe::write_goal(
+            obs,
+            observe::GoalOut {
+                goal: self.goal,
+                tower: self.goal_tower,
+            },
+        );
         *self.pairs = obs.goal.pairs_in_place(&obs.state) as i64;
     }
 
@@ -106,6 +128,7 @@ pub struct NativeVecEnv {
     blocked: Py<PyArray1<bool>>,
     pairs_in_place: Py<PyArray1<i64>>,
     goal: Py<PyArray2<i64>>,
+    goal_tower: Py<PyArray2<i64>>,
     last: Vec<Option<(Observation, bool)>>,
 }
 
@@ -119,6 +142,7 @@ struct Borrows<'py> {
     blocked: PyReadwriteArray1<'py, bool>,
     pairs_in_place: PyReadwriteArray1<'py, i64>,
     goal: PyReadwriteArray2<'py, i64>,
+    goal_tower: PyReadwriteArray2<'py, i64>,
 }
 
 enum ObsBorrow<'py> {
@@ -127,6 +151,7 @@ enum ObsBorrow<'py> {
         blocks: PyReadwriteArrayDyn<'py, i64>,
         held: PyReadwriteArray1<'py, i64>,
         goal: PyReadwriteArray2<'py, i64>,
+        goal_tower: PyReadwriteArray2<'py, i64>,
     },
 }
 
@@ -147,11 +172,21 @@ impl<'py> Borrows<'py> {
                 let len = s.len() / n.max(1);
                 s.chunks_mut(len.max(1)).map(ObsSlot::Bytes).collect()
             }
-            ObsBorrow::State { blocks: b, held, goal } => slice(b)
+            ObsBorrow::State {
+                blocks: b,
+                held,
+                goal,
+                goal_tower,
+            } => slice(b)
                 .chunks_mut(2 * blocks)
                 .zip(slice(held).iter_mut())
-                .zip(slice(goal).chunks_mut(blocks))
-                .map(|((blocks, held), goal)| ObsSlot::State { blocks, held, goal })
+                .zip(slice(goal).chunks_mut(blocks).zip(slice(goal_tower).chunks_mut(blocks)))
+                .map(|((blocks, held), (goal, goal_tower))| ObsSlot::State {
+                    blocks,
+                    held,
+                    goal,
+                    goal_tower,
+                })
                 .collect(),
         };
         obs.into_iter()
@@ -161,19 +196,26 @@ impl<'py> Borrows<'py> {
             .zip(slice(&mut self.action_mask).chunks_mut(actions))
             .zip(slice(&mut self.blocked).iter_mut())
             .zip(slice(&mut self.pairs_in_place).iter_mut())
-            .zip(slice(&mut self.goal).chunks_mut(blocks))
+            .zip(
+                slice(&mut self.goal)
+                    .chunks_mut(blocks)
+                    .zip(slice(&mut self.goal_tower).chunks_mut(blocks)),
+            )
             .zip(last.iter_mut())
             .map(
-                |((((((((obs, reward), terminated), truncated), mask), blocked), pairs), goal), last)| Slot {
-                    obs,
-                    reward,
-                    terminated,
-                    truncated,
-                    mask,
-                    blocked,
-                    pairs,
-                    goal,
-                    last,
+                |((((((((obs, reward), terminated), truncated), mask), blocked), pairs), (goal, goal_tower)), last)| {
+                    Slot {
+                        obs,
+                        reward,
+                        terminated,
+                        truncated,
+                        mask,
+                        blocked,
+                        pairs,
+                        goal,
+                        goal_tower,
+                        last,
+                    }
                 },
             )
             .collect()
@@ -185,10 +227,16 @@ impl NativeVecEnv {
         Borrows {
             obs: match &self.obs {
                 ObsBuffers::Bytes(a) => ObsBorrow::Bytes(a.bind(py).readwrite()),
-                ObsBuffers::State { blocks, held, goal } => ObsBorrow::State {
+                ObsBuffers::State {
+                    blocks,
+                    held,
+                    goal,
+                    goal_tower,
+                } => ObsBorrow::State {
                     blocks: blocks.bind(py).readwrite(),
                     held: held.bind(py).readwrite(),
                     goal: goal.bind(py).readwrite(),
+                    goal_tower: goal_tower.bind(py).readwrite(),
                 },
             },
             rewards: self.rewards.bind(py).readwrite(),
@@ -198,6 +246,7 @@ impl NativeVecEnv {
             blocked: self.blocked.bind(py).readwrite(),
             pairs_in_place: self.pairs_in_place.bind(py).readwrite(),
             goal: self.goal.bind(py).readwrite(),
+            goal_tower: self.goal_tower.bind(py).readwrite(),
         }
     }
 
@@ -296,6 +345,7 @@ impl NativeVecEnv {
                 blocks: PyArrayDyn::<i64>::zeros(py, vec![num_envs, n, 2], false).unbind(),
                 held: PyArray1::<i64>::zeros(py, num_envs, false).unbind(),
                 goal: PyArray2::<i64>::zeros(py, [num_envs, n], false).unbind(),
+                goal_tower: PyArray2::<i64>::zeros(py, [num_envs, n], false).unbind(),
             },
         };
         Ok(NativeVecEnv {
@@ -310,22 +360,29 @@ impl NativeVecEnv {
             blocked: PyArray1::zeros(py, num_envs, false).unbind(),
             pairs_in_place: PyArray1::zeros(py, num_envs, false).unbind(),
             goal: PyArray2::zeros(py, [num_envs, blocks], false).unbind(),
+            goal_tower: PyArray2::zeros(py, [num_envs, blocks], false).unbind(),
             last: vec![None; num_envs],
         })
     }
 
     /// The buffers every call writes into, by name: `obs` (an array, or a dict of arrays
     /// for `state`), `rewards`, `terminations`, `truncations`, `action_mask`, `blocked`,
-    /// `pairs_in_place`, `goal`.
+    /// `pairs_in_place`, `goal`, `goal_tower`.
     fn buffers<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
         match &self.obs {
             ObsBuffers::Bytes(a) => d.set_item("obs", a.bind(py))?,
-            ObsBuffers::State { blocks, held, goal } => {
+            ObsBuffers::State {
+                blocks,
+                held,
+                goal,
+                goal_tower,
+            } => {
                 let o = PyDict::new(py);
                 o.set_item("blocks", blocks.bind(py))?;
                 o.set_item("held", held.bind(py))?;
                 o.set_item("goal", goal.bind(py))?;
+                o.set_item("goal_tower", goal_tower.bind(py))?;
                 d.set_item("obs", o)?;
             }
         }
@@ -336,6 +393,7 @@ impl NativeVecEnv {
         d.set_item("blocked", self.blocked.bind(py))?;
         d.set_item("pairs_in_place", self.pairs_in_place.bind(py))?;
         d.set_item("goal", self.goal.bind(py))?;
+        d.set_item("goal_tower", self.goal_tower.bind(py))?;
         Ok(d)
     }
 

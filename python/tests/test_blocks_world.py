@@ -111,3 +111,24 @@ def test_side_view_demonstrations_reach_their_goals(expert):
     # Only legal actions: Pick of clear blocks, moves and Drop while holding.
     chosen = demos["action_masks"][np.arange(len(demos["actions"])), demos["actions"]]
     assert chosen.all()
+
+
+def test_the_state_observation_keeps_the_goals_towers_apart():
+    # `0,1/2` and `0,1,2` list the same blocks; `goal_tower` tells them apart, and a goal
+    # that leaves a block free marks the entries past its blocks -1.
+    for goal, blocks, order, towers in [
+        ("0,1/2", 3, [0, 1, 2], [0, 0, 1]),
+        ("0,1,2", 3, [0, 1, 2], [0, 0, 0]),
+        ("1,3,2/", 4, [1, 3, 2, -1], [0, 0, 0, -1]),
+    ]:
+        env = gym.make(ENV_ID, blocks=blocks, goal=goal, obs="state", backend="grid")
+        obs, info = env.reset(seed=2)
+        assert obs["goal"].tolist() == order and obs["goal_tower"].tolist() == towers
+        assert info["goal"].tolist() == order and info["goal_tower"].tolist() == towers
+        assert env.observation_space.contains(obs)
+        vec = blockstack.vector.StackVectorEnv(2, blocks=blocks, goal=goal, obs="state", view="side", backend="grid")
+        batch, infos = vec.reset(seed=2)
+        assert batch["goal_tower"].tolist() == [towers, towers]
+        assert infos["goal_tower"].tolist() == [towers, towers]
+        demos = blockstack.demonstrations(1, blocks=blocks, goal=goal, obs="state", view="side", backend="grid")
+        assert demos["observations"]["goal_tower"][0].tolist() == towers

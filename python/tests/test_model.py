@@ -61,6 +61,16 @@ def test_a_tabular_model_plays_the_clis_greedy_trajectory(cli, tmp_path, role_mo
     assert python_actions(model, "1,0,2", 3, 7) == expected
 
 
+def test_a_side_view_model_plays_the_clis_greedy_trajectory_on_a_goal_of_towers(cli, tmp_path):
+    # `predict` reads the goal's towers from the state observation: on `0,1/2` (not `0,1,2`)
+    # it plays what `blockstack run` plays.
+    path = tmp_path / "side.safetensors"
+    cli("train", "--view", "side", "--backend", "grid", "--games", "20000", "--out", path)
+    model = blockstack.load(path)
+    expected = cli_actions(cli, tmp_path, path, "q", "0,1/2", 3, 4, ("--backend", "grid"))
+    assert python_actions(model, "0,1/2", 3, 4, backend="grid") == expected
+
+
 def test_a_network_plays_the_clis_greedy_trajectory(cli, tmp_path, network):
     model = blockstack.load(network)
     assert model.kind == "dqn" and model.world["blocks"] == 2
