@@ -83,16 +83,11 @@ class Model:
             )
         cells = [tuple(int(v) for v in c) for c in np.asarray(observation["blocks"])]
         held = int(observation["held"])
-        goal = np.asarray(observation["goal"]).tolist()
+        goal = [int(b) for b in np.asarray(observation["goal"])]
         # Without ``goal_tower`` (observations of releases before it) the goal is one tower.
-        towers = np.asarray(observation.get("goal_tower", np.zeros(len(goal)))).tolist()
-        listed: dict = {}
-        for block, tower in zip(goal, towers):
-            if block >= 0:
-                listed.setdefault(int(tower), []).append(str(int(block)))
-        text = "/".join(",".join(t) for t in listed.values()) + "/"
+        towers = [int(t) for t in np.asarray(observation.get("goal_tower", [0] * len(goal)))]
         epsilon = 0.0 if deterministic else TEST_EPSILON
-        action = self._native.act(cells, None if held < 0 else held, text, epsilon)
+        action = self._native.act(cells, None if held < 0 else held, goal, towers, epsilon)
         return action, None
 
     def evaluate(

@@ -13,6 +13,7 @@ use sim::{Goal, Observation, State};
 
 use crate::boundary::{OrValueError, guard, raise_signal, signal_checker};
 use crate::env::state_from;
+use crate::observe;
 
 /// A model file of either kind, loaded: `blockstack.Model` wraps it.
 #[pyclass(module = "blockstack._native")]
@@ -79,16 +80,23 @@ impl NativeModel {
     }
 
     /// The action for a `state` observation (`cells` by block id, `held` a block id or
-    /// `None`, `goal` as `blockstack run --goal` reads it, towers included): greedy with
-    /// `epsilon` 0, else a random legal action with probability `epsilon`.
-    #[pyo3(signature = (cells, held, goal, epsilon=0.0))]
-    fn act(&mut self, cells: Vec<(u8, u8)>, held: Option<u8>, goal: &str, epsilon: f64) -> PyResult<usize> {
+    /// `None`, `goal` and `goal_tower` as the observation has them): greedy with `epsilon`
+    /// 0, else a random legal action with probability `epsilon`.
+    #[pyo3(signature = (cells, held, goal, goal_tower, epsilon=0.0))]
+    fn act(
+        &mut self,
+        cells: Vec<(u8, u8)>,
+        held: Option<u8>,
+        goal: Vec<i64>,
+        goal_tower: Vec<i64>,
+        epsilon: f64,
+    ) -> PyResult<usize> {
         let state: State = state_from(&cells, held)?;
         let world = self.model.world();
         self.model
             .check_world(world.grid, state.block_count())
             .or_value_error()?;
-        let goal = Goal::parse(goal, Some(state.block_count())).or_value_error()?;
+        let goal = observe::read_goal(&goal, &goal_tower, state.block_count())?;
         let obs = Observation {
             grid: world.grid,
             state,

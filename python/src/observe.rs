@@ -4,9 +4,9 @@
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use sim::{Action, Observation};
+use sim::{Action, Goal, Observation};
 
-use crate::boundary::OrValueError;
+use crate::boundary::{OrValueError, value_error};
 use crate::config::ObsKind;
 
 /// The held block as an integer: its id, or -1 when nothing is held.
@@ -88,6 +88,31 @@ pub fn write_goal(obs: &Observation, out: GoalOut<'_>) {
     for ((g, t), (block, tower)) in out.goal.iter_mut().zip(out.tower.iter_mut()).zip(named) {
         (*g, *t) = (block, tower);
     }
+}
+
+/// The goal that `goal` and `tower` describe, as [`write_goal`] writes them, in a world of
+/// `blocks` blocks; a `ValueError` naming what is wrong.
+pub fn read_goal(goal: &[i64], tower: &[i64], blocks: usize) -> PyResult<Goal> {
+    if goal.len() != tower.len() {
+        return Err(value_error(format!(
+            "goal has {} entries and goal_tower {}: give one tower per goal entry",
+            goal.len(),
+            tower.len()
+        )));
+    }
+    let mut towers: Vec<Vec<usize>> = Vec::new();
+    let mut current = None;
+    for (&block, &t) in goal.iter().zip(tower) {
+        if block < 0 {
+            continue;
+        }
+        if current != Some(t) {
+            towers.push(Vec::new());
+            current = Some(t);
+        }
+        towers.last_mut().expect("pushed above").push(block as usize);
+    }
+    Goal::of_towers(&towers, blocks).or_value_error()
 }
 
 /// The `info` of a reset or a step, as a dict: `action_mask` (int8, 1 for each legal

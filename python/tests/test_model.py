@@ -67,8 +67,11 @@ def test_a_side_view_model_plays_the_clis_greedy_trajectory_on_a_goal_of_towers(
     path = tmp_path / "side.safetensors"
     cli("train", "--view", "side", "--backend", "grid", "--games", "20000", "--out", path)
     model = blockstack.load(path)
-    expected = cli_actions(cli, tmp_path, path, "q", "0,1/2", 3, 4, ("--backend", "grid"))
-    assert python_actions(model, "0,1/2", 3, 4, backend="grid") == expected
+    expected = cli_actions(cli, tmp_path, path, "q", "0,1/2", 10, 4, ("--backend", "grid"))
+    assert python_actions(model, "0,1/2", 10, 4, backend="grid") == expected
+    obs, _ = model.make_env(goal="0,1/2", backend="grid").reset(seed=1)
+    with pytest.raises(ValueError, match="goal_tower"):
+        model.predict({**obs, "goal_tower": obs["goal_tower"][:2]})
 
 
 def test_a_network_plays_the_clis_greedy_trajectory(cli, tmp_path, network):
