@@ -91,7 +91,7 @@ fn run_plays_a_q_model_and_writes_trajectories() {
     let dir = scratch("run-q");
     let model = train_role(&dir, "role.safetensors", "3000");
     let trajectory = dir.join("t.jsonl");
-    let o = cli("run")
+    let v: serde_json::Value = cli("run")
         .flag("agent", "q")
         .flag("model", path(&model))
         .flag("epsilon", "0.1")
@@ -100,9 +100,7 @@ fn run_plays_a_q_model_and_writes_trajectories() {
         .flag("seed", "3")
         .flag("trajectory", path(&trajectory))
         .arg("--json")
-        .run();
-    assert!(o.status.success(), "{}", stderr(&o));
-    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        .json();
     assert_eq!(v["agent"], "q-role");
     assert_eq!(v["episodes"], 5);
     let lines = std::fs::read_to_string(&trajectory).unwrap();

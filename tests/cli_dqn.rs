@@ -39,15 +39,13 @@ fn train(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {
 fn a_trained_network_is_evaluated_and_played_like_a_tabular_model() {
     let dir = scratch("dqn-eval");
     let net = train(&dir, "net.safetensors", &[]);
-    let o = cli("eval")
+    let v: serde_json::Value = cli("eval")
         .flag("model", path(&net))
         .flag("episodes", "20")
         .flag("epsilon", "0")
         .flag("backend", "grid")
         .arg("--json")
-        .run();
-    assert!(o.status.success(), "{}", stderr(&o));
-    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        .json();
     assert_eq!(v["agent"], "dqn-small");
     assert_eq!(v["episodes"], 40);
     assert_eq!(v["per_goal"].as_array().unwrap().len(), 2);

@@ -20,14 +20,12 @@ fn the_role_learner_with_its_default_preset_plays_every_goal_greedily() {
     let training = &model_metadata(&model)["training"];
     assert_eq!(training["params"]["gamma"], 1.0, "{training}");
     assert_eq!(training["final_replay"], true, "{training}");
-    let o = cli("eval")
+    let report: serde_json::Value = cli("eval")
         .flag("model", path(&model))
         .flag("episodes", "100")
         .flag("epsilon", "0")
         .arg("--json")
-        .run();
-    assert!(o.status.success(), "{}", stderr(&o));
-    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        .json();
     assert_eq!(report["episodes"], 600, "{report}");
     assert_eq!(report["failures"], 0, "{report}");
 }

@@ -25,7 +25,7 @@ fn render_draws_the_side_view_over_a_table() {
 fn run_plays_the_side_view_and_records_it() {
     let dir = scratch("side");
     let traj = dir.join("side.jsonl");
-    let o = cli("run")
+    let v: serde_json::Value = cli("run")
         .flag("view", "side")
         .flag("blocks", "3")
         .flag("goal", "0,1/2")
@@ -33,9 +33,7 @@ fn run_plays_the_side_view_and_records_it() {
         .flag("seed", "5")
         .arg("--json")
         .flag("trajectory", traj.to_str().unwrap())
-        .run();
-    assert!(o.status.success(), "{}", stderr(&o));
-    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        .json();
     assert_eq!(v["goal"], "0,1/2");
     let first = std::fs::read_to_string(&traj).unwrap();
     let header: serde_json::Value = serde_json::from_str(first.lines().next().unwrap()).unwrap();
@@ -158,28 +156,24 @@ fn train_eval_and_run_a_side_view_learner() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stdout(&o).contains("q-role-towers"), "{}", stdout(&o));
     // eval plays the model's own world: every goal of towers, from the side.
-    let o = cli("eval")
+    let v: serde_json::Value = cli("eval")
         .flag("model", path(&model))
         .flag("episodes", "20")
         .flag("epsilon", "0")
         .flag("backend", "grid")
         .arg("--json")
-        .run();
-    assert!(o.status.success(), "{}", stderr(&o));
-    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        .json();
     assert_eq!(v["per_goal"].as_array().unwrap().len(), 13);
     assert_eq!(v["failures"], 0, "{v}");
     assert!(v["mean_ratio_to_optimum"].as_f64().unwrap() <= 1.05, "{v}");
-    let o = cli("run")
+    let v: serde_json::Value = cli("run")
         .flag("agent", "q")
         .flag("model", path(&model))
         .flag("goal", "2/0,1")
         .flag("episodes", "5")
         .flag("epsilon", "0")
         .arg("--json")
-        .run();
-    assert!(o.status.success(), "{}", stderr(&o));
-    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        .json();
     assert_eq!(v["failures"], 0, "{v}");
     // A side-view model does not play the top view, and one-tower learners refuse towers.
     let o = cli("run")

@@ -67,6 +67,12 @@ impl Cli {
         assert!(o.status.success(), "{:?}: {}", self.args, stderr(&o));
         stdout(&o)
     }
+
+    /// Runs it, checks that it succeeded, and reads what it printed as JSON.
+    pub fn json(&self) -> serde_json::Value {
+        let out = self.ok();
+        serde_json::from_str(&out).unwrap_or_else(|e| panic!("{:?}: {e}: {out}", self.args))
+    }
 }
 
 /// What a run printed on standard output.
