@@ -587,7 +587,7 @@ impl QNet {
     /// Q-values (`batch x actions`) of `x` (`batch x input length`), batch normalisation on
     /// its running statistics (acting, and the target network).
     pub fn forward<'w>(&self, x: &[f32], ws: &'w mut Workspace) -> &'w [f32] {
-        self.pass(x, ws, false);
+        kernels::without_subnormals(|| self.pass(x, ws, false));
         ws.output()
     }
 
@@ -595,7 +595,7 @@ impl QNet {
     /// running averages it updates (momentum 0.1, the unbiased variance, as PyTorch keeps
     /// them). `ws` keeps what [`QNet::backward`] needs.
     pub fn forward_train<'w>(&mut self, x: &[f32], ws: &'w mut Workspace) -> &'w [f32] {
-        self.pass(x, ws, true);
+        kernels::without_subnormals(|| self.pass(x, ws, true));
         for (layer, buffers) in self.layers.iter().zip(&ws.layers) {
             if let Layer::Conv { norm: Some(n), .. } = layer {
                 let rows = buffers.pre.len() / buffers.mean.len();
@@ -699,6 +699,11 @@ impl QNet {
     /// last [`QNet::forward_train`] through `ws`, whose input was `x`. No gradient is
     /// computed for the input.
     pub fn backward(&self, x: &[f32], ws: &mut Workspace, dq: &[f32], grad: &mut [f32]) {
+        kernels::without_subnormals(|| self.backward_pass(x, ws, dq, grad));
+    }
+
+    /// [`QNet::backward`]'s passes, layer by layer.
+    fn backward_pass(&self, x: &[f32], ws: &mut Workspace, dq: &[f32], grad: &mut [f32]) {
         let batch = ws.batch;
         assert_eq!(dq.len(), batch * self.actions, "one gradient per Q-value");
         assert_eq!(grad.len(), self.params.len(), "one gradient per parameter");

@@ -5,7 +5,9 @@
 //! clip of the gradients' global norm. The parameters and the gradients are each one flat
 //! slice ([`crate::net::QNet::params`]), so a step is two passes over memory, in place: one
 //! that adds the L2 term and measures the norm, one that updates the moments and the
-//! weights. Nothing is allocated after the optimiser is made.
+//! weights. Nothing is allocated after the optimiser is made. Subnormal values flush to
+//! zero ([`crate::kernels::without_subnormals`]): the moments of weights no input reaches
+//! decay into them.
 
 use serde::{Deserialize, Serialize};
 
@@ -73,7 +75,8 @@ impl Optimizer {
         self.steps += 1;
         let t = self.steps.min(i32::MAX as u64) as i32;
         let settings = (self.kind, self.lr, t, l2, clip);
-        update(settings, params, grads, &mut self.first, &mut self.second)
+        let (first, second) = (&mut self.first, &mut self.second);
+        crate::kernels::without_subnormals(|| update(settings, params, grads, first, second))
     }
 }
 
