@@ -358,7 +358,7 @@ fn no_markdown_file_points_outside_the_repository_or_to_a_missing_file() {
         "the docs were not found under {}",
         root.display()
     );
-    // The results report is generated (`blockstack reproduce --out docs/results`); until a
+    // The results report is generated (`blockstack reproduce --long --seed 1 --out docs/results`); until a
     // first one is committed, links into it cannot resolve.
     let results_committed = root.join("docs/results").is_dir();
     let mut problems = Vec::new();

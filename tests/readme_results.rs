@@ -1,7 +1,7 @@
 //! The README's results are the committed report's, not typed in by hand: the block between
 //! `<!-- results:begin -->` and `<!-- results:end -->` is what
 //! `experiments::reproduce::summary` computes from `docs/results/results.json` (the report
-//! `blockstack reproduce --out docs/results` writes, with the same block as `summary.md`).
+//! `blockstack reproduce --long --seed 1 --out docs/results` writes, with the same block as `summary.md`).
 
 use std::path::Path;
 
@@ -28,7 +28,7 @@ fn the_readmes_results_are_the_committed_reports() {
     assert_eq!(
         results_block(&read("README.md")).trim(),
         summary.trim(),
-        "run `blockstack reproduce --out docs/results` and paste docs/results/summary.md between the markers"
+        "run `blockstack reproduce --long --seed 1 --out docs/results` and paste docs/results/summary.md between the markers"
     );
     assert_eq!(read("docs/results/summary.md"), summary, "docs/results/summary.md");
     let json: serde_json::Value = serde_json::from_str(&results).expect("JSON");

@@ -21,8 +21,8 @@ pub struct ReproduceArgs {
     /// Small counts, to check the pipeline in a minute; not the paper's figures.
     #[arg(long)]
     pub quick: bool,
-    /// E8 at its long budget: the paper's pixel runs and the whole ablation (over two hours
-    /// of CPU: more than an hour on 2 cores); the default run trains E8's plane arms only.
+    /// E8 at its long budget: the paper's pixel runs and the whole ablation (about 47 minutes
+    /// on 2 cores, against 4 for the default run, which trains E8's plane arms only).
     #[arg(long, conflicts_with = "quick")]
     pub long: bool,
     /// Run only these experiments, e.g. E8 or E1,E5 (the agents experiments share are
