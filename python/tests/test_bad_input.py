@@ -210,6 +210,9 @@ def test_sweep_configs_that_are_not_tables_are_one_line_errors(tmp_path, capsys)
 def test_ctrl_c_stops_a_long_native_call(call):
     script = (
         "import os, signal, threading, time, blockstack\n"
+        # A shell that starts a job in the background without job control hands it SIGINT
+        # ignored, and Python keeps that: put back the handler that raises KeyboardInterrupt.
+        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
         "threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGINT)).start()\n"
         "start = time.monotonic()\n"
         "try:\n"
