@@ -19,9 +19,9 @@
 //! - `dqfd-planes` (the recommended recipe): `dqn-planes` with DQfD (Hester et al. 2018):
 //!   10,000 exact-solver demonstrations, 30,000 pre-training steps with the 1-step and
 //!   10-step TD losses, the large-margin loss (margin 0.8) and L2 1e-5, then 30,000 steps of
-//!   self-play (90,000 of each on 3 blocks and more) with a quarter of every batch drawn
-//!   from the demonstrations, epsilon from 0.1
-//!   to 0.01, the learning rate falling from 1e-3 to 1e-4, and loops corrected: the first
+//!   self-play (90,000 of each on 3 blocks; 40,000 demonstrations and 360,000 steps of
+//!   each on 4 and more) with a quarter of every batch drawn from the demonstrations,
+//!   epsilon from 0.1 to 0.01, the learning rate falling from 1e-3 to 1e-4, and loops corrected: the first
 //!   time a game comes back to a state it was in, the exact solver demonstrates from there
 //!   (the paper's demonstrators correcting the agent, section VI-C, as DQfD data).
 //! - `her-planes`: `dqn-planes` with hindsight relabelling (HER, Andrychowicz et al. 2017,
@@ -334,14 +334,20 @@ impl DqnConfig {
     }
 
     fn dqfd_planes(paper: DqnConfig) -> DqnConfig {
-        // Greedy failures on 3 blocks are two-state loops that fade with gradient steps
-        // (measured on 3,000 test games: 1.9 % at 30,000 + 30,000 steps, 0.8 % at three
-        // times that, 0.4 % at four): 3 blocks and more get three times the steps.
-        let steps = if paper.world.blocks <= 2 { 30_000 } else { 90_000 };
+        // Greedy failures are loops that fade with gradient steps (measured on 3,000 test
+        // games of 3 blocks: 1.9 % at 30,000 + 30,000 steps, 0.8 % at three times that,
+        // 0.4 % at four; on 12,000 of 4 blocks: 14.9 % at 90,000 + 90,000 with 10,000
+        // demonstrations, 9.7 % at twice both, 3.1 % at four times): 3 blocks get three times
+        // 2 blocks' steps, 4 blocks and more four times 3 blocks' steps and demonstrations.
+        let (steps, demos) = match paper.world.blocks {
+            ..=2 => (30_000, 10_000),
+            3 => (90_000, 10_000),
+            _ => (360_000, 40_000),
+        };
         DqnConfig {
             steps,
             pretrain_steps: steps,
-            demos: DemoSource::Exact(10_000),
+            demos: DemoSource::Exact(demos),
             loss: LossKind::Dqfd,
             learning_starts: 1_000,
             epsilon: Epsilon {
@@ -643,6 +649,26 @@ mod tests {
         assert_eq!(p.optimizer, OptimizerKind::Rmsprop);
         assert_eq!(p.world.reward.name(), "sparse");
         assert!(DqnConfig::preset("nope", 3).is_err());
+    }
+
+    #[test]
+    fn dqfd_planes_budget_grows_with_the_blocks_and_pixels_keep_their_own() {
+        let budget = |preset: &str, blocks| {
+            let c = DqnConfig::preset(preset, blocks).unwrap();
+            (c.demos, c.pretrain_steps, c.steps)
+        };
+        assert_eq!(budget("dqfd-planes", 2), (DemoSource::Exact(10_000), 30_000, 30_000));
+        assert_eq!(budget("dqfd-planes", 3), (DemoSource::Exact(10_000), 90_000, 90_000));
+        for blocks in [4, 5] {
+            assert_eq!(
+                budget("dqfd-planes", blocks),
+                (DemoSource::Exact(40_000), 360_000, 360_000)
+            );
+            assert_eq!(
+                budget("dqfd-pixels", blocks),
+                (DemoSource::Exact(5_000), 15_000, 15_000)
+            );
+        }
     }
 
     #[test]
