@@ -171,7 +171,7 @@ fn side_view(c: &mut Criterion) {
         [
             (
                 Backend::Grid,
-                Box::new(GridWorld::new_in(View::Side, grid, state).unwrap()),
+                Box::new(GridWorld::new_in(View::Side, grid, state.clone()).unwrap()),
             ),
             (
                 Backend::Physics,
@@ -181,7 +181,7 @@ fn side_view(c: &mut Criterion) {
     };
     let mut group = c.benchmark_group("side_step");
     group.throughput(Throughput::Elements(1));
-    for (backend, mut world) in worlds(held_high) {
+    for (backend, mut world) in worlds(held_high.clone()) {
         // A gripper step: the held block carried left and right along the top row.
         let mut k = 0u32;
         group.bench_function(backend.to_string(), |b| {
@@ -198,7 +198,7 @@ fn side_view(c: &mut Criterion) {
     group.finish();
     let mut group = c.benchmark_group("side_drop");
     group.throughput(Throughput::Elements(1));
-    for (backend, mut world) in worlds(held_high) {
+    for (backend, mut world) in worlds(held_high.clone()) {
         // A fall of six rows to the table (the state put back first, which costs little).
         group.bench_function(backend.to_string(), |b| {
             b.iter(|| {

@@ -145,14 +145,14 @@ impl NativeEnv {
     fn reset_to<'py>(
         &mut self,
         py: Python<'py>,
-        cells: Vec<(u8, u8)>,
-        held: Option<u8>,
+        cells: Vec<(u16, u16)>,
+        held: Option<u16>,
         goal: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyTuple>> {
         let blocks = self.env.config().blocks;
         let goal = match goal {
             Some(g) => goal_from(g, Some(blocks))?,
-            None => self.env.goal(),
+            None => self.env.goal().clone(),
         };
         let state = state_from(&cells, held)?;
         // Refused before the reset: a refused start leaves the episode as it was.
@@ -168,7 +168,7 @@ impl NativeEnv {
 
     /// Takes one action; `(observation, reward, terminated, truncated, info)`.
     fn step<'py>(&mut self, py: Python<'py>, action: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyTuple>> {
-        let config = *self.env.config();
+        let config = self.env.config().clone();
         let (step, gripper_steps) = if self.moves {
             let index: i64 = action
                 .extract()
@@ -277,7 +277,7 @@ impl NativeEnv {
 }
 
 /// A state from Python's cells and held block, checked by `sim`.
-pub fn state_from(cells: &[(u8, u8)], held: Option<u8>) -> PyResult<State> {
+pub fn state_from(cells: &[(u16, u16)], held: Option<u16>) -> PyResult<State> {
     let cells: Vec<Cell> = cells.iter().map(|&(x, y)| Cell::new(x, y)).collect();
     State::new(&cells, held.map(BlockId)).or_value_error()
 }

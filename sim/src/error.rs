@@ -13,8 +13,11 @@ use crate::state::BlockId;
 /// for a user without adding context of its own.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 pub enum SimError {
-    /// A grid with a zero side, or more cells than the occupancy model holds.
-    #[error("grid {width}x{height} is not allowed: each side must be at least 1 and the grid at most {max} cells")]
+    /// A top-view grid with more cells than the top view's occupancy model holds
+    /// ([`crate::MAX_CELLS`]).
+    #[error(
+        "grid {width}x{height} is not allowed in the top view: it holds at most {max} cells (the side view takes larger grids)"
+    )]
     BadGrid {
         /// Requested width.
         width: usize,
@@ -23,11 +26,24 @@ pub enum SimError {
         /// Largest number of cells supported.
         max: usize,
     },
-    /// A block count outside the supported range.
-    #[error("{count} blocks is not allowed: use between {min} and {max}")]
+    /// A grid with a side of zero or longer than [`crate::grid::MAX_SIDE`].
+    #[error("grid {width}x{height} is not allowed: each side must be between 1 and {max}")]
+    GridSide {
+        /// Requested width.
+        width: usize,
+        /// Requested height.
+        height: usize,
+        /// The longest side.
+        max: usize,
+    },
+    /// A block count outside the range of what is asked for it (the top view, the side
+    /// view, a learner).
+    #[error("{count} blocks is not allowed in {what}: use between {min} and {max}")]
     BadBlockCount {
         /// Requested block count.
         count: usize,
+        /// What bounds it: "the top view", "the side view", ...
+        what: &'static str,
         /// Smallest supported count.
         min: usize,
         /// Largest supported count.
@@ -111,9 +127,9 @@ pub enum SimError {
         /// The block.
         block: usize,
         /// Column.
-        x: u8,
+        x: u16,
         /// Row.
-        y: u8,
+        y: u16,
     },
     /// Towers asked of a side-view state in which a block is held.
     #[error("block {block} is held: a state's towers are read with nothing held")]
@@ -231,9 +247,9 @@ pub enum SimError {
         /// The other block.
         second: usize,
         /// Column.
-        x: u8,
+        x: u16,
         /// Row.
-        y: u8,
+        y: u16,
     },
     /// Two things that must agree on the number of blocks do not.
     #[error("block counts differ: the world has {expected} blocks but {what} has {found}")]

@@ -37,7 +37,7 @@ fn standing_states(grid: Grid, blocks: usize) -> Vec<State> {
     let mut all = Vec::new();
     rec(&cells, blocks, &mut chosen, &mut all);
     for placement in all {
-        for held in std::iter::once(None).chain((0..blocks).map(|b| Some(BlockId(b as u8)))) {
+        for held in std::iter::once(None).chain((0..blocks).map(|b| Some(BlockId::of(b)))) {
             let state = State::new(&placement, held).unwrap();
             if View::Side.check_state(&state).is_ok() {
                 out.push(state);
@@ -54,8 +54,8 @@ fn every_drop_of_a_small_world_lands_where_the_grid_says() {
     for blocks in 2..=4 {
         for state in standing_states(grid, blocks) {
             let Some(_) = state.held_block() else { continue };
-            let mut g = GridWorld::new_in(View::Side, grid, state).unwrap();
-            let mut p = PhysicsWorld::new_in(View::Side, grid, state).unwrap();
+            let mut g = GridWorld::new_in(View::Side, grid, state.clone()).unwrap();
+            let mut p = PhysicsWorld::new_in(View::Side, grid, state.clone()).unwrap();
             assert_eq!(g.act(Action::Drop).unwrap(), p.act(Action::Drop).unwrap());
             assert_eq!(g.state(), p.state(), "drop from {state:?}");
             assert!(p.max_centre_error() < 1e-6);
@@ -75,7 +75,7 @@ fn a_drop_from_the_top_row_onto_a_tall_tower_rests_on_it() {
         let mut cells: Vec<Cell> = (0..6).map(|y| Cell::new(0, y)).collect();
         cells.push(top);
         let state = State::new(&cells, Some(BlockId(6))).unwrap();
-        let mut g = GridWorld::new_in(View::Side, grid, state).unwrap();
+        let mut g = GridWorld::new_in(View::Side, grid, state.clone()).unwrap();
         let mut p = PhysicsWorld::new_in(View::Side, grid, state).unwrap();
         g.act(Action::Drop).unwrap();
         p.act(Action::Drop).unwrap();
@@ -262,7 +262,7 @@ fn block_moves_are_carried_out_by_the_gripper_through_either_backend() {
         })
         .unwrap();
         let start = State::new(&[Cell::new(0, 0), Cell::new(0, 1), Cell::new(2, 0)], None).unwrap();
-        env.reset_to(start, env.goal()).unwrap();
+        env.reset_to(start, env.goal().clone()).unwrap();
         let onto = |block, target| BlockMove::Onto {
             block: BlockId(block),
             target: BlockId(target),
@@ -303,7 +303,7 @@ fn the_side_view_is_drawn_over_a_table_with_the_goal_towers_beside_it() {
     })
     .unwrap();
     let start = State::new(&[Cell::new(0, 0), Cell::new(0, 1), Cell::new(2, 0)], None).unwrap();
-    let obs = env.reset_to(start, env.goal()).unwrap();
+    let obs = env.reset_to(start, env.goal().clone()).unwrap();
     let text = sim::render::ascii(&obs, sim::render::Colour::Never);
     // The goal's towers: 1 on 2 (top first), a gap, then 0.
     assert_eq!(
@@ -322,17 +322,17 @@ fn a_reset_that_moves_a_block_onto_another_blocks_cell_leaves_no_contact_behind(
     // in between, and the next drop's solver pushed block 0 off its cell. Every offset of
     // the update around the reset is tried.
     let grid = Grid::default();
-    let cells = |c: [(u8, u8); 3]| c.map(|(x, y)| Cell::new(x, y));
+    let cells = |c: [(u16, u16); 3]| c.map(|(x, y)| Cell::new(x, y));
     let before = State::new(&cells([(5, 1), (2, 0), (5, 0)]), Some(BlockId(0))).unwrap();
     let after = State::new(&cells([(2, 0), (1, 0), (1, 1)]), None).unwrap();
     for moves in 1005..1030 {
-        let mut p = PhysicsWorld::new_in(View::Side, grid, before).unwrap();
+        let mut p = PhysicsWorld::new_in(View::Side, grid, before.clone()).unwrap();
         for m in 0..moves {
             p.act(if m % 2 == 0 { Action::Up } else { Action::Down }).unwrap();
         }
         p.act(Action::Drop).unwrap();
         p.place(&after).unwrap();
-        let mut g = GridWorld::new_in(View::Side, grid, after).unwrap();
+        let mut g = GridWorld::new_in(View::Side, grid, after.clone()).unwrap();
         for action in [Action::Pick(BlockId(2)), Action::Right, Action::Right, Action::Drop] {
             assert_eq!(p.act(action).unwrap(), g.act(action).unwrap(), "after {moves} moves");
         }
