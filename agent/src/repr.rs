@@ -565,7 +565,7 @@ impl Places {
             tops |= 1 << (next - 1);
         }
         let named = next;
-        for b in (0..blocks).map(|i| BlockId::of(i)).filter(|&b| !goal.names(b)) {
+        for b in (0..blocks).map(BlockId::of).filter(|&b| !goal.names(b)) {
             places.block_at[next] = b;
             places.place_of[b.index()] = next as u8;
             next += 1;

@@ -9,6 +9,10 @@ use crate::boundary::{OrValueError, guard, value_error};
 use crate::config::{self, ObsKind, env_config, goal_from};
 use crate::observe;
 
+/// The most block moves `actions="moves"` numbers: its mask is one byte per move at every
+/// step (`N * (N + W)`: 2,000 blocks on their default grid, 8 million).
+const MAX_MOVE_ACTIONS: usize = 1 << 23;
+
 /// One blockstack environment; the Gymnasium class `blockstack.StackEnv` wraps it.
 #[pyclass(module = "blockstack._native")]
 pub struct NativeEnv {
@@ -117,6 +121,14 @@ impl NativeEnv {
                 )));
             }
         };
+        kind.check(config.grid, config.blocks).or_value_error()?;
+        let move_count = BlockMove::count(config.blocks, config.grid);
+        if moves && move_count > MAX_MOVE_ACTIONS {
+            return Err(value_error(format!(
+                "actions=\"moves\" numbers every block move, {move_count} with {} blocks on a {} grid, more than the {MAX_MOVE_ACTIONS} an action space and its mask hold: use fewer blocks or a narrower grid",
+                config.blocks, config.grid
+            )));
+        }
         Ok(NativeEnv {
             env: guard(|| Env::new(config).or_value_error())?,
             kind,

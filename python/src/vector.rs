@@ -102,7 +102,7 @@ impl Slot<'_> {
                 *self.terminated = step.terminated;
                 *self.truncated = step.truncated;
                 *self.blocked = step.info.blocked;
-                if let Some(last) = step.info.final_observation.clone() {
+                if let Some(last) = step.info.final_observation.as_deref().cloned() {
                     // The step's info is the reset's; the ended step's goes with its last
                     // observation, as Gymnasium's same-step mode reports them.
                     *self.blocked = false;
@@ -334,6 +334,7 @@ impl NativeVecEnv {
                 ..config::PlayRules::default()
             },
         )?;
+        kind.check(config.grid, config.blocks).or_value_error()?;
         let vec = guard(|| VecEnv::new(config.clone(), num_envs, threads).or_value_error())?.with_autoreset(mode);
         let n = blocks;
         let obs = match kind.shape(config.grid, n) {

@@ -20,8 +20,13 @@ use crate::seeding::{self, SimRng};
 use crate::start::StartRule;
 use crate::state::{BlockId, State};
 use crate::termination::Termination;
+use crate::uniform;
 use crate::view::{self, View};
 use crate::world::{Effect, World};
+
+/// The least share of the Blocks World states of its blocks a side-view grid must hold: the
+/// uniform start draws states until one fits (docs/world.md, "The side view at any size").
+pub const MIN_SIDE_FIT: f64 = 1e-3;
 
 /// The default episode length limit.
 pub const DEFAULT_HORIZON: u32 = 1000;
@@ -181,6 +186,18 @@ impl EnvConfig {
         if self.view == View::Side && self.start != StartRule::Uniform {
             return Err(SimError::SideViewStart { rule: self.start });
         }
+        if self.view == View::Side {
+            // The uniform start draws states until one fits the grid (`view::uniform_state`).
+            let fit = uniform::fit_probability(self.blocks, self.grid.width(), self.grid.height());
+            if fit < MIN_SIDE_FIT {
+                return Err(SimError::SideGridTooSmall {
+                    blocks: self.blocks,
+                    width: self.grid.width(),
+                    height: self.grid.height(),
+                    default: Grid::side_default(self.blocks).to_string(),
+                });
+            }
+        }
         self.start.check_fits(self.grid, self.blocks)
     }
 }
@@ -203,7 +220,7 @@ pub struct Info {
     /// With a [`VecEnv`](crate::VecEnv) that reset this environment after this step: the
     /// last observation of the episode that ended (the step's `observation` is then the
     /// next episode's first). `None` otherwise.
-    pub final_observation: Option<Observation>,
+    pub final_observation: Option<Box<Observation>>,
 }
 
 /// The result of one step, Gymnasium's five values.
@@ -354,7 +371,7 @@ impl Env {
             });
         }
         goal.check_fits(self.config.grid)?;
-        self.config.reward.check_goal(&goal)?;
+        self.config.reward.check_goal(goal)?;
         self.world.world_mut().place(state)?;
         self.goal = goal.clone();
         Ok(self.begin(state, false))

@@ -154,6 +154,35 @@ pub enum SimError {
         /// What refuses it ("the paper reward", "the exact top-view solver", ...).
         what: &'static str,
     },
+    /// A side-view grid that holds fewer than [`crate::env::MIN_SIDE_FIT`] of the Blocks
+    /// World states of its blocks: the uniform start would draw for long.
+    #[error(
+        "a {width}x{height} grid holds fewer than 1 in 1000 of the Blocks World states of {blocks} blocks, which the side view's start draws uniformly: use a wider or taller grid (without --grid the side view takes {default})"
+    )]
+    SideGridTooSmall {
+        /// Blocks.
+        blocks: usize,
+        /// Grid width.
+        width: usize,
+        /// Grid height.
+        height: usize,
+        /// The side view's default grid for these blocks.
+        default: String,
+    },
+    /// An observation array past its bound ([`crate::ObsKind::check`]).
+    #[error(
+        "a {kind} observation of {blocks} blocks on a {width}x{height} grid is not allowed: it is a W x H array of at most 256 cells and 16 blocks; use obs state"
+    )]
+    ObsTooLarge {
+        /// The array.
+        kind: crate::ObsKind,
+        /// Grid width.
+        width: usize,
+        /// Grid height.
+        height: usize,
+        /// Blocks.
+        blocks: usize,
+    },
     /// A start rule the side view does not use.
     #[error(
         "the {rule} start rule places blocks in the air; the side view starts from random towers: use the uniform start rule"

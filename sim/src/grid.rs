@@ -119,10 +119,13 @@ impl Grid {
     /// E9's grid. A grid this size holds every state of `N` blocks and leaves a row to carry
     /// any block over any tower, so every block move can be carried out.
     pub fn side_default(blocks: usize) -> Grid {
-        if blocks <= 7 {
+        // More blocks than a side holds are refused where the world is built; their grid is
+        // the largest.
+        let n = blocks.min(MAX_SIDE - 1);
+        if n <= 7 {
             Grid::default()
         } else {
-            Grid::new(blocks, blocks + 1).expect("the side view's blocks fit a side")
+            Grid::new(n, n + 1).expect("sides of at most MAX_SIDE")
         }
     }
 

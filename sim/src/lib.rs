@@ -77,7 +77,7 @@ pub mod world;
 pub use action::Action;
 pub use block_move::BlockMove;
 pub use coded_state::CodedState;
-pub use env::{Backend, DEFAULT_HORIZON, Env, EnvConfig, GoalSpec, Info, MoveStep, Step};
+pub use env::{Backend, DEFAULT_HORIZON, Env, EnvConfig, GoalSpec, Info, MIN_SIDE_FIT, MoveStep, Step};
 pub use error::{Result, SimError};
 pub use goal::Goal;
 pub use grid::{Cell, Direction, Grid, MAX_CELLS, MAX_SIDE};

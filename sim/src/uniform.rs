@@ -193,6 +193,73 @@ pub fn state_count(blocks: usize) -> Option<u128> {
     Some(row[0])
 }
 
+/// The probability that a uniformly random state of `blocks` blocks fits a grid `width`
+/// columns wide and `height` rows high (no more towers than columns, none taller than the
+/// rows): the share of the side view's uniform draws that [`crate::view::uniform_state`]
+/// keeps. 1 when the grid holds every state (`width` and `height` at least `blocks`).
+///
+/// A state with `k` towers is one of the `n! / k!` orders of the blocks cut into `k` parts,
+/// so the fitting states number `n!` times the sum over `k <= width` of `c(n, k) / k!`,
+/// `c(n, k)` the compositions of `n` into `k` parts of at most `height`, against
+/// `sum_k C(n - 1, k - 1) / k!` for all states. O(n min(width, n)), in scaled floats.
+pub fn fit_probability(blocks: usize, width: usize, height: usize) -> f64 {
+    let n = blocks;
+    if n == 0 || (width >= n && height >= n) {
+        return 1.0;
+    }
+    let ln_fact: Vec<f64> = std::iter::once(0.0)
+        .chain((1..=n).scan(0.0, |acc, i| {
+            *acc += (i as f64).ln();
+            Some(*acc)
+        }))
+        .collect();
+    // ln of every term of the total: C(n - 1, k - 1) / k!.
+    let ln_all: Vec<f64> = (1..=n)
+        .map(|k| ln_fact[n - 1] - ln_fact[k - 1] - ln_fact[n - k] - ln_fact[k])
+        .collect();
+    // Compositions of m into k parts of 1..=height, row k scaled to a largest value of 1
+    // (its log scale kept beside it), from row 1 up.
+    let mut row: Vec<f64> = (0..=n)
+        .map(|m| f64::from(u8::from((1..=height).contains(&m))))
+        .collect();
+    let mut scale = 0.0f64;
+    let mut ln_fit = Vec::new();
+    for (k, ln_k_fact) in ln_fact.iter().enumerate().take(width.min(n) + 1).skip(1) {
+        if k > 1 {
+            let mut next = vec![0.0; n + 1];
+            let mut window = 0.0;
+            for m in 0..=n {
+                // next[m] = row[m - 1] + ... + row[m - height]
+                if m >= 1 {
+                    window += row[m - 1];
+                }
+                if m > height {
+                    window -= row[m - 1 - height];
+                }
+                next[m] = window.max(0.0);
+            }
+            let top = next.iter().copied().fold(0.0, f64::max);
+            if top == 0.0 {
+                break;
+            }
+            next.iter_mut().for_each(|v| *v /= top);
+            scale += top.ln();
+            row = next;
+        }
+        if row[n] > 0.0 {
+            ln_fit.push(row[n].ln() + scale - ln_k_fact);
+        }
+    }
+    let log_sum = |terms: &[f64]| {
+        let top = terms.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        top + terms.iter().map(|t| (t - top).exp()).sum::<f64>().ln()
+    };
+    if ln_fit.is_empty() {
+        return 0.0;
+    }
+    (log_sum(&ln_fit) - log_sum(&ln_all)).exp().min(1.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -277,6 +344,32 @@ mod tests {
             let want = wide.towers(&mut crate::seeding::rng(seed));
             assert_eq!(tiny.towers(&mut crate::seeding::rng(seed)), want);
         }
+    }
+
+    #[test]
+    fn the_fit_probability_is_the_share_of_states_that_fit() {
+        // Every state of n blocks drawn many times: the share that fits against the formula.
+        for (n, w, h) in [(3, 2, 2), (4, 3, 3), (4, 1, 4), (5, 2, 3), (5, 5, 2), (6, 3, 2)] {
+            let sampler = UniformStates::new(n);
+            let mut rng = crate::seeding::rng(7);
+            let draws = 40_000;
+            let fit = (0..draws)
+                .filter(|_| {
+                    let t = sampler.towers(&mut rng);
+                    t.len() <= w && t.iter().all(|t| t.len() <= h)
+                })
+                .count();
+            let p = fit_probability(n, w, h);
+            let seen = fit as f64 / draws as f64;
+            assert!((p - seen).abs() < 0.01, "{n} blocks on {w}x{h}: {p} against {seen}");
+        }
+        // Exactly: 48 of the 73 states of 4 blocks fit 3 x 3 (not 4 towers, not one of 4).
+        assert!((fit_probability(4, 3, 3) - 48.0 / 73.0).abs() < 1e-12);
+        assert!((fit_probability(3, 2, 2) - 6.0 / 13.0).abs() < 1e-12);
+        assert_eq!(fit_probability(50, 50, 60), 1.0);
+        assert_eq!(fit_probability(5, 1, 4), 0.0);
+        // 100 blocks in towers of at most 3: next to none of the states.
+        assert!(fit_probability(100, 100, 3) < 1e-6);
     }
 
     #[test]

@@ -209,8 +209,9 @@ impl VecEnv {
                 if step.terminated || step.truncated {
                     match mode {
                         Autoreset::SameStep => {
-                            step.info.final_observation = Some(step.observation);
-                            step.observation = env.reset(None);
+                            let first = env.reset(None);
+                            step.info.final_observation =
+                                Some(Box::new(std::mem::replace(&mut step.observation, first)));
                             step.info.action_mask = step.observation.legal_actions();
                         }
                         Autoreset::NextStep => *ended = true,

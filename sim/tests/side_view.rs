@@ -339,3 +339,72 @@ fn a_reset_that_moves_a_block_onto_another_blocks_cell_leaves_no_contact_behind(
         assert_eq!(p.state(), g.state(), "after {moves} moves");
     }
 }
+
+/// A block move's gripper actions carried out one by one: each an ordinary step of `env`,
+/// and each through `World::act` on `world`, until the episode ends. The last step and how
+/// many were taken.
+fn move_one_action_at_a_time(env: &mut Env, world: &mut GridWorld, mv: sim::BlockMove) -> (sim::Step, u32) {
+    let actions = sim::block_move::expand(&env.state(), env.config().grid, mv).unwrap();
+    let mut last = None;
+    for (k, &a) in actions.iter().enumerate() {
+        world.act(a).unwrap();
+        let step = env.step(a).unwrap();
+        let over = step.terminated || step.truncated;
+        last = Some((step, k as u32 + 1));
+        if over {
+            break;
+        }
+    }
+    last.unwrap()
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(200))]
+
+    /// On the grid backend a block move goes straight to where its Drop releases the block
+    /// (O(N + W) for the move); the world, the step count and the last step are those of
+    /// `block_move::expand`'s gripper actions taken one by one through the rules, including
+    /// moves that the horizon cuts short.
+    #[test]
+    fn a_block_move_equals_its_gripper_actions_one_by_one(
+        blocks in 1usize..14,
+        extra_width in 0usize..3,
+        extra_height in 0usize..3,
+        horizon in 5u32..120,
+        seed in 0u64..10_000,
+    ) {
+        use rand::RngExt;
+        let grid = Grid::new(blocks.max(2) + extra_width, blocks + 1 + extra_height).unwrap();
+        let mut fast = Env::new(EnvConfig { horizon, ..side(grid, blocks, Backend::Grid) }).unwrap();
+        fast.reset(seed);
+        let mut slow = fast.clone();
+        let mut world = GridWorld::new_in(View::Side, grid, fast.state()).unwrap();
+        let mut rng = sim::seeding::rng(seed ^ 0xb10c);
+        while !fast.is_over() {
+            let legal: Vec<usize> = fast.legal_moves().iter().enumerate().filter(|(_, l)| **l).map(|(i, _)| i).collect();
+            proptest::prop_assert!(!legal.is_empty());
+            let mv = sim::BlockMove::from_index(legal[rng.random_range(0..legal.len())], blocks, grid).unwrap();
+            let (step, taken) = move_one_action_at_a_time(&mut slow, &mut world, mv);
+            let moved = fast.step_block_move(mv).unwrap();
+            proptest::prop_assert_eq!(&moved.step, &step);
+            proptest::prop_assert_eq!(moved.gripper_steps, taken);
+            proptest::prop_assert_eq!(fast.steps(), slow.steps());
+            proptest::prop_assert_eq!(fast.state(), world.state());
+            proptest::prop_assert_eq!(fast.legal_actions(), slow.legal_actions());
+        }
+    }
+
+    /// The legal moves by index are exactly the moves `block_move::check` allows, on states
+    /// of every size (the large ones through the heap).
+    #[test]
+    fn legal_moves_are_those_check_allows(blocks in 1usize..24, narrow in proptest::bool::ANY, seed in 0u64..10_000) {
+        let grid = if narrow { Grid::new(blocks.div_ceil(2) + 1, blocks + 1).unwrap() } else { Grid::side_default(blocks) };
+        let mut env = Env::new(side(grid, blocks, Backend::Grid)).unwrap();
+        let state = env.reset(seed).state;
+        let legal = env.legal_moves();
+        for (i, &l) in legal.iter().enumerate() {
+            let mv = sim::BlockMove::from_index(i, blocks, grid).unwrap();
+            proptest::prop_assert_eq!(l, sim::block_move::check(&state, grid, mv).is_ok(), "{}", mv);
+        }
+    }
+}
