@@ -17,6 +17,7 @@ mod cli_solve;
 mod cli_world;
 mod common;
 mod docs_anchors;
+mod docs_maps;
 mod fuzz_corpus;
 mod readme_results;
 mod tui_tmux;
