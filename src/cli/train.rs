@@ -275,7 +275,7 @@ pub fn train(args: TrainArgs) -> Result<()> {
         None => None,
     };
     let mut show = |p: &agent::Progress| {
-        if p.games_played % 64 == 0 || p.games_played == p.games_target {
+        if p.games_played.is_multiple_of(64) || p.games_played == p.games_target {
             if let Some(curve) = &curve {
                 curve.push(serve::CurvePoint {
                     games: p.games_played,
