@@ -8,6 +8,7 @@ mod cli_correct;
 mod cli_dqn;
 mod cli_files;
 mod cli_original;
+mod cli_pddl;
 mod cli_preset;
 mod cli_readers;
 mod cli_reproduce;
