@@ -97,13 +97,13 @@ impl State {
                 y: a.y,
             });
         }
-        if let Some(b) = held {
-            if b.index() >= count {
-                return Err(SimError::NoSuchBlock {
-                    block: b.index(),
-                    blocks: count,
-                });
-            }
+        if let Some(b) = held
+            && b.index() >= count
+        {
+            return Err(SimError::NoSuchBlock {
+                block: b.index(),
+                blocks: count,
+            });
         }
         Ok(Self {
             cells: Cells::from_slice(cells),
@@ -210,13 +210,13 @@ impl State {
 
     /// This state with `held` in hand instead (`None`: nothing held).
     pub fn with_held(&self, held: Option<BlockId>) -> Result<Self> {
-        if let Some(b) = held {
-            if b.index() >= self.block_count() {
-                return Err(SimError::NoSuchBlock {
-                    block: b.index(),
-                    blocks: self.block_count(),
-                });
-            }
+        if let Some(b) = held
+            && b.index() >= self.block_count()
+        {
+            return Err(SimError::NoSuchBlock {
+                block: b.index(),
+                blocks: self.block_count(),
+            });
         }
         Ok(Self {
             cells: self.cells.clone(),

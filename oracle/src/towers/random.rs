@@ -1,10 +1,11 @@
 //! Seeded random problems: uniformly random states (Slaney & Thiebaux's counting method,
-//! drawn by `sim::uniform`, the one home of the side view's random states) and random goals
-//! of a few towers, for tests, benchmarks and experiments.
+//! drawn by `sim::uniform`, the one home of the side view's random states), states in the
+//! shape of the 2023 planning competition's generator, and random goals of a few towers,
+//! for tests, benchmarks and experiments.
 
-use rand::Rng;
 use rand::seq::SliceRandom;
 use rand::seq::index::sample;
+use rand::{Rng, RngExt};
 use sim::seeding::rng;
 
 use crate::error::Result;
@@ -19,6 +20,23 @@ pub fn random_state(blocks: usize, seed: u64) -> Towers {
     let mut below = vec![NONE; blocks];
     for tower in sim::uniform::uniform_towers(blocks, &mut rng(seed)) {
         for pair in tower.windows(2) {
+            below[pair[1]] = pair[0];
+        }
+    }
+    Towers::from_below(below)
+}
+
+/// A random state of `blocks` blocks in the shape the 2023 planning competition's
+/// generator draws (`ipc2023-learning/benchmarks`, `blocksworld/blocksworld.py`): the blocks
+/// shuffled and stacked in that order, each starting a new tower with probability 1/10.
+/// Not uniform over states: its towers are few and tall (about `blocks / 10`). The same seed
+/// gives the same state.
+pub fn ipc_state(blocks: usize, seed: u64) -> Towers {
+    let mut rng = rng(seed);
+    let order = permutation(blocks, &mut rng);
+    let mut below = vec![NONE; blocks];
+    for pair in order.windows(2) {
+        if rng.random_range(0..10) != 0 {
             below[pair[1]] = pair[0];
         }
     }
