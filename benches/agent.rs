@@ -32,7 +32,7 @@ fn q_update(c: &mut Criterion) {
         protocol: ActionProtocol::Free,
         view: sim::View::Top,
     };
-    let before = obs([Cell::new(1, 1), Cell::new(4, 0), Cell::new(6, 6)], Some(BlockId(2)));
+    let before = obs.clone()([Cell::new(1, 1), Cell::new(4, 0), Cell::new(6, 6)], Some(BlockId(2)));
     let after = obs([Cell::new(1, 1), Cell::new(4, 0), Cell::new(5, 6)], Some(BlockId(2)));
     c.bench_function("q_update", |b| {
         b.iter(|| {

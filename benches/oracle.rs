@@ -21,7 +21,7 @@ const STARTS: u64 = 100;
 fn problem(grid: Grid, blocks: usize) -> (Goal, Vec<State>) {
     let order: Vec<usize> = (0..blocks).map(|i| (i * 2 + 1) % blocks).collect();
     let goal = Goal::from_indices(&order).unwrap_or_else(|_| Goal::identity(blocks).unwrap());
-    (goal, seeded_starts(grid, &goal, STARTS, 0).unwrap())
+    (goal.clone(), seeded_starts(grid, &goal, STARTS, 0).unwrap())
 }
 
 fn oracle(c: &mut Criterion) {
@@ -66,10 +66,10 @@ fn exact(c: &mut Criterion) {
         if blocks >= 3 {
             let mut by_effort: Vec<(usize, State)> = starts
                 .iter()
-                .map(|s| (solver.solve_with_stats(s, &goal).unwrap().1.expanded, *s))
+                .map(|s| (solver.solve_with_stats(s, &goal).unwrap().1.expanded, s.clone()))
                 .collect();
             by_effort.sort_by_key(|&(expanded, _)| expanded);
-            let median = by_effort[by_effort.len() / 2].1;
+            let median = by_effort[by_effort.len() / 2].1.clone();
             let mut group = c.benchmark_group("exact_solve_median_start");
             if blocks == 4 {
                 group.sample_size(20);

@@ -5,7 +5,8 @@
 //! `env_step_original` the `original` profile (paper protocol, `paper-code` reward), whose
 //! actions are chosen among the legal ones of each step's mask. `side_*` is the side view
 //! (docs/world.md, "The side view"): a gripper step, a drop (on the physics backend, rapier's
-//! dynamics to rest), and random play among the legal actions, on both backends.
+//! dynamics to rest), and random play among the legal actions, on both backends. `side_reset`
+//! and `side_task_by_block_moves` are the side view at 50 to 10,000 blocks.
 
 use std::hint::black_box;
 
@@ -171,7 +172,7 @@ fn side_view(c: &mut Criterion) {
         [
             (
                 Backend::Grid,
-                Box::new(GridWorld::new_in(View::Side, grid, state).unwrap()),
+                Box::new(GridWorld::new_in(View::Side, grid, state.clone()).unwrap()),
             ),
             (
                 Backend::Physics,
@@ -181,7 +182,7 @@ fn side_view(c: &mut Criterion) {
     };
     let mut group = c.benchmark_group("side_step");
     group.throughput(Throughput::Elements(1));
-    for (backend, mut world) in worlds(held_high) {
+    for (backend, mut world) in worlds(held_high.clone()) {
         // A gripper step: the held block carried left and right along the top row.
         let mut k = 0u32;
         group.bench_function(backend.to_string(), |b| {
@@ -198,7 +199,7 @@ fn side_view(c: &mut Criterion) {
     group.finish();
     let mut group = c.benchmark_group("side_drop");
     group.throughput(Throughput::Elements(1));
-    for (backend, mut world) in worlds(held_high) {
+    for (backend, mut world) in worlds(held_high.clone()) {
         // A fall of six rows to the table (the state put back first, which costs little).
         group.bench_function(backend.to_string(), |b| {
             b.iter(|| {
@@ -241,6 +242,61 @@ fn side_view(c: &mut Criterion) {
     group.finish();
 }
 
+fn side_at_scale(c: &mut Criterion) {
+    // The side view at the field's sizes (docs/world.md, "The side view at any size"): a
+    // reset (a uniform Blocks World state on the default grid), and a whole task played by
+    // block moves on the grid backend, the near-optimal planner's moves planned beforehand.
+    let mut group = c.benchmark_group("side_reset");
+    group.sample_size(10);
+    for blocks in [100, 1_000, 10_000] {
+        let mut env = Env::new(EnvConfig {
+            blocks,
+            grid: Grid::side_default(blocks),
+            backend: Backend::Grid,
+            view: View::Side,
+            ..EnvConfig::default()
+        })
+        .unwrap();
+        let mut seed = 0;
+        group.bench_function(BenchmarkId::from_parameter(blocks), |b| {
+            b.iter(|| {
+                seed += 1;
+                black_box(env.reset(seed).state.block_count())
+            })
+        });
+    }
+    group.finish();
+    let mut group = c.benchmark_group("side_task_by_block_moves");
+    group.sample_size(10);
+    for blocks in [50, 500, 5_000] {
+        let grid = Grid::side_default(blocks);
+        let mut env = Env::new(EnvConfig {
+            blocks,
+            grid,
+            backend: Backend::Grid,
+            view: View::Side,
+            horizon: u32::MAX,
+            ..EnvConfig::default()
+        })
+        .unwrap();
+        let goal = sim::Goal::uniform(blocks, &mut sim::seeding::rng(7)).unwrap();
+        let start = env.reset(1).state;
+        let plan = oracle::towers::plan_side(oracle::towers::MovePlanner::NearOptimal, grid, &start, &goal).unwrap();
+        group.bench_function(BenchmarkId::from_parameter(blocks), |b| {
+            b.iter(|| {
+                env.reset_to(&start, &goal).unwrap();
+                for &m in &plan.moves {
+                    let mv = oracle::towers::block_move_of(&env.state(), grid, m).unwrap();
+                    env.step_block_move(mv).unwrap();
+                }
+                assert!(env.is_over());
+                black_box(env.steps())
+            })
+        });
+    }
+    group.finish();
+}
+
 criterion_group!(
     benches,
     world_step,
@@ -248,6 +304,7 @@ criterion_group!(
     env_step_original,
     reset,
     vec_step,
-    side_view
+    side_view,
+    side_at_scale
 );
 criterion_main!(benches);

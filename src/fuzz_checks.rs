@@ -52,7 +52,7 @@ fn demonstrations(data: &[u8]) {
     if let Ok(episodes) = episodes_of(file, name, None) {
         for e in episodes {
             let actions: Vec<Action> = e.steps.iter().map(|s| s.action).collect();
-            let states = sim::GridWorld::new(e.grid, e.start)
+            let states = sim::GridWorld::new(e.grid, e.start.clone())
                 .expect("a checked start")
                 .replay(&actions)
                 .expect("checked actions");

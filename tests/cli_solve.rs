@@ -13,7 +13,7 @@ fn json(o: &Output) -> serde_json::Value {
 }
 
 /// Replays action indices from `start` and says whether the goal holds at the end.
-fn reaches(start: &[(u8, u8)], held: Option<u8>, goal: &str, actions: &[usize]) -> bool {
+fn reaches(start: &[(u16, u16)], held: Option<u16>, goal: &str, actions: &[usize]) -> bool {
     let cells: Vec<Cell> = start.iter().map(|&(x, y)| Cell::new(x, y)).collect();
     let goal: Goal = goal.parse().unwrap();
     let state = State::new(&cells, held.map(sim::BlockId)).unwrap();
@@ -140,11 +140,11 @@ fn run_plays_the_planners_in_the_physics_world() {
 
 /// Replays action indices from the side-view state `start` on `grid`: the end state.
 fn replay_side(grid: Grid, start: State, actions: &[usize]) -> State {
-    let mut world = GridWorld::new_in(View::Side, grid, start).unwrap();
+    let mut world = GridWorld::new_in(View::Side, grid, start.clone()).unwrap();
     for &i in actions {
         world.act(Action::from_index(i, start.block_count()).unwrap()).unwrap();
     }
-    *world.state_ref()
+    world.state_ref().clone()
 }
 
 fn indices(v: &serde_json::Value) -> Vec<usize> {
@@ -185,7 +185,7 @@ fn solve_counts_gripper_steps_in_the_side_view() {
     );
     let actions = indices(&exact);
     assert_eq!(actions.len() as u32, optimum);
-    assert!(goal.holds_in(View::Side, &replay_side(grid, start, &actions)));
+    assert!(goal.holds_in(View::Side, &replay_side(grid, start.clone(), &actions)));
     // The near-optimal plan, 4 block moves, carried out: no shorter than the optimum, and
     // the oracle of the side view is the same plan.
     let near = json(&base.clone().flag("solver", "near-optimal").arg("--json").run());

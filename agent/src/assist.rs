@@ -210,7 +210,7 @@ mod tests {
 
     /// The observation of 2 blocks on 7 x 7, goal 0,1, block 0 at (3, 2), block 1 at `top`,
     /// holding `held`.
-    fn obs(top: (u8, u8), held: Option<u8>) -> Observation {
+    fn obs(top: (u16, u16), held: Option<u16>) -> Observation {
         Observation {
             grid: Grid::default(),
             state: State::new(&[Cell::new(3, 2), Cell::new(top.0, top.1)], held.map(BlockId)).unwrap(),
@@ -233,19 +233,66 @@ mod tests {
         // Block 1 held; its pair (0, 1), block 0 at (3, 2). Block 1 at (4, 2) stands beside
         // it, d = 3125; at (4, 3) diagonally above, 3125 too; at (3, 3) on it, 625.
         let (beside, diagonal, stacked) = (obs((4, 2), Some(1)), obs((4, 3), Some(1)), obs((3, 3), Some(1)));
-        let back_and_forth = [beside, stacked, beside, stacked, beside, stacked];
+        let back_and_forth = [
+            beside.clone(),
+            stacked.clone(),
+            beside.clone(),
+            stacked.clone(),
+            beside.clone(),
+            stacked.clone(),
+        ];
         assert!(distances(&back_and_forth).oscillating());
         // The same d in two places is the same value: left-right between two cells at
         // 3125 is "constant".
-        assert!(distances(&[beside, diagonal, beside, diagonal, beside, diagonal]).oscillating());
+        assert!(
+            distances(&[
+                beside.clone(),
+                diagonal.clone(),
+                beside.clone(),
+                diagonal.clone(),
+                beside.clone(),
+                diagonal
+            ])
+            .oscillating()
+        );
         assert!(!distances(&back_and_forth[..5]).oscillating(), "six values are needed");
         let far = obs((6, 6), Some(1));
-        assert!(!distances(&[beside, stacked, beside, stacked, beside, far]).oscillating());
+        assert!(
+            !distances(&[
+                beside.clone(),
+                stacked.clone(),
+                beside.clone(),
+                stacked.clone(),
+                beside.clone(),
+                far
+            ])
+            .oscillating()
+        );
         // Nothing held: the tuple's first entry lists every pair's d; a held and an empty
         // state never compare equal.
         let empty = obs((3, 3), None);
-        assert!(distances(&[empty, stacked, empty, stacked, empty, stacked]).oscillating());
-        assert!(!distances(&[empty, empty, stacked, stacked, empty, empty]).oscillating());
+        assert!(
+            distances(&[
+                empty.clone(),
+                stacked.clone(),
+                empty.clone(),
+                stacked.clone(),
+                empty.clone(),
+                stacked.clone()
+            ])
+            .oscillating()
+        );
+        assert!(
+            !distances(&[
+                empty.clone(),
+                empty.clone(),
+                stacked.clone(),
+                stacked,
+                empty.clone(),
+                empty
+            ])
+            .oscillating()
+        );
         // The action test ignores states, and the distance test actions.
         let mut w = distances(&back_and_forth);
         w.see_action(Action::Up);

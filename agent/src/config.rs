@@ -196,7 +196,7 @@ impl TrainConfig {
             ));
         }
         for goal in &self.goals {
-            self.env_config(*goal).validate()?;
+            self.env_config(goal.clone()).validate()?;
         }
         Repr::new(self.repr, self.world.grid, self.world.blocks).map(|_| ())
     }
@@ -205,7 +205,7 @@ impl TrainConfig {
     pub fn env_config(&self, goal: Goal) -> EnvConfig {
         EnvConfig {
             goal: GoalSpec::Fixed(goal),
-            ..self.world
+            ..self.world.clone()
         }
     }
 

@@ -100,7 +100,7 @@ impl CorrectionRule {
             terminated,
             corrected,
             ..
-        } = *step;
+        } = step.clone();
         if corrected || self.learn_agent_steps {
             agent.update(&obs, action, reward, &next, terminated)?;
         }
@@ -143,7 +143,7 @@ pub fn session_world(agent: &QAgent) -> EnvConfig {
         Schedule::PaperCode => (schedule.game_steps(agent.blocks()), schedule.training_termination()),
     };
     let trained = match agent.training() {
-        Some(t) => t.world,
+        Some(t) => t.world.clone(),
         None => EnvConfig {
             reward: RewardModel::from_name("paper").expect("a known model"),
             ..EnvConfig::default()
@@ -278,7 +278,7 @@ impl<S: DemoSink> CorrectionSession<S> {
             return Err(AgentError::Config("no goals to demonstrate on".into()));
         }
         for goal in &goals {
-            env_config(&agent, &world, *goal).validate()?;
+            env_config(&agent, &world, goal.clone()).validate()?;
         }
         sink.record(&DemoRecord::Session(SessionLine::new(
             agent.grid(),
@@ -356,7 +356,7 @@ impl<S: DemoSink> CorrectionSession<S> {
     /// observation.
     pub fn next_episode(&mut self) -> Result<Observation> {
         let k = self.episode.as_ref().map_or(0, |(k, _, _)| k + 1);
-        let goal = self.goals[(k % self.goals.len() as u64) as usize];
+        let goal = self.goals[(k % self.goals.len() as u64) as usize].clone();
         let seed = episode_seed(self.seed, k);
         let mut env = Env::new(env_config(&self.agent, &self.world, goal))?;
         let obs = env.reset(seed);
@@ -394,10 +394,10 @@ impl<S: DemoSink> CorrectionSession<S> {
         self.rule.learn(
             &mut self.agent,
             &Experience {
-                obs,
+                obs: obs.clone(),
                 action,
                 reward: step.reward,
-                next: step.observation,
+                next: step.observation.clone(),
                 terminated: step.terminated,
                 truncated: step.truncated,
                 corrected,
@@ -493,7 +493,7 @@ pub struct Corrected<S> {
 /// runs on the caller's thread, so many can run at once.
 pub fn correct<S: DemoSink>(agent: QAgent, config: &CorrectionConfig, sink: S) -> Result<Corrected<S>> {
     config.demonstrator.validate()?;
-    let world = config.world.unwrap_or_else(|| session_world(&agent));
+    let world = config.world.clone().unwrap_or_else(|| session_world(&agent));
     if world.view != sim::View::Top {
         return Err(AgentError::Config(
             "the simulated demonstrators plan the top view; correct a side-view agent in person (blockstack demo)"
@@ -602,7 +602,7 @@ mod tests {
             ..rule
         };
         let pick = Experience {
-            obs: o,
+            obs: o.clone(),
             action: Action::Pick(BlockId(0)),
             reward: 5.0,
             next: step.observation,
@@ -627,7 +627,7 @@ mod tests {
         // A correction whose update leaves it behind: raised to best other + margin.
         a.set_q(&o, Action::Up, 9.0).unwrap();
         let drop = Experience {
-            obs: o,
+            obs: o.clone(),
             action: Action::Drop,
             reward: -1.0,
             next: o,

@@ -151,15 +151,15 @@ impl Demonstrator {
         self.rng = sim::seeding::rng(episode_seed);
         self.rng.set_stream(2);
         self.recent.clear();
-        self.recent.push(obs.state);
+        self.recent.push(obs.state.clone());
         self.watch_goal(obs);
     }
 
     /// Forgets the distances when `obs` has another goal or protocol than those measured.
     fn watch_goal(&mut self, obs: &Observation) {
-        if self.goal != Some((obs.goal, obs.protocol)) {
+        if self.goal != Some((obs.goal.clone(), obs.protocol)) {
             self.distances.clear();
-            self.goal = Some((obs.goal, obs.protocol));
+            self.goal = Some((obs.goal.clone(), obs.protocol));
         }
     }
 
@@ -168,7 +168,7 @@ impl Demonstrator {
     pub fn review(&mut self, obs: &Observation, proposed: Action) -> Result<Option<Action>> {
         self.watch_goal(obs);
         if self.recent.last() != Some(&obs.state) {
-            self.recent.push(obs.state);
+            self.recent.push(obs.state.clone());
             if self.recent.len() > LOOP_WINDOW + 1 {
                 self.recent.remove(0);
             }
@@ -179,9 +179,9 @@ impl Demonstrator {
         // shifts the draws of the next.
         let looks = self.rng.random_bool(attention);
         let takes_over = self.rng.random_bool(takeover);
-        let mut after = GridWorld::new(self.grid, obs.state)?;
+        let mut after = GridWorld::new(self.grid, obs.state.clone())?;
         after.act(proposed)?;
-        let after = *after.state_ref();
+        let after = after.state_ref().clone();
         let loops = notices_loops && self.recent.contains(&after);
         let off_path = looks && !obs.goal.holds(&after) && {
             let now = self.distance(&obs.state, obs)?;
@@ -229,7 +229,7 @@ impl Demonstrator {
             return Ok(d);
         }
         let d = self.exact.with_protocol(obs.protocol).distance(state, &obs.goal)?;
-        self.distances.insert(*state, d);
+        self.distances.insert(state.clone(), d);
         Ok(d)
     }
 }
@@ -266,14 +266,14 @@ mod tests {
         let d = exact.distance(&obs.state, &obs.goal).unwrap();
         let mut corrected = 0;
         for action in Action::all(3) {
-            let mut w = GridWorld::new(grid, obs.state).unwrap();
+            let mut w = GridWorld::new(grid, obs.state.clone()).unwrap();
             w.act(action).unwrap();
             let on_path = exact.distance(w.state_ref(), &obs.goal).unwrap() + 1 == d;
             let review = expert.review(&obs, action).unwrap();
             assert_eq!(review.is_none(), on_path, "{action}");
             if let Some(better) = review {
                 corrected += 1;
-                let mut w = GridWorld::new(grid, obs.state).unwrap();
+                let mut w = GridWorld::new(grid, obs.state.clone()).unwrap();
                 w.act(better).unwrap();
                 assert_eq!(exact.distance(w.state_ref(), &obs.goal).unwrap() + 1, d);
             }
@@ -294,7 +294,7 @@ mod tests {
         let mut w = GridWorld::new(obs.grid, obs.state).unwrap();
         w.act(pick).unwrap();
         let held = Observation {
-            state: *w.state_ref(),
+            state: w.state_ref().clone(),
             ..obs
         };
         assert!(d.review(&held, Action::Drop).unwrap().is_some());

@@ -166,10 +166,10 @@ pub fn evaluate<'a>(
     };
     let (mut results, mut optimal) = (Vec::new(), Vec::new());
     let mut per_goal = Vec::with_capacity(plan.goals.len());
-    for &goal in &plan.goals {
+    for goal in &plan.goals {
         let mut env = Env::new(EnvConfig {
-            goal: GoalSpec::Fixed(goal),
-            ..world
+            goal: GoalSpec::Fixed(goal.clone()),
+            ..world.clone()
         })?;
         let mut policy = make_policy()?;
         let played = (0..plan.episodes)

@@ -28,7 +28,8 @@ impl PlanCursor {
     /// The plan's next action, if `obs` is the state the plan expects now.
     fn next(&mut self, obs: &Observation) -> Option<Action> {
         match self.steps.last() {
-            Some(&(state, action)) if state == obs.state && self.goal == Some(obs.goal) => {
+            Some((state, action)) if *state == obs.state && self.goal.as_ref() == Some(&obs.goal) => {
+                let action = *action;
                 self.steps.pop();
                 Some(action)
             }
@@ -38,10 +39,10 @@ impl PlanCursor {
 
     /// Follows `plan` from `obs`, returning its first action.
     fn follow(&mut self, obs: &Observation, plan: Plan) -> Result<Action> {
-        let states = GridWorld::new(obs.grid, obs.state)?.replay(&plan.actions)?;
+        let states = GridWorld::new(obs.grid, obs.state.clone())?.replay(&plan.actions)?;
         let mut steps: Vec<(State, Action)> = states.into_iter().zip(plan.actions).collect();
         steps.reverse();
-        self.goal = Some(obs.goal);
+        self.goal = Some(obs.goal.clone());
         self.steps = steps;
         // An empty plan means the goal holds; the oracle says so as an error.
         self.next(obs).map_or_else(
@@ -181,7 +182,7 @@ mod tests {
     #[test]
     fn a_policy_replans_when_the_world_left_its_plan() {
         let goal: Goal = "1,0,2".parse().unwrap();
-        let mut env = Env::new(EnvConfig::with_goal(goal)).unwrap();
+        let mut env = Env::new(EnvConfig::with_goal(goal.clone())).unwrap();
         let mut policy = OraclePolicy::new(env.config().grid);
         let mut rng = sim::seeding::rng(0);
         let obs = env.reset(3);

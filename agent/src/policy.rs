@@ -48,7 +48,7 @@ mod tests {
     use super::*;
     use sim::{ActionProtocol, BlockId, Cell, Grid, State};
 
-    fn obs(held: Option<u8>, protocol: ActionProtocol) -> Observation {
+    fn obs(held: Option<u16>, protocol: ActionProtocol) -> Observation {
         Observation {
             grid: Grid::default(),
             state: State::new(&[Cell::new(0, 0), Cell::new(3, 3), Cell::new(6, 6)], held.map(BlockId)).unwrap(),

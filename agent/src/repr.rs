@@ -76,7 +76,7 @@ fn action_of_index(index: usize) -> Action {
         2 => Action::Left,
         3 => Action::Right,
         4 => Action::Drop,
-        i => Action::Pick(BlockId((i - 5) as u8)),
+        i => Action::Pick(BlockId::of(i - 5)),
     }
 }
 
@@ -99,6 +99,7 @@ impl KeySpace {
         if !(MIN_BLOCKS..=MAX_BLOCKS).contains(&blocks) {
             return Err(sim::SimError::BadBlockCount {
                 count: blocks,
+                what: "a tabular learner",
                 min: MIN_BLOCKS,
                 max: MAX_BLOCKS,
             }
@@ -564,7 +565,7 @@ impl Places {
             tops |= 1 << (next - 1);
         }
         let named = next;
-        for b in (0..blocks).map(|i| BlockId(i as u8)).filter(|&b| !goal.names(b)) {
+        for b in (0..blocks).map(BlockId::of).filter(|&b| !goal.names(b)) {
             places.block_at[next] = b;
             places.place_of[b.index()] = next as u8;
             next += 1;
@@ -689,7 +690,7 @@ impl Repr {
             Repr::RoleTowers(r) if mask.count() < mask.action_count() => {
                 mask.iter().fold(0, |bits, a| bits | 1 << r.column(goal, a))
             }
-            _ => mask.bits(),
+            _ => mask.as_u32().expect("a table's world has at most 16 blocks"),
         }
     }
 }

@@ -13,7 +13,7 @@ use crate::error::Result;
 use crate::policy::Policy;
 
 /// How one episode went.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct EpisodeResult {
     /// Episode number in the run.
     pub episode: u64,
@@ -68,7 +68,7 @@ impl EpisodeObserver for TrajectoryWriter {
             episode,
             seed,
             config.grid,
-            start.goal,
+            start.goal.clone(),
             config.horizon,
             &start.state,
         ))?)
@@ -93,12 +93,12 @@ impl<O: EpisodeObserver> EpisodeObserver for Option<O> {
 /// Keeps every observation of the episodes, each start first (e.g. for a picture of them).
 impl EpisodeObserver for Vec<Observation> {
     fn start(&mut self, _: u64, _: u64, _: &EnvConfig, start: &Observation) -> Result<()> {
-        self.push(*start);
+        self.push(start.clone());
         Ok(())
     }
 
     fn step(&mut self, _: u64, _: &Observation, _: Action, step: &Step) -> Result<()> {
-        self.push(step.observation);
+        self.push(step.observation.clone());
         Ok(())
     }
 }
@@ -113,14 +113,16 @@ pub fn play_episode(
     observer: &mut dyn EpisodeObserver,
 ) -> Result<EpisodeResult> {
     let obs = env.reset(seed);
-    let config = *env.config();
+    let config = env.config().clone();
     observer.start(episode, seed, &config, &obs)?;
-    let start = obs.state;
+    let start = obs.state.clone();
     let mut rng = policy_rng(seed);
     policy.begin_episode(&obs);
     let mut obs = obs;
     let mut total_reward = 0.0;
-    let mut reached_goal = false;
+    // An episode over at its start began with the goal holding (one block in the side
+    // view): solved by the empty plan.
+    let mut reached_goal = env.is_over() && obs.goal_holds();
     while !env.is_over() {
         let action = policy.act(&obs, &mut rng)?;
         let step = env.step(action)?;

@@ -56,7 +56,7 @@ impl CorrectionRule {
 }
 
 /// One executed step, as the rule learns from it.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Experience {
     /// The state it was taken in.
     pub obs: Observation,

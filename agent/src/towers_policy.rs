@@ -86,11 +86,11 @@ mod tests {
             goals.push(Goal::parse(text, Some(3)).unwrap());
         }
         for backend in [Backend::Grid, Backend::Physics] {
-            for &goal in &goals {
+            for goal in &goals {
                 let mut env = Env::new(EnvConfig {
                     view: View::Side,
                     backend,
-                    ..EnvConfig::with_goal(goal)
+                    ..EnvConfig::with_goal(goal.clone())
                 })
                 .unwrap();
                 for planner in [MovePlanner::Exact, MovePlanner::NearOptimal] {
@@ -111,7 +111,7 @@ mod tests {
             view: View::Side,
             blocks: 4,
             backend: Backend::Grid,
-            ..EnvConfig::with_goal(goal)
+            ..EnvConfig::with_goal(goal.clone())
         })
         .unwrap();
         for k in 0..10 {

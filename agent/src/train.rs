@@ -131,7 +131,7 @@ impl Trainer {
         let envs = config
             .goals
             .iter()
-            .map(|&g| Env::new(config.env_config(g)))
+            .map(|g| Env::new(config.env_config(g.clone())))
             .collect::<sim::Result<Vec<_>>>()?;
         Ok(Trainer {
             agent,
@@ -219,8 +219,8 @@ impl Trainer {
         if self.config.exploring_starts {
             let slot = rng.random_range(0..=self.config.world.blocks);
             if slot > 0 {
-                let held = obs.state.with_held(Some(BlockId(slot as u8 - 1)))?;
-                obs = env.reset_to(held, obs.goal)?;
+                let held = obs.state.with_held(Some(BlockId::of(slot - 1)))?;
+                obs = env.reset_to(held, &obs.goal)?;
             }
         }
         let QParams { alpha, epsilon, .. } = *agent.params();
@@ -284,7 +284,7 @@ impl Trainer {
                 path.push(t);
             }
             key = next_key;
-            obs = step.observation;
+            obs = step.observation.clone();
             if reached.is_none()
                 && step
                     .observation

@@ -20,7 +20,7 @@ fn goal(text: &str) -> Goal {
     text.parse().unwrap()
 }
 
-fn obs(cells: &[(u8, u8)], held: Option<u8>, goal: Goal, protocol: ActionProtocol) -> Observation {
+fn obs(cells: &[(u16, u16)], held: Option<u16>, goal: Goal, protocol: ActionProtocol) -> Observation {
     let cells: Vec<Cell> = cells.iter().map(|&(x, y)| Cell::new(x, y)).collect();
     Observation {
         grid: Grid::default(),
@@ -40,8 +40,8 @@ fn paper_agent(params: QParams) -> QAgent {
 #[test]
 fn the_bootstrap_reads_only_the_actions_seen_in_the_next_state() {
     let g = goal("0,1,2");
-    let s = obs(&[(0, 0), (3, 3), (6, 6)], Some(0), g, ActionProtocol::Paper);
-    let next = obs(&[(0, 1), (3, 3), (6, 6)], Some(0), g, ActionProtocol::Paper);
+    let s = obs(&[(0, 0), (3, 3), (6, 6)], Some(0), g.clone(), ActionProtocol::Paper);
+    let next = obs(&[(0, 1), (3, 3), (6, 6)], Some(0), g.clone(), ActionProtocol::Paper);
     let mut a = paper_agent(QParams::default());
     // Nothing seen in s': Q(s, up) = r.
     assert_eq!(a.update(&s, Action::Up, 1.0, &next, false).unwrap(), 1.0);
@@ -75,7 +75,7 @@ fn the_taken_entry_is_seen_before_the_bootstrap_reads_it() {
 #[test]
 fn the_step_that_ends_the_game_sets_the_entry_to_its_reward() {
     let g = goal("0,1,2");
-    let s = obs(&[(3, 1), (3, 2), (4, 3)], Some(2), g, ActionProtocol::Paper);
+    let s = obs(&[(3, 1), (3, 2), (4, 3)], Some(2), g.clone(), ActionProtocol::Paper);
     let done = obs(&[(3, 1), (3, 2), (3, 3)], Some(2), g, ActionProtocol::Paper);
     let mut a = paper_agent(QParams::default());
     a.set_q(&done, Action::Up, 500.0).unwrap();
@@ -230,7 +230,7 @@ fn corrections_as_coded_get_the_plain_update_and_replay_to_the_same_table() {
 #[test]
 fn a_person_changes_blocks_by_a_drop_and_a_pick_under_paper() {
     let g = goal("0,1,2");
-    let holding = obs(&[(0, 0), (3, 3), (6, 6)], Some(0), g, ActionProtocol::Paper);
+    let holding = obs(&[(0, 0), (3, 3), (6, 6)], Some(0), g.clone(), ActionProtocol::Paper);
     let pick = Action::Pick(BlockId(2));
     assert_eq!(person_steps(&holding, pick).unwrap(), [Action::Drop, pick]);
     assert!(person_steps(&holding, Action::Pick(BlockId(0))).unwrap().is_empty());
@@ -254,7 +254,7 @@ fn a_person_changes_blocks_by_a_drop_and_a_pick_under_paper() {
 fn state_from(picks: &[usize], held: usize) -> State {
     let mut free: Vec<Cell> = Grid::default().cells().collect();
     let cells: Vec<Cell> = picks.iter().map(|&p| free.remove(p % free.len())).collect();
-    State::new(&cells, (held < 3).then_some(BlockId(held as u8))).unwrap()
+    State::new(&cells, (held < 3).then_some(BlockId::of(held))).unwrap()
 }
 
 fn legal(o: &Observation, a: Action) -> Result<(), TestCaseError> {
@@ -275,7 +275,7 @@ proptest! {
         picks in prop::collection::vec(0usize..1000, 3), held in 0usize..4, g in 0usize..6,
         values in prop::collection::vec(-5.0f32..5.0, 8), seed in 0u64..1000,
     ) {
-        let goal = Goal::all(3).unwrap()[g];
+        let goal = Goal::all(3).unwrap()[g].clone();
         let state = state_from(&picks, held);
         prop_assume!(!goal.holds(&state));
         let o = Observation { grid: Grid::default(), state, goal, protocol: ActionProtocol::Paper, view: sim::View::Top };
@@ -329,7 +329,7 @@ fn under_free_a_q_agent_draws_as_before_protocols() {
     // With every action legal the masked choice is the unmasked one: the same draws, so the
     // same actions, from the same generator.
     let g = goal("1,0,2");
-    let o = obs(&[(0, 0), (3, 3), (6, 6)], Some(1), g, ActionProtocol::Free);
+    let o = obs(&[(0, 0), (3, 3), (6, 6)], Some(1), g.clone(), ActionProtocol::Free);
     let mut q = QAgent::new(ReprKind::Role, Grid::default(), 3, QParams::default()).unwrap();
     q.set_q(&o, Action::Up, 2.0).unwrap();
     q.set_q(&o, Action::Pick(BlockId(2)), 2.0).unwrap();

@@ -39,7 +39,7 @@ fn the_update_matches_a_hand_computed_mdp() {
     let mut env = Env::new(EnvConfig {
         grid,
         blocks: 2,
-        goal: GoalSpec::Fixed(g),
+        goal: GoalSpec::Fixed(g.clone()),
         reward: RewardModel::from_name("step-cost").unwrap(),
         backend: Backend::Grid,
         ..EnvConfig::default()
@@ -47,7 +47,7 @@ fn the_update_matches_a_hand_computed_mdp() {
     .unwrap();
     let start = State::new(&[Cell::new(0, 0), Cell::new(0, 2)], None).unwrap();
     let mut episode = |q: &mut QAgent| -> (Observation, Observation) {
-        let s0 = env.reset_to(start, g).unwrap();
+        let s0 = env.reset_to(&start, &g).unwrap();
         let step = env.step(Action::Pick(BlockId(1))).unwrap();
         assert_eq!(step.reward, -1.0);
         q.update(
@@ -125,7 +125,7 @@ fn a_trained_agent_finishes_an_easy_stack() {
     };
     let free = Observation {
         state: held.state.with_held(None).unwrap(),
-        ..held
+        ..held.clone()
     };
     let mut r = rng(3);
     assert_eq!(q.greedy_action(&held, &mut r).unwrap(), Action::Down);

@@ -10,13 +10,13 @@ use sim::{Action, BlockId, Cell, Goal, Grid, State};
 fn state_from(grid: Grid, n: usize, picks: &[usize], held: usize) -> State {
     let mut free: Vec<Cell> = grid.cells().collect();
     let cells: Vec<Cell> = picks[..n].iter().map(|&p| free.remove(p % free.len())).collect();
-    let held = (held % (n + 1) < n).then(|| BlockId((held % (n + 1)) as u8));
+    let held = (held % (n + 1) < n).then(|| BlockId::of(held % (n + 1)));
     State::new(&cells, held).unwrap()
 }
 
 fn goal_from(n: usize, index: usize) -> Goal {
     let all = Goal::all(n).unwrap();
-    all[index % all.len()]
+    all[index % all.len()].clone()
 }
 
 /// The state with block ids renamed by `rename` (block b becomes rename[b]).
@@ -25,13 +25,13 @@ fn renamed(state: &State, rename: &[usize]) -> State {
     for b in state.blocks() {
         cells[rename[b.index()]] = state.cell(b);
     }
-    State::new(&cells, state.held_block().map(|h| BlockId(rename[h.index()] as u8))).unwrap()
+    State::new(&cells, state.held_block().map(|h| BlockId::of(rename[h.index()]))).unwrap()
 }
 
 /// `action` with its block renamed by `rename` (a Pick of block b picks rename[b]).
 fn renamed_action(action: Action, rename: &[usize]) -> Action {
     match action {
-        Action::Pick(b) => Action::Pick(BlockId(rename[b.index()] as u8)),
+        Action::Pick(b) => Action::Pick(BlockId::of(rename[b.index()])),
         other => other,
     }
 }
@@ -101,7 +101,7 @@ proptest! {
         let grid = Grid::default();
         let repr = Repr::new(ReprKind::RoleTowers, grid, 4).unwrap();
         let goals = Goal::all_towers(4).unwrap();
-        let goal = goals[g];
+        let goal = goals[g].clone();
         let (s1, s2) = (state_from(grid, 4, &p1, h1), state_from(grid, 4, &p2, h2));
         prop_assert!(repr.key(&s1, &goal) < repr.key_count());
         prop_assert_eq!(repr.key(&s1, &goal) == repr.key(&s2, &goal), s1 == s2);

@@ -282,7 +282,7 @@ mod tests {
         // A single state is a one-frame GIF.
         let still = EpisodeFrames {
             caption: String::new(),
-            observations: vec![ok.observations[0]],
+            observations: vec![ok.observations[0].clone()],
         };
         assert_eq!(episode_gif(&[still], &options, &path).expect("gif"), 1);
         assert_eq!(decode(&path).len(), 1);

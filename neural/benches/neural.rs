@@ -65,7 +65,7 @@ fn network(c: &mut Criterion) {
         let mut online = trainer.net().try_clone().unwrap();
         let target = online.try_clone().unwrap();
         let spec = *online.input();
-        let mut env = Env::new(config.env_config(config.goals[0])).unwrap();
+        let mut env = Env::new(config.env_config(config.goals[0].clone())).unwrap();
         let observations: Vec<sim::Observation> = (0..128).map(|i| env.reset(i)).collect();
         let refs: Vec<&sim::Observation> = observations.iter().collect();
         let next = spec.batch(&refs);
@@ -101,7 +101,7 @@ fn greedy(c: &mut Criterion) {
     for (name, preset) in NETS {
         let config = config(preset);
         let dqn = Trainer::new(config.clone()).unwrap().finish().unwrap();
-        let mut env = Env::new(config.env_config(config.goals[0])).unwrap();
+        let mut env = Env::new(config.env_config(config.goals[0].clone())).unwrap();
         let obs = env.reset(3);
         let pool = pool(1);
         group.bench_function(name, |b| {

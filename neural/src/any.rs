@@ -105,8 +105,8 @@ impl AnyModel {
         let trained = match self {
             AnyModel::Q(q) => q
                 .training()
-                .map_or_else(|| EnvConfig::for_profile(Profile::Spec), |t| t.world),
-            AnyModel::Dqn(d) => d.config().world,
+                .map_or_else(|| EnvConfig::for_profile(Profile::Spec), |t| t.world.clone()),
+            AnyModel::Dqn(d) => d.config().world.clone(),
         };
         EnvConfig {
             grid: self.grid(),

@@ -526,7 +526,7 @@ impl DqnConfig {
             return bad("no goals to train on".into());
         }
         for goal in &self.goals {
-            self.env_config(*goal).validate()?;
+            self.env_config(goal.clone()).validate()?;
         }
         if self.batch == 0 {
             return bad("the batch must hold at least 1 transition".into());

@@ -51,7 +51,7 @@ impl DemoEpisode {
         let obs = |state: State| Observation {
             grid,
             state,
-            goal: self.goal,
+            goal: self.goal.clone(),
             protocol: config.world.protocol,
             view: config.world.view,
         };
@@ -67,7 +67,14 @@ impl DemoEpisode {
                 after,
             }) as f32;
             let terminal = self.goal.holds(after);
-            out.extend(builder.push(obs(*before), action, r, obs(*after), terminal, self.expert[k]));
+            out.extend(builder.push(
+                obs(before.clone()),
+                action,
+                r,
+                obs(after.clone()),
+                terminal,
+                self.expert[k],
+            ));
             if terminal {
                 break;
             }
@@ -98,7 +105,7 @@ pub fn planned<P: Planner + Sync>(config: &DqnConfig, count: u64, planner: &P) -
     let mut envs = config
         .goals
         .iter()
-        .map(|&g| Env::new(config.env_config(g)))
+        .map(|g| Env::new(config.env_config(g.clone())))
         .collect::<sim::Result<Vec<_>>>()?;
     let base = demo_seed(config.seed);
     let starts: Vec<(State, Goal)> = (0..count)
@@ -110,11 +117,11 @@ pub fn planned<P: Planner + Sync>(config: &DqnConfig, count: u64, planner: &P) -
         .collect();
     starts
         .par_iter()
-        .map(|&(start, goal)| {
-            let plan = planner.plan(&start, &goal)?;
-            let states = GridWorld::new(config.world.grid, start)?.replay(&plan.actions)?;
+        .map(|(start, goal)| {
+            let plan = planner.plan(start, goal)?;
+            let states = GridWorld::new(config.world.grid, start.clone())?.replay(&plan.actions)?;
             Ok(DemoEpisode {
-                goal,
+                goal: goal.clone(),
                 states,
                 expert: vec![true; plan.actions.len()],
                 actions: plan.actions,
@@ -135,8 +142,8 @@ pub fn read(path: &Path, grid: Grid, blocks: usize) -> Result<Vec<DemoEpisode>> 
 impl From<agent::demos::DemoEpisode> for DemoEpisode {
     fn from(e: agent::demos::DemoEpisode) -> Self {
         DemoEpisode {
-            goal: e.goal,
             states: e.states(),
+            goal: e.goal,
             actions: e.steps.iter().map(|s| s.action).collect(),
             expert: e.steps.iter().map(|s| s.demonstrated).collect(),
         }
@@ -180,7 +187,7 @@ mod tests {
     #[test]
     fn a_trajectory_file_replays_into_demonstrations_and_a_wrong_one_is_refused() {
         let c = config(DemoSource::None);
-        let mut env = Env::new(c.env_config(c.goals[1])).unwrap();
+        let mut env = Env::new(c.env_config(c.goals[1].clone())).unwrap();
         let mut policy = agent::ExactPolicy::new(c.world.grid);
         let dir = tempfile::tempdir().unwrap();
         let dir = dir.path();
@@ -192,7 +199,10 @@ mod tests {
         let episodes = read(&path, c.world.grid, 3).unwrap();
         assert_eq!(episodes.len(), 3);
         for (e, r) in episodes.iter().zip(&results) {
-            assert_eq!((e.states[0], e.actions.len() as u32), (r.start, r.steps));
+            assert_eq!(
+                (e.states[0].clone(), e.actions.len() as u32),
+                (r.start.clone(), r.steps)
+            );
         }
         let text = std::fs::read_to_string(&path).unwrap();
         let broken = text.replacen("\"action\":", "\"action\":1,\"x\":", 1);

@@ -22,7 +22,7 @@ use crate::config::DqnConfig;
 use crate::replay::{NStepReturn, Transition};
 
 /// One step of a game, as it was played.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Step {
     /// The observation the action was taken in.
     pub obs: Observation,
@@ -50,7 +50,9 @@ pub fn relabel(steps: &[Step], k: usize, config: &DqnConfig, rng: &mut SimRng) -
             continue;
         }
         for _ in 0..k {
-            let goal = achieved[later[rng.random_range(0..later.len())]].expect("a state where a goal stood");
+            let goal = achieved[later[rng.random_range(0..later.len())]]
+                .clone()
+                .expect("a state where a goal stood");
             if goal.holds(&steps[t].obs.state) {
                 continue;
             }
@@ -63,7 +65,13 @@ pub fn relabel(steps: &[Step], k: usize, config: &DqnConfig, rng: &mut SimRng) -
 /// Step `t` of `steps` under `goal`, with its n-step return (which stops where the goal
 /// holds or the game ends).
 fn transition(steps: &[Step], t: usize, goal: Goal, config: &DqnConfig) -> Transition {
-    let under = |obs: &Observation| Observation { goal, ..*obs };
+    let under = |obs: &Observation| Observation {
+        grid: obs.grid,
+        state: obs.state.clone(),
+        goal: goal.clone(),
+        protocol: obs.protocol,
+        view: obs.view,
+    };
     let reward = |i: usize| {
         let s = &steps[i];
         config.world.reward.reward(&RewardTransition {
@@ -120,13 +128,13 @@ mod tests {
             state,
             protocol: sim::ActionProtocol::Free,
             view: sim::View::Top,
-            goal,
+            goal: goal.clone(),
         };
         (0..actions.len())
             .map(|i| Step {
-                obs: obs(states[i]),
+                obs: obs(states[i].clone()),
                 action: actions[i],
-                next: obs(states[i + 1]),
+                next: obs(states[i + 1].clone()),
             })
             .collect()
     }
@@ -146,13 +154,16 @@ mod tests {
         ];
         let steps = game("3,0;3,1;5,2", "2,1,0", &actions);
         let stack: Goal = "0,1,2".parse().unwrap();
-        assert_eq!(Goal::standing(&steps[2].next.state), Some(stack));
+        assert_eq!(Goal::standing(&steps[2].next.state), Some(stack.clone()));
         let mut rng = sim::seeding::rng(1);
         let relabelled = relabel(&steps, 4, &config, &mut rng);
         // Steps 0-2 come before the stack stood (4 each); none stood after steps 3 and 4.
         assert_eq!(relabelled.len(), 12);
         for t in &relabelled {
-            assert_eq!((t.obs.goal, t.next.goal), (stack, stack));
+            assert_eq!(
+                (t.obs.goal.clone(), t.next.goal.clone()),
+                (stack.clone(), stack.clone())
+            );
             assert!(!t.expert);
         }
         let last = relabelled.iter().filter(|t| t.terminal).collect::<Vec<_>>();
@@ -165,8 +176,8 @@ mod tests {
             .find(|t| {
                 t.obs
                     == Observation {
-                        goal: stack,
-                        ..steps[0].obs
+                        goal: stack.clone(),
+                        ..steps[0].obs.clone()
                     }
             })
             .unwrap();

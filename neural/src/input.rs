@@ -208,7 +208,7 @@ mod tests {
     use super::*;
     use sim::{BlockId, Cell, State};
 
-    fn obs(cells: [Cell; 3], held: Option<u8>) -> Observation {
+    fn obs(cells: [Cell; 3], held: Option<u16>) -> Observation {
         Observation {
             grid: Grid::default(),
             state: State::new(&cells, held.map(BlockId)).unwrap(),
@@ -243,7 +243,7 @@ mod tests {
         let pixels = InputSpec::new(ObsKind::PaperScreen, false, Grid::default(), 3).unwrap();
         let o = obs([Cell::new(1, 2), Cell::new(3, 3), Cell::new(1, 1)], Some(2));
         // Goal 2,0,1: block 2 at place 0, block 0 at place 1, block 1 at place 2.
-        for (block, place) in [(2u8, 0usize), (0, 1), (1, 2)] {
+        for (block, place) in [(2u16, 0usize), (0, 1), (1, 2)] {
             let pick = sim::Action::Pick(BlockId(block));
             assert_eq!(planes.column(&o.goal, pick), 5 + place);
             assert_eq!(planes.action(&o.goal, 5 + place), pick);

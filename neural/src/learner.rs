@@ -118,7 +118,7 @@ impl Encoder {
                 }
                 self.bytes.clear();
                 spec.encode(obs, &mut self.bytes);
-                self.screens.insert(*obs, self.bytes.as_slice().into());
+                self.screens.insert(obs.clone(), self.bytes.as_slice().into());
                 self.cached += width;
             }
             to_floats(&self.screens[obs], x, scale);
@@ -388,14 +388,14 @@ mod tests {
         // The expert took Left (index 2): J = max(1 + .8, 2 + .8, 0.5, -1 + .8, .8, 1.1, .9) - 0.5
         // = 2.3; its gradient on the last bias is +1 at Down (the max) and -1 at Left.
         let t = Transition {
-            obs,
+            obs: obs.clone(),
             action: Action::Left,
             reward: 0.0,
-            next: obs,
+            next: obs.clone(),
             terminal: true,
             n_step: NStepReturn {
                 rewards: 0.0,
-                last: obs,
+                last: obs.clone(),
                 steps: 1,
                 terminal: true,
             },

@@ -29,14 +29,18 @@ impl ActionSet {
     /// something (a pick with nothing held, a drop while holding).
     pub fn allowed(obs: &Observation, mask_noops: bool) -> ActionSet {
         let blocks = obs.state.block_count();
-        let legal = ActionSet(obs.legal_actions().bits());
+        let legal = ActionSet(
+            obs.legal_actions()
+                .as_u32()
+                .expect("a network's world has at most 16 blocks"),
+        );
         if !mask_noops {
             return legal;
         }
-        let world = GridWorld::new(obs.grid, obs.state).expect("an observation fits its grid");
+        let world = GridWorld::new(obs.grid, obs.state.clone()).expect("an observation fits its grid");
         let mut set = 0u32;
         for a in Action::all(blocks) {
-            let mut trial = world;
+            let mut trial = world.clone();
             let changes = matches!(
                 trial.act(a).expect("every action of Action::all exists"),
                 Effect::Moved | Effect::Picked | Effect::Dropped
@@ -134,7 +138,7 @@ mod tests {
         assert_eq!(allowed, vec![0, 4, 6]);
         let free = Observation {
             state: obs.state.with_held(None).unwrap(),
-            ..obs
+            ..obs.clone()
         };
         // Nothing held: only the picks change anything.
         assert_eq!(ActionSet::allowed(&free, true).iter().collect::<Vec<_>>(), vec![5, 6]);

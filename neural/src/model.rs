@@ -451,7 +451,7 @@ impl Policy for DqnPolicy<'_> {
             return Ok(a);
         }
         let a = self.dqn.greedy_action(obs)?;
-        self.greedy.insert(*obs, a);
+        self.greedy.insert(obs.clone(), a);
         Ok(a)
     }
 }

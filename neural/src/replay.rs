@@ -15,7 +15,7 @@ use sim::{Action, Observation};
 
 /// The n-step part of a transition: the discounted rewards of up to `n` steps from it, and
 /// where they led.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct NStepReturn {
     /// `r_t + gamma r_(t+1) + ... + gamma^(k-1) r_(t+k-1)`.
     pub rewards: f32,
@@ -28,7 +28,7 @@ pub struct NStepReturn {
 }
 
 /// One step, as the learner replays it.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Transition {
     /// The observation the action was taken in.
     pub obs: Observation,
@@ -103,7 +103,7 @@ impl NStep {
                 break;
             }
         }
-        let (_, _, _, last, terminal, _) = self.pending[end];
+        let (last, terminal) = (self.pending[end].3.clone(), self.pending[end].4);
         let (obs, action, reward, next, step_terminal, expert) = self.pending.pop_front().expect("pending");
         Transition {
             obs,
@@ -204,7 +204,7 @@ mod tests {
     use super::*;
     use sim::{Cell, Goal, Grid, State};
 
-    fn obs(x: u8) -> Observation {
+    fn obs(x: u16) -> Observation {
         Observation {
             grid: Grid::default(),
             state: State::new(&[Cell::new(x % 7, 0), Cell::new(x % 7, 3)], None).unwrap(),
@@ -214,7 +214,7 @@ mod tests {
         }
     }
 
-    fn transition(i: u8) -> Transition {
+    fn transition(i: u16) -> Transition {
         let mut n = NStep::new(1, 0.9);
         n.push(obs(i), Action::Up, f32::from(i), obs(i + 1), false, false)
             .unwrap()
@@ -239,7 +239,7 @@ mod tests {
         let rest = n.finish();
         assert_eq!(rest.len(), 2);
         assert_eq!((rest[0].n_step.rewards, rest[0].n_step.steps), (4.0 + 4.0, 2));
-        assert_eq!((rest[1].n_step.rewards, rest[1].n_step.last), (8.0, obs(4)));
+        assert_eq!((rest[1].n_step.rewards, rest[1].n_step.last.clone()), (8.0, obs(4)));
         assert!(rest.iter().all(|t| t.n_step.terminal && t.expert));
     }
 

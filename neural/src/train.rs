@@ -124,7 +124,7 @@ impl Trainer {
         let envs = config
             .goals
             .iter()
-            .map(|&g| Env::new(config.env_config(g)))
+            .map(|g| Env::new(config.env_config(g.clone())))
             .collect::<sim::Result<Vec<_>>>()?;
         let mut rng = seeding::rng(config.seed);
         rng.set_stream(3);
@@ -262,7 +262,7 @@ impl Trainer {
 
     /// One step of the current game (beginning one if none is going on).
     fn env_step(&mut self) -> Result<()> {
-        let (env_index, obs) = match self.current {
+        let (env_index, obs) = match self.current.clone() {
             Some(c) => c,
             None => {
                 let k = self.report.games;
@@ -275,7 +275,7 @@ impl Trainer {
                 (i, obs)
             }
         };
-        if self.config.correct_loops && !self.visited.insert(obs.state) && !self.corrected {
+        if self.config.correct_loops && !self.visited.insert(obs.state.clone()) && !self.corrected {
             self.correct(&obs)?;
             self.corrected = true;
         }
@@ -285,16 +285,16 @@ impl Trainer {
         let done = step.terminated || step.truncated;
         if self.config.hindsight > 0 {
             self.game.push(Step {
-                obs,
+                obs: obs.clone(),
                 action,
-                next: step.observation,
+                next: step.observation.clone(),
             });
         }
         if let Some(t) = self.n_step.push(
             obs,
             action,
             step.reward as f32,
-            step.observation,
+            step.observation.clone(),
             step.terminated,
             false,
         ) {
@@ -330,9 +330,9 @@ impl Trainer {
     /// the demonstrations; the agent plays on.
     fn correct(&mut self, obs: &Observation) -> Result<()> {
         let plan = self.corrector.plan(&obs.state, &obs.goal)?;
-        let states = GridWorld::new(obs.grid, obs.state)?.replay(&plan.actions)?;
+        let states = GridWorld::new(obs.grid, obs.state.clone())?.replay(&plan.actions)?;
         let episode = DemoEpisode {
-            goal: obs.goal,
+            goal: obs.goal.clone(),
             states,
             expert: vec![true; plan.actions.len()],
             actions: plan.actions,

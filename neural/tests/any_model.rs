@@ -18,7 +18,7 @@ fn legal_q_values_map_a_networks_columns_back_to_actions() {
     };
     let dqn = Trainer::new(config).unwrap().finish().unwrap();
     let goal: Goal = "1,0".parse().unwrap();
-    let obs = Env::new(EnvConfig::with_goal(goal)).unwrap().reset(3);
+    let obs = Env::new(EnvConfig::with_goal(goal.clone())).unwrap().reset(3);
     let by_column = dqn.q_values(&obs).unwrap();
     let input = *dqn.net().input();
     let model = AnyModel::Dqn(Box::new(dqn));

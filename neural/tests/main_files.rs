@@ -28,7 +28,7 @@ fn cells(value: &serde_json::Value) -> Vec<Cell> {
         .as_array()
         .unwrap()
         .iter()
-        .map(|c| Cell::new(c[0].as_u64().unwrap() as u8, c[1].as_u64().unwrap() as u8))
+        .map(|c| Cell::new(c[0].as_u64().unwrap() as u16, c[1].as_u64().unwrap() as u16))
         .collect()
 }
 
@@ -45,7 +45,7 @@ fn recorded_choices(trajectory: &str) -> Vec<(Observation, usize)> {
                     .as_array()
                     .unwrap()
                     .iter()
-                    .map(|b| BlockId(b.as_u64().unwrap() as u8))
+                    .map(|b| BlockId::of(b.as_u64().unwrap() as usize))
                     .collect();
                 current = Some(Observation {
                     grid: Grid::default(),
@@ -57,8 +57,8 @@ fn recorded_choices(trajectory: &str) -> Vec<(Observation, usize)> {
             }
             "step" => {
                 let obs = current.as_mut().unwrap();
-                out.push((*obs, v["action"].as_u64().unwrap() as usize));
-                let held = v["held"].as_u64().map(|b| BlockId(b as u8));
+                out.push((obs.clone(), v["action"].as_u64().unwrap() as usize));
+                let held = v["held"].as_u64().map(|b| BlockId::of(b as usize));
                 obs.state = State::new(&cells(&v["blocks"]), held).unwrap();
             }
             other => panic!("unexpected record {other}"),

@@ -12,9 +12,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let goal: Goal = args.next().as_deref().unwrap_or("1,0,2").parse()?;
     let config = EnvConfig {
         backend: Backend::Grid,
-        ..EnvConfig::with_goal(goal)
+        ..EnvConfig::with_goal(goal.clone())
     };
-    let obs = Env::new(config)?.reset(seed);
+    let obs = Env::new(config.clone())?.reset(seed);
     print!("{}", ascii(&obs, Colour::Never));
     let oracle = Oracle::new(config.grid).plan(&obs.state, &goal)?;
     let exact = ExactSolver::new(config.grid).solve(&obs.state, &goal)?;

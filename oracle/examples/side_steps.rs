@@ -26,7 +26,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let mut env = Env::new(EnvConfig {
                 view: View::Side,
                 blocks,
-                ..EnvConfig::with_goal(goal)
+                ..EnvConfig::with_goal(goal.clone())
             })?;
             let start = env.reset(seed).state;
             let t = Instant::now();

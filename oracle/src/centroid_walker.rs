@@ -168,11 +168,11 @@ impl CentroidWalker {
             };
             ys.iter_mut().for_each(|y| *y += shift);
         }
-        let column = ((mx - half) / CELL_PX) as u8;
+        let column = ((mx - half) / CELL_PX) as u16;
         let mut cells = vec![Cell::new(0, 0); state.block_count()];
         for (place, &y) in ys.iter().enumerate() {
             let row_from_top = (y - half) / CELL_PX;
-            let row = (grid.height() as i32 - 1 - row_from_top) as u8;
+            let row = (grid.height() as i32 - 1 - row_from_top) as u16;
             cells[goal.block_at_place(place).index()] = Cell::new(column, row);
         }
         cells
@@ -185,7 +185,7 @@ impl CentroidWalker {
         check_problem(self.grid, state, goal)?;
         let Some(held) = state.held_block() else {
             let block = rng.random_range(0..state.block_count());
-            return Ok(Action::Pick(BlockId(block as u8)));
+            return Ok(Action::Pick(BlockId::of(block)));
         };
         if goal.holds(state) {
             return Ok(Action::Drop);
@@ -238,12 +238,12 @@ impl CentroidWalker {
 mod tests {
     use super::*;
 
-    fn state(cells: &[(u8, u8)], held: Option<u8>) -> State {
+    fn state(cells: &[(u16, u16)], held: Option<u16>) -> State {
         let cells: Vec<Cell> = cells.iter().map(|&(x, y)| Cell::new(x, y)).collect();
         State::new(&cells, held.map(BlockId)).unwrap()
     }
 
-    fn column(x: u8, rows: &[u8]) -> Vec<Cell> {
+    fn column(x: u16, rows: &[u16]) -> Vec<Cell> {
         rows.iter().map(|&y| Cell::new(x, y)).collect()
     }
 

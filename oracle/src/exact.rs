@@ -281,7 +281,7 @@ impl ExactSolver {
             .map(|w| {
                 successors(&w[0])
                     .into_iter()
-                    .find(|&(_, t)| t == w[1])
+                    .find(|(_, t)| *t == w[1])
                     .map(|(a, _)| a)
                     .expect("consecutive states of a path are one action apart")
             })
@@ -312,7 +312,7 @@ impl Planner for ExactSolver {
 /// that leads there: under `free`, moves of the held block that move it and picks of every
 /// other block; under `paper`, those of them the protocol allows, and Drop.
 fn successors(grid: Grid, protocol: ActionProtocol, state: &State) -> Vec<(Action, State)> {
-    let world = GridWorld::new(grid, *state).expect("states reached by act fit the grid");
+    let world = GridWorld::new(grid, state.clone()).expect("states reached by act fit the grid");
     let held = state.held_block();
     let moves = [Action::Up, Action::Down, Action::Left, Action::Right]
         .into_iter()
@@ -325,9 +325,9 @@ fn successors(grid: Grid, protocol: ActionProtocol, state: &State) -> Vec<(Actio
         .chain(drop)
         .filter(|&a| legal.contains(a))
         .filter_map(|a| {
-            let mut w = world;
+            let mut w = world.clone();
             match w.act(a) {
-                Ok(Effect::Moved | Effect::Picked | Effect::Dropped) => Some((a, *w.state_ref())),
+                Ok(Effect::Moved | Effect::Picked | Effect::Dropped) => Some((a, w.into_state())),
                 _ => None,
             }
         })
@@ -339,7 +339,7 @@ mod tests {
     use super::*;
     use sim::Cell;
 
-    fn state(cells: &[(u8, u8)], held: Option<u8>) -> State {
+    fn state(cells: &[(u16, u16)], held: Option<u16>) -> State {
         let cells: Vec<Cell> = cells.iter().map(|&(x, y)| Cell::new(x, y)).collect();
         State::new(&cells, held.map(sim::BlockId)).unwrap()
     }

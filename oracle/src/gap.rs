@@ -16,7 +16,7 @@ pub fn seeded_starts(grid: Grid, goal: &Goal, count: u64, seed: u64) -> Result<V
     let mut env = Env::new(EnvConfig {
         grid,
         backend: Backend::Grid,
-        ..EnvConfig::with_goal(*goal)
+        ..EnvConfig::with_goal(goal.clone())
     })?;
     Ok((0..count).map(|k| env.reset(episode_seed(seed, k)).state).collect())
 }
@@ -72,7 +72,7 @@ pub fn measure(oracle: &Oracle, exact: &ExactSolver, goal: &Goal, starts: &[Stat
             let excess = o.len() - e.len();
             if worst.as_ref().is_none_or(|(r, x, _)| (ratio, excess) > (*r, *x)) {
                 let case = GapCase {
-                    start: *start,
+                    start: start.clone(),
                     oracle: o,
                     exact: e,
                 };
@@ -82,7 +82,7 @@ pub fn measure(oracle: &Oracle, exact: &ExactSolver, goal: &Goal, starts: &[Stat
     }
     let n = starts.len().max(1) as f64;
     Ok(GapReport {
-        goal: *goal,
+        goal: goal.clone(),
         starts: starts.len(),
         mean_oracle_steps: oracle_steps as f64 / n,
         mean_exact_steps: exact_steps as f64 / n,

@@ -51,7 +51,7 @@
 //!
 //! let grid = Grid::default();
 //! let goal: Goal = "1,0,2".parse()?;
-//! let mut env = sim::Env::new(sim::EnvConfig::with_goal(goal))?;
+//! let mut env = sim::Env::new(sim::EnvConfig::with_goal(goal.clone()))?;
 //! let start = env.reset(7).state;
 //! let plan = Oracle::new(grid).plan(&start, &goal)?;
 //! let shortest = ExactSolver::new(grid).distance(&start, &goal)?;

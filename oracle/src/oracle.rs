@@ -147,7 +147,7 @@ impl Oracle {
     /// The shortest routing-policy plan over every placement and block order, `None` if the
     /// policy is stuck at all of them; `state` and `goal` have been checked.
     fn routed_plan(&self, state: &State, goal: &Goal) -> Result<Option<Plan>> {
-        let world = GridWorld::new(self.grid, *state)?;
+        let world = GridWorld::new(self.grid, state.clone())?;
         let mut placements: Vec<(u32, u64, Placement)> = Placement::all(self.grid, goal.block_count())
             .map(|p| (p.lower_bound(state, goal), p.centroid_distance(state, goal), p))
             .collect();
@@ -158,7 +158,7 @@ impl Oracle {
                 if best.as_ref().is_some_and(|b| bound as usize >= b.len()) {
                     break;
                 }
-                if let Some(actions) = rollout(world, goal, placement, order) {
+                if let Some(actions) = rollout(world.clone(), goal, placement, order) {
                     let actions = legalize(&actions, state.held_block(), self.protocol);
                     if best.as_ref().is_none_or(|b| actions.len() < b.len()) {
                         best = Some(actions);
@@ -332,7 +332,7 @@ mod tests {
                     .par_iter()
                     .flat_map_iter(|s| (0..=blocks).map(move |h| (s, h)))
                     .filter(|&(s, h)| {
-                        let held = (h < blocks).then_some(BlockId(h as u8));
+                        let held = (h < blocks).then_some(BlockId::of(h));
                         let s = s.with_held(held).unwrap();
                         !goal.holds(&s) && oracle.routed_plan(&s, &goal).unwrap().is_none()
                     })

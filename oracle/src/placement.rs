@@ -8,8 +8,8 @@ use crate::error::{OracleError, Result};
 /// A place for the goal's stack: its column and the row of its bottom block.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub(crate) struct Placement {
-    pub column: u8,
-    pub bottom: u8,
+    pub column: u16,
+    pub bottom: u16,
 }
 
 impl Placement {
@@ -18,8 +18,8 @@ impl Placement {
         let rows = (grid.height() + 1).saturating_sub(blocks);
         (0..rows).flat_map(move |bottom| {
             (0..grid.width()).map(move |column| Placement {
-                column: column as u8,
-                bottom: bottom as u8,
+                column: column as u16,
+                bottom: bottom as u16,
             })
         })
     }
@@ -27,7 +27,7 @@ impl Placement {
     /// The cell `block` stands on in this placement's stack.
     #[inline]
     pub fn target(self, goal: &Goal, block: BlockId) -> Cell {
-        Cell::new(self.column, self.bottom + goal.place_of(block) as u8)
+        Cell::new(self.column, self.bottom + goal.place_of(block) as u16)
     }
 
     /// Whether `cell` is one of the stack's cells.
@@ -44,7 +44,7 @@ impl Placement {
         let held = state.held_block();
         let mut bound = 0;
         for (i, &cell) in state.cells().iter().enumerate() {
-            let block = BlockId(i as u8);
+            let block = BlockId::of(i);
             let distance = cell.manhattan(self.target(goal, block));
             if distance > 0 {
                 bound += distance + u32::from(held != Some(block));

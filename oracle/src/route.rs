@@ -37,7 +37,7 @@ impl Records {
             let prev = usize::from(self.from[at]);
             let (a, b) = (grid.cell_at(prev), grid.cell_at(at));
             actions.push(
-                match (i16::from(b.x) - i16::from(a.x), i16::from(b.y) - i16::from(a.y)) {
+                match (i32::from(b.x) - i32::from(a.x), i32::from(b.y) - i32::from(a.y)) {
                     (0, 1) => Action::Up,
                     (0, -1) => Action::Down,
                     (-1, 0) => Action::Left,
@@ -53,7 +53,7 @@ impl Records {
 
 /// `world` with `block` held (picked if it was not).
 fn holding(world: &GridWorld, block: BlockId) -> GridWorld {
-    let mut world = *world;
+    let mut world = world.clone();
     world.act(Action::Pick(block)).expect("the block exists");
     world
 }
@@ -61,7 +61,7 @@ fn holding(world: &GridWorld, block: BlockId) -> GridWorld {
 /// The worlds one move of the held `block` away, by the rules.
 fn next(world: GridWorld) -> impl Iterator<Item = GridWorld> {
     MOVES.into_iter().filter_map(move |a| {
-        let mut w = world;
+        let mut w = world.clone();
         (w.act(a) == Ok(Effect::Moved)).then_some(w)
     })
 }

@@ -14,12 +14,12 @@ fn every_action_can_be_undone() {
     // The breadth-first search below relies on the state graph being undirected.
     let grid = Grid::default();
     for s in all_states(grid, 3) {
-        let world = GridWorld::new(grid, s).unwrap();
+        let world = GridWorld::new(grid, s.clone()).unwrap();
         for a in Action::all(3) {
-            let mut w = world;
+            let mut w = world.clone();
             w.act(a).unwrap();
             let back = Action::all(3).any(|b| {
-                let mut v = w;
+                let mut v = w.clone();
                 v.act(b).unwrap();
                 v == world
             });
@@ -52,7 +52,7 @@ fn exact_distances_equal_breadth_first_search_on_random_three_block_states() {
     let states = all_states(grid, 3);
     let mut r = rng(21);
     for _ in 0..400 {
-        let s = states[r.random_range(0..states.len())];
+        let s = states[r.random_range(0..states.len())].clone();
         let plan = solver.solve(&s, &goal).unwrap();
         assert_eq!(Some(plan.len() as u32), table.distance(&s), "{s:?}");
         assert!(goal.holds(&replay(grid, &s, &plan.actions)), "{s:?}");
@@ -70,9 +70,9 @@ fn the_heuristic_is_admissible_and_consistent_on_every_three_block_state() {
         let h = solver.lower_bound(&s, &goal).unwrap();
         assert!(h <= table.distance(&s).unwrap(), "{s:?}: bound {h} above the distance");
         assert_eq!(h == 0, goal.holds(&s), "{s:?}");
-        let world = GridWorld::new(grid, s).unwrap();
+        let world = GridWorld::new(grid, s.clone()).unwrap();
         for a in Action::all(3) {
-            let mut w = world;
+            let mut w = world.clone();
             w.act(a).unwrap();
             let next = solver.lower_bound(w.state_ref(), &goal).unwrap();
             assert!(h <= next + 1, "{s:?} {a}: bound falls from {h} to {next}");
@@ -107,7 +107,7 @@ fn exact_and_oracle_plans_replay_to_the_goal_in_the_physics_world() {
                 solver.solve(&start, &goal).unwrap(),
                 oracle.plan(&start, &goal).unwrap(),
             ] {
-                let mut world = PhysicsWorld::new(grid, start).unwrap();
+                let mut world = PhysicsWorld::new(grid, start.clone()).unwrap();
                 for (i, &a) in plan.actions.iter().enumerate() {
                     assert!(!goal.holds(&world.state()), "{start:?}: goal before action {i}");
                     world.act(a).unwrap();
@@ -148,7 +148,7 @@ fn oracle_optimality_gap_is_within_three_percent_for_every_three_block_goal() {
     }
 }
 
-fn state(cells: &[(u8, u8)], held: Option<u8>) -> State {
+fn state(cells: &[(u16, u16)], held: Option<u16>) -> State {
     let cells: Vec<Cell> = cells.iter().map(|&(x, y)| Cell::new(x, y)).collect();
     State::new(&cells, held.map(BlockId)).unwrap()
 }

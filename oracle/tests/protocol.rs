@@ -19,10 +19,10 @@ fn replays_legally(grid: Grid, start: &State, goal: &Goal, plan: &oracle::Plan) 
         backend: Backend::Grid,
         protocol: PAPER,
         horizon: 10_000,
-        ..EnvConfig::with_goal(*goal)
+        ..EnvConfig::with_goal(goal.clone())
     })
     .unwrap();
-    env.reset_to(*start, *goal).unwrap();
+    env.reset_to(start.clone(), goal.clone()).unwrap();
     for &a in &plan.actions {
         env.step(a)
             .map_err(|e| format!("{start:?} goal {goal}: plan {plan}: {e}"))?;
@@ -75,7 +75,7 @@ fn exact_paper_plans_match_breadth_first_search_on_random_three_block_states() {
     let mut r = rng(31);
     let mut longer = 0;
     for _ in 0..300 {
-        let s = states[r.random_range(0..states.len())];
+        let s = states[r.random_range(0..states.len())].clone();
         let plan = solver.solve(&s, &goal).unwrap();
         assert_eq!(Some(plan.len() as u32), table.distance(&s), "{s:?}");
         assert!(replays_legally(grid, &s, &goal, &plan).unwrap(), "{s:?}");
@@ -107,7 +107,7 @@ fn oracle_paper_plans_replay_legally_from_three_block_starts() {
         let failures: Vec<String> = placements
             .par_iter()
             .step_by(7)
-            .flat_map_iter(|s| (0..4).map(move |h| s.with_held((h < 3).then_some(sim::BlockId(h as u8))).unwrap()))
+            .flat_map_iter(|s| (0..4).map(move |h| s.with_held((h < 3).then_some(sim::BlockId::of(h))).unwrap()))
             .filter_map(|s| {
                 let plan = oracle.plan(&s, &goal).map_err(|e| e.to_string()).ok()?;
                 match replays_legally(grid, &s, &goal, &plan) {
@@ -134,12 +134,12 @@ fn following_the_paper_oracle_step_by_step_reaches_the_goal_within_its_plan() {
     let states = all_states(grid, 3);
     for _ in 0..2000 {
         let goal = Goal::random(3, &mut r).unwrap();
-        let start = states[r.random_range(0..states.len())];
+        let start = states[r.random_range(0..states.len())].clone();
         if goal.holds(&start) {
             continue;
         }
         let planned = oracle.plan(&start, &goal).unwrap().len();
-        let mut world = GridWorld::new(grid, start).unwrap();
+        let mut world = GridWorld::new(grid, start.clone()).unwrap();
         let mut steps = 0;
         while !goal.holds(world.state_ref()) {
             let a = oracle.next_action(world.state_ref(), &goal).unwrap();

@@ -23,16 +23,16 @@ fn side_states(grid: Grid, blocks: usize) -> Vec<State> {
 /// every action (no-ops included) through `World::act` in the side view.
 fn distances_from(grid: Grid, start: State) -> HashMap<State, u32> {
     let n = start.block_count();
-    let mut dist = HashMap::from([(start, 0)]);
+    let mut dist = HashMap::from([(start.clone(), 0)]);
     let mut queue = VecDeque::from([start]);
     while let Some(s) = queue.pop_front() {
         let d = dist[&s];
         let world = GridWorld::new_in(View::Side, grid, s).unwrap();
         for a in Action::all(n) {
-            let mut w = world;
+            let mut w = world.clone();
             w.act(a).unwrap();
-            dist.entry(*w.state_ref()).or_insert_with(|| {
-                queue.push_back(*w.state_ref());
+            dist.entry(w.state_ref().clone()).or_insert_with(|| {
+                queue.push_back(w.state_ref().clone());
                 d + 1
             });
         }
@@ -42,11 +42,11 @@ fn distances_from(grid: Grid, start: State) -> HashMap<State, u32> {
 
 /// The state `actions` lead to from `start` in the side view of the grid model.
 fn replay_side(grid: Grid, start: &State, actions: &[Action]) -> State {
-    let mut world = GridWorld::new_in(View::Side, grid, *start).unwrap();
+    let mut world = GridWorld::new_in(View::Side, grid, start.clone()).unwrap();
     for &a in actions {
         world.act(a).unwrap();
     }
-    *world.state_ref()
+    world.state_ref().clone()
 }
 
 #[test]
@@ -66,7 +66,7 @@ fn side_distances_equal_breadth_first_search_on_small_worlds() {
         for (n, goals) in &goal_sets {
             let solver = ExactSolver::new(grid).with_view(View::Side);
             for start in side_states(grid, *n) {
-                let dist = distances_from(grid, start);
+                let dist = distances_from(grid, start.clone());
                 for goal in goals {
                     let best = dist
                         .iter()
@@ -103,9 +103,9 @@ fn side_heuristic_is_consistent_on_every_state_of_a_small_world() {
         for s in side_states(grid, 3) {
             let h = solver.lower_bound(&s, &goal).unwrap();
             assert_eq!(h == 0, goal.holds_in(View::Side, &s), "{s:?} goal {goal}");
-            let world = GridWorld::new_in(View::Side, grid, s).unwrap();
+            let world = GridWorld::new_in(View::Side, grid, s.clone()).unwrap();
             for a in Action::all(3) {
-                let mut w = world;
+                let mut w = world.clone();
                 w.act(a).unwrap();
                 let next = solver.lower_bound(w.state_ref(), &goal).unwrap();
                 assert!(h <= next + 1, "{s:?} goal {goal}: {a} takes h from {h} to {next}");
@@ -127,7 +127,7 @@ fn random_problems(blocks: usize, count: u64) -> Vec<(State, Goal)> {
         let mut env = Env::new(EnvConfig {
             view: View::Side,
             blocks,
-            ..EnvConfig::with_goal(goal)
+            ..EnvConfig::with_goal(goal.clone())
         })
         .unwrap();
         out.push((env.reset(seed).state, goal));
@@ -147,10 +147,10 @@ fn side_plans_replay_through_the_env_on_both_backends() {
                     view: View::Side,
                     backend,
                     blocks,
-                    ..EnvConfig::with_goal(goal)
+                    ..EnvConfig::with_goal(goal.clone())
                 })
                 .unwrap();
-                env.reset_to(start, goal).unwrap();
+                env.reset_to(start.clone(), goal.clone()).unwrap();
                 let mut last = None;
                 for &a in &plan.actions {
                     assert!(last.is_none_or(|s: sim::Step| !s.terminated), "{goal}: ended early");
@@ -170,7 +170,7 @@ fn side_steps_lie_between_three_times_the_fewest_moves_and_the_expanded_exact_pl
     let small = Grid::new(4, 3).unwrap();
     for goal in Goal::all_towers(3).unwrap() {
         for s in side_states(small, 3).into_iter().filter(|s| s.held_block().is_none()) {
-            problems.push((small, s, goal));
+            problems.push((small, s, goal.clone()));
         }
     }
     for blocks in [3, 4] {
@@ -217,7 +217,7 @@ fn side_bad_input_is_an_error() {
     let err = narrow.solve(&start, &three).unwrap_err();
     assert!(matches!(err, OracleError::GoalUnreachable { .. }), "{err}");
     let tiny = solver.with_node_budget(3);
-    let (start, goal) = random_problems(4, 1)[0];
+    let (start, goal) = random_problems(4, 1)[0].clone();
     assert!(matches!(
         tiny.solve(&start, &goal),
         Err(OracleError::BudgetExceeded { .. })

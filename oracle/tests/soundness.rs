@@ -79,7 +79,7 @@ fn random_mid_episode(grid: Grid, blocks: usize, steps: usize, rng: &mut impl Rn
         let a = Action::from_index(rng.random_range(0..Action::count(blocks)), blocks).unwrap();
         world.act(a).unwrap();
     }
-    let held = BlockId(rng.random_range(0..blocks) as u8);
+    let held = BlockId::of(rng.random_range(0..blocks));
     world.state_ref().with_held(Some(held)).unwrap()
 }
 
@@ -103,7 +103,7 @@ fn following_next_action_from_mid_episode_states_reaches_the_goal() {
         let goal = Goal::random(3, &mut r).unwrap();
         let start = random_mid_episode(grid, 3, 30, &mut r);
         let planned = oracle.plan(&start, &goal).unwrap().len();
-        let mut world = GridWorld::new(grid, start).unwrap();
+        let mut world = GridWorld::new(grid, start.clone()).unwrap();
         let mut steps = 0;
         while !goal.holds(world.state_ref()) {
             world

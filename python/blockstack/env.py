@@ -75,7 +75,9 @@ class StackEnv(gym.Env):
       each episode. ``planes`` does not carry the goal (``role-planes`` name blocks by
       their place in it, ``frame`` and ``paper-screen`` draw it), so with a drawn goal and
       ``planes`` use ``info["goal"]``.
-    - ``grid``: ``(width, height)`` or text such as ``"7x7"``, default ``(7, 7)``.
+    - ``grid``: ``(width, height)`` or text such as ``"7x7"``; default ``(7, 7)``, and in
+      the side view ``(7, 7)`` up to 7 blocks and ``(N, N + 1)`` beyond (docs/world.md,
+      "The side view at any size").
     - ``reward``: ``sparse`` (+10 at the goal), ``dense``, ``paper`` or ``step-cost``;
       ``None`` (the default) takes the profile's (``sparse`` in ``spec``).
     - ``backend``: ``physics`` (rapier2d) or ``grid`` (the occupancy model); same rules.
@@ -129,7 +131,7 @@ class StackEnv(gym.Env):
         self,
         blocks: int = 3,
         goal: Goal = None,
-        grid: Tuple[int, int] = (7, 7),
+        grid: Optional[Tuple[int, int]] = None,
         reward: Optional[str] = None,
         backend: str = "physics",
         obs: str = "planes",
@@ -145,7 +147,7 @@ class StackEnv(gym.Env):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"cannot read render mode from {render_mode!r}: choose None, rgb_array or ansi")
         blocks = whole("blocks", blocks)
-        grid = _native.grid_size(grid)
+        grid = _native.grid_size(grid, view, blocks)
         steps = whole("max_episode_steps", max_episode_steps, 0, U32_MAX)
         if horizon is not None:
             steps = whole("horizon", horizon, 0, U32_MAX)

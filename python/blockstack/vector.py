@@ -59,7 +59,7 @@ class StackVectorEnv(VectorEnv):
 
     ``num_envs`` is refused with a ``ValueError`` when the buffers and environments would
     need more than the machine's physical memory (about 8 KiB and an observation each).
-    ``grid`` is ``(width, height)`` or text such as ``"7x7"``. One instance may be used from
+    ``grid`` is ``(width, height)`` or text such as ``"7x7"`` (default: as ``StackEnv``'s). One instance may be used from
     several threads: its calls take turns. It cannot be pickled or copied.
 
     ``reset(seed=s)`` resets environment ``i`` with ``s + i`` (a list gives one seed each),
@@ -73,7 +73,7 @@ class StackVectorEnv(VectorEnv):
         num_envs: int,
         blocks: int = 3,
         goal: Goal = None,
-        grid: Tuple[int, int] = (7, 7),
+        grid: Optional[Tuple[int, int]] = None,
         reward: Optional[str] = None,
         backend: str = "physics",
         obs: str = "planes",
@@ -94,7 +94,7 @@ class StackVectorEnv(VectorEnv):
             raise ValueError(f"cannot read render mode from {render_mode!r}: choose None or rgb_array")
         num_envs = whole("num_envs", num_envs)
         blocks = whole("blocks", blocks)
-        grid = _native.grid_size(grid)
+        grid = _native.grid_size(grid, view, blocks)
         steps = whole("max_episode_steps", max_episode_steps, 0, U32_MAX)
         if horizon is not None:
             steps = whole("horizon", horizon, 0, U32_MAX)

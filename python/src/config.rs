@@ -19,7 +19,9 @@ pub fn obs_kind(name: &str) -> PyResult<ObsKind> {
 #[pyfunction]
 pub fn observation_shape(obs: &str, blocks: usize, grid: (usize, usize)) -> PyResult<Option<[usize; 3]>> {
     let grid = Grid::new(grid.0, grid.1).or_value_error()?;
-    Ok(obs_kind(obs)?.shape(grid, blocks))
+    let kind = obs_kind(obs)?;
+    kind.check(grid, blocks).or_value_error()?;
+    Ok(kind.shape(grid, blocks))
 }
 
 /// The world an environment is made of, from the Python keyword arguments: the profile's
@@ -90,10 +92,18 @@ pub fn grid_from(grid: &Bound<'_, PyAny>) -> PyResult<Grid> {
 
 /// `(width, height)` of a grid given as text such as `"7x7"` or a `(width, height)` pair
 /// ([`grid_from`]): the one reading of a grid argument, for the Python classes and
-/// functions to call before they build anything.
+/// functions to call before they build anything. No grid (`None`) is the view's default for
+/// `blocks` blocks: 7 x 7 from above, `sim::Grid::side_default` from the side.
 #[pyfunction]
-pub fn grid_size(grid: &Bound<'_, PyAny>) -> PyResult<(usize, usize)> {
-    let grid = grid_from(grid)?;
+#[pyo3(signature = (grid, view=None, blocks=3))]
+pub fn grid_size(grid: Option<&Bound<'_, PyAny>>, view: Option<&str>, blocks: usize) -> PyResult<(usize, usize)> {
+    let grid = match grid {
+        Some(grid) => grid_from(grid)?,
+        None if view.map(str::parse::<sim::View>).transpose().or_value_error()? == Some(sim::View::Side) => {
+            Grid::side_default(blocks)
+        }
+        None => Grid::default(),
+    };
     Ok((grid.width(), grid.height()))
 }
 

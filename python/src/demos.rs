@@ -185,10 +185,10 @@ impl EpisodeObserver for Columns {
         let first = std::mem::take(&mut self.starting);
         self.push(
             episode,
-            *before,
+            before.clone(),
             action,
             step.reward,
-            step.observation,
+            step.observation.clone(),
             step.terminated,
             step.truncated,
             first,
@@ -259,7 +259,7 @@ pub fn demonstrations<'py>(
             // with the GIL taken back only for that.
             let mut signal = None;
             let mut check = signal_checker(&mut signal);
-            let mut env = Env::new(config).or_value_error()?;
+            let mut env = Env::new(config.clone()).or_value_error()?;
             let mut columns = Columns::default();
             let played = (0..episodes).try_for_each(|k| {
                 check()?;
@@ -317,22 +317,22 @@ pub fn read_recording<'py>(
         for e in &episodes {
             let mut obs = Observation {
                 grid: e.grid,
-                state: e.start,
-                goal: e.goal,
+                state: e.start.clone(),
+                goal: e.goal.clone(),
                 protocol,
                 view: sim::View::Top,
             };
             for (k, step) in e.steps.iter().enumerate() {
                 let next = Observation {
-                    state: step.state,
-                    ..obs
+                    state: step.state.clone(),
+                    ..obs.clone()
                 };
                 columns.push(
                     e.episode,
                     obs,
                     step.action,
                     step.reward,
-                    next,
+                    next.clone(),
                     step.terminated,
                     step.truncated,
                     k == 0,

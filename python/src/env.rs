@@ -9,6 +9,10 @@ use crate::boundary::{OrValueError, guard, value_error};
 use crate::config::{self, ObsKind, env_config, goal_from};
 use crate::observe;
 
+/// The most block moves `actions="moves"` numbers: its mask is one byte per move at every
+/// step (`N * (N + W)`: 2,000 blocks on their default grid, 8 million).
+const MAX_MOVE_ACTIONS: usize = 1 << 23;
+
 /// One blockstack environment; the Gymnasium class `blockstack.StackEnv` wraps it.
 #[pyclass(module = "blockstack._native")]
 pub struct NativeEnv {
@@ -117,6 +121,14 @@ impl NativeEnv {
                 )));
             }
         };
+        kind.check(config.grid, config.blocks).or_value_error()?;
+        let move_count = BlockMove::count(config.blocks, config.grid);
+        if moves && move_count > MAX_MOVE_ACTIONS {
+            return Err(value_error(format!(
+                "actions=\"moves\" numbers every block move, {move_count} with {} blocks on a {} grid, more than the {MAX_MOVE_ACTIONS} an action space and its mask hold: use fewer blocks or a narrower grid",
+                config.blocks, config.grid
+            )));
+        }
         Ok(NativeEnv {
             env: guard(|| Env::new(config).or_value_error())?,
             kind,
@@ -145,14 +157,14 @@ impl NativeEnv {
     fn reset_to<'py>(
         &mut self,
         py: Python<'py>,
-        cells: Vec<(u8, u8)>,
-        held: Option<u8>,
+        cells: Vec<(u16, u16)>,
+        held: Option<u16>,
         goal: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyTuple>> {
         let blocks = self.env.config().blocks;
         let goal = match goal {
             Some(g) => goal_from(g, Some(blocks))?,
-            None => self.env.goal(),
+            None => self.env.goal().clone(),
         };
         let state = state_from(&cells, held)?;
         // Refused before the reset: a refused start leaves the episode as it was.
@@ -168,7 +180,7 @@ impl NativeEnv {
 
     /// Takes one action; `(observation, reward, terminated, truncated, info)`.
     fn step<'py>(&mut self, py: Python<'py>, action: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyTuple>> {
-        let config = *self.env.config();
+        let config = self.env.config().clone();
         let (step, gripper_steps) = if self.moves {
             let index: i64 = action
                 .extract()
@@ -277,7 +289,7 @@ impl NativeEnv {
 }
 
 /// A state from Python's cells and held block, checked by `sim`.
-pub fn state_from(cells: &[(u8, u8)], held: Option<u8>) -> PyResult<State> {
+pub fn state_from(cells: &[(u16, u16)], held: Option<u16>) -> PyResult<State> {
     let cells: Vec<Cell> = cells.iter().map(|&(x, y)| Cell::new(x, y)).collect();
     State::new(&cells, held.map(BlockId)).or_value_error()
 }

@@ -17,7 +17,7 @@ use crate::env::state_from;
 /// top, or `-1` for every block when none does.
 #[pyfunction]
 #[pyo3(signature = (cells, held=None))]
-pub fn achieved_goal(cells: Vec<(u8, u8)>, held: Option<u8>) -> PyResult<Vec<i64>> {
+pub fn achieved_goal(cells: Vec<(u16, u16)>, held: Option<u16>) -> PyResult<Vec<i64>> {
     let state = state_from(&cells, held)?;
     Ok(match Goal::standing(&state) {
         Some(goal) => goal.order().iter().map(|b| i64::from(b.0)).collect(),
@@ -51,7 +51,7 @@ pub fn goal_rewards(reward: &str, blocks: usize, grid: (usize, usize)) -> PyResu
         let column = |order: &mut dyn Iterator<Item = usize>| -> PyResult<State> {
             let mut cells = vec![Cell::new(0, 0); blocks];
             for (y, b) in order.enumerate() {
-                cells[b] = Cell::new(0, y as u8);
+                cells[b] = Cell::new(0, y as u16);
             }
             State::new(&cells, None::<BlockId>).or_value_error()
         };

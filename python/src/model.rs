@@ -85,8 +85,8 @@ impl NativeModel {
     #[pyo3(signature = (cells, held, goal, goal_tower, epsilon=0.0))]
     fn act(
         &mut self,
-        cells: Vec<(u8, u8)>,
-        held: Option<u8>,
+        cells: Vec<(u16, u16)>,
+        held: Option<u16>,
         goal: Vec<i64>,
         goal_tower: Vec<i64>,
         epsilon: f64,

@@ -25,9 +25,9 @@ use crate::env::state_from;
 #[allow(clippy::too_many_arguments)]
 pub fn solve<'py>(
     py: Python<'py>,
-    cells: Vec<(u8, u8)>,
+    cells: Vec<(u16, u16)>,
     goal: &Bound<'_, PyAny>,
-    held: Option<u8>,
+    held: Option<u16>,
     grid: (usize, usize),
     solver: &str,
     protocol: &str,

@@ -134,7 +134,7 @@ pub fn train<'py>(
                 let plan = EvalPlan {
                     world: EnvConfig {
                         horizon: sim::DEFAULT_HORIZON,
-                        ..config.world
+                        ..config.world.clone()
                     },
                     profile: config.profile,
                     goals: eval_goals,

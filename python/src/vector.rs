@@ -102,7 +102,7 @@ impl Slot<'_> {
                 *self.terminated = step.terminated;
                 *self.truncated = step.truncated;
                 *self.blocked = step.info.blocked;
-                if let Some(last) = step.info.final_observation {
+                if let Some(last) = step.info.final_observation.as_deref().cloned() {
                     // The step's info is the reset's; the ended step's goes with its last
                     // observation, as Gymnasium's same-step mode reports them.
                     *self.blocked = false;
@@ -334,7 +334,8 @@ impl NativeVecEnv {
                 ..config::PlayRules::default()
             },
         )?;
-        let vec = guard(|| VecEnv::new(config, num_envs, threads).or_value_error())?.with_autoreset(mode);
+        kind.check(config.grid, config.blocks).or_value_error()?;
+        let vec = guard(|| VecEnv::new(config.clone(), num_envs, threads).or_value_error())?.with_autoreset(mode);
         let n = blocks;
         let obs = match kind.shape(config.grid, n) {
             Some(shape) => {
@@ -413,7 +414,7 @@ impl NativeVecEnv {
         py.detach(|| {
             guard(|| {
                 vec.reset_with(&seeds, &mut slots, |obs, slot| {
-                    slot.write(kind, &VecStep::Reset(*obs));
+                    slot.write(kind, &VecStep::Reset(obs.clone()));
                 });
                 Ok(())
             })

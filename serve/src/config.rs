@@ -252,7 +252,7 @@ impl Condition {
                 asked.to_vec()
             }
         };
-        let watch_world = loaded.as_ref().map_or(world, AnyModel::world);
+        let watch_world = loaded.as_ref().map_or(world.clone(), AnyModel::world);
         Ok(Condition {
             name: name.to_string(),
             model_file: model.map(|p| p.display().to_string()),

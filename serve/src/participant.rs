@@ -90,7 +90,7 @@ impl Participant {
         let session = CorrectionSession::new(
             c.agent.clone(),
             c.rule,
-            c.world,
+            c.world.clone(),
             c.goals.clone(),
             c.seed,
             PROPOSAL_EPSILON,
@@ -207,11 +207,11 @@ impl Participant {
         let world = EnvConfig {
             goal: goals
                 .get((k % goals.len().max(1) as u64) as usize)
-                .map_or(GoalSpec::Random, |g| GoalSpec::Fixed(**g)),
+                .map_or(GoalSpec::Random, |g| GoalSpec::Fixed((*g).clone())),
             ..c.watch_world
         };
         let seed = episode_seed(c.seed, k);
-        let mut env = Env::new(world)?;
+        let mut env = Env::new(world.clone())?;
         let obs = env.reset(seed);
         let mut w = Watching {
             k,

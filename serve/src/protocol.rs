@@ -137,11 +137,11 @@ pub struct View {
     /// `[W, H]`.
     pub grid: [usize; 2],
     /// Every block's cell `[x, y]` (y up), by block id.
-    pub blocks: Vec<[u8; 2]>,
+    pub blocks: Vec<[u16; 2]>,
     /// The held block.
-    pub held: Option<u8>,
+    pub held: Option<u16>,
     /// The goal, bottom to top.
-    pub goal: Vec<u8>,
+    pub goal: Vec<u16>,
     /// Every block's colour as `#rrggbb` (`sim::render`'s palette).
     pub colours: Vec<String>,
     /// Every block's label (`sim::render::label`).

@@ -20,7 +20,7 @@ fn main() -> Result<(), sim::SimError> {
         .map(|_| Action::from_index(rng.random_range(0..Action::count(3)), 3))
         .collect::<Result<_, _>>()?;
 
-    let mut occupancy = GridWorld::new(grid, start)?;
+    let mut occupancy = GridWorld::new(grid, start.clone())?;
     let t = Instant::now();
     for &a in &actions {
         occupancy.act(a)?;
@@ -42,7 +42,7 @@ fn main() -> Result<(), sim::SimError> {
             &sim::Observation {
                 grid,
                 state: physics.state(),
-                goal: env.goal(),
+                goal: env.goal().clone(),
                 protocol: sim::ActionProtocol::Free,
                 view: sim::View::Top,
             },

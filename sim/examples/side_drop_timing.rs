@@ -9,7 +9,7 @@ use sim::{Action, Backend, BlockId, Cell, Env, EnvConfig, Grid, PhysicsWorld, St
 fn main() {
     let grid = Grid::default();
     let state = State::new(&[Cell::new(0, 0), Cell::new(0, 1), Cell::new(4, 6)], Some(BlockId(2))).unwrap();
-    let mut p = PhysicsWorld::new_in(View::Side, grid, state).unwrap();
+    let mut p = PhysicsWorld::new_in(View::Side, grid, state.clone()).unwrap();
     let n = 2000;
     let t = Instant::now();
     for _ in 0..n {

@@ -42,7 +42,7 @@ impl Action {
             2 => Action::Left,
             3 => Action::Right,
             4 => Action::Drop,
-            i if i < Action::count(blocks) => Action::Pick(BlockId((i - 5) as u8)),
+            i if i < Action::count(blocks) => Action::Pick(BlockId::of(i - 5)),
             _ => return Err(SimError::ActionOutOfRange { index, blocks }),
         })
     }
@@ -112,7 +112,7 @@ impl Action {
                 if b >= blocks {
                     return Err(SimError::NoSuchBlock { block: b, blocks });
                 }
-                Action::Pick(BlockId(b as u8))
+                Action::Pick(BlockId::of(b))
             }
         };
         Ok(action)

@@ -19,9 +19,11 @@ use std::fmt;
 
 use crate::action::Action;
 use crate::error::{Result, SimError};
-use crate::grid::Grid;
+use crate::grid::{Cell, Grid};
+use crate::grid_world::GridWorld;
 use crate::state::{BlockId, State};
 use crate::view;
+use crate::world::World;
 
 /// One block move.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -38,7 +40,7 @@ pub enum BlockMove {
         /// The block moved.
         block: BlockId,
         /// The column, from 0 at the left.
-        column: u8,
+        column: u16,
     },
 }
 
@@ -67,16 +69,16 @@ impl BlockMove {
             });
         }
         let per = blocks + grid.width();
-        let (block, d) = (BlockId((index / per) as u8), index % per);
+        let (block, d) = (BlockId::of(index / per), index % per);
         Ok(if d < blocks {
             BlockMove::Onto {
                 block,
-                target: BlockId(d as u8),
+                target: BlockId::of(d),
             }
         } else {
             BlockMove::ToTable {
                 block,
-                column: (d - blocks) as u8,
+                column: (d - blocks) as u16,
             }
         })
     }
@@ -98,14 +100,135 @@ impl fmt::Display for BlockMove {
     }
 }
 
-/// Heights of the columns of `state` on `grid`, not counting `except` (the block moved).
-fn heights(state: &State, grid: Grid, except: BlockId) -> Vec<u8> {
-    let mut h = vec![0u8; grid.width()];
-    for b in state.blocks().filter(|&b| b != except) {
-        let c = state.cell(b);
-        h[usize::from(c.x)] = h[usize::from(c.x)].max(c.y + 1);
+/// How the gripper carries out a block move, the fewest actions there are (module docs):
+/// Pick `block` at `from`, Up to `row`, across to column `to_x`, Drop.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Carry {
+    /// The block moved.
+    pub block: BlockId,
+    /// Where it stands before the move.
+    pub from: Cell,
+    /// The row it is carried across on: just over every column on the way and the
+    /// destination.
+    pub row: u16,
+    /// The destination's column.
+    pub to_x: u16,
+}
+
+impl Carry {
+    /// Number of gripper actions: the Pick, the lift, the way across and the Drop.
+    pub fn len(&self) -> usize {
+        2 + usize::from(self.row - self.from.y) + usize::from(self.from.x.abs_diff(self.to_x))
     }
-    h
+
+    /// Whether it takes no action (never: a move is at least a Pick, a step across and a
+    /// Drop).
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// The cell the block is carried to, from which the Drop lets it fall.
+    pub fn release_cell(&self) -> Cell {
+        Cell::new(self.to_x, self.row)
+    }
+
+    /// The step across: Left or Right.
+    pub fn across(&self) -> Action {
+        if self.to_x > self.from.x {
+            Action::Right
+        } else {
+            Action::Left
+        }
+    }
+
+    /// The gripper actions, in order.
+    pub fn actions(&self) -> impl Iterator<Item = Action> + use<> {
+        let (lift, across) = (
+            usize::from(self.row - self.from.y),
+            usize::from(self.from.x.abs_diff(self.to_x)),
+        );
+        std::iter::once(Action::Pick(self.block))
+            .chain(std::iter::repeat_n(Action::Up, lift))
+            .chain(std::iter::repeat_n(self.across(), across))
+            .chain(std::iter::once(Action::Drop))
+    }
+}
+
+/// What a route needs to know of a world: the blocks' cells, whether a block is clear, what
+/// stands on it, and how tall the columns stand (the moved block left out). The state itself
+/// answers by scanning its blocks (O(N) each); the grid backend's side view answers from its
+/// column heights.
+trait Layout {
+    fn state(&self) -> &State;
+    /// The block standing on `block` (`None`: it is clear).
+    fn block_on(&self, block: BlockId) -> Option<BlockId>;
+    /// The height of column `x`, not counting `except`.
+    fn height(&self, x: u16, except: BlockId) -> u16;
+    /// The row to carry `from`'s block across on to column `to_x`: the tallest column
+    /// strictly between them or at `to_x` (the block's own column stands below it).
+    fn carry_row(&self, from: Cell, to_x: u16, block: BlockId) -> u16 {
+        let (lo, hi) = (from.x.min(to_x), from.x.max(to_x));
+        (lo..=hi)
+            .filter(|&x| x != from.x)
+            .map(|x| self.height(x, block))
+            .max()
+            .unwrap_or(0)
+            .max(from.y)
+    }
+}
+
+/// A state seen through scans of its blocks; column heights computed once.
+struct Scanned<'a> {
+    state: &'a State,
+    heights: Vec<u16>,
+    block: BlockId,
+}
+
+impl<'a> Scanned<'a> {
+    fn new(state: &'a State, grid: Grid, block: BlockId) -> Self {
+        let mut heights = vec![0u16; grid.width()];
+        for b in state.blocks().filter(|&b| b != block) {
+            let c = state.cell(b);
+            let x = usize::from(c.x);
+            heights[x] = heights[x].max(c.y + 1);
+        }
+        Scanned { state, heights, block }
+    }
+}
+
+impl Layout for Scanned<'_> {
+    fn state(&self) -> &State {
+        self.state
+    }
+
+    fn block_on(&self, block: BlockId) -> Option<BlockId> {
+        view::block_on(self.state, block)
+    }
+
+    fn height(&self, x: u16, except: BlockId) -> u16 {
+        debug_assert_eq!(except, self.block);
+        self.heights[usize::from(x)]
+    }
+}
+
+impl Layout for GridWorld {
+    fn state(&self) -> &State {
+        self.state_ref()
+    }
+
+    fn block_on(&self, block: BlockId) -> Option<BlockId> {
+        let c = self.cell_of(block);
+        if usize::from(c.y) + 1 >= self.grid().height() {
+            return None;
+        }
+        self.block_at(Cell::new(c.x, c.y + 1))
+    }
+
+    fn height(&self, x: u16, except: BlockId) -> u16 {
+        let h = self.columns().expect("a side-view world").height(x);
+        // A clear block stands on the top of its column: leaving it out lowers it by one.
+        if self.cell_of(except).x == x { h - 1 } else { h }
+    }
 }
 
 /// `Ok` if `mv` can be carried out in the side-view state `state` on `grid`: nothing held,
@@ -113,12 +236,38 @@ fn heights(state: &State, grid: Grid, except: BlockId) -> Vec<u8> {
 /// exists and is empty, and the grid has a free row to carry the block over what lies
 /// between. Otherwise [`SimError::IllegalMove`] (or [`SimError::NoSuchBlock`]) naming why.
 pub fn check(state: &State, grid: Grid, mv: BlockMove) -> Result<()> {
-    expand(state, grid, mv).map(drop)
+    route(state, grid, mv).map(drop)
 }
 
 /// The gripper actions that carry out `mv` from the side-view state `state` on `grid`, the
 /// fewest there are (module docs); an error, as [`check`] says, if it cannot be done.
 pub fn expand(state: &State, grid: Grid, mv: BlockMove) -> Result<Vec<Action>> {
+    Ok(route(state, grid, mv)?.actions().collect())
+}
+
+/// How the gripper carries out `mv` from the side-view `state` on `grid` ([`Carry`]); an
+/// error, as [`check`] says, if it cannot be done. O(N + W).
+pub fn route(state: &State, grid: Grid, mv: BlockMove) -> Result<Carry> {
+    if mv.block().index() >= state.block_count() {
+        return Err(SimError::NoSuchBlock {
+            block: mv.block().index(),
+            blocks: state.block_count(),
+        });
+    }
+    route_over(&Scanned::new(state, grid, mv.block()), grid, mv)
+}
+
+/// [`route`] in a side-view grid world, from its column heights: O(1) but for the way
+/// across (O(W)) and the error messages.
+pub fn route_in(world: &GridWorld, mv: BlockMove) -> Result<Carry> {
+    if world.view() != view::View::Side {
+        return Err(SimError::MovesNeedSideView);
+    }
+    route_over(world, world.grid(), mv)
+}
+
+fn route_over(layout: &impl Layout, grid: Grid, mv: BlockMove) -> Result<Carry> {
+    let state = layout.state();
     let n = state.block_count();
     let block = mv.block();
     let illegal = |reason: String| SimError::IllegalMove {
@@ -142,7 +291,7 @@ pub fn expand(state: &State, grid: Grid, mv: BlockMove) -> Result<Vec<Action>> {
                 blocks: n,
             });
         }
-        if let Some(top) = view::block_on(state, b) {
+        if let Some(top) = layout.block_on(b) {
             return Err(illegal(format!("block {top} stands on block {b}")));
         }
     }
@@ -150,7 +299,6 @@ pub fn expand(state: &State, grid: Grid, mv: BlockMove) -> Result<Vec<Action>> {
         return Err(illegal(format!("block {h} is held; drop it first")));
     }
     let from = state.cell(block);
-    let heights = heights(state, grid, block);
     let to_x = match mv {
         BlockMove::Onto { target, .. } if target == block => {
             return Err(illegal("a block cannot be put onto itself".into()));
@@ -159,7 +307,7 @@ pub fn expand(state: &State, grid: Grid, mv: BlockMove) -> Result<Vec<Action>> {
         BlockMove::ToTable { column, .. } if usize::from(column) >= grid.width() => {
             return Err(illegal(format!("the grid has columns 0..{}", grid.width())));
         }
-        BlockMove::ToTable { column, .. } if heights[usize::from(column)] > 0 => {
+        BlockMove::ToTable { column, .. } if layout.height(column, block) > 0 => {
             return Err(illegal(format!("column {column} is not empty")));
         }
         BlockMove::ToTable { column, .. } => column,
@@ -167,35 +315,60 @@ pub fn expand(state: &State, grid: Grid, mv: BlockMove) -> Result<Vec<Action>> {
     if to_x == from.x {
         return Err(illegal("the block is already there".into()));
     }
-    let (lo, hi) = (from.x.min(to_x), from.x.max(to_x));
-    // The row to carry the block on: above every column it passes and the destination.
-    let row = (lo..=hi)
-        .filter(|&x| x != from.x)
-        .map(|x| heights[usize::from(x)])
-        .max()
-        .unwrap_or(0)
-        .max(from.y);
+    let row = layout.carry_row(from, to_x, block);
     if usize::from(row) >= grid.height() {
         return Err(illegal(format!(
             "no free row to carry it over: the grid has {} rows",
             grid.height()
         )));
     }
-    let mut actions = vec![Action::Pick(block)];
-    actions.extend(std::iter::repeat_n(Action::Up, usize::from(row - from.y)));
-    let side = if to_x > from.x { Action::Right } else { Action::Left };
-    actions.extend(std::iter::repeat_n(side, usize::from(hi - lo)));
-    actions.push(Action::Drop);
-    Ok(actions)
+    Ok(Carry { block, from, row, to_x })
 }
 
 /// Every legal block move in the side-view state `state` on `grid`, by index: `true` at
-/// [`BlockMove::index`] of each move [`check`] allows.
+/// [`BlockMove::index`] of each move [`check`] allows. O(N (N + W)), the size of the answer.
 pub fn legal_moves(state: &State, grid: Grid) -> Vec<bool> {
     let n = state.block_count();
-    (0..BlockMove::count(n, grid))
-        .map(|i| BlockMove::from_index(i, n, grid).is_ok_and(|mv| check(state, grid, mv).is_ok()))
-        .collect()
+    let (w, h) = (grid.width(), grid.height());
+    let mut legal = vec![false; BlockMove::count(n, grid)];
+    if state.held_block().is_some() {
+        return legal;
+    }
+    let mut heights = vec![0u16; w];
+    for c in state.cells() {
+        let x = usize::from(c.x);
+        heights[x] = heights[x].max(c.y + 1);
+    }
+    let clear: Vec<BlockId> = state
+        .blocks()
+        .filter(|&b| state.cell(b).y + 1 == heights[usize::from(state.cell(b).x)])
+        .collect();
+    // For each clear block: the row it is carried on to each column (the tallest column on
+    // the way there, its own left out), from a sweep outwards in each direction.
+    let mut row = vec![0u16; w];
+    for &b in &clear {
+        let from = state.cell(b);
+        let fx = usize::from(from.x);
+        let mut tallest = from.y;
+        for x in (0..fx).rev() {
+            tallest = tallest.max(heights[x]);
+            row[x] = tallest;
+        }
+        tallest = from.y;
+        for x in fx + 1..w {
+            tallest = tallest.max(heights[x]);
+            row[x] = tallest;
+        }
+        let base = b.index() * (n + w);
+        for &t in &clear {
+            let x = usize::from(state.cell(t).x);
+            legal[base + t.index()] = t != b && usize::from(row[x]) < h;
+        }
+        for x in (0..w).filter(|&x| x != fx && heights[x] == 0) {
+            legal[base + n + x] = usize::from(row[x]) < h;
+        }
+    }
+    legal
 }
 
 #[cfg(test)]
@@ -203,7 +376,7 @@ mod tests {
     use super::*;
     use crate::grid::Cell;
 
-    fn state(cells: &[(u8, u8)]) -> State {
+    fn state(cells: &[(u16, u16)]) -> State {
         let cells: Vec<Cell> = cells.iter().map(|&(x, y)| Cell::new(x, y)).collect();
         State::new(&cells, None).unwrap()
     }

@@ -292,7 +292,7 @@ impl fmt::Display for CodedState {
 mod tests {
     use super::*;
 
-    fn state(cells: &[(u8, u8)], held: Option<u8>) -> State {
+    fn state(cells: &[(u16, u16)], held: Option<u16>) -> State {
         let cells: Vec<Cell> = cells.iter().map(|&(x, y)| Cell::new(x, y)).collect();
         State::new(&cells, held.map(BlockId)).unwrap()
     }

@@ -1,5 +1,7 @@
 //! A Gymnasium-style environment over either backend.
 
+use std::borrow::Borrow;
+
 use serde::{Deserialize, Serialize};
 
 use crate::action::Action;
@@ -16,10 +18,15 @@ use crate::protocol::{ActionMask, ActionProtocol};
 use crate::reward::{RewardModel, Transition};
 use crate::seeding::{self, SimRng};
 use crate::start::StartRule;
-use crate::state::{BlockId, MAX_BLOCKS, MIN_BLOCKS, State};
+use crate::state::{BlockId, State};
 use crate::termination::Termination;
+use crate::uniform;
 use crate::view::{self, View};
 use crate::world::{Effect, World};
+
+/// The least share of the Blocks World states of its blocks a side-view grid must hold: the
+/// uniform start draws states until one fits (docs/world.md, "The side view at any size").
+pub const MIN_SIDE_FIT: f64 = 1e-3;
 
 /// The default episode length limit.
 pub const DEFAULT_HORIZON: u32 = 1000;
@@ -44,7 +51,7 @@ crate::names!(Backend { Physics = "physics", Grid = "grid" } unknown(name) -> Si
 });
 
 /// Where an episode's goal comes from.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum GoalSpec {
     /// The same goal every episode.
@@ -55,7 +62,7 @@ pub enum GoalSpec {
 }
 
 /// Everything that defines an environment.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EnvConfig {
     /// The grid (default 7 x 7).
     pub grid: Grid,
@@ -135,13 +142,7 @@ impl EnvConfig {
 
     /// An error naming the first thing in this config that cannot make a world.
     pub fn validate(&self) -> Result<()> {
-        if !(MIN_BLOCKS..=MAX_BLOCKS).contains(&self.blocks) {
-            return Err(SimError::BadBlockCount {
-                count: self.blocks,
-                min: MIN_BLOCKS,
-                max: MAX_BLOCKS,
-            });
-        }
+        self.view.check_world(self.grid, self.blocks)?;
         if self.blocks >= self.grid.cell_count() {
             return Err(SimError::TooManyBlocks {
                 blocks: self.blocks,
@@ -149,7 +150,7 @@ impl EnvConfig {
                 height: self.grid.height(),
             });
         }
-        match self.goal {
+        match &self.goal {
             GoalSpec::Fixed(goal) => {
                 if goal.block_count() != self.blocks {
                     return Err(SimError::BlockCountMismatch {
@@ -159,8 +160,10 @@ impl EnvConfig {
                     });
                 }
                 goal.check_fits(self.grid)?;
-                self.reward.check_goal(&goal)?;
-                if goal.pair_count() == 0 && (self.view == View::Top || self.grid.height() == 1) {
+                self.reward.check_goal(goal)?;
+                // A side view of one block is the exception: its goal holds in every state,
+                // and an episode is over at its reset (the empty plan; docs/world.md).
+                if goal.holds_everywhere_in(self.view, self.grid) && !(self.view == View::Side && self.blocks == 1) {
                     // Every start would meet it: the uniform start rule would draw forever.
                     return Err(SimError::BadGoal {
                         goal: goal.to_string(),
@@ -183,12 +186,24 @@ impl EnvConfig {
         if self.view == View::Side && self.start != StartRule::Uniform {
             return Err(SimError::SideViewStart { rule: self.start });
         }
+        if self.view == View::Side {
+            // The uniform start draws states until one fits the grid (`view::uniform_state`).
+            let fit = uniform::fit_probability(self.blocks, self.grid.width(), self.grid.height());
+            if fit < MIN_SIDE_FIT {
+                return Err(SimError::SideGridTooSmall {
+                    blocks: self.blocks,
+                    width: self.grid.width(),
+                    height: self.grid.height(),
+                    default: Grid::side_default(self.blocks).to_string(),
+                });
+            }
+        }
         self.start.check_fits(self.grid, self.blocks)
     }
 }
 
 /// Extra facts about a step, beside the observation and reward.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Info {
     /// What the action did.
     pub effect: Effect,
@@ -205,11 +220,11 @@ pub struct Info {
     /// With a [`VecEnv`](crate::VecEnv) that reset this environment after this step: the
     /// last observation of the episode that ended (the step's `observation` is then the
     /// next episode's first). `None` otherwise.
-    pub final_observation: Option<Observation>,
+    pub final_observation: Option<Box<Observation>>,
 }
 
 /// The result of one step, Gymnasium's five values.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Step {
     /// The observation after the action.
     pub observation: Observation,
@@ -225,7 +240,7 @@ pub struct Step {
 }
 
 /// The result of a block move ([`Env::step_block_move`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct MoveStep {
     /// The last gripper step the move took (its Drop, unless the episode ended first).
     pub step: Step,
@@ -293,8 +308,8 @@ impl Env {
     pub fn new(config: EnvConfig) -> Result<Env> {
         config.validate()?;
         let grid = config.grid;
-        let goal = match config.goal {
-            GoalSpec::Fixed(g) => g,
+        let goal = match &config.goal {
+            GoalSpec::Fixed(g) => g.clone(),
             GoalSpec::Random => Goal::identity(config.blocks)?,
         };
         // A placeholder start on the bottom rows (standing, for the side view); `reset`
@@ -306,6 +321,10 @@ impl Env {
             Backend::Grid => AnyWorld::Grid(GridWorld::new_in(view, grid, start)?),
             Backend::Physics => AnyWorld::Physics(Box::new(PhysicsWorld::new_in(view, grid, start)?)),
         };
+        let legal = [
+            config.protocol.legal_when(None, config.blocks),
+            config.protocol.legal_when(Some(BlockId(0)), config.blocks),
+        ];
         Ok(Env {
             config,
             world,
@@ -314,10 +333,7 @@ impl Env {
             steps: 0,
             phase: Phase::NotReset,
             previous_action: None,
-            legal: [
-                config.protocol.legal_when(None, config.blocks),
-                config.protocol.legal_when(Some(BlockId(0)), config.blocks),
-            ],
+            legal,
         })
     }
 
@@ -337,14 +353,16 @@ impl Env {
             .draw_in(self.config.view, self.config.grid, &self.goal, &mut self.rng);
         // Drawn for this world's grid and block count: it fits without a check.
         self.world.world_mut().put(&start);
-        self.begin(start, self.config.start.keeps_goal_starts())
+        self.begin(&start, self.config.start.keeps_goal_starts())
     }
 
     /// Starts an episode from a given state and goal (for planners, tests, and experiments
     /// that replay recorded starts); the state may hold a block. An error if either does not
     /// fit the world. Under [`Termination::Goal`] a state in which the goal holds starts an
     /// episode that is already over.
-    pub fn reset_to(&mut self, state: State, goal: Goal) -> Result<Observation> {
+    /// The state and goal are taken by value or by reference.
+    pub fn reset_to(&mut self, state: impl Borrow<State>, goal: impl Borrow<Goal>) -> Result<Observation> {
+        let (state, goal) = (state.borrow(), goal.borrow());
         if goal.block_count() != self.config.blocks {
             return Err(SimError::BlockCountMismatch {
                 expected: self.config.blocks,
@@ -353,21 +371,21 @@ impl Env {
             });
         }
         goal.check_fits(self.config.grid)?;
-        self.config.reward.check_goal(&goal)?;
-        self.world.world_mut().place(&state)?;
-        self.goal = goal;
+        self.config.reward.check_goal(goal)?;
+        self.world.world_mut().place(state)?;
+        self.goal = goal.clone();
         Ok(self.begin(state, false))
     }
 
     /// Starts the episode whose start the world already shows. Under
     /// [`Termination::Goal`], a start meeting the goal is over at once unless
     /// `keeps_goal_start` (then its first step ends it).
-    fn begin(&mut self, start: State, keeps_goal_start: bool) -> Observation {
+    fn begin(&mut self, start: &State, keeps_goal_start: bool) -> Observation {
         self.steps = 0;
         self.previous_action = None;
         let over = matches!(self.config.termination, Termination::Goal)
             && !keeps_goal_start
-            && self.goal.holds_in(self.config.view, &start);
+            && self.goal.holds_in(self.config.view, start);
         self.phase = if over { Phase::Over } else { Phase::Running };
         self.observation()
     }
@@ -409,11 +427,12 @@ impl Env {
         if terminated || truncated {
             self.phase = Phase::Over;
         }
+        let action_mask = self.legal_in(&after);
         Ok(Step {
             observation: Observation {
                 grid: self.config.grid,
                 state: after,
-                goal: self.goal,
+                goal: self.goal.clone(),
                 protocol: self.config.protocol,
                 view: self.config.view,
             },
@@ -425,22 +444,45 @@ impl Env {
                 blocked: effect == Effect::Blocked,
                 pairs_in_place,
                 steps: self.steps,
-                action_mask: self.legal_in(&after),
+                action_mask,
                 final_observation: None,
             },
         })
     }
 
     /// Carries out the block move `mv` (side view only) as the gripper actions
-    /// [`block_move::expand`] gives, each one an [`Env::step`] through the backend. An error,
-    /// with nothing changed, if the episode is not running or the move cannot be carried out
-    /// now. The episode may end before the move's last action (at the horizon); the result
-    /// says how many gripper steps were taken and holds the last one.
+    /// [`block_move::expand`] gives, each one a step of the episode. An error, with nothing
+    /// changed, if the episode is not running or the move cannot be carried out now. The
+    /// episode may end before the move's last action (at the horizon); the result says how
+    /// many gripper steps were taken and holds the last one.
+    ///
+    /// The physics backend carries out every gripper action through rapier. The grid
+    /// backend, when the episode ends only at the goal and the move ends before the horizon,
+    /// carries the block straight to the cell the Drop releases it from and takes the Drop
+    /// as an ordinary step: the same world, step count and last step as every action one by
+    /// one (none of the actions before the Drop can end the episode: the goal cannot hold
+    /// while a block it names is held, nor start to hold while a block it leaves free moves),
+    /// at O(N + W) for the whole move instead of O(N) for each of its gripper steps.
     pub fn step_block_move(&mut self, mv: BlockMove) -> Result<MoveStep> {
         if self.config.view != View::Side {
             return Err(SimError::MovesNeedSideView);
         }
         self.check_running()?;
+        let (termination, horizon, steps) = (self.config.termination, self.config.horizon, self.steps);
+        if let AnyWorld::Grid(world) = &mut self.world {
+            let carry = block_move::route_in(world, mv)?;
+            let len = carry.len() as u32;
+            if matches!(termination, Termination::Goal) && steps + len <= horizon {
+                world.act(Action::Pick(carry.block))?;
+                world.carry_held(carry.release_cell());
+                self.steps += len - 1;
+                self.previous_action = Some(carry.across());
+                return Ok(MoveStep {
+                    step: self.step(Action::Drop)?,
+                    gripper_steps: len,
+                });
+            }
+        }
         let actions = block_move::expand(&self.state(), self.config.grid, mv)?;
         let mut last = None;
         for (k, &action) in actions.iter().enumerate() {
@@ -491,12 +533,12 @@ impl Env {
     #[inline]
     fn check_legal(&self, state: &State, action: Action) -> Result<()> {
         let free = matches!(self.config.protocol, ActionProtocol::Free);
-        let mask = if free {
-            self.legal[usize::from(state.held_block().is_some())]
+        let legal = if free {
+            self.legal[usize::from(state.held_block().is_some())].contains(action)
         } else {
-            self.legal_in(state)
+            self.legal_in(state).contains(action)
         };
-        if mask.contains(action) {
+        if legal {
             Ok(())
         } else if free {
             // Only a pick of a block that does not exist.
@@ -512,8 +554,12 @@ impl Env {
     #[inline]
     fn legal_in(&self, state: &State) -> ActionMask {
         match self.config.view {
-            View::Top => self.legal[usize::from(state.held_block().is_some())],
-            View::Side => view::side_mask(state),
+            View::Top => self.legal[usize::from(state.held_block().is_some())].clone(),
+            View::Side => match &self.world {
+                // The column heights answer which blocks are clear in O(N).
+                AnyWorld::Grid(world) => world.side_mask(),
+                AnyWorld::Physics(_) => view::side_mask(state),
+            },
         }
     }
 
@@ -528,7 +574,7 @@ impl Env {
         Observation {
             grid: self.config.grid,
             state: self.state(),
-            goal: self.goal,
+            goal: self.goal.clone(),
             protocol: self.config.protocol,
             view: self.config.view,
         }
@@ -546,8 +592,8 @@ impl Env {
     }
 
     /// The current goal.
-    pub fn goal(&self) -> Goal {
-        self.goal
+    pub fn goal(&self) -> &Goal {
+        &self.goal
     }
 
     /// The configuration.

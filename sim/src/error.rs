@@ -13,8 +13,11 @@ use crate::state::BlockId;
 /// for a user without adding context of its own.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 pub enum SimError {
-    /// A grid with a zero side, or more cells than the occupancy model holds.
-    #[error("grid {width}x{height} is not allowed: each side must be at least 1 and the grid at most {max} cells")]
+    /// A top-view grid with more cells than the top view's occupancy model holds
+    /// ([`crate::MAX_CELLS`]).
+    #[error(
+        "grid {width}x{height} is not allowed in the top view: it holds at most {max} cells (the side view takes larger grids)"
+    )]
     BadGrid {
         /// Requested width.
         width: usize,
@@ -23,11 +26,24 @@ pub enum SimError {
         /// Largest number of cells supported.
         max: usize,
     },
-    /// A block count outside the supported range.
-    #[error("{count} blocks is not allowed: use between {min} and {max}")]
+    /// A grid with a side of zero or longer than [`crate::grid::MAX_SIDE`].
+    #[error("grid {width}x{height} is not allowed: each side must be between 1 and {max}")]
+    GridSide {
+        /// Requested width.
+        width: usize,
+        /// Requested height.
+        height: usize,
+        /// The longest side.
+        max: usize,
+    },
+    /// A block count outside the range of what is asked for it (the top view, the side
+    /// view, a learner).
+    #[error("{count} blocks is not allowed in {what}: use between {min} and {max}")]
     BadBlockCount {
         /// Requested block count.
         count: usize,
+        /// What bounds it: "the top view", "the side view", ...
+        what: &'static str,
         /// Smallest supported count.
         min: usize,
         /// Largest supported count.
@@ -111,9 +127,9 @@ pub enum SimError {
         /// The block.
         block: usize,
         /// Column.
-        x: u8,
+        x: u16,
         /// Row.
-        y: u8,
+        y: u16,
     },
     /// Towers asked of a side-view state in which a block is held.
     #[error("block {block} is held: a state's towers are read with nothing held")]
@@ -137,6 +153,35 @@ pub enum SimError {
         goal: String,
         /// What refuses it ("the paper reward", "the exact top-view solver", ...).
         what: &'static str,
+    },
+    /// A side-view grid that holds fewer than [`crate::env::MIN_SIDE_FIT`] of the Blocks
+    /// World states of its blocks: the uniform start would draw for long.
+    #[error(
+        "a {width}x{height} grid holds fewer than 1 in 1000 of the Blocks World states of {blocks} blocks, which the side view's start draws uniformly: use a wider or taller grid (without --grid the side view takes {default})"
+    )]
+    SideGridTooSmall {
+        /// Blocks.
+        blocks: usize,
+        /// Grid width.
+        width: usize,
+        /// Grid height.
+        height: usize,
+        /// The side view's default grid for these blocks.
+        default: String,
+    },
+    /// An observation array past its bound ([`crate::ObsKind::check`]).
+    #[error(
+        "a {kind} observation of {blocks} blocks on a {width}x{height} grid is not allowed: it is a W x H array of at most 256 cells and 16 blocks; use obs state"
+    )]
+    ObsTooLarge {
+        /// The array.
+        kind: crate::ObsKind,
+        /// Grid width.
+        width: usize,
+        /// Grid height.
+        height: usize,
+        /// Blocks.
+        blocks: usize,
     },
     /// A start rule the side view does not use.
     #[error(
@@ -231,9 +276,9 @@ pub enum SimError {
         /// The other block.
         second: usize,
         /// Column.
-        x: u8,
+        x: u16,
         /// Row.
-        y: u8,
+        y: u16,
     },
     /// Two things that must agree on the number of blocks do not.
     #[error("block counts differ: the world has {expected} blocks but {what} has {found}")]

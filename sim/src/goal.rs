@@ -9,7 +9,8 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use crate::error::{Result, SimError};
 use crate::grid::{Cell, Grid};
-use crate::state::{BlockId, MAX_BLOCKS, MIN_BLOCKS, State};
+use crate::inline_vec::InlineVec;
+use crate::state::{BlockId, MAX_BLOCKS, MAX_SIDE_BLOCKS, MIN_SIDE_BLOCKS, State};
 use crate::view::View;
 
 /// The most goals [`Goal::all`] builds: every goal of 7 blocks (`7! = 5040`).
@@ -26,24 +27,39 @@ pub const MAX_ALL_GOALS: usize = 5040;
 /// must also stand on the table ([`Goal::holds_in`]). Everything that handles only the
 /// classic goal asks [`Goal::is_one_tower`] (or [`Goal::one_tower`]) first and refuses
 /// others with [`SimError::NotOneTower`].
-#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Clone, PartialEq, Eq, Hash)]
 pub struct Goal {
     /// The named blocks, tower by tower, each bottom to top.
-    order: [BlockId; MAX_BLOCKS],
+    order: InlineVec<BlockId, MAX_BLOCKS>,
     /// `place[b]` is block `b`'s position in `order` (0 = bottom of the first tower);
-    /// `u8::MAX` for a block the goal leaves free.
-    place: [u8; MAX_BLOCKS],
-    /// Bit `i` set: `order[i]` is the top of its tower.
-    tops: u32,
-    /// How many blocks `order` names.
-    named: u8,
-    /// How many blocks the world has.
-    count: u8,
+    /// [`FREE`] for a block the goal leaves free.
+    place: InlineVec<u16, MAX_BLOCKS>,
+    /// Where each tower ends in `order` (one past its top), in order: the last is
+    /// `order.len()`.
+    ends: InlineVec<u16, MAX_BLOCKS>,
+}
+
+/// The place of a block a goal leaves free.
+const FREE: u16 = u16::MAX;
+
+/// An error unless `count` blocks can make a world of some view (1 to [`MAX_SIDE_BLOCKS`]);
+/// each view bounds it further where a world is built.
+fn check_count(count: usize) -> Result<()> {
+    if !(MIN_SIDE_BLOCKS..=MAX_SIDE_BLOCKS).contains(&count) {
+        return Err(SimError::BadBlockCount {
+            count,
+            what: "any world",
+            min: MIN_SIDE_BLOCKS,
+            max: MAX_SIDE_BLOCKS,
+        });
+    }
+    Ok(())
 }
 
 impl Goal {
     /// A goal from its order bottom to top; an error unless it is a permutation of `0..N`
-    /// with `MIN_BLOCKS <= N <= MAX_BLOCKS`.
+    /// with `1 <= N <= MAX_SIDE_BLOCKS` (the top view takes 2 to [`MAX_BLOCKS`]:
+    /// [`View::check_world`]).
     pub fn new(order: &[BlockId]) -> Result<Goal> {
         let count = order.len();
         let bad = |reason: String| SimError::BadGoal {
@@ -51,31 +67,21 @@ impl Goal {
             count,
             reason,
         };
-        if !(MIN_BLOCKS..=MAX_BLOCKS).contains(&count) {
-            return Err(SimError::BadBlockCount {
-                count,
-                min: MIN_BLOCKS,
-                max: MAX_BLOCKS,
-            });
-        }
-        let mut place = [u8::MAX; MAX_BLOCKS];
+        check_count(count)?;
+        let mut place = InlineVec::from_elem(FREE, count);
         for (i, b) in order.iter().enumerate() {
             if b.index() >= count {
                 return Err(bad(format!("block {b} does not exist")));
             }
-            if place[b.index()] != u8::MAX {
+            if place[b.index()] != FREE {
                 return Err(bad(format!("block {b} appears twice")));
             }
-            place[b.index()] = i as u8;
+            place[b.index()] = i as u16;
         }
-        let mut all = [BlockId::default(); MAX_BLOCKS];
-        all[..count].copy_from_slice(order);
         Ok(Goal {
-            order: all,
+            order: InlineVec::from_slice(order),
             place,
-            tops: 1 << (count - 1),
-            named: count as u8,
-            count: count as u8,
+            ends: InlineVec::from_slice(&[count as u16]),
         })
     }
 
@@ -89,16 +95,10 @@ impl Goal {
             count: blocks,
             reason,
         };
-        if !(MIN_BLOCKS..=MAX_BLOCKS).contains(&blocks) {
-            return Err(SimError::BadBlockCount {
-                count: blocks,
-                min: MIN_BLOCKS,
-                max: MAX_BLOCKS,
-            });
-        }
-        let mut order = [BlockId::default(); MAX_BLOCKS];
-        let mut place = [u8::MAX; MAX_BLOCKS];
-        let (mut named, mut tops) = (0usize, 0u32);
+        check_count(blocks)?;
+        let mut order = InlineVec::new();
+        let mut place = InlineVec::from_elem(FREE, blocks);
+        let mut ends = InlineVec::new();
         for tower in towers {
             if tower.is_empty() {
                 return Err(bad("a tower names no block".into()));
@@ -107,25 +107,18 @@ impl Goal {
                 if b >= blocks {
                     return Err(bad(format!("block {b} does not exist")));
                 }
-                if place[b] != u8::MAX {
+                if place[b] != FREE {
                     return Err(bad(format!("block {b} appears twice")));
                 }
-                place[b] = named as u8;
-                order[named] = BlockId(b as u8);
-                named += 1;
+                place[b] = order.len() as u16;
+                order.push(BlockId::of(b));
             }
-            tops |= 1 << (named - 1);
+            ends.push(order.len() as u16);
         }
-        if named == 0 {
+        if order.is_empty() {
             return Err(bad("it names no block".into()));
         }
-        Ok(Goal {
-            order,
-            place,
-            tops,
-            named: named as u8,
-            count: blocks as u8,
-        })
+        Ok(Goal { order, place, ends })
     }
 
     /// A goal from plain indices, e.g. `Goal::from_indices(&[1, 0, 2])`.
@@ -138,7 +131,7 @@ impl Goal {
                 reason: format!("block {b} does not exist"),
             });
         }
-        let ids: Vec<BlockId> = order.iter().map(|&b| BlockId(b as u8)).collect();
+        let ids: Vec<BlockId> = order.iter().map(|&b| BlockId::of(b)).collect();
         Goal::new(&ids)
     }
 
@@ -226,11 +219,11 @@ impl Goal {
     /// goals and 12 almost half a billion, which nothing should build by default.
     pub fn all(blocks: usize) -> Result<Vec<Goal>> {
         let identity = Goal::identity(blocks)?;
-        let goals = (1..=blocks as u128).product::<u128>();
-        if goals > MAX_ALL_GOALS as u128 {
+        let goals = (1..=blocks as u128).try_fold(1u128, u128::checked_mul);
+        if goals.is_none_or(|g| g > MAX_ALL_GOALS as u128) {
             return Err(SimError::TooManyGoals {
                 blocks,
-                goals: goals.to_string(),
+                goals: count_text(goals),
                 max: MAX_ALL_GOALS,
                 example: identity.to_string(),
             });
@@ -260,12 +253,12 @@ impl Goal {
     /// [`MAX_ALL_GOALS`] goals, from 7 blocks on.
     pub fn all_towers(blocks: usize) -> Result<Vec<Goal>> {
         Goal::identity(blocks)?;
-        // The ways to split N named blocks into ordered towers: the Lah numbers' row sum.
-        let count = (1..=blocks).map(|k| lah(blocks, k)).sum::<u128>();
-        if count > MAX_ALL_GOALS as u128 {
+        // As many as the Blocks World states of N blocks.
+        let count = crate::uniform::state_count(blocks);
+        if count.is_none_or(|c| c > MAX_ALL_GOALS as u128) {
             return Err(SimError::TooManyGoals {
                 blocks,
-                goals: count.to_string(),
+                goals: count_text(count),
                 max: MAX_ALL_GOALS,
                 example: "0,1/2".to_string(),
             });
@@ -293,9 +286,17 @@ impl Goal {
     /// One goal of each shape of `blocks` blocks: for every way to split them into towers
     /// (tower heights, tallest first), the blocks `0, 1, ...` in towers of those heights
     /// (`0,1,2`, `0,1/2` and `0/1/2` for 3 blocks). A learner that names blocks by their
-    /// place in the goal meets every goal in these.
+    /// place in the goal meets every goal in these. For the learners' worlds: 1 to
+    /// [`MAX_BLOCKS`] blocks (the shapes of 100 blocks number 190 million).
     pub fn shapes(blocks: usize) -> Result<Vec<Goal>> {
-        Goal::identity(blocks)?;
+        if !(MIN_SIDE_BLOCKS..=MAX_BLOCKS).contains(&blocks) {
+            return Err(SimError::BadBlockCount {
+                count: blocks,
+                what: "a list of goal shapes",
+                min: MIN_SIDE_BLOCKS,
+                max: MAX_BLOCKS,
+            });
+        }
         let mut out = Vec::new();
         for heights in partitions(blocks, blocks) {
             let mut next = 0;
@@ -370,14 +371,14 @@ impl Goal {
 
     /// Number of blocks of the world the goal is for.
     #[inline]
-    pub const fn block_count(&self) -> usize {
-        self.count as usize
+    pub fn block_count(&self) -> usize {
+        self.place.len()
     }
 
     /// Whether this is the classic goal: one tower of every block.
     #[inline]
-    pub const fn is_one_tower(&self) -> bool {
-        self.named == self.count && self.tops == 1 << (self.count - 1)
+    pub fn is_one_tower(&self) -> bool {
+        self.order.len() == self.place.len() && self.ends.len() == 1
     }
 
     /// The goal's one tower, bottom to top, if it is one tower of every block; otherwise
@@ -396,13 +397,11 @@ impl Goal {
     /// The towers, each bottom to top.
     pub fn towers(&self) -> impl Iterator<Item = &[BlockId]> + '_ {
         let mut start = 0;
-        (0..self.named as usize)
-            .filter(|&i| self.tops & (1 << i) != 0)
-            .map(move |top| {
-                let tower = &self.order[start..=top];
-                start = top + 1;
-                tower
-            })
+        self.ends.iter().map(move |&end| {
+            let tower = &self.order[start..usize::from(end)];
+            start = usize::from(end);
+            tower
+        })
     }
 
     /// The towers as plain indices, each bottom to top (what the block-move planners take).
@@ -412,27 +411,27 @@ impl Goal {
 
     /// Number of consecutive pairs `(below, above)` the goal asks for ([`Goal::pairs`]).
     #[inline]
-    pub const fn pair_count(&self) -> usize {
-        self.named as usize - self.tower_count()
+    pub fn pair_count(&self) -> usize {
+        self.order.len() - self.tower_count()
     }
 
     /// Number of towers.
     #[inline]
-    pub const fn tower_count(&self) -> usize {
-        self.tops.count_ones() as usize
+    pub fn tower_count(&self) -> usize {
+        self.ends.len()
     }
 
     /// Whether the goal names `block` (a goal of towers may leave blocks free).
     #[inline]
     pub fn names(&self, block: BlockId) -> bool {
-        self.place[block.index()] != u8::MAX
+        self.place[block.index()] != FREE
     }
 
     /// The blocks bottom to top: for a goal of one tower of every block, all of them; for
     /// a goal of towers, the named blocks tower by tower ([`Goal::towers`] keeps them apart).
     #[inline]
     pub fn order(&self) -> &[BlockId] {
-        &self.order[..self.named as usize]
+        &self.order
     }
 
     /// Where `block` stands in [`Goal::order`]: 0 at the bottom. Meaningful for a block the
@@ -450,9 +449,7 @@ impl Goal {
 
     /// The goal's consecutive pairs `(below, above)` within each tower, bottom first.
     pub fn pairs(&self) -> impl Iterator<Item = (BlockId, BlockId)> + '_ {
-        (0..(self.named as usize).saturating_sub(1))
-            .filter(|&i| self.tops & (1 << i) == 0)
-            .map(|i| (self.order[i], self.order[i + 1]))
+        self.towers().flat_map(|t| t.windows(2).map(|w| (w[0], w[1])))
     }
 
     /// How many consecutive pairs of the goal stand in place (`above` directly on `below`).
@@ -467,6 +464,26 @@ impl Goal {
     #[inline]
     pub fn holds(&self, state: &State) -> bool {
         self.pairs().all(|(a, b)| on_top(state.cell(a), state.cell(b)))
+    }
+
+    /// Whether the goal holds in every state of `view` on `grid`: from above, a goal with no
+    /// pair (towers of one block each); from the side, such a goal of one block, or on a grid
+    /// one row high (where every block stands on the table).
+    pub fn holds_everywhere_in(&self, view: View, grid: Grid) -> bool {
+        self.pair_count() == 0
+            && match view {
+                View::Top => true,
+                View::Side => self.block_count() == 1 || grid.height() == 1,
+            }
+    }
+
+    /// A goal naming every one of `blocks` blocks, its towers a Blocks World state drawn
+    /// uniformly ([`crate::uniform`]), listed by their bottom block: the complete goals of
+    /// random problems (1 to [`MAX_SIDE_BLOCKS`] blocks).
+    pub fn uniform(blocks: usize, rng: &mut impl rand::Rng) -> Result<Goal> {
+        check_count(blocks)?;
+        let towers = crate::uniform::UniformStates::shared(blocks).towers(rng);
+        Goal::of_towers(&canonical_towers(towers), blocks)
     }
 
     /// Whether the goal holds in `view`: every consecutive pair in place; in the side view
@@ -639,12 +656,9 @@ fn partitions(n: usize, largest: usize) -> Vec<Vec<usize>> {
     out
 }
 
-/// The Lah number L(n, k): the ways to split `n` labelled blocks into `k` non-empty towers.
-fn lah(n: usize, k: usize) -> u128 {
-    // L(n, k) = C(n - 1, k - 1) n! / k!
-    let factorial = |m: usize| (1..=m as u128).product::<u128>();
-    let choose = factorial(n - 1) / (factorial(k - 1) * factorial(n - k));
-    choose * factorial(n) / factorial(k)
+/// A count as an error message writes it: the number, or "more than 10^38" past `u128`.
+fn count_text(count: Option<u128>) -> String {
+    count.map_or_else(|| "more than 10^38".to_string(), |c| c.to_string())
 }
 
 /// Every set of `towers - 1` cut points in `1..blocks`, increasing.

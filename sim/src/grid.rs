@@ -6,22 +6,28 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, SimError};
 
-/// The largest number of cells a grid may have (16 x 16, or any other shape of at most
-/// this many cells): the occupancy model keeps one bit per cell in a fixed-size set.
+/// The largest number of cells of a top-view grid (16 x 16, or any other shape of at most
+/// this many cells): the top view's occupancy model keeps one bit per cell in a fixed-size
+/// set, and its planes and pictures are `W x H` arrays. Checked where a top-view world is
+/// built ([`View::check_world`](crate::View::check_world)), not by [`Grid`] itself: the side
+/// view keeps no `W x H` structure and takes any grid whose sides fit [`MAX_SIDE`].
 pub const MAX_CELLS: usize = 256;
+
+/// The longest side of any grid: coordinates are `u16`.
+pub const MAX_SIDE: usize = u16::MAX as usize;
 
 /// A cell `(x, y)` of the grid: `x` grows to the right, `y` grows upward.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 pub struct Cell {
     /// Column, from 0 at the left.
-    pub x: u8,
+    pub x: u16,
     /// Row, from 0 at the bottom.
-    pub y: u8,
+    pub y: u16,
 }
 
 impl Cell {
     /// The cell at column `x`, row `y`.
-    pub const fn new(x: u8, y: u8) -> Self {
+    pub const fn new(x: u16, y: u16) -> Self {
         Self { x, y }
     }
 
@@ -78,8 +84,8 @@ impl Direction {
 /// The size of the world: `width x height` cells of one world unit each.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub struct Grid {
-    width: u8,
-    height: u8,
+    width: u16,
+    height: u16,
 }
 
 impl Default for Grid {
@@ -90,20 +96,37 @@ impl Default for Grid {
 }
 
 impl Grid {
-    /// A `width x height` grid; both sides at least 1 and at most [`MAX_CELLS`] cells in all.
+    /// A `width x height` grid; both sides from 1 to [`MAX_SIDE`]. (A top-view world also
+    /// needs at most [`MAX_CELLS`] cells: [`View::check_world`](crate::View::check_world).)
     pub fn new(width: usize, height: usize) -> Result<Self> {
-        // Coordinates are stored as u8, so a side of 256 (a 256 x 1 grid) is out too.
-        if width == 0 || height == 0 || width > 255 || height > 255 || width * height > MAX_CELLS {
-            return Err(SimError::BadGrid {
+        if !(1..=MAX_SIDE).contains(&width) || !(1..=MAX_SIDE).contains(&height) {
+            return Err(SimError::GridSide {
                 width,
                 height,
-                max: MAX_CELLS,
+                max: MAX_SIDE,
             });
         }
         Ok(Self {
-            width: width as u8,
-            height: height as u8,
+            width: width as u16,
+            height: height as u16,
         })
+    }
+
+    /// The side view's grid for `blocks` blocks when none is given (docs/world.md, "The side
+    /// view at any size"): the paper's 7 x 7 up to 7 blocks (it holds every state and every
+    /// goal of 7 blocks), and beyond, `N` columns (a table as wide as the widest state, all
+    /// blocks on the table) and `N + 1` rows (a tower of every block, and a row above it), as
+    /// E9's grid. A grid this size holds every state of `N` blocks and leaves a row to carry
+    /// any block over any tower, so every block move can be carried out.
+    pub fn side_default(blocks: usize) -> Grid {
+        // More blocks than a side holds are refused where the world is built; their grid is
+        // the largest.
+        let n = blocks.min(MAX_SIDE - 1);
+        if n <= 7 {
+            Grid::default()
+        } else {
+            Grid::new(n, n + 1).expect("sides of at most MAX_SIDE")
+        }
     }
 
     /// Columns.
@@ -129,7 +152,7 @@ impl Grid {
     /// The cell at `(x, y)`, or an error naming it if it lies outside the grid.
     pub fn cell(self, x: i64, y: i64) -> Result<Cell> {
         if self.contains(x, y) {
-            Ok(Cell::new(x as u8, y as u8))
+            Ok(Cell::new(x as u16, y as u16))
         } else {
             Err(SimError::CellOutsideGrid {
                 x,
@@ -160,7 +183,10 @@ impl Grid {
     /// The cell with row-major index `index`.
     #[inline]
     pub const fn cell_at(self, index: usize) -> Cell {
-        Cell::new((index % self.width as usize) as u8, (index / self.width as usize) as u8)
+        Cell::new(
+            (index % self.width as usize) as u16,
+            (index / self.width as usize) as u16,
+        )
     }
 
     /// Every cell, in row-major order.

@@ -20,8 +20,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, SimError};
 use crate::grid::Grid;
+use crate::grid::MAX_CELLS;
 use crate::observation::{Observation, PIXELS_SIDE};
-use crate::render::{CELL_PIXELS, frame_size};
+use crate::render::{CELL_PIXELS, frame_size, picture_size};
+use crate::state::MAX_BLOCKS;
 
 /// Which array an observation is shown as (module docs).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -73,6 +75,28 @@ impl ObsKind {
             }
             ObsKind::PaperScreen => Some([PIXELS_SIDE, PIXELS_SIDE, 3]),
             ObsKind::State => None,
+        }
+    }
+
+    /// An error if this array of a world of `blocks` blocks on `grid` is past its bound:
+    /// the planes (and the paper's screen, drawn from them) are `W x H` arrays of the top
+    /// view's size, at most [`MAX_CELLS`] cells and [`MAX_BLOCKS`] blocks (a side-view world
+    /// of 1,000 blocks would make planes of a billion values); the frame is a picture of at
+    /// most [`crate::render::MAX_PICTURE_PIXELS`]. `state` has no bound.
+    pub fn check(self, grid: Grid, blocks: usize) -> Result<()> {
+        match self {
+            ObsKind::Planes | ObsKind::RolePlanes | ObsKind::PaperScreen
+                if grid.cell_count() > MAX_CELLS || blocks > MAX_BLOCKS =>
+            {
+                Err(SimError::ObsTooLarge {
+                    kind: self,
+                    width: grid.width(),
+                    height: grid.height(),
+                    blocks,
+                })
+            }
+            ObsKind::Frame => picture_size(grid, blocks, CELL_PIXELS).map(drop),
+            _ => Ok(()),
         }
     }
 

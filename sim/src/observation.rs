@@ -10,7 +10,7 @@ use crate::view::View;
 
 /// The full observation: grid, every block's cell, the held block, the goal, and the
 /// action protocol that says which actions are legal.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct Observation {
     /// The grid.
     pub grid: Grid,
@@ -236,7 +236,7 @@ impl<'a> PaperScreen<'a> {
             if usize::from(c.y) != grid_row {
                 continue;
             }
-            let b = BlockId(i as u8);
+            let b = BlockId::of(i);
             let rgb = if self.obs.held_block() == Some(b) {
                 PIXELS_HELD
             } else {

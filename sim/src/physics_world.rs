@@ -79,7 +79,7 @@ use rapier2d::prelude::*;
 
 use crate::error::{Result, SimError};
 use crate::grid::{Cell, Direction, Grid};
-use crate::state::{BlockId, MAX_BLOCKS, State};
+use crate::state::{BlockId, Cells, State};
 use crate::view::View;
 use crate::world::World;
 
@@ -196,6 +196,7 @@ impl PhysicsWorld {
     /// A world of `view` on `grid` with its blocks placed as `state` says; an error if the
     /// state does not fit the grid (or, in the side view, has a block standing on nothing).
     pub fn new_in(view: View, grid: Grid, state: State) -> Result<Self> {
+        view.check_world(grid, state.block_count())?;
         state.check_fits(grid)?;
         view.check_state(&state)?;
         let side = view == View::Side;
@@ -354,7 +355,7 @@ impl PhysicsWorld {
     /// next drop's solver pushed both blocks off their cells).
     fn set_positions(&mut self, cells: &[Cell]) {
         for (i, &cell) in cells.iter().enumerate() {
-            self.set_position(BlockId(i as u8), cell);
+            self.set_position(BlockId::of(i), cell);
         }
         for _ in cells {
             self.count_move();
@@ -411,7 +412,7 @@ fn centre(cell: Cell) -> Vector {
 /// The cell whose centre is nearest to `p`.
 #[inline]
 fn cell_at(p: Vector) -> Cell {
-    Cell::new((p.x - 0.5).round() as u8, (p.y - 0.5).round() as u8)
+    Cell::new((p.x - 0.5).round() as u16, (p.y - 0.5).round() as u16)
 }
 
 impl World for PhysicsWorld {
@@ -457,8 +458,8 @@ impl World for PhysicsWorld {
         self.bodies[self.blocks[block.index()].body].wake_up(true);
         self.settle_steps = self.run_to_rest(block)?;
         // Read back every block's resting cell, check it, and put the block exactly on it.
-        let mut cells = [Cell::default(); MAX_BLOCKS];
-        for (i, (b, slot)) in self.blocks.iter().zip(&mut cells).enumerate() {
+        let mut cells = Cells::from_elem(Cell::default(), self.blocks.len());
+        for (i, (b, slot)) in self.blocks.iter().zip(cells.iter_mut()).enumerate() {
             let at = self.bodies[b.body].translation();
             let cell = cell_at(at);
             let error = (at - centre(cell)).length();
@@ -473,7 +474,7 @@ impl World for PhysicsWorld {
             }
             *slot = cell;
         }
-        self.set_positions(&cells[..self.blocks.len()]);
+        self.set_positions(&cells);
         self.rest_all();
         Ok(())
     }
@@ -509,7 +510,7 @@ impl World for PhysicsWorld {
                 return false;
             }
             let from = self.cell_of(block);
-            let to = Cell::new((i32::from(from.x) + dx) as u8, (i32::from(from.y) + dy) as u8);
+            let to = Cell::new((i32::from(from.x) + dx) as u16, (i32::from(from.y) + dy) as u16);
             self.teleport(block, to);
             return true;
         }
@@ -526,7 +527,7 @@ impl World for PhysicsWorld {
         }
         let from = self.cell_of(block);
         // The walls kept the block inside the grid, so the neighbour exists.
-        let to = Cell::new((i32::from(from.x) + dx) as u8, (i32::from(from.y) + dy) as u8);
+        let to = Cell::new((i32::from(from.x) + dx) as u16, (i32::from(from.y) + dy) as u16);
         self.teleport(block, to);
         true
     }
@@ -538,10 +539,7 @@ impl World for PhysicsWorld {
     }
 
     fn state(&self) -> State {
-        let mut cells = [Cell::default(); MAX_BLOCKS];
-        for (i, c) in cells.iter_mut().take(self.blocks.len()).enumerate() {
-            *c = self.cell_of(BlockId(i as u8));
-        }
-        State::new(&cells[..self.blocks.len()], self.held).expect("the walls and casts keep blocks on distinct cells")
+        let cells: Cells = (0..self.blocks.len()).map(|i| self.cell_of(BlockId::of(i))).collect();
+        State::new(&cells, self.held).expect("the walls and casts keep blocks on distinct cells")
     }
 }

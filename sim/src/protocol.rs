@@ -18,10 +18,11 @@ use serde::{Deserialize, Serialize};
 
 use crate::action::Action;
 use crate::error::{Result, SimError};
-use crate::state::{BlockId, MAX_BLOCKS, State};
+use crate::inline_vec::InlineVec;
+use crate::state::{BlockId, State};
 
 /// Indices of the four moves and Drop: bits `0..5`.
-const MOVES_AND_DROP: u32 = 0b1_1111;
+pub(crate) const MOVES_AND_DROP: u64 = 0b1_1111;
 
 /// Which actions are legal in a state.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -56,12 +57,11 @@ impl ActionProtocol {
     pub(crate) fn legal_when(self, held: Option<BlockId>, blocks: usize) -> ActionMask {
         match self {
             ActionProtocol::Free => ActionMask::all(blocks),
+            ActionProtocol::Paper if held.is_some() => ActionMask::with_first_word(MOVES_AND_DROP, blocks),
             ActionProtocol::Paper => {
-                let picks = ActionMask::all(blocks).bits & !MOVES_AND_DROP;
-                ActionMask {
-                    bits: if held.is_some() { MOVES_AND_DROP } else { picks },
-                    actions: Action::count(blocks) as u8,
-                }
+                let mut picks = ActionMask::all(blocks);
+                picks.words[0] &= !MOVES_AND_DROP;
+                picks
             }
         }
     }
@@ -106,50 +106,68 @@ impl ActionProtocol {
     }
 }
 
-/// A set of actions of a world with `N` blocks, one bit per action index (docs/world.md section 2's
-/// table; at most `5 + MAX_BLOCKS` = 21 actions).
+/// A set of actions of a world with `N` blocks, one bit per action index (docs/world.md
+/// section 2's table: `5 + N` actions).
 ///
-/// `Copy` and a few bytes, so every step can return one. It knows how many actions the
-/// world has, so it can be written out as a full 0/1 array.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+/// Up to 59 blocks (64 actions, every top-view world and every learner's) the bits are one
+/// word kept inline, so a step returns its mask without allocating; a larger side-view
+/// world's mask holds `(5 + N) / 64` words on the heap. It knows how many actions the world
+/// has, so it can be written out as a full 0/1 array.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct ActionMask {
-    /// Bit `i` set: action `i` is in the set.
-    bits: u32,
+    /// Bit `i % 64` of word `i / 64` set: action `i` is in the set. Bits past the world's
+    /// actions are never set.
+    words: InlineVec<u64, 1>,
     /// `5 + N`: the number of actions of the world.
-    actions: u8,
+    actions: u32,
 }
 
-// Every action index fits one bit of the mask.
-const _: () = assert!(Action::count(MAX_BLOCKS) <= u32::BITS as usize);
+/// Words of a mask of `actions` actions.
+#[inline]
+const fn words_for(actions: usize) -> usize {
+    actions.div_ceil(64)
+}
 
 impl ActionMask {
-    /// Every action of a world with `blocks` blocks; `blocks` is at most [`MAX_BLOCKS`], as
-    /// in every state.
+    /// Every action of a world with `blocks` blocks.
     #[inline]
-    pub const fn all(blocks: usize) -> ActionMask {
+    pub fn all(blocks: usize) -> ActionMask {
+        let actions = Action::count(blocks);
+        let mut words = InlineVec::from_elem(u64::MAX, words_for(actions));
+        if actions % 64 != 0 {
+            let last = words.len() - 1;
+            words[last] = (1u64 << (actions % 64)) - 1;
+        }
+        ActionMask {
+            words,
+            actions: actions as u32,
+        }
+    }
+
+    /// No action of a world with `blocks` blocks.
+    #[inline]
+    pub fn none(blocks: usize) -> ActionMask {
         let actions = Action::count(blocks);
         ActionMask {
-            bits: (1u32 << actions) - 1,
-            actions: actions as u8,
+            words: InlineVec::from_elem(0, words_for(actions)),
+            actions: actions as u32,
         }
     }
 
-    /// The set with bits `bits` (bit `i`: action `i`) of a world with `blocks` blocks; the
-    /// caller keeps to the world's actions.
+    /// The set with the first word `bits` (bit `i`: action `i < 64`) of a world with
+    /// `blocks` blocks; the caller keeps to the world's actions.
     #[inline]
-    pub(crate) const fn from_bits(bits: u32, blocks: usize) -> ActionMask {
-        ActionMask {
-            bits,
-            actions: Action::count(blocks) as u8,
-        }
+    pub(crate) fn with_first_word(bits: u64, blocks: usize) -> ActionMask {
+        let mut mask = ActionMask::none(blocks);
+        mask.words[0] = bits;
+        mask
     }
 
-    /// No action of a world with `blocks` blocks (at most [`MAX_BLOCKS`]).
-    pub const fn none(blocks: usize) -> ActionMask {
-        ActionMask {
-            bits: 0,
-            actions: Action::count(blocks) as u8,
-        }
+    /// Adds the action with index `index`, which the caller keeps below
+    /// [`ActionMask::action_count`].
+    #[inline]
+    pub(crate) fn insert_index(&mut self, index: usize) {
+        self.words[index / 64] |= 1 << (index % 64);
     }
 
     /// The set of the given actions of a world with `blocks` blocks; an error for an action
@@ -161,7 +179,7 @@ impl ActionMask {
             if i >= mask.action_count() {
                 return Err(SimError::ActionOutOfRange { index: i, blocks });
             }
-            mask.bits |= 1 << i;
+            mask.insert_index(i);
         }
         Ok(mask)
     }
@@ -169,52 +187,52 @@ impl ActionMask {
     /// The number of actions of the world, `5 + N` (the length of [`ActionMask::write_bytes`]'s
     /// output).
     #[inline]
-    pub const fn action_count(self) -> usize {
+    pub fn action_count(&self) -> usize {
         self.actions as usize
     }
 
     /// Whether `action` is in the set.
     #[inline]
-    pub const fn contains(self, action: Action) -> bool {
+    pub fn contains(&self, action: Action) -> bool {
         self.contains_index(action.index())
     }
 
     /// Whether the action with index `index` is in the set (`false` past the world's
     /// actions).
     #[inline]
-    pub const fn contains_index(self, index: usize) -> bool {
-        // Bit 31 is never set (at most 21 actions), so larger indices land on it.
-        let bit = if index < 31 { index } else { 31 };
-        self.bits & (1 << bit) != 0
+    pub fn contains_index(&self, index: usize) -> bool {
+        self.words.get(index / 64).is_some_and(|w| w & (1 << (index % 64)) != 0)
     }
 
     /// Number of actions in the set.
     #[inline]
-    pub const fn count(self) -> usize {
-        self.bits.count_ones() as usize
+    pub fn count(&self) -> usize {
+        self.words.iter().map(|w| w.count_ones() as usize).sum()
     }
 
     /// Whether the set is empty.
     #[inline]
-    pub const fn is_empty(self) -> bool {
-        self.bits == 0
+    pub fn is_empty(&self) -> bool {
+        self.words.iter().all(|&w| w == 0)
     }
 
     /// The actions in the set, in index order.
-    pub fn iter(self) -> impl Iterator<Item = Action> {
+    pub fn iter(&self) -> impl Iterator<Item = Action> + '_ {
         let blocks = self.action_count() - Action::count(0);
         self.indices()
             .map(move |i| Action::from_index(i, blocks).expect("a mask holds only indices of its world"))
     }
 
     /// The indices in the set, in increasing order.
-    pub fn indices(self) -> impl Iterator<Item = usize> {
-        let mut bits = self.bits;
-        std::iter::from_fn(move || {
-            (bits != 0).then(|| {
-                let i = bits.trailing_zeros() as usize;
-                bits &= bits - 1;
-                i
+    pub fn indices(&self) -> impl Iterator<Item = usize> + '_ {
+        self.words.iter().enumerate().flat_map(|(w, &word)| {
+            let mut bits = word;
+            std::iter::from_fn(move || {
+                (bits != 0).then(|| {
+                    let i = bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    w * 64 + i
+                })
             })
         })
     }
@@ -224,27 +242,37 @@ impl ActionMask {
     /// A uniform draw among legal actions is `mask.nth(rng.random_range(0..mask.count()))`;
     /// with every action legal that is action `k` itself.
     #[inline]
-    pub fn nth(self, k: usize) -> Option<Action> {
+    pub fn nth(&self, k: usize) -> Option<Action> {
         let blocks = self.action_count() - Action::count(0);
-        let mut bits = self.bits;
-        for _ in 0..k {
-            bits &= bits.wrapping_sub(1);
+        let mut k = k;
+        for (w, &word) in self.words.iter().enumerate() {
+            let ones = word.count_ones() as usize;
+            if k >= ones {
+                k -= ones;
+                continue;
+            }
+            let mut bits = word;
+            for _ in 0..k {
+                bits &= bits - 1;
+            }
+            let index = w * 64 + bits.trailing_zeros() as usize;
+            return Some(Action::from_index(index, blocks).expect("a mask holds only indices of its world"));
         }
-        (bits != 0).then(|| {
-            Action::from_index(bits.trailing_zeros() as usize, blocks).expect("a mask holds only indices of its world")
-        })
+        None
     }
 
-    /// The set as bits: bit `i` is action `i`.
+    /// The set as the bits of one `u32` (bit `i`: action `i`), for callers that keep a mask
+    /// in a word: the learners, whose worlds have at most [`MAX_BLOCKS`] blocks (21
+    /// actions). `None` for a world of more than 32 actions.
     #[inline]
-    pub const fn bits(self) -> u32 {
-        self.bits
+    pub fn as_u32(&self) -> Option<u32> {
+        (self.actions <= 32).then(|| self.words[0] as u32)
     }
 
     /// Writes the set as `5 + N` bytes, `1` for an action in the set and `0` otherwise,
     /// into `out` (no allocation: for array-based callers such as neural nets and the
     /// Python binding). An error unless `out` has exactly [`ActionMask::action_count`] bytes.
-    pub fn write_bytes(self, out: &mut [u8]) -> Result<()> {
+    pub fn write_bytes(&self, out: &mut [u8]) -> Result<()> {
         if out.len() != self.action_count() {
             return Err(SimError::MaskLength {
                 expected: self.action_count(),
@@ -252,7 +280,7 @@ impl ActionMask {
             });
         }
         for (i, byte) in out.iter_mut().enumerate() {
-            *byte = u8::from(self.bits & (1 << i) != 0);
+            *byte = u8::from(self.words[i / 64] & (1 << (i % 64)) != 0);
         }
         Ok(())
     }
@@ -276,7 +304,7 @@ mod tests {
     use super::*;
     use crate::grid::Cell;
 
-    fn state(held: Option<u8>) -> State {
+    fn state(held: Option<u16>) -> State {
         State::new(&[Cell::new(0, 0), Cell::new(2, 3), Cell::new(5, 1)], held.map(BlockId)).unwrap()
     }
 

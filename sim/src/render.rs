@@ -100,8 +100,8 @@ pub fn ascii(obs: &Observation, colour: Colour) -> String {
     let mut out = String::new();
     for row in 0..h.max(order.len() + 1) {
         if row < h {
-            let y = (h - 1 - row) as u8;
-            for x in 0..w as u8 {
+            let y = (h - 1 - row) as u16;
+            for x in 0..w as u16 {
                 let cell = crate::grid::Cell::new(x, y);
                 match obs.state.block_at(cell) {
                     Some(b) if obs.held_block() == Some(b) => out.push_str(&paint(b, format!("[{}]", label(b)))),
@@ -197,7 +197,7 @@ pub fn frame(obs: &Observation, cell: u32) -> RgbImage {
     }
     let border = (cell / 16).max(1);
     for (i, &c) in obs.blocks().iter().enumerate() {
-        let b = BlockId(i as u8);
+        let b = BlockId::of(i);
         // Image rows grow downward, grid rows upward.
         let (px, py) = (u32::from(c.x) * cell, (h - 1 - u32::from(c.y)) * cell);
         fill(
@@ -326,7 +326,7 @@ mod tests {
 
     fn observation(grid: Grid, blocks: usize) -> Observation {
         let cells: Vec<Cell> = (0..blocks)
-            .map(|i| Cell::new((i % grid.width()) as u8, (i / grid.width()) as u8))
+            .map(|i| Cell::new((i % grid.width()) as u16, (i / grid.width()) as u16))
             .collect();
         Observation {
             grid,

@@ -29,6 +29,7 @@ use crate::goal::Goal;
 use crate::grid::{Cell, Grid};
 use crate::seeding::SimRng;
 use crate::state::{MAX_BLOCKS, State};
+use crate::uniform::UniformStates;
 use crate::view::{self, View};
 
 /// How a reset places the blocks.
@@ -93,17 +94,23 @@ impl StartRule {
     }
 
     /// A start for `goal` on `grid` in `view`. In the top view [`StartRule::draw`]; in the
-    /// side view (which takes only [`StartRule::Uniform`]) random towers
-    /// ([`view::random_towers`]), drawn again while the goal holds, as the uniform rule does.
+    /// side view (which takes only [`StartRule::Uniform`]) a state drawn uniformly over the
+    /// Blocks World states that fit the grid ([`view::uniform_state`]), drawn again while the
+    /// goal holds, as the uniform rule does, unless the goal holds in every state (one block
+    /// on the table: the episode is then over at its start).
     pub fn draw_in(self, view: View, grid: Grid, goal: &Goal, rng: &mut SimRng) -> State {
         match view {
             View::Top => self.draw(grid, goal, rng),
-            View::Side => loop {
-                let state = view::random_towers(grid, goal.block_count(), rng);
-                if !goal.holds_in(View::Side, &state) {
-                    return state;
+            View::Side => {
+                let states = UniformStates::shared(goal.block_count());
+                let everywhere = goal.holds_everywhere_in(View::Side, grid);
+                loop {
+                    let state = view::uniform_state(grid, &states, rng);
+                    if everywhere || !goal.holds_in(View::Side, &state) {
+                        return state;
+                    }
                 }
-            },
+            }
         }
     }
 }
@@ -144,7 +151,7 @@ fn paper(grid: Grid, n: usize, rng: &mut SimRng) -> State {
     while k < n {
         let x = rng.random_range(0..grid.width() - 1);
         let y = rng.random_range(1..grid.height());
-        let c = Cell::new(x as u8, y as u8);
+        let c = Cell::new(x as u16, y as u16);
         if !cells[..k].contains(&c) {
             cells[k] = c;
             k += 1;

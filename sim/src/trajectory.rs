@@ -164,7 +164,7 @@ pub enum Record {
         /// The horizon.
         horizon: u32,
         /// Every block's start cell `[x, y]`, by block id.
-        start: Vec<[u8; 2]>,
+        start: Vec<[u16; 2]>,
         /// The world: written only for the side view.
         #[serde(default, skip_serializing_if = "is_top")]
         view: View,
@@ -178,9 +178,9 @@ pub enum Record {
         /// The action's index.
         action: usize,
         /// Every block's cell `[x, y]` after the action, by block id.
-        blocks: Vec<[u8; 2]>,
+        blocks: Vec<[u16; 2]>,
         /// The held block after the action.
-        held: Option<u8>,
+        held: Option<u16>,
         /// The reward.
         reward: f64,
         /// The goal holds.
@@ -194,7 +194,7 @@ fn is_top(view: &View) -> bool {
     *view == View::Top
 }
 
-fn cells(state: &State) -> Vec<[u8; 2]> {
+fn cells(state: &State) -> Vec<[u16; 2]> {
     state.cells().iter().map(|c| [c.x, c.y]).collect()
 }
 
@@ -296,7 +296,7 @@ impl Episode {
 }
 
 /// One step of an [`Episode`].
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct EpisodeStep {
     /// The action taken.
     pub action: Action,
@@ -394,7 +394,7 @@ impl<R: BufRead> TrajectoryReader<R> {
             return Err(self.error(SimError::ZeroHorizon.to_string()));
         }
         let start = self.state(&start, None, grid, &goal)?;
-        let world = GridWorld::new_in(view, grid, start).map_err(|e| self.error(e.to_string()))?;
+        let world = GridWorld::new_in(view, grid, start.clone()).map_err(|e| self.error(e.to_string()))?;
         self.next_episode = episode.checked_add(1);
         let ended = self.current.replace((
             Episode {
@@ -413,7 +413,7 @@ impl<R: BufRead> TrajectoryReader<R> {
     }
 
     /// A recorded state, checked against the grid and the goal's block count.
-    fn state(&self, blocks: &[[u8; 2]], held: Option<u8>, grid: Grid, goal: &Goal) -> Result<State> {
+    fn state(&self, blocks: &[[u16; 2]], held: Option<u16>, grid: Grid, goal: &Goal) -> Result<State> {
         if blocks.len() != goal.block_count() {
             return Err(self.error(format!(
                 "the state has {} blocks and the goal {}",
@@ -467,21 +467,20 @@ impl<R: BufRead> TrajectoryReader<R> {
                 open.horizon
             )));
         }
-        let (grid, goal, view) = (open.grid, open.goal, open.view);
+        let (grid, goal, view) = (open.grid, open.goal.clone(), open.view);
         let previous_action = open.steps.last().map(|s| s.action);
         let action = Action::from_index(action, goal.block_count()).map_err(|e| self.error(e.to_string()))?;
         let state = self.state(&blocks, held, grid, &goal)?;
-        let mut world = self.current.as_ref().expect("an open episode").1;
-        let before = world.state();
+        let before = self.current.as_ref().expect("an open episode").1.state();
         if view == View::Side {
             // The side view's rules refuse what the world would take as a no-op.
             View::Side
                 .check(ActionProtocol::Free, &before, action)
                 .map_err(|e| self.error(e.to_string()))?;
         }
+        let world = &mut self.current.as_mut().expect("an open episode").1;
         world.act(action).expect("an action of the world's blocks");
-        self.current.as_mut().expect("an open episode").1 = world;
-        if world.state() != state {
+        if *world.state_ref() != state {
             let after = world.state();
             return Err(self.error(format!(
                 "{action} from {} gives {}, not the recorded {}",
@@ -681,16 +680,16 @@ mod tests {
     fn a_plan_replays_into_the_states_it_visits() {
         let episode = &read(&fixture("trajectory.jsonl")).unwrap()[0];
         let actions: Vec<Action> = episode.steps.iter().map(|s| s.action).collect();
-        let states = GridWorld::new(episode.grid, episode.start)
+        let states = GridWorld::new(episode.grid, episode.start.clone())
             .unwrap()
             .replay(&actions)
             .unwrap();
         assert_eq!(states[0], episode.start);
         assert_eq!(
             states[1..],
-            episode.steps.iter().map(|s| s.state).collect::<Vec<_>>()[..]
+            episode.steps.iter().map(|s| s.state.clone()).collect::<Vec<_>>()[..]
         );
-        let mut world = GridWorld::new(episode.grid, episode.start).unwrap();
+        let mut world = GridWorld::new(episode.grid, episode.start.clone()).unwrap();
         assert!(world.replay(&[Action::Pick(BlockId(9))]).is_err());
     }
 }

@@ -26,7 +26,7 @@ pub enum Autoreset {
 }
 
 /// What one environment of a [`VecEnv`] did in a vectorised step.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum VecStep {
     /// It took its action (under [`Autoreset::SameStep`] a step that ended the episode has
     /// already reset it: see [`Autoreset`]).
@@ -70,7 +70,9 @@ impl VecEnv {
     /// `count` environments of `config`, stepped on `threads` threads (0: one per core; 1:
     /// on the caller's thread, without a pool).
     pub fn new(config: EnvConfig, count: usize, threads: usize) -> Result<VecEnv> {
-        let envs = (0..count).map(|_| Env::new(config)).collect::<Result<Vec<_>>>()?;
+        let envs = (0..count)
+            .map(|_| Env::new(config.clone()))
+            .collect::<Result<Vec<_>>>()?;
         let pool = match threads {
             1 => None,
             _ => Some(
@@ -118,7 +120,7 @@ impl VecEnv {
             .map(|i| Some(base_seed.wrapping_add(i)))
             .collect();
         let mut out = vec![None; self.len()];
-        self.reset_with(&seeds, &mut out, |obs, slot| *slot = Some(*obs));
+        self.reset_with(&seeds, &mut out, |obs, slot| *slot = Some(obs.clone()));
         out.into_iter()
             .map(|o| o.expect("every environment was reset"))
             .collect()
@@ -159,7 +161,7 @@ impl VecEnv {
     /// count, or if any step fails (the first such error).
     pub fn step(&mut self, actions: &[Action]) -> Result<Vec<VecStep>> {
         let mut out = vec![None; self.len()];
-        self.step_with(actions, &mut out, |step, slot| *slot = Some(*step))?;
+        self.step_with(actions, &mut out, |step, slot| *slot = Some(step.clone()))?;
         Ok(out
             .into_iter()
             .map(|s| s.expect("every environment was stepped"))
@@ -207,8 +209,9 @@ impl VecEnv {
                 if step.terminated || step.truncated {
                     match mode {
                         Autoreset::SameStep => {
-                            step.info.final_observation = Some(step.observation);
-                            step.observation = env.reset(None);
+                            let first = env.reset(None);
+                            step.info.final_observation =
+                                Some(Box::new(std::mem::replace(&mut step.observation, first)));
                             step.info.action_mask = step.observation.legal_actions();
                         }
                         Autoreset::NextStep => *ended = true,

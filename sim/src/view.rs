@@ -11,15 +11,19 @@
 //! the mask of legal actions, the start rule (random towers) and the towers of a state that
 //! planners search over.
 
+use std::collections::HashSet;
+use std::ops::RangeInclusive;
+
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
 
 use crate::action::Action;
 use crate::error::{Result, SimError};
-use crate::grid::{Cell, Grid};
-use crate::protocol::{ActionMask, ActionProtocol};
+use crate::grid::{Cell, Grid, MAX_CELLS};
+use crate::protocol::{ActionMask, ActionProtocol, MOVES_AND_DROP};
 use crate::seeding::SimRng;
-use crate::state::{BlockId, MAX_BLOCKS, State};
+use crate::state::{BlockId, MAX_BLOCKS, MAX_SIDE_BLOCKS, MIN_BLOCKS, MIN_SIDE_BLOCKS, State};
+use crate::uniform::UniformStates;
 
 /// Which world: seen from above (the paper's) or from the side (the classic Blocks World).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -41,6 +45,47 @@ crate::names!(View { Top = "top", Side = "side" } unknown(name) -> SimError {
 });
 
 impl View {
+    /// The block counts a world of this view takes: 2 to [`MAX_BLOCKS`] from above, 1 to
+    /// [`MAX_SIDE_BLOCKS`] from the side.
+    pub const fn block_range(self) -> RangeInclusive<usize> {
+        match self {
+            View::Top => MIN_BLOCKS..=MAX_BLOCKS,
+            View::Side => MIN_SIDE_BLOCKS..=MAX_SIDE_BLOCKS,
+        }
+    }
+
+    /// The view's name in an error message: "the top view", "the side view".
+    pub const fn title(self) -> &'static str {
+        match self {
+            View::Top => "the top view",
+            View::Side => "the side view",
+        }
+    }
+
+    /// An error if a world of `blocks` blocks on `grid` is beyond this view's bounds
+    /// (docs/world.md, "The side view at any size"): the top view keeps an occupancy bitset of
+    /// at most [`MAX_CELLS`] cells and at most [`MAX_BLOCKS`] blocks; the side view keeps no
+    /// `W x H` structure and takes up to [`MAX_SIDE_BLOCKS`] blocks on any grid.
+    pub fn check_world(self, grid: Grid, blocks: usize) -> Result<()> {
+        if self == View::Top && grid.cell_count() > MAX_CELLS {
+            return Err(SimError::BadGrid {
+                width: grid.width(),
+                height: grid.height(),
+                max: MAX_CELLS,
+            });
+        }
+        let range = self.block_range();
+        if !range.contains(&blocks) {
+            return Err(SimError::BadBlockCount {
+                count: blocks,
+                what: self.title(),
+                min: *range.start(),
+                max: *range.end(),
+            });
+        }
+        Ok(())
+    }
+
     /// The legal actions in `state` in this view: `protocol`'s in the top view; in the side
     /// view, whatever the protocol, the picks of clear blocks with nothing held, and the
     /// moves and Drop while holding ([`side_mask`]). (Under the `free` protocol an action
@@ -73,7 +118,7 @@ impl View {
     }
 }
 
-/// The block standing directly on `block`, if any.
+/// The block standing directly on `block`, if any (a scan of the blocks).
 #[inline]
 pub fn block_on(state: &State, block: BlockId) -> Option<BlockId> {
     let c = state.cell(block);
@@ -100,21 +145,32 @@ pub fn landing_cell(from: Cell, occupied: impl Fn(Cell) -> bool) -> Cell {
 }
 
 /// The side view's legal actions: with nothing held, Pick of every clear block; while
-/// holding, the four moves and Drop.
+/// holding, the four moves and Drop. O(N): up to [`MAX_BLOCKS`] blocks by comparing cells
+/// (no allocation), beyond through a set of the occupied cells.
 #[inline]
 pub fn side_mask(state: &State) -> ActionMask {
     let n = state.block_count();
     if state.held_block().is_some() {
-        return ActionMask::from_bits(0b1_1111, n);
+        return ActionMask::with_first_word(MOVES_AND_DROP, n);
     }
-    // Bit 5 + b for every block b with nothing on it: the hot path of every side-view step.
     let cells = state.cells();
-    let mut bits = 0u32;
-    for (b, c) in cells.iter().enumerate() {
-        let covered = cells.iter().any(|o| o.x == c.x && o.y == c.y.wrapping_add(1));
-        bits |= u32::from(!covered) << (5 + b);
+    if n <= MAX_BLOCKS {
+        // Bit 5 + b for every block b with nothing on it: the hot path of every side-view step.
+        let mut bits = 0u64;
+        for (b, c) in cells.iter().enumerate() {
+            let covered = cells.iter().any(|o| o.x == c.x && o.y == c.y.wrapping_add(1));
+            bits |= u64::from(!covered) << (5 + b);
+        }
+        return ActionMask::with_first_word(bits, n);
     }
-    ActionMask::from_bits(bits, n)
+    let occupied: HashSet<Cell> = cells.iter().copied().collect();
+    let mut mask = ActionMask::none(n);
+    for (b, c) in cells.iter().enumerate() {
+        if !occupied.contains(&Cell::new(c.x, c.y.wrapping_add(1))) {
+            mask.insert_index(5 + b);
+        }
+    }
+    mask
 }
 
 /// `Ok` if `action` is legal in the side view in `state`, otherwise the error naming why.
@@ -138,15 +194,28 @@ fn check_side(state: &State, action: Action) -> Result<()> {
 }
 
 /// An error naming the first block that is not held and stands neither on the table (row
-/// 0) nor on another block.
+/// 0) nor on another block. O(N): up to [`MAX_BLOCKS`] blocks by comparing cells, beyond
+/// through a set of the cells of the blocks not held.
 pub fn check_stands(state: &State) -> Result<()> {
+    let held = state.held_block();
+    let standing: Option<HashSet<Cell>> = (state.block_count() > MAX_BLOCKS).then(|| {
+        state
+            .blocks()
+            .filter(|&b| held != Some(b))
+            .map(|b| state.cell(b))
+            .collect()
+    });
     for b in state.blocks() {
         let c = state.cell(b);
-        if state.held_block() == Some(b) || c.y == 0 {
+        if held == Some(b) || c.y == 0 {
             continue;
         }
         let below = Cell::new(c.x, c.y - 1);
-        if state.block_at(below).is_none_or(|u| state.held_block() == Some(u)) {
+        let supported = match &standing {
+            Some(cells) => cells.contains(&below),
+            None => state.block_at(below).is_some_and(|u| held != Some(u)),
+        };
+        if !supported {
             return Err(SimError::Floating {
                 block: b.index(),
                 x: c.x,
@@ -218,36 +287,39 @@ fn towers_error(towers: &[Vec<usize>], reason: String) -> SimError {
     }
 }
 
-/// The side view's start (docs/world.md, "The side view"): the blocks, in an order drawn
-/// uniformly (Fisher-Yates), each put on top of a column drawn uniformly among those not yet
-/// full. Nothing held; every block stands on the table or on another block. `blocks` is
-/// below `grid`'s cell count (the config checks it).
-pub fn random_towers(grid: Grid, blocks: usize, rng: &mut SimRng) -> State {
-    let mut order: [usize; MAX_BLOCKS] = std::array::from_fn(|i| i);
-    for i in (1..blocks).rev() {
-        let j = rng.random_range(0..=i);
-        order.swap(i, j);
+/// A side-view state drawn uniformly over the Blocks World states of `states.blocks()`
+/// blocks that fit `grid` ([`crate::uniform`]): towers drawn uniformly, drawn again while
+/// there are more towers than columns or a tower taller than the rows, then stood on distinct
+/// columns drawn uniformly (the tower drawn first on the first column drawn). Nothing held.
+/// The config checks that the grid holds some state (the blocks fit its cells); on a grid
+/// too small for most states the draws can take long (docs/world.md, "The side view at any
+/// size").
+pub fn uniform_state(grid: Grid, states: &UniformStates, rng: &mut SimRng) -> State {
+    let (w, h) = (grid.width(), grid.height());
+    let towers = loop {
+        let towers = states.towers(rng);
+        if towers.len() <= w && towers.iter().all(|t| t.len() <= h) {
+            break towers;
+        }
+    };
+    // The first `towers.len()` entries of a partial Fisher-Yates shuffle of the columns.
+    let mut columns: Vec<u16> = (0..w as u16).collect();
+    let mut cells = vec![Cell::default(); states.blocks()];
+    for (i, tower) in towers.iter().enumerate() {
+        let j = rng.random_range(i..w);
+        columns.swap(i, j);
+        for (y, &b) in tower.iter().enumerate() {
+            cells[b] = Cell::new(columns[i], y as u16);
+        }
     }
-    let mut heights = [0u8; 256];
-    let mut cells = [Cell::default(); MAX_BLOCKS];
-    for &b in &order[..blocks] {
-        let x = loop {
-            let x = rng.random_range(0..grid.width());
-            if usize::from(heights[x]) < grid.height() {
-                break x;
-            }
-        };
-        cells[b] = Cell::new(x as u8, heights[x]);
-        heights[x] += 1;
-    }
-    State::new(&cells[..blocks], None).expect("distinct cells")
+    State::new(&cells, None).expect("distinct cells")
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn state(cells: &[(u8, u8)], held: Option<u8>) -> State {
+    fn state(cells: &[(u16, u16)], held: Option<u16>) -> State {
         let cells: Vec<Cell> = cells.iter().map(|&(x, y)| Cell::new(x, y)).collect();
         State::new(&cells, held.map(BlockId)).unwrap()
     }
@@ -317,12 +389,61 @@ mod tests {
     }
 
     #[test]
-    fn random_towers_stand_and_follow_the_seed() {
+    fn uniform_states_stand_fit_the_grid_and_follow_the_seed() {
         let grid = Grid::new(4, 3).unwrap();
+        let states = UniformStates::new(5);
         for seed in 0..200 {
-            let s = random_towers(grid, 5, &mut crate::seeding::rng(seed));
+            let s = uniform_state(grid, &states, &mut crate::seeding::rng(seed));
             check_stands(&s).unwrap();
-            assert_eq!(s, random_towers(grid, 5, &mut crate::seeding::rng(seed)));
+            s.check_fits(grid).unwrap();
+            assert_eq!(s, uniform_state(grid, &states, &mut crate::seeding::rng(seed)));
+        }
+    }
+
+    /// Random standing states of `n` blocks on `grid`, some with a block held in the air
+    /// and some with a block lifted off its tower (floating).
+    fn random_state(n: usize, grid: Grid, seed: u64) -> State {
+        let mut rng = crate::seeding::rng(seed);
+        let mut s = uniform_state(grid, &UniformStates::new(n), &mut rng);
+        let mut cells = s.cells().to_vec();
+        match rng.random_range(0..3) {
+            0 => {}
+            kind => {
+                // A clear block lifted one row (held, or left floating).
+                let b = side_mask(&s).indices().next().expect("some block is clear") - 5;
+                cells[b].y += 1;
+                s = State::new(&cells, (kind == 1).then_some(BlockId::of(b))).unwrap();
+            }
+        }
+        s
+    }
+
+    #[test]
+    fn the_large_world_paths_agree_with_the_small_ones() {
+        // Past MAX_BLOCKS the mask and the standing check go through sets of cells; the
+        // cell-by-cell answer (the small path's) is the reference.
+        for seed in 0..300 {
+            let n = 17 + (seed as usize % 20);
+            let s = random_state(n, Grid::new(n, n + 1).unwrap(), seed);
+            let clear: Vec<usize> = if s.held_block().is_some() {
+                vec![0, 1, 2, 3, 4]
+            } else {
+                s.blocks().filter(|&b| is_clear(&s, b)).map(|b| 5 + b.index()).collect()
+            };
+            assert_eq!(side_mask(&s).indices().collect::<Vec<_>>(), clear);
+            let floating = s.blocks().find(|&b| {
+                let c = s.cell(b);
+                s.held_block() != Some(b)
+                    && c.y > 0
+                    && s.block_at(Cell::new(c.x, c.y - 1))
+                        .is_none_or(|u| s.held_block() == Some(u))
+            });
+            match floating {
+                None => assert!(check_stands(&s).is_ok()),
+                Some(b) => {
+                    assert!(matches!(check_stands(&s), Err(SimError::Floating { block, .. }) if block == b.index()))
+                }
+            }
         }
     }
 

@@ -61,7 +61,7 @@ pub trait World {
 
     /// Whether a block stands on `cell`.
     fn is_occupied(&self, cell: Cell) -> bool {
-        (0..self.block_count()).any(|i| self.cell_of(BlockId(i as u8)) == cell)
+        (0..self.block_count()).any(|i| self.cell_of(BlockId::of(i)) == cell)
     }
 
     /// Puts every block where `state` says and holds what it holds; `state` has been
@@ -79,6 +79,7 @@ pub trait World {
                 found: state.block_count(),
             });
         }
+        self.view().check_world(self.grid(), state.block_count())?;
         state.check_fits(self.grid())?;
         self.view().check_state(state)?;
         self.put(state);

@@ -10,7 +10,7 @@ fn goal(text: &str) -> Goal {
     text.parse().unwrap()
 }
 
-fn state(cells: &[(u8, u8)], held: Option<u8>) -> State {
+fn state(cells: &[(u16, u16)], held: Option<u16>) -> State {
     let cells: Vec<Cell> = cells.iter().map(|&(x, y)| Cell::new(x, y)).collect();
     State::new(&cells, held.map(BlockId)).unwrap()
 }
@@ -125,31 +125,59 @@ fn bad_configs_are_named() {
     let base = EnvConfig::default();
     let check = |c: EnvConfig| Env::new(c).err().unwrap();
     assert!(matches!(
-        check(EnvConfig { blocks: 1, ..base }),
+        check(EnvConfig {
+            blocks: 1,
+            ..base.clone()
+        }),
         SimError::BadBlockCount { .. }
     ));
     assert!(matches!(
-        check(EnvConfig { blocks: 17, ..base }),
+        check(EnvConfig {
+            blocks: 17,
+            ..base.clone()
+        }),
         SimError::BadBlockCount { .. }
     ));
-    assert!(matches!(check(EnvConfig { horizon: 0, ..base }), SimError::ZeroHorizon));
+    assert!(matches!(
+        check(EnvConfig {
+            horizon: 0,
+            ..base.clone()
+        }),
+        SimError::ZeroHorizon
+    ));
     let tall = EnvConfig {
         grid: Grid::new(7, 2).unwrap(),
-        ..base
+        ..base.clone()
     };
     assert!(matches!(check(tall), SimError::StackTooTall { blocks: 3, height: 2 }));
     let full = EnvConfig {
         grid: Grid::new(1, 3).unwrap(),
-        ..base
+        ..base.clone()
     };
     assert!(matches!(check(full), SimError::TooManyBlocks { .. }));
     let mismatch = EnvConfig {
         goal: GoalSpec::Fixed(goal("1,0")),
-        ..base
+        ..base.clone()
     };
     assert!(matches!(check(mismatch), SimError::BlockCountMismatch { .. }));
-    assert!(matches!(Grid::new(0, 7), Err(SimError::BadGrid { .. })));
-    assert!(matches!(Grid::new(17, 16), Err(SimError::BadGrid { .. })));
+    assert!(matches!(Grid::new(0, 7), Err(SimError::GridSide { .. })));
+    assert!(matches!(Grid::new(65_536, 7), Err(SimError::GridSide { .. })));
+    // The top view's bitset holds 256 cells; the side view keeps none.
+    let wide = EnvConfig {
+        grid: Grid::new(17, 16).unwrap(),
+        ..base.clone()
+    };
+    assert_eq!(
+        check(wide.clone()).to_string(),
+        "grid 17x16 is not allowed in the top view: it holds at most 256 cells (the side view takes larger grids)"
+    );
+    assert!(
+        Env::new(EnvConfig {
+            view: sim::View::Side,
+            ..wide
+        })
+        .is_ok()
+    );
     assert!(matches!("1,1,0".parse::<Goal>(), Err(SimError::BadGoal { .. })));
     assert!(matches!("0,3,1".parse::<Goal>(), Err(SimError::BadGoal { .. })));
     assert!(matches!("0,x".parse::<Goal>(), Err(SimError::Parse { .. })));
@@ -297,10 +325,10 @@ fn vec_env_seeds_each_env_and_resets_in_the_same_step() {
     };
     // One thread steps on the caller's thread, two on a pool: same results.
     for threads in [1, 2] {
-        let mut v = VecEnv::new(config, 4, threads).unwrap();
+        let mut v = VecEnv::new(config.clone(), 4, threads).unwrap();
         let first = v.reset(10);
         for (i, obs) in first.iter().enumerate() {
-            assert_eq!(*obs, Env::new(config).unwrap().reset(10 + i as u64));
+            assert_eq!(*obs, Env::new(config.clone()).unwrap().reset(10 + i as u64));
         }
         let drops = vec![Action::Drop; 4];
         v.step(&drops).unwrap();
@@ -311,9 +339,9 @@ fn vec_env_seeds_each_env_and_resets_in_the_same_step() {
                 panic!("same-step autoreset never returns a bare reset")
             };
             assert!(s.truncated);
-            assert_eq!(s.info.final_observation.unwrap().state, first[i].state);
+            assert_eq!(s.info.final_observation.clone().unwrap().state, first[i].state);
             // The returned observation starts the next episode: the env's generator continued.
-            let mut solo = Env::new(config).unwrap();
+            let mut solo = Env::new(config.clone()).unwrap();
             solo.reset(10 + i as u64);
             assert_eq!(s.observation, solo.reset(None));
         }
@@ -332,10 +360,10 @@ fn vec_env_in_next_step_mode_returns_the_last_observation_then_resets() {
         ..EnvConfig::with_goal(goal("0,1,2"))
     };
     for threads in [1, 2] {
-        let mut v = VecEnv::new(config, 3, threads)
+        let mut v = VecEnv::new(config.clone(), 3, threads)
             .unwrap()
             .with_autoreset(Autoreset::NextStep);
-        let mut solo: Vec<Env> = (0..3).map(|_| Env::new(config).unwrap()).collect();
+        let mut solo: Vec<Env> = (0..3).map(|_| Env::new(config.clone()).unwrap()).collect();
         let first = v.reset(4);
         for (i, env) in solo.iter_mut().enumerate() {
             assert_eq!(first[i], env.reset(4 + i as u64));
@@ -347,7 +375,7 @@ fn vec_env_in_next_step_mode_returns_the_last_observation_then_resets() {
             solo[i].step(picks[i]).unwrap();
             let expected = solo[i].step([Action::Up, Action::Drop, Action::Left][i]).unwrap();
             // The step that ends the episode returns its last observation, as a lone env does.
-            assert_eq!(*s, VecStep::Stepped(expected));
+            assert_eq!(*s, VecStep::Stepped(expected.clone()));
             assert!(expected.truncated && expected.info.final_observation.is_none());
         }
         // The next step ignores its action (even a pick) and starts the next episode.

@@ -12,7 +12,7 @@ fn goal(text: &str) -> Goal {
     text.parse().unwrap()
 }
 
-fn state(cells: &[(u8, u8)], held: Option<u8>) -> State {
+fn state(cells: &[(u16, u16)], held: Option<u16>) -> State {
     let cells: Vec<Cell> = cells.iter().map(|&(x, y)| Cell::new(x, y)).collect();
     State::new(&cells, held.map(BlockId)).unwrap()
 }
@@ -57,7 +57,11 @@ fn masks_on_hand_built_states_for_both_protocols_and_backends() {
             // Picking block 1: the step's mask is that of the state after it.
             let step = env.step(Action::Pick(BlockId(1))).unwrap();
             assert_eq!(step.observation.state, holding);
-            assert_eq!(actions(step.info.action_mask), when_holding, "{backend} {protocol}");
+            assert_eq!(
+                actions(step.info.action_mask.clone()),
+                when_holding,
+                "{backend} {protocol}"
+            );
             assert_eq!(actions(env.legal_actions()), when_holding);
             assert_eq!(step.observation.legal_actions(), step.info.action_mask);
             // Every action of the mask is one the environment takes.
@@ -76,7 +80,7 @@ fn an_illegal_action_under_paper_is_an_error_that_changes_nothing() {
     for backend in BACKENDS {
         let mut env = original("0,1,2", backend);
         let start = state(&[(0, 1), (3, 3), (5, 5)], None);
-        env.reset_to(start, goal("0,1,2")).unwrap();
+        env.reset_to(start.clone(), goal("0,1,2")).unwrap();
         for illegal in [Action::Up, Action::Down, Action::Left, Action::Right, Action::Drop] {
             assert_eq!(
                 env.step(illegal),
@@ -198,12 +202,12 @@ fn the_paper_start_rule_refuses_grids_it_cannot_fill() {
         start: StartRule::Paper,
         ..EnvConfig::default()
     };
-    assert!(Env::new(config).is_ok(), "a 2x2 corner holds 3 blocks");
+    assert!(Env::new(config.clone()).is_ok(), "a 2x2 corner holds 3 blocks");
     // 2x5: a 1x4 corner, four cells for five blocks.
     let too_small = EnvConfig {
         grid: Grid::new(2, 5).unwrap(),
         blocks: 5,
-        ..config
+        ..config.clone()
     };
     let err = Env::new(too_small).err().unwrap();
     assert_eq!(
@@ -265,7 +269,7 @@ fn reward_above_ends_on_the_reward_not_on_the_goal() {
 
         // A start meeting the goal runs under reward-above, and ends at once under goal.
         let stacked = state(&[(3, 1), (3, 2)], None);
-        two.reset_to(stacked, goal("0,1")).unwrap();
+        two.reset_to(stacked.clone(), goal("0,1")).unwrap();
         assert!(!two.is_over());
         let mut by_goal = Env::new(EnvConfig {
             blocks: 2,
@@ -384,7 +388,7 @@ fn vec_env_masks_and_autoresets_under_paper() {
         ..EnvConfig::with_goal(goal("0,1,2")).with_profile(Profile::Original)
     };
     for threads in [1, 2] {
-        let mut v = VecEnv::new(config, 3, threads).unwrap();
+        let mut v = VecEnv::new(config.clone(), 3, threads).unwrap();
         let first = v.reset(20);
         let picks: Vec<Action> = (0..3).map(|b| Action::Pick(BlockId(b))).collect();
         for obs in &first {
@@ -413,10 +417,10 @@ fn vec_env_masks_and_autoresets_under_paper() {
         let last = stepped(v.step(&[Action::Down; 3]).unwrap());
         for (i, s) in last.iter().enumerate() {
             assert!(s.truncated || s.terminated, "env {i}");
-            let ended = s.info.final_observation.unwrap();
+            let ended = s.info.final_observation.clone().unwrap();
             assert_eq!(ended.held_block(), Some(BlockId(0)));
             assert_eq!(actions(ended.legal_actions()).len(), 5);
-            assert_eq!(actions(s.info.action_mask), picks);
+            assert_eq!(actions(s.info.action_mask.clone()), picks);
             assert_eq!(s.info.action_mask, v.envs()[i].legal_actions());
         }
     }

@@ -71,19 +71,19 @@ proptest! {
         let mut physics = Env::new(config(width, height, blocks, rules, Backend::Physics)).unwrap();
         let mut grid = Env::new(config(width, height, blocks, rules, Backend::Grid)).unwrap();
         let first = physics.reset(seed);
-        prop_assert_eq!(first, grid.reset(seed));
+        prop_assert_eq!(first.clone(), grid.reset(seed));
         let mut legal = first.legal_actions();
         for &a in &actions {
-            prop_assert_eq!(legal, physics.legal_actions());
+            prop_assert_eq!(legal.clone(), physics.legal_actions());
             let action = legal.nth(a % legal.count()).unwrap();
             let p = physics.step(action).unwrap();
             let g = grid.step(action).unwrap();
-            prop_assert_eq!(p, g);
-            prop_assert_eq!(p.info.action_mask, p.observation.legal_actions());
+            prop_assert_eq!(p.clone(), g);
+            prop_assert_eq!(p.info.action_mask.clone(), p.observation.legal_actions());
             legal = p.info.action_mask;
             if p.terminated || p.truncated {
                 let next = physics.reset(None);
-                prop_assert_eq!(next, grid.reset(None));
+                prop_assert_eq!(next.clone(), grid.reset(None));
                 legal = next.legal_actions();
             }
         }
@@ -100,7 +100,7 @@ proptest! {
         let grid = Grid::default();
         let mut env = Env::new(EnvConfig { goal: GoalSpec::Fixed(Goal::identity(blocks).unwrap()), blocks, ..EnvConfig::default() }).unwrap();
         let start = env.reset(seed).state;
-        let mut physics = PhysicsWorld::new(grid, start).unwrap();
+        let mut physics = PhysicsWorld::new(grid, start.clone()).unwrap();
         let mut occupancy = GridWorld::new(grid, start).unwrap();
         for &a in &actions {
             let action = Action::from_index(a % Action::count(blocks), blocks).unwrap();

@@ -2,18 +2,18 @@
 
 use sim::{Action, BlockId, Cell, Effect, Grid, GridWorld, PhysicsWorld, SimError, State, World};
 
-fn state(cells: &[(u8, u8)], held: Option<u8>) -> State {
+fn state(cells: &[(u16, u16)], held: Option<u16>) -> State {
     let cells: Vec<Cell> = cells.iter().map(|&(x, y)| Cell::new(x, y)).collect();
     State::new(&cells, held.map(BlockId)).unwrap()
 }
 
 /// Runs `check` on a grid world and a physics world built from the same state.
 fn both(grid: Grid, start: State, check: impl Fn(&mut dyn World)) {
-    check(&mut GridWorld::new(grid, start).unwrap());
+    check(&mut GridWorld::new(grid, start.clone()).unwrap());
     check(&mut PhysicsWorld::new(grid, start).unwrap());
 }
 
-fn cells(w: &dyn World) -> Vec<(u8, u8)> {
+fn cells(w: &dyn World) -> Vec<(u16, u16)> {
     w.state().cells().iter().map(|c| (c.x, c.y)).collect()
 }
 
@@ -26,7 +26,7 @@ fn held_block_moves_in_each_direction() {
         (Action::Left, (2, 3)),
         (Action::Right, (4, 3)),
     ] {
-        both(Grid::default(), start, |w| {
+        both(Grid::default(), start.clone(), |w| {
             assert_eq!(w.act(action).unwrap(), Effect::Moved);
             assert_eq!(cells(w), vec![to, (0, 0)], "{action}");
             assert_eq!(w.held_block(), Some(BlockId(0)));
@@ -56,7 +56,7 @@ fn blocks_block_moves_into_them() {
     // Block 0 at the centre, surrounded on all four sides.
     let start = state(&[(3, 3), (3, 4), (3, 2), (2, 3), (4, 3)], Some(0));
     for action in [Action::Up, Action::Down, Action::Left, Action::Right] {
-        both(Grid::default(), start, |w| {
+        both(Grid::default(), start.clone(), |w| {
             assert_eq!(w.act(action).unwrap(), Effect::Blocked, "{action}");
             assert_eq!(w.state(), start);
         });
@@ -68,7 +68,7 @@ fn diagonal_and_distant_blocks_do_not_block() {
     // Diagonal neighbours and a block two cells away leave every move free.
     let start = state(&[(3, 3), (2, 4), (4, 2), (5, 3), (3, 5)], Some(0));
     for action in [Action::Up, Action::Down, Action::Left, Action::Right] {
-        both(Grid::default(), start, |w| {
+        both(Grid::default(), start.clone(), |w| {
             assert_eq!(w.act(action).unwrap(), Effect::Moved, "{action}")
         });
     }
@@ -78,7 +78,7 @@ fn diagonal_and_distant_blocks_do_not_block() {
 fn moves_with_nothing_held_change_nothing() {
     let start = state(&[(3, 3), (5, 5)], None);
     for action in [Action::Up, Action::Down, Action::Left, Action::Right] {
-        both(Grid::default(), start, |w| {
+        both(Grid::default(), start.clone(), |w| {
             assert_eq!(w.act(action).unwrap(), Effect::NothingHeld);
             assert_eq!(w.state(), start);
         });
@@ -145,7 +145,7 @@ fn a_state_rejects_overlaps_and_missing_held_blocks() {
     ));
     let outside = State::new(&[Cell::new(7, 0), c], None).unwrap();
     assert!(matches!(
-        GridWorld::new(Grid::default(), outside),
+        GridWorld::new(Grid::default(), outside.clone()),
         Err(SimError::CellOutsideGrid { .. })
     ));
     assert!(matches!(
@@ -159,7 +159,7 @@ fn placing_a_state_that_does_not_fit_is_an_error_and_changes_nothing() {
     let start = state(&[(1, 1), (5, 5)], None);
     let three = state(&[(0, 0), (1, 0), (2, 0)], None);
     let outside = State::new(&[Cell::new(0, 0), Cell::new(0, 7)], None).unwrap();
-    both(Grid::default(), start, |w| {
+    both(Grid::default(), start.clone(), |w| {
         assert!(matches!(
             w.place(&three),
             Err(SimError::BlockCountMismatch {

@@ -37,7 +37,7 @@ fn standing_states(grid: Grid, blocks: usize) -> Vec<State> {
     let mut all = Vec::new();
     rec(&cells, blocks, &mut chosen, &mut all);
     for placement in all {
-        for held in std::iter::once(None).chain((0..blocks).map(|b| Some(BlockId(b as u8)))) {
+        for held in std::iter::once(None).chain((0..blocks).map(|b| Some(BlockId::of(b)))) {
             let state = State::new(&placement, held).unwrap();
             if View::Side.check_state(&state).is_ok() {
                 out.push(state);
@@ -54,8 +54,8 @@ fn every_drop_of_a_small_world_lands_where_the_grid_says() {
     for blocks in 2..=4 {
         for state in standing_states(grid, blocks) {
             let Some(_) = state.held_block() else { continue };
-            let mut g = GridWorld::new_in(View::Side, grid, state).unwrap();
-            let mut p = PhysicsWorld::new_in(View::Side, grid, state).unwrap();
+            let mut g = GridWorld::new_in(View::Side, grid, state.clone()).unwrap();
+            let mut p = PhysicsWorld::new_in(View::Side, grid, state.clone()).unwrap();
             assert_eq!(g.act(Action::Drop).unwrap(), p.act(Action::Drop).unwrap());
             assert_eq!(g.state(), p.state(), "drop from {state:?}");
             assert!(p.max_centre_error() < 1e-6);
@@ -75,7 +75,7 @@ fn a_drop_from_the_top_row_onto_a_tall_tower_rests_on_it() {
         let mut cells: Vec<Cell> = (0..6).map(|y| Cell::new(0, y)).collect();
         cells.push(top);
         let state = State::new(&cells, Some(BlockId(6))).unwrap();
-        let mut g = GridWorld::new_in(View::Side, grid, state).unwrap();
+        let mut g = GridWorld::new_in(View::Side, grid, state.clone()).unwrap();
         let mut p = PhysicsWorld::new_in(View::Side, grid, state).unwrap();
         g.act(Action::Drop).unwrap();
         p.act(Action::Drop).unwrap();
@@ -262,7 +262,7 @@ fn block_moves_are_carried_out_by_the_gripper_through_either_backend() {
         })
         .unwrap();
         let start = State::new(&[Cell::new(0, 0), Cell::new(0, 1), Cell::new(2, 0)], None).unwrap();
-        env.reset_to(start, env.goal()).unwrap();
+        env.reset_to(start, env.goal().clone()).unwrap();
         let onto = |block, target| BlockMove::Onto {
             block: BlockId(block),
             target: BlockId(target),
@@ -303,7 +303,7 @@ fn the_side_view_is_drawn_over_a_table_with_the_goal_towers_beside_it() {
     })
     .unwrap();
     let start = State::new(&[Cell::new(0, 0), Cell::new(0, 1), Cell::new(2, 0)], None).unwrap();
-    let obs = env.reset_to(start, env.goal()).unwrap();
+    let obs = env.reset_to(start, env.goal().clone()).unwrap();
     let text = sim::render::ascii(&obs, sim::render::Colour::Never);
     // The goal's towers: 1 on 2 (top first), a gap, then 0.
     assert_eq!(
@@ -322,20 +322,89 @@ fn a_reset_that_moves_a_block_onto_another_blocks_cell_leaves_no_contact_behind(
     // in between, and the next drop's solver pushed block 0 off its cell. Every offset of
     // the update around the reset is tried.
     let grid = Grid::default();
-    let cells = |c: [(u8, u8); 3]| c.map(|(x, y)| Cell::new(x, y));
+    let cells = |c: [(u16, u16); 3]| c.map(|(x, y)| Cell::new(x, y));
     let before = State::new(&cells([(5, 1), (2, 0), (5, 0)]), Some(BlockId(0))).unwrap();
     let after = State::new(&cells([(2, 0), (1, 0), (1, 1)]), None).unwrap();
     for moves in 1005..1030 {
-        let mut p = PhysicsWorld::new_in(View::Side, grid, before).unwrap();
+        let mut p = PhysicsWorld::new_in(View::Side, grid, before.clone()).unwrap();
         for m in 0..moves {
             p.act(if m % 2 == 0 { Action::Up } else { Action::Down }).unwrap();
         }
         p.act(Action::Drop).unwrap();
         p.place(&after).unwrap();
-        let mut g = GridWorld::new_in(View::Side, grid, after).unwrap();
+        let mut g = GridWorld::new_in(View::Side, grid, after.clone()).unwrap();
         for action in [Action::Pick(BlockId(2)), Action::Right, Action::Right, Action::Drop] {
             assert_eq!(p.act(action).unwrap(), g.act(action).unwrap(), "after {moves} moves");
         }
         assert_eq!(p.state(), g.state(), "after {moves} moves");
+    }
+}
+
+/// A block move's gripper actions carried out one by one: each an ordinary step of `env`,
+/// and each through `World::act` on `world`, until the episode ends. The last step and how
+/// many were taken.
+fn move_one_action_at_a_time(env: &mut Env, world: &mut GridWorld, mv: sim::BlockMove) -> (sim::Step, u32) {
+    let actions = sim::block_move::expand(&env.state(), env.config().grid, mv).unwrap();
+    let mut last = None;
+    for (k, &a) in actions.iter().enumerate() {
+        world.act(a).unwrap();
+        let step = env.step(a).unwrap();
+        let over = step.terminated || step.truncated;
+        last = Some((step, k as u32 + 1));
+        if over {
+            break;
+        }
+    }
+    last.unwrap()
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(200))]
+
+    /// On the grid backend a block move goes straight to where its Drop releases the block
+    /// (O(N + W) for the move); the world, the step count and the last step are those of
+    /// `block_move::expand`'s gripper actions taken one by one through the rules, including
+    /// moves that the horizon cuts short.
+    #[test]
+    fn a_block_move_equals_its_gripper_actions_one_by_one(
+        blocks in 1usize..14,
+        extra_width in 0usize..3,
+        extra_height in 0usize..3,
+        horizon in 5u32..120,
+        seed in 0u64..10_000,
+    ) {
+        use rand::RngExt;
+        let grid = Grid::new(blocks.max(2) + extra_width, blocks + 1 + extra_height).unwrap();
+        let mut fast = Env::new(EnvConfig { horizon, ..side(grid, blocks, Backend::Grid) }).unwrap();
+        fast.reset(seed);
+        let mut slow = fast.clone();
+        let mut world = GridWorld::new_in(View::Side, grid, fast.state()).unwrap();
+        let mut rng = sim::seeding::rng(seed ^ 0xb10c);
+        while !fast.is_over() {
+            let legal: Vec<usize> = fast.legal_moves().iter().enumerate().filter(|(_, l)| **l).map(|(i, _)| i).collect();
+            proptest::prop_assert!(!legal.is_empty());
+            let mv = sim::BlockMove::from_index(legal[rng.random_range(0..legal.len())], blocks, grid).unwrap();
+            let (step, taken) = move_one_action_at_a_time(&mut slow, &mut world, mv);
+            let moved = fast.step_block_move(mv).unwrap();
+            proptest::prop_assert_eq!(&moved.step, &step);
+            proptest::prop_assert_eq!(moved.gripper_steps, taken);
+            proptest::prop_assert_eq!(fast.steps(), slow.steps());
+            proptest::prop_assert_eq!(fast.state(), world.state());
+            proptest::prop_assert_eq!(fast.legal_actions(), slow.legal_actions());
+        }
+    }
+
+    /// The legal moves by index are exactly the moves `block_move::check` allows, on states
+    /// of every size (the large ones through the heap).
+    #[test]
+    fn legal_moves_are_those_check_allows(blocks in 1usize..24, narrow in proptest::bool::ANY, seed in 0u64..10_000) {
+        let grid = if narrow { Grid::new(blocks.div_ceil(2) + 1, blocks + 1).unwrap() } else { Grid::side_default(blocks) };
+        let mut env = Env::new(side(grid, blocks, Backend::Grid)).unwrap();
+        let state = env.reset(seed).state;
+        let legal = env.legal_moves();
+        for (i, &l) in legal.iter().enumerate() {
+            let mv = sim::BlockMove::from_index(i, blocks, grid).unwrap();
+            proptest::prop_assert_eq!(l, sim::block_move::check(&state, grid, mv).is_ok(), "{}", mv);
+        }
     }
 }

@@ -59,7 +59,7 @@ fn towers_parse_print_and_round_trip() {
 #[test]
 fn towers_stand_anywhere_from_above_and_on_the_table_from_the_side() {
     let g: Goal = "0,1/2,3".parse().unwrap();
-    let at = |cells: [(u8, u8); 4], held: Option<u8>| {
+    let at = |cells: [(u16, u16); 4], held: Option<u16>| {
         let cells: Vec<Cell> = cells.iter().map(|&(x, y)| Cell::new(x, y)).collect();
         State::new(&cells, held.map(BlockId)).unwrap()
     };
@@ -82,7 +82,7 @@ fn rewards_that_need_one_tower_refuse_towers_and_trivial_goals_are_refused() {
     let towers = GoalSpec::Fixed("0,1/2".parse().unwrap());
     let config = |reward: &str, view| EnvConfig {
         blocks: 3,
-        goal: towers,
+        goal: towers.clone(),
         reward: RewardModel::from_name(reward).unwrap(),
         view,
         ..EnvConfig::default()
@@ -100,7 +100,7 @@ fn rewards_that_need_one_tower_refuse_towers_and_trivial_goals_are_refused() {
         goal: GoalSpec::Fixed("0/1/2".parse().unwrap()),
         ..EnvConfig::default()
     };
-    assert!(Env::new(trivial).is_err(), "it holds in every state from above");
+    assert!(Env::new(trivial.clone()).is_err(), "it holds in every state from above");
     assert!(
         Env::new(EnvConfig {
             view: View::Side,
@@ -124,7 +124,7 @@ fn a_towers_episode_in_the_side_view_ends_when_its_towers_stand() {
     .unwrap();
     // 0 on the table, 1 on 0, 2 on 1: take 2 off, then 1, put 0 on 1.
     let start = State::new(&[Cell::new(0, 0), Cell::new(0, 1), Cell::new(0, 2)], None).unwrap();
-    env.reset_to(start, env.goal()).unwrap();
+    env.reset_to(start, env.goal().clone()).unwrap();
     let plan = [
         Action::Pick(BlockId(2)),
         Action::Up,
@@ -177,7 +177,7 @@ fn trajectory_headers_record_the_view_and_the_towers_and_old_headers_read_as_top
             0,
             5,
             obs.grid,
-            obs.goal,
+            obs.goal.clone(),
             1000,
             &obs.state,
         ))
@@ -192,7 +192,7 @@ fn trajectory_headers_record_the_view_and_the_towers_and_old_headers_read_as_top
     for k in 0..40 {
         let action = mask.nth(k % mask.count()).unwrap();
         let step = env.step(action).unwrap();
-        mask = step.info.action_mask;
+        mask = step.info.action_mask.clone();
         lines.push(serde_json::to_string(&Record::step(0, action.index(), &step)).unwrap());
         if step.terminated || step.truncated {
             break;
@@ -203,7 +203,7 @@ fn trajectory_headers_record_the_view_and_the_towers_and_old_headers_read_as_top
         .collect::<Result<_, _>>()
         .unwrap();
     assert_eq!(episodes.len(), 1);
-    assert_eq!((episodes[0].view, episodes[0].goal), (View::Side, obs.goal));
+    assert_eq!((episodes[0].view, &episodes[0].goal), (View::Side, &obs.goal));
     assert_eq!(episodes[0].steps.len(), lines.len() - 1);
 }
 
@@ -272,4 +272,5 @@ fn shapes_give_one_goal_for_each_split_into_towers() {
     assert_eq!(text(4), ["0,1,2,3", "0,1,2/3", "0,1/2,3", "0,1/2/3", "0/1/2/3"]);
     assert_eq!(Goal::shapes(10).unwrap().len(), 42, "the partitions of 10");
     assert!(Goal::shapes(17).is_err());
+    assert!(Goal::shapes(0).is_err());
 }

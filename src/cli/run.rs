@@ -164,7 +164,7 @@ pub fn run(args: RunArgs) -> Result<()> {
         (AgentKind::Q | AgentKind::Dqn, Some(m)) => m.policy(args.epsilon.unwrap_or(agent::profile::TEST_EPSILON))?,
         (AgentKind::Q | AgentKind::Dqn, None) => anyhow::bail!("--agent q and --agent dqn need --model FILE"),
     };
-    let mut env = Env::new(config)?;
+    let mut env = Env::new(config.clone())?;
     let mut trajectory = trajectory_out.as_ref().map(TrajectoryWriter::create).transpose()?;
     let bar = super::progress::bar(args.episodes, "episodes");
     let results = agent::rollout::play_observed(
@@ -180,7 +180,7 @@ pub fn run(args: RunArgs) -> Result<()> {
     if let Some(t) = trajectory {
         t.finish()?;
     }
-    let goal = match config.goal {
+    let goal = match &config.goal {
         GoalSpec::Fixed(g) => Some(g.to_string()),
         GoalSpec::Random => None,
     };

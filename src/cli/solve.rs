@@ -68,9 +68,10 @@ pub struct SolveArgs {
     /// --solver exact).
     #[arg(long)]
     pub held: Option<usize>,
-    /// Grid size, WxH.
-    #[arg(long, default_value = "7x7")]
-    pub grid: String,
+    /// Grid size, WxH [default: 7x7; in the side view, 7x7 up to 7 blocks and N x (N+1)
+    /// beyond]
+    #[arg(long)]
+    pub grid: Option<String>,
     /// The world: top (the paper's, seen from above) or side (the classic Blocks World; the
     /// goal may be several towers, e.g. 0,1/2).
     #[arg(long, default_value = "top")]
@@ -114,10 +115,13 @@ pub fn solve(args: SolveArgs) -> Result<()> {
     let (Some(start), Some(goal)) = (&args.start, &args.goal) else {
         anyhow::bail!("solve needs --start and --goal, or --pddl PROBLEM.pddl")
     };
-    let grid: Grid = args.grid.parse().context("--grid")?;
+    // The blocks `--start` lists (the side view's default grid grows with them).
+    let blocks = start.split(';').count();
+    let grid = super::world::grid_or_default(args.grid.as_deref(), args.view, blocks).context("--grid")?;
     if args.view == View::Side {
         return solve_side(&args, grid, start, goal);
     }
+    View::Top.check_world(grid, sim::MIN_BLOCKS).context("--grid")?;
     anyhow::ensure!(
         args.cost != Some(Cost::Moves),
         "--cost moves counts block moves, which the side view plans: add --view side"
@@ -133,6 +137,7 @@ pub fn solve(args: SolveArgs) -> Result<()> {
             "--start"
         }
     })?;
+    View::Top.check_world(grid, state.block_count()).context("--start")?;
     let goal = Goal::parse(goal, Some(state.block_count())).context("--goal")?;
     anyhow::ensure!(
         solver == SolverKind::Exact || args.budget.solver_budget.is_none(),
@@ -191,6 +196,7 @@ fn solve_side(args: &SolveArgs, grid: Grid, start: &str, goal: &str) -> Result<(
             "--start"
         }
     })?;
+    View::Side.check_world(grid, state.block_count()).context("--start")?;
     View::Side.check_state(&state).context("--start")?;
     let goal = Goal::parse(goal, Some(state.block_count())).context("--goal")?;
     goal.check_fits(grid).context("--goal")?;

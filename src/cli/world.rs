@@ -17,9 +17,10 @@ pub struct WorldArgs {
     /// no tower names are free) (default: one tower drawn at random every episode).
     #[arg(long)]
     pub goal: Option<String>,
-    /// Grid size, WxH.
-    #[arg(long, default_value = "7x7")]
-    pub grid: String,
+    /// Grid size, WxH [default: 7x7; in the side view, 7x7 up to 7 blocks and N x (N+1)
+    /// beyond]
+    #[arg(long)]
+    pub grid: Option<String>,
     /// Steps before an episode is cut off [default: 1000]
     #[arg(long)]
     pub horizon: Option<u32>,
@@ -42,13 +43,13 @@ impl WorldArgs {
     /// already this command's), in `view` unless `--view` says otherwise, checked. Episodes
     /// end at the goal.
     pub fn config(&self, rules: &ProfileParts, view: View) -> Result<EnvConfig> {
-        let grid: Grid = self.grid.parse()?;
+        let view: View = self.view.as_deref().map_or(Ok(view), str::parse)?;
+        let grid = grid_or_default(self.grid.as_deref(), view, self.blocks)?;
         let goal = match &self.goal {
             Some(text) => GoalSpec::Fixed(Goal::parse(text, Some(self.blocks))?),
             None => GoalSpec::Random,
         };
         let backend: Backend = self.backend.parse()?;
-        let view: View = self.view.as_deref().map_or(Ok(view), str::parse)?;
         let config = EnvConfig {
             grid,
             blocks: self.blocks,
@@ -65,4 +66,14 @@ impl WorldArgs {
         config.validate()?;
         Ok(config)
     }
+}
+
+/// The grid `--grid` names, or the view's default for `blocks` blocks: 7 x 7 in the top
+/// view, [`Grid::side_default`] in the side view (docs/world.md, "The side view at any size").
+pub fn grid_or_default(text: Option<&str>, view: View, blocks: usize) -> Result<Grid> {
+    Ok(match text {
+        Some(text) => text.parse()?,
+        None if view == View::Side => Grid::side_default(blocks),
+        None => Grid::default(),
+    })
 }

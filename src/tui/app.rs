@@ -56,7 +56,7 @@ pub fn command_for(key: KeyEvent, blocks: usize) -> Option<Command> {
         KeyCode::Char(c @ ('0'..='9' | 'A'..='F')) => {
             let i = c.to_digit(16).expect("a label");
             if (i as usize) < blocks {
-                Command::Override(Action::Pick(BlockId(i as u8)))
+                Command::Override(Action::Pick(BlockId::of(i as usize)))
             } else {
                 Command::NoSuchBlock(i)
             }
@@ -201,10 +201,10 @@ impl<S: DemoSink> DemoApp<S> {
                 };
             }
             Command::NoSuchBlock(i) => {
-                let last = BlockId(self.agent().blocks() as u8 - 1);
+                let last = BlockId::of(self.agent().blocks() - 1);
                 self.message = format!(
                     "There is no block {}: the blocks are 0 to {}.",
-                    label(BlockId(i as u8)),
+                    label(BlockId::of(i as usize)),
                     label(last)
                 );
             }

@@ -25,8 +25,8 @@ const GOAL_BOX_WIDTH: u16 = 9;
 /// The help line for a world of `blocks` blocks (their labels pick them).
 pub fn help(blocks: usize) -> String {
     let picks = match blocks {
-        ..=10 => format!("0-{} pick", label(BlockId(blocks as u8 - 1))),
-        _ => format!("0-9 A-{} pick", label(BlockId(blocks as u8 - 1))),
+        ..=10 => format!("0-{} pick", label(BlockId::of(blocks - 1))),
+        _ => format!("0-9 A-{} pick", label(BlockId::of(blocks - 1))),
     };
     format!("arrows move  {picks}  d drop  space pause  +/- pace  n next  q quit")
 }
@@ -161,7 +161,7 @@ fn block_colour(block: BlockId) -> Color {
 
 /// The grid, top row first: a block is its label on its colour, the held one in brackets.
 fn grid_lines(obs: &Observation, cell: CellSize) -> Vec<Line<'static>> {
-    let (w, h) = (obs.grid.width() as u8, obs.grid.height() as u8);
+    let (w, h) = (obs.grid.width() as u16, obs.grid.height() as u16);
     let width = cell.width as usize;
     let mut lines = Vec::new();
     for y in (0..h).rev() {

@@ -19,7 +19,7 @@ use crate::error::{AgentError, Result};
 use crate::rule::{CorrectionRule, Experience};
 
 /// One step of a [`DemoEpisode`].
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct DemoStep {
     /// The action taken.
     pub action: Action,
@@ -54,8 +54,8 @@ pub struct DemoEpisode {
 impl DemoEpisode {
     /// The states the episode passes through, `start` first (one more than the steps).
     pub fn states(&self) -> Vec<State> {
-        std::iter::once(self.start)
-            .chain(self.steps.iter().map(|s| s.state))
+        std::iter::once(self.start.clone())
+            .chain(self.steps.iter().map(|s| s.state.clone()))
             .collect()
     }
 }
@@ -72,7 +72,7 @@ impl From<Episode> for DemoEpisode {
                 .iter()
                 .map(|s| DemoStep {
                     action: s.action,
-                    state: s.state,
+                    state: s.state.clone(),
                     reward: s.reward,
                     terminated: s.terminated,
                     truncated: s.truncated,
@@ -146,7 +146,7 @@ impl DemoLearner for Collector {
         let episode = self.episodes.last_mut().expect("the replay begins an episode first");
         episode.steps.push(DemoStep {
             action: step.action,
-            state: step.next.state,
+            state: step.next.state.clone(),
             reward: step.reward,
             terminated: step.terminated,
             truncated: step.truncated,

@@ -63,9 +63,9 @@ pub use sim::trajectory::MAX_LINE_BYTES;
 #[serde(deny_unknown_fields)]
 pub struct StateLine {
     /// Every block's cell.
-    pub blocks: Vec<[u8; 2]>,
+    pub blocks: Vec<[u16; 2]>,
     /// The held block's id, or `null`.
-    pub held: Option<u8>,
+    pub held: Option<u16>,
 }
 
 impl StateLine {
@@ -154,7 +154,7 @@ impl EpisodeLine {
         EpisodeLine {
             episode,
             seed,
-            goal: obs.goal,
+            goal: obs.goal.clone(),
             start: StateLine::of(&obs.state),
         }
     }

@@ -131,7 +131,7 @@ struct OpenSession {
 }
 
 /// The episode being replayed.
-#[derive(Clone, Copy)]
+#[derive(Clone)]
 struct OpenEpisode {
     number: u64,
     goal: Goal,
@@ -354,7 +354,7 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
             }
             _ => {}
         }
-        self.agent.begin_episode(e.episode, e.goal, start)?;
+        self.agent.begin_episode(e.episode, e.goal.clone(), start.clone())?;
         session.last_episode = Some(e.episode);
         self.episode = Some(OpenEpisode {
             number: e.episode,
@@ -370,7 +370,7 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
 
     fn step(&mut self, s: StepLine) -> std::result::Result<(), LineError> {
         let session = self.session.as_mut().ok_or_else(|| no_header("a step", "session"))?;
-        let episode = match self.episode {
+        let episode = match self.episode.clone() {
             Some(e) if e.number == s.episode => e,
             _ => return Err(no_header(&format!("a step of episode {}", s.episode), "episode")),
         };
@@ -397,13 +397,13 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
         let obs = Observation {
             grid: session.grid,
             state: s.state.state(session.grid)?,
-            goal: episode.goal,
+            goal: episode.goal.clone(),
             protocol: ActionProtocol::Free,
             view: sim::View::Top,
         };
         let next = Observation {
             state: s.next.state(session.grid)?,
-            ..obs
+            ..obs.clone()
         };
         check_blocks(&obs.state, &episode.goal)?;
         check_blocks(&next.state, &episode.goal)?;
@@ -419,7 +419,7 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
         }
         let action = Action::parse(&s.action, blocks)?;
         Action::parse(&s.proposed, blocks)?;
-        let mut world = GridWorld::new(session.grid, obs.state)?;
+        let mut world = GridWorld::new(session.grid, obs.state.clone())?;
         world.act(action)?;
         if world.state() != next.state {
             return Err(LineError::bad(format!(
@@ -449,7 +449,7 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
                 obs,
                 action,
                 reward: s.reward,
-                next,
+                next: next.clone(),
                 terminated: s.terminated,
                 truncated: s.truncated,
                 corrected: s.correction,
@@ -755,8 +755,8 @@ mod tests {
                 unreachable!()
             };
             // A next state the rules cannot give: a block jumps to a free far cell.
-            let free = (0..7u8)
-                .flat_map(|x| (0..7u8).map(move |y| [x, y]))
+            let free = (0..7u16)
+                .flat_map(|x| (0..7u16).map(move |y| [x, y]))
                 .find(|c| !s.next.blocks.contains(c) && !s.state.blocks.contains(c))
                 .unwrap();
             s.next.blocks[0] = free;

@@ -114,7 +114,7 @@ impl Suite {
             ..EnvConfig::default()
         };
         let specs: Vec<GoalSpec> = match &self.goals {
-            Goals::Each(goals) => goals.iter().map(|&g| GoalSpec::Fixed(g)).collect(),
+            Goals::Each(goals) => goals.iter().map(|g| GoalSpec::Fixed(g.clone())).collect(),
             Goals::Drawn => vec![GoalSpec::Random],
         };
         Ok(specs
@@ -296,7 +296,7 @@ impl ArmResult {
         optimal: &[u32],
         horizon: u32,
     ) -> ArmResult {
-        let all: Vec<EpisodeResult> = replicates.iter().flatten().copied().collect();
+        let all: Vec<EpisodeResult> = replicates.iter().flatten().cloned().collect();
         let summary = Summary::of(&all);
         let optimality = agent::optimality::Optimality::of(&all, optimal);
         let failures_per_replicate: Vec<usize> = replicates.iter().map(|r| Summary::of(r).failures).collect();
@@ -341,14 +341,14 @@ impl ArmResult {
 
 /// `items` in `runs` equal runs, regrouped into sets of `per` items of each run: set `r`
 /// holds items `r * per..(r + 1) * per` of every run, run after run.
-fn regroup<T: Copy>(items: &[T], runs: usize, per: usize) -> Vec<Vec<T>> {
+fn regroup<T: Clone>(items: &[T], runs: usize, per: usize) -> Vec<Vec<T>> {
     let run_length = items.len() / runs.max(1);
     let sets = run_length / per.max(1);
     (0..sets)
         .map(|r| {
             items
                 .chunks(run_length.max(1))
-                .flat_map(|run| run[r * per..(r + 1) * per].iter().copied())
+                .flat_map(|run| run[r * per..(r + 1) * per].iter().cloned())
                 .collect()
         })
         .collect()
@@ -664,7 +664,7 @@ mod tests {
         let exact = s.play(&mut agent::ExactPolicy::new(s.grid())).unwrap();
         let optimum = s.optimum().unwrap();
         for ((r, e), o) in random.iter().zip(&exact).zip(&optimum) {
-            assert_eq!((r.start, r.goal), (e.start, e.goal));
+            assert_eq!((r.start.clone(), r.goal.clone()), (e.start.clone(), e.goal.clone()));
             assert_eq!(e.steps, *o);
             assert!(!r.reached_goal || r.steps >= *o);
         }

@@ -37,13 +37,13 @@ fn suites() -> [(Goals, PaperTable, &'static str, &'static str); 3] {
     [
         (Goals::Drawn, paper::TABLE_II, "All goals", "e6-all-goals"),
         (
-            Goals::Each(vec![unseen[0]]),
+            Goals::Each(vec![unseen[0].clone()]),
             paper::TABLE_III,
             "Goal 0,2,1",
             "e6-goal-021",
         ),
         (
-            Goals::Each(vec![unseen[1]]),
+            Goals::Each(vec![unseen[1].clone()]),
             paper::TABLE_IV,
             "Goal 2,0,1",
             "e6-goal-201",

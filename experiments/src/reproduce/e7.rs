@@ -300,7 +300,7 @@ fn episodes<'a>(
     let mut figures = Vec::new();
     for (i, (agent, _)) in agents.iter().enumerate() {
         let observations = suite.record(policy(*agent)?.as_mut(), start)?;
-        let goal = observations[0].goal;
+        let goal = observations[0].goal.clone();
         let (stem, who) = if i == 0 {
             ("e7-best", "the best learner")
         } else {

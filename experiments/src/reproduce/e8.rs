@@ -207,7 +207,7 @@ fn arms(budget: Budget, seed: u64) -> Result<Vec<Arm>> {
             DqnConfig {
                 world: sim::EnvConfig {
                     reward: dense,
-                    ..ours3.world
+                    ..ours3.world.clone()
                 },
                 ..ours3.clone()
             },

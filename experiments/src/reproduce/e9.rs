@@ -378,7 +378,7 @@ fn problem(blocks: usize, towers: usize, seed: u64, learner: &QAgent) -> Result<
     let mut env = Env::new(EnvConfig {
         grid,
         blocks,
-        goal: GoalSpec::Fixed(goal),
+        goal: GoalSpec::Fixed(goal.clone()),
         horizon: HORIZON,
         backend: BACKEND,
         view: View::Side,

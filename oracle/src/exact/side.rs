@@ -176,14 +176,15 @@ impl<'a> SideProblem<'a> {
 /// that leads there: the picks of clear blocks with nothing held; while holding, the moves
 /// that move and Drop.
 pub(super) fn successors(grid: Grid, state: &State) -> Vec<(Action, State)> {
-    let world = GridWorld::new_in(View::Side, grid, *state).expect("states reached by act fit the grid and stand");
+    let world =
+        GridWorld::new_in(View::Side, grid, state.clone()).expect("states reached by act fit the grid and stand");
     View::Side
         .legal_actions(ActionProtocol::Free, state)
         .iter()
         .filter_map(|a| {
-            let mut w = world;
+            let mut w = world.clone();
             match w.act(a) {
-                Ok(Effect::Moved | Effect::Picked | Effect::Dropped) => Some((a, *w.state_ref())),
+                Ok(Effect::Moved | Effect::Picked | Effect::Dropped) => Some((a, w.into_state())),
                 _ => None,
             }
         })

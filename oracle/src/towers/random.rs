@@ -1,11 +1,7 @@
-//! Seeded random problems: uniformly random states (as Slaney & Thiebaux draw them), states
-//! in the shape of the 2023 planning competition's generator, and random goals of a few
-//! towers, for tests, benchmarks and experiments.
-//!
-//! The states of `n` blocks with `k` towers number `L(n, k) = C(n-1, k-1) n! / k!` (the
-//! Lah numbers): each is `k!` of the (permutation, cut of it into `k` pieces) pairs. So a
-//! uniform state is a tower count drawn with weights `L(n, k)`, a uniform permutation and
-//! a uniform choice of the `k - 1` cut points.
+//! Seeded random problems: uniformly random states (Slaney & Thiebaux's counting method,
+//! drawn by `sim::uniform`, the one home of the side view's random states), states in the
+//! shape of the 2023 planning competition's generator, and random goals of a few towers,
+//! for tests, benchmarks and experiments.
 
 use rand::seq::SliceRandom;
 use rand::seq::index::sample;
@@ -18,16 +14,13 @@ use super::error::TowersError;
 use super::goal::TowerGoal;
 use super::state::{NONE, Towers};
 
-/// A uniformly random state of `blocks` blocks; the same seed gives the same state.
+/// A uniformly random state of `blocks` blocks ([`sim::uniform`]); the same seed gives the
+/// same state.
 pub fn random_state(blocks: usize, seed: u64) -> Towers {
-    let mut rng = rng(seed);
     let mut below = vec![NONE; blocks];
-    if blocks > 0 {
-        let k = tower_count(blocks, &mut rng);
-        for tower in cut(&permutation(blocks, &mut rng), k, &mut rng) {
-            for pair in tower.windows(2) {
-                below[pair[1]] = pair[0];
-            }
+    for tower in sim::uniform::uniform_towers(blocks, &mut rng(seed)) {
+        for pair in tower.windows(2) {
+            below[pair[1]] = pair[0];
         }
     }
     Towers::from_below(below)
@@ -83,26 +76,4 @@ fn cut(items: &[usize], k: usize, rng: &mut impl Rng) -> Vec<Vec<usize>> {
             piece
         })
         .collect()
-}
-
-/// A tower count for `n >= 1` blocks drawn with weights `L(n, k)`, computed in logs.
-fn tower_count(n: usize, rng: &mut impl Rng) -> usize {
-    let ln_fact: Vec<f64> = std::iter::once(0.0)
-        .chain((1..=n).scan(0.0, |acc, i| {
-            *acc += (i as f64).ln();
-            Some(*acc)
-        }))
-        .collect();
-    // ln L(n, k) without the ln n! every term shares.
-    let ln_l = |k: usize| ln_fact[n - 1] - ln_fact[k - 1] - ln_fact[n - k] - ln_fact[k];
-    let top = (1..=n).map(ln_l).fold(f64::NEG_INFINITY, f64::max);
-    let weights: Vec<f64> = (1..=n).map(|k| (ln_l(k) - top).exp()).collect();
-    let mut r = rng.random::<f64>() * weights.iter().sum::<f64>();
-    for (i, w) in weights.iter().enumerate() {
-        if r < *w {
-            return i + 1;
-        }
-        r -= w;
-    }
-    n
 }

@@ -61,15 +61,15 @@ pub fn plan_side(planner: MovePlanner, grid: Grid, state: &State, goal: &Goal) -
 /// leftmost empty column. An error if a move cannot be carried out there (no empty column,
 /// no free row to carry the block over).
 pub fn gripper_actions(grid: Grid, state: &State, plan: &TowerPlan) -> Result<Vec<Action>> {
-    let mut world = GridWorld::new_in(View::Side, grid, *state)?;
+    let mut world = GridWorld::new_in(View::Side, grid, state.clone())?;
     let mut actions = Vec::new();
     for m in &plan.moves {
-        let now = *world.state_ref();
-        let steps = block_move::expand(&now, grid, block_move_of(&now, grid, *m)?)?;
-        for &a in &steps {
+        let mv = block_move_of(world.state_ref(), grid, *m)?;
+        let start = actions.len();
+        actions.extend(block_move::route_in(&world, mv)?.actions());
+        for &a in &actions[start..] {
             world.act(a)?;
         }
-        actions.extend(steps);
     }
     Ok(actions)
 }
@@ -77,11 +77,11 @@ pub fn gripper_actions(grid: Grid, state: &State, plan: &TowerPlan) -> Result<Ve
 /// The world's block move that carries out the plan's move `m` from `state` on `grid`: a
 /// move to the table goes to the leftmost empty column (an error if there is none).
 pub fn block_move_of(state: &State, grid: Grid, m: Move) -> Result<BlockMove> {
-    let block = BlockId(m.block as u8);
+    let block = BlockId::of(m.block);
     Ok(match m.to {
         Place::On(target) => BlockMove::Onto {
             block,
-            target: BlockId(target as u8),
+            target: BlockId::of(target),
         },
         Place::Table => BlockMove::ToTable {
             block,
@@ -93,7 +93,11 @@ pub fn block_move_of(state: &State, grid: Grid, m: Move) -> Result<BlockMove> {
     })
 }
 
-/// The leftmost column with no block on the table, if any.
-pub fn empty_column(state: &State, grid: Grid) -> Option<u8> {
-    (0..grid.width() as u8).find(|&x| state.cells().iter().all(|c| c.x != x || c.y != 0))
+/// The leftmost column with no block on the table, if any. O(N + W).
+pub fn empty_column(state: &State, grid: Grid) -> Option<u16> {
+    let mut used = vec![false; grid.width()];
+    for c in state.cells().iter().filter(|c| c.y == 0) {
+        used[usize::from(c.x)] = true;
+    }
+    used.iter().position(|&u| !u).map(|x| x as u16)
 }

@@ -47,14 +47,14 @@ impl BfsTable {
         }
         while let Some(state) = queue.pop_front() {
             let d = table.dist[table.index(&state)];
-            let world = GridWorld::new(grid, state).unwrap();
+            let world = GridWorld::new(grid, state.clone()).unwrap();
             for action in protocol.legal_actions(&state).iter() {
-                let mut w = world;
+                let mut w = world.clone();
                 w.act(action).unwrap();
                 let i = table.index(w.state_ref());
                 if table.dist[i] == UNREACHABLE {
                     table.dist[i] = d + 1;
-                    queue.push_back(*w.state_ref());
+                    queue.push_back(w.state_ref().clone());
                 }
             }
         }
@@ -104,7 +104,7 @@ pub fn all_states(grid: Grid, blocks: usize) -> Vec<State> {
         .into_iter()
         .flat_map(|s| {
             std::iter::once(None)
-                .chain((0..blocks).map(|b| Some(BlockId(b as u8))))
+                .chain((0..blocks).map(|b| Some(BlockId::of(b))))
                 .map(move |h| s.with_held(h).unwrap())
         })
         .collect()
@@ -112,9 +112,9 @@ pub fn all_states(grid: Grid, blocks: usize) -> Vec<State> {
 
 /// The state `actions` lead to from `start`, by the rules of the grid model.
 pub fn replay(grid: Grid, start: &State, actions: &[Action]) -> State {
-    let mut world = GridWorld::new(grid, *start).unwrap();
+    let mut world = GridWorld::new(grid, start.clone()).unwrap();
     for &a in actions {
         world.act(a).unwrap();
     }
-    *world.state_ref()
+    world.state_ref().clone()
 }

@@ -102,9 +102,9 @@ pub fn world_of(view: &Value) -> (sim::State, sim::Goal) {
         .as_array()
         .unwrap()
         .iter()
-        .map(|c| sim::Cell::new(c[0].as_u64().unwrap() as u8, c[1].as_u64().unwrap() as u8))
+        .map(|c| sim::Cell::new(c[0].as_u64().unwrap() as u16, c[1].as_u64().unwrap() as u16))
         .collect();
-    let held = view["held"].as_u64().map(|b| sim::BlockId(b as u8));
+    let held = view["held"].as_u64().map(|b| sim::BlockId::of(b as usize));
     let goal: Vec<usize> = view["goal"]
         .as_array()
         .unwrap()
