@@ -37,6 +37,19 @@ def optional_whole(name: str, value: Any, low: int = 0, high: int = U64_MAX) -> 
     return None if value is None else whole(name, value, low, high)
 
 
+def whole_numbers(name: str, value: Any) -> np.ndarray:
+    """``value`` as an array of whole numbers (int64): integers as they are, floats only when
+    every one is a whole number (a replay buffer may store block ids as floats); a
+    ``ValueError`` naming ``name`` for a fraction, a boolean, text or anything else, rather
+    than a value rounded or compared as something it is not."""
+    array = np.asarray(value)
+    if array.dtype.kind in "iu":
+        return array.astype(np.int64, copy=False)
+    if array.dtype.kind == "f" and np.all(np.isfinite(array)) and np.all(array == np.round(array)):
+        return array.astype(np.int64)
+    raise ValueError(f"{name} holds whole numbers (block ids, cells), not {array.dtype} values: {value!r}")
+
+
 def memory_bytes() -> Optional[int]:
     """This machine's physical memory in bytes, or ``None`` where the system does not say."""
     try:

@@ -4,47 +4,14 @@
 //! carried out by the gripper.
 
 use anyhow::{Context, Result};
-use clap::{Args, ValueEnum};
-use oracle::towers::{MovePlanner, Place, TowerPlan, gripper_actions, plan_side};
-use oracle::{Oracle, OracleError, Plan};
+use clap::Args;
+use oracle::towers::{Place, TowerPlan};
+use oracle::{Cost, CountedPlan, OracleError, PlannerKind};
 use serde::Serialize;
 use sim::{Goal, Grid, State, View};
 
 use super::solver_budget::SolverBudgetArg;
 use super::stdout::line;
-
-/// Which planner solves.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum SolverKind {
-    /// The exact solver: a shortest plan.
-    Exact,
-    /// The centroid + A* oracle (top view); in the side view, the near-optimal planner
-    /// carried out by the gripper (as `run --agent oracle` carries its moves out).
-    Oracle,
-    /// The near-optimal block-move planner (side view): at most twice the optimum, for
-    /// any number of blocks.
-    NearOptimal,
-}
-
-impl SolverKind {
-    fn name(self) -> &'static str {
-        match self {
-            SolverKind::Exact => "exact",
-            SolverKind::Oracle => "oracle",
-            SolverKind::NearOptimal => "near-optimal",
-        }
-    }
-}
-
-/// What a plan's length counts.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Cost {
-    /// Gripper actions (pick, moves, drop): the environment's steps.
-    Steps,
-    /// Block moves (a clear block onto the table or another block): the planning
-    /// literature's count, in the side view.
-    Moves,
-}
 
 /// Arguments of `blockstack solve`.
 #[derive(Debug, Args)]
@@ -68,11 +35,15 @@ pub struct SolveArgs {
     pub view: View,
     /// What the plan's length counts: steps (gripper actions; the top view's default and
     /// only count) or moves (block moves; the side view's default).
-    #[arg(long, value_enum)]
+    #[arg(long)]
     pub cost: Option<Cost>,
-    /// The planner.
-    #[arg(long, value_enum, default_value_t = SolverKind::Exact)]
-    pub solver: SolverKind,
+    /// The planner: exact (the shortest plan in the count asked for: the fewest gripper
+    /// steps, or from the side the fewest block moves with --cost moves), exact-moves (the
+    /// fewest block moves, carried out by the gripper with --cost steps; side view),
+    /// near-optimal (at most twice the fewest block moves; side view) or oracle (the view's:
+    /// centroid + A* from above, near-optimal from the side).
+    #[arg(long, default_value = "exact")]
+    pub solver: PlannerKind,
     /// The action protocol the plan keeps to: free (every action legal) or paper (nothing
     /// held: only pick; holding: only moves and drop); the exact plan is the shortest legal
     /// one.
@@ -106,10 +77,9 @@ pub fn solve(args: SolveArgs) -> Result<()> {
         args.cost != Some(Cost::Moves),
         "--cost moves counts block moves, which the side view plans: add --view side"
     );
-    anyhow::ensure!(
-        args.solver != SolverKind::NearOptimal,
-        "--solver near-optimal plans block moves in the side view: add --view side"
-    );
+    args.solver
+        .check_view(View::Top)
+        .map_err(|e| anyhow::anyhow!("--solver {}: {e}: add --view side", args.solver))?;
     let state = State::parse(&args.start, args.held, grid).with_context(|| {
         if args.held.is_some() {
             "--start and --held"
@@ -119,20 +89,15 @@ pub fn solve(args: SolveArgs) -> Result<()> {
     })?;
     let goal = Goal::parse(&args.goal, Some(state.block_count())).context("--goal")?;
     anyhow::ensure!(
-        args.solver == SolverKind::Exact || args.budget.solver_budget.is_none(),
+        args.solver == PlannerKind::Exact || args.budget.solver_budget.is_none(),
         "--solver-budget is the exact solver's: it does not apply to --solver {}",
-        args.solver.name()
+        args.solver
     );
-    let plan = match args.solver {
-        SolverKind::Exact => args
-            .budget
-            .solver(grid)
-            .with_protocol(args.protocol)
-            .solve(&state, &goal)
-            .map_err(|e| args.budget.explain(e))?,
-        SolverKind::Oracle => Oracle::new(grid).with_protocol(args.protocol).plan(&state, &goal)?,
-        SolverKind::NearOptimal => unreachable!("refused above: near-optimal is the side view's"),
-    };
+    let solver = args.budget.solver(grid).with_protocol(args.protocol);
+    let plan = args
+        .solver
+        .plan_steps(&solver, &state, &goal)
+        .map_err(|e| args.budget.explain(e))?;
     if args.json {
         let report = SolveReport {
             length: plan.len(),
@@ -144,7 +109,7 @@ pub fn solve(args: SolveArgs) -> Result<()> {
     } else {
         line(format_args!(
             "{} plan, goal {goal}, grid {grid}: {} actions",
-            args.solver.name(),
+            args.solver,
             plan.len()
         ))?;
         if !plan.is_empty() {
@@ -157,8 +122,8 @@ pub fn solve(args: SolveArgs) -> Result<()> {
 /// `solve --view side`: a plan from the side-view state `--start` to `--goal`'s towers, in
 /// block moves (on a table as wide as the grid) or in gripper steps.
 fn solve_side(args: &SolveArgs, grid: Grid) -> Result<()> {
-    let cost = args.cost.unwrap_or(Cost::Moves);
-    let exact_steps = cost == Cost::Steps && args.solver == SolverKind::Exact;
+    let cost = args.cost.unwrap_or(Cost::default_in(View::Side));
+    let exact_steps = cost == Cost::Steps && args.solver == PlannerKind::Exact;
     anyhow::ensure!(
         args.held.is_none() || exact_steps,
         "--held: a block-move plan starts with nothing held; --cost steps --solver exact plans from a held block"
@@ -177,33 +142,16 @@ fn solve_side(args: &SolveArgs, grid: Grid) -> Result<()> {
     View::Side.check_state(&state).context("--start")?;
     let goal = Goal::parse(&args.goal, Some(state.block_count())).context("--goal")?;
     goal.check_fits(grid).context("--goal")?;
-    // The oracle of the side view is the near-optimal planner (as `run --agent oracle`).
-    let planner = match args.solver {
-        SolverKind::Exact => MovePlanner::Exact,
-        SolverKind::NearOptimal | SolverKind::Oracle => MovePlanner::NearOptimal,
-    };
-    if cost == Cost::Moves {
-        let plan = plan_side(planner, grid, &state, &goal)?;
-        return print_moves(args, grid, &goal, &plan);
-    }
-    let plan = if exact_steps {
-        args.budget
-            .solver(grid)
-            .with_view(View::Side)
-            .solve(&state, &goal)
-            .map_err(|e| match e {
-                OracleError::BudgetExceeded { budget, blocks, grid } => anyhow::anyhow!(
-                    "the exact gripper-step search stored its budget of {budget} states for {blocks} blocks \
-                     on a {grid} grid without finding a shortest plan: use --solver near-optimal or --cost moves, \
-                     or raise --solver-budget"
-                ),
-                e => e.into(),
-            })?
-    } else {
-        let moves = plan_side(planner, grid, &state, &goal)?;
-        Plan {
-            actions: gripper_actions(grid, &state, &moves)?,
-        }
+    let solver = args.budget.solver(grid).with_view(View::Side);
+    let plan = match args.solver.plan(&solver, cost, &state, &goal) {
+        Ok(CountedPlan::Moves(plan)) => return print_moves(args, grid, &goal, &plan),
+        Ok(CountedPlan::Steps(plan)) => plan,
+        Err(OracleError::BudgetExceeded { budget, blocks, grid }) => anyhow::bail!(
+            "the exact gripper-step search stored its budget of {budget} states for {blocks} blocks \
+             on a {grid} grid without finding a shortest plan: use --solver near-optimal or --cost moves, \
+             or raise --solver-budget"
+        ),
+        Err(e) => return Err(e.into()),
     };
     if args.json {
         let report = SolveReport {
@@ -216,7 +164,7 @@ fn solve_side(args: &SolveArgs, grid: Grid) -> Result<()> {
     } else {
         line(format_args!(
             "{} plan, goal {goal}, grid {grid}, side view: {} gripper steps",
-            args.solver.name(),
+            args.solver,
             plan.len()
         ))?;
         if plan.is_empty() {
@@ -257,7 +205,7 @@ fn print_moves(args: &SolveArgs, grid: Grid, goal: &Goal, plan: &TowerPlan) -> R
     } else {
         line(format_args!(
             "{} plan, goal {goal}, grid {grid}, side view: {} block moves",
-            args.solver.name(),
+            args.solver,
             plan.len()
         ))?;
         if plan.is_empty() {
