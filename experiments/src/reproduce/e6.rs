@@ -212,7 +212,7 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
         ));
         tables.push(Table {
             title: title.into(),
-            suite: format!("{}, in each world", describe(&suite)),
+            suite: format!("{}, in each world", describe(suite)),
             paper: Some(theirs),
             tests: vec!["Wilcoxon vs baseline".into()],
             rows,
