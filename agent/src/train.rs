@@ -202,7 +202,7 @@ impl Trainer {
             self.play_counted()?;
             let games = self.report.games;
             hooks.after_game(&self.progress(total))?;
-            if every.is_some_and(|n| games % n == 0) || (every.is_some() && games == total) {
+            if every.is_some_and(|n| games.is_multiple_of(n)) || (every.is_some() && games == total) {
                 hooks.checkpoint(self)?;
             }
         }

@@ -43,6 +43,9 @@ pub enum OracleError {
     /// A plan counted in block moves asked for in the top view.
     #[error("a plan counted in block moves is the side view's: the top view counts gripper steps")]
     CostNotInView,
+    /// A PDDL problem or plan was refused ([`crate::pddl`]).
+    #[error(transparent)]
+    Pddl(#[from] crate::pddl::PddlError),
     /// The goal holds already, so there is no next action to give.
     #[error("goal {goal} already holds: there is no next action")]
     GoalAlreadyHolds {

@@ -14,6 +14,7 @@
 //!   with it.
 //! - [`PlannerKind`]: a planner chosen by name, with one meaning in both views (the one
 //!   table the command line, Python and the experiments share).
+//! - [`pddl`]: the planning competitions' Blocks World problems and plans, read and written.
 //! - [`towers`]: block-move planners for the classic Blocks World seen from the side (an
 //!   exact A* solver and a near-optimal planner that scales to thousands of blocks).
 //!
@@ -70,6 +71,7 @@ pub mod error;
 pub mod exact;
 pub mod gap;
 pub mod oracle;
+pub mod pddl;
 mod placement;
 pub mod plan;
 pub mod planner_kind;

@@ -5,7 +5,10 @@
 
 use anyhow::{Context, Result};
 use clap::Args;
-use oracle::towers::{Place, TowerPlan};
+use std::path::{Path, PathBuf};
+
+use oracle::pddl::{self, Problem};
+use oracle::towers::{ExactMoves, MovePlanner, NearOptimal, Place, TowerPlan};
 use oracle::{Cost, CountedPlan, OracleError, PlannerKind};
 use serde::Serialize;
 use sim::{Goal, Grid, State, View};
@@ -17,11 +20,17 @@ use super::stdout::line;
 #[derive(Debug, Args)]
 pub struct SolveArgs {
     /// Every block's cell, block 0 first: x,y pairs separated by ';', e.g. "0,0;3,0;5,2".
-    #[arg(long)]
-    pub start: String,
+    #[arg(long, required_unless_present = "pddl")]
+    pub start: Option<String>,
     /// The goal, bottom to top, e.g. 1,0,2.
-    #[arg(long)]
-    pub goal: String,
+    #[arg(long, required_unless_present = "pddl")]
+    pub goal: Option<String>,
+    /// A Blocks World problem in PDDL (the planning competitions' 4-operator domain) in
+    /// place of --start and --goal: the plan is printed in the competitions' format, one
+    /// action per line ((unstack b3 b5), (putdown b3), (pickup b4), (stack b4 b3)), by
+    /// --solver near-optimal (the default here) or exact.
+    #[arg(long, value_name = "PROBLEM.pddl", conflicts_with_all = ["start", "goal", "held", "grid", "view", "cost", "protocol"])]
+    pub pddl: Option<PathBuf>,
     /// The block held at the start (default: none; in the side view only with --cost steps
     /// --solver exact).
     #[arg(long)]
@@ -41,9 +50,10 @@ pub struct SolveArgs {
     /// steps, or from the side the fewest block moves with --cost moves), exact-moves (the
     /// fewest block moves, carried out by the gripper with --cost steps; side view),
     /// near-optimal (at most twice the fewest block moves; side view) or oracle (the view's:
-    /// centroid + A* from above, near-optimal from the side).
-    #[arg(long, default_value = "exact")]
-    pub solver: PlannerKind,
+    /// centroid + A* from above, near-optimal from the side) [default: exact; with --pddl,
+    /// near-optimal]
+    #[arg(long)]
+    pub solver: Option<PlannerKind>,
     /// The action protocol the plan keeps to: free (every action legal) or paper (nothing
     /// held: only pick; holding: only moves and drop); the exact plan is the shortest legal
     /// one.
@@ -69,47 +79,52 @@ struct SolveReport {
 
 /// Plans and prints the plan.
 pub fn solve(args: SolveArgs) -> Result<()> {
+    if let Some(path) = &args.pddl {
+        return solve_pddl(path, &args);
+    }
+    let solver = args.solver.unwrap_or(PlannerKind::Exact);
+    let (Some(start), Some(goal)) = (&args.start, &args.goal) else {
+        anyhow::bail!("solve needs --start and --goal, or --pddl PROBLEM.pddl")
+    };
     let grid: Grid = args.grid.parse().context("--grid")?;
     if args.view == View::Side {
-        return solve_side(&args, grid);
+        return solve_side(&args, grid, start, goal);
     }
     anyhow::ensure!(
         args.cost != Some(Cost::Moves),
         "--cost moves counts block moves, which the side view plans: add --view side"
     );
-    args.solver
+    solver
         .check_view(View::Top)
-        .map_err(|e| anyhow::anyhow!("--solver {}: {e}: add --view side", args.solver))?;
-    let state = State::parse(&args.start, args.held, grid).with_context(|| {
+        .map_err(|e| anyhow::anyhow!("--solver {solver}: {e}: add --view side"))?;
+    let state = State::parse(start, args.held, grid).with_context(|| {
         if args.held.is_some() {
             "--start and --held"
         } else {
             "--start"
         }
     })?;
-    let goal = Goal::parse(&args.goal, Some(state.block_count())).context("--goal")?;
+    let goal = Goal::parse(goal, Some(state.block_count())).context("--goal")?;
     anyhow::ensure!(
-        args.solver == PlannerKind::Exact || args.budget.solver_budget.is_none(),
-        "--solver-budget is the exact solver's: it does not apply to --solver {}",
-        args.solver
+        solver == PlannerKind::Exact || args.budget.solver_budget.is_none(),
+        "--solver-budget is the exact solver's: it does not apply to --solver {solver}"
     );
-    let solver = args.budget.solver(grid).with_protocol(args.protocol);
-    let plan = args
-        .solver
-        .plan_steps(&solver, &state, &goal)
+    let planning = args.budget.solver(grid).with_protocol(args.protocol);
+    let plan = solver
+        .plan_steps(&planning, &state, &goal)
         .map_err(|e| args.budget.explain(e))?;
     if args.json {
         let report = SolveReport {
             length: plan.len(),
             cost: None,
             actions: plan.actions.iter().map(|a| a.index()).collect(),
-            solver: args.solver.name(),
+            solver: solver.name(),
         };
         line(serde_json::to_string(&report)?)?;
     } else {
         line(format_args!(
             "{} plan, goal {goal}, grid {grid}: {} actions",
-            args.solver,
+            solver,
             plan.len()
         ))?;
         if !plan.is_empty() {
@@ -121,9 +136,10 @@ pub fn solve(args: SolveArgs) -> Result<()> {
 
 /// `solve --view side`: a plan from the side-view state `--start` to `--goal`'s towers, in
 /// block moves (on a table as wide as the grid) or in gripper steps.
-fn solve_side(args: &SolveArgs, grid: Grid) -> Result<()> {
+fn solve_side(args: &SolveArgs, grid: Grid, start: &str, goal: &str) -> Result<()> {
+    let solver = args.solver.unwrap_or(PlannerKind::Exact);
     let cost = args.cost.unwrap_or(Cost::default_in(View::Side));
-    let exact_steps = cost == Cost::Steps && args.solver == PlannerKind::Exact;
+    let exact_steps = cost == Cost::Steps && solver == PlannerKind::Exact;
     anyhow::ensure!(
         args.held.is_none() || exact_steps,
         "--held: a block-move plan starts with nothing held; --cost steps --solver exact plans from a held block"
@@ -132,7 +148,7 @@ fn solve_side(args: &SolveArgs, grid: Grid) -> Result<()> {
         args.budget.solver_budget.is_none() || exact_steps,
         "--solver-budget is the exact gripper-step search's: it applies to --view side only with --cost steps --solver exact"
     );
-    let state = State::parse(&args.start, args.held, grid).with_context(|| {
+    let state = State::parse(start, args.held, grid).with_context(|| {
         if args.held.is_some() {
             "--start and --held"
         } else {
@@ -140,11 +156,11 @@ fn solve_side(args: &SolveArgs, grid: Grid) -> Result<()> {
         }
     })?;
     View::Side.check_state(&state).context("--start")?;
-    let goal = Goal::parse(&args.goal, Some(state.block_count())).context("--goal")?;
+    let goal = Goal::parse(goal, Some(state.block_count())).context("--goal")?;
     goal.check_fits(grid).context("--goal")?;
-    let solver = args.budget.solver(grid).with_view(View::Side);
-    let plan = match args.solver.plan(&solver, cost, &state, &goal) {
-        Ok(CountedPlan::Moves(plan)) => return print_moves(args, grid, &goal, &plan),
+    let planning = args.budget.solver(grid).with_view(View::Side);
+    let plan = match solver.plan(&planning, cost, &state, &goal) {
+        Ok(CountedPlan::Moves(plan)) => return print_moves(args, solver, grid, &goal, &plan),
         Ok(CountedPlan::Steps(plan)) => plan,
         Err(OracleError::BudgetExceeded { budget, blocks, grid }) => anyhow::bail!(
             "the exact gripper-step search stored its budget of {budget} states for {blocks} blocks \
@@ -158,13 +174,13 @@ fn solve_side(args: &SolveArgs, grid: Grid) -> Result<()> {
             length: plan.len(),
             cost: Some("steps"),
             actions: plan.actions.iter().map(|a| a.index()).collect(),
-            solver: args.solver.name(),
+            solver: solver.name(),
         };
         line(serde_json::to_string(&report)?)
     } else {
         line(format_args!(
             "{} plan, goal {goal}, grid {grid}, side view: {} gripper steps",
-            args.solver,
+            solver,
             plan.len()
         ))?;
         if plan.is_empty() {
@@ -185,7 +201,7 @@ struct MovesReport {
 }
 
 /// Prints a block-move plan, as JSON or text.
-fn print_moves(args: &SolveArgs, grid: Grid, goal: &Goal, plan: &TowerPlan) -> Result<()> {
+fn print_moves(args: &SolveArgs, solver: PlannerKind, grid: Grid, goal: &Goal, plan: &TowerPlan) -> Result<()> {
     if args.json {
         let moves = plan
             .moves
@@ -199,13 +215,13 @@ fn print_moves(args: &SolveArgs, grid: Grid, goal: &Goal, plan: &TowerPlan) -> R
             length: plan.len(),
             cost: "moves",
             moves,
-            solver: args.solver.name(),
+            solver: solver.name(),
         };
         line(serde_json::to_string(&report)?)
     } else {
         line(format_args!(
             "{} plan, goal {goal}, grid {grid}, side view: {} block moves",
-            args.solver,
+            solver,
             plan.len()
         ))?;
         if plan.is_empty() {
@@ -213,5 +229,68 @@ fn print_moves(args: &SolveArgs, grid: Grid, goal: &Goal, plan: &TowerPlan) -> R
         }
         let moves: Vec<String> = plan.moves.iter().map(ToString::to_string).collect();
         line(moves.join(" "))
+    }
+}
+
+/// The block-move planner `--solver` names for a PDDL problem (near-optimal unless given;
+/// a PDDL plan counts block moves, so `exact` and `exact-moves` are the fewest moves and
+/// `oracle` the near-optimal planner, as in the side view: `PlannerKind::move_planner`),
+/// with `--solver-budget` as the exact search's budget.
+pub(super) fn pddl_planner(solver: Option<PlannerKind>, budget: &SolverBudgetArg) -> Result<MovePlanner> {
+    let planner = solver.unwrap_or(PlannerKind::NearOptimal).move_planner();
+    anyhow::ensure!(
+        planner == MovePlanner::Exact || budget.solver_budget.is_none(),
+        "--solver-budget is the exact solver's: it does not apply to --solver near-optimal"
+    );
+    Ok(planner)
+}
+
+/// `planner`'s block-move plan for `problem` on the literature's unbounded table.
+pub(super) fn plan_pddl(planner: MovePlanner, budget: &SolverBudgetArg, problem: &Problem) -> Result<TowerPlan> {
+    Ok(match planner {
+        MovePlanner::Exact => ExactMoves::new()
+            .with_budget(budget.budget())
+            .solve(problem.start(), problem.goal())
+            .map_err(|e| budget.explain(e))?,
+        MovePlanner::NearOptimal => NearOptimal::new().plan(problem.start(), problem.goal())?,
+    })
+}
+
+/// A PDDL plan as JSON: `{"moves": M, "actions": A, "plan": ["(unstack b3 b5)", ...]}`.
+#[derive(Debug, Serialize)]
+pub(super) struct PddlPlanReport {
+    /// Block moves.
+    pub moves: usize,
+    /// Actions: two per move, the competitions' cost.
+    pub actions: usize,
+    /// The actions as PDDL.
+    pub plan: Vec<String>,
+}
+
+impl PddlPlanReport {
+    /// The report of `plan` for `problem`, its actions checked by replaying them over the
+    /// file's facts ([`Problem::replay`]).
+    pub fn new(problem: &Problem, plan: &TowerPlan) -> Result<(Self, Vec<pddl::Action>)> {
+        let actions = pddl::actions(problem.start(), plan)?;
+        problem.replay(&actions)?;
+        let report = PddlPlanReport {
+            moves: plan.len(),
+            actions: actions.len(),
+            plan: actions.iter().map(|a| a.to_pddl(problem.block_names())).collect(),
+        };
+        Ok((report, actions))
+    }
+}
+
+/// `solve --pddl`: the plan for the problem file, in the competitions' format.
+fn solve_pddl(path: &Path, args: &SolveArgs) -> Result<()> {
+    let planner = pddl_planner(args.solver, &args.budget)?;
+    let problem = Problem::read(path)?;
+    let plan = plan_pddl(planner, &args.budget, &problem)?;
+    let (report, actions) = PddlPlanReport::new(&problem, &plan)?;
+    if args.json {
+        line(serde_json::to_string(&report)?)
+    } else {
+        super::stdout::text(&problem.plan_text(&actions))
     }
 }

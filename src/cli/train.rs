@@ -53,7 +53,7 @@ const RUN_FLAGS: [&str; 24] = [
 #[command(mut_arg("grid", |a| a.help("Grid size, WxH [default: 7x7]")))]
 #[command(mut_arg("reward", |a| a.help("Reward model: sparse, dense, paper, step-cost or paper-code [default: the preset's: paper under spec, paper-code under original, step-cost under --preset optimal]")))]
 #[command(mut_arg("horizon", |a| a.help("Steps before a training game is cut off [default: the schedule's: 1000 under spec, 5000 (1000 with 2 blocks) under paper-code]")))]
-#[command(mut_arg("view", |a| a.help("The world: top (the paper's) or side (the classic Blocks World: the goals default to one goal of each shape, 0,1,2:0,1/2:0/1/2 for 3 blocks, and the learner to --repr role-towers) [default: top]")))]
+#[command(mut_arg("view", |a| a.help("The world: top (the paper's) or side (the classic Blocks World: goals default to one goal of each shape of towers, e.g. 0,1,2 and 0,1/2 and 0/1/2 for 3 blocks, which the role-towers learner plays on every goal of that shape; --goals 0,1/2:... names others) [default: top]")))]
 pub struct TrainArgs {
     #[command(flatten)]
     pub world: WorldArgs,
@@ -216,7 +216,7 @@ struct Shown<'a> {
 
 impl agent::TrainHooks for Shown<'_> {
     fn after_game(&mut self, p: &agent::Progress) -> agent::Result<()> {
-        if p.games_played % 64 == 0 || p.games_played == p.games_target {
+        if p.games_played.is_multiple_of(64) || p.games_played == p.games_target {
             if let Some(curve) = self.curve {
                 curve.push(serve::CurvePoint {
                     games: p.games_played,
