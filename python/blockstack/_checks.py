@@ -50,6 +50,20 @@ def whole_numbers(name: str, value: Any) -> np.ndarray:
     raise ValueError(f"{name} holds whole numbers (block ids, cells), not {array.dtype} values: {value!r}")
 
 
+def cells_of(cells: Any) -> list:
+    """Every block's ``(x, y)``, each a pair of whole numbers in ``[0, 255]``; a
+    ``ValueError`` naming ``cells[i]`` otherwise (the native side would raise
+    ``OverflowError`` or ``TypeError`` naming nothing)."""
+    checked = []
+    for i, cell in enumerate(cells):
+        try:
+            x, y = cell
+        except (TypeError, ValueError):
+            raise ValueError(f"cells[{i}] must be an (x, y) pair, not {cell!r}") from None
+        checked.append((whole(f"cells[{i}] x", x, 0, 255), whole(f"cells[{i}] y", y, 0, 255)))
+    return checked
+
+
 def memory_bytes() -> Optional[int]:
     """This machine's physical memory in bytes, or ``None`` where the system does not say."""
     try:

@@ -9,7 +9,7 @@ import numpy as np
 from gymnasium import spaces
 
 from blockstack import _native
-from blockstack._checks import optional_whole, whole
+from blockstack._checks import cells_of, optional_whole
 from blockstack._goal import Goal, goal_text
 from blockstack.spaces import action_space, observation_space
 from blockstack.world import world_of
@@ -55,13 +55,7 @@ def reset_state(options: dict) -> Tuple[list, Optional[int], Goal]:
         raise ValueError(
             f"reset options {', '.join(sorted(options))} need \"cells\": a start state is every block's (x, y)"
         )
-    cells = []
-    for i, cell in enumerate(options["cells"]):
-        try:
-            x, y = cell
-        except (TypeError, ValueError):
-            raise ValueError(f"cells[{i}] must be an (x, y) pair, not {cell!r}") from None
-        cells.append((whole(f"cells[{i}] x", x, 0, 255), whole(f"cells[{i}] y", y, 0, 255)))
+    cells = cells_of(options["cells"])
     held = optional_whole("held", options.get("held"), 0, 255)
     return cells, held, goal_text(options.get("goal"))
 

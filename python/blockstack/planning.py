@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Optional, Sequence, Tuple
 
 from blockstack import _native
-from blockstack._checks import optional_whole, whole
+from blockstack._checks import cells_of, optional_whole
 from blockstack._goal import Goal
 
 
@@ -38,13 +38,7 @@ def solve(
     block-move plan carried out (``"near-optimal"`` or ``"oracle"``). Both as ``blockstack
     solve --view side --cost ... --json`` prints them.
     """
-    checked = []
-    for i, cell in enumerate(cells):
-        try:
-            x, y = cell
-        except (TypeError, ValueError):
-            raise ValueError(f"cells[{i}] must be an (x, y) pair, not {cell!r}") from None
-        checked.append((whole(f"cells[{i}] x", x, 0, 255), whole(f"cells[{i}] y", y, 0, 255)))
+    checked = cells_of(cells)
     held = optional_whole("held", held, 0, 255)
     for name, value in (("solver", solver), ("protocol", protocol), ("view", view)):
         if not isinstance(value, str):
