@@ -102,7 +102,7 @@ fn env_step_original(c: &mut Criterion) {
     for backend in [Backend::Grid, Backend::Physics] {
         let mut env = Env::new(EnvConfig {
             backend,
-            ..EnvConfig::for_profile(Profile::Original)
+            ..Profile::Original.world()
         })
         .unwrap();
         let mut legal = env.reset(1).legal_actions();

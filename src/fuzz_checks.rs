@@ -25,6 +25,23 @@ pub fn model_file(data: &[u8]) {
     }
 }
 
+/// The network file reader ([`neural::Dqn::read_from`]): any bytes give a network or an
+/// error; a network that reads plays: its forward pass answers an observation of its world
+/// with one value per output column.
+pub fn network_file(data: &[u8]) {
+    let Ok(dqn) = neural::Dqn::read_from(data, "fuzz input") else {
+        return;
+    };
+    let config = dqn.config();
+    let goal = Goal::identity(config.blocks()).expect("a read config has a valid block count");
+    let Ok(mut env) = sim::Env::new(config.env_config(goal)) else {
+        return;
+    };
+    let obs = env.reset(0);
+    let values = dqn.q_values(&obs).expect("a network that reads plays its own world");
+    assert_eq!(values.len(), Action::count(config.blocks()));
+}
+
 /// The recording format's reader (`agent::demos::format`), with no learner: every line
 /// it reads that parses as a record writes back to the same record; and the checked reader
 /// of demonstrations files.

@@ -13,7 +13,17 @@ use clap::Parser;
 
 fn main() -> ExitCode {
     remove_temp_files_on_signals();
-    let cli = blockstack::cli::Cli::parse();
+    let cli = match blockstack::cli::Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => match blockstack::cli::bad_value(&e) {
+            Some(line) => {
+                let _ = writeln!(std::io::stderr(), "blockstack: {line}");
+                return ExitCode::from(2);
+            }
+            // Help, version, and usage errors as clap prints them.
+            None => e.exit(),
+        },
+    };
     let outcome = blockstack::cli::run(cli).and_then(|()| blockstack::cli::flush_stdout());
     match outcome {
         Ok(()) => ExitCode::SUCCESS,

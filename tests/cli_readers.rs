@@ -1,6 +1,6 @@
 //! The commands that read demonstrations (`dqn --demos-file`, `learn-from-demos`) run the
 //! one checked reader of each file format: what it refuses is one line and exit 2, and the
-//! files the previous release wrote (tests/fixtures/) still read.
+//! files the previous release wrote (testkit/fixtures/) still read.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 use crate::common::{cli, path, scratch, stderr, stdout};
 
 fn fixture(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures").join(name)
+    testkit::fixture(name)
 }
 
 /// `blockstack dqn --demos-file FILE` on the default 3-block world, with a tiny network.

@@ -1,6 +1,6 @@
 //! `blockstack run` and `render` end to end, and their answers to bad input.
 
-use crate::common::{blockstack, cli, scratch, stderr, stdout};
+use crate::common::{blockstack, cli, path, scratch, stderr, stdout};
 
 #[test]
 fn run_reports_failures_and_steps_as_json() {
@@ -141,4 +141,94 @@ fn bad_input_gets_one_line_and_exit_status_2() {
         assert!(err.contains(needle), "{args:?}: {err}");
         assert!(!err.contains("panicked"), "{args:?}: {err}");
     }
+}
+
+/// The world flags are one set, parsed into the world's own types by every command that
+/// describes a world: a bad value is the same one line whichever command is given it.
+#[test]
+fn every_command_reads_the_world_flags_alike() {
+    let commands: [&[&str]; 5] = [
+        &["run"],
+        &["render"],
+        &["train", "--out", "unused.safetensors"],
+        &["dqn", "--out", "unused.safetensors"],
+        &["eval", "--model", "missing.safetensors"],
+    ];
+    for (flag, value, says) in [
+        ("--grid", "7by7", "--grid 7by7: cannot read grid"),
+        ("--backend", "box2d", "--backend box2d: cannot read backend"),
+        (
+            "--view",
+            "front",
+            "--view front: cannot read view from \"front\": choose one of top, side",
+        ),
+        ("--reward", "lots", "--reward lots: "),
+        ("--blocks", "many", "--blocks many: "),
+        ("--horizon", "0x10", "--horizon 0x10: "),
+    ] {
+        for command in commands {
+            let args = [command, &[flag, value]].concat();
+            let o = blockstack(&args);
+            let err = stderr(&o);
+            assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+            assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+            assert!(err.contains(says), "{args:?}: {err}");
+        }
+    }
+    // Malformed goals of towers are refused, not read as something else.
+    for goal in ["0,1//2", "+0,1/2", "/0,1,2"] {
+        let o = blockstack(&["run", "--view", "side", "--goal", goal]);
+        assert_eq!(o.status.code(), Some(2), "{goal}");
+        assert!(
+            stderr(&o).contains(&format!("cannot read goal from \"{goal}\"")),
+            "{}",
+            stderr(&o)
+        );
+    }
+}
+
+/// `eval` plays the model's own world: a size or view other than the model's is refused
+/// with the words `run --model` uses.
+#[test]
+fn eval_refuses_a_world_the_model_never_learnt() {
+    let dir = scratch("eval-world");
+    let model = dir.join("m.safetensors");
+    let o = cli("train")
+        .flag("repr", "role")
+        .flag("goals", "0,1,2")
+        .flag("games", 5)
+        .flag("backend", "grid")
+        .flag("out", path(&model))
+        .run();
+    assert!(o.status.success(), "{}", stderr(&o));
+    for (flag, value, says) in [
+        ("grid", "5x5", "the world has 3 blocks on a 5x5 grid"),
+        ("blocks", "2", "the world has 2 blocks"),
+        (
+            "view",
+            "side",
+            "the model learnt the top view; it cannot play the side view",
+        ),
+    ] {
+        let o = cli("eval")
+            .flag("model", path(&model))
+            .flag(flag, value)
+            .flag("episodes", 1)
+            .run();
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{flag}: {err}");
+        assert!(
+            err.contains(says) && err.trim_end().lines().count() == 1,
+            "{flag}: {err}"
+        );
+    }
+    let v = cli("eval")
+        .flag("model", path(&model))
+        .flag("episodes", 2)
+        .flag("backend", "grid")
+        .flag("reward", "dense")
+        .flag("horizon", 50)
+        .arg("--json")
+        .json();
+    assert_eq!((v["horizon"].as_u64(), v["backend"].as_str()), (Some(50), Some("grid")));
 }

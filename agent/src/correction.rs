@@ -166,9 +166,13 @@ pub fn session_world(agent: &QAgent) -> EnvConfig {
 pub fn session_world_under(agent: &QAgent, profile: Option<Profile>) -> (EnvConfig, Profile) {
     let mut world = session_world(agent);
     if let Some(p) = profile {
-        world.protocol = p.protocol();
-        world.start = p.start_rule();
-        world.reward = crate::LearnerProfile::of(p).reward;
+        // The profile's rules (`ProfileParts::apply`, their one application), with the
+        // reward its learner learns from.
+        let parts = sim::ProfileParts {
+            reward: crate::LearnerProfile::of(p).reward,
+            ..sim::ProfileParts::of(p)
+        };
+        world = parts.apply(world);
     }
     let trained_under = agent.training().map_or(Profile::Spec, |t| t.profile);
     (world, profile.unwrap_or(trained_under))

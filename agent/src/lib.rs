@@ -3,6 +3,8 @@
 //! - [`Policy`]: what every agent offers; [`RandomPolicy`] is the paper's baseline. Every
 //!   policy chooses among the legal actions of its observation (the world's action
 //!   protocol): the planners ([`planner_policy`]) plan under it, the Q-learners mask it.
+//! - [`PolicyKind`] ([`policy_kind`]): an agent chosen by name (the random agent, a planner,
+//!   a trained model), built from the world it plays and its model.
 //! - [`rollout`]: the episode loop every command and experiment shares, with its
 //!   [`Summary`] of failures and steps to goal.
 //! - [`QAgent`]: tabular Q-learning over one of the [`repr`] state representations, trained
@@ -32,6 +34,7 @@ pub mod model;
 pub mod optimality;
 pub mod planner_policy;
 pub mod policy;
+pub mod policy_kind;
 pub mod preset;
 pub mod profile;
 pub mod qlearning;
@@ -51,6 +54,7 @@ pub use demos::{BadLines, DemoRecord, DemoSink, DemoWriter};
 pub use error::{AgentError, Result};
 pub use planner_policy::{ExactPolicy, OraclePolicy, PaperOraclePolicy, PlannerPolicy};
 pub use policy::{Policy, RandomPolicy};
+pub use policy_kind::{PlayingModel, PolicyKind, PolicyOptions};
 pub use preset::{Preset, TrainOverrides};
 pub use profile::LearnerProfile;
 pub use qlearning::{QAgent, QPolicy};
@@ -59,4 +63,4 @@ pub use repr::{Repr, ReprKind, Representation};
 pub use rollout::{EpisodeObserver, EpisodeResult, Summary, play, play_episode};
 pub use schedule::Schedule;
 pub use towers_policy::TowersPolicy;
-pub use train::{Progress, TrainReport, Trained, Trainer, train};
+pub use train::{Progress, TrainHooks, TrainReport, Trained, Trainer, train};

@@ -193,7 +193,6 @@ impl TrainingMeta {
                 start: self.start,
                 termination: self.schedule.training_termination(),
                 view: self.view,
-                ..EnvConfig::default()
             },
             goals: self.goals,
             repr: self.repr,

@@ -39,7 +39,8 @@ impl PlanCursor {
 
     /// Follows `plan` from `obs`, returning its first action.
     fn follow(&mut self, obs: &Observation, plan: Plan) -> Result<Action> {
-        let states = GridWorld::new(obs.grid, obs.state.clone())?.replay(&plan.actions)?;
+        // Replayed by the observation's view's rules (in the side view a dropped block falls).
+        let states = GridWorld::new_in(obs.view, obs.grid, obs.state.clone())?.replay(&plan.actions)?;
         let mut steps: Vec<(State, Action)> = states.into_iter().zip(plan.actions).collect();
         steps.reverse();
         self.goal = Some(obs.goal.clone());

@@ -22,7 +22,8 @@ use crate::error::{AgentError, Result};
 use crate::policy::Policy;
 
 /// A block-move planner ([`MovePlanner`]) as a side-view policy (module docs). Its name is
-/// the planner's: `exact` or `near-optimal`.
+/// the agent's ([`crate::PolicyKind`]): `exact-moves` (the fewest block moves; `exact` is the
+/// fewest gripper steps) or `near-optimal`.
 #[derive(Clone, Debug)]
 pub struct TowersPolicy {
     planner: MovePlanner,
@@ -53,7 +54,10 @@ impl TowersPolicy {
 
 impl Policy for TowersPolicy {
     fn name(&self) -> String {
-        self.planner.name().into()
+        match self.planner {
+            MovePlanner::Exact => oracle::PlannerKind::ExactMoves.name().into(),
+            MovePlanner::NearOptimal => oracle::PlannerKind::NearOptimal.name().into(),
+        }
     }
 
     fn begin_episode(&mut self, _obs: &Observation) {

@@ -23,7 +23,7 @@ use sim::{BlockId, Env};
 
 use crate::assist::{Assist, OracleKind, OscillationWatch};
 use crate::config::{QParams, TrainConfig};
-use crate::error::Result;
+use crate::error::{AgentError, Result};
 use crate::memory::ReplayMemory;
 use crate::qlearning::{QAgent, TableStep};
 use crate::rollout::policy_rng;
@@ -176,15 +176,50 @@ impl Trainer {
     pub fn play_games(&mut self, count: u64, mut progress: Option<&mut dyn FnMut(&Progress)>) -> Result<()> {
         let target = self.report.games + count;
         for _ in 0..count {
-            let outcome = self.play_game()?;
-            if self.recent.len() == RECENT_GAMES {
-                self.recent.pop_front();
-            }
-            self.recent.push_back(outcome);
+            self.play_counted()?;
             if let Some(report) = progress.as_deref_mut() {
                 report(&self.progress(target));
             }
         }
+        Ok(())
+    }
+
+    /// Plays games until `total` have been played in all (the config's games become
+    /// `total`), the one loop of a whole run for the command line and Python: after each
+    /// game [`TrainHooks::after_game`] (progress, and stopping: its error ends the run),
+    /// and every [`TrainHooks::checkpoint_every`] games and after the last
+    /// [`TrainHooks::checkpoint`]. An error if `total` is below the games played already.
+    pub fn run_until(&mut self, total: u64, hooks: &mut dyn TrainHooks) -> Result<()> {
+        let played = self.report.games;
+        if total < played {
+            return Err(AgentError::Config(format!(
+                "{total} games in all: the run has played {played} already"
+            )));
+        }
+        self.set_games(total);
+        let every = hooks.checkpoint_every().filter(|&n| n > 0);
+        while self.report.games < total {
+            self.play_counted()?;
+            let games = self.report.games;
+            hooks.after_game(&self.progress(total))?;
+            if every.is_some_and(|n| games.is_multiple_of(n)) || (every.is_some() && games == total) {
+                hooks.checkpoint(self)?;
+            }
+        }
+        if every.is_some() && played == total {
+            // Nothing was left to play: the checkpoint still records the run as it stands.
+            hooks.checkpoint(self)?;
+        }
+        Ok(())
+    }
+
+    /// Plays the next game and counts it among the recent ones.
+    fn play_counted(&mut self) -> Result<()> {
+        let outcome = self.play_game()?;
+        if self.recent.len() == RECENT_GAMES {
+            self.recent.pop_front();
+        }
+        self.recent.push_back(outcome);
         Ok(())
     }
 
@@ -357,6 +392,30 @@ fn replay(agent: &mut QAgent, memory: &ReplayMemory) -> u32 {
     }
     MAX_REPLAY_SWEEPS
 }
+
+/// What a run does beside playing ([`Trainer::run_until`]): show progress, stop on the
+/// caller's word, write checkpoints. Every method has a default that does nothing.
+pub trait TrainHooks {
+    /// Called after every game with the run's progress; an error (say, Ctrl-C seen) stops
+    /// the run before the next game.
+    fn after_game(&mut self, _progress: &Progress) -> Result<()> {
+        Ok(())
+    }
+
+    /// Games between two checkpoints, counted from the run's first game; `None` (the
+    /// default) writes none.
+    fn checkpoint_every(&self) -> Option<u64> {
+        None
+    }
+
+    /// Writes a checkpoint of `trainer` (`Trainer::write_checkpoint`).
+    fn checkpoint(&mut self, _trainer: &Trainer) -> Result<()> {
+        Ok(())
+    }
+}
+
+/// No hooks: a run that only plays.
+impl TrainHooks for () {}
 
 /// Trains an agent as `config` says, calling `progress` after every game.
 pub fn train(config: &TrainConfig, progress: Option<&mut dyn FnMut(&Progress)>) -> Result<Trained> {

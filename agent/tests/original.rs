@@ -357,7 +357,7 @@ fn under_free_a_q_agent_draws_as_before_protocols() {
 fn planners_play_the_authors_world_to_the_goal_legally() {
     let config = EnvConfig {
         backend: Backend::Grid,
-        ..EnvConfig::for_profile(Profile::Original)
+        ..Profile::Original.world()
     };
     let grid = config.grid;
     let mut env = Env::new(config).unwrap();

@@ -12,7 +12,7 @@ const EXPECT: Expect<'static> = Expect {
     what: "a test file",
 };
 
-use crate::scratch::scratch;
+use testkit::scratch;
 
 fn sample() -> Vec<u8> {
     let tensors = [

@@ -5,7 +5,7 @@ use std::process::Command;
 
 use files::{FilesError, ReadProblem, open_bounded};
 
-use crate::scratch::scratch;
+use testkit::scratch;
 
 #[test]
 fn a_regular_file_larger_than_the_bound_is_refused_from_its_size() {

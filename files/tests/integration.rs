@@ -4,5 +4,3 @@
 mod container;
 mod input;
 mod output;
-#[path = "../../tests/common/scratch.rs"]
-mod scratch;

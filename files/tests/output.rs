@@ -9,7 +9,7 @@ use std::process::Command;
 
 use files::{Destination, OutputPath, Special, live_temp_files, prepare_folder, refuse_same_file};
 
-use crate::scratch::scratch;
+use testkit::scratch;
 
 /// Every file in `dir` whose name says it is a temporary file.
 fn temps(dir: &Path) -> Vec<String> {

@@ -9,10 +9,10 @@
 
 use std::path::Path;
 
-use agent::eval::{EvalPlan, Evaluation};
-use agent::{Policy, QAgent};
+use agent::eval::{EvalOverrides, EvalPlan, Evaluation};
+use agent::{AgentError, PlayingModel, Policy, PolicyKind, QAgent};
 use oracle::ExactSolver;
-use sim::{Action, EnvConfig, Goal, GoalSpec, Grid, Observation, Profile, ProfileParts, RewardModel};
+use sim::{Action, Backend, EnvConfig, Goal, GoalSpec, Grid, Observation, Profile, ProfileParts, RewardModel, View};
 
 use crate::error::Result;
 use crate::model::{Dqn, FORMAT, MAX_NETWORK_BYTES};
@@ -28,8 +28,12 @@ pub enum AnyModel {
 impl AnyModel {
     /// Reads the model file at `path`, whichever kind it is: the container names its format
     /// in its header; anything that is not a network file is read as a tabular model (whose
-    /// reader says what is wrong with a file that is neither).
+    /// reader says what is wrong with a file that is neither). A pipe, socket or device is
+    /// refused before it is opened, whoever asks (the command line, Python, `serve`): the
+    /// file is read twice (its header says which reader reads it), a pipe's second reading
+    /// finds it empty, and opening a pipe with no writer would wait forever.
     pub fn load(path: &Path) -> Result<AnyModel> {
+        refuse_special(path)?;
         match files::container::format_of(path, MAX_NETWORK_BYTES) {
             Some(format) if format == FORMAT => Ok(AnyModel::Dqn(Box::new(Dqn::load(path)?))),
             _ => Ok(AnyModel::Q(Box::new(QAgent::load(path)?))),
@@ -103,9 +107,7 @@ impl AnyModel {
     /// not say plays in its profile's world.
     pub fn world(&self) -> EnvConfig {
         let trained = match self {
-            AnyModel::Q(q) => q
-                .training()
-                .map_or_else(|| EnvConfig::for_profile(Profile::Spec), |t| t.world.clone()),
+            AnyModel::Q(q) => q.training().map_or_else(|| Profile::Spec.world(), |t| t.world.clone()),
             AnyModel::Dqn(d) => d.config().world.clone(),
         };
         EnvConfig {
@@ -118,17 +120,40 @@ impl AnyModel {
         }
     }
 
-    /// An evaluation in the model's own world ([`AnyModel::world`], its profile reported):
-    /// `episodes` seeded starts from base seed `seed` on each of `goals`, as `blockstack
-    /// eval` plays them when no flag changes the world.
-    pub fn eval_plan(&self, goals: Vec<Goal>, episodes: u64, seed: u64) -> EvalPlan {
-        EvalPlan {
-            world: self.world(),
-            profile: self.profile(),
+    /// The evaluation `overrides` describe in the model's own world ([`AnyModel::world`]):
+    /// its size and view (another is refused), its rules ([`AnyModel::parts`]) under the
+    /// profile and rules named, its training reward unless a profile or reward is named,
+    /// games of at most 1000 steps on the physics backend unless named; every goal of its
+    /// world unless goals are named. `blockstack eval`, Python's `Model.evaluate` and
+    /// `blockstack.train(eval_episodes=...)` all plan their evaluation here.
+    pub fn eval_plan_with(&self, o: &EvalOverrides) -> Result<EvalPlan> {
+        let own = self.world();
+        self.check_world(o.grid.unwrap_or(own.grid), o.blocks.unwrap_or(own.blocks))?;
+        self.check_view(o.view.unwrap_or(own.view))?;
+        let goals = match &o.goals {
+            Some(goals) => goals.clone(),
+            None => Goal::all_in(own.view, own.blocks)?,
+        };
+        let rules = self.parts().overridden(o.profile, o.protocol, o.start, None);
+        // The reward only sums up in trajectories: the model's own unless asked otherwise.
+        let reward = o.reward.unwrap_or(match (o.profile, self.training_reward()) {
+            (None, Some(r)) => r,
+            _ => rules.reward,
+        });
+        let world = EnvConfig {
+            horizon: o.horizon.unwrap_or(sim::DEFAULT_HORIZON),
+            backend: o.backend.unwrap_or(Backend::Physics),
+            reward,
+            ..rules.apply(own)
+        };
+        world.validate()?;
+        Ok(EvalPlan {
+            world,
+            profile: rules.profile,
             goals,
-            episodes,
-            seed,
-        }
+            episodes: o.episodes,
+            seed: o.seed,
+        })
     }
 
     /// An error unless a world of `blocks` blocks on `grid` is the model's.
@@ -138,6 +163,18 @@ impl AnyModel {
             AnyModel::Dqn(d) => d.check_world(grid, blocks)?,
         }
         Ok(())
+    }
+
+    /// An error unless `view` is the one the model learnt: a model plays its own view.
+    pub fn check_view(&self, view: View) -> Result<()> {
+        let own = self.world().view;
+        if view == own {
+            return Ok(());
+        }
+        Err(AgentError::ModelMismatch(format!(
+            "the model learnt the {own} view; it cannot play the {view} view"
+        ))
+        .into())
     }
 
     /// The Q-value of every action legal in `obs`, in action-index order: a tabular
@@ -201,5 +238,47 @@ impl AnyModel {
             &mut || Ok(self.policy(epsilon)?),
             tick,
         )?)
+    }
+}
+
+/// An error if `path` is a pipe, a socket or a device ([`AnyModel::load`]).
+fn refuse_special(path: &Path) -> Result<()> {
+    use std::os::unix::fs::FileTypeExt;
+    // `metadata` does not open the file, so it does not wait for a pipe's writer.
+    let Ok(meta) = std::fs::metadata(path) else {
+        return Ok(());
+    };
+    let kind = meta.file_type();
+    if kind.is_fifo() || kind.is_socket() || kind.is_char_device() || kind.is_block_device() {
+        return Err(AgentError::Model {
+            path: path.display().to_string(),
+            reason:
+                "a pipe or a device is not supported as a model file (it is read twice); save the model to a file first"
+                    .into(),
+        }
+        .into());
+    }
+    Ok(())
+}
+
+impl PlayingModel for AnyModel {
+    fn kind(&self) -> PolicyKind {
+        match self {
+            AnyModel::Q(_) => PolicyKind::Q,
+            AnyModel::Dqn(_) => PolicyKind::Dqn,
+        }
+    }
+
+    fn model_name(&self) -> String {
+        self.name()
+    }
+
+    fn playing(&self, epsilon: f64) -> agent::Result<Box<dyn Policy + '_>> {
+        self.policy(epsilon).map_err(|e| match e {
+            crate::NeuralError::Agent(e) => e,
+            // The same words: a network's settings are checked as a table's are.
+            crate::NeuralError::Config(reason) => AgentError::Config(reason),
+            e => AgentError::ModelMismatch(e.to_string()),
+        })
     }
 }

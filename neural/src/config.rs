@@ -269,7 +269,6 @@ impl DqnConfig {
                 reward: RewardModel::from_name("sparse")?,
                 backend: Backend::Grid,
                 protocol: ActionProtocol::Free,
-                obs: net.obs(),
                 ..EnvConfig::default()
             },
             goals: Goal::all(blocks)?,
@@ -397,10 +396,6 @@ impl DqnConfig {
         let steps = if paper.world.blocks <= 2 { 50_000 } else { 300_000 };
         let net = NetConfig::small();
         DqnConfig {
-            world: EnvConfig {
-                obs: net.obs(),
-                ..paper.world
-            },
             net,
             steps,
             td_loss: TdLoss::Huber,
@@ -438,16 +433,9 @@ impl DqnConfig {
         self.world.blocks
     }
 
-    /// This config with the network `net`, the world's observation made the one it reads.
+    /// This config with the network `net`.
     pub fn with_net(self, net: NetConfig) -> DqnConfig {
-        DqnConfig {
-            world: EnvConfig {
-                obs: net.obs(),
-                ..self.world
-            },
-            net,
-            ..self
-        }
+        DqnConfig { net, ..self }
     }
 
     /// The environment a game on `goal` is played in: [`DqnConfig::world`] with that goal.
@@ -505,14 +493,6 @@ impl DqnConfig {
     pub fn validate(&self) -> Result<()> {
         let bad = |what: String| Err(NeuralError::Config(what));
         self.net.validate(self.obs())?;
-        if self.world.obs != self.obs() {
-            return bad(format!(
-                "the world shows {} and the {} network reads {}",
-                self.world.obs,
-                self.net.kind,
-                self.obs()
-            ));
-        }
         if self.world.goal != GoalSpec::Random {
             return bad("a training config names its goals in `goals`: its world's goal must be drawn".into());
         }

@@ -213,17 +213,16 @@ mod tests {
 
     #[test]
     fn files_written_by_the_previous_release_read_as_demonstrations() {
-        let fixtures = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures");
         let grid = Grid::default();
-        let recording = read(&fixtures.join("recording-v2.jsonl"), grid, 3).unwrap();
+        let recording = read(&testkit::fixture("recording-v2.jsonl"), grid, 3).unwrap();
         assert_eq!(recording.len(), 2, "one per episode line");
         assert!(recording.iter().any(|e| e.expert.iter().any(|&x| x)), "corrections");
         assert!(recording.iter().all(|e| e.goal.holds(e.states.last().unwrap())));
-        let trajectory = read(&fixtures.join("trajectory.jsonl"), grid, 3).unwrap();
+        let trajectory = read(&testkit::fixture("trajectory.jsonl"), grid, 3).unwrap();
         assert_eq!(trajectory.len(), 3);
         assert!(trajectory.iter().all(|e| e.expert.iter().all(|&x| x)));
         // Another world than the learner's is refused.
-        let err = read(&fixtures.join("trajectory-dense.jsonl"), grid, 3)
+        let err = read(&testkit::fixture("trajectory-dense.jsonl"), grid, 3)
             .unwrap_err()
             .to_string();
         assert!(err.contains("4 blocks on a 5x6 grid"), "{err}");
@@ -231,8 +230,7 @@ mod tests {
 
     #[test]
     fn a_step_after_the_episode_terminated_is_refused() {
-        let fixtures = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures");
-        let text = std::fs::read_to_string(fixtures.join("trajectory.jsonl")).unwrap();
+        let text = testkit::fixture_text("trajectory.jsonl");
         let lines: Vec<&str> = text.lines().collect();
         let last = lines.iter().position(|l| l.contains("\"terminated\":true")).unwrap();
         let mut after: serde_json::Value = serde_json::from_str(lines[last]).unwrap();

@@ -16,6 +16,7 @@
 //! message that says which.
 
 use std::collections::HashMap;
+use std::io::Read;
 use std::path::Path;
 
 use files::container::{Container, Expect, Tensor};
@@ -196,14 +197,19 @@ impl Dqn {
     /// truncated, corrupt, of another format or version, or if its tensors do not fit its
     /// config.
     pub fn load(path: &Path) -> Result<Dqn> {
+        let name = path.display().to_string();
+        let input = files::open_bounded(path, MAX_NETWORK_BYTES, EXPECT.what).map_err(|e| read_failure(&name, e))?;
+        Dqn::read_from(input, &name)
+    }
+
+    /// Reads a network from the bytes of a network file, named `name` in errors, with the
+    /// checks of [`Dqn::load`] (the fuzz target `network_file` feeds it).
+    pub fn read_from(input: impl Read, name: &str) -> Result<Dqn> {
         let fail = |reason: String| NeuralError::Model {
-            path: path.display().to_string(),
+            path: name.to_string(),
             reason,
         };
-        let container = Container::read(path, &EXPECT).map_err(|e| match e {
-            FilesError::Read { problem, .. } => fail(problem.to_string()),
-            other => fail(other.to_string()),
-        })?;
+        let container = Container::read_from(input, name, &EXPECT).map_err(|e| read_failure(name, e))?;
         let Metadata {
             config,
             report,
@@ -240,6 +246,17 @@ impl Dqn {
             report,
             warnings,
         })
+    }
+}
+
+/// A file error while reading network `name`, as one line naming it.
+fn read_failure(name: &str, e: FilesError) -> NeuralError {
+    NeuralError::Model {
+        path: name.to_string(),
+        reason: match e {
+            FilesError::Read { problem, .. } => problem.to_string(),
+            other => other.to_string(),
+        },
     }
 }
 
@@ -370,8 +387,7 @@ impl StoredConfig {
         }
     }
 
-    /// The config this stored form describes: games ending at the goal, the goal drawn,
-    /// the network's observation.
+    /// The config this stored form describes: games ending at the goal, the goal drawn.
     fn config(self) -> DqnConfig {
         DqnConfig {
             world: EnvConfig {
@@ -383,7 +399,6 @@ impl StoredConfig {
                 backend: self.backend,
                 protocol: self.protocol,
                 start: self.start,
-                obs: self.net.obs(),
                 ..EnvConfig::default()
             },
             goals: self.goals,

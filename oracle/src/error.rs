@@ -22,6 +22,27 @@ pub enum OracleError {
     /// A block-move problem or search of [`crate::towers`] was refused.
     #[error(transparent)]
     Towers(#[from] crate::towers::TowersError),
+    /// A planner name that is not one ([`crate::PlannerKind`]).
+    #[error("unknown planner {name:?}: choose one of {}", crate::PlannerKind::NAMES.join(", "))]
+    UnknownPlanner {
+        /// The name given.
+        name: String,
+    },
+    /// A planner of block moves asked to plan in the top view, which has none.
+    #[error("the {planner} planner plans block moves, which only the side view has")]
+    PlannerNotInView {
+        /// The planner's name.
+        planner: &'static str,
+    },
+    /// A cost name that is not one ([`crate::planner_kind::Cost`]).
+    #[error("unknown cost {name:?}: choose steps or moves")]
+    UnknownCost {
+        /// The name given.
+        name: String,
+    },
+    /// A plan counted in block moves asked for in the top view.
+    #[error("a plan counted in block moves is the side view's: the top view counts gripper steps")]
+    CostNotInView,
     /// A PDDL problem or plan was refused ([`crate::pddl`]).
     #[error(transparent)]
     Pddl(#[from] crate::pddl::PddlError),

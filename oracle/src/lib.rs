@@ -12,6 +12,8 @@
 //!   towards a stack laid around the blocks' centroid, with a random block when nothing is
 //!   held. It plans nothing and can get stuck; Table I of the paper assisted its learner
 //!   with it.
+//! - [`PlannerKind`]: a planner chosen by name, with one meaning in both views (the one
+//!   table the command line, Python and the experiments share).
 //! - [`pddl`]: the planning competitions' Blocks World problems and plans, read and written.
 //! - [`towers`]: block-move planners for the classic Blocks World seen from the side (an
 //!   exact A* solver and a near-optimal planner that scales to thousands of blocks).
@@ -72,6 +74,7 @@ pub mod oracle;
 pub mod pddl;
 mod placement;
 pub mod plan;
+pub mod planner_kind;
 mod route;
 pub mod towers;
 
@@ -80,3 +83,4 @@ pub use error::{OracleError, Result};
 pub use exact::{DEFAULT_NODE_BUDGET, ExactSolver, SearchStats};
 pub use oracle::{FALLBACK_NODE_BUDGET, Oracle};
 pub use plan::{Plan, Planner, legalize};
+pub use planner_kind::{Cost, CountedPlan, PlannerKind};

@@ -31,7 +31,9 @@ they report is raised as ``ValueError`` with their message.
 
 from gymnasium.envs.registration import register, registry
 
-from blockstack._native import REWARDS, episode_seed
+from blockstack import _native
+from blockstack._checks import whole
+from blockstack._native import REWARDS
 from blockstack.demonstrations import demonstrations, read_recording
 from blockstack.env import BlocksWorldEnv, StackEnv
 from blockstack.goal_env import StackGoalEnv
@@ -39,6 +41,7 @@ from blockstack.model import Model, load
 from blockstack import vector
 from blockstack.planning import read_pddl, solve
 from blockstack.training import train
+from blockstack.world import World
 
 __all__ = [
     "REWARDS",
@@ -46,6 +49,7 @@ __all__ = [
     "Model",
     "StackEnv",
     "StackGoalEnv",
+    "World",
     "demonstrations",
     "episode_seed",
     "load",
@@ -55,6 +59,12 @@ __all__ = [
     "train",
     "vector",
 ]
+
+def episode_seed(base: int, index: int) -> int:
+    """The seed of episode ``index`` of a run with seed ``base``: the seed ``blockstack run
+    --seed BASE`` resets its episode ``index`` with (``sim::seeding::episode_seed``)."""
+    return _native.episode_seed(whole("base", base), whole("index", index))
+
 
 ENV_ID = "blockstack/Stack-v0"
 

@@ -37,6 +37,33 @@ def optional_whole(name: str, value: Any, low: int = 0, high: int = U64_MAX) -> 
     return None if value is None else whole(name, value, low, high)
 
 
+def whole_numbers(name: str, value: Any) -> np.ndarray:
+    """``value`` as an array of whole numbers (int64): integers as they are, floats only when
+    every one is a whole number (a replay buffer may store block ids as floats); a
+    ``ValueError`` naming ``name`` for a fraction, a boolean, text or anything else, rather
+    than a value rounded or compared as something it is not."""
+    array = np.asarray(value)
+    if array.dtype.kind in "iu":
+        return array.astype(np.int64, copy=False)
+    if array.dtype.kind == "f" and np.all(np.isfinite(array)) and np.all(array == np.round(array)):
+        return array.astype(np.int64)
+    raise ValueError(f"{name} holds whole numbers (block ids, cells), not {array.dtype} values: {value!r}")
+
+
+def cells_of(cells: Any) -> list:
+    """Every block's ``(x, y)``, each a pair of whole numbers in ``[0, 255]``; a
+    ``ValueError`` naming ``cells[i]`` otherwise (the native side would raise
+    ``OverflowError`` or ``TypeError`` naming nothing)."""
+    checked = []
+    for i, cell in enumerate(cells):
+        try:
+            x, y = cell
+        except (TypeError, ValueError):
+            raise ValueError(f"cells[{i}] must be an (x, y) pair, not {cell!r}") from None
+        checked.append((whole(f"cells[{i}] x", x, 0, 255), whole(f"cells[{i}] y", y, 0, 255)))
+    return checked
+
+
 def memory_bytes() -> Optional[int]:
     """This machine's physical memory in bytes, or ``None`` where the system does not say."""
     try:

@@ -15,11 +15,11 @@ Ready for behaviour cloning (``observations`` -> ``actions``) or DQfD (add
 from __future__ import annotations
 
 import os
-from typing import Optional, Tuple, Union
+from typing import Any, Union
 
 from blockstack import _native
-from blockstack._checks import U32_MAX, fits_in_memory, memory_bytes, observation_bytes, whole
-from blockstack._goal import Goal, goal_text
+from blockstack._checks import fits_in_memory, memory_bytes, observation_bytes, whole
+from blockstack.world import world_of
 
 #: A lower bound on the bytes one step holds while the episodes are played: its two
 #: observations as the Rust side keeps them, before they become arrays.
@@ -29,38 +29,31 @@ STEP_BYTES = 64
 def demonstrations(
     episodes: int,
     expert: str = "exact",
-    blocks: int = 3,
     seed: int = 0,
     obs: str = "planes",
-    goal: Goal = None,
-    grid: Tuple[int, int] = (7, 7),
-    reward: Optional[str] = None,
-    backend: str = "physics",
-    max_episode_steps: int = 1000,
-    profile: str = "spec",
-    view: str = "top",
+    **world: Any,
 ) -> dict:
-    """``episodes`` episodes of an expert (``"exact"``: shortest plans; ``"oracle"``).
-
-    ``view="side"`` plays the classic Blocks World: ``"exact"`` takes the fewest gripper
-    steps, ``"oracle"`` carries out the near-optimal block-move planner's moves.
+    """``episodes`` episodes of an expert in the world the world keywords describe
+    (:mod:`blockstack.world`, as every environment takes them), each as ``blockstack run
+    --agent EXPERT`` plays it: ``"exact"`` (the fewest gripper steps, in either view) or
+    ``"oracle"`` (the view's oracle), and in the side view (``view="side"``, the classic
+    Blocks World) ``"exact-moves"`` (the fewest block moves, carried out by the gripper) or
+    ``"near-optimal"`` (the near-optimal block-move planner, carried out).
 
     Episode ``k`` starts from ``reset(episode_seed(seed, k))``: the start that
-    ``blockstack run --seed SEED`` plays as its episode ``k``. ``grid`` is ``(width,
-    height)`` or text such as ``"7x7"``. Every episode takes at least one step, so
-    ``episodes`` whose arrays would need more than the machine's memory are refused up
-    front (``ValueError``). Ctrl-C stops a long call with ``KeyboardInterrupt``.
+    ``blockstack run --seed SEED`` plays as its episode ``k``. Every episode takes at least
+    one step, so ``episodes`` whose arrays would need more than the machine's memory are
+    refused up front (``ValueError``). Ctrl-C stops a long call with ``KeyboardInterrupt``.
     """
     episodes = whole("episodes", episodes)
-    blocks = whole("blocks", blocks)
     seed = whole("seed", seed)
-    steps = whole("max_episode_steps", max_episode_steps, 0, U32_MAX)
-    grid = _native.grid_size(grid)
-    per_step = 2 * observation_bytes(obs, blocks, grid) + (5 + blocks) + 27 + STEP_BYTES
+    for name, value in (("expert", expert), ("obs", obs)):
+        if not isinstance(value, str):
+            raise ValueError(f"{name} is a name (text), not {value!r}")
+    w = world_of(world)
+    per_step = 2 * observation_bytes(obs, w.blocks, w.grid) + (5 + w.blocks) + 27 + STEP_BYTES
     fits_in_memory(f"episodes={episodes}", episodes * per_step)
-    return _native.demonstrations(
-        episodes, expert, blocks, seed, obs, goal_text(goal), grid, reward, backend, steps, profile, view
-    )
+    return _native.demonstrations(episodes, w, expert, seed, obs)
 
 
 def read_recording(path: Union[str, os.PathLike], obs: str = "planes", profile: str = "spec") -> dict:
@@ -75,4 +68,9 @@ def read_recording(path: Union[str, os.PathLike], obs: str = "planes", profile: 
     whose arrays would need more than the machine's memory is refused, saying how large
     they would be, before they are made.
     """
+    for name, value in (("obs", obs), ("profile", profile)):
+        if not isinstance(value, str):
+            raise ValueError(f"{name} is a name (text), not {value!r}")
+    if not isinstance(path, (str, os.PathLike)):
+        raise ValueError(f"path is a file name (text or a path), not {path!r}")
     return _native.read_recording(os.fspath(path), obs, profile, memory_bytes())

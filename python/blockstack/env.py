@@ -9,9 +9,10 @@ import numpy as np
 from gymnasium import spaces
 
 from blockstack import _native
-from blockstack._checks import U32_MAX, optional_whole, whole
+from blockstack._checks import cells_of, optional_whole
 from blockstack._goal import Goal, goal_text
 from blockstack.spaces import action_space, observation_space
+from blockstack.world import world_of
 
 
 def check_seed(seed: Any) -> Optional[int]:
@@ -54,13 +55,7 @@ def reset_state(options: dict) -> Tuple[list, Optional[int], Goal]:
         raise ValueError(
             f"reset options {', '.join(sorted(options))} need \"cells\": a start state is every block's (x, y)"
         )
-    cells = []
-    for i, cell in enumerate(options["cells"]):
-        try:
-            x, y = cell
-        except (TypeError, ValueError):
-            raise ValueError(f"cells[{i}] must be an (x, y) pair, not {cell!r}") from None
-        cells.append((whole(f"cells[{i}] x", x, 0, 255), whole(f"cells[{i}] y", y, 0, 255)))
+    cells = cells_of(options["cells"])
     held = optional_whole("held", options.get("held"), 0, 255)
     return cells, held, goal_text(options.get("goal"))
 
@@ -69,44 +64,32 @@ class StackEnv(gym.Env):
     """Blocks on a grid, picked, moved and dropped until they stand in the goal's order.
 
     Arguments (all keyword, as ``gymnasium.make("blockstack/Stack-v0", ...)`` passes them):
+    the world keywords of :mod:`blockstack.world` (``blocks``, ``goal``, ``grid``,
+    ``reward``, ``backend``, ``horizon`` / ``max_episode_steps``, ``profile``, ``protocol``,
+    ``start``, ``view``), which every environment and :func:`blockstack.demonstrations`
+    take alike, and:
 
-    - ``blocks``: number of blocks ``N`` (2 to 16; default 3).
-    - ``goal``: the stack bottom to top (``"1,0,2"`` or ``[1, 0, 2]``); ``None`` draws one
-      each episode. ``planes`` does not carry the goal (``role-planes`` name blocks by
-      their place in it, ``frame`` and ``paper-screen`` draw it), so with a drawn goal and
-      ``planes`` use ``info["goal"]``.
-    - ``grid``: ``(width, height)`` or text such as ``"7x7"``; default ``(7, 7)``, and in
-      the side view ``(7, 7)`` up to 7 blocks and ``(N, N + 1)`` beyond (docs/world.md,
-      "The side view at any size").
-    - ``reward``: ``sparse`` (+10 at the goal), ``dense``, ``paper`` or ``step-cost``;
-      ``None`` (the default) takes the profile's (``sparse`` in ``spec``).
-    - ``backend``: ``physics`` (rapier2d) or ``grid`` (the occupancy model); same rules.
     - ``obs``: ``planes``, ``role-planes``, ``frame``, ``paper-screen`` or ``state`` (see
-      :mod:`blockstack.spaces`).
-    - ``profile``: ``spec`` (the world of the SPEC: every action legal) or ``original`` (the
-      paper's world as its authors coded it: their action protocol, nothing held: picks
-      only, holding: moves and drop only; their start rule; the ``paper-code`` reward).
-      An illegal action is a ``ValueError`` that changes nothing; ``info["action_mask"]``
-      says which are legal. (``gymnasium.utils.env_checker.check_env`` steps random
-      actions, so it passes in ``spec`` only.)
-    - ``protocol`` (``free`` or ``paper``) and ``start`` (``uniform`` or ``paper``): one rule
-      of the profile each, set otherwise; ``None`` (the default) keeps the profile's.
-    - ``view``: ``top`` (the default, the paper's world seen from above) or ``side`` (the
-      classic Blocks World seen from the side: towers on a table, only a clear block can be
-      picked, a released block falls; ``blockstack/BlocksWorld-v0``). In the side view the
-      legal actions are its own whatever the protocol (``info["action_mask"]``).
+      :mod:`blockstack.spaces`). ``planes`` does not carry the goal (``role-planes`` name
+      blocks by their place in it, ``frame`` and ``paper-screen`` draw it), so with a drawn
+      goal and ``planes`` use ``info["goal"]``.
     - ``actions``: ``gripper`` (the default, the ``5 + N`` actions) or, in the side view,
       ``moves``: block moves, ``x * (N + W) + d`` puts block ``x`` onto block ``d`` for
       ``d < N`` and onto the table at column ``d - N`` otherwise, each carried out as the
       gripper steps it takes (``info["gripper_steps"]``); ``info["action_mask"]`` marks the
       legal moves.
-    - ``goal`` may also name several towers, ``"0,1/2"``: each bottom to top, blocks no
-      tower names free (in the side view a tower stands on the table).
     - ``render_mode``: ``None``, ``rgb_array`` (the frame) or ``ansi`` (text).
-    - ``max_episode_steps``: the horizon: an episode that has not reached the goal after
-      this many steps is truncated, by the Rust environment itself. (``gymnasium.make``
-      keeps its own ``max_episode_steps`` argument for Gymnasium's ``TimeLimit``: pass the
-      horizon as ``horizon=`` there, or leave both at 1000.)
+
+    The world: under ``profile="original"`` (the paper's world as its authors coded it:
+    nothing held, picks only; holding, moves and drop only) an illegal action is a
+    ``ValueError`` that changes nothing; ``info["action_mask"]`` says which are legal.
+    (``gymnasium.utils.env_checker.check_env`` steps random actions, so it passes in
+    ``spec`` only.) In the side view (``view="side"``, ``blockstack/BlocksWorld-v0``: towers
+    on a table, only a clear block can be picked, a released block falls) the legal actions
+    are its own whatever the protocol. ``max_episode_steps`` is the horizon: an episode that
+    has not reached the goal after this many steps is truncated by the Rust environment
+    itself. (``gymnasium.make`` keeps its own ``max_episode_steps`` argument for Gymnasium's
+    ``TimeLimit``: pass the horizon as ``horizon=`` there, or leave both at 1000.)
 
     Seeding: ``reset(seed=s)`` starts exactly where the Rust ``Env::reset(s)`` starts, so an
     episode here and ``blockstack run --trajectory`` with the same seeds and actions agree
@@ -127,33 +110,16 @@ class StackEnv(gym.Env):
 
     metadata = {"render_modes": ["rgb_array", "ansi"], "render_fps": 4}
 
-    def __init__(
-        self,
-        blocks: int = 3,
-        goal: Goal = None,
-        grid: Optional[Tuple[int, int]] = None,
-        reward: Optional[str] = None,
-        backend: str = "physics",
-        obs: str = "planes",
-        profile: str = "spec",
-        render_mode: Optional[str] = None,
-        max_episode_steps: int = 1000,
-        horizon: Optional[int] = None,
-        protocol: Optional[str] = None,
-        start: Optional[str] = None,
-        view: str = "top",
-        actions: str = "gripper",
-    ):
+    def __init__(self, obs: str = "planes", render_mode: Optional[str] = None, actions: str = "gripper", **world: Any):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"cannot read render mode from {render_mode!r}: choose None, rgb_array or ansi")
-        blocks = whole("blocks", blocks)
-        grid = _native.grid_size(grid, view, blocks)
-        steps = whole("max_episode_steps", max_episode_steps, 0, U32_MAX)
-        if horizon is not None:
-            steps = whole("horizon", horizon, 0, U32_MAX)
-        self._native = _native.NativeEnv(
-            blocks, goal_text(goal), grid, reward, backend, steps, profile, obs, protocol, start, view, actions
-        )
+        for name, value in (("obs", obs), ("actions", actions)):
+            if not isinstance(value, str):
+                raise ValueError(f"{name} is a name (text), not {value!r}")
+        #: The world this environment plays (:class:`blockstack.world.World`).
+        self.world = world_of(world)
+        self._native = _native.NativeEnv(self.world, obs, actions)
+        blocks, grid = self.world.blocks, self.world.grid
         self.render_mode = render_mode
         self.obs_kind = obs
         self._moves = actions == "moves"
@@ -223,7 +189,7 @@ class BlocksWorldEnv(StackEnv):
     are :class:`StackEnv`'s.
     """
 
-    def __init__(self, blocks: int = 3, goal: Goal = None, actions: str = "gripper", **kwargs):
+    def __init__(self, **kwargs: Any):
         if "view" in kwargs:
             raise ValueError("BlocksWorld-v0 is the side view: use blockstack/Stack-v0 to choose a view")
-        super().__init__(blocks=blocks, goal=goal, actions=actions, view="side", **kwargs)
+        super().__init__(view="side", **kwargs)

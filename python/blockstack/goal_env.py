@@ -20,14 +20,14 @@ the rules), or ``-1`` for every block when no stack stands (no goal equals it).
 
 from __future__ import annotations
 
-from typing import Any, Optional, Tuple
+from typing import Any, Optional
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
 from blockstack import _native
-from blockstack._goal import Goal
+from blockstack._checks import whole_numbers
 from blockstack.env import StackEnv
 from blockstack.spaces import action_space, observation_space
 
@@ -39,12 +39,16 @@ class StackGoalEnv(gym.Env):
     """Blocks to stack in a goal's order, with the goal beside the observation.
 
     Arguments (keyword, as ``gymnasium.make("blockstack/StackGoal-v0", ...)`` passes them):
+    the world keywords of :mod:`blockstack.world`, as every environment takes them, and
+    ``render_mode``. Two differ here:
 
-    - ``blocks``, ``grid``, ``backend``, ``goal``, ``max_episode_steps`` / ``horizon``: as
-      :class:`blockstack.StackEnv`'s (the ``spec`` world: every action legal).
     - ``reward``: ``sparse`` (+10 at the goal, the default) or ``step-cost`` (-1 a step, 0
       at the goal): a goal environment's reward is a function of the achieved and desired
       goals alone, which the others (they weigh distances or moves) are not.
+    - ``goal``: one stack of every block (``"1,0,2"``), or ``None`` to draw one each
+      episode. A goal of towers (``"0,1/2"``) is refused: the goal a state achieves is the
+      stack standing in it, which a goal leaving blocks free is not, so the environment
+      would pay for goals that ``compute_reward`` never sees reached.
 
     Observation: a dict of
 
@@ -52,7 +56,8 @@ class StackGoalEnv(gym.Env):
       not depend on the goal (``role-planes`` and ``frame`` do, so a relabelled goal would
       contradict them);
     - ``desired_goal``: the episode's goal, ``int64`` ``(N,)``, bottom to top;
-    - ``achieved_goal``: the goal standing now, or ``-1`` everywhere.
+    - ``achieved_goal``: the stack standing now (in the side view, on the table with no
+      block of it held), or ``-1`` everywhere.
 
     ``info`` is :class:`blockstack.StackEnv`'s with ``is_success`` (the goal holds; what
     Stable-Baselines3 logs as the success rate) and ``steps`` (steps of the episode).
@@ -62,31 +67,15 @@ class StackGoalEnv(gym.Env):
 
     metadata = {"render_modes": ["rgb_array", "ansi"], "render_fps": 4}
 
-    def __init__(
-        self,
-        blocks: int = 3,
-        goal: Goal = None,
-        grid: Tuple[int, int] = (7, 7),
-        reward: str = "sparse",
-        backend: str = "physics",
-        render_mode: Optional[str] = None,
-        max_episode_steps: int = 1000,
-        horizon: Optional[int] = None,
-    ):
+    def __init__(self, render_mode: Optional[str] = None, **world: Any):
+        reward = world.setdefault("reward", "sparse")
         if reward not in GOAL_REWARDS:
             # The Rust side says why; asked here so the error comes before the world is made.
             _native.goal_rewards(str(reward), 2, (7, 7))
-        self._env = StackEnv(
-            blocks=blocks,
-            goal=goal,
-            grid=grid,
-            reward=reward,
-            backend=backend,
-            obs="planes",
-            render_mode=render_mode,
-            max_episode_steps=max_episode_steps,
-            horizon=horizon,
-        )
+        self._env = StackEnv(obs="planes", render_mode=render_mode, **world)
+        self.world = self._env.world
+        if self.world.goal is not None:
+            _native.check_stack_goal(self.world.goal, self.world.blocks)
         native = self._env._native
         self.blocks = native.blocks
         self.horizon = native.horizon
@@ -104,7 +93,7 @@ class StackGoalEnv(gym.Env):
 
     def _observe(self, planes: np.ndarray, info: dict) -> dict:
         cells, held, goal = self._env._native.state()
-        achieved = np.array(_native.achieved_goal(cells, held), dtype=np.int64)
+        achieved = np.array(_native.achieved_goal(cells, held, self.world.view), dtype=np.int64)
         info["is_success"] = bool(np.array_equal(achieved, goal))
         info["steps"] = self._env._native.steps
         return {
@@ -140,6 +129,9 @@ class StackGoalEnv(gym.Env):
                 f"achieved and desired goals are arrays of shape ({self.blocks},) or (batch, {self.blocks}), "
                 f"not {achieved.shape} and {desired.shape}"
             )
+        # Block ids: whole numbers (a replay buffer may hold them as floats), never rounded.
+        achieved = whole_numbers("achieved_goal", achieved)
+        desired = whole_numbers("desired_goal", desired)
         reached = np.all(achieved == desired, axis=-1) & np.all(desired >= 0, axis=-1)
         return bool(reached) if reached.ndim == 0 else reached
 

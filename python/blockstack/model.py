@@ -24,6 +24,7 @@ from typing import Any, Optional, Tuple, Union
 import numpy as np
 
 from blockstack import _native
+from blockstack._checks import U32_MAX, whole, whole_numbers
 from blockstack.env import StackEnv
 
 # The test policy's exploration when ``deterministic=False`` (the paper's test epsilon).
@@ -34,6 +35,8 @@ class Model:
     """A trained model read from a file (:func:`load`)."""
 
     def __init__(self, path: Union[str, os.PathLike]):
+        if not isinstance(path, (str, os.PathLike)):
+            raise ValueError(f"path is a file name (text or a path), not {path!r}")
         self._native = _native.NativeModel(os.fspath(path))
         self.path = os.fspath(path)
 
@@ -55,15 +58,19 @@ class Model:
     def make_env(self, **overrides: Any) -> StackEnv:
         """A Gymnasium environment of the world the model was trained in, showing the
         ``state`` observation that :meth:`predict` reads; ``overrides`` change any keyword
-        argument of :class:`blockstack.StackEnv` (``goal``, ``backend``, ``render_mode``...)."""
+        argument of :class:`blockstack.StackEnv` (``goal``, ``backend``, ``render_mode``...).
+        A world the model cannot play (another grid, number of blocks or view) is a
+        ``ValueError``, as ``blockstack run --model`` refuses it."""
         kwargs = dict(self.world, obs="state")
         kwargs.update(overrides)
-        return StackEnv(**kwargs)
+        env = StackEnv(**kwargs)
+        self._native.check_world(env.world)
+        return env
 
     def reset(self, seed: int) -> None:
         """Starts the policy's generator for an episode reset with ``seed``, as ``blockstack
         run`` does, so that ties are broken as the CLI breaks them."""
-        self._native.reset(int(seed))
+        self._native.reset(whole("seed", seed))
 
     def predict(
         self,
@@ -81,11 +88,23 @@ class Model:
                 "predict reads the state observation (a dict of blocks, held and goal): make the "
                 "environment with obs='state', as model.make_env() does"
             )
-        cells = [tuple(int(v) for v in c) for c in np.asarray(observation["blocks"])]
-        held = int(observation["held"])
-        goal = [int(b) for b in np.asarray(observation["goal"])]
+        blocks = _whole_array("blocks", observation["blocks"])
+        if blocks.ndim != 2 or blocks.shape[1:] != (2,):
+            raise ValueError(f"observation['blocks'] is every block's (x, y), shape (N, 2), not {blocks.shape}")
+        held = _whole_array("held", observation["held"])
+        if held.ndim != 0:
+            raise ValueError(f"observation['held'] is one block id (or -1), not an array of shape {held.shape}")
+        goal = _whole_array("goal", observation["goal"])
         # Without ``goal_tower`` (observations of releases before it) the goal is one tower.
-        towers = [int(t) for t in np.asarray(observation.get("goal_tower", [0] * len(goal)))]
+        towers = _whole_array("goal_tower", observation.get("goal_tower", np.zeros(len(goal), dtype=np.int64)))
+        if blocks.size and not (0 <= blocks.min() and blocks.max() <= 255):
+            raise ValueError("observation['blocks'] holds a cell outside any grid (0..255)")
+        if not -1 <= int(held) <= 255:
+            raise ValueError(f"observation['held'] is a block id or -1, not {int(held)}")
+        cells = [(int(x), int(y)) for x, y in blocks]
+        held = int(held)
+        goal = [int(b) for b in goal]
+        towers = [int(t) for t in towers]
         epsilon = 0.0 if deterministic else TEST_EPSILON
         action = self._native.act(cells, None if held < 0 else held, goal, towers, epsilon)
         return action, None
@@ -102,7 +121,20 @@ class Model:
         """Plays ``episodes`` seeded starts on each goal (``goals`` ``:``-separated, default
         every goal) in the model's own world and returns what ``blockstack eval --model PATH
         --json`` prints with the same settings."""
-        return json.loads(self._native.evaluate(episodes, seed, goals, epsilon, backend, horizon))
+        episodes = whole("episodes", episodes)
+        seed = whole("seed", seed)
+        horizon = whole("horizon", horizon, 0, U32_MAX)
+        if isinstance(epsilon, bool) or not isinstance(epsilon, (int, float, np.integer, np.floating)):
+            raise ValueError(f"epsilon is a probability (a number in [0, 1]), not {epsilon!r}")
+        for name, value in (("goals", goals), ("backend", backend)):
+            if value is not None and not isinstance(value, str):
+                raise ValueError(f"{name} is text, not {value!r}")
+        return json.loads(self._native.evaluate(episodes, seed, goals, float(epsilon), backend, horizon))
+
+
+def _whole_array(name: str, value: Any) -> np.ndarray:
+    """``observation[name]`` as an array of whole numbers (:func:`whole_numbers`)."""
+    return whole_numbers(f"observation[{name!r}]", value)
 
 
 def load(path: Union[str, os.PathLike]) -> Model:

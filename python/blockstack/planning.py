@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Optional, Sequence, Tuple
 
 from blockstack import _native
+from blockstack._checks import cells_of, optional_whole
 from blockstack._goal import Goal
 
 
@@ -22,21 +23,29 @@ def solve(
     ``cells[i]`` (``(x, y)``, ``y`` upward) with ``held`` held, to ``goal`` (bottom to top,
     ``"1,0,2"`` or ``[1, 0, 2]``).
 
-    ``solver="exact"`` gives a shortest plan (A* over the joint state) under ``protocol``
-    (``"free"`` or ``"paper"``, as ``blockstack solve --protocol``); ``"oracle"`` the
-    centroid + A* oracle's. An empty list when the goal holds already; ``ValueError`` for a
+    ``solver`` names a planner as ``blockstack solve --solver`` does: ``"exact"`` gives a
+    shortest plan (A* over the joint state) under ``protocol`` (``"free"`` or ``"paper"``,
+    as ``blockstack solve --protocol``); ``"oracle"`` the centroid + A* oracle's. An empty list when the goal holds already; ``ValueError`` for a
     state or goal that does not fit the grid.
 
     ``view="side"`` plans in the classic Blocks World seen from the side (the goal may be
     several towers, ``"0,1/2"``), counting ``cost``. ``cost="moves"`` (the side view's
     default) gives block moves, a list of ``{"block": B, "onto": "table" | C}``: the fewest
-    (``solver="exact"``) or the near-optimal planner's (``"near-optimal"``, or
-    ``"oracle"``). ``cost="steps"`` gives action indices: the fewest gripper steps
-    (``"exact"``; ``held`` may name a block held at the start) or the near-optimal block-move
-    plan carried out by the gripper (``"near-optimal"`` or ``"oracle"``). Both as
-    ``blockstack solve --view side --cost ... --json`` prints them.
+    (``solver="exact"`` or ``"exact-moves"``) or the near-optimal planner's
+    (``"near-optimal"``, or ``"oracle"``). ``cost="steps"`` gives action indices: the fewest
+    gripper steps (``"exact"``; ``held`` may name a block held at the start), the fewest
+    block moves carried out by the gripper (``"exact-moves"``) or the near-optimal
+    block-move plan carried out (``"near-optimal"`` or ``"oracle"``). Both as ``blockstack
+    solve --view side --cost ... --json`` prints them.
     """
-    return _native.solve([tuple(c) for c in cells], goal, held, tuple(grid), solver, protocol, view, cost)
+    checked = cells_of(cells)
+    held = optional_whole("held", held, 0, 255)
+    for name, value in (("solver", solver), ("protocol", protocol), ("view", view)):
+        if not isinstance(value, str):
+            raise ValueError(f"{name} is a name (text), not {value!r}")
+    if cost is not None and not isinstance(cost, str):
+        raise ValueError(f"cost is a name (text), not {cost!r}")
+    return _native.solve(checked, goal, held, _native.grid_size(grid), solver, protocol, view, cost)
 
 
 def read_pddl(path) -> dict:

@@ -12,17 +12,17 @@ from __future__ import annotations
 
 import os
 import threading
-from typing import Optional, Sequence, Tuple, Union
+from typing import Any, Optional, Sequence, Union
 
 import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from blockstack import _native
-from blockstack._checks import ENV_BYTES, U32_MAX, fits_in_memory, observation_bytes, whole
-from blockstack._goal import Goal, goal_text
+from blockstack._checks import ENV_BYTES, fits_in_memory, observation_bytes, whole
 from blockstack.env import check_seed
 from blockstack.spaces import action_space, observation_space
+from blockstack.world import world_of
 
 #: Below this many environments one thread steps the batch (``threads=None``): a hand-off
 #: to other threads costs more than it saves (measured by ``benchmarks/python/throughput.py``).
@@ -44,7 +44,9 @@ def _cores() -> int:
 class StackVectorEnv(VectorEnv):
     """``num_envs`` blockstack environments of one world, stepped together in Rust.
 
-    Takes the keyword arguments of :class:`blockstack.StackEnv` and:
+    Takes the world keywords of :mod:`blockstack.world`, as every environment does,
+    ``obs`` and ``render_mode`` as :class:`blockstack.StackEnv` takes them (gripper actions
+    only), and:
 
     - ``threads``: threads that step the batch; ``None`` picks one below
       :data:`PARALLEL_FROM_ENVS` environments and one per core from there.
@@ -52,14 +54,12 @@ class StackVectorEnv(VectorEnv):
       an episode ends resets that environment, ignoring its action, with reward 0) or
       ``SAME_STEP`` (the ending step resets it and reports the last observation and info
       in ``infos["final_obs"]`` / ``infos["final_info"]``). Declared in ``metadata``.
-    - ``view``: ``top`` (the paper's world) or ``side`` (the Blocks World seen from the side,
-      as ``blockstack/BlocksWorld-v0``; gripper actions).
     - ``copy``: ``True`` (Gymnasium's default) returns copies; ``False`` returns the
       buffers themselves, overwritten by the next call (the fastest way to read them).
 
     ``num_envs`` is refused with a ``ValueError`` when the buffers and environments would
     need more than the machine's physical memory (about 8 KiB and an observation each).
-    ``grid`` is ``(width, height)`` or text such as ``"7x7"`` (default: as ``StackEnv``'s). One instance may be used from
+    One instance may be used from
     several threads: its calls take turns. It cannot be pickled or copied.
 
     ``reset(seed=s)`` resets environment ``i`` with ``s + i`` (a list gives one seed each),
@@ -71,20 +71,12 @@ class StackVectorEnv(VectorEnv):
     def __init__(
         self,
         num_envs: int,
-        blocks: int = 3,
-        goal: Goal = None,
-        grid: Optional[Tuple[int, int]] = None,
-        reward: Optional[str] = None,
-        backend: str = "physics",
         obs: str = "planes",
-        profile: str = "spec",
         render_mode: Optional[str] = None,
-        max_episode_steps: int = 1000,
-        horizon: Optional[int] = None,
         threads: Optional[int] = None,
         autoreset_mode: Union[AutoresetMode, str] = AutoresetMode.NEXT_STEP,
         copy: bool = True,
-        view: str = "top",
+        **world: Any,
     ):
         key = autoreset_mode.value if isinstance(autoreset_mode, AutoresetMode) else autoreset_mode
         mode = _SPELLINGS.get(key) if isinstance(key, str) else None
@@ -92,12 +84,12 @@ class StackVectorEnv(VectorEnv):
             raise ValueError(f"autoreset mode {autoreset_mode!r} is not supported: use next-step or same-step")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"cannot read render mode from {render_mode!r}: choose None or rgb_array")
+        if not isinstance(obs, str):
+            raise ValueError(f"obs is a name (text), not {obs!r}")
         num_envs = whole("num_envs", num_envs)
-        blocks = whole("blocks", blocks)
-        grid = _native.grid_size(grid, view, blocks)
-        steps = whole("max_episode_steps", max_episode_steps, 0, U32_MAX)
-        if horizon is not None:
-            steps = whole("horizon", horizon, 0, U32_MAX)
+        #: The world every environment plays (:class:`blockstack.world.World`).
+        self.world = world_of(world)
+        blocks, grid = self.world.blocks, self.world.grid
         if threads is None:
             threads = 1 if num_envs < PARALLEL_FROM_ENVS else _cores()
         threads = whole("threads", threads, 0, 4096)
@@ -105,9 +97,7 @@ class StackVectorEnv(VectorEnv):
         # fails in Rust would abort the interpreter.
         per_env = observation_bytes(obs, blocks, grid) + 8 * (blocks + 2) + (5 + blocks) + 3 + ENV_BYTES
         fits_in_memory(f"num_envs={num_envs}", num_envs * per_env)
-        self._native = _native.NativeVecEnv(
-            num_envs, blocks, goal_text(goal), grid, reward, backend, steps, profile, obs, threads, _MODES[mode], view
-        )
+        self._native = _native.NativeVecEnv(num_envs, self.world, obs, threads, _MODES[mode])
         self._lock = threading.Lock()
         self.metadata = dict(self.metadata, autoreset_mode=mode)
         self.autoreset_mode = mode

@@ -24,54 +24,63 @@ pub fn observation_shape(obs: &str, blocks: usize, grid: (usize, usize)) -> PyRe
     Ok(kind.shape(grid, blocks))
 }
 
-/// The world an environment is made of, from the Python keyword arguments: the profile's
-/// world (its action protocol, start rule and reward) with the given grid, blocks, goal,
-/// horizon and backend, and the reward, protocol and start rule given by name, if any.
-#[allow(clippy::too_many_arguments)]
-pub fn env_config(
-    blocks: usize,
-    goal: Option<&str>,
-    grid: (usize, usize),
-    reward: Option<&str>,
-    backend: &str,
-    horizon: u32,
-    profile: &str,
-    rules: PlayRules<'_>,
-) -> PyResult<EnvConfig> {
-    let parts = ProfileParts::of(Profile::Spec).overridden(
-        Some(self::profile(profile)?),
-        rules.protocol.map(str::parse).transpose().or_value_error()?,
-        rules.start.map(str::parse).transpose().or_value_error()?,
-        reward.map(RewardModel::from_name).transpose().or_value_error()?,
-    );
-    let config = parts.apply(EnvConfig {
-        grid: Grid::new(grid.0, grid.1).or_value_error()?,
-        blocks,
-        goal: match goal {
-            Some(text) => GoalSpec::Fixed(Goal::parse(text, Some(blocks)).or_value_error()?),
-            None => GoalSpec::Random,
-        },
-        horizon,
-        backend: backend.parse::<Backend>().or_value_error()?,
-        view: match rules.view {
-            Some(name) => name.parse().or_value_error()?,
-            None => sim::View::default(),
-        },
-        ..EnvConfig::default()
-    });
-    config.validate().or_value_error()?;
-    Ok(config)
+/// The world keywords, one set taken the same way by `StackEnv`, `BlocksWorldEnv`,
+/// `StackVectorEnv`, `StackGoalEnv` and `demonstrations`: Python's `blockstack.world.World`
+/// (a dataclass that checks their types and ranges first) read by attribute.
+#[derive(Clone, Debug, FromPyObject)]
+pub struct World {
+    /// Number of blocks.
+    pub blocks: usize,
+    /// The goal as text (`"1,0,2"`, `"0,1/2"`), or `None` to draw one each episode.
+    pub goal: Option<String>,
+    /// `(width, height)`.
+    pub grid: (usize, usize),
+    /// The reward's name, or `None` for the profile's.
+    pub reward: Option<String>,
+    /// The backend's name.
+    pub backend: String,
+    /// Steps before an episode is truncated.
+    pub horizon: u32,
+    /// The profile's name.
+    pub profile: String,
+    /// The action protocol's name, or `None` for the profile's.
+    pub protocol: Option<String>,
+    /// The start rule's name, or `None` for the profile's.
+    pub start: Option<String>,
+    /// The view's name.
+    pub view: String,
 }
 
-/// The rules of play a profile sets, named one by one (`None`: the profile's).
-#[derive(Clone, Copy, Debug, Default)]
-pub struct PlayRules<'a> {
-    /// The action protocol's name (`free` or `paper`).
-    pub protocol: Option<&'a str>,
-    /// The start rule's name (`uniform` or `paper`).
-    pub start: Option<&'a str>,
-    /// The world's name (`top` or `side`).
-    pub view: Option<&'a str>,
+impl World {
+    /// The world these keywords describe: the profile's rules (its action protocol, start
+    /// rule and reward) with each rule named in its place ([`ProfileParts::overridden`]), on
+    /// the grid, blocks, goal, horizon, backend and view given; checked by `sim`.
+    pub fn config(&self) -> PyResult<EnvConfig> {
+        let parts = ProfileParts::of(Profile::Spec).overridden(
+            Some(profile(&self.profile)?),
+            self.protocol.as_deref().map(str::parse).transpose().or_value_error()?,
+            self.start.as_deref().map(str::parse).transpose().or_value_error()?,
+            self.reward
+                .as_deref()
+                .map(RewardModel::from_name)
+                .transpose()
+                .or_value_error()?,
+        );
+        let config = parts.apply(EnvConfig {
+            grid: Grid::new(self.grid.0, self.grid.1).or_value_error()?,
+            blocks: self.blocks,
+            goal: match &self.goal {
+                Some(text) => GoalSpec::Fixed(Goal::parse(text, Some(self.blocks)).or_value_error()?),
+                None => GoalSpec::Random,
+            },
+            horizon: self.horizon,
+            backend: self.backend.parse::<Backend>().or_value_error()?,
+            view: self.view.parse().or_value_error()?,
+            ..EnvConfig::default()
+        });
+        config.validate().or_value_error()?;
+        Ok(config)
+    }
 }
 
 /// A grid from Python: text such as `"7x7"` or a `(width, height)` pair, as every function

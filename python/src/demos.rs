@@ -4,17 +4,16 @@
 
 use std::path::PathBuf;
 
-use agent::{EpisodeObserver, ExactPolicy, OraclePolicy, Policy, TowersPolicy};
+use agent::{EpisodeObserver, PolicyKind, PolicyOptions};
 use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods};
-use oracle::ExactSolver;
-use oracle::towers::MovePlanner;
+use oracle::PlannerKind;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sim::seeding::episode_seed;
 use sim::{Action, Env, EnvConfig, Grid, Observation, Step};
 
 use crate::boundary::{OrValueError, guard, raise_signal, signal_checker, value_error};
-use crate::config::{self, ObsKind, env_config};
+use crate::config::{self, ObsKind, World};
 use crate::observe;
 
 /// Steps of episodes, column by column.
@@ -199,9 +198,10 @@ impl EpisodeObserver for Columns {
 
 /// Expert episodes as arrays for behaviour cloning or DQfD: episode `k` starts from
 /// `reset(episode_seed(seed, k))`, the start `blockstack run --seed SEED` plays, and the
-/// expert (`exact`: shortest plans; `oracle`) acts until the goal holds. In the side view
-/// (`view="side"`) `exact` plays the fewest gripper steps and `oracle` the near-optimal
-/// block-move planner carried out by the gripper.
+/// expert acts until the goal holds, as `blockstack run --agent EXPERT` plays it: a planner
+/// named as `oracle::PlannerKind` names it (`exact`: the fewest gripper steps in either
+/// view; `oracle`; in the side view `exact-moves` and `near-optimal`, block-move plans
+/// carried out by the gripper).
 ///
 /// Keys: `observations`, `next_observations` (`(T, *obs shape)`, or dicts of arrays for
 /// `state`), `actions` (int64), `rewards` (float64), `terminations`, `truncations`,
@@ -209,50 +209,23 @@ impl EpisodeObserver for Columns {
 /// episode of each step), `action_masks` (int8, `(T, 5 + N)`, the legal actions in each
 /// observation).
 #[pyfunction]
-#[pyo3(signature = (episodes, expert="exact", blocks=3, seed=0, obs="planes", goal=None, grid=(7, 7), reward=None, backend="physics", horizon=1000, profile="spec", view="top"))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (episodes, world, expert="exact", seed=0, obs="planes"))]
 pub fn demonstrations<'py>(
     py: Python<'py>,
     episodes: u64,
+    world: World,
     expert: &str,
-    blocks: usize,
     seed: u64,
     obs: &str,
-    goal: Option<&str>,
-    grid: (usize, usize),
-    reward: Option<&str>,
-    backend: &str,
-    horizon: u32,
-    profile: &str,
-    view: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let kind = config::obs_kind(obs)?;
-    let config = env_config(
-        blocks,
-        goal,
-        grid,
-        reward,
-        backend,
-        horizon,
-        profile,
-        config::PlayRules {
-            view: Some(view),
-            ..config::PlayRules::default()
-        },
-    )?;
-    let side = config.view == sim::View::Side;
-    let mut policy: Box<dyn Policy + Send> = match expert {
-        "exact" => Box::new(ExactPolicy::with_planner(
-            ExactSolver::new(config.grid).with_view(config.view),
-        )),
-        "oracle" if side => Box::new(TowersPolicy::new(MovePlanner::NearOptimal)),
-        "oracle" => Box::new(OraclePolicy::new(config.grid)),
-        _ => {
-            return Err(value_error(format!(
-                "cannot read expert from {expert:?}: choose exact or oracle"
-            )));
-        }
-    };
+    let config = world.config()?;
+    let blocks = config.blocks;
+    // The experts are the planners, by the names `blockstack run --agent` gives them.
+    let expert: PlannerKind = expert.parse().or_value_error()?;
+    let mut policy = PolicyKind::from(expert)
+        .expert(&config, &PolicyOptions::default())
+        .or_value_error()?;
     let columns = py.detach(|| {
         guard(|| {
             // Ctrl-C stops a long run: the checker looks for signals at most every 100 ms,

@@ -6,7 +6,7 @@ use pyo3::types::{PyBool, PyTuple};
 use sim::{Action, BlockId, BlockMove, Cell, Env, Observation, State, Termination, View};
 
 use crate::boundary::{OrValueError, guard, value_error};
-use crate::config::{self, ObsKind, env_config, goal_from};
+use crate::config::{self, ObsKind, World, goal_from};
 use crate::observe;
 
 /// The most block moves `actions="moves"` numbers: its mask is one byte per move at every
@@ -89,28 +89,13 @@ impl NativeEnv {
 
 #[pymethods]
 impl NativeEnv {
-    /// An environment of the given world; a `ValueError` with the crate's message for a
-    /// config that cannot make one.
+    /// An environment of `world` (the world keywords, [`World`]) showing `obs`, acting with
+    /// `actions`; a `ValueError` with the crate's message for a config that cannot make one.
     #[new]
-    #[pyo3(signature = (blocks=3, goal=None, grid=(7, 7), reward=None, backend="physics", horizon=1000, profile="spec", obs="planes", protocol=None, start=None, view=None, actions="gripper"))]
-    #[allow(clippy::too_many_arguments)]
-    fn new(
-        blocks: usize,
-        goal: Option<&str>,
-        grid: (usize, usize),
-        reward: Option<&str>,
-        backend: &str,
-        horizon: u32,
-        profile: &str,
-        obs: &str,
-        protocol: Option<&str>,
-        start: Option<&str>,
-        view: Option<&str>,
-        actions: &str,
-    ) -> PyResult<Self> {
+    #[pyo3(signature = (world, obs="planes", actions="gripper"))]
+    fn new(world: World, obs: &str, actions: &str) -> PyResult<Self> {
         let kind = config::obs_kind(obs)?;
-        let rules = config::PlayRules { protocol, start, view };
-        let config = env_config(blocks, goal, grid, reward, backend, horizon, profile, rules)?;
+        let config = world.config()?;
         let moves = match actions {
             "gripper" => false,
             "moves" if config.view == View::Side => true,

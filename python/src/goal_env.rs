@@ -8,21 +8,36 @@
 
 use pyo3::prelude::*;
 use sim::reward::Transition;
-use sim::{Action, BlockId, Cell, Goal, Grid, RewardModel, State};
+use sim::{Action, BlockId, Cell, Goal, Grid, RewardModel, State, View};
 
 use crate::boundary::{OrValueError, guard, value_error};
 use crate::env::state_from;
 
-/// The goal standing in the state of `cells` (every block's `(x, y)`) and `held`, bottom to
-/// top, or `-1` for every block when none does.
+/// The goal standing in the state of `cells` (every block's `(x, y)`) and `held` in `view`
+/// (`top` or `side`, where a stack stands on the table and holds no held block), bottom to
+/// top, or `-1` for every block when none does: the stack whose goal
+/// [`sim::Goal::holds_in`] that state, as the environment's reward and termination see it.
 #[pyfunction]
-#[pyo3(signature = (cells, held=None))]
-pub fn achieved_goal(cells: Vec<(u16, u16)>, held: Option<u16>) -> PyResult<Vec<i64>> {
+#[pyo3(signature = (cells, held=None, view="top"))]
+pub fn achieved_goal(cells: Vec<(u16, u16)>, held: Option<u16>, view: &str) -> PyResult<Vec<i64>> {
     let state = state_from(&cells, held)?;
-    Ok(match Goal::standing(&state) {
+    let view: View = view.parse().or_value_error()?;
+    Ok(match Goal::standing(&state).filter(|g| g.holds_in(view, &state)) {
         Some(goal) => goal.order().iter().map(|b| i64::from(b.0)).collect(),
         None => vec![-1; cells.len()],
     })
+}
+
+/// A `ValueError` unless `goal` is a goal a goal environment can relabel: one stack of all
+/// `blocks` blocks. Its achieved goal is the stack standing, one array of block ids, which a
+/// goal of towers (`0,1/2`, blocks free) is not: the environment would pay for a goal that
+/// `compute_reward` never sees reached.
+#[pyfunction]
+pub fn check_stack_goal(goal: &str, blocks: usize) -> PyResult<()> {
+    let goal = Goal::parse(goal, Some(blocks)).or_value_error()?;
+    goal.one_tower("a goal environment (blockstack/Stack-v0 plays goals of towers)")
+        .or_value_error()?;
+    Ok(())
 }
 
 /// `(reached, missed)`: the reward model `reward`'s reward for a step of a world of `blocks`

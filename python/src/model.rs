@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use agent::eval::EvalPlan;
+use agent::eval::EvalOverrides;
 use agent::rollout::policy_rng;
 use neural::AnyModel;
 use pyo3::prelude::*;
@@ -12,6 +12,7 @@ use sim::seeding::SimRng;
 use sim::{Goal, Observation, State};
 
 use crate::boundary::{OrValueError, guard, raise_signal, signal_checker};
+use crate::config::World;
 use crate::env::state_from;
 use crate::observe;
 
@@ -72,6 +73,14 @@ impl NativeModel {
         Ok(d)
     }
 
+    /// A `ValueError` unless `world` (the world keywords) is one the model plays: its grid,
+    /// blocks and view, as `blockstack run --model` refuses any other.
+    fn check_world(&self, world: World) -> PyResult<()> {
+        let config = world.config()?;
+        self.model.check_world(config.grid, config.blocks).or_value_error()?;
+        self.model.check_view(config.view).or_value_error()
+    }
+
     /// Starts the policy's generator for an episode reset with `seed`, as `blockstack run`
     /// does: from then on the model breaks ties (and draws random actions) as the CLI would
     /// in that episode.
@@ -127,15 +136,18 @@ impl NativeModel {
         backend: &str,
         horizon: u32,
     ) -> PyResult<String> {
-        let blocks = self.model.blocks();
-        let goals = match goals {
-            Some(text) => Goal::parse_list(text, blocks).or_value_error()?,
-            None => Goal::all_in(self.model.world().view, blocks).or_value_error()?,
+        let overrides = EvalOverrides {
+            goals: goals
+                .map(|text| Goal::parse_list(text, self.model.blocks()))
+                .transpose()
+                .or_value_error()?,
+            episodes,
+            seed,
+            backend: Some(backend.parse().or_value_error()?),
+            horizon: Some(horizon),
+            ..EvalOverrides::default()
         };
-        let mut plan: EvalPlan = self.model.eval_plan(goals, episodes, seed);
-        plan.world.backend = backend.parse().or_value_error()?;
-        plan.world.horizon = horizon;
-        plan.world.validate().or_value_error()?;
+        let plan = self.model.eval_plan_with(&overrides).or_value_error()?;
         py.detach(|| {
             guard(|| {
                 let mut signal = None;

@@ -2,24 +2,26 @@
 //! the top view; in the side view, in block moves by the block-move planners, or in gripper
 //! steps by the exact solver's side-view search or a block-move plan carried out.
 
-use oracle::towers::{MovePlanner, Place, gripper_actions, plan_side};
-use oracle::{ExactSolver, Oracle, Planner};
+use oracle::towers::Place;
+use oracle::{Cost, CountedPlan, ExactSolver, PlannerKind};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use sim::{Action, ActionProtocol, Goal, Grid, State, View};
+use sim::{Action, ActionProtocol, Grid, View};
 
 use crate::boundary::{OrValueError, guard, value_error};
 use crate::config::goal_from;
 use crate::env::state_from;
 
 /// A plan from the state where block `i` stands on `cells[i]` (and `held` is held) to
-/// `goal`. In the top view, a list of action indices: a shortest one by the exact solver
-/// (`"exact"`) under `protocol`, or the oracle's (`"oracle"`); empty when the goal holds
-/// already. In the side view (`view="side"`), counted in `cost`: `"moves"` (the default) is
-/// a list of block moves, each `{"block": B, "onto": "table" | C}`, the fewest (`"exact"`)
-/// or the near-optimal planner's (`"near-optimal"`, or `"oracle"`); `"steps"` a list of
-/// action indices, the fewest gripper steps (`"exact"`) or the near-optimal plan carried
-/// out by the gripper; as `blockstack solve --view side --cost ... --json` prints them.
+/// `goal` by the planner named `solver` (`oracle::PlannerKind`, the names `blockstack solve
+/// --solver` takes). In the top view, a list of action indices: a shortest one by the exact
+/// solver (`"exact"`) under `protocol`, or the oracle's (`"oracle"`); empty when the goal
+/// holds already. In the side view (`view="side"`), counted in `cost`: `"moves"` (the
+/// default) is a list of block moves, each `{"block": B, "onto": "table" | C}`, the fewest
+/// (`"exact"` or `"exact-moves"`) or the near-optimal planner's (`"near-optimal"`, or
+/// `"oracle"`); `"steps"` a list of action indices, the fewest gripper steps (`"exact"`)
+/// or a block-move plan carried out by the gripper; as `blockstack solve --view side --cost
+/// ... --json` prints them.
 #[pyfunction]
 #[pyo3(signature = (cells, goal, held=None, grid=(7, 7), solver="exact", protocol="free", view="top", cost=None))]
 #[allow(clippy::too_many_arguments)]
@@ -40,77 +42,37 @@ pub fn solve<'py>(
     state.check_fits(grid).or_value_error()?;
     goal.check_fits(grid).or_value_error()?;
     let protocol: ActionProtocol = protocol.parse().or_value_error()?;
-    let steps = match cost {
-        None => None,
-        Some("steps") => Some(true),
-        Some("moves") => Some(false),
-        Some(other) => {
-            return Err(value_error(format!(
-                "cannot read cost from {other:?}: choose steps or moves"
-            )));
-        }
+    let planner: PlannerKind = solver.parse().or_value_error()?;
+    let view: View = view.parse().or_value_error()?;
+    let cost = match cost {
+        Some(name) => name.parse::<Cost>().or_value_error()?,
+        None => Cost::default_in(view),
     };
-    if view.parse::<View>().or_value_error()? == View::Side {
-        View::Side.check_state(&state).or_value_error()?;
-        if steps == Some(true) {
-            let actions = py.detach(|| guard(|| side_steps(grid, &state, &goal, solver)))?;
-            return indices(py, &actions);
-        }
-        let plan = py.detach(|| guard(|| plan_side(move_planner(solver)?, grid, &state, &goal).or_value_error()))?;
-        let moves = plan
-            .moves
-            .iter()
-            .map(|m| {
-                let d = PyDict::new(py);
-                d.set_item("block", m.block)?;
-                match m.to {
-                    Place::Table => d.set_item("onto", "table")?,
-                    Place::On(b) => d.set_item("onto", b)?,
-                }
-                Ok(d)
-            })
-            .collect::<PyResult<Vec<_>>>()?;
-        return moves.into_pyobject(py).map(|l| l.into_any());
-    }
-    if steps == Some(false) {
+    if view == View::Top && cost == Cost::Moves {
         return Err(value_error(
             "cost=\"moves\" counts block moves, which the side view plans: pass view=\"side\"",
         ));
     }
-    let planner: Box<dyn Planner + Send + Sync> = match solver {
-        "exact" => Box::new(ExactSolver::new(grid).with_protocol(protocol)),
-        "oracle" => Box::new(Oracle::new(grid).with_protocol(protocol)),
-        _ => {
-            return Err(value_error(format!(
-                "cannot read solver from {solver:?}: choose exact or oracle"
-            )));
-        }
-    };
-    let actions = py.detach(|| guard(|| planner.plan(&state, &goal).or_value_error()))?;
-    indices(py, &actions.actions)
-}
-
-/// The side view's block-move planner named `solver` (`"oracle"` is the near-optimal one,
-/// as the side view's `--agent oracle` plays it).
-fn move_planner(solver: &str) -> PyResult<MovePlanner> {
-    match solver {
-        "oracle" => Ok(MovePlanner::NearOptimal),
-        _ => solver.parse().or_value_error(),
-    }
-}
-
-/// A side-view plan in gripper steps: the fewest (`"exact"`), or the near-optimal block-move
-/// plan carried out by the gripper.
-fn side_steps(grid: Grid, state: &State, goal: &Goal, solver: &str) -> PyResult<Vec<Action>> {
-    match move_planner(solver)? {
-        MovePlanner::Exact => ExactSolver::new(grid)
-            .with_view(View::Side)
-            .solve(state, goal)
-            .map(|plan| plan.actions)
-            .or_value_error(),
-        MovePlanner::NearOptimal => {
-            let moves = plan_side(MovePlanner::NearOptimal, grid, state, goal).or_value_error()?;
-            gripper_actions(grid, state, &moves).or_value_error()
+    view.check_state(&state).or_value_error()?;
+    let solver = ExactSolver::new(grid).with_protocol(protocol).with_view(view);
+    let plan = py.detach(|| guard(|| planner.plan(&solver, cost, &state, &goal).or_value_error()))?;
+    match plan {
+        CountedPlan::Steps(plan) => indices(py, &plan.actions),
+        CountedPlan::Moves(plan) => {
+            let moves = plan
+                .moves
+                .iter()
+                .map(|m| {
+                    let d = PyDict::new(py);
+                    d.set_item("block", m.block)?;
+                    match m.to {
+                        Place::Table => d.set_item("onto", "table")?,
+                        Place::On(b) => d.set_item("onto", b)?,
+                    }
+                    Ok(d)
+                })
+                .collect::<PyResult<Vec<_>>>()?;
+            moves.into_pyobject(py).map(|l| l.into_any())
         }
     }
 }

@@ -2,17 +2,26 @@
 //! flags of `blockstack train`, for Python and the Ray sweep.
 
 use std::path::PathBuf;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
-use agent::eval::EvalPlan;
-use agent::{Assist, TrainConfig, TrainOverrides, Trainer};
-use oracle::ExactSolver;
+use agent::eval::EvalOverrides;
+use agent::{Assist, TrainConfig, TrainHooks, TrainOverrides, Trainer};
+use neural::AnyModel;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use sim::{Backend, EnvConfig, Goal, RewardModel, View};
+use sim::{Backend, Goal, RewardModel, View};
 
 use crate::boundary::{OrValueError, guard, raise_signal, signal_checker, value_error};
 use crate::config;
+
+/// Training hooks that stop the run when Ctrl-C is seen ([`signal_checker`]).
+struct Interruptible<F>(F);
+
+impl<F: FnMut() -> agent::Result<()>> TrainHooks for Interruptible<F> {
+    fn after_game(&mut self, _: &agent::Progress) -> agent::Result<()> {
+        (self.0)()
+    }
+}
 
 /// A setting given by name (`None` keeps the profile's and preset's).
 fn named<T: std::str::FromStr>(name: Option<&str>) -> PyResult<Option<T>>
@@ -115,53 +124,45 @@ pub fn train<'py>(
     let (trained, seconds, evaluation) = py.detach(|| {
         guard(|| {
             let clock = Instant::now();
-            // `agent::train`, a game at a time, so that Ctrl-C (looked at every 50 ms, the
-            // GIL taken back only for that) stops a long run with KeyboardInterrupt.
+            // The run's one loop (`Trainer::run_until`), with Ctrl-C looked for every 100 ms
+            // (the GIL taken back only for that): it stops a long run with KeyboardInterrupt.
             let mut trainer = Trainer::new(config.clone()).or_value_error()?;
-            let mut looked = Instant::now();
-            for _ in 0..config.games {
-                trainer.play_games(1, None).or_value_error()?;
-                if looked.elapsed() >= Duration::from_millis(50) {
-                    Python::attach(|py| py.check_signals())?;
-                    looked = Instant::now();
-                }
-            }
+            let mut signal = None;
+            let ran = trainer.run_until(config.games, &mut Interruptible(signal_checker(&mut signal)));
+            ran.map_err(|e| raise_signal(signal, e))?;
             let trained = trainer.finish();
             let seconds = clock.elapsed().as_secs_f64();
+            // Evaluated as `blockstack eval` and `Model.evaluate` evaluate a model file (the
+            // one plan builder, `AnyModel::eval_plan_with`): in the training world, on its
+            // backend, games ending at the goal within the paper's 1000 steps.
+            let model = AnyModel::Q(Box::new(trained.agent));
             let evaluation = if eval_episodes > 0 {
-                // The library's one evaluation, in the training world with games that end
-                // at the goal within the paper's 1000 steps.
-                let plan = EvalPlan {
-                    world: EnvConfig {
-                        horizon: sim::DEFAULT_HORIZON,
-                        ..config.world.clone()
-                    },
-                    profile: config.profile,
-                    goals: eval_goals,
-                    episodes: eval_episodes,
-                    seed: eval_seed,
-                };
-                let solver = ExactSolver::for_world(&plan.world);
-                let model = &trained.agent;
-                let name = model.name();
+                let plan = model
+                    .eval_plan_with(&EvalOverrides {
+                        goals: Some(eval_goals),
+                        episodes: eval_episodes,
+                        seed: eval_seed,
+                        backend: Some(config.world.backend),
+                        ..EvalOverrides::default()
+                    })
+                    .or_value_error()?;
                 let mut signal = None;
-                let evaluated = agent::eval::evaluate(
-                    &plan,
-                    name,
-                    String::new(),
-                    eval_epsilon,
-                    &solver,
-                    &mut || Ok(Box::new(model.policy(eval_epsilon)?)),
-                    &mut signal_checker(&mut signal),
-                );
+                let evaluated = model.evaluate(&plan, "", eval_epsilon, &mut signal_checker(&mut signal));
                 Some(evaluated.map_err(|e| raise_signal(signal, e))?.report)
             } else {
                 None
             };
+            let AnyModel::Q(agent) = model else {
+                unreachable!("made a tabular model above")
+            };
             if let Some(out) = &out_path {
-                let bytes = trained.agent.to_bytes().map_err(value_error)?;
+                let bytes = agent.to_bytes().map_err(value_error)?;
                 out.write(&bytes).or_value_error()?;
             }
+            let trained = agent::Trained {
+                agent: *agent,
+                report: trained.report,
+            };
             Ok((trained, seconds, evaluation))
         })
     })?;

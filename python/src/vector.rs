@@ -11,7 +11,7 @@ use pyo3::types::{PyDict, PyList};
 use sim::{Action, Autoreset, Observation, VecEnv, VecStep};
 
 use crate::boundary::{OrValueError, guard, value_error};
-use crate::config::{self, ObsKind, env_config};
+use crate::config::{self, ObsKind, World};
 use crate::observe;
 
 /// The observation buffer(s) of a batch: one array for `planes` and `pixels`, three for
@@ -291,22 +291,14 @@ impl NativeVecEnv {
     /// `num_envs` environments of one world, stepped on `threads` threads (1: on the
     /// caller's thread; 0: one per core), with autoreset `next-step` or `same-step`.
     #[new]
-    #[pyo3(signature = (num_envs, blocks=3, goal=None, grid=(7, 7), reward=None, backend="physics", horizon=1000, profile="spec", obs="planes", threads=1, autoreset="next-step", view=None))]
-    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (num_envs, world, obs="planes", threads=1, autoreset="next-step"))]
     fn new(
         py: Python<'_>,
         num_envs: usize,
-        blocks: usize,
-        goal: Option<&str>,
-        grid: (usize, usize),
-        reward: Option<&str>,
-        backend: &str,
-        horizon: u32,
-        profile: &str,
+        world: World,
         obs: &str,
         threads: usize,
         autoreset: &str,
-        view: Option<&str>,
     ) -> PyResult<Self> {
         let kind = config::obs_kind(obs)?;
         let mode = match autoreset {
@@ -321,19 +313,8 @@ impl NativeVecEnv {
         if num_envs == 0 {
             return Err(value_error("a vector environment needs at least one environment"));
         }
-        let config = env_config(
-            blocks,
-            goal,
-            grid,
-            reward,
-            backend,
-            horizon,
-            profile,
-            config::PlayRules {
-                view,
-                ..config::PlayRules::default()
-            },
-        )?;
+        let config = world.config()?;
+        let blocks = config.blocks;
         kind.check(config.grid, config.blocks).or_value_error()?;
         let vec = guard(|| VecEnv::new(config.clone(), num_envs, threads).or_value_error())?.with_autoreset(mode);
         let n = blocks;

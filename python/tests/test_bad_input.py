@@ -90,6 +90,29 @@ def test_integers_out_of_range_are_value_errors_naming_the_argument(call, name):
         call()
 
 
+@pytest.mark.parametrize(
+    "call, says",
+    [
+        # Each of these raised OverflowError or TypeError from the native side, naming nothing.
+        (lambda: blockstack.solve([(300, 0), (1, 0)], "0,1"), "cells\\[0\\] x"),
+        (lambda: blockstack.solve([(0, 0), (1, 0)], "0,1", held=-1), "held"),
+        (lambda: blockstack.solve([(0, 0), (1, 0)], "0,1", solver=3), "solver"),
+        (lambda: blockstack.solve([(0, 0), ("a", 0)], "0,1"), "cells\\[1\\] x"),
+        (lambda: blockstack.episode_seed(-1, 0), "base"),
+        (lambda: blockstack.episode_seed(0, 2**64), "index"),
+        (lambda: blockstack.StackEnv(obs=3), "obs"),
+        (lambda: blockstack.StackEnv(backend=None), "backend"),
+        (lambda: blockstack.demonstrations(1, expert=None), "expert"),
+        (lambda: blockstack.read_recording(3), "path"),
+        (lambda: blockstack.read_recording("x.jsonl", obs=3), "obs"),
+        (lambda: blockstack.load(3), "path"),
+    ],
+)
+def test_wrong_types_are_value_errors_naming_the_argument(call, says):
+    with pytest.raises(ValueError, match=says):
+        call()
+
+
 def test_an_action_out_of_range_says_so():
     env = blockstack.StackEnv()
     env.reset(seed=1)
@@ -223,3 +246,34 @@ def test_ctrl_c_stops_a_long_native_call(call):
     run = run_python(script)
     assert run.returncode == 0, run.stderr
     assert "interrupted" in run.stdout, run.stdout
+
+
+@pytest.mark.parametrize(
+    "cli_args, python_call",
+    [
+        (["run", "--grid", "7by7"], lambda: blockstack.StackEnv(grid="7by7")),
+        (["run", "--view", "front"], lambda: blockstack.StackEnv(view="front")),
+        (["run", "--backend", "box2d"], lambda: blockstack.StackEnv(backend="box2d")),
+        (["run", "--reward", "lots"], lambda: blockstack.StackEnv(reward="lots")),
+        (["run", "--view", "side", "--goal", "0,1//2"], lambda: blockstack.BlocksWorldEnv(goal="0,1//2")),
+        (["run", "--profile", "paper"], lambda: blockstack.StackEnv(profile="paper")),
+        (
+            ["solve", "--start", "0,0;3,0;5,2", "--goal", "1,0,2", "--solver", "greedy"],
+            lambda: blockstack.solve([(0, 0), (3, 0), (5, 2)], "1,0,2", solver="greedy"),
+        ),
+        (
+            ["solve", "--start", "0,0;3,0;5,2", "--goal", "1,0,2", "--solver", "near-optimal"],
+            lambda: blockstack.solve([(0, 0), (3, 0), (5, 2)], "1,0,2", solver="near-optimal"),
+        ),
+    ],
+)
+def test_python_and_the_cli_say_the_same_of_the_same_bad_input(cli, cli_args, python_call):
+    import subprocess
+
+    with pytest.raises(ValueError) as python:
+        python_call()
+    with pytest.raises(subprocess.CalledProcessError) as run:
+        cli(*cli_args)
+    assert run.value.returncode == 2
+    assert run.value.stderr.count("\n") == 1, run.value.stderr
+    assert str(python.value) in run.value.stderr, (str(python.value), run.value.stderr)

@@ -95,3 +95,40 @@ def test_stable_baselines3_dqn_with_her_runs_unchanged():
     obs, _ = env.reset(seed=1)
     action, _ = model.predict(obs, deterministic=True)
     assert env.action_space.contains(int(action))
+
+
+def test_a_goal_of_towers_is_refused_rather_than_relabelled_wrongly():
+    """A goal of towers leaves blocks free, so the stack standing (the achieved goal) is not
+    it: the environment would pay 10 where ``compute_reward`` gives 0. Refused, in one line."""
+    for goal in ["0,1/2", "0,1/", "2/1/0"]:
+        with pytest.raises(ValueError, match="not one tower of every block"):
+            StackGoalEnv(blocks=3, goal=goal, view="side")
+
+
+@pytest.mark.parametrize("view", ["top", "side"])
+def test_the_env_and_compute_reward_agree_in_either_view(view):
+    env = StackGoalEnv(blocks=2, view=view, backend="grid", horizon=60)
+    rng = np.random.default_rng(1)
+    reached = 0
+    for episode in range(40):
+        obs, info = env.reset(seed=episode)
+        for _ in range(60):
+            # A legal action: the side view has rules of its own (only a clear block is picked).
+            action = int(rng.choice(np.flatnonzero(info["action_mask"])))
+            obs, r, terminated, truncated, info = env.step(action)
+            args = (obs["achieved_goal"], obs["desired_goal"], info)
+            assert r == env.compute_reward(*args)
+            assert terminated == env.compute_terminated(*args) == info["is_success"]
+            if terminated or truncated:
+                reached += terminated
+                break
+    assert reached > 0
+
+
+def test_compute_reward_refuses_goals_that_are_not_block_ids():
+    env = StackGoalEnv(blocks=3)
+    goal = np.array([0, 1, 2])
+    assert env.compute_reward(goal.astype(np.float32), goal, {}) == 10.0  # a buffer's floats
+    for bad in [goal + 0.5, goal.astype(bool), np.array(["0", "1", "2"])]:
+        with pytest.raises(ValueError, match="whole numbers"):
+            env.compute_reward(bad, goal, {})

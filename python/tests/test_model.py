@@ -2,7 +2,9 @@
 as the CLI plays and evaluates it."""
 
 import json
+import os
 
+import numpy as np
 import pytest
 
 import blockstack
@@ -106,3 +108,51 @@ def test_predict_reads_the_state_observation(role_model):
     obs, _ = env.reset(seed=1)
     with pytest.raises(ValueError, match="obs='state'"):
         model.predict(obs)
+
+
+def test_a_model_refuses_an_environment_of_another_world(role_model, tmp_path):
+    """``make_env`` with a grid, block count or view the model never learnt is refused, as
+    ``blockstack run --model`` refuses it, instead of playing a world it does not know."""
+    model = blockstack.load(role_model)
+    for overrides, says in [
+        ({"grid": (5, 5)}, "the agent plays 3 blocks on a 7x7 grid, the world has 3 blocks on a 5x5 grid"),
+        ({"blocks": 2, "goal": "1,0"}, "the world has 2 blocks"),
+        ({"view": "side"}, "the model learnt the top view; it cannot play the side view"),
+    ]:
+        with pytest.raises(ValueError, match=says):
+            model.make_env(**overrides)
+    side = tmp_path / "side.safetensors"
+    blockstack.train(view="side", backend="grid", games=5, out=str(side))
+    with pytest.raises(ValueError, match="the model learnt the side view; it cannot play the top view"):
+        blockstack.load(side).make_env(view="top")
+
+
+def test_predict_refuses_fractions_instead_of_rounding_them(role_model):
+    model = blockstack.load(role_model)
+    obs, _ = model.make_env(backend="grid").reset(seed=1)
+    model.predict({k: np.asarray(v, dtype=float) for k, v in obs.items()})  # whole numbers as floats: read
+    bad = dict(obs, blocks=obs["blocks"] + 0.5)
+    with pytest.raises(ValueError, match="observation\\['blocks'\\] holds whole numbers"):
+        model.predict(bad)
+    with pytest.raises(ValueError, match="observation\\['held'\\]"):
+        model.predict(dict(obs, held=True))
+
+
+def test_a_fifo_is_refused_at_once_not_waited_on(tmp_path):
+    """A pipe with no writer would block ``open`` forever (and ignore Ctrl-C): it is
+    refused before it is opened, as the CLI refuses it."""
+    import subprocess
+    import sys
+
+    fifo = tmp_path / "model.safetensors"
+    os.mkfifo(fifo)
+    script = (
+        "import blockstack, sys\n"
+        "try:\n"
+        f"    blockstack.load({str(fifo)!r})\n"
+        "except ValueError as e:\n"
+        "    print(e)\n"
+    )
+    run = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
+    assert run.returncode == 0, run.stderr
+    assert "a pipe or a device is not supported as a model file" in run.stdout, run.stdout

@@ -16,7 +16,7 @@ import pytest
 import blockstack
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
-FIXTURES = ROOT / "tests" / "fixtures"
+FIXTURES = ROOT / "testkit" / "fixtures"
 OBS = ("planes", "role-planes", "state", "frame", "paper-screen")
 
 

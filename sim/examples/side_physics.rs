@@ -19,7 +19,9 @@
 use std::time::{Duration, Instant};
 
 use rand::RngExt;
-use sim::{Action, Backend, BlockId, BlockMove, Cell, Env, EnvConfig, Grid, GridWorld, PhysicsWorld, State, View, World};
+use sim::{
+    Action, Backend, BlockId, BlockMove, Cell, Env, EnvConfig, Grid, GridWorld, PhysicsWorld, State, View, World,
+};
 
 /// The tower heights tried.
 const HEIGHTS: [usize; 6] = [10, 25, 50, 75, 100, 150];
@@ -51,7 +53,9 @@ fn main() -> Result<(), sim::SimError> {
 
     println!();
     println!("Random legal block moves carried out by the gripper, physics against grid (seed {seed})");
-    println!("| blocks | grid | moves | gripper steps | same step | physics errors | ms per move, physics | ms per move, grid |");
+    println!(
+        "| blocks | grid | moves | gripper steps | same step | physics errors | ms per move, physics | ms per move, grid |"
+    );
     println!("|---:|---|---:|---:|---:|---:|---:|---:|");
     for blocks in AGREEMENT_BLOCKS {
         let a = agreement(blocks, moves, seed)?;
@@ -206,7 +210,8 @@ fn agreement(blocks: usize, moves: u64, seed: u64) -> Result<Agreement, sim::Sim
             }
             Err(e) => {
                 a.errors += 1;
-                a.first_difference.get_or_insert_with(|| format!("episode {episode}, {mv}: {e}"));
+                a.first_difference
+                    .get_or_insert_with(|| format!("episode {episode}, {mv}: {e}"));
                 fresh = true;
             }
         }

@@ -10,10 +10,8 @@ use crate::error::{Result, SimError};
 use crate::goal::Goal;
 use crate::grid::{Cell, Grid};
 use crate::grid_world::GridWorld;
-use crate::obs_kind::ObsKind;
 use crate::observation::Observation;
 use crate::physics_world::PhysicsWorld;
-use crate::profile::Profile;
 use crate::protocol::{ActionMask, ActionProtocol};
 use crate::reward::{RewardModel, Transition};
 use crate::seeding::{self, SimRng};
@@ -61,7 +59,9 @@ pub enum GoalSpec {
     Random,
 }
 
-/// Everything that defines an environment.
+/// Everything that defines an environment: the world's rules and size. What an agent outside
+/// the library is shown of it (`sim::ObsKind`) is that agent's choice, not the world's: a
+/// config written when it still held one (`"obs"`) reads back, the entry ignored.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EnvConfig {
     /// The grid (default 7 x 7).
@@ -85,10 +85,6 @@ pub struct EnvConfig {
     /// What ends an episode before the horizon (default: the goal holds).
     #[serde(default)]
     pub termination: Termination,
-    /// The array an agent outside the library is shown (default `planes`): what Python's
-    /// environments return and what a network reads. The world's rules do not depend on it.
-    #[serde(default)]
-    pub obs: ObsKind,
     /// Which world (default `top`, the paper's): seen from above, or from the side with
     /// gravity and towers (docs/world.md, "The side view"). A config written before the side
     /// view existed reads back as the top view.
@@ -108,7 +104,6 @@ impl Default for EnvConfig {
             protocol: ActionProtocol::default(),
             start: StartRule::default(),
             termination: Termination::default(),
-            obs: ObsKind::default(),
             view: View::default(),
         }
     }
@@ -121,22 +116,6 @@ impl EnvConfig {
             blocks: goal.block_count(),
             goal: GoalSpec::Fixed(goal),
             ..Self::default()
-        }
-    }
-
-    /// The default config with `profile`'s protocol, start rule and reward.
-    pub fn for_profile(profile: Profile) -> Self {
-        Self::default().with_profile(profile)
-    }
-
-    /// This config with `profile`'s protocol, start rule and reward; everything else
-    /// (grid, blocks, goal, horizon, backend, termination) stays.
-    pub fn with_profile(self, profile: Profile) -> Self {
-        Self {
-            protocol: profile.protocol(),
-            start: profile.start_rule(),
-            reward: profile.reward(),
-            ..self
         }
     }
 

@@ -146,7 +146,7 @@ impl Goal {
         }
         let mut order = Vec::new();
         for part in text.split(',') {
-            let b = part.trim().parse::<usize>().map_err(|_| SimError::Parse {
+            let b = block_number(part).ok_or_else(|| SimError::Parse {
                 what: "goal",
                 text: text.to_string(),
                 reason: format!(
@@ -172,11 +172,26 @@ impl Goal {
     /// Reads a goal of towers, `"0,1,2/3,4"` ([`Goal::parse`]).
     fn parse_towers(text: &str, blocks: Option<usize>) -> Result<Goal> {
         let mut towers = Vec::new();
-        for part in text.split('/').map(str::trim).filter(|p| !p.is_empty()) {
+        let parts: Vec<&str> = text.split('/').map(str::trim).collect();
+        for (i, part) in parts.iter().enumerate() {
+            // One '/' at the end marks a goal whose unnamed blocks are free (`1,3,2/`); an
+            // empty tower anywhere else is a typo (`0,1//2`), not a goal.
+            if part.is_empty() && i + 1 == parts.len() && i > 0 {
+                continue;
+            }
+            if part.is_empty() {
+                return Err(SimError::Parse {
+                    what: "goal",
+                    text: text.to_string(),
+                    reason:
+                        "a tower is empty; write each tower bottom to top, towers separated by one '/', e.g. 0,1,2/3,4"
+                            .into(),
+                });
+            }
             let tower = part
                 .split(',')
                 .map(|b| {
-                    b.trim().parse::<usize>().map_err(|_| SimError::Parse {
+                    block_number(b).ok_or_else(|| SimError::Parse {
                         what: "goal",
                         text: text.to_string(),
                         reason: format!(
@@ -597,6 +612,16 @@ impl fmt::Debug for Goal {
     }
 }
 
+/// A block number as a goal writes it: decimal digits only, spaces around them allowed
+/// (`+1` or `1_0` are not block numbers, though Rust's integer parser would take the first).
+fn block_number(text: &str) -> Option<usize> {
+    let text = text.trim();
+    if text.is_empty() || !text.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    text.parse().ok()
+}
+
 impl std::str::FromStr for Goal {
     type Err = SimError;
 
@@ -706,5 +731,18 @@ mod tests {
             let held = Goal::standing(&stacked).is_some_and(|g| g == goal);
             assert_eq!(goal.holds(&stacked), held);
         }
+    }
+
+    /// Malformed goals are refused, not read as something else: an empty tower, a sign.
+    #[test]
+    fn malformed_goals_are_refused() {
+        for text in ["0,1//2", "+0,1/2", "/0,1", "0,+1,2", "0,1,2//", "/", "0, 1,-2"] {
+            let err = Goal::parse(text, Some(3)).unwrap_err().to_string();
+            assert!(err.contains(text), "{text}: {err}");
+        }
+        for (text, towers) in [("0,1/2", 2), ("0,1,2/", 1), (" 0 , 1 / 2 ", 2)] {
+            assert_eq!(Goal::parse(text, Some(3)).unwrap().towers().count(), towers, "{text}");
+        }
+        assert_eq!(Goal::parse("1, 0, 2", Some(3)).unwrap(), "1,0,2".parse().unwrap());
     }
 }

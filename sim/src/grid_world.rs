@@ -223,10 +223,10 @@ impl World for GridWorld {
         if let CellIndex::Side(columns) = &mut self.index {
             // A block picked leaves its column (it is clear: the top of it); a block let go
             // is counted again by `settle`, once it has come to rest.
-            if let Some(b) = held {
-                if self.state.held_block() != Some(b) {
-                    columns.heights[usize::from(self.state.cell(b).x)] -= 1;
-                }
+            if let Some(b) = held
+                && self.state.held_block() != Some(b)
+            {
+                columns.heights[usize::from(self.state.cell(b).x)] -= 1;
             }
         }
         self.state.set_held(held);

@@ -17,7 +17,7 @@
 //! Our world is the one docs/world.md sections 1-9 describe. The paper's experiments ran in the world its authors coded
 //! (docs/world.md section 10, with file:line citations of their repository), which differs
 //! in rules that an [`EnvConfig`] can switch one by one, or all at once with a [`Profile`]
-//! ([`EnvConfig::for_profile`]):
+//! ([`ProfileParts::apply`], [`Profile::world`]):
 //!
 //! - [`ActionProtocol`] ([`protocol`]): `free` (SPEC, every action legal) or `paper` (nothing
 //!   held: only Pick; holding: only the moves and Drop). The legal actions are an

@@ -12,6 +12,9 @@
 //! | reward | `sparse` | `paper-code` |
 //! | training games end | at the goal | at a step reward above 70 |
 //!
+//! A profile is applied to a world in one place, [`ProfileParts::apply`] ([`Profile::world`]
+//! is the default world under a profile).
+//!
 //! A run takes a profile's parts and then any part named on its own in its place
 //! (`--profile original --protocol free`): [`ProfileParts::overridden`] is that one
 //! resolution, which the CLI's commands and Python's environments both call.
@@ -67,6 +70,12 @@ impl Profile {
             Profile::Spec => RewardModel::default(),
             Profile::Original => RewardModel::PaperCode(PaperCode::default()),
         }
+    }
+
+    /// The default world ([`EnvConfig::default`]) under this profile's protocol, start rule
+    /// and reward ([`ProfileParts::apply`]).
+    pub fn world(self) -> EnvConfig {
+        ProfileParts::of(self).apply(EnvConfig::default())
     }
 
     /// What ends a training game: the goal, or (the authors' code) a step reward above 70.

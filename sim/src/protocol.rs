@@ -134,7 +134,7 @@ impl ActionMask {
     pub fn all(blocks: usize) -> ActionMask {
         let actions = Action::count(blocks);
         let mut words = InlineVec::from_elem(u64::MAX, words_for(actions));
-        if actions % 64 != 0 {
+        if !actions.is_multiple_of(64) {
             let last = words.len() - 1;
             words[last] = (1u64 << (actions % 64)) - 1;
         }

@@ -557,7 +557,7 @@ mod tests {
     use super::*;
 
     /// The trajectory files `blockstack run --trajectory` wrote at the release before this
-    /// reader served the commands (tests/fixtures/README.md).
+    /// reader served the commands (testkit/fixtures/README.md).
     const FIXTURES: [&str; 4] = [
         "trajectory.jsonl",
         "trajectory-original.jsonl",
@@ -566,10 +566,7 @@ mod tests {
     ];
 
     fn fixture(name: &str) -> String {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../tests/fixtures")
-            .join(name);
-        std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        testkit::fixture_text(name)
     }
 
     fn read(text: &str) -> Result<Vec<Episode>> {

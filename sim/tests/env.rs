@@ -396,3 +396,14 @@ fn vec_env_refuses_to_step_before_reset_and_steps_nothing() {
     assert_eq!(v.step(&[Action::Up, Action::Up]), Err(SimError::NotReset));
     assert!(v.envs().iter().all(|e| e.steps() == 0));
 }
+
+/// A world written while it still held the observation kind (`"obs"`, a consumer's choice)
+/// reads back, the entry ignored.
+#[test]
+fn a_world_that_named_its_observation_reads_back() {
+    let mut written = serde_json::to_value(EnvConfig::default()).unwrap();
+    assert!(written.get("obs").is_none());
+    written["obs"] = serde_json::json!("paper-screen");
+    let read: EnvConfig = serde_json::from_value(written).unwrap();
+    assert_eq!(read, EnvConfig::default());
+}

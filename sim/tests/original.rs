@@ -5,7 +5,7 @@
 use sim::reward::{PaperCode, Transition};
 use sim::{
     Action, ActionMask, ActionProtocol, Backend, BlockId, Cell, Env, EnvConfig, Goal, GoalSpec, Grid, Profile,
-    RewardModel, SimError, StartRule, State, Step, Termination, VecEnv, VecStep,
+    ProfileParts, RewardModel, SimError, StartRule, State, Step, Termination, VecEnv, VecStep,
 };
 
 fn goal(text: &str) -> Goal {
@@ -21,7 +21,7 @@ fn state(cells: &[(u16, u16)], held: Option<u16>) -> State {
 fn original(goal_text: &str, backend: Backend) -> Env {
     Env::new(EnvConfig {
         backend,
-        ..EnvConfig::with_goal(goal(goal_text)).with_profile(Profile::Original)
+        ..ProfileParts::of(Profile::Original).apply(EnvConfig::with_goal(goal(goal_text)))
     })
     .unwrap()
 }
@@ -165,7 +165,7 @@ fn paper_starts_meet_the_goal_at_the_expected_rate_and_end_on_the_first_action()
         let mut env = Env::new(EnvConfig {
             backend,
             blocks: 2,
-            ..EnvConfig::for_profile(Profile::Original)
+            ..Profile::Original.world()
         })
         .unwrap();
         let obs = env.reset(met[0]);
@@ -238,7 +238,7 @@ fn reward_above_ends_on_the_reward_not_on_the_goal() {
         let config = |termination| EnvConfig {
             backend,
             termination,
-            ..EnvConfig::with_goal(goal("0,1,2")).with_profile(Profile::Original)
+            ..ProfileParts::of(Profile::Original).apply(EnvConfig::with_goal(goal("0,1,2")))
         };
         // 1 stands on 0; 2 is held diagonally above 1. Left puts 2 on 1: d of (1, 2) falls
         // from 3125 to 625 (+1) and both pairs stand (+100): 101 > 70.
@@ -385,7 +385,7 @@ fn vec_env_masks_and_autoresets_under_paper() {
     let config = EnvConfig {
         backend: Backend::Grid,
         horizon: 3,
-        ..EnvConfig::with_goal(goal("0,1,2")).with_profile(Profile::Original)
+        ..ProfileParts::of(Profile::Original).apply(EnvConfig::with_goal(goal("0,1,2")))
     };
     for threads in [1, 2] {
         let mut v = VecEnv::new(config.clone(), 3, threads).unwrap();

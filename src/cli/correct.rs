@@ -57,7 +57,7 @@ pub fn correct(args: CorrectArgs) -> Result<()> {
     let agent = QAgent::load(&args.model)?;
     let profile = DemonstratorProfile::preset(args.demonstrator)?;
     let l = &args.learning;
-    let (world, rules_of) = session_world(&agent, l.profile, l.play, l.reward.as_deref())?;
+    let (world, rules_of) = session_world(&agent, l.profile, l.play, l.reward);
     let goals = demonstration_goals(args.goals.as_deref(), &world, rules_of)?;
     let config = CorrectionConfig {
         rule: Some(l.rule(rules_of)?),

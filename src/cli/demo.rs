@@ -80,7 +80,7 @@ pub struct LearningArgs {
     /// The reward the agent learns from: sparse, dense, paper, step-cost or paper-code
     /// [default: the one it was trained with, or the profile's]
     #[arg(long)]
-    pub reward: Option<String>,
+    pub reward: Option<sim::RewardModel>,
 }
 
 /// A `--margin`: a number, or none.
@@ -126,7 +126,7 @@ pub fn demo(args: DemoArgs) -> Result<()> {
     let agent = QAgent::load(&args.model)?;
     let record = record.as_ref().map(DemoWriter::append).transpose()?;
     let l = &args.learning;
-    let (world, profile) = session_world(&agent, l.profile, l.play, l.reward.as_deref())?;
+    let (world, profile) = session_world(&agent, l.profile, l.play, l.reward);
     let goals = demonstration_goals(args.goals.as_deref(), &world, profile)?;
     let session = CorrectionSession::new(
         agent,

@@ -8,14 +8,22 @@ use anyhow::{Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use neural::{DemoSource, DqnConfig, LossKind, NetKind, ObsKind, OptimizerKind, Phase, Progress, TdLoss};
-use sim::{Backend, Grid, RewardModel};
 
 use super::stdout::line;
 use super::train::parse_goals;
+use super::world::WorldArgs;
 
 /// Arguments of `blockstack dqn`. Every setting starts from a preset and may be changed.
 #[derive(Debug, Args)]
+#[command(mut_arg("blocks", |a| a.help("Number of blocks [default: 3]")))]
+#[command(mut_arg("grid", |a| a.help("Grid size, WxH [default: 7x7]")))]
+#[command(mut_arg("reward", |a| a.help("Reward model: sparse, dense, paper or step-cost [default: the preset's]")))]
+#[command(mut_arg("horizon", |a| a.help("Steps before a training game is cut off [default: the preset's]")))]
+#[command(mut_arg("backend", |a| a.help("World backend of the training games: grid (the same rules, faster) or physics [default: grid]")))]
+#[command(mut_arg("view", |a| a.help("The world: top only (a network learns the paper's world) [default: top]")))]
 pub struct DqnArgs {
+    #[command(flatten)]
+    pub world: WorldArgs,
     /// Start from this preset: paper (the paper's DQN on pixels), paper-dqfd (the same with
     /// DQfD on 500 exact-solver demonstrations), dqn-planes (ours, no demonstrations),
     /// dqfd-planes (ours with DQfD: the recommended recipe), her-planes (ours without
@@ -34,15 +42,9 @@ pub struct DqnArgs {
     /// are given).
     #[arg(long)]
     pub loss: Option<LossKind>,
-    /// Number of blocks.
-    #[arg(long, default_value_t = 3)]
-    pub blocks: usize,
     /// Goals to train on, separated by ':', e.g. 0,1,2:1,0,2 (default: every goal).
     #[arg(long)]
     pub goals: Option<String>,
-    /// Grid size, WxH.
-    #[arg(long, default_value = "7x7")]
-    pub grid: String,
     /// Environment steps of self-play.
     #[arg(long)]
     pub steps: Option<u64>,
@@ -56,9 +58,6 @@ pub struct DqnArgs {
     /// --record`) or a trajectory file (`run --trajectory`).
     #[arg(long)]
     pub demos_file: Option<PathBuf>,
-    /// Reward model: sparse, dense, paper or step-cost.
-    #[arg(long)]
-    pub reward: Option<String>,
     /// Discount factor.
     #[arg(long)]
     pub gamma: Option<f64>,
@@ -102,16 +101,10 @@ pub struct DqnArgs {
     /// Share of every self-play batch drawn from the demonstrations.
     #[arg(long)]
     pub demo_share: Option<f64>,
-    /// Steps before a training game is cut off.
-    #[arg(long)]
-    pub horizon: Option<u32>,
-    /// World backend of the training games: grid (default; the same rules, faster) or physics.
-    #[arg(long)]
-    pub backend: Option<String>,
     /// Action protocol: free (every action legal; default) or paper (pick only with nothing
     /// held, move or drop only while holding). Every choice is masked to the legal actions.
     #[arg(long)]
-    pub protocol: Option<String>,
+    pub protocol: Option<sim::ActionProtocol>,
     /// Seed of the weights, starts, demonstrations and every random choice.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -154,9 +147,15 @@ impl DqnArgs {
                 .into()
             }
         };
-        let mut c = DqnConfig::preset(&preset, self.blocks)?;
-        c.world.grid = self.grid.parse::<Grid>()?;
-        c.goals = parse_goals(self.goals.as_deref(), self.blocks)?;
+        let w = &self.world;
+        anyhow::ensure!(
+            w.view.is_none_or(|v| v == sim::View::Top),
+            "--view side: a network learns the top view only (train a tabular learner for the side view: blockstack train --view side)"
+        );
+        let blocks = w.blocks.unwrap_or(3);
+        let mut c = DqnConfig::preset(&preset, blocks)?;
+        c.world.grid = w.grid.unwrap_or_default();
+        c.goals = parse_goals(self.goals.as_deref(), blocks)?;
         c.seed = self.seed;
         if let Some(kind) = self.net {
             c = c.with_net(match kind {
@@ -203,7 +202,7 @@ impl DqnArgs {
             demo_share = self.demo_share,
             hindsight = self.hindsight,
         );
-        if let Some(h) = self.horizon {
+        if let Some(h) = w.horizon {
             c.world.horizon = h;
         }
         if let Some(lr) = self.lr {
@@ -213,14 +212,14 @@ impl DqnArgs {
         if let Some(lr) = self.lr_final {
             c.lr_final = lr;
         }
-        if let Some(r) = &self.reward {
-            c.world.reward = RewardModel::from_name(r)?;
+        if let Some(r) = w.reward {
+            c.world.reward = r;
         }
-        if let Some(b) = &self.backend {
-            c.world.backend = b.parse::<Backend>()?;
+        if let Some(b) = w.backend {
+            c.world.backend = b;
         }
-        if let Some(p) = &self.protocol {
-            c.world.protocol = p.parse::<sim::ActionProtocol>()?;
+        if let Some(p) = self.protocol {
+            c.world.protocol = p;
         }
         if let Some(h) = self.hidden {
             c.net.hidden = h;

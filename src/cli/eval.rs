@@ -1,22 +1,26 @@
 //! `blockstack eval`: play a trained model on seeded starts, per goal and overall.
 
-use std::os::unix::fs::FileTypeExt;
 use std::path::{Path, PathBuf};
 
 use agent::Summary;
-use agent::eval::EvalReport;
+use agent::eval::{EvalOverrides, EvalReport};
 use agent::optimality::Optimality;
 use anyhow::{Context, Result};
 use clap::Args;
 use neural::AnyModel;
-use sim::{Backend, EnvConfig};
+use oracle::ExactSolver;
 
-use super::profile::{PlayRulesArgs, ProfileArg, played};
+use super::profile::{PlayRulesArgs, ProfileArg};
 use super::solver_budget::SolverBudgetArg;
 use super::stdout::line;
+use super::world::WorldArgs;
 
 /// Arguments of `blockstack eval`.
 #[derive(Debug, Args)]
+#[command(mut_arg("blocks", |a| a.help("Number of blocks: the model's (another is refused) [default: the model's]")))]
+#[command(mut_arg("grid", |a| a.help("Grid size, WxH: the model's (another is refused) [default: the model's]")))]
+#[command(mut_arg("reward", |a| a.help("Reward model summed in the episodes: sparse, dense, paper, step-cost or paper-code [default: the model's training reward, or --profile's]")))]
+#[command(mut_arg("view", |a| a.help("The world: the model's (the other is refused) [default: the model's]")))]
 pub struct EvalArgs {
     /// The model file to evaluate: a tabular agent (`train`) or a network (`dqn`).
     #[arg(long)]
@@ -34,12 +38,8 @@ pub struct EvalArgs {
     /// Probability of a random legal action (the paper's test policy: 0.1; 0 is greedy).
     #[arg(long, default_value_t = agent::profile::TEST_EPSILON)]
     pub epsilon: f64,
-    /// Steps before an episode is cut off.
-    #[arg(long, default_value_t = sim::DEFAULT_HORIZON)]
-    pub horizon: u32,
-    /// World backend: physics (rapier2d) or grid (occupancy model).
-    #[arg(long, default_value = "physics")]
-    pub backend: String,
+    #[command(flatten)]
+    pub world: WorldArgs,
     /// Print the result as one JSON object.
     #[arg(long)]
     pub json: bool,
@@ -55,35 +55,34 @@ pub struct EvalArgs {
 /// and prints the figures.
 pub fn eval(args: EvalArgs) -> Result<()> {
     let model = load_model(&args.model)?;
-    let goals = match args.goals.as_deref() {
-        Some(text) => sim::Goal::parse_list(text, model.blocks())?,
-        None => sim::Goal::all_in(model.world().view, model.blocks())
-            .context("without --goals every goal of the model's world is used")?,
+    let goals = args
+        .goals
+        .as_deref()
+        .map(|text| sim::Goal::parse_list(text, model.blocks()))
+        .transpose()?;
+    let w = &args.world;
+    let overrides = EvalOverrides {
+        goals,
+        episodes: args.episodes,
+        seed: args.seed,
+        profile: args.profile.profile,
+        protocol: args.play.protocol,
+        start: args.play.start.start,
+        reward: w.reward,
+        horizon: w.horizon,
+        backend: w.backend,
+        blocks: w.blocks,
+        grid: w.grid,
+        view: w.view,
     };
-    let backend: Backend = args.backend.parse()?;
-    // The model's own world (protocol, start rule) unless the command line says otherwise;
-    // the reward only sums up in trajectories, so it is the model's training reward.
-    let rules = played(model.parts(), args.profile, args.play, None)?;
-    let reward = match (args.profile.profile, model.training_reward()) {
-        (None, Some(r)) => r,
-        _ => rules.reward,
-    };
-    let mut plan = model.eval_plan(goals, args.episodes, args.seed);
-    plan.profile = rules.profile;
-    plan.world = EnvConfig {
-        horizon: args.horizon,
-        reward,
-        backend,
-        protocol: rules.protocol,
-        start: rules.start,
-        ..plan.world
-    };
-    plan.world.validate()?;
-    let solver = args
-        .budget
-        .solver(model.grid())
-        .with_protocol(rules.protocol)
-        .with_view(plan.world.view);
+    let plan = model.eval_plan_with(&overrides).map_err(|e| match e {
+        // The goals were the default's: say which flag chooses others.
+        neural::NeuralError::Sim(sim::SimError::TooManyGoals { .. }) if args.goals.is_none() => {
+            anyhow::Error::new(e).context("without --goals every goal of the model's world is used")
+        }
+        e => e.into(),
+    })?;
+    let solver = ExactSolver::for_world(&plan.world).with_node_budget(args.budget.budget());
     // Each episode counts twice: played, then solved exactly.
     let bar = super::progress::bar(
         2 * args.episodes * plan.goals.len() as u64,
@@ -152,17 +151,8 @@ fn print_report(r: &EvalReport) -> Result<()> {
     line("exact solver's shortest legal plan from each start; the last column counts a failure as the horizon H")
 }
 
-/// Reads the model file `--model PATH`. A pipe or a device (`<(cat m)`) is refused with a
-/// line that says so: a model is read twice (its header says which reader reads the file),
-/// and the second reading of a pipe finds it empty.
+/// Reads the model file `--model PATH` ([`AnyModel::load`], which refuses a pipe or a
+/// device, as Python's `blockstack.load` and `serve` do).
 pub(super) fn load_model(path: &Path) -> Result<AnyModel> {
-    if let Ok(meta) = std::fs::metadata(path) {
-        let kind = meta.file_type();
-        anyhow::ensure!(
-            !(kind.is_fifo() || kind.is_socket() || kind.is_char_device() || kind.is_block_device()),
-            "--model {}: a pipe or a device is not supported as a model file (it is read twice); save the model to a file first",
-            path.display()
-        );
-    }
-    Ok(AnyModel::load(path)?)
+    AnyModel::load(path).context("--model")
 }

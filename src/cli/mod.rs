@@ -68,6 +68,31 @@ pub enum Command {
     Serve(serve::ServeArgs),
 }
 
+/// A flag's value that clap refused (`--view front`), as one line naming the flag, the value
+/// and why: `--view front: cannot read view from "front": choose one of top, side`, as every
+/// other bad input is reported. `None` for other errors (help, version, usage).
+pub fn bad_value(e: &clap::Error) -> Option<String> {
+    use clap::error::{ContextKind, ContextValue, ErrorKind};
+    if !matches!(e.kind(), ErrorKind::ValueValidation | ErrorKind::InvalidValue) {
+        return None;
+    }
+    let text = |kind| match e.get(kind) {
+        Some(ContextValue::String(s)) => Some(s.clone()),
+        Some(ContextValue::Strings(s)) => Some(s.join(", ")),
+        _ => None,
+    };
+    // "--view <VIEW>": the flag alone.
+    let flag = text(ContextKind::InvalidArg)?;
+    let flag = flag.split([' ', '=']).next().unwrap_or(&flag).to_string();
+    let value = text(ContextKind::InvalidValue).unwrap_or_default();
+    let why = match (std::error::Error::source(e), text(ContextKind::ValidValue)) {
+        (Some(source), _) => source.to_string(),
+        (None, Some(valid)) => format!("choose one of {valid}"),
+        (None, None) => "not a value it takes".to_string(),
+    };
+    Some(format!("{flag} {value}: {why}"))
+}
+
 /// Carries out `cli`'s command.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {

@@ -8,9 +8,8 @@
 //! in (its protocol and start rule, its profile's reward) unless `--profile` or a part's
 //! flag says otherwise.
 
-use anyhow::Result;
 use clap::Args;
-use sim::{ActionProtocol, Profile, ProfileParts, StartRule};
+use sim::{ActionProtocol, Profile, ProfileParts, RewardModel, StartRule};
 
 /// `--profile`.
 #[derive(Debug, Clone, Copy, Args)]
@@ -43,17 +42,15 @@ pub struct StartArg {
 }
 
 /// `parts` under the command line's choices ([`ProfileParts::overridden`]): `--profile`
-/// replaces them all with its own, then each part given (`reward` by a reward model's
-/// name) replaces that part.
+/// replaces them all with its own, then each part given replaces that part.
 pub fn overridden(
     parts: ProfileParts,
     profile: ProfileArg,
     protocol: Option<ActionProtocol>,
     start: Option<StartRule>,
-    reward: Option<&str>,
-) -> Result<ProfileParts> {
-    let reward = reward.map(str::parse).transpose()?;
-    Ok(parts.overridden(profile.profile, protocol, start, reward))
+    reward: Option<RewardModel>,
+) -> ProfileParts {
+    parts.overridden(profile.profile, protocol, start, reward)
 }
 
 /// [`overridden`] by `--profile`, `--protocol`, `--start` and `--reward`.
@@ -61,28 +58,30 @@ pub fn played(
     parts: ProfileParts,
     profile: ProfileArg,
     play: PlayRulesArgs,
-    reward: Option<&str>,
-) -> Result<ProfileParts> {
+    reward: Option<RewardModel>,
+) -> ProfileParts {
     overridden(parts, profile, play.protocol, play.start.start, reward)
 }
 
 /// The world of a correction session of `agent` (`demo`, `correct`): the one it was trained
 /// in under `--profile` ([`agent::correction::session_world_under`]), then each part's own
-/// flag. Also the profile whose correction rule applies: `--profile`,
-/// else the one the agent was trained under.
+/// flag ([`ProfileParts::overridden`]). Also the profile whose correction rule applies:
+/// `--profile`, else the one the agent was trained under.
 pub fn session_world(
     agent: &agent::QAgent,
     profile: ProfileArg,
     play: PlayRulesArgs,
-    reward: Option<&str>,
-) -> Result<(sim::EnvConfig, Profile)> {
-    let (mut world, profile) = agent::correction::session_world_under(agent, profile.profile);
-    world.protocol = play.protocol.unwrap_or(world.protocol);
-    world.start = play.start.start.unwrap_or(world.start);
-    if let Some(name) = reward {
-        world.reward = name.parse()?;
+    reward: Option<RewardModel>,
+) -> (sim::EnvConfig, Profile) {
+    let (world, profile) = agent::correction::session_world_under(agent, profile.profile);
+    let parts = ProfileParts {
+        profile,
+        protocol: world.protocol,
+        start: world.start,
+        reward: world.reward,
     }
-    Ok((world, profile))
+    .overridden(None, play.protocol, play.start.start, reward);
+    (parts.apply(world), profile)
 }
 
 #[cfg(test)]
@@ -100,11 +99,11 @@ mod tests {
             protocol: Some(ActionProtocol::Free),
             start: StartArg { start: None },
         };
-        let parts = played(spec, original, play, Some("sparse")).unwrap();
+        let parts = played(spec, original, play, Some("sparse".parse().unwrap()));
         assert_eq!(
             (parts.profile, parts.protocol, parts.start, parts.reward.name()),
             (Profile::Original, ActionProtocol::Free, StartRule::Paper, "sparse")
         );
-        assert!(overridden(spec, none, None, None, Some("lots")).is_err());
+        assert_eq!(overridden(spec, none, None, None, None), spec);
     }
 }

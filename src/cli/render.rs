@@ -10,13 +10,15 @@ use sim::render::{self, Colour};
 
 use super::profile::{ProfileArg, StartArg, overridden};
 use super::stdout;
-use super::world::WorldArgs;
+use super::world::{GoalArg, WorldArgs};
 
 /// Arguments of `blockstack render`.
 #[derive(Debug, Args)]
 pub struct RenderArgs {
     #[command(flatten)]
     pub world: WorldArgs,
+    #[command(flatten)]
+    pub goal: GoalArg,
     #[command(flatten)]
     pub profile: ProfileArg,
     #[command(flatten)]
@@ -56,9 +58,11 @@ pub fn render(args: RenderArgs) -> Result<()> {
         args.profile,
         None,
         args.start.start,
-        args.world.reward.as_deref(),
-    )?;
-    let config = args.world.config(&rules, sim::View::Top)?;
+        args.world.reward,
+    );
+    let config = args
+        .world
+        .config(sim::EnvConfig::default(), &rules, args.goal.goal.as_deref())?;
     if let Some(out) = &out {
         render::PictureFormat::of(out.path())?;
         anyhow::ensure!(

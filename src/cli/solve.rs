@@ -4,50 +4,17 @@
 //! carried out by the gripper.
 
 use anyhow::{Context, Result};
-use clap::{Args, ValueEnum};
+use clap::Args;
 use std::path::{Path, PathBuf};
 
 use oracle::pddl::{self, Problem};
-use oracle::towers::{ExactMoves, MovePlanner, NearOptimal, Place, TowerPlan, gripper_actions, plan_side};
-use oracle::{Oracle, OracleError, Plan};
+use oracle::towers::{ExactMoves, MovePlanner, NearOptimal, Place, TowerPlan};
+use oracle::{Cost, CountedPlan, OracleError, PlannerKind};
 use serde::Serialize;
 use sim::{Goal, Grid, State, View};
 
 use super::solver_budget::SolverBudgetArg;
 use super::stdout::line;
-
-/// Which planner solves.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum SolverKind {
-    /// The exact solver: a shortest plan.
-    Exact,
-    /// The centroid + A* oracle (top view); in the side view, the near-optimal planner
-    /// carried out by the gripper (as `run --agent oracle` carries its moves out).
-    Oracle,
-    /// The near-optimal block-move planner (side view): at most twice the optimum, for
-    /// any number of blocks.
-    NearOptimal,
-}
-
-impl SolverKind {
-    fn name(self) -> &'static str {
-        match self {
-            SolverKind::Exact => "exact",
-            SolverKind::Oracle => "oracle",
-            SolverKind::NearOptimal => "near-optimal",
-        }
-    }
-}
-
-/// What a plan's length counts.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Cost {
-    /// Gripper actions (pick, moves, drop): the environment's steps.
-    Steps,
-    /// Block moves (a clear block onto the table or another block): the planning
-    /// literature's count, in the side view.
-    Moves,
-}
 
 /// Arguments of `blockstack solve`.
 #[derive(Debug, Args)]
@@ -78,11 +45,16 @@ pub struct SolveArgs {
     pub view: View,
     /// What the plan's length counts: steps (gripper actions; the top view's default and
     /// only count) or moves (block moves; the side view's default).
-    #[arg(long, value_enum)]
+    #[arg(long)]
     pub cost: Option<Cost>,
-    /// The planner [default: exact; with --pddl, near-optimal]
-    #[arg(long, value_enum)]
-    pub solver: Option<SolverKind>,
+    /// The planner: exact (the shortest plan in the count asked for: the fewest gripper
+    /// steps, or from the side the fewest block moves with --cost moves), exact-moves (the
+    /// fewest block moves, carried out by the gripper with --cost steps; side view),
+    /// near-optimal (at most twice the fewest block moves; side view) or oracle (the view's:
+    /// centroid + A* from above, near-optimal from the side) [default: exact; with --pddl,
+    /// near-optimal]
+    #[arg(long)]
+    pub solver: Option<PlannerKind>,
     /// The action protocol the plan keeps to: free (every action legal) or paper (nothing
     /// held: only pick; holding: only moves and drop); the exact plan is the shortest legal
     /// one.
@@ -111,7 +83,7 @@ pub fn solve(args: SolveArgs) -> Result<()> {
     if let Some(path) = &args.pddl {
         return solve_pddl(path, &args);
     }
-    let solver = args.solver.unwrap_or(SolverKind::Exact);
+    let solver = args.solver.unwrap_or(PlannerKind::Exact);
     let (Some(start), Some(goal)) = (&args.start, &args.goal) else {
         anyhow::bail!("solve needs --start and --goal, or --pddl PROBLEM.pddl")
     };
@@ -126,10 +98,9 @@ pub fn solve(args: SolveArgs) -> Result<()> {
         args.cost != Some(Cost::Moves),
         "--cost moves counts block moves, which the side view plans: add --view side"
     );
-    anyhow::ensure!(
-        solver != SolverKind::NearOptimal,
-        "--solver near-optimal plans block moves in the side view: add --view side"
-    );
+    solver
+        .check_view(View::Top)
+        .map_err(|e| anyhow::anyhow!("--solver {solver}: {e}: add --view side"))?;
     let state = State::parse(start, args.held, grid).with_context(|| {
         if args.held.is_some() {
             "--start and --held"
@@ -140,20 +111,13 @@ pub fn solve(args: SolveArgs) -> Result<()> {
     View::Top.check_world(grid, state.block_count()).context("--start")?;
     let goal = Goal::parse(goal, Some(state.block_count())).context("--goal")?;
     anyhow::ensure!(
-        solver == SolverKind::Exact || args.budget.solver_budget.is_none(),
-        "--solver-budget is the exact solver's: it does not apply to --solver {}",
-        solver.name()
+        solver == PlannerKind::Exact || args.budget.solver_budget.is_none(),
+        "--solver-budget is the exact solver's: it does not apply to --solver {solver}"
     );
-    let plan = match solver {
-        SolverKind::Exact => args
-            .budget
-            .solver(grid)
-            .with_protocol(args.protocol)
-            .solve(&state, &goal)
-            .map_err(|e| args.budget.explain(e))?,
-        SolverKind::Oracle => Oracle::new(grid).with_protocol(args.protocol).plan(&state, &goal)?,
-        SolverKind::NearOptimal => unreachable!("refused above: near-optimal is the side view's"),
-    };
+    let planning = args.budget.solver(grid).with_protocol(args.protocol);
+    let plan = solver
+        .plan_steps(&planning, &state, &goal)
+        .map_err(|e| args.budget.explain(e))?;
     if args.json {
         let report = SolveReport {
             length: plan.len(),
@@ -165,7 +129,7 @@ pub fn solve(args: SolveArgs) -> Result<()> {
     } else {
         line(format_args!(
             "{} plan, goal {goal}, grid {grid}: {} actions",
-            solver.name(),
+            solver,
             plan.len()
         ))?;
         if !plan.is_empty() {
@@ -178,9 +142,9 @@ pub fn solve(args: SolveArgs) -> Result<()> {
 /// `solve --view side`: a plan from the side-view state `--start` to `--goal`'s towers, in
 /// block moves (on a table as wide as the grid) or in gripper steps.
 fn solve_side(args: &SolveArgs, grid: Grid, start: &str, goal: &str) -> Result<()> {
-    let solver = args.solver.unwrap_or(SolverKind::Exact);
-    let cost = args.cost.unwrap_or(Cost::Moves);
-    let exact_steps = cost == Cost::Steps && solver == SolverKind::Exact;
+    let solver = args.solver.unwrap_or(PlannerKind::Exact);
+    let cost = args.cost.unwrap_or(Cost::default_in(View::Side));
+    let exact_steps = cost == Cost::Steps && solver == PlannerKind::Exact;
     anyhow::ensure!(
         args.held.is_none() || exact_steps,
         "--held: a block-move plan starts with nothing held; --cost steps --solver exact plans from a held block"
@@ -200,33 +164,16 @@ fn solve_side(args: &SolveArgs, grid: Grid, start: &str, goal: &str) -> Result<(
     View::Side.check_state(&state).context("--start")?;
     let goal = Goal::parse(goal, Some(state.block_count())).context("--goal")?;
     goal.check_fits(grid).context("--goal")?;
-    // The oracle of the side view is the near-optimal planner (as `run --agent oracle`).
-    let planner = match solver {
-        SolverKind::Exact => MovePlanner::Exact,
-        SolverKind::NearOptimal | SolverKind::Oracle => MovePlanner::NearOptimal,
-    };
-    if cost == Cost::Moves {
-        let plan = plan_side(planner, grid, &state, &goal)?;
-        return print_moves(args, solver, grid, &goal, &plan);
-    }
-    let plan = if exact_steps {
-        args.budget
-            .solver(grid)
-            .with_view(View::Side)
-            .solve(&state, &goal)
-            .map_err(|e| match e {
-                OracleError::BudgetExceeded { budget, blocks, grid } => anyhow::anyhow!(
-                    "the exact gripper-step search stored its budget of {budget} states for {blocks} blocks \
-                     on a {grid} grid without finding a shortest plan: use --solver near-optimal or --cost moves, \
-                     or raise --solver-budget"
-                ),
-                e => e.into(),
-            })?
-    } else {
-        let moves = plan_side(planner, grid, &state, &goal)?;
-        Plan {
-            actions: gripper_actions(grid, &state, &moves)?,
-        }
+    let planning = args.budget.solver(grid).with_view(View::Side);
+    let plan = match solver.plan(&planning, cost, &state, &goal) {
+        Ok(CountedPlan::Moves(plan)) => return print_moves(args, solver, grid, &goal, &plan),
+        Ok(CountedPlan::Steps(plan)) => plan,
+        Err(OracleError::BudgetExceeded { budget, blocks, grid }) => anyhow::bail!(
+            "the exact gripper-step search stored its budget of {budget} states for {blocks} blocks \
+             on a {grid} grid without finding a shortest plan: use --solver near-optimal or --cost moves, \
+             or raise --solver-budget"
+        ),
+        Err(e) => return Err(e.into()),
     };
     if args.json {
         let report = SolveReport {
@@ -239,7 +186,7 @@ fn solve_side(args: &SolveArgs, grid: Grid, start: &str, goal: &str) -> Result<(
     } else {
         line(format_args!(
             "{} plan, goal {goal}, grid {grid}, side view: {} gripper steps",
-            solver.name(),
+            solver,
             plan.len()
         ))?;
         if plan.is_empty() {
@@ -260,7 +207,7 @@ struct MovesReport {
 }
 
 /// Prints a block-move plan, as JSON or text.
-fn print_moves(args: &SolveArgs, solver: SolverKind, grid: Grid, goal: &Goal, plan: &TowerPlan) -> Result<()> {
+fn print_moves(args: &SolveArgs, solver: PlannerKind, grid: Grid, goal: &Goal, plan: &TowerPlan) -> Result<()> {
     if args.json {
         let moves = plan
             .moves
@@ -280,7 +227,7 @@ fn print_moves(args: &SolveArgs, solver: SolverKind, grid: Grid, goal: &Goal, pl
     } else {
         line(format_args!(
             "{} plan, goal {goal}, grid {grid}, side view: {} block moves",
-            solver.name(),
+            solver,
             plan.len()
         ))?;
         if plan.is_empty() {
@@ -292,13 +239,11 @@ fn print_moves(args: &SolveArgs, solver: SolverKind, grid: Grid, goal: &Goal, pl
 }
 
 /// The block-move planner `--solver` names for a PDDL problem (near-optimal unless given;
-/// `oracle` is the near-optimal planner, as in the side view), with `--solver-budget` as the
-/// exact search's budget.
-pub(super) fn pddl_planner(solver: Option<SolverKind>, budget: &SolverBudgetArg) -> Result<MovePlanner> {
-    let planner = match solver.unwrap_or(SolverKind::NearOptimal) {
-        SolverKind::Exact => MovePlanner::Exact,
-        SolverKind::NearOptimal | SolverKind::Oracle => MovePlanner::NearOptimal,
-    };
+/// a PDDL plan counts block moves, so `exact` and `exact-moves` are the fewest moves and
+/// `oracle` the near-optimal planner, as in the side view: `PlannerKind::move_planner`),
+/// with `--solver-budget` as the exact search's budget.
+pub(super) fn pddl_planner(solver: Option<PlannerKind>, budget: &SolverBudgetArg) -> Result<MovePlanner> {
+    let planner = solver.unwrap_or(PlannerKind::NearOptimal).move_planner();
     anyhow::ensure!(
         planner == MovePlanner::Exact || budget.solver_budget.is_none(),
         "--solver-budget is the exact solver's: it does not apply to --solver near-optimal"

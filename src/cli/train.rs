@@ -8,9 +8,10 @@ use agent::{Assist, OracleKind, Oscillation, Preset, ReprKind, Schedule, TrainCo
 use anyhow::{Context, Result};
 use clap::{ArgGroup, Args};
 use indicatif::{ProgressBar, ProgressStyle};
-use sim::{Backend, Goal, Grid, RewardModel, View};
+use sim::Goal;
 
 use super::profile::{PlayRulesArgs, ProfileArg};
+use super::world::WorldArgs;
 
 use super::stdout::line;
 
@@ -48,13 +49,14 @@ const RUN_FLAGS: [&str; 24] = [
 /// Arguments of `blockstack train`.
 #[derive(Debug, Args)]
 #[command(group(ArgGroup::new("checkpointing").args(["checkpoint", "resume"]).multiple(true)))]
+#[command(mut_arg("blocks", |a| a.help("Number of blocks [default: 3]")))]
+#[command(mut_arg("grid", |a| a.help("Grid size, WxH [default: 7x7]")))]
+#[command(mut_arg("reward", |a| a.help("Reward model: sparse, dense, paper, step-cost or paper-code [default: the preset's: paper under spec, paper-code under original, step-cost under --preset optimal]")))]
+#[command(mut_arg("horizon", |a| a.help("Steps before a training game is cut off [default: the schedule's: 1000 under spec, 5000 (1000 with 2 blocks) under paper-code]")))]
+#[command(mut_arg("view", |a| a.help("The world: top (the paper's) or side (the classic Blocks World: goals default to one goal of each shape of towers, e.g. 0,1,2 and 0,1/2 and 0/1/2 for 3 blocks, which the role-towers learner plays on every goal of that shape; --goals 0,1/2:... names others) [default: top]")))]
 pub struct TrainArgs {
-    /// Number of blocks.
-    #[arg(long, default_value_t = 3)]
-    pub blocks: usize,
-    /// Grid size, WxH.
-    #[arg(long, default_value = "7x7")]
-    pub grid: String,
+    #[command(flatten)]
+    pub world: WorldArgs,
     #[command(flatten)]
     pub profile: ProfileArg,
     #[command(flatten)]
@@ -73,10 +75,6 @@ pub struct TrainArgs {
     /// optimal, role-towers in the side view]
     #[arg(long)]
     pub repr: Option<ReprKind>,
-    /// Reward model: sparse, dense, paper, step-cost or paper-code [default: the preset's:
-    /// paper under spec, paper-code under original, step-cost under --preset optimal]
-    #[arg(long)]
-    pub reward: Option<String>,
     /// Training schedule: spec (goals in turn, constant alpha) or paper-code (the authors':
     /// a goal drawn per game, alpha decay after step 4000, bootstrap over seen actions,
     /// games ended by a reward above 70) [default: the profile's]
@@ -130,18 +128,6 @@ pub struct TrainArgs {
     /// --oscillation), or oscillation+P (also at each step with probability P).
     #[arg(long, default_value = "none")]
     pub assist: Assist,
-    /// Steps before a training game is cut off [default: the schedule's: 1000 under spec,
-    /// 5000 (1000 with 2 blocks) under paper-code]
-    #[arg(long)]
-    pub horizon: Option<u32>,
-    /// World backend: physics (rapier2d) or grid (occupancy model).
-    #[arg(long, default_value = "physics")]
-    pub backend: String,
-    /// The world: top (the paper's) or side (the classic Blocks World: goals default to one
-    /// goal of each shape of towers, e.g. 0,1,2 and 0,1/2 and 0/1/2 for 3 blocks, which the
-    /// role-towers learner plays on every goal of that shape; --goals 0,1/2:... names others).
-    #[arg(long, default_value = "top")]
-    pub view: String,
     /// Where to write the trained model (a .safetensors file; checked before training).
     #[arg(long)]
     pub out: PathBuf,
@@ -178,20 +164,21 @@ impl TrainArgs {
     /// The training config these arguments describe: the library's resolver
     /// ([`TrainConfig::resolve`]: profile, then preset, then each flag given).
     pub fn config(&self) -> Result<TrainConfig> {
+        let w = &self.world;
         let overrides = TrainOverrides {
             profile: self.profile.profile,
             preset: self.preset,
-            blocks: Some(self.blocks),
-            grid: Some(self.grid.parse::<Grid>()?),
+            blocks: w.blocks,
+            grid: w.grid,
             goals: self
                 .goals
                 .as_deref()
-                .map(|text| Goal::parse_list(text, self.blocks))
+                .map(|text| Goal::parse_list(text, w.blocks.unwrap_or(3)))
                 .transpose()?,
             protocol: self.play.protocol,
             start: self.play.start.start,
             repr: self.repr,
-            reward: self.reward.as_deref().map(RewardModel::from_name).transpose()?,
+            reward: w.reward,
             schedule: self.schedule,
             oracle: self.oracle,
             oscillation: self.oscillation,
@@ -205,9 +192,9 @@ impl TrainArgs {
             backward_replay: self.backward_replay,
             final_replay: self.final_replay,
             assist: Some(self.assist),
-            horizon: self.horizon,
-            backend: Some(self.backend.parse::<Backend>()?),
-            view: Some(self.view.parse::<View>()?),
+            horizon: w.horizon,
+            backend: w.backend,
+            view: w.view,
         };
         TrainConfig::resolve(&overrides).map_err(|e| match e {
             // The goals were the default's: say which flag chooses others.
@@ -216,6 +203,47 @@ impl TrainArgs {
             }
             e => e.into(),
         })
+    }
+}
+
+/// What `train` does beside playing: the progress bar and the live curve, and checkpoints.
+struct Shown<'a> {
+    bar: &'a ProgressBar,
+    curve: Option<&'a serve::CurveHandle>,
+    checkpoint: Option<&'a files::OutputPath>,
+    every: u64,
+}
+
+impl agent::TrainHooks for Shown<'_> {
+    fn after_game(&mut self, p: &agent::Progress) -> agent::Result<()> {
+        if p.games_played.is_multiple_of(64) || p.games_played == p.games_target {
+            if let Some(curve) = self.curve {
+                curve.push(serve::CurvePoint {
+                    games: p.games_played,
+                    success_rate: p.recent_success_rate(),
+                    mean_steps: p.recent_mean_steps,
+                });
+            }
+            self.bar.set_position(p.games_played);
+            let steps = p.recent_mean_steps.map_or("-".to_string(), |s| format!("{s:.1}"));
+            self.bar.set_message(format!(
+                "last {}: {:.0}% reached the goal, {steps} mean steps",
+                p.recent_games,
+                100.0 * p.recent_success_rate()
+            ));
+        }
+        Ok(())
+    }
+
+    fn checkpoint_every(&self) -> Option<u64> {
+        self.checkpoint.map(|_| self.every)
+    }
+
+    fn checkpoint(&mut self, trainer: &Trainer) -> agent::Result<()> {
+        match self.checkpoint {
+            Some(out) => trainer.write_checkpoint(out),
+            None => Ok(()),
+        }
     }
 }
 
@@ -252,8 +280,6 @@ pub fn train(args: TrainArgs) -> Result<()> {
         total >= played,
         "--games {total}: the checkpoint has played {played} games already; --games is the total, so ask for {played} or more"
     );
-    trainer.set_games(total);
-    let config = trainer.config().clone();
     // Hidden by indicatif itself when stderr is not a terminal.
     let bar = ProgressBar::new(total);
     bar.set_position(played);
@@ -274,41 +300,15 @@ pub fn train(args: TrainArgs) -> Result<()> {
         }
         None => None,
     };
-    let mut show = |p: &agent::Progress| {
-        if p.games_played.is_multiple_of(64) || p.games_played == p.games_target {
-            if let Some(curve) = &curve {
-                curve.push(serve::CurvePoint {
-                    games: p.games_played,
-                    success_rate: p.recent_success_rate(),
-                    mean_steps: p.recent_mean_steps,
-                });
-            }
-            bar.set_position(p.games_played);
-            let steps = p.recent_mean_steps.map_or("-".to_string(), |s| format!("{s:.1}"));
-            bar.set_message(format!(
-                "last {}: {:.0}% reached the goal, {steps} mean steps",
-                p.recent_games,
-                100.0 * p.recent_success_rate()
-            ));
-        }
-    };
     let clock = Instant::now();
-    let every = args.checkpoint_every.unwrap_or(DEFAULT_CHECKPOINT_EVERY);
-    loop {
-        let played = trainer.report().games;
-        // Checkpoints fall on multiples of `every`, and on the last game.
-        let games = match &checkpoint {
-            Some(_) => (every - played % every).min(total - played),
-            None => total - played,
-        };
-        trainer.play_games(games, Some(&mut show))?;
-        if let Some(out) = &checkpoint {
-            trainer.write_checkpoint(out)?;
-        }
-        if trainer.report().games == total {
-            break;
-        }
-    }
+    let mut hooks = Shown {
+        bar: &bar,
+        curve: curve.as_ref(),
+        checkpoint: checkpoint.as_ref(),
+        every: args.checkpoint_every.unwrap_or(DEFAULT_CHECKPOINT_EVERY),
+    };
+    trainer.run_until(total, &mut hooks)?;
+    let config = trainer.config().clone();
     let trained = trainer.finish();
     let seconds = clock.elapsed().as_secs_f64();
     bar.finish_and_clear();

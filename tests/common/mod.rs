@@ -7,9 +7,8 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-mod scratch;
 #[allow(unused_imports)]
-pub use scratch::scratch;
+pub use testkit::scratch;
 
 /// The `blockstack` binary built for these tests.
 pub const BIN: &str = env!("CARGO_BIN_EXE_blockstack");

@@ -3,25 +3,17 @@
 //! tables of arms: the paper's figure, ours in the paper's world and ours in the SPEC world
 //! side by side.
 
+pub use agent::eval::{Goals, Suite};
 use agent::optimality::mean_steps_failures_as_horizon;
 use agent::{EpisodeResult, Policy, Summary};
 use serde::Serialize;
-use sim::{ActionProtocol, Env, EnvConfig, Goal, GoalSpec, Grid, Observation, Profile, StartRule};
+use sim::{ActionProtocol, EnvConfig, Goal, Profile, StartRule};
 
 use super::paper::{MeanOver, PaperRow, PaperTable};
 use super::spread::PaperInside;
 use super::{ProgressSink, Result};
 use plots::{Arm, BoxPlot};
 use stats::{Method, TestResult};
-
-/// The goals of a suite's games.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Goals {
-    /// Every goal in the list, each played from the same `episodes` starts.
-    Each(Vec<Goal>),
-    /// A goal drawn with each start (uniformly, from the start's seed).
-    Drawn,
-}
 
 /// The rules of `sim` a suite's games are played under that differ between the paper's
 /// world as its authors coded it and ours: which actions are legal, and how a game starts.
@@ -61,145 +53,53 @@ impl Rules {
     }
 }
 
-/// A set of test games, fixed by a seed: every arm of a comparison plays the same suite,
-/// so game `k` of two arms starts from the same state with the same goal and the arms'
-/// results pair up.
-///
-/// Game `k` of goal `g` is reset with `sim::seeding::episode_seed(seed, k)`, the way
-/// `blockstack run` and `blockstack eval` number games, and the agent draws its random
-/// actions from its own stream of that seed ([`agent::rollout::policy_rng`]).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Suite {
-    /// Blocks.
-    pub blocks: usize,
-    /// The goals.
-    pub goals: Goals,
-    /// Games per goal (or in all, for drawn goals).
-    pub episodes: u64,
-    /// The seed of the starts.
-    pub seed: u64,
-    /// Steps before a game counts as failed.
-    pub horizon: u32,
-    /// The world's rules.
-    pub rules: Rules,
+impl Rules {
+    /// The world of these rules with `blocks` blocks and games cut off at `horizon` steps, on
+    /// the paper's 7 x 7 grid, the goal drawn.
+    pub fn world(self, blocks: usize, horizon: u32) -> EnvConfig {
+        EnvConfig {
+            blocks,
+            horizon,
+            protocol: self.protocol,
+            start: self.start,
+            ..EnvConfig::default()
+        }
+    }
 }
 
-impl Suite {
-    /// `episodes` games per goal of `goals` with `blocks` blocks in `world`, starts from
-    /// `seed`, the paper's horizon.
-    pub fn in_world(world: Profile, blocks: usize, goals: Goals, episodes: u64, seed: u64) -> Suite {
-        Suite {
-            blocks,
-            goals,
-            episodes,
-            seed,
-            horizon: super::HORIZON,
-            rules: Rules::of(world),
-        }
+/// `episodes` games per goal of `goals` with `blocks` blocks in `world`, starts from
+/// `seed`, the paper's horizon: the suite every arm of an experiment plays
+/// ([`agent::eval::Suite`]).
+pub fn suite_in(world: Profile, blocks: usize, goals: Goals, episodes: u64, seed: u64) -> Suite {
+    Suite {
+        world: Rules::of(world).world(blocks, super::HORIZON),
+        goals,
+        episodes,
+        seed,
     }
+}
 
-    /// The grid every experiment plays on: the paper's 7 x 7.
-    pub fn grid(&self) -> Grid {
-        Grid::default()
-    }
-
-    /// The games' environments: one per goal, or one drawing its goals.
-    fn envs(&self) -> Result<Vec<Env>> {
-        let config = |goal| EnvConfig {
-            blocks: self.blocks,
-            goal,
-            horizon: self.horizon,
-            protocol: self.rules.protocol,
-            start: self.rules.start,
-            ..EnvConfig::default()
-        };
-        let specs: Vec<GoalSpec> = match &self.goals {
-            Goals::Each(goals) => goals.iter().map(|g| GoalSpec::Fixed(g.clone())).collect(),
-            Goals::Drawn => vec![GoalSpec::Random],
-        };
-        Ok(specs
-            .into_iter()
-            .map(|s| Env::new(config(s)))
-            .collect::<sim::Result<_>>()?)
-    }
-
-    /// Games in all.
-    pub fn games(&self) -> u64 {
-        match &self.goals {
-            Goals::Each(goals) => self.episodes * goals.len() as u64,
-            Goals::Drawn => self.episodes,
-        }
-    }
-
-    /// `policy`'s games, goal by goal.
-    pub fn play(&self, policy: &mut dyn Policy) -> Result<Vec<EpisodeResult>> {
-        let mut results = Vec::with_capacity(self.games() as usize);
-        for mut env in self.envs()? {
-            results.extend(agent::play(&mut env, policy, self.episodes, self.seed, &mut ())?);
-        }
-        Ok(results)
-    }
-
-    /// The observations of game `index` (in [`Suite::play`]'s order) played by `policy`,
-    /// the start first: the same game as in [`Suite::play`].
-    pub fn record(&self, policy: &mut dyn Policy, index: usize) -> Result<Vec<Observation>> {
-        let per_env = self.episodes as usize;
-        let mut env = self.envs()?.swap_remove(index / per_env);
-        let k = (index % per_env) as u64;
-        let mut observations = Vec::new();
-        agent::play_episode(
-            &mut env,
-            policy,
-            k,
-            sim::seeding::episode_seed(self.seed, k),
-            &mut observations,
-        )?;
-        Ok(observations)
-    }
-
-    /// Every game's first observation (start and goal), in [`Suite::play`]'s order.
-    pub fn starts(&self) -> Result<Vec<Observation>> {
-        let mut starts = Vec::with_capacity(self.games() as usize);
-        for mut env in self.envs()? {
-            starts.extend((0..self.episodes).map(|k| env.reset(sim::seeding::episode_seed(self.seed, k))));
-        }
-        Ok(starts)
-    }
-
-    /// The length of a shortest plan from every game's start (the exact solver's, under the
-    /// suite's protocol), in [`Suite::play`]'s order: 0 from a start that already meets the
-    /// goal (the paper's start rule keeps them; such games have no ratio to the optimum, see
-    /// [`agent::optimality`]).
-    pub fn optimum(&self) -> Result<Vec<u32>> {
-        let solver = oracle::ExactSolver::new(self.grid()).with_protocol(self.rules.protocol);
-        self.starts()?
-            .iter()
-            .map(|obs| Ok(solver.distance(&obs.state, &obs.goal)?))
-            .collect()
-    }
-
-    /// A short description: "500 games, goal drawn per game, starts seed 1001" (the world
-    /// is the table column's).
-    pub fn describe(&self) -> String {
-        let goals = match &self.goals {
-            Goals::Each(goals) if goals.len() == 1 => format!("{} games of goal {}", self.episodes, goals[0]),
-            Goals::Each(goals) => format!(
-                "{} games of each goal {} ({} in all)",
-                self.episodes,
-                goals.iter().map(Goal::to_string).collect::<Vec<_>>().join(" "),
-                self.games()
-            ),
-            Goals::Drawn => format!(
-                "{} games, goal drawn per game from all {}",
-                self.episodes,
-                goal_count(self.blocks)
-            ),
-        };
-        format!(
-            "{goals}, {} blocks, horizon {}, starts seed {}",
-            self.blocks, self.horizon, self.seed
-        )
-    }
+/// A suite described for the report: "500 games, goal drawn per game from all 6, 3 blocks,
+/// horizon 1000, starts seed 1001" (the world is the table column's).
+pub fn describe(suite: &Suite) -> String {
+    let goals = match &suite.goals {
+        Goals::Each(goals) if goals.len() == 1 => format!("{} games of goal {}", suite.episodes, goals[0]),
+        Goals::Each(goals) => format!(
+            "{} games of each goal {} ({} in all)",
+            suite.episodes,
+            goals.iter().map(Goal::to_string).collect::<Vec<_>>().join(" "),
+            suite.games()
+        ),
+        Goals::Drawn => format!(
+            "{} games, goal drawn per game from all {}",
+            suite.episodes,
+            goal_count(suite.world.blocks)
+        ),
+    };
+    format!(
+        "{goals}, {} blocks, horizon {}, starts seed {}",
+        suite.world.blocks, suite.world.horizon, suite.seed
+    )
 }
 
 /// The mean of `values` (`None` for none), e.g. of shortest plans' lengths.
@@ -592,7 +492,7 @@ where
             let mut policy = policy(p)?;
             let results = suite.play(policy.as_mut());
             progress.advance(stage);
-            results
+            Ok(results?)
         })
         .collect()
 }
@@ -624,7 +524,7 @@ pub fn steps_box_plot(title: String, rows: &[Row], replicates: usize, suite: &Su
         note: format!(
             "{replicates} agents per arm, each {} (the same games for every arm of a world), in the original world \
              (the paper's, as coded) and in the SPEC world (ours).",
-            suite.describe()
+            describe(suite)
         ),
     }
 }
@@ -634,14 +534,7 @@ mod tests {
     use super::*;
 
     fn suite(goals: Goals) -> Suite {
-        Suite {
-            blocks: 3,
-            goals,
-            episodes: 4,
-            seed: 9,
-            horizon: 1000,
-            rules: Rules::of(Profile::Spec),
-        }
+        suite_in(Profile::Spec, 3, goals, 4, 9)
     }
 
     #[test]
@@ -661,7 +554,7 @@ mod tests {
     fn every_arm_plays_the_same_starts_and_the_optimum_is_below_them() {
         let s = suite(Goals::Drawn);
         let random = s.play(&mut agent::RandomPolicy).unwrap();
-        let exact = s.play(&mut agent::ExactPolicy::new(s.grid())).unwrap();
+        let exact = s.play(&mut agent::ExactPolicy::new(s.world.grid)).unwrap();
         let optimum = s.optimum().unwrap();
         for ((r, e), o) in random.iter().zip(&exact).zip(&optimum) {
             assert_eq!((r.start.clone(), r.goal.clone()), (e.start.clone(), e.goal.clone()));
@@ -698,10 +591,8 @@ mod tests {
 
     #[test]
     fn failures_count_as_the_horizon_in_the_samples() {
-        let s = Suite {
-            horizon: 3,
-            ..suite(Goals::Drawn)
-        };
+        let mut s = suite(Goals::Drawn);
+        s.world.horizon = 3;
         let random = s.play(&mut agent::RandomPolicy).unwrap();
         let arm = ArmResult::of(
             "random",

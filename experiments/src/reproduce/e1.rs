@@ -14,7 +14,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 use sim::{ActionProtocol, Profile, StartRule};
 
-use super::arms::{ArmResult, Goals, Row, Rules, Suite, Table, mean_of};
+use super::arms::{ArmResult, Goals, Row, Rules, Suite, Table, describe, mean_of};
 use super::shared::Shared;
 use super::text::{num, paper_against};
 use super::{Context, Experiment, HORIZON, Result, Setting, paper};
@@ -104,13 +104,11 @@ pub struct Decomposition {
 /// Runs E1.
 pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
     let per_replicate = ctx.scale.e1_games;
-    let suite = |rules| Suite {
-        blocks: 2,
+    let suite = |rules: Rules| Suite {
+        world: rules.world(2, HORIZON),
         goals: Goals::Drawn,
         episodes: per_replicate * ctx.scale.e1_replicates as u64,
         seed: ctx.seeds.test,
-        horizon: HORIZON,
-        rules,
     };
     let played: Vec<(WorldArm, Option<f64>)> = WORLDS
         .par_iter()
@@ -174,7 +172,7 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
         part(steps.start),
         part(steps.interaction),
     );
-    let games = suite(Rules::of(Profile::Spec)).describe();
+    let games = describe(&suite(Rules::of(Profile::Spec)));
     Ok(Experiment {
         id: "E1".into(),
         title: "Random agent, 2 blocks".into(),

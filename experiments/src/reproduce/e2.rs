@@ -3,7 +3,7 @@
 
 use sim::{Goal, Profile};
 
-use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, mean_of, play_replicates};
+use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, describe, mean_of, play_replicates, suite_in};
 use super::shared::Shared;
 use super::text::{mean_name, num, paper_against, significance, world_name};
 use super::{Context, Experiment, HORIZON, Result, Setting, WORLDS, paper, paper_learner};
@@ -30,7 +30,7 @@ struct World {
 fn in_world(ctx: &Context, world: Profile) -> Result<World> {
     let goals = Goal::all(2)?;
     let trained = ctx.train_replicates("E2", |r| ctx.paper_config(world, &goals, r))?;
-    let suite = Suite::in_world(world, 2, Goals::Drawn, ctx.scale.test_games, ctx.seeds.test);
+    let suite = suite_in(world, 2, Goals::Drawn, ctx.scale.test_games, ctx.seeds.test);
     let optimum = suite.optimum()?;
     let mut arms = Vec::new();
     for epsilon in EPSILONS {
@@ -127,7 +127,7 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
             name: "games".into(),
             value: format!(
                 "{} in each world (the paper does not say how many), per agent and epsilon",
-                spec.suite.describe()
+                describe(&spec.suite)
             ),
         },
         Setting {
@@ -147,7 +147,7 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
         setup,
         tables: vec![Table {
             title: "Q-learning, 2 blocks".into(),
-            suite: format!("{}, in each world", spec.suite.describe()),
+            suite: format!("{}, in each world", describe(&spec.suite)),
             paper: Some(paper::E2),
             tests: vec!["Wilcoxon vs epsilon 0.01".into()],
             rows,

@@ -6,7 +6,7 @@
 use agent::{QAgent, RandomPolicy};
 use sim::Profile;
 
-use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, mean_of, play_replicates};
+use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, describe, mean_of, play_replicates, suite_in};
 use super::shared::Shared;
 use super::text::{num, p_value, paper_against, significance, world_name};
 use super::{Context, Experiment, HORIZON, Result, Setting, WORLDS, goals, paper, paper_learner};
@@ -34,7 +34,7 @@ fn in_world(ctx: &Context, world: Profile) -> Result<World> {
     let trained = ctx.train_replicates("E3", |r| ctx.paper_config(world, &train_goals, r))?;
     let test_goals = Goals::Each(goals(&paper::E3_TEST_GOALS));
     let per_goal = ctx.scale.e3_games_per_goal;
-    let suite = Suite::in_world(world, 3, test_goals.clone(), per_goal, ctx.seeds.test);
+    let suite = suite_in(world, 3, test_goals.clone(), per_goal, ctx.seeds.test);
     let optimum = suite.optimum()?;
     let eps = ctx.test_epsilon();
     let q = play_replicates(
@@ -170,7 +170,7 @@ pub(super) fn run(ctx: &Context, shared: &Shared) -> Result<Experiment> {
             value: format!(
                 "{} (the paper's 100) in each world, per agent; the random agent plays {} sets of them, each its own \
                  starts",
-                spec.suite.describe(),
+                describe(&spec.suite),
                 ctx.scale.replicates
             ),
         },
@@ -191,7 +191,7 @@ pub(super) fn run(ctx: &Context, shared: &Shared) -> Result<Experiment> {
         setup,
         tables: vec![Table {
             title: "Unseen goals 2,1,0 and 1,2,0".into(),
-            suite: format!("{}, in each world", spec.suite.describe()),
+            suite: format!("{}, in each world", describe(&spec.suite)),
             paper: Some(paper::E3),
             tests: vec!["KS vs random".into()],
             rows,

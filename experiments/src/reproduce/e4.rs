@@ -9,7 +9,7 @@ use agent::{EpisodeResult, TrainConfig};
 use rayon::prelude::*;
 use sim::{Goal, Profile};
 
-use super::arms::{ArmResult, Goals, Row, Suite, Table};
+use super::arms::{ArmResult, Goals, Row, Suite, Table, describe, suite_in};
 use super::shared::{Shared, train_along};
 use super::text::{mean_name, num, percent};
 use super::{Context, Curve, CurvePoint, Drawing, Experiment, Figure, Result, Setting, paper, paper_learner};
@@ -25,13 +25,13 @@ pub(super) fn jobs(ctx: &Context) -> u64 {
 
 /// The SPEC world's test games at every point: all goals, drawn per game.
 pub(super) fn suite(ctx: &Context) -> Suite {
-    Suite::in_world(Profile::Spec, 3, Goals::Drawn, ctx.scale.test_games, ctx.seeds.test)
+    suite_in(Profile::Spec, 3, Goals::Drawn, ctx.scale.test_games, ctx.seeds.test)
 }
 
 /// The original world's test games at every point: the paper's 100, goal drawn per game.
 fn original_suite(ctx: &Context) -> Suite {
     let games = u64::from(paper::FIG3[0].test_games);
-    Suite::in_world(Profile::Original, 3, Goals::Drawn, games, ctx.seeds.test)
+    suite_in(Profile::Original, 3, Goals::Drawn, games, ctx.seeds.test)
 }
 
 /// Trains `replicates` of `config(r)` in parallel along `schedule`, testing at each point
@@ -110,14 +110,14 @@ fn spec_curve(ctx: &Context) -> Result<Curve> {
         ),
         world: Profile::Spec,
         test_epsilon: eps,
-        suite: suite.describe(),
+        suite: describe(&suite),
         points: schedule
             .iter()
             .zip(&per_point)
             .map(|(&games, at_point)| {
                 CurvePoint::of(
                     games,
-                    &ArmResult::of("", "", Some(eps), &at_point[0], &optimum, suite.horizon),
+                    &ArmResult::of("", "", Some(eps), &at_point[0], &optimum, suite.world.horizon),
                 )
             })
             .collect(),
@@ -158,7 +158,7 @@ fn original_curves(ctx: &Context) -> Result<(Vec<Curve>, Table)> {
                     Some(eps),
                     &at_point[e],
                     &optimum,
-                    suite.horizon,
+                    suite.world.horizon,
                 )
             })
             .collect();
@@ -171,13 +171,13 @@ fn original_curves(ctx: &Context) -> Result<(Vec<Curve>, Table)> {
             learner: learner.clone(),
             world: Profile::Original,
             test_epsilon: eps,
-            suite: suite.describe(),
+            suite: describe(&suite),
             points: schedule.iter().zip(&arms).map(|(&g, a)| CurvePoint::of(g, a)).collect(),
         });
     }
     let table = Table {
         title: "Fig. 3's points, the paper's learner in the original world".into(),
-        suite: format!("{}, in the original world", suite.describe()),
+        suite: format!("{}, in the original world", describe(&suite)),
         paper: None,
         tests: Vec::new(),
         rows,

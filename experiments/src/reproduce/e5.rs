@@ -10,7 +10,9 @@
 use agent::{Assist, OracleKind, Oscillation};
 use sim::{Goal, Profile};
 
-use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, play_replicates, steps_box_plot};
+use super::arms::{
+    ArmResult, Goals, Row, Suite, Table, TestOutcome, describe, play_replicates, steps_box_plot, suite_in,
+};
 use super::shared::Shared;
 use super::text::{num, paper_against, significance, world_name};
 use super::{Context, Drawing, Experiment, Figure, HORIZON, Result, Setting, WORLDS, paper, paper_learner};
@@ -45,7 +47,7 @@ struct World {
 /// Runs E5 in `world`, training for `games` or for the learner's preset.
 fn in_world(ctx: &Context, world: Profile, games: Option<u64>) -> Result<World> {
     let all = Goal::all(3)?;
-    let suite = Suite::in_world(world, 3, Goals::Drawn, ctx.scale.test_games, ctx.seeds.test);
+    let suite = suite_in(world, 3, Goals::Drawn, ctx.scale.test_games, ctx.seeds.test);
     let optimum = suite.optimum()?;
     let eps = ctx.test_epsilon();
     let mut arms = Vec::new();
@@ -195,7 +197,7 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
     setup.extend([
         Setting {
             name: "games".into(),
-            value: format!("{} (the paper's 500) in each world, per agent", spec.suite.describe()),
+            value: format!("{} (the paper's 500) in each world, per agent", describe(&spec.suite)),
         },
         Setting {
             name: "test policy".into(),
@@ -215,7 +217,7 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
         tables: vec![
             Table {
                 title: "Oracle assistance in training".into(),
-                suite: format!("{}, in each world", spec.suite.describe()),
+                suite: format!("{}, in each world", describe(&spec.suite)),
                 paper: Some(paper::TABLE_I),
                 tests: vec!["Wilcoxon vs baseline".into()],
                 rows,
@@ -225,7 +227,7 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
                     "Oracle assistance in training, {} training games (Table I gives no length; Fig. 3's middle point)",
                     short_training()
                 ),
-                suite: format!("{}, in the original world", short.suite.describe()),
+                suite: format!("{}, in the original world", describe(&short.suite)),
                 paper: Some(paper::TABLE_I),
                 tests: vec!["Wilcoxon vs baseline".into()],
                 rows: short_rows,

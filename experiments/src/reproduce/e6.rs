@@ -8,7 +8,9 @@ use agent::{CorrectionConfig, DemonstratorProfile, QAgent};
 use rayon::prelude::*;
 use sim::{Goal, Profile};
 
-use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, play_replicates, steps_box_plot};
+use super::arms::{
+    ArmResult, Goals, Row, Suite, Table, TestOutcome, describe, play_replicates, steps_box_plot, suite_in,
+};
 use super::paper::PaperTable;
 use super::shared::Shared;
 use super::{Context, Drawing, Experiment, Figure, HORIZON, Result, Setting, WORLDS, goals, paper, paper_learner};
@@ -96,7 +98,7 @@ fn in_world(ctx: &Context, world: Profile) -> Result<World> {
     let eps = ctx.test_epsilon();
     let mut tables = Vec::new();
     for (goals, _, _, _) in suites() {
-        let suite = Suite::in_world(world, 3, goals, ctx.scale.test_games, ctx.seeds.test);
+        let suite = suite_in(world, 3, goals, ctx.scale.test_games, ctx.seeds.test);
         let optimum = suite.optimum()?;
         let base = play_replicates(
             &suite,
@@ -210,7 +212,7 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
         ));
         tables.push(Table {
             title: title.into(),
-            suite: format!("{}, in each world", suite.describe()),
+            suite: format!("{}, in each world", describe(suite)),
             paper: Some(theirs),
             tests: vec!["Wilcoxon vs baseline".into()],
             rows,

@@ -2,11 +2,11 @@
 //! (the paper's and ours), the oracle and the exact solver, on the same starts of every
 //! goal, against the shortest plans.
 
-use agent::{EpisodeResult, ExactPolicy, OraclePolicy, Policy, RandomPolicy};
+use agent::{EpisodeResult, PlayingModel, Policy, PolicyKind, PolicyOptions};
 use rayon::prelude::*;
 use sim::{Goal, Profile};
 
-use super::arms::{ArmResult, Goals, Row, Rules, Suite, Table, TestOutcome, mean_of};
+use super::arms::{ArmResult, Goals, Row, Rules, Suite, Table, TestOutcome, describe, mean_of};
 use super::e3::ours_description;
 use super::shared::Shared;
 use super::text::{num, significance};
@@ -63,6 +63,16 @@ impl Agent {
     fn is_learner(self) -> bool {
         matches!(self, Agent::Paper { .. } | Agent::Ours { .. })
     }
+
+    /// The kind of policy it is, as `blockstack run --agent` names it.
+    fn kind(self) -> PolicyKind {
+        match self {
+            Agent::Random => PolicyKind::Random,
+            Agent::Paper { .. } | Agent::Ours { .. } => PolicyKind::Q,
+            Agent::Oracle => PolicyKind::Oracle,
+            Agent::Exact => PolicyKind::Exact,
+        }
+    }
 }
 
 /// Jobs reported: one suite per agent.
@@ -74,31 +84,33 @@ pub(super) fn jobs(_: &Context) -> u64 {
 pub(super) fn run(ctx: &Context, shared: &Shared) -> Result<Experiment> {
     let (paper_agent, ours) = (shared.paper_spec(), shared.ours());
     let suite = Suite {
-        blocks: 3,
+        world: Rules::of(Profile::Spec).world(3, HORIZON),
         goals: Goals::Each(Goal::all(3)?),
         episodes: ctx.scale.test_games,
         seed: ctx.seeds.test,
-        horizon: HORIZON,
-        rules: Rules::of(Profile::Spec),
     };
     let optimum = suite.optimum()?;
     let eps = ctx.test_epsilon();
     let epsilon = |greedy: bool| if greedy { 0.0 } else { eps };
+    let world = &suite.world;
     let policy = |agent: Agent| -> Result<Box<dyn Policy + '_>> {
-        Ok(match agent {
-            Agent::Random => Box::new(RandomPolicy),
-            Agent::Paper { greedy } => Box::new(paper_agent.policy(epsilon(greedy))?),
-            Agent::Ours { greedy } => Box::new(ours.policy(epsilon(greedy))?),
-            Agent::Oracle => Box::new(OraclePolicy::new(suite.grid())),
-            Agent::Exact => Box::new(ExactPolicy::new(suite.grid())),
-        })
+        let (model, greedy): (Option<&dyn PlayingModel>, bool) = match agent {
+            Agent::Paper { greedy } => (Some(paper_agent as &dyn PlayingModel), greedy),
+            Agent::Ours { greedy } => (Some(ours as &dyn PlayingModel), greedy),
+            _ => (None, false),
+        };
+        let options = PolicyOptions {
+            epsilon: epsilon(greedy),
+            ..PolicyOptions::default()
+        };
+        Ok(agent.kind().policy(world, model, &options)?)
     };
     let played: Vec<Vec<EpisodeResult>> = AGENTS
         .par_iter()
         .map(|&a| {
             let results = suite.play(policy(a)?.as_mut());
             ctx.progress.advance("E7");
-            results
+            Ok(results?)
         })
         .collect::<Result<_>>()?;
     let arms: Vec<ArmResult> = AGENTS
@@ -208,7 +220,7 @@ pub(super) fn run(ctx: &Context, shared: &Shared) -> Result<Experiment> {
         log_scale: true,
         note: format!(
             "{}. Learners play with a random action with probability {eps} unless marked greedy.",
-            suite.describe()
+            describe(&suite)
         ),
     };
     let mut figures = vec![Figure::new(
@@ -233,7 +245,7 @@ pub(super) fn run(ctx: &Context, shared: &Shared) -> Result<Experiment> {
             },
             Setting {
                 name: "games".into(),
-                value: format!("{}, per agent", suite.describe()),
+                value: format!("{}, per agent", describe(&suite)),
             },
             Setting {
                 name: "test policy".into(),
@@ -262,7 +274,7 @@ pub(super) fn run(ctx: &Context, shared: &Shared) -> Result<Experiment> {
         ],
         tables: vec![Table {
             title: "Steps to goal against the optimum".into(),
-            suite: suite.describe(),
+            suite: describe(&suite),
             paper: None,
             tests: vec!["Wilcoxon vs Q paper".into(), "Wilcoxon vs exact".into()],
             rows,

@@ -22,7 +22,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 use sim::{Goal, Profile, RewardModel};
 
-use super::arms::{ArmResult, Goals, Row, Suite, Table};
+use super::arms::{ArmResult, Goals, Row, Suite, Table, describe, suite_in};
 use super::shared::Shared;
 use super::text::num;
 use super::{Context, Drawing, Experiment, Figure, HORIZON, Options, Result, Setting};
@@ -287,7 +287,7 @@ struct Outcome {
 
 /// The suite every arm of `blocks` blocks is tested on: each goal, `games` starts.
 fn suite(ctx: &Context, blocks: usize, games: u64) -> Result<Suite> {
-    Ok(Suite::in_world(
+    Ok(suite_in(
         Profile::Spec,
         blocks,
         Goals::Each(Goal::all(blocks)?),
@@ -380,7 +380,7 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
             if !rows.is_empty() {
                 tables.push(Table {
                     title: format!("{title}, {blocks} blocks"),
-                    suite: suite(ctx, blocks, budget.test_games())?.describe()
+                    suite: describe(&suite(ctx, blocks, budget.test_games())?)
                         + ", greedy (every arm's network after its whole budget)",
                     paper: None,
                     tests: Vec::new(),

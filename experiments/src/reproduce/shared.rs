@@ -11,7 +11,7 @@
 use agent::{Assist, EpisodeResult, QAgent, TrainConfig, Trainer};
 use sim::{Goal, Profile};
 
-use super::arms::{ArmResult, Suite};
+use super::arms::{ArmResult, Suite, describe};
 use super::e3::ours_description;
 use super::{Context, Curve, CurvePoint, Result, e4};
 
@@ -133,7 +133,7 @@ fn train_ours_along(ctx: &Context) -> Result<(QAgent, Curve)> {
             let results = at_point.swap_remove(0);
             CurvePoint::of(
                 games,
-                &ArmResult::of("", "", Some(eps), &[results], &optimum, suite.horizon),
+                &ArmResult::of("", "", Some(eps), &[results], &optimum, suite.world.horizon),
             )
         })
         .collect();
@@ -141,7 +141,7 @@ fn train_ours_along(ctx: &Context) -> Result<(QAgent, Curve)> {
         learner: format!("ours: {}", ours_description(&agent)),
         world: Profile::Spec,
         test_epsilon: eps,
-        suite: suite.describe(),
+        suite: describe(&suite),
         points,
     };
     Ok((agent, curve))

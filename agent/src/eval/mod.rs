@@ -1,21 +1,25 @@
 //! Evaluating a policy on seeded starts: the one evaluation that `blockstack eval`, Python's
 //! `blockstack.train(eval_episodes=...)` and `Model.evaluate`, and the experiments share.
 //!
-//! An evaluation plays `episodes` episodes of a policy on each goal, episode `k` of every
-//! goal reset with [`sim::seeding::episode_seed`]`(seed, k)` (so any two policies evaluated
-//! with the same seed meet the same starts), measures each start's shortest legal plan with
-//! the exact solver, and sums it all up per goal and overall ([`EvalReport`], which is what
-//! `blockstack eval --json` prints). Games end at the goal or at the world's horizon.
+//! An evaluation plays `episodes` episodes of a policy on each goal, a [`Suite`] of one goal
+//! each: episode `k` of every goal reset with [`sim::seeding::episode_seed`]`(seed, k)` (so
+//! any two policies evaluated with the same seed meet the same starts). It measures each
+//! start's shortest legal plan with the exact solver, and sums it all up per goal and
+//! overall ([`EvalReport`], which is what `blockstack eval --json` prints). Games end at the
+//! goal or at the world's horizon. The experiments play their arms on [`Suite`]s too.
 
 use oracle::ExactSolver;
 use serde::Serialize;
-use sim::{Env, EnvConfig, Goal, GoalSpec, Profile, Termination};
+use sim::{EnvConfig, Goal, GoalSpec, Profile, Termination};
 
 use crate::error::{AgentError, Result};
 use crate::optimality::{self, Optimality};
 use crate::policy::Policy;
-use crate::rollout::{EpisodeResult, Summary, play_episode};
-use sim::seeding::episode_seed;
+use crate::rollout::{EpisodeResult, Summary};
+
+mod suite;
+
+pub use suite::{Goals, Suite};
 
 /// A run of a policy, as `blockstack run --json` reports it: the world, the seed and the
 /// figures.
@@ -126,6 +130,39 @@ pub struct EvalPlan {
     pub seed: u64,
 }
 
+/// What an evaluation of a trained model changes in the model's own world, each `None`
+/// keeping what the model (or the evaluation's default) says: `blockstack eval`'s flags and
+/// Python's `Model.evaluate` keywords, read by `neural::AnyModel::eval_plan_with`, the one
+/// place an evaluation of a model is planned.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct EvalOverrides {
+    /// The goals (default: every goal of the model's world, `Goal::all_in`).
+    pub goals: Option<Vec<Goal>>,
+    /// Episodes per goal.
+    pub episodes: u64,
+    /// The base seed of the starts.
+    pub seed: u64,
+    /// The profile whose rules replace the model's (default: the model's own rules).
+    pub profile: Option<Profile>,
+    /// The action protocol (default: the profile's, else the model's).
+    pub protocol: Option<sim::ActionProtocol>,
+    /// The start rule (default: the profile's, else the model's).
+    pub start: Option<sim::StartRule>,
+    /// The reward summed in the episodes (default: the model's training reward, or the
+    /// profile's when one is named).
+    pub reward: Option<sim::RewardModel>,
+    /// Steps before a game is cut off (default: the paper's 1000).
+    pub horizon: Option<u32>,
+    /// The backend (default: physics, whatever the model trained on).
+    pub backend: Option<sim::Backend>,
+    /// The number of blocks: the model's, or refused.
+    pub blocks: Option<usize>,
+    /// The grid: the model's, or refused.
+    pub grid: Option<sim::Grid>,
+    /// The view: the model's, or refused.
+    pub view: Option<sim::View>,
+}
+
 /// One evaluation's outcome: the report and every episode played.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Evaluation {
@@ -162,23 +199,19 @@ pub fn evaluate<'a>(
     let world = EnvConfig {
         termination: Termination::Goal,
         goal: GoalSpec::Random,
-        ..plan.world
+        ..plan.world.clone()
     };
     let (mut results, mut optimal) = (Vec::new(), Vec::new());
     let mut per_goal = Vec::with_capacity(plan.goals.len());
     for goal in &plan.goals {
-        let mut env = Env::new(EnvConfig {
-            goal: GoalSpec::Fixed(goal.clone()),
-            ..world.clone()
-        })?;
+        let suite = Suite {
+            world: world.clone(),
+            goals: Goals::Each(vec![goal.clone()]),
+            episodes: plan.episodes,
+            seed: plan.seed,
+        };
         let mut policy = make_policy()?;
-        let played = (0..plan.episodes)
-            .map(|k| {
-                let result = play_episode(&mut env, policy.as_mut(), k, episode_seed(plan.seed, k), &mut ())?;
-                tick()?;
-                Ok(result)
-            })
-            .collect::<Result<Vec<_>>>()?;
+        let played = suite.play_with(policy.as_mut(), tick)?;
         let best = played
             .iter()
             .map(|r| {

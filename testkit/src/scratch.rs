@@ -1,6 +1,5 @@
 //! Scratch folders for the workspace's tests, removed when a test ends so that test runs do
-//! not fill the disk. The `files` crate's tests include this file too (`#[path]`): one home
-//! for the helper.
+//! not fill the disk.
 
 use std::path::Path;
 
