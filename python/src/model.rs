@@ -40,12 +40,14 @@ impl NativeModel {
         })
     }
 
-    /// `q` (a tabular Q-agent) or `dqn` (a network).
+    /// `q` (a tabular Q-agent), `dqn` (a network) or `relational` (a relational policy of
+    /// block moves, `blockstack dqn --preset general`).
     #[getter]
     fn kind(&self) -> &'static str {
         match self.model {
             AnyModel::Q(_) => "q",
             AnyModel::Dqn(_) => "dqn",
+            AnyModel::Relational(_) => "relational",
         }
     }
 

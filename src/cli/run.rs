@@ -66,7 +66,7 @@ pub struct RunArgs {
     #[arg(long, required_if_eq_any([("agent", "q"), ("agent", "dqn")]))]
     pub model: Option<PathBuf>,
     /// The `q` or `dqn` agent's probability of a random legal action [default: the paper's
-    /// test policy: 0.1]
+    /// test policy: 0.1; 0 for a relational policy (`dqn --preset general`)]
     #[arg(long)]
     pub epsilon: Option<f64>,
     #[command(flatten)]
@@ -121,7 +121,9 @@ pub fn run(args: RunArgs) -> Result<()> {
         (AgentKind::Q | AgentKind::Dqn, Some(path)) => {
             let model = super::eval::load_model(path)?;
             match (args.agent, &model) {
-                (AgentKind::Q, AnyModel::Q(_)) | (AgentKind::Dqn, AnyModel::Dqn(_)) => {}
+                (AgentKind::Q, AnyModel::Q(_))
+                | (AgentKind::Dqn, AnyModel::Dqn(_))
+                | (AgentKind::Dqn, AnyModel::Relational(_)) => {}
                 _ => anyhow::bail!(
                     "{} holds a {} model, not what --agent {} plays",
                     path.display(),
@@ -161,7 +163,14 @@ pub fn run(args: RunArgs) -> Result<()> {
             OracleKind::Paper => Box::new(PaperOraclePolicy::new(config.grid)),
         },
         (AgentKind::Exact, _) => Box::new(ExactPolicy::with_planner(args.budget.solver(config.grid))),
-        (AgentKind::Q | AgentKind::Dqn, Some(m)) => m.policy(args.epsilon.unwrap_or(agent::profile::TEST_EPSILON))?,
+        (AgentKind::Q | AgentKind::Dqn, Some(m)) => {
+            // A relational policy plays greedily unless asked: it is measured greedy.
+            let default = match m {
+                AnyModel::Relational(_) => 0.0,
+                _ => agent::profile::TEST_EPSILON,
+            };
+            m.policy(args.epsilon.unwrap_or(default))?
+        }
         (AgentKind::Q | AgentKind::Dqn, None) => anyhow::bail!("--agent q and --agent dqn need --model FILE"),
     };
     let mut env = Env::new(config)?;

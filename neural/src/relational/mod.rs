@@ -2,7 +2,7 @@
 
 pub mod graph;
 pub mod net;
-pub mod policy;
+pub mod model;
 pub mod train;
 
 /// The most moves a game of `blocks` blocks may take before it counts as failed: four per
@@ -10,3 +10,7 @@ pub mod train;
 pub fn move_limit(blocks: usize) -> usize {
     4 * blocks
 }
+
+pub use model::{Game, MovePolicy, RelationalModel, RelationalPolicy};
+pub use net::{RelationalNet, Shape};
+pub use train::{IterationReport, RelationalConfig};

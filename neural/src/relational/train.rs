@@ -25,7 +25,7 @@ use crate::optim::{Optimizer, OptimizerKind};
 
 use super::graph::Graph;
 use super::net::{RelationalNet, Shape, Tape};
-use super::policy::Policy;
+use super::model::MovePolicy;
 
 /// A training run of the relational policy.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -70,7 +70,7 @@ impl RelationalConfig {
             partial_goals: 0.2,
             problems: 20_000,
             iterations: 10,
-            steps: 2_000,
+            steps: 3_000,
             rollouts: 1_000,
             batch: 64,
             lr: 3e-3,
@@ -239,7 +239,7 @@ pub fn train(
             step += 1;
         }
         // DAgger: play the policy and label what it reached.
-        let mut policy = Policy::new(&net);
+        let mut policy = MovePolicy::new(&net);
         let (mut played, mut won, mut ratio_sum) = (0u64, 0u64, 0.0);
         for k in 0..config.rollouts {
             let seed = episode_seed(episode_seed(config.seed, 3), iteration * 10_000_000 + k);
@@ -260,7 +260,7 @@ pub fn train(
                     break;
                 };
                 data.push(example);
-                let mv = policy.choose(&state, &goal).expect("a legal move where the goal does not hold");
+                let mv = policy.choose(&state, &goal, oracle::towers::Table::Unbounded).expect("a legal move where the goal does not hold");
                 state.apply(mv, oracle::towers::Table::Unbounded)?;
                 moves += 1;
             }

@@ -32,6 +32,28 @@ pub fn random_state(blocks: usize, seed: u64) -> Towers {
     Towers::from_below(below)
 }
 
+/// A random state of `blocks` blocks drawn as Neural Logic Machines draw theirs (Dong et
+/// al., "Neural Logic Machines", ICLR 2019, and their code's `randomly_generate_world`):
+/// the blocks in a uniformly random order, each put on the table or on top of one of the
+/// towers built so far, the table and each top equally likely. Not uniform over states:
+/// tall towers are rarer than among uniform states. The same seed gives the same state.
+pub fn nlm_state(blocks: usize, seed: u64) -> Towers {
+    let mut rng = rng(seed);
+    let mut below = vec![NONE; blocks];
+    // The tops of the towers built so far.
+    let mut tops: Vec<usize> = Vec::new();
+    for b in permutation(blocks, &mut rng) {
+        let place = rng.random_range(0..=tops.len());
+        if place < tops.len() {
+            below[b] = tops[place];
+            tops[place] = b;
+        } else {
+            tops.push(b);
+        }
+    }
+    Towers::from_below(below)
+}
+
 /// A random goal of `stacks` towers naming `named` of `blocks` blocks (the others free):
 /// a uniform choice of the named blocks, their order, and the cut into towers.
 pub fn random_goal(blocks: usize, stacks: usize, named: usize, seed: u64) -> Result<TowerGoal> {
