@@ -37,7 +37,7 @@ from blockstack.env import BlocksWorldEnv, StackEnv
 from blockstack.goal_env import StackGoalEnv
 from blockstack.model import Model, load
 from blockstack import vector
-from blockstack.planning import solve
+from blockstack.planning import read_pddl, solve
 from blockstack.training import train
 
 __all__ = [
@@ -49,6 +49,7 @@ __all__ = [
     "demonstrations",
     "episode_seed",
     "load",
+    "read_pddl",
     "read_recording",
     "solve",
     "train",

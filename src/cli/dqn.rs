@@ -242,13 +242,13 @@ impl DqnArgs {
             if let Some(obs) = self.obs {
                 c.net.validate(obs)?;
             }
-        } else if let Some(obs) = self.obs {
-            if obs != c.obs() {
-                c = c.with_net(match obs {
-                    ObsKind::PaperScreen => neural::NetConfig::paper(),
-                    _ => neural::NetConfig::small(),
-                });
-            }
+        } else if let Some(obs) = self.obs
+            && obs != c.obs()
+        {
+            c = c.with_net(match obs {
+                ObsKind::PaperScreen => neural::NetConfig::paper(),
+                _ => neural::NetConfig::small(),
+            });
         }
         if let Some(d) = demos {
             if d == DemoSource::None {
@@ -340,7 +340,7 @@ pub fn dqn(args: DqnArgs) -> Result<()> {
             bar.set_length(p.target);
             stretch = (Instant::now(), p.done.saturating_sub(1));
         }
-        if p.done % DRAW_EVERY == 0 || p.done == p.target {
+        if p.done.is_multiple_of(DRAW_EVERY) || p.done == p.target {
             bar.set_position(p.done);
             let rate = (p.done - stretch.1) as f64 / stretch.0.elapsed().as_secs_f64().max(1e-9);
             let unit = if p.phase == Phase::Pretrain {
