@@ -1,6 +1,7 @@
-"""Trained models: ``blockstack.load(path)`` reads a model file of either kind (a tabular
-Q-agent from ``blockstack train``, a network from ``blockstack dqn``) and plays it with
-Stable-Baselines3's conventions::
+"""Trained models: ``blockstack.load(path)`` reads a model file of any kind (a tabular
+Q-agent from ``blockstack train``, a network from ``blockstack dqn``, a relational policy of
+block moves from ``blockstack dqn --preset general``) and plays it with Stable-Baselines3's
+conventions::
 
     model = blockstack.load("role.safetensors")
     env = model.make_env()                      # the world it was trained in, obs="state"
@@ -11,8 +12,16 @@ Stable-Baselines3's conventions::
 
 ``predict`` reads the ``state`` observation (a dict of ``blocks``, ``held``, ``goal`` and
 ``goal_tower``),
-which holds everything either kind of model needs; ``make_env`` makes environments that
-show it.
+which holds everything every kind of model needs; ``make_env`` makes environments that
+show it. A relational policy plays the side view at any number of blocks, a block move at a
+time: its ``make_env`` takes block moves (``actions="moves"``), and ``predict`` returns a
+block move's index there (pass ``grid=`` for an environment on another grid than the
+model's world's)::
+
+    model = blockstack.load("general.safetensors")
+    env = model.make_env(blocks=6)
+    obs, info = env.reset(seed=7)
+    move, _ = model.predict(obs)                # a block move of the env's action space
 """
 
 from __future__ import annotations
@@ -39,7 +48,8 @@ class Model:
 
     @property
     def kind(self) -> str:
-        """``q`` (a tabular Q-agent) or ``dqn`` (a network)."""
+        """``q`` (a tabular Q-agent), ``dqn`` (a network) or ``relational`` (a relational
+        policy of block moves)."""
         return self._native.kind
 
     @property
@@ -57,6 +67,8 @@ class Model:
         ``state`` observation that :meth:`predict` reads; ``overrides`` change any keyword
         argument of :class:`blockstack.StackEnv` (``goal``, ``backend``, ``render_mode``...)."""
         kwargs = dict(self.world, obs="state")
+        if self.kind == "relational":
+            kwargs["actions"] = "moves"
         kwargs.update(overrides)
         return StackEnv(**kwargs)
 
@@ -71,11 +83,14 @@ class Model:
         state: Any = None,
         episode_start: Optional[np.ndarray] = None,
         deterministic: bool = True,
+        grid: Optional[Tuple[int, int]] = None,
     ) -> Tuple[int, None]:
         """``(action, None)`` for a ``state`` observation: the greedy legal action, or with
         ``deterministic=False`` a random legal action with probability 0.1 (the paper's test
-        policy). ``state`` and ``episode_start`` are Stable-Baselines3's arguments for
-        recurrent policies, unused here."""
+        policy). For a relational policy the action is a block move of an environment with
+        ``actions="moves"`` on ``grid`` (default: the model's world's grid). ``state`` and
+        ``episode_start`` are Stable-Baselines3's arguments for recurrent policies, unused
+        here."""
         if not isinstance(observation, dict) or not {"blocks", "held", "goal"} <= set(observation):
             raise ValueError(
                 "predict reads the state observation (a dict of blocks, held and goal): make the "
@@ -87,6 +102,10 @@ class Model:
         # Without ``goal_tower`` (observations of releases before it) the goal is one tower.
         towers = [int(t) for t in np.asarray(observation.get("goal_tower", [0] * len(goal)))]
         epsilon = 0.0 if deterministic else TEST_EPSILON
+        if self.kind == "relational":
+            size = tuple(grid) if grid is not None else tuple(self.world["grid"])
+            move = self._native.act_move(cells, None if held < 0 else held, goal, towers, size, epsilon)
+            return move, None
         action = self._native.act(cells, None if held < 0 else held, goal, towers, epsilon)
         return action, None
 
@@ -106,6 +125,6 @@ class Model:
 
 
 def load(path: Union[str, os.PathLike]) -> Model:
-    """The model file at ``path``, of either kind; a ``ValueError`` saying what is wrong with
-    a file that is neither."""
+    """The model file at ``path``, of any kind; a ``ValueError`` saying what is wrong with a
+    file that is none."""
     return Model(path)
