@@ -20,7 +20,7 @@ fn quick_report() -> PathBuf {
     let o = cli("reproduce").arg("--quick").flag("out", dir.to_str().unwrap()).run();
     assert!(o.status.success(), "{}", stderr(&o));
     let out = String::from_utf8_lossy(&o.stdout);
-    assert!(out.contains("reproduced E1, E2, E3, E4, E5, E6, E7, E8, E9"), "{out}");
+    assert!(out.contains("reproduced E1, E2, E3, E4, E5, E6, E7, E8, E9, E10"), "{out}");
     dir
 }
 
@@ -49,10 +49,10 @@ fn the_quick_report_holds_every_experiment() {
     let summary = std::fs::read_to_string(dir.join("summary.md")).expect("summary.md exists");
     let text = std::fs::read_to_string(dir.join("results.json")).unwrap();
     assert_eq!(summary, experiments::reproduce::summary(&text).unwrap());
-    assert_eq!(summary.lines().filter(|l| l.starts_with("| E")).count(), 9, "{summary}");
+    assert_eq!(summary.lines().filter(|l| l.starts_with("| E")).count(), 10, "{summary}");
     let experiments = json["experiments"].as_array().unwrap();
     let ids: Vec<&str> = experiments.iter().map(|e| e["id"].as_str().unwrap()).collect();
-    assert_eq!(ids, ["E1", "E2", "E3", "E4", "E5", "E6", "E7", "E8", "E9"]);
+    assert_eq!(ids, ["E1", "E2", "E3", "E4", "E5", "E6", "E7", "E8", "E9", "E10"]);
     for e in experiments {
         let id = e["id"].as_str().unwrap();
         assert!(readme.contains(&format!("## {id}: ")), "{id} has no section");
@@ -60,11 +60,14 @@ fn the_quick_report_holds_every_experiment() {
         assert!(!reading.is_empty() && readme.contains(reading), "{id}'s reading");
         let tables = e["tables"].as_array().unwrap();
         let curves = e["curves"].as_array().unwrap();
-        // E9's figures are its own (grouped problems, physics against the grid model).
+        // E9's figures are its own (grouped problems, physics against the grid model), and
+        // E10's (the learned policy by number of blocks).
         let blocks_world = !e["blocks_world"].is_null();
         assert_eq!(blocks_world, id == "E9", "{id}");
+        let general = !e["general"].is_null();
+        assert_eq!(general, id == "E10", "{id}");
         assert!(
-            !tables.is_empty() || !curves.is_empty() || blocks_world,
+            !tables.is_empty() || !curves.is_empty() || blocks_world || general,
             "{id} has no figures"
         );
         for (t, row) in tables
@@ -128,6 +131,7 @@ fn the_quick_report_holds_every_experiment() {
         "e7-paper.gif",
         "e9-moves.png",
         "e9-reached.png",
+        "e10-moves.png",
     ] {
         assert!(dir.join(figure).is_file(), "{figure}");
     }
@@ -164,6 +168,20 @@ fn the_quick_report_holds_every_experiment() {
         );
     }
     assert!(readme.contains("### Physics against the grid model"));
+
+    // E10: the learned policy played every size it was given, each against the near-optimal
+    // planner, and against the fewest moves where searched; NLM's published figures beside.
+    let e10 = &experiments[9]["general"];
+    for row in e10["uniform"].as_array().unwrap() {
+        assert!(row["problems"].as_u64().unwrap() > 0, "{row}");
+        assert!((0.0..=1.0).contains(&row["success"].as_f64().unwrap()), "{row}");
+    }
+    for row in e10["exact"].as_array().unwrap() {
+        let near = row["near_optimal_fewest_ratio"].as_f64().unwrap();
+        assert!((1.0..=2.0).contains(&near), "{row}");
+    }
+    assert_eq!(e10["nlm"][1]["published"][1], 85.8);
+    assert!(readme.contains("### Neural Logic Machines' generator"));
 
     // E1: the paper's figure, ours in both worlds, and where the paper's lies against the
     // spread of each world's replicates, said in the reading.
@@ -251,13 +269,13 @@ fn only_runs_the_experiments_asked_for() {
     assert_eq!(json["ran"]["threads"], 1);
     let o = cli("reproduce")
         .arg("--quick")
-        .flag("only", "E10")
+        .flag("only", "E11")
         .flag("out", out.to_str().unwrap())
         .run();
     assert_eq!(o.status.code(), Some(2));
     assert_eq!(stderr(&o).trim_end().lines().count(), 1, "{}", stderr(&o));
     assert!(
-        stderr(&o).contains("--only E10: name experiments E1 to E9"),
+        stderr(&o).contains("--only E11: name experiments E1 to E10"),
         "{}",
         stderr(&o)
     );

@@ -7,6 +7,7 @@ mod cli_checkpoint;
 mod cli_correct;
 mod cli_dqn;
 mod cli_files;
+mod cli_general;
 mod cli_original;
 mod cli_pddl;
 mod cli_preset;

@@ -1,7 +1,8 @@
 //! The reproduction of the paper (docs/world.md section 9): experiments E1-E8, each beside the
 //! paper's figures, with their statistical tests, pictures, a report and machine-readable
-//! results; and E9, ours, the classic Blocks World seen from the side (docs/world.md section
-//! 12). `blockstack reproduce` is the command over it.
+//! results; E9, ours, the classic Blocks World seen from the side (docs/world.md section
+//! 12); and E10, ours, one learned policy for that world at every size (docs/dqn.md).
+//! `blockstack reproduce` is the command over it.
 //!
 //! [`reproduce`] runs the experiments asked for and returns the [`Reproduction`]: data only,
 //! nothing printed, nothing written; [`write_report`] then draws the pictures and writes
@@ -10,7 +11,7 @@
 //!
 //! # How a run is organised
 //!
-//! Every experiment is one module `e1` to `e9` with one signature, `run(&Context, &Shared)`,
+//! Every experiment is one module `e1` to `e10` with one signature, `run(&Context, &Shared)`,
 //! listed once in [`EXPERIMENTS`] with its id, the jobs it reports and the parts of the
 //! shared stage it needs. The shared stage (`Shared`) trains the agents several experiments
 //! play (our learner, the paper's learner in the SPEC world) before the experiments that
@@ -57,6 +58,7 @@
 
 mod arms;
 mod e1;
+mod e10;
 mod e2;
 mod e3;
 mod e4;
@@ -75,6 +77,7 @@ mod text;
 
 pub use arms::{ArmResult, Goals, Measured, Row, Rules, Suite, Table, TestOutcome};
 pub use e1::{Decomposition, Gap, WorldArm};
+pub use e10::{Family, General, SizeFigures, TrainingFigures};
 pub use e8::Budget;
 pub use e9::{AgentFigures, Agreement, BlocksWorld, Group, Played, Problem};
 pub use ran::Ran;
@@ -134,7 +137,7 @@ pub enum ReproduceError {
     #[error(transparent)]
     Files(#[from] files::FilesError),
     /// An experiment id that is not in [`EXPERIMENTS`].
-    #[error("no experiment {id}: name experiments E1 to E9")]
+    #[error("no experiment {id}: name experiments E1 to E10")]
     UnknownExperiment {
         /// The id asked for.
         id: String,
@@ -157,10 +160,11 @@ pub struct Options {
     pub seed: u64,
     /// Small counts (a check that the pipeline works), not the paper's.
     pub quick: bool,
-    /// E8's long budget: the pixel runs and the whole ablation ([`Budget::Long`]); E9's
+    /// E8's long budget: the pixel runs and the whole ablation ([`Budget::Long`]); E10's
+    /// preset training and 1,000 problems per size; E9's
     /// many problems.
     pub long: bool,
-    /// The experiments to run, by id ("E1" to "E9", any case); empty for all. The agents
+    /// The experiments to run, by id ("E1" to "E10", any case); empty for all. The agents
     /// they share are trained only when one of them needs them.
     pub only: Vec<String>,
 }
@@ -411,7 +415,7 @@ impl Figure {
 /// One experiment's results, ready for the report.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Experiment {
-    /// "E1" to "E9".
+    /// "E1" to "E10".
     pub id: String,
     /// What it asks.
     pub title: String,
@@ -433,6 +437,9 @@ pub struct Experiment {
     /// other experiments' results).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub blocks_world: Option<BlocksWorld>,
+    /// E10's training and problems by size (absent from the other experiments' results).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub general: Option<General>,
 }
 
 /// The whole run's results: what `results.json` holds.
@@ -465,7 +472,7 @@ pub(crate) struct Context<'a> {
 
 /// One experiment of the reproduction, as [`EXPERIMENTS`] lists it.
 pub struct Spec {
-    /// "E1" to "E9".
+    /// "E1" to "E10".
     pub id: &'static str,
     /// The parts of the shared stage it plays.
     needs: &'static [Part],
@@ -476,8 +483,9 @@ pub struct Spec {
 }
 
 /// Every experiment, in the report's order: E1-E7 are the paper's section VI (E7 the table
-/// it never had), E8 its section III-C, E9 the classic Blocks World (ours).
-pub const EXPERIMENTS: [Spec; 9] = [
+/// it never had), E8 its section III-C, E9 the classic Blocks World (ours), E10 one learned
+/// policy for it at every size (ours).
+pub const EXPERIMENTS: [Spec; 10] = [
     Spec {
         id: "E1",
         needs: &[],
@@ -531,6 +539,12 @@ pub const EXPERIMENTS: [Spec; 9] = [
         needs: &[],
         jobs: e9::jobs,
         run: e9::run,
+    },
+    Spec {
+        id: "E10",
+        needs: &[],
+        jobs: e10::jobs,
+        run: e10::run,
     },
 ];
 
@@ -764,7 +778,7 @@ mod tests {
         assert_eq!(announced, jobs(&[]));
         assert_eq!(done, announced);
         let ids: Vec<&str> = one.experiments.iter().map(|e| e.id.as_str()).collect();
-        assert_eq!(ids, ["E1", "E2", "E3", "E4", "E5", "E6", "E7", "E8", "E9"]);
+        assert_eq!(ids, ["E1", "E2", "E3", "E4", "E5", "E6", "E7", "E8", "E9", "E10"]);
     }
 
     #[test]
@@ -797,10 +811,10 @@ mod tests {
             seed: 5,
             quick: true,
             long: false,
-            only: vec!["E10".into()],
+            only: vec!["E11".into()],
         };
         let err = reproduce_with(&options, tiny(), &()).unwrap_err();
-        assert_eq!(err.to_string(), "no experiment E10: name experiments E1 to E9");
+        assert_eq!(err.to_string(), "no experiment E11: name experiments E1 to E10");
     }
 
     #[test]
@@ -847,14 +861,14 @@ mod tests {
         assert_eq!(summary_md, summary(&text).unwrap());
         assert!(summary_md.contains("at commit abc1234, on a test CPU (4 cores, 2 threads)"));
         let table: Vec<&str> = summary_md.lines().filter(|l| l.starts_with("| E")).collect();
-        assert_eq!(table.len(), 9, "{summary_md}");
+        assert_eq!(table.len(), 10, "{summary_md}");
         assert!(table[0].starts_with("| E1 random agent, 2 blocks"), "{}", table[0]);
         assert!(
             table[0].contains("| 4.0%, 263.55 |"),
             "the paper's E1 figures: {}",
             table[0]
         );
-        assert_eq!(json["experiments"].as_array().unwrap().len(), 9);
+        assert_eq!(json["experiments"].as_array().unwrap().len(), 10);
         // Every arm's figures and the paper's beside them.
         let e5 = &json["experiments"][4]["tables"][0]["rows"];
         assert_eq!(e5[0]["paper"]["failures"], 186);

@@ -1,7 +1,8 @@
 //! A model file of either kind, loaded and played through one type.
 //!
 //! `blockstack train` writes tabular Q-agents ([`agent::QAgent`]), `blockstack dqn` writes
-//! networks ([`Dqn`]); both are safetensors containers whose header names their format.
+//! networks ([`Dqn`]) and, with `--preset general`, relational policies
+//! ([`RelationalModel`]); all are safetensors containers whose header names their format.
 //! [`AnyModel::load`] reads the header and the file with the reader of its kind, so that
 //! `blockstack eval`, `blockstack run --model`, Python's `blockstack.load` and the
 //! experiments all load, describe and play a model the same way. It lives in `neural`
@@ -16,6 +17,7 @@ use sim::{Action, Backend, EnvConfig, Goal, GoalSpec, Grid, Observation, Profile
 
 use crate::error::Result;
 use crate::model::{Dqn, FORMAT, MAX_NETWORK_BYTES};
+use crate::relational::RelationalModel;
 
 /// A trained agent read from a model file.
 pub enum AnyModel {
@@ -23,6 +25,23 @@ pub enum AnyModel {
     Q(Box<QAgent>),
     /// A network (`blockstack dqn`).
     Dqn(Box<Dqn>),
+    /// A relational policy (`blockstack dqn --preset general`): block moves in the side
+    /// view, at any number of blocks.
+    Relational(Box<RelationalModel>),
+}
+
+/// The world a relational policy is shown in when nothing says otherwise: the side view of
+/// the most blocks it trained on, on a grid where they fit (as wide as the blocks, a row
+/// more than them, at least the paper's 7 x 7).
+fn relational_world(model: &RelationalModel) -> EnvConfig {
+    let blocks = model.config().max_blocks;
+    EnvConfig {
+        grid: Grid::new(blocks.max(7), (blocks + 1).max(7)).unwrap_or_default(),
+        blocks,
+        view: sim::View::Side,
+        reward: RewardModel::from_name("step-cost").expect("a reward model"),
+        ..EnvConfig::for_profile(Profile::Spec)
+    }
 }
 
 impl AnyModel {
@@ -36,23 +55,29 @@ impl AnyModel {
         refuse_special(path)?;
         match files::container::format_of(path, MAX_NETWORK_BYTES) {
             Some(format) if format == FORMAT => Ok(AnyModel::Dqn(Box::new(Dqn::load(path)?))),
+            Some(format) if format == crate::relational::model::FORMAT => {
+                Ok(AnyModel::Relational(Box::new(RelationalModel::load(path)?)))
+            }
             _ => Ok(AnyModel::Q(Box::new(QAgent::load(path)?))),
         }
     }
 
-    /// The grid it plays on.
+    /// The grid it plays on (a relational policy plays any: the grid of its default world).
     pub fn grid(&self) -> Grid {
         match self {
             AnyModel::Q(q) => q.grid(),
             AnyModel::Dqn(d) => d.grid(),
+            AnyModel::Relational(r) => relational_world(r).grid,
         }
     }
 
-    /// The number of blocks it plays with.
+    /// The number of blocks it plays with (a relational policy plays any number: the most
+    /// it trained on).
     pub fn blocks(&self) -> usize {
         match self {
             AnyModel::Q(q) => q.blocks(),
             AnyModel::Dqn(d) => d.blocks(),
+            AnyModel::Relational(r) => r.config().max_blocks,
         }
     }
 
@@ -61,14 +86,17 @@ impl AnyModel {
         match self {
             AnyModel::Q(q) => q.name(),
             AnyModel::Dqn(d) => d.name(),
+            AnyModel::Relational(r) => r.name(),
         }
     }
 
-    /// The reward it was trained with, when the file says.
+    /// The reward it was trained with, when the file says (a relational policy learnt from
+    /// the optimum's moves, not from a reward).
     pub fn training_reward(&self) -> Option<RewardModel> {
         match self {
             AnyModel::Q(q) => q.training().map(|t| t.world.reward),
             AnyModel::Dqn(d) => Some(d.config().world.reward),
+            AnyModel::Relational(_) => None,
         }
     }
 
@@ -77,7 +105,7 @@ impl AnyModel {
     pub fn profile(&self) -> Profile {
         match self {
             AnyModel::Q(q) => q.training().map_or(Profile::Spec, |t| t.profile),
-            AnyModel::Dqn(_) => Profile::Spec,
+            AnyModel::Dqn(_) | AnyModel::Relational(_) => Profile::Spec,
         }
     }
 
@@ -93,7 +121,7 @@ impl AnyModel {
                 start: world.start,
                 ..ProfileParts::of(self.profile())
             },
-            AnyModel::Dqn(_) => ProfileParts {
+            AnyModel::Dqn(_) | AnyModel::Relational(_) => ProfileParts {
                 protocol: world.protocol,
                 reward: world.reward,
                 ..ProfileParts::of(Profile::Spec)
@@ -109,6 +137,7 @@ impl AnyModel {
         let trained = match self {
             AnyModel::Q(q) => q.training().map_or_else(|| Profile::Spec.world(), |t| t.world.clone()),
             AnyModel::Dqn(d) => d.config().world.clone(),
+            AnyModel::Relational(r) => relational_world(r),
         };
         EnvConfig {
             grid: self.grid(),
@@ -156,11 +185,18 @@ impl AnyModel {
         })
     }
 
-    /// An error unless a world of `blocks` blocks on `grid` is the model's.
+    /// An error unless a world of `blocks` blocks on `grid` is the model's (a relational
+    /// policy plays any, of at least one block).
     pub fn check_world(&self, grid: Grid, blocks: usize) -> Result<()> {
         match self {
             AnyModel::Q(q) => q.check_world(grid, blocks)?,
             AnyModel::Dqn(d) => d.check_world(grid, blocks)?,
+            AnyModel::Relational(_) if blocks == 0 => {
+                return Err(crate::NeuralError::Mismatch(
+                    "the relational policy plays worlds of at least 1 block".into(),
+                ));
+            }
+            AnyModel::Relational(_) => {}
         }
         Ok(())
     }
@@ -183,6 +219,11 @@ impl AnyModel {
     pub fn legal_q_values(&self, obs: &Observation) -> Result<Vec<(Action, f32)>> {
         let legal = obs.legal_actions();
         let by_action = match self {
+            AnyModel::Relational(_) => {
+                return Err(crate::NeuralError::Mismatch(
+                    "the relational policy scores block moves, not gripper actions".into(),
+                ));
+            }
             AnyModel::Q(q) => q.q_values(obs)?,
             AnyModel::Dqn(d) => {
                 let by_column = d.q_values(obs)?;
@@ -202,6 +243,7 @@ impl AnyModel {
         Ok(match self {
             AnyModel::Q(q) => Box::new(q.policy(epsilon)?),
             AnyModel::Dqn(d) => Box::new(d.policy(epsilon)?),
+            AnyModel::Relational(r) => Box::new(r.policy(epsilon)?),
         })
     }
 
@@ -265,7 +307,7 @@ impl PlayingModel for AnyModel {
     fn kind(&self) -> PolicyKind {
         match self {
             AnyModel::Q(_) => PolicyKind::Q,
-            AnyModel::Dqn(_) => PolicyKind::Dqn,
+            AnyModel::Dqn(_) | AnyModel::Relational(_) => PolicyKind::Dqn,
         }
     }
 

@@ -230,6 +230,40 @@ macro_rules! avx2_dispatch {
 }
 pub(crate) use avx2_dispatch;
 
+/// `tanh` of every value, in place, as a rational function: Eigen's and PyTorch's CPU
+/// approximation (a 13th over a 6th degree polynomial on `[-7.9, 7.9]`, clamped outside),
+/// within a few units in the last place of `f32::tanh`. Why: libm's `tanhf` is a call per
+/// value and costs tens of nanoseconds; this is a dozen multiply-adds that vectorise.
+pub fn tanh_in_place(values: &mut [f32]) {
+    tanh_dispatch(values);
+}
+
+avx2_dispatch! {
+    fn tanh_dispatch => tanh_any(values: &mut [f32])
+}
+
+#[inline(always)]
+fn tanh_any(values: &mut [f32]) {
+    const CLAMP: f32 = 7.905_311;
+    const A: [f32; 7] = [
+        4.893_524_6e-3,
+        6.372_619_3e-4,
+        1.485_722_4e-5,
+        5.122_297e-8,
+        -8.604_671_5e-11,
+        2.000_187_9e-13,
+        -2.760_768_5e-16,
+    ];
+    const B: [f32; 4] = [4.893_525_2e-3, 2.268_434_6e-3, 1.185_347_1e-4, 1.198_258_4e-6];
+    for v in values.iter_mut() {
+        let x = v.clamp(-CLAMP, CLAMP);
+        let x2 = x * x;
+        let p = ((((((A[6] * x2 + A[5]) * x2 + A[4]) * x2 + A[3]) * x2 + A[2]) * x2 + A[1]) * x2 + A[0]) * x;
+        let q = ((B[3] * x2 + B[2]) * x2 + B[1]) * x2 + B[0];
+        *v = p / q;
+    }
+}
+
 /// How many fixed parts a batch of `batch` samples is split into: two when each half
 /// carries at least `min_half` samples' worth of work, else one. It depends on the work
 /// only, never on the threads, so results do not either.
@@ -372,6 +406,16 @@ mod tests {
         let rhs: f64 = x.iter().zip(&dx).map(|(a, b)| f64::from(a * b)).sum();
         assert!((lhs - rhs).abs() < 1e-4, "{lhs} {rhs}");
         assert!(ConvGeometry::new(2, 5, 1, 3, 1).is_none());
+    }
+
+    #[test]
+    fn the_rational_tanh_is_tanh() {
+        let mut xs: Vec<f32> = (-2000..=2000).map(|i| i as f32 / 100.0).collect();
+        let want: Vec<f32> = xs.iter().map(|x| x.tanh()).collect();
+        tanh_in_place(&mut xs);
+        for (got, want) in xs.iter().zip(&want) {
+            assert!((got - want).abs() < 1e-6, "{got} {want}");
+        }
     }
 
     #[test]

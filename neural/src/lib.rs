@@ -29,6 +29,7 @@ pub mod mask;
 pub mod model;
 pub mod net;
 pub mod optim;
+pub mod relational;
 pub mod replay;
 pub mod train;
 

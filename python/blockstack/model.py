@@ -1,6 +1,7 @@
-"""Trained models: ``blockstack.load(path)`` reads a model file of either kind (a tabular
-Q-agent from ``blockstack train``, a network from ``blockstack dqn``) and plays it with
-Stable-Baselines3's conventions::
+"""Trained models: ``blockstack.load(path)`` reads a model file of any kind (a tabular
+Q-agent from ``blockstack train``, a network from ``blockstack dqn``, a relational policy of
+block moves from ``blockstack dqn --preset general``) and plays it with Stable-Baselines3's
+conventions::
 
     model = blockstack.load("role.safetensors")
     env = model.make_env()                      # the world it was trained in, obs="state"
@@ -11,8 +12,16 @@ Stable-Baselines3's conventions::
 
 ``predict`` reads the ``state`` observation (a dict of ``blocks``, ``held``, ``goal`` and
 ``goal_tower``),
-which holds everything either kind of model needs; ``make_env`` makes environments that
-show it.
+which holds everything every kind of model needs; ``make_env`` makes environments that
+show it. A relational policy plays the side view at any number of blocks, a block move at a
+time: its ``make_env`` takes block moves (``actions="moves"``), and ``predict`` returns a
+block move's index there (pass ``grid=`` for an environment on another grid than the
+model's world's)::
+
+    model = blockstack.load("general.safetensors")
+    env = model.make_env(blocks=6)
+    obs, info = env.reset(seed=7)
+    move, _ = model.predict(obs)                # a block move of the env's action space
 """
 
 from __future__ import annotations
@@ -42,7 +51,8 @@ class Model:
 
     @property
     def kind(self) -> str:
-        """``q`` (a tabular Q-agent) or ``dqn`` (a network)."""
+        """``q`` (a tabular Q-agent), ``dqn`` (a network) or ``relational`` (a relational
+        policy of block moves)."""
         return self._native.kind
 
     @property
@@ -62,6 +72,8 @@ class Model:
         A world the model cannot play (another grid, number of blocks or view) is a
         ``ValueError``, as ``blockstack run --model`` refuses it."""
         kwargs = dict(self.world, obs="state")
+        if self.kind == "relational":
+            kwargs["actions"] = "moves"
         kwargs.update(overrides)
         env = StackEnv(**kwargs)
         self._native.check_world(env.world)
@@ -78,11 +90,14 @@ class Model:
         state: Any = None,
         episode_start: Optional[np.ndarray] = None,
         deterministic: bool = True,
+        grid: Optional[Tuple[int, int]] = None,
     ) -> Tuple[int, None]:
         """``(action, None)`` for a ``state`` observation: the greedy legal action, or with
         ``deterministic=False`` a random legal action with probability 0.1 (the paper's test
-        policy). ``state`` and ``episode_start`` are Stable-Baselines3's arguments for
-        recurrent policies, unused here."""
+        policy). For a relational policy the action is a block move of an environment with
+        ``actions="moves"`` on ``grid`` (default: the model's world's grid). ``state`` and
+        ``episode_start`` are Stable-Baselines3's arguments for recurrent policies, unused
+        here."""
         if not isinstance(observation, dict) or not {"blocks", "held", "goal"} <= set(observation):
             raise ValueError(
                 "predict reads the state observation (a dict of blocks, held and goal): make the "
@@ -106,6 +121,10 @@ class Model:
         goal = [int(b) for b in goal]
         towers = [int(t) for t in towers]
         epsilon = 0.0 if deterministic else TEST_EPSILON
+        if self.kind == "relational":
+            size = tuple(grid) if grid is not None else tuple(self.world["grid"])
+            move = self._native.act_move(cells, None if held < 0 else held, goal, towers, size, epsilon)
+            return move, None
         action = self._native.act(cells, None if held < 0 else held, goal, towers, epsilon)
         return action, None
 
@@ -138,6 +157,6 @@ def _whole_array(name: str, value: Any) -> np.ndarray:
 
 
 def load(path: Union[str, os.PathLike]) -> Model:
-    """The model file at ``path``, of either kind; a ``ValueError`` saying what is wrong with
-    a file that is neither."""
+    """The model file at ``path``, of any kind; a ``ValueError`` saying what is wrong with a
+    file that is none."""
     return Model(path)

@@ -9,9 +9,9 @@ use neural::AnyModel;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sim::seeding::SimRng;
-use sim::{Goal, Observation, State};
+use sim::{Goal, Grid, Observation, State, View};
 
-use crate::boundary::{OrValueError, guard, raise_signal, signal_checker};
+use crate::boundary::{OrValueError, guard, raise_signal, signal_checker, value_error};
 use crate::config::World;
 use crate::env::state_from;
 use crate::observe;
@@ -41,12 +41,14 @@ impl NativeModel {
         })
     }
 
-    /// `q` (a tabular Q-agent) or `dqn` (a network).
+    /// `q` (a tabular Q-agent), `dqn` (a network) or `relational` (a relational policy of
+    /// block moves, `blockstack dqn --preset general`).
     #[getter]
     fn kind(&self) -> &'static str {
         match self.model {
             AnyModel::Q(_) => "q",
             AnyModel::Dqn(_) => "dqn",
+            AnyModel::Relational(_) => "relational",
         }
     }
 
@@ -100,6 +102,12 @@ impl NativeModel {
         goal_tower: Vec<i64>,
         epsilon: f64,
     ) -> PyResult<usize> {
+        if matches!(self.model, AnyModel::Relational(_)) {
+            return Err(value_error(
+                "a relational policy chooses block moves, not gripper actions: play it in an environment with \
+                 actions=\"moves\" (model.make_env() makes one)",
+            ));
+        }
         let state: State = state_from(&cells, held)?;
         let world = self.model.world();
         self.model
@@ -117,6 +125,45 @@ impl NativeModel {
         guard(|| {
             let mut policy = model.policy(epsilon).or_value_error()?;
             Ok(policy.act(&obs, rng).or_value_error()?.index())
+        })
+    }
+
+    /// The block move a relational policy makes from a side-view `state` observation on a
+    /// grid of `(width, height)`: its index among the actions of an environment with
+    /// `actions="moves"` (`sim::BlockMove::index`); greedy with `epsilon` 0, else a random
+    /// legal block move with probability `epsilon`. A `ValueError` for a model of another
+    /// kind.
+    #[pyo3(signature = (cells, held, goal, goal_tower, grid, epsilon=0.0))]
+    #[allow(clippy::too_many_arguments)]
+    fn act_move(
+        &mut self,
+        cells: Vec<(u8, u8)>,
+        held: Option<u8>,
+        goal: Vec<i64>,
+        goal_tower: Vec<i64>,
+        grid: (usize, usize),
+        epsilon: f64,
+    ) -> PyResult<usize> {
+        let AnyModel::Relational(model) = &self.model else {
+            return Err(value_error(
+                "this model chooses gripper actions: predict plays it; block moves are a relational policy's",
+            ));
+        };
+        let state: State = state_from(&cells, held)?;
+        let grid = Grid::new(grid.0, grid.1).or_value_error()?;
+        let goal = observe::read_goal(&goal, &goal_tower, state.block_count())?;
+        let obs = Observation {
+            grid,
+            state,
+            goal,
+            protocol: sim::ActionProtocol::Free,
+            view: View::Side,
+        };
+        let rng = &mut self.rng;
+        guard(|| {
+            let mut policy = model.policy(epsilon).or_value_error()?;
+            let mv = policy.block_move(&obs, rng).or_value_error()?;
+            Ok(mv.index(obs.state.block_count(), grid))
         })
     }
 

@@ -7,6 +7,7 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use neural::relational::{RelationalConfig, RelationalModel};
 use neural::{DemoSource, DqnConfig, LossKind, NetKind, ObsKind, OptimizerKind, Phase, Progress, TdLoss};
 
 use super::stdout::line;
@@ -15,7 +16,7 @@ use super::world::WorldArgs;
 
 /// Arguments of `blockstack dqn`. Every setting starts from a preset and may be changed.
 #[derive(Debug, Args)]
-#[command(mut_arg("blocks", |a| a.help("Number of blocks [default: 3]")))]
+#[command(mut_arg("blocks", |a| a.help("Number of blocks [default: 3; with --preset general, the most blocks of a training problem: 6]")))]
 #[command(mut_arg("grid", |a| a.help("Grid size, WxH [default: 7x7]")))]
 #[command(mut_arg("reward", |a| a.help("Reward model: sparse, dense, paper or step-cost [default: the preset's]")))]
 #[command(mut_arg("horizon", |a| a.help("Steps before a training game is cut off [default: the preset's]")))]
@@ -28,7 +29,10 @@ pub struct DqnArgs {
     /// DQfD on 500 exact-solver demonstrations), dqn-planes (ours, no demonstrations),
     /// dqfd-planes (ours with DQfD: the recommended recipe), her-planes (ours without
     /// demonstrations, with hindsight relabelling), dqfd-pixels (our DQfD recipe with the
-    /// paper network on the paper screen). Default: from --obs and --loss.
+    /// paper network on the paper screen), general (a relational policy of block moves in
+    /// the side view that plays any number of blocks, learnt from the optimum on up to 6;
+    /// it takes --blocks, --steps, --batch, --lr, --lr-final, --hidden and --seed). Default:
+    /// from --obs and --loss.
     #[arg(long)]
     pub preset: Option<String>,
     /// What the network sees: role-planes or paper-screen (default: the preset's, else
@@ -113,7 +117,69 @@ pub struct DqnArgs {
     pub out: PathBuf,
 }
 
+/// The preset that trains a relational policy ([`neural::relational`]), not a Q-network.
+pub const GENERAL: &str = "general";
+
 impl DqnArgs {
+    /// The relational policy's training config (`--preset general`): the preset's, with
+    /// the few flags it takes; any other flag given is refused, naming it.
+    pub fn general_config(&self) -> Result<RelationalConfig> {
+        let given = [
+            ("--obs", self.obs.is_some()),
+            ("--net", self.net.is_some()),
+            ("--loss", self.loss.is_some()),
+            ("--goals", self.goals.is_some()),
+            ("--grid", self.world.grid.is_some()),
+            ("--pretrain", self.pretrain.is_some()),
+            ("--demos", self.demos.is_some()),
+            ("--demos-file", self.demos_file.is_some()),
+            ("--reward", self.world.reward.is_some()),
+            ("--gamma", self.gamma.is_some()),
+            ("--optimizer", self.optimizer.is_some()),
+            ("--td-loss", self.td_loss.is_some()),
+            ("--buffer", self.buffer.is_some()),
+            ("--double", self.double.is_some()),
+            ("--mask-noops", self.mask_noops.is_some()),
+            ("--batch-norm", self.batch_norm.is_some()),
+            ("--margin", self.margin.is_some()),
+            ("--hindsight", self.hindsight.is_some()),
+            ("--demo-share", self.demo_share.is_some()),
+            ("--horizon", self.world.horizon.is_some()),
+            ("--backend", self.world.backend.is_some()),
+            ("--view top", self.world.view == Some(sim::View::Top)),
+            ("--protocol", self.protocol.is_some()),
+        ];
+        if let Some((flag, _)) = given.iter().find(|(_, g)| *g) {
+            anyhow::bail!(
+                "{flag} does not apply to --preset general (a relational policy learnt from the optimum): \
+                 it takes --blocks, --steps, --batch, --lr, --lr-final, --hidden and --seed"
+            );
+        }
+        let mut c = RelationalConfig::general();
+        c.seed = self.seed;
+        if let Some(b) = self.world.blocks {
+            c.max_blocks = b;
+        }
+        if let Some(s) = self.steps {
+            c.steps = s;
+        }
+        if let Some(b) = self.batch {
+            c.batch = b;
+        }
+        if let Some(lr) = self.lr {
+            c.lr_final *= lr / c.lr;
+            c.lr = lr;
+        }
+        if let Some(lr) = self.lr_final {
+            c.lr_final = lr;
+        }
+        if let Some(h) = self.hidden {
+            c.shape.hidden = h;
+        }
+        c.validate()?;
+        Ok(c)
+    }
+
     /// The training config these arguments describe.
     pub fn config(&self) -> Result<DqnConfig> {
         if let Some(obs) = self.obs {
@@ -240,6 +306,9 @@ pub fn dqn(args: DqnArgs) -> Result<()> {
     // Before minutes of work, not after.
     let out = files::OutputPath::check(&args.out)?;
     super::stdout::claim_for_data(&[Some(&out)])?;
+    if args.preset.as_deref() == Some(GENERAL) {
+        return general(&args);
+    }
     if let Some(demos) = &args.demos_file {
         files::refuse_same_file(&args.out, demos).context("--out and --demos-file")?;
     }
@@ -320,5 +389,46 @@ pub fn dqn(args: DqnArgs) -> Result<()> {
         r.steps as f64 / (seconds - demo_seconds).max(1e-9),
         r.gradient_steps as f64 / (seconds - demo_seconds).max(1e-9)
     ))?;
+    line(format_args!("saved {}", args.out.display()))
+}
+
+/// `--preset general`: trains the relational policy, showing a progress bar on a terminal
+/// (one tick per DAgger iteration), and saves it.
+fn general(args: &DqnArgs) -> Result<()> {
+    let config = args.general_config()?;
+    let clock = Instant::now();
+    let bar = ProgressBar::new(config.iterations);
+    bar.set_style(
+        ProgressStyle::with_template("DAgger {bar:30} {pos}/{len}  {msg}  [{elapsed_precise}, eta {eta}]")
+            .expect("a valid template"),
+    );
+    let model = RelationalModel::train(&config, &mut |r| {
+        bar.set_position(r.iteration);
+        bar.set_message(format!(
+            "{} examples, loss {:.4}, {:.1}% of games reached the goal",
+            r.examples,
+            r.loss,
+            100.0 * r.success
+        ));
+    })?;
+    let seconds = clock.elapsed().as_secs_f64();
+    bar.finish_and_clear();
+    model
+        .save(&args.out)
+        .with_context(|| "the policy was trained but not saved")?;
+    line(format_args!("trained {}", model.name()))?;
+    if let Some(last) = model.report().last() {
+        line(format_args!(
+            "{} DAgger iterations of {} gradient steps on problems of 2 to {} blocks, {} labelled examples; \
+             the last iteration's games: {:.1}% reached the goal, {:.3}x the fewest moves",
+            config.iterations,
+            config.steps,
+            config.max_blocks,
+            last.examples,
+            100.0 * last.success,
+            last.moves_ratio
+        ))?;
+    }
+    line(format_args!("trained in {seconds:.1} s"))?;
     line(format_args!("saved {}", args.out.display()))
 }

@@ -40,7 +40,7 @@ pub struct Cli {
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Reproduce the paper: run experiments E1-E9 and write the report (README.md, results.json, pictures).
+    /// Reproduce the paper: run experiments E1-E10 and write the report (README.md, results.json, pictures).
     Reproduce(reproduce::ReproduceArgs),
     /// Play episodes with an agent and report failures and steps to goal.
     Run(run::RunArgs),

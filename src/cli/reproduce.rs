@@ -1,4 +1,4 @@
-//! `blockstack reproduce`: run experiments E1-E9 and write the report.
+//! `blockstack reproduce`: run experiments E1-E10 and write the report.
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -72,7 +72,7 @@ pub fn reproduce(args: ReproduceArgs) -> Result<()> {
     for id in &args.only {
         anyhow::ensure!(
             reproduce::EXPERIMENTS.iter().any(|e| id.eq_ignore_ascii_case(e.id)),
-            "--only {id}: name experiments E1 to E9"
+            "--only {id}: name experiments E1 to E10"
         );
     }
     let options = Options {

@@ -56,7 +56,7 @@ pub struct RunArgs {
     #[arg(long, required_if_eq_any([("agent", "q"), ("agent", "dqn")]))]
     pub model: Option<PathBuf>,
     /// The `q` or `dqn` agent's probability of a random legal action [default: the paper's
-    /// test policy: 0.1]
+    /// test policy: 0.1; 0 for a relational policy (`dqn --preset general`)]
     #[arg(long)]
     pub epsilon: Option<f64>,
     #[command(flatten)]
@@ -133,7 +133,11 @@ pub fn run(args: RunArgs) -> Result<()> {
             .map_err(|e| anyhow::anyhow!("{e} (leave --view out to play its own)"))?;
     }
     let options = PolicyOptions {
-        epsilon: args.epsilon.unwrap_or(agent::profile::TEST_EPSILON),
+        // A relational policy plays greedily unless asked: it is measured greedy.
+        epsilon: args.epsilon.unwrap_or(match model {
+            Some(AnyModel::Relational(_)) => 0.0,
+            _ => agent::profile::TEST_EPSILON,
+        }),
         oracle: args.oracle.unwrap_or(LearnerProfile::of(rules.profile).oracle),
         node_budget: args.budget.budget(),
     };

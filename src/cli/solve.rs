@@ -10,6 +10,8 @@ use std::path::{Path, PathBuf};
 use oracle::pddl::{self, Problem};
 use oracle::towers::{ExactMoves, MovePlanner, NearOptimal, Place, TowerPlan};
 use oracle::{Cost, CountedPlan, OracleError, PlannerKind};
+use neural::AnyModel;
+use neural::relational::RelationalModel;
 use serde::Serialize;
 use sim::{Goal, Grid, State, View};
 
@@ -55,6 +57,10 @@ pub struct SolveArgs {
     /// near-optimal]
     #[arg(long)]
     pub solver: Option<PlannerKind>,
+    /// With --pddl: plan with a learned policy of block moves (`dqn --preset general`) in
+    /// place of --solver, greedily, one forward pass per move.
+    #[arg(long, value_name = "FILE", requires = "pddl", conflicts_with = "solver")]
+    pub model: Option<PathBuf>,
     /// The action protocol the plan keeps to: free (every action legal) or paper (nothing
     /// held: only pick; holding: only moves and drop); the exact plan is the shortest legal
     /// one.
@@ -238,27 +244,77 @@ fn print_moves(args: &SolveArgs, solver: PlannerKind, grid: Grid, goal: &Goal, p
     }
 }
 
+/// What plans a PDDL problem: a block-move planner, or a learned policy played greedily.
+pub(super) enum PddlPlanner {
+    /// A planner of `oracle::towers`.
+    Planner(MovePlanner),
+    /// A relational policy (`dqn --preset general`).
+    Policy(Box<RelationalModel>),
+}
+
+impl PddlPlanner {
+    /// Its name in reports: the planner's, or "relational policy".
+    pub(super) fn name(&self) -> &'static str {
+        match self {
+            PddlPlanner::Planner(MovePlanner::Exact) => "exact",
+            PddlPlanner::Planner(MovePlanner::NearOptimal) => "near-optimal",
+            PddlPlanner::Policy(_) => "relational policy",
+        }
+    }
+}
+
 /// The block-move planner `--solver` names for a PDDL problem (near-optimal unless given;
 /// a PDDL plan counts block moves, so `exact` and `exact-moves` are the fewest moves and
 /// `oracle` the near-optimal planner, as in the side view: `PlannerKind::move_planner`),
-/// with `--solver-budget` as the exact search's budget.
-pub(super) fn pddl_planner(solver: Option<PlannerKind>, budget: &SolverBudgetArg) -> Result<MovePlanner> {
+/// with `--solver-budget` as the exact search's budget; or the relational policy of
+/// `--model`.
+pub(super) fn pddl_planner(
+    solver: Option<PlannerKind>,
+    model: Option<&Path>,
+    budget: &SolverBudgetArg,
+) -> Result<PddlPlanner> {
+    if let Some(path) = model {
+        anyhow::ensure!(
+            budget.solver_budget.is_none(),
+            "--solver-budget is the exact solver's: it does not apply to --model"
+        );
+        return match super::eval::load_model(path)? {
+            AnyModel::Relational(policy) => Ok(PddlPlanner::Policy(policy)),
+            other => anyhow::bail!(
+                "--model {} holds a {} model: a PDDL problem is played by a relational policy of block moves \
+                 (blockstack dqn --preset general)",
+                path.display(),
+                other.name()
+            ),
+        };
+    }
     let planner = solver.unwrap_or(PlannerKind::NearOptimal).move_planner();
     anyhow::ensure!(
         planner == MovePlanner::Exact || budget.solver_budget.is_none(),
         "--solver-budget is the exact solver's: it does not apply to --solver near-optimal"
     );
-    Ok(planner)
+    Ok(PddlPlanner::Planner(planner))
 }
 
-/// `planner`'s block-move plan for `problem` on the literature's unbounded table.
-pub(super) fn plan_pddl(planner: MovePlanner, budget: &SolverBudgetArg, problem: &Problem) -> Result<TowerPlan> {
+/// `planner`'s block-move plan for `problem` on the literature's unbounded table; a policy
+/// that does not reach the goal within its move limit is an error that says so.
+pub(super) fn plan_pddl(planner: &PddlPlanner, budget: &SolverBudgetArg, problem: &Problem) -> Result<TowerPlan> {
     Ok(match planner {
-        MovePlanner::Exact => ExactMoves::new()
+        PddlPlanner::Planner(MovePlanner::Exact) => ExactMoves::new()
             .with_budget(budget.budget())
             .solve(problem.start(), problem.goal())
             .map_err(|e| budget.explain(e))?,
-        MovePlanner::NearOptimal => NearOptimal::new().plan(problem.start(), problem.goal())?,
+        PddlPlanner::Planner(MovePlanner::NearOptimal) => NearOptimal::new().plan(problem.start(), problem.goal())?,
+        PddlPlanner::Policy(policy) => {
+            let game = policy.play(problem.start(), problem.goal())?;
+            anyhow::ensure!(
+                game.reached,
+                "the policy did not reach the goal within {} block moves ({} blocks)",
+                neural::relational::move_limit(problem.start().blocks()),
+                problem.start().blocks()
+            );
+            TowerPlan { moves: game.moves }
+        }
     })
 }
 
@@ -290,9 +346,9 @@ impl PddlPlanReport {
 
 /// `solve --pddl`: the plan for the problem file, in the competitions' format.
 fn solve_pddl(path: &Path, args: &SolveArgs) -> Result<()> {
-    let planner = pddl_planner(args.solver, &args.budget)?;
+    let planner = pddl_planner(args.solver, args.model.as_deref(), &args.budget)?;
     let problem = Problem::read(path)?;
-    let plan = plan_pddl(planner, &args.budget, &problem)?;
+    let plan = plan_pddl(&planner, &args.budget, &problem)?;
     let (report, actions) = PddlPlanReport::new(&problem, &plan)?;
     if args.json {
         line(serde_json::to_string(&report)?)

@@ -37,6 +37,11 @@ pub struct SolveAllArgs {
     /// view names them, are exact and near-optimal here (a PDDL plan counts block moves).
     #[arg(long, default_value = "near-optimal")]
     pub solver: PlannerKind,
+    /// Play every task with a learned policy of block moves (`dqn --preset general`) in
+    /// place of --solver, greedily; a task it does not finish within 4 moves per block
+    /// is a row with its error.
+    #[arg(long, value_name = "FILE", conflicts_with = "solver")]
+    pub model: Option<PathBuf>,
     #[command(flatten)]
     pub budget: SolverBudgetArg,
     /// Print one JSON object: {"solver", "tasks": [...], "groups": [...], "overall"}.
@@ -106,7 +111,7 @@ struct SolveAllReport {
 
 /// Plans every task and prints the table and the summary.
 pub fn solve_all(args: SolveAllArgs) -> Result<()> {
-    let planner = pddl_planner(Some(args.solver), &args.budget)?;
+    let planner = pddl_planner(Some(args.solver), args.model.as_deref(), &args.budget)?;
     let bounds = args.bounds.as_deref().map(read_bounds).transpose()?;
     let mut paths = Vec::new();
     find_problems(&args.tasks, &mut paths)?;
@@ -137,7 +142,7 @@ pub fn solve_all(args: SolveAllArgs) -> Result<()> {
         };
         let solved = Problem::read(path).map_err(anyhow::Error::from).and_then(|problem| {
             row.blocks = Some(problem.block_names().len());
-            let plan = plan_pddl(planner, &args.budget, &problem)?;
+            let plan = plan_pddl(&planner, &args.budget, &problem)?;
             Ok(PddlPlanReport::new(&problem, &plan)?.0)
         });
         match solved {
@@ -159,10 +164,7 @@ pub fn solve_all(args: SolveAllArgs) -> Result<()> {
         .map(|g| Summary::of(g, rows.iter().filter(|r| r.group == *g)))
         .collect();
     let report = SolveAllReport {
-        solver: match planner {
-            oracle::towers::MovePlanner::Exact => "exact",
-            oracle::towers::MovePlanner::NearOptimal => "near-optimal",
-        },
+        solver: planner.name(),
         overall: Summary::of("all", rows.iter()),
         groups,
         tasks: rows,

@@ -227,5 +227,6 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
         reading,
         figures: Vec::new(),
         blocks_world: None,
+        general: None,
     })
 }

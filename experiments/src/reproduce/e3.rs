@@ -202,6 +202,7 @@ pub(super) fn run(ctx: &Context, shared: &Shared) -> Result<Experiment> {
         reading,
         figures: Vec::new(),
         blocks_world: None,
+        general: None,
     })
 }
 

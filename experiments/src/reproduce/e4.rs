@@ -459,5 +459,6 @@ fn experiment(ctx: &Context, paper_curves: PaperCurves, ours: Curve) -> Experime
         reading,
         figures,
         blocks_world: None,
+        general: None,
     }
 }

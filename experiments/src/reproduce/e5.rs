@@ -239,5 +239,6 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
         reading,
         figures: vec![figure],
         blocks_world: None,
+        general: None,
     })
 }

@@ -285,6 +285,7 @@ pub(super) fn run(ctx: &Context, shared: &Shared) -> Result<Experiment> {
         reading,
         figures,
         blocks_world: None,
+        general: None,
     })
 }
 

@@ -554,6 +554,7 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
         reading,
         figures,
         blocks_world: None,
+        general: None,
     })
 }
 

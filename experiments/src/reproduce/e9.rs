@@ -841,6 +841,7 @@ fn experiment(ctx: &Context, world: BlocksWorld, learner: &TrainConfig) -> Exper
             ),
         ],
         blocks_world: Some(world),
+        general: None,
     }
 }
 

@@ -11,7 +11,9 @@ use super::ran::Ran;
 use super::spread::Spread;
 use super::summary::summary;
 use super::text::{ALPHA, failures, num, p_value, verdict};
-use super::{BlocksWorld, Curve, Decomposition, Drawing, Experiment, Group, ReproduceError, Reproduction, Result};
+use super::{
+    BlocksWorld, Curve, Decomposition, Drawing, Experiment, General, Group, ReproduceError, Reproduction, Result,
+};
 use crate::episode::{GifOptions, episode_gif};
 use plots::{bar_chart, box_plot, curves_chart, learning_curve};
 
@@ -100,7 +102,8 @@ pub fn markdown(r: &Reproduction, ran: &Ran) -> String {
          physics), the figures of \"Interactive Robot Learning\" section VI beside ours in two worlds: `original`, \
          the paper's world as its authors coded it (their action protocol, start rule, reward, representation and \
          schedule), and `spec`, ours (docs/world.md). E1-E6 are run in both; E7 and our own learner in the SPEC world; \
-         E9, ours, in the classic Blocks World seen from the side (docs/world.md section 12). \
+         E9, ours, in the classic Blocks World seen from the side (docs/world.md section 12); E10, ours, one \
+         learned policy for that world at every size. \
          Every figure below is computed by the run; the paper's come from `experiments::reproduce::paper`. The same \
          figures, and more, are in [`results.json`](results.json).{}\n",
         r.paper_settings.horizon,
@@ -261,6 +264,9 @@ fn experiment(md: &mut String, e: &Experiment) {
     }
     if let Some(w) = &e.blocks_world {
         blocks_world(md, w);
+    }
+    if let Some(g) = &e.general {
+        general(md, g);
     }
     if let Some(d) = &e.decomposition {
         decomposition(md, d);
@@ -569,6 +575,66 @@ fn groups(md: &mut String, title: &str, key: &str, groups: &[Group], grid: Optio
             }
         }
         let _ = writeln!(md, "| {} |", cells.join(" | "));
+    }
+}
+
+/// E10's tables: the uniform problems by size, those of a few blocks against the fewest
+/// moves, and NLM's generator beside NLM's figures.
+fn general(md: &mut String, g: &General) {
+    let _ = writeln!(md, "\n### Uniform problems, by number of blocks\n");
+    let _ = writeln!(
+        md,
+        "| blocks | problems | solved | policy: mean moves | near-optimal: mean moves | × near-optimal | worst × \
+         near-optimal |\n|---|---|---|---|---|---|---|"
+    );
+    for r in &g.uniform {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {:.1}% | {} | {} | {} | {} |",
+            r.blocks,
+            r.problems,
+            100.0 * r.success,
+            num(r.mean_moves, 2),
+            num(r.near_optimal_moves, 2),
+            num(r.near_optimal_ratio, 4),
+            num(r.worst_ratio, 3)
+        );
+    }
+    let _ = writeln!(md, "\n### A few blocks, against the fewest moves\n");
+    let _ = writeln!(
+        md,
+        "| blocks | problems | solved | fewest moves | policy × fewest | near-optimal × fewest |\n|---|---|---|---|---|---|"
+    );
+    for r in &g.exact {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {:.1}% | {} | {} | {} |",
+            r.blocks,
+            r.problems,
+            100.0 * r.success,
+            num(r.fewest_moves, 2),
+            num(r.fewest_ratio, 4),
+            num(r.near_optimal_fewest_ratio, 4)
+        );
+    }
+    let _ = writeln!(md, "\n### Neural Logic Machines' generator\n");
+    let _ = writeln!(
+        md,
+        "| blocks | problems | solved | policy: mean moves | near-optimal: mean moves | NLM (published): solved | NLM: \
+         mean moves |\n|---|---|---|---|---|---|---|"
+    );
+    for r in &g.nlm {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {:.1}% | {} | {} | {} | {} |",
+            r.blocks,
+            r.problems,
+            100.0 * r.success,
+            num(r.mean_moves, 2),
+            num(r.near_optimal_moves, 2),
+            r.published.map_or("-".into(), |p| format!("{:.0}%", 100.0 * p.0)),
+            num(r.published.map(|p| p.1), 1)
+        );
     }
 }
 

@@ -60,6 +60,7 @@ pub fn summary(results_json: &str) -> Result<String> {
             "E7" => e7(e),
             "E8" => e8(e),
             "E9" => e9(e),
+            "E10" => e10(e),
             _ => None,
         }
         .ok_or_else(|| bad(format!("{id}'s figures are not where a reproduction puts them")))?;
@@ -324,6 +325,55 @@ fn e9(e: &Value) -> Option<Vec<String>> {
             reached.join(", "),
             count("same_landings")?,
             count("drops")?,
+        ),
+    ])
+}
+
+/// E10: the learned policy's success and block moves against the near-optimal planner's
+/// over the uniform problems' sizes, and the fewest moves up to 8 blocks.
+fn e10(e: &Value) -> Option<Vec<String>> {
+    let g = &e["general"];
+    let uniform = g["uniform"].as_array()?;
+    let exact = g["exact"].as_array()?;
+    let problems: f64 = uniform.iter().map(|r| r["problems"].as_f64()).sum::<Option<f64>>()?;
+    let won: f64 = uniform
+        .iter()
+        .map(|r| Some(r["success"].as_f64()? * r["problems"].as_f64()?))
+        .sum::<Option<f64>>()?;
+    let sizes = |rows: &[Value]| -> Option<String> {
+        Some(format!(
+            "{}-{}",
+            rows.first()?["blocks"].as_u64()?,
+            rows.last()?["blocks"].as_u64()?
+        ))
+    };
+    let span = |rows: &[Value], field: &str| -> String {
+        let values: Vec<f64> = rows.iter().filter_map(|r| r[field].as_f64()).collect();
+        match (
+            values.iter().copied().reduce(f64::min),
+            values.iter().copied().reduce(f64::max),
+        ) {
+            (Some(lo), Some(hi)) => format!("{}-{}", number(Some(lo), 3), number(Some(hi), 3)),
+            _ => "-".into(),
+        }
+    };
+    Some(vec![
+        format!(
+            "one policy learnt on 2-{} blocks plays {} blocks: solved; block moves against the near-optimal planner \
+             and the fewest",
+            g["training"]["config"]["max_blocks"].as_u64()?,
+            sizes(uniform)?
+        ),
+        "-".into(),
+        "-".into(),
+        format!(
+            "solved {} of {} uniform problems; {}x the near-optimal planner's moves by size; {}x the fewest on {} \
+             blocks",
+            percent(Some(won / problems)),
+            problems,
+            span(uniform, "near_optimal_ratio"),
+            span(exact, "fewest_ratio"),
+            sizes(exact)?
         ),
     ])
 }

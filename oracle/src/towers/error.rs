@@ -139,4 +139,20 @@ pub enum TowersError {
         /// Blocks in the world.
         blocks: usize,
     },
+    /// A state of another number of blocks than a state space's.
+    #[error("the state has {blocks} blocks, and the state space is of {expected}")]
+    BlockCount {
+        /// Blocks in the state.
+        blocks: usize,
+        /// Blocks of the space.
+        expected: usize,
+    },
+    /// A state space of no block or of more than it takes.
+    #[error("a state space holds 1 to {max} blocks, not {blocks}")]
+    SpaceSize {
+        /// Blocks asked for.
+        blocks: usize,
+        /// The most it takes.
+        max: usize,
+    },
 }

@@ -62,6 +62,7 @@ pub mod near_optimal;
 pub mod plan;
 pub mod random;
 pub mod side;
+pub mod space;
 pub mod state;
 
 pub use error::{Part, TowersError};
@@ -69,6 +70,7 @@ pub use exact::{DEFAULT_MOVE_BUDGET, ExactMoves};
 pub use goal::TowerGoal;
 pub use near_optimal::NearOptimal;
 pub use plan::TowerPlan;
-pub use random::{ipc_state, random_goal, random_state};
+pub use random::{ipc_state, nlm_state, random_goal, random_state};
 pub use side::{MovePlanner, block_move_of, gripper_actions, plan_side};
+pub use space::{Distances, StateSpace};
 pub use state::{Move, Place, Table, Towers};

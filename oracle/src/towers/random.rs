@@ -1,7 +1,7 @@
 //! Seeded random problems: uniformly random states (Slaney & Thiebaux's counting method,
 //! drawn by `sim::uniform`, the one home of the side view's random states), states in the
-//! shape of the 2023 planning competition's generator, and random goals of a few towers,
-//! for tests, benchmarks and experiments.
+//! shape of the 2023 planning competition's generator and of Neural Logic Machines', and
+//! random goals of a few towers, for tests, benchmarks and experiments.
 
 use rand::seq::SliceRandom;
 use rand::seq::index::sample;
@@ -38,6 +38,28 @@ pub fn ipc_state(blocks: usize, seed: u64) -> Towers {
     for pair in order.windows(2) {
         if rng.random_range(0..10) != 0 {
             below[pair[1]] = pair[0];
+        }
+    }
+    Towers::from_below(below)
+}
+
+/// A random state of `blocks` blocks drawn as Neural Logic Machines draw theirs (Dong et
+/// al., "Neural Logic Machines", ICLR 2019, and their code's `randomly_generate_world`):
+/// the blocks in a uniformly random order, each put on the table or on top of one of the
+/// towers built so far, the table and each top equally likely. Not uniform over states:
+/// tall towers are rarer than among uniform states. The same seed gives the same state.
+pub fn nlm_state(blocks: usize, seed: u64) -> Towers {
+    let mut rng = rng(seed);
+    let mut below = vec![NONE; blocks];
+    // The tops of the towers built so far.
+    let mut tops: Vec<usize> = Vec::new();
+    for b in permutation(blocks, &mut rng) {
+        let place = rng.random_range(0..=tops.len());
+        if place < tops.len() {
+            below[b] = tops[place];
+            tops[place] = b;
+        } else {
+            tops.push(b);
         }
     }
     Towers::from_below(below)

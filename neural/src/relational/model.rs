@@ -1,0 +1,298 @@
+//! A trained relational policy with its training config: played as block moves, as a
+//! side-view agent ([`RelationalPolicy`]), saved and read as a network file.
+//!
+//! # Network files
+//!
+//! The project's model container (`files::container`: safetensors with blockstack's
+//! metadata and a CRC-32), format [`FORMAT`] version [`VERSION`]: one `F32` tensor per
+//! parameter, named as [`RelationalNet::tensors`] names them (`up.linear1.weight`,
+//! `goal_table`, `pair.linear2.weight`, ...; a linear layer's weight is `[in, out]`), and as
+//! metadata `{"config": the RelationalConfig, "report": [one IterationReport per DAgger
+//! iteration]}`. The config is stored as it is: changing `RelationalConfig` is changing the
+//! format. A reader refuses a file that is missing, too large ([`MAX_FILE_BYTES`]),
+//! truncated, corrupt, of another format or version, or whose tensors do not fit the
+//! network its config describes, each with a message that says which.
+
+use std::path::Path;
+
+use agent::Policy;
+use files::container::{Container, Expect, Tensor};
+use files::{FilesError, OutputPath};
+use oracle::towers::{Move, Place, Table, TowerGoal, Towers};
+use rand::RngExt;
+use serde::{Deserialize, Serialize};
+use sim::block_move::{self, BlockMove};
+use sim::seeding::SimRng;
+use sim::{Action, Observation, View};
+
+use crate::error::{NeuralError, Result};
+
+use super::graph::{Graph, TABLE};
+use super::net::{RelationalNet, Tape};
+use super::train::{IterationReport, RelationalConfig};
+
+/// The format name of a relational network file.
+pub const FORMAT: &str = "blockstack-relational";
+
+/// The relational network file version this build writes and reads.
+pub const VERSION: u32 = 1;
+
+/// The largest relational network file read: the preset's network is about 40 KB.
+pub const MAX_FILE_BYTES: u64 = 1 << 26;
+
+const EXPECT: Expect<'static> = Expect {
+    format: FORMAT,
+    version: VERSION,
+    max_bytes: MAX_FILE_BYTES,
+    what: "a relational network file",
+};
+
+/// The JSON metadata of a relational network file.
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Metadata {
+    config: RelationalConfig,
+    report: Vec<IterationReport>,
+}
+
+/// A trained relational policy: its network, how it was trained, and the training's
+/// iterations.
+#[derive(Clone, Debug)]
+pub struct RelationalModel {
+    net: RelationalNet,
+    config: RelationalConfig,
+    report: Vec<IterationReport>,
+}
+
+/// How a game of block moves went.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Game {
+    /// The moves made, first to last.
+    pub moves: Vec<Move>,
+    /// Whether the goal held after them, within the move limit ([`super::move_limit`]).
+    pub reached: bool,
+}
+
+impl RelationalModel {
+    /// Trains a policy as `config` says ([`super::train::train`]); `progress` after every
+    /// iteration.
+    pub fn train(config: &RelationalConfig, progress: &mut dyn FnMut(&IterationReport)) -> Result<RelationalModel> {
+        let (net, report) = super::train::train(config, progress)?;
+        Ok(RelationalModel {
+            net,
+            config: *config,
+            report,
+        })
+    }
+
+    /// The network.
+    pub fn net(&self) -> &RelationalNet {
+        &self.net
+    }
+
+    /// How it was trained.
+    pub fn config(&self) -> &RelationalConfig {
+        &self.config
+    }
+
+    /// The training's iterations.
+    pub fn report(&self) -> &[IterationReport] {
+        &self.report
+    }
+
+    /// Its name in reports.
+    pub fn name(&self) -> String {
+        let s = self.config.shape;
+        format!(
+            "relational policy ({} rounds, width {}; trained on up to {} blocks)",
+            s.rounds, s.width, self.config.max_blocks
+        )
+    }
+
+    /// A chooser of block moves ([`MovePolicy`]).
+    pub fn move_policy(&self) -> MovePolicy<'_> {
+        MovePolicy::new(&self.net)
+    }
+
+    /// Plays the policy greedily from `start` to `goal` on an unbounded table, for at most
+    /// [`super::move_limit`] moves; an error if the goal names a block the state lacks.
+    pub fn play(&self, start: &Towers, goal: &TowerGoal) -> Result<Game> {
+        goal.check_blocks(start.blocks())?;
+        let mut chooser = self.move_policy();
+        let mut state = start.clone();
+        let mut moves = Vec::new();
+        while moves.len() < super::move_limit(start.blocks()) {
+            let Some(mv) = chooser.choose(&state, goal, Table::Unbounded) else {
+                break;
+            };
+            state.apply(mv, Table::Unbounded)?;
+            moves.push(mv);
+        }
+        Ok(Game {
+            reached: goal.holds(&state),
+            moves,
+        })
+    }
+
+    /// The policy as a side-view agent, taking a random legal block move with probability
+    /// `epsilon`.
+    pub fn policy(&self, epsilon: f64) -> Result<RelationalPolicy<'_>> {
+        agent::qlearning::check_epsilon(epsilon)?;
+        Ok(RelationalPolicy {
+            chooser: self.move_policy(),
+            epsilon,
+            pending: Vec::new(),
+        })
+    }
+
+    /// Writes the network file (module docs) through the project's output helper:
+    /// atomically for a regular file.
+    pub fn save(&self, path: &Path) -> Result<()> {
+        let out = OutputPath::check(path)?;
+        let tensors: Vec<(&str, Tensor<'_>)> = self
+            .net
+            .tensors()
+            .map(|t| {
+                let tensor = Tensor::from_values(t.shape, t.values).expect("a tensor's shape fits its values");
+                (t.name, tensor)
+            })
+            .collect();
+        let metadata = Metadata {
+            config: self.config,
+            report: self.report.clone(),
+        };
+        files::container::write(&out, FORMAT, VERSION, &metadata, &tensors)?;
+        Ok(())
+    }
+
+    /// Reads a relational network file; an error saying what is wrong if it is missing, too
+    /// large, truncated, corrupt, of another format or version, or if its tensors do not fit
+    /// its config.
+    pub fn load(path: &Path) -> Result<RelationalModel> {
+        let fail = |reason: String| NeuralError::Model {
+            path: path.display().to_string(),
+            reason,
+        };
+        let container = Container::read(path, &EXPECT).map_err(|e| match e {
+            FilesError::Read { problem, .. } => fail(problem.to_string()),
+            other => fail(other.to_string()),
+        })?;
+        let Metadata { config, report } = container
+            .metadata()
+            .map_err(|e| fail(format!("the file is corrupt: its metadata does not read ({e})")))?;
+        config
+            .validate()
+            .map_err(|e| fail(format!("its training config is not valid: {e}")))?;
+        let mut net = RelationalNet::new(config.shape, &mut sim::seeding::rng(0))?;
+        let names = container.names();
+        if names.len() != net.tensor_count() {
+            return Err(fail(format!(
+                "it holds {} tensors, and its network has {}",
+                names.len(),
+                net.tensor_count()
+            )));
+        }
+        for name in names {
+            let tensor = container.tensor(&name).expect("a name of the container");
+            let values = tensor
+                .values::<f32>()
+                .ok_or_else(|| fail(format!("tensor {name} is {:?}, not F32", tensor.dtype())))?;
+            net.set_tensor(&name, tensor.shape(), &values)
+                .map_err(|e| fail(e.to_string()))?;
+        }
+        Ok(RelationalModel { net, config, report })
+    }
+}
+
+/// The greedy choice of block moves: one forward pass per move, the legal move with the
+/// highest score ([`RelationalNet::best_move`]). It keeps its buffers from one choice to the
+/// next.
+pub struct MovePolicy<'n> {
+    net: &'n RelationalNet,
+    tape: Tape,
+}
+
+impl<'n> MovePolicy<'n> {
+    /// The policy of `net`.
+    pub fn new(net: &'n RelationalNet) -> MovePolicy<'n> {
+        MovePolicy { net, tape: Tape::new() }
+    }
+
+    /// The move it makes from `state` towards `goal` on `table` (a move to the table only
+    /// where a column is free); `None` if the goal holds or no move is legal.
+    pub fn choose(&mut self, state: &Towers, goal: &TowerGoal, table: Table) -> Option<Move> {
+        if goal.holds(state) {
+            return None;
+        }
+        let graph = Graph::of([(state, goal)]);
+        self.net.forward(&graph, &mut self.tape);
+        let table_free = table.has_free_column(state.tower_count());
+        let (x, to) = self.net.best_move(&graph, &self.tape, 0, table_free)?;
+        Some(Move {
+            block: x as usize,
+            to: if to == TABLE { Place::Table } else { Place::On(to as usize) },
+        })
+    }
+}
+
+/// The relational policy as a side-view agent: at each block-move boundary (nothing held,
+/// no gripper action pending) it reads the towers and the goal's towers from what it sees,
+/// chooses a block move (or, with probability `epsilon`, a random legal one) and carries it
+/// out as the gripper actions [`sim::block_move::expand`] gives, a move to the table going
+/// to the leftmost empty column. The table is as wide as the grid.
+pub struct RelationalPolicy<'n> {
+    chooser: MovePolicy<'n>,
+    epsilon: f64,
+    /// The gripper actions left of the current move, last first.
+    pending: Vec<Action>,
+}
+
+impl RelationalPolicy<'_> {
+    /// The block move for `obs` (in the side view, nothing held); `rng` draws the random
+    /// moves.
+    pub fn block_move(&mut self, obs: &Observation, rng: &mut SimRng) -> Result<BlockMove> {
+        if obs.view != View::Side {
+            return Err(NeuralError::Mismatch(format!(
+                "the relational policy plays the side view (block moves on towers), not the {} view",
+                obs.view
+            )));
+        }
+        let state = Towers::new(&sim::view::towers(&obs.state)?)?;
+        let goal = TowerGoal::new(&obs.goal.tower_lists())?;
+        goal.check_blocks(state.blocks())?;
+        let table = Table::Columns(obs.grid.width());
+        let mv = if self.epsilon > 0.0 && rng.random_bool(self.epsilon) {
+            let legal = state.moves(table);
+            legal.get(rng.random_range(0..legal.len().max(1))).copied()
+        } else {
+            self.chooser.choose(&state, &goal, table)
+        };
+        let mv = mv.ok_or_else(|| {
+            NeuralError::Oracle(oracle::OracleError::GoalAlreadyHolds {
+                goal: obs.goal.to_string(),
+            })
+        })?;
+        Ok(oracle::towers::block_move_of(&obs.state, obs.grid, mv)?)
+    }
+}
+
+impl Policy for RelationalPolicy<'_> {
+    fn name(&self) -> String {
+        "relational".into()
+    }
+
+    fn begin_episode(&mut self, _obs: &Observation) {
+        self.pending.clear();
+    }
+
+    fn act(&mut self, obs: &Observation, rng: &mut SimRng) -> agent::Result<Action> {
+        if self.pending.is_empty() {
+            let mv = self.block_move(obs, rng)?;
+            self.pending = block_move::expand(&obs.state, obs.grid, mv)?;
+            self.pending.reverse();
+        }
+        self.pending
+            .pop()
+            .ok_or_else(|| agent::AgentError::Config("a block move expanded into no gripper action".into()))
+    }
+}
