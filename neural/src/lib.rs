@@ -10,7 +10,8 @@
 //!   step of the DQN and DQfD losses; RMSprop and Adam.
 //! - [`hindsight`]: hindsight relabelling (HER): a game stored again under the stacks it built.
 //! - [`demos`]: demonstrations from the exact solver, the oracle, or a recording.
-//! - [`config`], [`train`]: a run's settings and presets, and the trainer.
+//! - [`config`], [`train`], [`checkpoint`]: a run's settings and presets, the trainer, and
+//!   its checkpoints (a run written between two steps, and resumed bit for bit).
 //! - [`model`]: a trained network ([`Dqn`]), played through [`agent::Policy`] (so
 //!   `agent::play`, rollouts and evaluation serve it unchanged), saved and read as a
 //!   network file in the project's model container (`files::container`).
@@ -18,6 +19,7 @@
 //! Everything runs on the CPU; every random draw comes from the config's seed.
 
 pub mod any;
+pub mod checkpoint;
 pub mod config;
 pub mod demos;
 pub mod error;

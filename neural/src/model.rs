@@ -277,7 +277,7 @@ struct Metadata {
 /// the bytes it always did.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct StoredConfig {
+pub(crate) struct StoredConfig {
     grid: Grid,
     blocks: usize,
     goals: Vec<Goal>,
@@ -328,7 +328,7 @@ fn is_default<T: Default + PartialEq>(value: &T) -> bool {
 
 impl StoredConfig {
     /// The stored form of `c`.
-    fn of(c: &DqnConfig) -> StoredConfig {
+    pub(crate) fn of(c: &DqnConfig) -> StoredConfig {
         let w = &c.world;
         StoredConfig {
             grid: w.grid,
@@ -372,7 +372,7 @@ impl StoredConfig {
 
     /// The config this stored form describes: games ending at the goal, the goal drawn,
     /// the network's observation.
-    fn config(self) -> DqnConfig {
+    pub(crate) fn config(self) -> DqnConfig {
         DqnConfig {
             world: EnvConfig {
                 grid: self.grid,

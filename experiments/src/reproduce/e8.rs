@@ -304,17 +304,11 @@ fn run_arm(ctx: &Context, arm: &Arm, budget: Budget) -> Result<Outcome> {
     let curve_optimum = curve_suite.optimum()?;
     let test_suite = suite(ctx, c.blocks(), budget.test_games())?;
     let mut trainer = Trainer::new(c.clone())?;
-    let total = c.pretrain_steps + c.steps;
-    let mut done = 0;
+    let total = trainer.total_steps();
     let mut curve = Vec::with_capacity(points);
     let quiet = &mut |_: &neural::Progress| {};
     for i in 1..=points as u64 {
-        let until = total * i / points as u64;
-        let pre = until.min(c.pretrain_steps).saturating_sub(done.min(c.pretrain_steps));
-        trainer.pretrain(pre, quiet)?;
-        let play = until.saturating_sub(c.pretrain_steps) - done.saturating_sub(c.pretrain_steps);
-        trainer.play(play, quiet)?;
-        done = until;
+        trainer.train_until(total * i / points as u64, quiet)?;
         let snapshot = trainer.snapshot()?;
         let results = curve_suite.play(&mut snapshot.policy(0.0)?)?;
         let steps = trainer.report().gradient_steps;
