@@ -38,6 +38,9 @@
 //!   after the step, 2 it holds at the window's end, 4 a demonstrator chose the action);
 //! - `game` (U8): the actions of the game being played, absent between games.
 //!
+//! A caller may keep a document of its own in the metadata's `"note"`
+//! ([`Trainer::write_checkpoint_with`]): E8 keeps the tests an arm played along its training.
+//!
 //! It is written through the output helper (atomically for a regular file), so a kill while
 //! it is written leaves the previous checkpoint whole.
 
@@ -129,6 +132,9 @@ struct Metadata {
     optimizer_steps: u64,
     agent_next: usize,
     contexts: Vec<Context>,
+    /// The caller's own document, kept with the run ([`Trainer::write_checkpoint_with`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    note: Option<serde_json::Value>,
 }
 
 /// Transitions as columns, the tensors of one table (module docs).
@@ -241,6 +247,14 @@ fn rng_from(bytes: &[u8]) -> Option<SimRng> {
 impl Trainer {
     /// Writes the run as it stands, between two steps, to `out` (module docs).
     pub fn write_checkpoint(&self, out: &OutputPath) -> Result<()> {
+        self.write_checkpoint_with(out, None)
+    }
+
+    /// [`Trainer::write_checkpoint`] with a document of the caller's kept beside the run, in
+    /// the same file (so written with it, atomically): what the caller has made of the run so
+    /// far, such as the tests it played along the way. [`Trainer::resume_with_note`] gives it
+    /// back.
+    pub fn write_checkpoint_with(&self, out: &OutputPath, note: Option<&serde_json::Value>) -> Result<()> {
         let blocks = self.config.blocks();
         let learner = &self.learner;
         let mut tensors: Vec<(String, Tensor<'static>)> = Vec::new();
@@ -296,6 +310,7 @@ impl Trainer {
             optimizer_steps: optimizer.steps(),
             agent_next,
             contexts,
+            note: note.cloned(),
         };
         let named: Vec<(&str, Tensor<'_>)> = tensors.iter().map(|(n, t)| (n.as_str(), t.clone())).collect();
         files::container::write(out, CHECKPOINT_FORMAT, CHECKPOINT_VERSION, &metadata, &named)?;
@@ -305,17 +320,28 @@ impl Trainer {
     /// The run a checkpoint file holds, ready to take its next step; an error saying what
     /// is wrong with a file that is not a checkpoint or does not hold a run.
     pub fn resume(path: &Path) -> Result<Trainer> {
+        Ok(Trainer::resume_with_note(path)?.0)
+    }
+
+    /// [`Trainer::resume`], with the caller's document written with the run, if any
+    /// ([`Trainer::write_checkpoint_with`]).
+    pub fn resume_with_note(path: &Path) -> Result<(Trainer, Option<serde_json::Value>)> {
         let name = path.display().to_string();
         let input =
             files::open_bounded(path, MAX_CHECKPOINT_BYTES, EXPECT.what).map_err(|e| NeuralError::Checkpoint {
                 path: name.clone(),
                 reason: read_problem(e),
             })?;
-        Trainer::read_checkpoint(input, &name)
+        Trainer::read_noted(input, &name)
     }
 
     /// [`Trainer::resume`] from the bytes of a checkpoint, named `name` in errors.
     pub fn read_checkpoint(input: impl Read, name: &str) -> Result<Trainer> {
+        Ok(Trainer::read_noted(input, name)?.0)
+    }
+
+    /// The run and the caller's note a checkpoint's bytes hold.
+    fn read_noted(input: impl Read, name: &str) -> Result<(Trainer, Option<serde_json::Value>)> {
         let fail = |reason: String| NeuralError::Checkpoint {
             path: name.to_string(),
             reason,
@@ -444,7 +470,7 @@ impl Trainer {
             trainer.replay_game(&game).map_err(|e| corrupt(e.to_string()))?;
         }
         trainer.corrected = meta.corrected;
-        Ok(trainer)
+        Ok((trainer, meta.note))
     }
 
     /// Puts the game being played back where it was: its environment reset from the game's

@@ -35,8 +35,15 @@ where
 /// `eval_episodes`, `eval_failures`, `eval_mean_steps`, `eval_median_steps`,
 /// `eval_mean_steps_failures_as_horizon`, `eval_mean_optimal_steps`,
 /// `eval_mean_ratio_to_optimum` (`None` where no episode reached the goal).
+///
+/// `checkpoint` writes the run there every `checkpoint_every` games (1000 by default) and
+/// after the last, as `blockstack train --checkpoint` does; if the file already holds a
+/// checkpoint of this very run (the same settings), training continues from it (as `train
+/// --resume` would) and ends with the same model, byte for byte, as a run that never
+/// stopped; a checkpoint of another run is a `ValueError`. The dict's `resumed_at` is the
+/// games the run had played when this call took it up (0 for a new run).
 #[pyfunction]
-#[pyo3(signature = (*, blocks=3, grid=None, profile=None, preset=None, protocol=None, start=None, repr=None, reward=None, schedule=None, oracle=None, oscillation=None, goals=None, games=None, seed=1, alpha=None, gamma=None, epsilon=None, initial_q=None, exploring_starts=false, backward_replay=None, final_replay=None, assist="none", horizon=None, backend="physics", view="top", eval_episodes=0, eval_goals=None, eval_seed=2, eval_epsilon=0.1, out=None))]
+#[pyo3(signature = (*, blocks=3, grid=None, profile=None, preset=None, protocol=None, start=None, repr=None, reward=None, schedule=None, oracle=None, oscillation=None, goals=None, games=None, seed=1, alpha=None, gamma=None, epsilon=None, initial_q=None, exploring_starts=false, backward_replay=None, final_replay=None, assist="none", horizon=None, backend="physics", view="top", eval_episodes=0, eval_goals=None, eval_seed=2, eval_epsilon=0.1, out=None, checkpoint=None, checkpoint_every=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn train<'py>(
     py: Python<'py>,
@@ -70,6 +77,8 @@ pub fn train<'py>(
     eval_seed: u64,
     eval_epsilon: f64,
     out: Option<PathBuf>,
+    checkpoint: Option<PathBuf>,
+    checkpoint_every: Option<u64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     // Checked before any work, as the CLI does: a missing folder must not cost a training run.
     let out_path = out
@@ -77,6 +86,19 @@ pub fn train<'py>(
         .map(files::OutputPath::check)
         .transpose()
         .or_value_error()?;
+    let checkpoint = checkpoint
+        .as_deref()
+        .map(|path| files::OutputPath::check(path).map(|out| (path.to_path_buf(), out)))
+        .transpose()
+        .or_value_error()?;
+    if let (Some(out), Some((path, _))) = (&out, &checkpoint) {
+        files::refuse_same_file(out, path).or_value_error()?;
+    }
+    let every = match (checkpoint_every, &checkpoint) {
+        (Some(0), _) => return Err(value_error("checkpoint_every must be at least 1")),
+        (Some(_), None) => return Err(value_error("checkpoint_every needs checkpoint")),
+        (every, _) => every.unwrap_or(agent::checkpoint::DEFAULT_EVERY),
+    };
     let overrides = TrainOverrides {
         profile: named(profile)?,
         preset: named(preset)?,
@@ -112,15 +134,24 @@ pub fn train<'py>(
         Some(text) => Goal::parse_list(text, blocks).or_value_error()?,
         None => config.goals.clone(),
     };
-    let (trained, seconds, evaluation) = py.detach(|| {
+    let (trained, seconds, evaluation, resumed_at) = py.detach(|| {
         guard(|| {
             let clock = Instant::now();
+            let mut trainer = match &checkpoint {
+                Some((path, _)) if path.exists() => Trainer::resume_run(path, &config).or_value_error()?,
+                _ => Trainer::new(config.clone()).or_value_error()?,
+            };
+            let resumed_at = trainer.report().games;
             // `agent::train`, a game at a time, so that Ctrl-C (looked at every 50 ms, the
             // GIL taken back only for that) stops a long run with KeyboardInterrupt.
-            let mut trainer = Trainer::new(config.clone()).or_value_error()?;
             let mut looked = Instant::now();
-            for _ in 0..config.games {
+            while trainer.report().games < config.games {
                 trainer.play_games(1, None).or_value_error()?;
+                if let Some((_, out)) = &checkpoint {
+                    if trainer.checkpoint_due(every) {
+                        trainer.write_checkpoint(out).or_value_error()?;
+                    }
+                }
                 if looked.elapsed() >= Duration::from_millis(50) {
                     Python::attach(|py| py.check_signals())?;
                     looked = Instant::now();
@@ -162,7 +193,7 @@ pub fn train<'py>(
                 let bytes = trained.agent.to_bytes().map_err(value_error)?;
                 out.write(&bytes).or_value_error()?;
             }
-            Ok((trained, seconds, evaluation))
+            Ok((trained, seconds, evaluation, resumed_at))
         })
     })?;
     let d = PyDict::new(py);
@@ -190,6 +221,7 @@ pub fn train<'py>(
     d.set_item("assisted_steps", r.assisted_steps)?;
     d.set_item("replay_sweeps", r.replay_sweeps)?;
     d.set_item("train_seconds", seconds)?;
+    d.set_item("resumed_at", resumed_at)?;
     if let Some(e) = evaluation {
         let (summary, o) = (e.run.summary, e.optimality);
         d.set_item("eval_episodes", summary.episodes)?;

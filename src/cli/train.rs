@@ -14,9 +14,6 @@ use super::profile::{PlayRulesArgs, ProfileArg};
 
 use super::stdout::line;
 
-/// Games between two checkpoints unless `--checkpoint-every` says otherwise.
-const DEFAULT_CHECKPOINT_EVERY: u64 = 1000;
-
 /// The flags that set up a run, which `--resume` takes from its checkpoint instead.
 const RUN_FLAGS: [&str; 24] = [
     "preset",
@@ -292,7 +289,7 @@ pub fn train(args: TrainArgs) -> Result<()> {
         }
     };
     let clock = Instant::now();
-    let every = args.checkpoint_every.unwrap_or(DEFAULT_CHECKPOINT_EVERY);
+    let every = args.checkpoint_every.unwrap_or(agent::checkpoint::DEFAULT_EVERY);
     loop {
         let played = trainer.report().games;
         // Checkpoints fall on multiples of `every`, and on the last game.
