@@ -54,6 +54,7 @@ use serde::{Deserialize, Serialize};
 use sim::seeding::{SimRng, episode_seed};
 use sim::{Action, ActionProtocol, BlockId, Cell, Goal, Grid, Observation, State, View};
 
+use crate::config::DqnConfig;
 use crate::error::{NeuralError, Result};
 use crate::hindsight::Step;
 use crate::learner::{Learner, Losses};
@@ -68,6 +69,11 @@ pub const CHECKPOINT_FORMAT: &str = "blockstack-dqn-checkpoint";
 
 /// The checkpoint version this build writes and reads.
 pub const CHECKPOINT_VERSION: u32 = 1;
+
+/// Steps (pre-training gradient steps and self-play steps) between two checkpoints unless
+/// the caller says otherwise (`dqn --checkpoint-every`'s default): a few minutes of training
+/// at most, and a checkpoint costs well under a second.
+pub const DEFAULT_EVERY: u64 = 10_000;
 
 /// The largest checkpoint read: a buffer at its bound ([`crate::config::MAX_BUFFER_BYTES`])
 /// stored as rows is smaller than it.
@@ -323,6 +329,33 @@ impl Trainer {
         Ok(Trainer::resume_with_note(path)?.0)
     }
 
+    /// The run of `config` a checkpoint file holds; an error if the file holds a run of
+    /// other settings.
+    pub fn resume_run(path: &Path, config: &DqnConfig) -> Result<Trainer> {
+        let trainer = Trainer::resume(path)?;
+        if trainer.config() != config {
+            return Err(NeuralError::Checkpoint {
+                path: path.display().to_string(),
+                reason: "it holds a run of other settings".into(),
+            });
+        }
+        Ok(trainer)
+    }
+
+    /// Whether a run checkpointed every `every` steps writes its checkpoint now: after a
+    /// multiple of `every` steps ([`Trainer::steps_done`]), and at the end of the run.
+    pub fn checkpoint_due(&self, every: u64) -> bool {
+        let done = self.steps_done();
+        done % every.max(1) == 0 || done == self.total_steps()
+    }
+
+    /// The steps after which the next checkpoint of a run checkpointed every `every` steps
+    /// falls: the next multiple of `every`, or the end of the run.
+    pub fn next_checkpoint(&self, every: u64) -> u64 {
+        let every = every.max(1);
+        ((self.steps_done() / every + 1) * every).min(self.total_steps())
+    }
+
     /// [`Trainer::resume`], with the caller's document written with the run, if any
     /// ([`Trainer::write_checkpoint_with`]).
     pub fn resume_with_note(path: &Path) -> Result<(Trainer, Option<serde_json::Value>)> {
@@ -526,7 +559,7 @@ fn read_transitions(
     c: &Container,
     prefix: &str,
     contexts: &[Context],
-    config: &crate::DqnConfig,
+    config: &DqnConfig,
 ) -> std::result::Result<Vec<Transition>, String> {
     let tensor = |name: &str| {
         let full = format!("{prefix}/{name}");
