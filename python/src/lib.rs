@@ -12,6 +12,7 @@
 //! - [`planning`]: the exact solver and the oracle (`blockstack.solve`).
 //! - [`demos`]: expert demonstrations and recorded episodes as arrays.
 //! - [`training`]: the tabular trainer, in-process (`blockstack.train`, the Ray sweep).
+//! - [`dqn`]: the network trainer, in-process (`blockstack.train_dqn`).
 //! - [`model`]: a model file of either kind, loaded, played and evaluated (`blockstack.load`).
 //! - [`output`]: files written through the `files` crate (the sweep's table).
 //!
@@ -24,6 +25,7 @@ use pyo3::prelude::*;
 mod boundary;
 mod config;
 mod demos;
+mod dqn;
 mod env;
 mod goal_env;
 mod model;
@@ -45,6 +47,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(demos::demonstrations, m)?)?;
     m.add_function(wrap_pyfunction!(demos::read_recording, m)?)?;
     m.add_function(wrap_pyfunction!(training::train, m)?)?;
+    m.add_function(wrap_pyfunction!(dqn::train_dqn, m)?)?;
     m.add_function(wrap_pyfunction!(config::episode_seed, m)?)?;
     m.add_function(wrap_pyfunction!(config::observation_shape, m)?)?;
     m.add_function(wrap_pyfunction!(config::grid_size, m)?)?;
