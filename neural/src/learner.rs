@@ -372,7 +372,7 @@ mod tests {
             mask_noops: false,
             optimizer: crate::optim::OptimizerKind::Adam,
             lr: 1e-3,
-            ..DqnConfig::preset("dqn-planes", 2).unwrap()
+            ..DqnConfig::preset(crate::preset::Preset::DqnPlanes, 2).unwrap()
         };
         let net_config = NetConfig {
             kind: NetKind::Mlp,

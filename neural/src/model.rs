@@ -462,7 +462,7 @@ mod tests {
 
     #[test]
     fn the_stored_config_gives_back_the_config_and_leaves_out_defaults() {
-        for name in crate::config::PRESETS {
+        for name in crate::preset::Preset::ALL {
             let config = DqnConfig::preset(name, 3).unwrap();
             let json = serde_json::to_string(&StoredConfig::of(&config)).unwrap();
             // The fields added since the first files are absent at their defaults.
@@ -471,7 +471,7 @@ mod tests {
             let back: StoredConfig = serde_json::from_str(&json).unwrap();
             assert_eq!(back.config(), config, "{name}");
         }
-        let her = DqnConfig::preset("her-planes", 3).unwrap();
+        let her = DqnConfig::preset(crate::preset::Preset::HerPlanes, 3).unwrap();
         let moved = DqnConfig {
             world: EnvConfig {
                 start: StartRule::Paper,

@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use neural::checkpoint::CHECKPOINT_FORMAT;
-use neural::{DemoSource, DqnConfig, NetConfig, OptimizerKind, TargetEvery, Trainer};
+use neural::{DemoSource, DqnConfig, NetConfig, OptimizerKind, Preset, TargetEvery, Trainer};
 use sim::Backend;
 
 fn quiet() -> impl FnMut(&neural::Progress) {
@@ -29,7 +29,7 @@ fn dqfd() -> DqnConfig {
             hidden: 32,
             ..NetConfig::small()
         },
-        ..DqnConfig::preset("dqfd-planes", 2).unwrap()
+        ..DqnConfig::preset(Preset::DqfdPlanes, 2).unwrap()
     }
 }
 
@@ -47,7 +47,7 @@ fn configs() -> Vec<(&'static str, DqnConfig)> {
             hidden: 32,
             ..NetConfig::small()
         },
-        ..DqnConfig::preset("her-planes", 2).unwrap()
+        ..DqnConfig::preset(Preset::HerPlanes, 2).unwrap()
     };
     her.world.backend = Backend::Physics;
     her.world.horizon = 60;
@@ -58,7 +58,7 @@ fn configs() -> Vec<(&'static str, DqnConfig)> {
         batch: 4,
         optimizer: OptimizerKind::Rmsprop,
         target_every: TargetEvery::Games(3),
-        ..DqnConfig::preset("paper", 2).unwrap()
+        ..DqnConfig::preset(Preset::Paper, 2).unwrap()
     };
     let mut paper = paper;
     paper.world.horizon = 12;

@@ -12,6 +12,7 @@
 //! - [`planning`]: the exact solver and the oracle (`blockstack.solve`).
 //! - [`demos`]: expert demonstrations and recorded episodes as arrays.
 //! - [`training`]: the tabular trainer, in-process (`blockstack.train`, the Ray sweep).
+//! - [`dqn`]: the network trainer, in-process (`blockstack.train_dqn`).
 //! - [`model`]: a model file of either kind, loaded, played and evaluated (`blockstack.load`).
 //! - [`output`]: files written through the `files` crate (the sweep's table).
 //! - [`reproduce`]: the reproduction (`experiments`), its E8 arms run where a callable
@@ -26,6 +27,7 @@ use pyo3::prelude::*;
 mod boundary;
 mod config;
 mod demos;
+mod dqn;
 mod env;
 mod goal_env;
 mod model;
@@ -48,6 +50,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(demos::demonstrations, m)?)?;
     m.add_function(wrap_pyfunction!(demos::read_recording, m)?)?;
     m.add_function(wrap_pyfunction!(training::train, m)?)?;
+    m.add_function(wrap_pyfunction!(dqn::train_dqn, m)?)?;
     m.add_function(wrap_pyfunction!(reproduce::e8_arms, m)?)?;
     m.add_function(wrap_pyfunction!(reproduce::run_e8_arm, m)?)?;
     m.add_function(wrap_pyfunction!(reproduce::reproduce, m)?)?;

@@ -7,11 +7,12 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use neural::{DemoSource, DqnConfig, LossKind, NetKind, ObsKind, OptimizerKind, Phase, Progress, TdLoss};
-use sim::{Backend, Grid, RewardModel};
+use neural::{
+    DemoSource, DqnConfig, DqnOverrides, LossKind, NetKind, ObsKind, OptimizerKind, Phase, Preset, Progress, TdLoss,
+};
+use sim::{ActionProtocol, Backend, Goal, Grid, RewardModel};
 
 use super::stdout::line;
-use super::train::parse_goals;
 
 /// Arguments of `blockstack dqn`. Every setting starts from a preset and may be changed.
 #[derive(Debug, Args)]
@@ -22,7 +23,7 @@ pub struct DqnArgs {
     /// demonstrations, with hindsight relabelling), dqfd-pixels (our DQfD recipe with the
     /// paper network on the paper screen). Default: from --obs and --loss.
     #[arg(long)]
-    pub preset: Option<String>,
+    pub preset: Option<Preset>,
     /// What the network sees: role-planes or paper-screen (default: the preset's, else
     /// role-planes). Earlier releases called them planes and pixels.
     #[arg(long)]
@@ -121,115 +122,54 @@ pub struct DqnArgs {
 }
 
 impl DqnArgs {
-    /// The training config these arguments describe.
+    /// The training config these arguments describe: the library's resolver
+    /// ([`DqnConfig::resolve`]: the preset, then each flag given).
     pub fn config(&self) -> Result<DqnConfig> {
-        if let Some(obs) = self.obs {
-            neural::input::check_network_obs(obs)?;
-        }
-        let demos = match (&self.demos, &self.demos_file) {
-            (_, Some(path)) => Some(DemoSource::File(path.display().to_string())),
-            (Some(d), None) => Some(d.clone()),
-            (None, None) => None,
+        let overrides = DqnOverrides {
+            preset: self.preset,
+            obs: self.obs,
+            net: self.net,
+            loss: self.loss,
+            blocks: Some(self.blocks),
+            goals: self
+                .goals
+                .as_deref()
+                .map(|text| Goal::parse_list(text, self.blocks))
+                .transpose()?,
+            grid: Some(self.grid.parse::<Grid>()?),
+            steps: self.steps,
+            pretrain: self.pretrain,
+            demos: match (&self.demos, &self.demos_file) {
+                (_, Some(path)) => Some(DemoSource::File(path.display().to_string())),
+                (demos, None) => demos.clone(),
+            },
+            reward: self.reward.as_deref().map(RewardModel::from_name).transpose()?,
+            gamma: self.gamma,
+            lr: self.lr,
+            lr_final: self.lr_final,
+            optimizer: self.optimizer,
+            td_loss: self.td_loss,
+            buffer: self.buffer,
+            batch: self.batch,
+            hidden: self.hidden,
+            double: self.double,
+            mask_noops: self.mask_noops,
+            batch_norm: self.batch_norm,
+            margin: self.margin,
+            hindsight: self.hindsight,
+            demo_share: self.demo_share,
+            horizon: self.horizon,
+            backend: self.backend.as_deref().map(str::parse::<Backend>).transpose()?,
+            protocol: self.protocol.as_deref().map(str::parse::<ActionProtocol>).transpose()?,
+            seed: Some(self.seed),
         };
-        let preset = match &self.preset {
-            Some(p) => p.clone(),
-            None => {
-                let obs = self.obs.or(self.net.map(|n| {
-                    neural::NetConfig {
-                        kind: n,
-                        ..neural::NetConfig::small()
-                    }
-                    .obs()
-                }));
-                let dqfd = match self.loss {
-                    Some(loss) => loss == LossKind::Dqfd,
-                    None => demos.as_ref().is_some_and(|d| *d != DemoSource::None),
-                };
-                match (obs.unwrap_or(ObsKind::RolePlanes), dqfd) {
-                    (ObsKind::PaperScreen, false) => "paper",
-                    (ObsKind::PaperScreen, true) => "paper-dqfd",
-                    (_, false) => "dqn-planes",
-                    (_, true) => "dqfd-planes",
-                }
-                .into()
+        DqnConfig::resolve(&overrides).map_err(|e| match e {
+            // The goals were the default's: say which flag chooses others.
+            neural::NeuralError::Sim(sim::SimError::TooManyGoals { .. }) if self.goals.is_none() => {
+                anyhow::Error::new(e).context("without --goals every goal is used")
             }
-        };
-        let mut c = DqnConfig::preset(&preset, self.blocks)?;
-        c.world.grid = self.grid.parse::<Grid>()?;
-        c.goals = parse_goals(self.goals.as_deref(), self.blocks)?;
-        c.seed = self.seed;
-        if let Some(kind) = self.net {
-            c = c.with_net(match kind {
-                NetKind::Paper => neural::NetConfig::paper(),
-                _ => neural::NetConfig {
-                    kind,
-                    ..neural::NetConfig::small()
-                },
-            });
-            if let Some(obs) = self.obs {
-                c.net.validate(obs)?;
-            }
-        } else if let Some(obs) = self.obs {
-            if obs != c.obs() {
-                c = c.with_net(match obs {
-                    ObsKind::PaperScreen => neural::NetConfig::paper(),
-                    _ => neural::NetConfig::small(),
-                });
-            }
-        }
-        if let Some(d) = demos {
-            if d == DemoSource::None {
-                c.pretrain_steps = 0;
-            }
-            c.demos = d;
-        }
-        macro_rules! set {
-            ($($field:ident = $value:expr),* $(,)?) => {
-                $(if let Some(v) = $value { c.$field = v; })*
-            };
-        }
-        set!(
-            loss = self.loss,
-            steps = self.steps,
-            pretrain_steps = self.pretrain,
-            gamma = self.gamma,
-            optimizer = self.optimizer,
-            td_loss = self.td_loss,
-            buffer = self.buffer,
-            batch = self.batch,
-            double = self.double,
-            mask_noops = self.mask_noops,
-            margin = self.margin,
-            demo_share = self.demo_share,
-            hindsight = self.hindsight,
-        );
-        if let Some(h) = self.horizon {
-            c.world.horizon = h;
-        }
-        if let Some(lr) = self.lr {
-            c.lr_final *= lr / c.lr;
-            c.lr = lr;
-        }
-        if let Some(lr) = self.lr_final {
-            c.lr_final = lr;
-        }
-        if let Some(r) = &self.reward {
-            c.world.reward = RewardModel::from_name(r)?;
-        }
-        if let Some(b) = &self.backend {
-            c.world.backend = b.parse::<Backend>()?;
-        }
-        if let Some(p) = &self.protocol {
-            c.world.protocol = p.parse::<sim::ActionProtocol>()?;
-        }
-        if let Some(h) = self.hidden {
-            c.net.hidden = h;
-        }
-        if let Some(bn) = self.batch_norm {
-            c.net.batch_norm = bn;
-        }
-        c.validate()?;
-        Ok(c)
+            e => e.into(),
+        })
     }
 }
 

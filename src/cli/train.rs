@@ -161,15 +161,6 @@ pub struct TrainArgs {
     pub serve: Option<u16>,
 }
 
-/// Reads goals separated by ':' (e.g. `0,1,2:1,0,2`), each with `blocks` blocks; every goal
-/// of `blocks` blocks when `text` is `None`.
-pub fn parse_goals(text: Option<&str>, blocks: usize) -> Result<Vec<Goal>> {
-    match text {
-        None => Goal::all(blocks).context("without --goals every goal is used"),
-        Some(text) => Ok(Goal::parse_list(text, blocks)?),
-    }
-}
-
 impl TrainArgs {
     /// The training config these arguments describe: the library's resolver
     /// ([`TrainConfig::resolve`]: profile, then preset, then each flag given).

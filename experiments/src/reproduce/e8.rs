@@ -20,7 +20,7 @@
 use std::path::Path;
 
 use agent::EpisodeResult;
-use neural::{DemoSource, DqnConfig, NetConfig, NetKind, OptimizerKind, TargetEvery, Trainer};
+use neural::{DemoSource, DqnConfig, NetConfig, NetKind, OptimizerKind, Preset, TargetEvery, Trainer};
 use serde::{Deserialize, Serialize};
 use sim::{Goal, Profile, RewardModel};
 
@@ -115,7 +115,7 @@ fn scaled(mut c: DqnConfig, fraction: f64) -> DqnConfig {
     c
 }
 
-fn preset(name: &str, blocks: usize, seed: u64, fraction: f64) -> Result<DqnConfig> {
+fn preset(name: Preset, blocks: usize, seed: u64, fraction: f64) -> Result<DqnConfig> {
     Ok(scaled(
         DqnConfig {
             seed,
@@ -133,12 +133,12 @@ const DEFAULT_SHARE: f64 = 0.6;
 /// ablation keep the 2-block steps so that they cost what they did (`--long`'s own
 /// `dqfd-planes` arm trains at the preset's full budget).
 fn dqfd_planes3(seed: u64, fraction: f64) -> Result<DqnConfig> {
-    let two = DqnConfig::preset("dqfd-planes", 2)?;
+    let two = DqnConfig::preset(Preset::DqfdPlanes, 2)?;
     let config = DqnConfig {
         steps: two.steps,
         pretrain_steps: two.pretrain_steps,
         seed,
-        ..DqnConfig::preset("dqfd-planes", 3)?
+        ..DqnConfig::preset(Preset::DqfdPlanes, 3)?
     };
     Ok(scaled(config, fraction))
 }
@@ -160,7 +160,7 @@ fn arms(budget: Budget, seed: u64) -> Result<Vec<Arm>> {
             "ours: DQfD, planes, 3 blocks",
             Part::Ours,
             if budget == Budget::Long {
-                preset("dqfd-planes", 3, seed, fraction)?
+                preset(Preset::DqfdPlanes, 3, seed, fraction)?
             } else {
                 dqfd_planes3(seed, fraction)?
             },
@@ -168,16 +168,16 @@ fn arms(budget: Budget, seed: u64) -> Result<Vec<Arm>> {
         arm(
             "ours: DQN, planes, 2 blocks",
             Part::Ours,
-            preset("dqn-planes", 2, seed, fraction)?,
+            preset(Preset::DqnPlanes, 2, seed, fraction)?,
         ),
     ];
     if budget != Budget::Long {
         return Ok(arms);
     }
-    let paper2 = preset("paper", 2, seed, 1.0)?;
-    let paper_dqfd2 = preset("paper-dqfd", 2, seed, 1.0)?;
+    let paper2 = preset(Preset::Paper, 2, seed, 1.0)?;
+    let paper_dqfd2 = preset(Preset::PaperDqfd, 2, seed, 1.0)?;
     // Our learner on the paper's pixels and network: what the screen and the network cost.
-    let ours_pixels2 = preset("dqfd-pixels", 2, seed, 1.0)?;
+    let ours_pixels2 = preset(Preset::DqfdPixels, 2, seed, 1.0)?;
     let ours3 = dqfd_planes3(seed, 1.0)?;
     arms.extend([
         arm("paper: DQN, pixels, 2 blocks", Part::Paper, paper2),
@@ -185,7 +185,7 @@ fn arms(budget: Budget, seed: u64) -> Result<Vec<Arm>> {
         arm(
             "ours: DQN with hindsight relabelling, planes, 3 blocks",
             Part::Ours,
-            preset("her-planes", 3, seed, 1.0)?,
+            preset(Preset::HerPlanes, 3, seed, 1.0)?,
         ),
         arm(
             "ours on pixels: DQfD, paper network, 2 blocks",
@@ -245,7 +245,7 @@ fn arms(budget: Budget, seed: u64) -> Result<Vec<Arm>> {
             },
         ),
         // DQN on 3 blocks: `her-planes` without its relabelling.
-        ablate("no demonstrations", preset("dqn-planes", 3, seed, 1.0)?),
+        ablate("no demonstrations", preset(Preset::DqnPlanes, 3, seed, 1.0)?),
         ablate(
             "absolute planes (an MLP, not centred)",
             DqnConfig {

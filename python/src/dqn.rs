@@ -1,0 +1,178 @@
+//! The network trainer in-process: one run of `blockstack dqn` from its flags, for Python.
+
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use neural::{DemoSource, DqnConfig, DqnOverrides, Trainer};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use sim::{Goal, RewardModel};
+
+use crate::boundary::{OrValueError, guard};
+use crate::config;
+
+/// A setting given by name (`None` keeps the preset's).
+fn named<T: std::str::FromStr>(name: Option<&str>) -> PyResult<Option<T>>
+where
+    T::Err: std::fmt::Display,
+{
+    name.map(str::parse::<T>).transpose().or_value_error()
+}
+
+/// Trains a deep Q-network as `blockstack dqn` does: the same settings, resolved by the same
+/// library call (`neural::DqnConfig::resolve`: the preset, then each setting given), so the
+/// same arguments give the same network file, byte for byte. In this process, the GIL
+/// released; Ctrl-C stops it with `KeyboardInterrupt`. `demos` names a planner's
+/// demonstrations (`exact:K`, `oracle:K` or `none`), `demos_file` a recording. `out` saves
+/// the network file (its folder is checked before training); `blockstack.load(out)` plays
+/// and evaluates it.
+///
+/// Returns a dict: `describe` (the run in one line, as `blockstack dqn` prints
+/// it), `blocks`, `grid`, `goals`, `seed`, and the training totals (`demo_episodes`,
+/// `demo_transitions`, `pretrain_steps`, `steps`, `games`, `successes`, `corrections`,
+/// `relabelled`, `gradient_steps`, `train_seconds`).
+#[pyfunction]
+#[pyo3(signature = (*, preset=None, obs=None, net=None, loss=None, blocks=3, goals=None, grid=None, steps=None, pretrain=None, demos=None, demos_file=None, reward=None, gamma=None, lr=None, lr_final=None, optimizer=None, td_loss=None, buffer=None, batch=None, hidden=None, double=None, mask_noops=None, batch_norm=None, margin=None, hindsight=None, demo_share=None, horizon=None, backend=None, protocol=None, seed=1, out=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn train_dqn<'py>(
+    py: Python<'py>,
+    preset: Option<&str>,
+    obs: Option<&str>,
+    net: Option<&str>,
+    loss: Option<&str>,
+    blocks: usize,
+    goals: Option<&str>,
+    grid: Option<&Bound<'py, PyAny>>,
+    steps: Option<u64>,
+    pretrain: Option<u64>,
+    demos: Option<&str>,
+    demos_file: Option<PathBuf>,
+    reward: Option<&str>,
+    gamma: Option<f64>,
+    lr: Option<f64>,
+    lr_final: Option<f64>,
+    optimizer: Option<&str>,
+    td_loss: Option<&str>,
+    buffer: Option<usize>,
+    batch: Option<usize>,
+    hidden: Option<usize>,
+    double: Option<bool>,
+    mask_noops: Option<bool>,
+    batch_norm: Option<bool>,
+    margin: Option<f64>,
+    hindsight: Option<usize>,
+    demo_share: Option<f64>,
+    horizon: Option<u32>,
+    backend: Option<&str>,
+    protocol: Option<&str>,
+    seed: u64,
+    out: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyDict>> {
+    // Checked before any work, as the CLI does: a missing folder must not cost a training run.
+    let out_path = out
+        .as_deref()
+        .map(files::OutputPath::check)
+        .transpose()
+        .or_value_error()?;
+    let demos = match (demos, &demos_file) {
+        (Some(_), Some(_)) => {
+            return Err(crate::boundary::value_error(
+                "demos and demos_file both name demonstrations: give one",
+            ));
+        }
+        (_, Some(path)) => {
+            if let Some(out) = &out {
+                files::refuse_same_file(out, path).or_value_error()?;
+            }
+            Some(DemoSource::File(path.display().to_string()))
+        }
+        (demos, None) => named(demos)?,
+    };
+    let overrides = DqnOverrides {
+        preset: named(preset)?,
+        obs: named(obs)?,
+        net: named(net)?,
+        loss: named(loss)?,
+        blocks: Some(blocks),
+        goals: goals
+            .map(|text| Goal::parse_list(text, blocks))
+            .transpose()
+            .or_value_error()?,
+        grid: grid.map(config::grid_from).transpose()?,
+        steps,
+        pretrain,
+        demos,
+        reward: reward.map(RewardModel::from_name).transpose().or_value_error()?,
+        gamma,
+        lr,
+        lr_final,
+        optimizer: named(optimizer)?,
+        td_loss: named(td_loss)?,
+        buffer,
+        batch,
+        hidden,
+        double,
+        mask_noops,
+        batch_norm,
+        margin,
+        hindsight,
+        demo_share,
+        horizon,
+        backend: named(backend)?,
+        protocol: named(protocol)?,
+        seed: Some(seed),
+    };
+    let config = DqnConfig::resolve(&overrides).or_value_error()?;
+    let (report, seconds) = py.detach(|| {
+        guard(|| {
+            let clock = Instant::now();
+            let mut trainer = Trainer::new(config.clone()).or_value_error()?;
+            // A step at a time, so that Ctrl-C (looked at every 50 ms, the GIL taken back only
+            // for that) stops a long run with KeyboardInterrupt. The steps are the ones
+            // `Trainer::run` takes, so the network is the CLI's.
+            let mut looked = Instant::now();
+            let mut look = || -> PyResult<()> {
+                if looked.elapsed() >= Duration::from_millis(50) {
+                    Python::attach(|py| py.check_signals())?;
+                    looked = Instant::now();
+                }
+                Ok(())
+            };
+            let quiet = &mut |_: &neural::Progress| {};
+            for _ in 0..config.pretrain_steps {
+                trainer.pretrain(1, quiet).or_value_error()?;
+                look()?;
+            }
+            for _ in 0..config.steps {
+                trainer.play(1, quiet).or_value_error()?;
+                look()?;
+            }
+            let dqn = trainer.finish().or_value_error()?;
+            let seconds = clock.elapsed().as_secs_f64();
+            if let Some(out) = &out_path {
+                dqn.save(out.path()).or_value_error()?;
+            }
+            Ok((*dqn.report(), seconds))
+        })
+    })?;
+    let d = PyDict::new(py);
+    d.set_item("describe", config.describe())?;
+    d.set_item("blocks", config.blocks())?;
+    d.set_item("grid", config.grid().to_string())?;
+    d.set_item(
+        "goals",
+        config.goals.iter().map(Goal::to_string).collect::<Vec<_>>().join(":"),
+    )?;
+    d.set_item("seed", config.seed)?;
+    d.set_item("demo_episodes", report.demo_episodes)?;
+    d.set_item("demo_transitions", report.demo_transitions)?;
+    d.set_item("pretrain_steps", report.pretrain_steps)?;
+    d.set_item("steps", report.steps)?;
+    d.set_item("games", report.games)?;
+    d.set_item("successes", report.successes)?;
+    d.set_item("corrections", report.corrections)?;
+    d.set_item("relabelled", report.relabelled)?;
+    d.set_item("gradient_steps", report.gradient_steps)?;
+    d.set_item("train_seconds", seconds)?;
+    Ok(d)
+}
