@@ -22,6 +22,7 @@ WHOLE_SETTINGS = {
     "horizon": U32_MAX,
     "eval_episodes": U64_MAX,
     "eval_seed": U64_MAX,
+    "checkpoint_every": U64_MAX,
 }
 
 #: Every setting :func:`train` takes.
@@ -38,6 +39,9 @@ DQN_WHOLE_SETTINGS = {
     "hindsight": U64_MAX,
     "horizon": U32_MAX,
     "seed": U64_MAX,
+    "eval_episodes": U64_MAX,
+    "eval_seed": U64_MAX,
+    "checkpoint_every": U64_MAX,
 }
 
 #: Every setting :func:`train_dqn` takes.
@@ -61,12 +65,18 @@ def check_settings(settings: Dict[str, Any]) -> Dict[str, Any]:
     return _checked(settings, SETTINGS, WHOLE_SETTINGS)
 
 
+def check_dqn_settings(settings: Dict[str, Any]) -> Dict[str, Any]:
+    """``settings`` of :func:`train_dqn` with their whole numbers as ints; a ``ValueError``
+    naming an unknown setting or a whole number out of range."""
+    return _checked(settings, DQN_SETTINGS, DQN_WHOLE_SETTINGS)
+
+
 def train(**settings: Any) -> Dict[str, Any]:
     return _native.train(**check_settings(settings))
 
 
 def train_dqn(**settings: Any) -> Dict[str, Any]:
-    return _native.train_dqn(**_checked(settings, DQN_SETTINGS, DQN_WHOLE_SETTINGS))
+    return _native.train_dqn(**check_dqn_settings(settings))
 
 
 train.__doc__ = _native.train.__doc__

@@ -3,13 +3,14 @@
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use neural::{DemoSource, DqnConfig, DqnOverrides, Trainer};
+use neural::{AnyModel, DemoSource, DqnConfig, DqnOverrides, Trainer};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sim::{Goal, RewardModel};
 
-use crate::boundary::{OrValueError, guard};
+use crate::boundary::{OrValueError, guard, raise_signal, signal_checker};
 use crate::config;
+use crate::training::{checkpointing, eval_items};
 
 /// A setting given by name (`None` keeps the preset's).
 fn named<T: std::str::FromStr>(name: Option<&str>) -> PyResult<Option<T>>
@@ -27,12 +28,26 @@ where
 /// the network file (its folder is checked before training); `blockstack.load(out)` plays
 /// and evaluates it.
 ///
+/// With `eval_episodes > 0`, it then plays the network that many times on each of
+/// `eval_goals` (the training goals by default) in its training world, games of up to 1000
+/// steps, from the starts `blockstack eval --seed EVAL_SEED` plays, as `blockstack.train`
+/// evaluates a tabular agent.
+///
+/// `checkpoint` writes the run there every `checkpoint_every` steps (pre-training gradient
+/// steps, then self-play steps; 10,000 by default) and at its end, the file `blockstack dqn
+/// --checkpoint` writes; if the file already holds a checkpoint of this very run (the same
+/// settings), training goes on from it (as `dqn --resume` does) and ends with the network
+/// file a run that never stopped writes, byte for byte; a checkpoint of another run is a
+/// `ValueError`.
+///
 /// Returns a dict: `describe` (the run in one line, as `blockstack dqn` prints
-/// it), `blocks`, `grid`, `goals`, `seed`, and the training totals (`demo_episodes`,
+/// it), `blocks`, `grid`, `goals`, `seed`, the training totals (`demo_episodes`,
 /// `demo_transitions`, `pretrain_steps`, `steps`, `games`, `successes`, `corrections`,
-/// `relabelled`, `gradient_steps`, `train_seconds`).
+/// `relabelled`, `gradient_steps`, `train_seconds`), `resumed_at` (the steps the run had
+/// done when this call took it up from its checkpoint; 0 for a new run) and, with an
+/// evaluation, `blockstack.train`'s `eval_*` figures.
 #[pyfunction]
-#[pyo3(signature = (*, preset=None, obs=None, net=None, loss=None, blocks=3, goals=None, grid=None, steps=None, pretrain=None, demos=None, demos_file=None, reward=None, gamma=None, lr=None, lr_final=None, optimizer=None, td_loss=None, buffer=None, batch=None, hidden=None, double=None, mask_noops=None, batch_norm=None, margin=None, hindsight=None, demo_share=None, horizon=None, backend=None, protocol=None, seed=1, out=None))]
+#[pyo3(signature = (*, preset=None, obs=None, net=None, loss=None, blocks=3, goals=None, grid=None, steps=None, pretrain=None, demos=None, demos_file=None, reward=None, gamma=None, lr=None, lr_final=None, optimizer=None, td_loss=None, buffer=None, batch=None, hidden=None, double=None, mask_noops=None, batch_norm=None, margin=None, hindsight=None, demo_share=None, horizon=None, backend=None, protocol=None, seed=1, eval_episodes=0, eval_goals=None, eval_seed=2, eval_epsilon=0.1, out=None, checkpoint=None, checkpoint_every=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn train_dqn<'py>(
     py: Python<'py>,
@@ -66,7 +81,13 @@ pub fn train_dqn<'py>(
     backend: Option<&str>,
     protocol: Option<&str>,
     seed: u64,
+    eval_episodes: u64,
+    eval_goals: Option<&str>,
+    eval_seed: u64,
+    eval_epsilon: f64,
     out: Option<PathBuf>,
+    checkpoint: Option<PathBuf>,
+    checkpoint_every: Option<u64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     // Checked before any work, as the CLI does: a missing folder must not cost a training run.
     let out_path = out
@@ -74,6 +95,12 @@ pub fn train_dqn<'py>(
         .map(files::OutputPath::check)
         .transpose()
         .or_value_error()?;
+    let (checkpoint, every) = checkpointing(
+        out.as_deref(),
+        checkpoint,
+        checkpoint_every,
+        neural::checkpoint::DEFAULT_EVERY,
+    )?;
     let demos = match (demos, &demos_file) {
         (Some(_), Some(_)) => {
             return Err(crate::boundary::value_error(
@@ -123,36 +150,57 @@ pub fn train_dqn<'py>(
         seed: Some(seed),
     };
     let config = DqnConfig::resolve(&overrides).or_value_error()?;
-    let (report, seconds) = py.detach(|| {
+    let eval_goals = match eval_goals {
+        Some(text) => Goal::parse_list(text, blocks).or_value_error()?,
+        None => config.goals.clone(),
+    };
+    let (report, seconds, resumed_at, evaluation) = py.detach(|| {
         guard(|| {
             let clock = Instant::now();
-            let mut trainer = Trainer::new(config.clone()).or_value_error()?;
+            let mut trainer = match &checkpoint {
+                Some((path, _)) if path.exists() => Trainer::resume_run(path, &config).or_value_error()?,
+                _ => Trainer::new(config.clone()).or_value_error()?,
+            };
+            let resumed_at = trainer.steps_done();
             // A step at a time, so that Ctrl-C (looked at every 50 ms, the GIL taken back only
             // for that) stops a long run with KeyboardInterrupt. The steps are the ones
             // `Trainer::run` takes, so the network is the CLI's.
             let mut looked = Instant::now();
-            let mut look = || -> PyResult<()> {
+            let quiet = &mut |_: &neural::Progress| {};
+            while trainer.steps_done() < trainer.total_steps() {
+                trainer.train_until(trainer.steps_done() + 1, quiet).or_value_error()?;
+                if let Some((_, out)) = &checkpoint {
+                    if trainer.checkpoint_due(every) {
+                        trainer.write_checkpoint(out).or_value_error()?;
+                    }
+                }
                 if looked.elapsed() >= Duration::from_millis(50) {
                     Python::attach(|py| py.check_signals())?;
                     looked = Instant::now();
                 }
-                Ok(())
-            };
-            let quiet = &mut |_: &neural::Progress| {};
-            for _ in 0..config.pretrain_steps {
-                trainer.pretrain(1, quiet).or_value_error()?;
-                look()?;
             }
-            for _ in 0..config.steps {
-                trainer.play(1, quiet).or_value_error()?;
-                look()?;
+            if let Some((_, out)) = &checkpoint {
+                // A run with nothing left to train (or nothing at all) still leaves its file.
+                if !out.path().exists() {
+                    trainer.write_checkpoint(out).or_value_error()?;
+                }
             }
             let dqn = trainer.finish().or_value_error()?;
             let seconds = clock.elapsed().as_secs_f64();
             if let Some(out) = &out_path {
                 dqn.save(out.path()).or_value_error()?;
             }
-            Ok((*dqn.report(), seconds))
+            let report = *dqn.report();
+            let evaluation = if eval_episodes > 0 {
+                let model = AnyModel::Dqn(Box::new(dqn));
+                let plan = model.eval_plan(eval_goals, eval_episodes, eval_seed);
+                let mut signal = None;
+                let evaluated = model.evaluate(&plan, "", eval_epsilon, &mut signal_checker(&mut signal));
+                Some(evaluated.map_err(|e| raise_signal(signal, e))?.report)
+            } else {
+                None
+            };
+            Ok((report, seconds, resumed_at, evaluation))
         })
     })?;
     let d = PyDict::new(py);
@@ -174,5 +222,9 @@ pub fn train_dqn<'py>(
     d.set_item("relabelled", report.relabelled)?;
     d.set_item("gradient_steps", report.gradient_steps)?;
     d.set_item("train_seconds", seconds)?;
+    d.set_item("resumed_at", resumed_at)?;
+    if let Some(e) = evaluation {
+        eval_items(&d, &e)?;
+    }
     Ok(d)
 }

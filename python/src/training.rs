@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use agent::eval::EvalPlan;
+use agent::eval::{EvalPlan, EvalReport};
 use agent::{Assist, TrainConfig, TrainOverrides, Trainer};
 use oracle::ExactSolver;
 use pyo3::prelude::*;
@@ -86,19 +86,12 @@ pub fn train<'py>(
         .map(files::OutputPath::check)
         .transpose()
         .or_value_error()?;
-    let checkpoint = checkpoint
-        .as_deref()
-        .map(|path| files::OutputPath::check(path).map(|out| (path.to_path_buf(), out)))
-        .transpose()
-        .or_value_error()?;
-    if let (Some(out), Some((path, _))) = (&out, &checkpoint) {
-        files::refuse_same_file(out, path).or_value_error()?;
-    }
-    let every = match (checkpoint_every, &checkpoint) {
-        (Some(0), _) => return Err(value_error("checkpoint_every must be at least 1")),
-        (Some(_), None) => return Err(value_error("checkpoint_every needs checkpoint")),
-        (every, _) => every.unwrap_or(agent::checkpoint::DEFAULT_EVERY),
-    };
+    let (checkpoint, every) = checkpointing(
+        out.as_deref(),
+        checkpoint,
+        checkpoint_every,
+        agent::checkpoint::DEFAULT_EVERY,
+    )?;
     let overrides = TrainOverrides {
         profile: named(profile)?,
         preset: named(preset)?,
@@ -155,6 +148,12 @@ pub fn train<'py>(
                 if looked.elapsed() >= Duration::from_millis(50) {
                     Python::attach(|py| py.check_signals())?;
                     looked = Instant::now();
+                }
+            }
+            if let Some((_, out)) = &checkpoint {
+                // A run with no game left to play (or none at all) still leaves its file.
+                if !out.path().exists() {
+                    trainer.write_checkpoint(out).or_value_error()?;
                 }
             }
             let trained = trainer.finish();
@@ -223,17 +222,48 @@ pub fn train<'py>(
     d.set_item("train_seconds", seconds)?;
     d.set_item("resumed_at", resumed_at)?;
     if let Some(e) = evaluation {
-        let (summary, o) = (e.run.summary, e.optimality);
-        d.set_item("eval_episodes", summary.episodes)?;
-        d.set_item("eval_failures", summary.failures)?;
-        d.set_item("eval_mean_steps", summary.mean_steps)?;
-        d.set_item("eval_median_steps", summary.median_steps)?;
-        d.set_item(
-            "eval_mean_steps_failures_as_horizon",
-            e.run.mean_steps_failures_as_horizon,
-        )?;
-        d.set_item("eval_mean_optimal_steps", o.mean_optimal_steps)?;
-        d.set_item("eval_mean_ratio_to_optimum", o.mean_ratio_to_optimum)?;
+        eval_items(&d, &e)?;
     }
     Ok(d)
+}
+
+/// A run's checkpoint file, checked as an output (and not `out`), and the steps or games
+/// between two checkpoints (`default` unless given); a `ValueError` for `checkpoint_every`
+/// without a checkpoint, or 0.
+pub(crate) fn checkpointing(
+    out: Option<&std::path::Path>,
+    checkpoint: Option<PathBuf>,
+    checkpoint_every: Option<u64>,
+    default: u64,
+) -> PyResult<(Option<(PathBuf, files::OutputPath)>, u64)> {
+    let checkpoint = checkpoint
+        .map(|path| files::OutputPath::check(&path).map(|output| (path, output)))
+        .transpose()
+        .or_value_error()?;
+    if let (Some(out), Some((path, _))) = (out, &checkpoint) {
+        files::refuse_same_file(out, path).or_value_error()?;
+    }
+    let every = match (checkpoint_every, &checkpoint) {
+        (Some(0), _) => return Err(value_error("checkpoint_every must be at least 1")),
+        (Some(_), None) => return Err(value_error("checkpoint_every needs checkpoint")),
+        (every, _) => every.unwrap_or(default),
+    };
+    Ok((checkpoint, every))
+}
+
+/// The evaluation's figures into a run's dict: `eval_episodes`, `eval_failures`,
+/// `eval_mean_steps`, `eval_median_steps`, `eval_mean_steps_failures_as_horizon`,
+/// `eval_mean_optimal_steps`, `eval_mean_ratio_to_optimum`.
+pub(crate) fn eval_items(d: &Bound<'_, PyDict>, e: &EvalReport) -> PyResult<()> {
+    let (summary, o) = (e.run.summary, e.optimality);
+    d.set_item("eval_episodes", summary.episodes)?;
+    d.set_item("eval_failures", summary.failures)?;
+    d.set_item("eval_mean_steps", summary.mean_steps)?;
+    d.set_item("eval_median_steps", summary.median_steps)?;
+    d.set_item(
+        "eval_mean_steps_failures_as_horizon",
+        e.run.mean_steps_failures_as_horizon,
+    )?;
+    d.set_item("eval_mean_optimal_steps", o.mean_optimal_steps)?;
+    d.set_item("eval_mean_ratio_to_optimum", o.mean_ratio_to_optimum)
 }

@@ -37,3 +37,23 @@ def test_a_checkpoint_of_another_run_is_refused(tmp_path):
         blockstack.train(**RUN, games=10, checkpoint_every=5)
     with pytest.raises(ValueError, match="at least 1"):
         blockstack.train(**RUN, games=10, checkpoint=str(ck), checkpoint_every=0)
+
+
+def test_a_network_run_writes_the_checkpoint_of_the_command_line(cli, tmp_path):
+    flags = ["--preset", "dqn-planes", "--blocks", "2", "--goals", "0,1", "--hidden", "32", "--steps", "400",
+             "--seed", "3"]
+    by_cli, ck_cli = tmp_path / "cli.st", tmp_path / "cli.ck"
+    cli("dqn", *flags, "--checkpoint", ck_cli, "--checkpoint-every", "150", "--out", by_cli)
+    run = dict(preset="dqn-planes", blocks=2, goals="0,1", hidden=32, steps=400, seed=3)
+    by_python, ck_python = tmp_path / "python.st", tmp_path / "python.ck"
+    row = blockstack.train_dqn(**run, checkpoint=str(ck_python), checkpoint_every=150, out=str(by_python),
+                               eval_episodes=5)
+    assert row["resumed_at"] == 0 and row["eval_episodes"] == 5
+    assert by_python.read_bytes() == by_cli.read_bytes()
+    assert ck_python.read_bytes() == ck_cli.read_bytes()
+    # The command line's checkpoint holds the whole run: taken up from Python, nothing is left.
+    again = tmp_path / "again.st"
+    assert blockstack.train_dqn(**run, checkpoint=str(ck_cli), out=str(again))["resumed_at"] == 400
+    assert again.read_bytes() == by_cli.read_bytes()
+    with pytest.raises(ValueError, match="other settings"):
+        blockstack.train_dqn(**dict(run, seed=4), checkpoint=str(ck_cli))

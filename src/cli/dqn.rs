@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use clap::Args;
+use clap::{ArgGroup, Args};
 use indicatif::{ProgressBar, ProgressStyle};
 use neural::{
     DemoSource, DqnConfig, DqnOverrides, LossKind, NetKind, ObsKind, OptimizerKind, Phase, Preset, Progress, TdLoss,
@@ -14,8 +14,43 @@ use sim::{ActionProtocol, Backend, Goal, Grid, RewardModel};
 
 use super::stdout::line;
 
+/// The flags that set up a run, which `--resume` takes from its checkpoint instead.
+const RUN_FLAGS: [&str; 30] = [
+    "preset",
+    "obs",
+    "net",
+    "loss",
+    "blocks",
+    "goals",
+    "grid",
+    "steps",
+    "pretrain",
+    "demos",
+    "demos_file",
+    "reward",
+    "gamma",
+    "lr",
+    "lr_final",
+    "optimizer",
+    "td_loss",
+    "buffer",
+    "batch",
+    "hidden",
+    "double",
+    "mask_noops",
+    "batch_norm",
+    "margin",
+    "hindsight",
+    "demo_share",
+    "horizon",
+    "backend",
+    "protocol",
+    "seed",
+];
+
 /// Arguments of `blockstack dqn`. Every setting starts from a preset and may be changed.
 #[derive(Debug, Args)]
+#[command(group(ArgGroup::new("checkpointing").args(["checkpoint", "resume"]).multiple(true)))]
 pub struct DqnArgs {
     /// Start from this preset: paper (the paper's DQN on pixels), paper-dqfd (the same with
     /// DQfD on 500 exact-solver demonstrations), dqn-planes (ours, no demonstrations),
@@ -119,6 +154,23 @@ pub struct DqnArgs {
     /// Where to write the network.
     #[arg(long)]
     pub out: PathBuf,
+    /// Write the run to this checkpoint file every --checkpoint-every steps and when it ends
+    /// (atomically: a kill loses at most the steps since the last one): its networks,
+    /// optimiser, replay buffer and demonstrations, generator and the game being played;
+    /// `dqn --resume FILE` continues it.
+    #[arg(long, value_name = "FILE")]
+    pub checkpoint: Option<PathBuf>,
+    /// Steps (pre-training gradient steps, then self-play steps) between two checkpoints
+    /// [default: 10000]
+    #[arg(long, value_name = "N", requires = "checkpointing", value_parser = clap::value_parser!(u64).range(1..))]
+    pub checkpoint_every: Option<u64>,
+    /// Continue the run in this checkpoint file, with its settings, to its end; it goes on
+    /// writing checkpoints to the same file unless --checkpoint names another. The flags that
+    /// set up a run (--steps included: the learning rate falls over the planned steps) are
+    /// refused with it: the network it saves is the one the run would have saved had it never
+    /// stopped, byte for byte.
+    #[arg(long, value_name = "FILE", conflicts_with_all = RUN_FLAGS)]
+    pub resume: Option<PathBuf>,
 }
 
 impl DqnArgs {
@@ -176,20 +228,45 @@ impl DqnArgs {
 /// How often the progress bar is redrawn, in steps.
 const DRAW_EVERY: u64 = 100;
 
-/// Trains, showing a progress bar on a terminal, and saves the network.
+/// Trains (or resumes a checkpointed run), showing a progress bar on a terminal, writing
+/// checkpoints if asked, and saves the network.
 pub fn dqn(args: DqnArgs) -> Result<()> {
     // Before minutes of work, not after.
     let out = files::OutputPath::check(&args.out)?;
-    super::stdout::claim_for_data(&[Some(&out)])?;
+    let checkpoint_path = args.checkpoint.as_ref().or(args.resume.as_ref());
+    let checkpoint = checkpoint_path.map(files::OutputPath::check).transpose()?;
+    anyhow::ensure!(
+        !checkpoint.as_ref().is_some_and(files::OutputPath::is_stdout),
+        "--checkpoint -: a checkpoint is written again every N steps, so it must be a file"
+    );
+    super::stdout::claim_for_data(&[Some(&out), checkpoint.as_ref()])?;
     if let Some(demos) = &args.demos_file {
         files::refuse_same_file(&args.out, demos).context("--out and --demos-file")?;
     }
-    let config = args.config()?;
+    if let Some(path) = checkpoint_path {
+        match (&args.checkpoint, files::refuse_same_file(&args.out, path)) {
+            (_, Ok(())) => {}
+            // The checkpoint is written as well as read: it is not only an input.
+            (Some(_), Err(_)) => anyhow::bail!(
+                "--out {} and --checkpoint {} are the same file: the network and the checkpoint need a file each",
+                args.out.display(),
+                path.display()
+            ),
+            (None, Err(e)) => return Err(anyhow::Error::new(e).context("--out and --resume")),
+        }
+    }
     let clock = Instant::now();
-    let trainer = neural::Trainer::new(config.clone())?;
+    let mut trainer = match &args.resume {
+        Some(path) => neural::Trainer::resume(path)?,
+        None => neural::Trainer::new(args.config()?)?,
+    };
+    let config = trainer.config().clone();
+    let resumed_at = trainer.steps_done();
+    let before = trainer.report();
     let demo_seconds = clock.elapsed().as_secs_f64();
     // Hidden by indicatif itself when stderr is not a terminal.
     let bar = ProgressBar::new(config.pretrain_steps);
+    bar.set_position(trainer.report().pretrain_steps);
     bar.set_style(
         ProgressStyle::with_template("{prefix} {bar:30} {pos}/{len}  {msg}  [{elapsed_precise}, eta {eta}]")
             .expect("a valid template"),
@@ -227,7 +304,21 @@ pub fn dqn(args: DqnArgs) -> Result<()> {
             });
         }
     };
-    let dqn = trainer.run(&mut show)?;
+    let every = args.checkpoint_every.unwrap_or(neural::checkpoint::DEFAULT_EVERY);
+    loop {
+        let until = match &checkpoint {
+            Some(_) => trainer.next_checkpoint(every),
+            None => trainer.total_steps(),
+        };
+        trainer.train_until(until, &mut show)?;
+        if let Some(out) = &checkpoint {
+            trainer.write_checkpoint(out)?;
+        }
+        if trainer.steps_done() == trainer.total_steps() {
+            break;
+        }
+    }
+    let dqn = trainer.finish()?;
     let seconds = clock.elapsed().as_secs_f64();
     bar.finish_and_clear();
     dqn.save(&args.out)
@@ -243,8 +334,19 @@ pub fn dqn(args: DqnArgs) -> Result<()> {
     }
     let r = dqn.report();
     line(format_args!("trained {}: {}", dqn.name(), config.describe()))?;
+    if let Some(path) = &args.resume {
+        line(format_args!(
+            "resumed at step {resumed_at} of {} from {}",
+            config.pretrain_steps + config.steps,
+            path.display()
+        ))?;
+    }
+    let made = match &args.resume {
+        Some(_) => format!("{demo_seconds:.1} s to read the checkpoint"),
+        None => format!("{demo_seconds:.1} s to make"),
+    };
     line(format_args!(
-        "{} demonstrated episodes ({} transitions, {demo_seconds:.1} s to make), {} pre-training steps; \
+        "{} demonstrated episodes ({} transitions, {made}), {} pre-training steps; \
          {} self-play steps in {} games, {} reached the goal; {} demonstrations from a loop; {} relabelled transitions; {} gradient steps",
         r.demo_episodes,
         r.demo_transitions,
@@ -258,8 +360,11 @@ pub fn dqn(args: DqnArgs) -> Result<()> {
     ))?;
     line(format_args!(
         "trained in {seconds:.1} s ({:.0} environment steps/s, {:.0} gradient steps/s)",
-        r.steps as f64 / (seconds - demo_seconds).max(1e-9),
-        r.gradient_steps as f64 / (seconds - demo_seconds).max(1e-9)
+        (r.steps - before.steps) as f64 / (seconds - demo_seconds).max(1e-9),
+        (r.gradient_steps - before.gradient_steps) as f64 / (seconds - demo_seconds).max(1e-9)
     ))?;
+    if let Some(out) = &checkpoint {
+        line(format_args!("checkpoint {}", out.path().display()))?;
+    }
     line(format_args!("saved {}", args.out.display()))
 }
