@@ -315,20 +315,14 @@ fn network_checkpoint_misuse_is_one_line_and_exit_status_2() {
             vec!["--resume", path(&model)],
             "blockstack-dqn file and not blockstack-dqn-checkpoint",
         ),
-        (vec!["--checkpoint-every", "5"], "--checkpoint"),
-        (vec!["--checkpoint", "-"], "it must be a file"),
+        (vec!["--steps", "10", "--checkpoint-every", "5"], "--checkpoint"),
+        (vec!["--steps", "10", "--checkpoint", "-"], "it must be a file"),
         (
-            vec!["--checkpoint", path(&ck), "--checkpoint-every", "0"],
+            vec!["--steps", "10", "--checkpoint", path(&ck), "--checkpoint-every", "0"],
             "--checkpoint-every",
         ),
     ] {
-        let o = blockstack(
-            &[
-                &["dqn", "--steps", "10", "--out", path(&dir.join("other.st"))][..],
-                &args,
-            ]
-            .concat(),
-        );
+        let o = blockstack(&[&["dqn", "--out", path(&dir.join("other.st"))][..], &args].concat());
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
         assert!(err.contains(message), "{args:?}: {err}");
