@@ -185,9 +185,14 @@ impl Columns {
             c.n_step_rewards.push(t.n_step.rewards);
             c.n_steps.push(t.n_step.steps);
             c.flags.push(
-                u8::from(t.terminal) * TERMINAL
-                    | u8::from(t.n_step.terminal) * N_STEP_TERMINAL
-                    | u8::from(t.expert) * EXPERT,
+                [
+                    (t.terminal, TERMINAL),
+                    (t.n_step.terminal, N_STEP_TERMINAL),
+                    (t.expert, EXPERT),
+                ]
+                .iter()
+                .filter(|(set, _)| *set)
+                .fold(0, |flags, (_, bit)| flags | bit),
             );
         }
         c

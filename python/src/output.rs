@@ -29,6 +29,9 @@ pub fn check_folder(path: PathBuf) -> PyResult<()> {
     files::prepare_folder(path).or_value_error()
 }
 
+/// A bar from Python: its name, its value, and an interval `(low, high)` or `None`.
+type PyBar = (String, f64, Option<(f64, f64)>);
+
 /// Draws a bar chart with the `plots` crate (the reproduction's charts' look) and writes
 /// `<stem>.png` and `<stem>.svg`; returns their paths. `bars` holds `(name, value,
 /// (low, high) or None)`; `interval_label` names the intervals in the legend.
@@ -40,7 +43,7 @@ pub fn bar_chart(
     stem: PathBuf,
     title: String,
     y_label: String,
-    bars: Vec<(String, f64, Option<(f64, f64)>)>,
+    bars: Vec<PyBar>,
     value_label: String,
     interval_label: &str,
     note: &str,
