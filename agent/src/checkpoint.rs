@@ -148,7 +148,7 @@ impl Trainer {
     /// multiple of `every` games, and after the last.
     pub fn checkpoint_due(&self, every: u64) -> bool {
         let played = self.report.games;
-        played % every.max(1) == 0 || played == self.config.games
+        played.is_multiple_of(every.max(1)) || played == self.config.games
     }
 
     /// [`Trainer::resume`] from the bytes of a checkpoint, named `name` in errors.

@@ -351,7 +351,7 @@ impl Trainer {
     /// multiple of `every` steps ([`Trainer::steps_done`]), and at the end of the run.
     pub fn checkpoint_due(&self, every: u64) -> bool {
         let done = self.steps_done();
-        done % every.max(1) == 0 || done == self.total_steps()
+        done.is_multiple_of(every.max(1)) || done == self.total_steps()
     }
 
     /// The steps after which the next checkpoint of a run checkpointed every `every` steps

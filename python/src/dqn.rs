@@ -169,10 +169,10 @@ pub fn train_dqn<'py>(
             let quiet = &mut |_: &neural::Progress| {};
             while trainer.steps_done() < trainer.total_steps() {
                 trainer.train_until(trainer.steps_done() + 1, quiet).or_value_error()?;
-                if let Some((_, out)) = &checkpoint {
-                    if trainer.checkpoint_due(every) {
-                        trainer.write_checkpoint(out).or_value_error()?;
-                    }
+                if let Some((_, out)) = &checkpoint
+                    && trainer.checkpoint_due(every)
+                {
+                    trainer.write_checkpoint(out).or_value_error()?;
                 }
                 if looked.elapsed() >= Duration::from_millis(50) {
                     Python::attach(|py| py.check_signals())?;

@@ -140,10 +140,10 @@ pub fn train<'py>(
             let mut looked = Instant::now();
             while trainer.report().games < config.games {
                 trainer.play_games(1, None).or_value_error()?;
-                if let Some((_, out)) = &checkpoint {
-                    if trainer.checkpoint_due(every) {
-                        trainer.write_checkpoint(out).or_value_error()?;
-                    }
+                if let Some((_, out)) = &checkpoint
+                    && trainer.checkpoint_due(every)
+                {
+                    trainer.write_checkpoint(out).or_value_error()?;
                 }
                 if looked.elapsed() >= Duration::from_millis(50) {
                     Python::attach(|py| py.check_signals())?;
