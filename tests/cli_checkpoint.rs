@@ -1,12 +1,12 @@
-//! `train --checkpoint` and `train --resume`: a run stopped at any checkpoint (on purpose
-//! or by `kill -9`) and resumed ends with the same model file, byte for byte, as a run that
-//! never stopped.
+//! `train --checkpoint` / `--resume` and `dqn --checkpoint` / `--resume`: a run stopped at
+//! any checkpoint (on purpose or by `kill -9`) and resumed ends with the same model file,
+//! byte for byte, as a run that never stopped.
 
 use std::path::Path;
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-use crate::common::{BIN, blockstack, cli, file_metadata, path, scratch, stderr, train};
+use crate::common::{BIN, blockstack, cli, file_metadata, path, scratch, stderr, stdout, train};
 
 /// The role recipe on two goals, on the grid backend: its final replay makes the
 /// checkpoint carry a replay memory.
@@ -213,4 +213,132 @@ fn checkpoint_misuse_is_one_line_and_exit_status_2() {
         .flag("out", path(&model))
         .run();
     assert!(stderr(&o).contains("--checkpoint"), "{}", stderr(&o));
+}
+
+/// A small network run: DQN on 2 blocks and one goal, a narrow network.
+const DQN: [&str; 10] = [
+    "--preset",
+    "dqn-planes",
+    "--blocks",
+    "2",
+    "--goals",
+    "0,1",
+    "--hidden",
+    "64",
+    "--steps",
+    "30000",
+];
+
+fn dqn(args: &[&str]) -> std::process::Output {
+    let o = blockstack(&[&["dqn"][..], args].concat());
+    assert!(o.status.success(), "dqn {args:?}: {}", stderr(&o));
+    o
+}
+
+/// The steps a network checkpoint has done, read as any program could.
+fn steps_done(checkpoint: &Path) -> u64 {
+    file_metadata(checkpoint, "blockstack-dqn-checkpoint")["report"]["steps"]
+        .as_u64()
+        .expect("steps done")
+}
+
+#[test]
+fn a_network_run_killed_after_a_checkpoint_resumes_to_the_same_file() {
+    let dir = scratch("dqn-checkpoint-kill");
+    let (whole, resumed, ck) = (dir.join("whole.st"), dir.join("resumed.st"), dir.join("ck"));
+    let mut child = Command::new(BIN)
+        .arg("dqn")
+        .args(DQN)
+        .args(["--checkpoint", path(&ck), "--checkpoint-every", "500"])
+        .args(["--out", path(&dir.join("never.st"))])
+        .spawn()
+        .expect("the binary runs");
+    let clock = Instant::now();
+    while !ck.exists() {
+        assert!(
+            clock.elapsed() < Duration::from_secs(120),
+            "no checkpoint after 2 minutes"
+        );
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the run ended before it was killed"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.kill().expect("SIGKILL");
+    child.wait().unwrap();
+    assert!(!dir.join("never.st").exists());
+    let done = steps_done(&ck);
+    assert!(done > 0 && done.is_multiple_of(500) && done < 30000, "{done}");
+
+    let o = dqn(&["--resume", path(&ck), "--out", path(&resumed)]);
+    assert!(
+        stdout(&o).contains(&format!("resumed at step {done}")),
+        "{}",
+        stdout(&o)
+    );
+    dqn(&[&DQN[..], &["--out", path(&whole)]].concat());
+    assert!(
+        std::fs::read(&whole).unwrap() == std::fs::read(&resumed).unwrap(),
+        "the resumed run's network differs from the undisturbed run's"
+    );
+    // It went on checkpointing to the same file, to the end.
+    assert_eq!(steps_done(&ck), 30000);
+}
+
+#[test]
+fn network_checkpoint_misuse_is_one_line_and_exit_status_2() {
+    let dir = scratch("dqn-checkpoint-misuse");
+    let (model, ck) = (dir.join("m.st"), dir.join("ck"));
+    dqn(&[
+        "--preset",
+        "dqn-planes",
+        "--blocks",
+        "2",
+        "--steps",
+        "50",
+        "--checkpoint",
+        path(&ck),
+        "--out",
+        path(&model),
+    ]);
+    for (args, message) in [
+        (
+            vec!["--resume", path(&ck), "--seed", "4"],
+            "'--resume <FILE>' cannot be used with '--seed <SEED>'",
+        ),
+        (
+            vec!["--resume", path(&ck), "--steps", "80"],
+            "'--resume <FILE>' cannot be used with '--steps <STEPS>'",
+        ),
+        (
+            vec!["--resume", path(&model)],
+            "blockstack-dqn file and not blockstack-dqn-checkpoint",
+        ),
+        (vec!["--steps", "10", "--checkpoint-every", "5"], "--checkpoint"),
+        (vec!["--steps", "10", "--checkpoint", "-"], "it must be a file"),
+        (
+            vec!["--steps", "10", "--checkpoint", path(&ck), "--checkpoint-every", "0"],
+            "--checkpoint-every",
+        ),
+    ] {
+        let o = blockstack(&[&["dqn", "--out", path(&dir.join("other.st"))][..], &args].concat());
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(message), "{args:?}: {err}");
+    }
+    let o = cli("dqn").flag("resume", path(&ck)).flag("out", path(&ck)).run();
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--out and --resume"), "{}", stderr(&o));
+    let o = cli("dqn")
+        .flag("steps", "5")
+        .flag("checkpoint", path(&model))
+        .flag("out", path(&model))
+        .run();
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("--out") && stderr(&o).contains("--checkpoint"),
+        "{}",
+        stderr(&o)
+    );
 }

@@ -29,6 +29,7 @@ use std::path::Path;
 use files::{Container, Expect, FilesError, OutputPath, Tensor};
 use serde::{Deserialize, Serialize};
 
+use crate::config::TrainConfig;
 use crate::error::{AgentError, Result};
 use crate::model::MAX_MODEL_BYTES;
 use crate::model::TrainingMeta;
@@ -40,6 +41,10 @@ pub const CHECKPOINT_FORMAT: &str = "blockstack-train-checkpoint";
 
 /// The checkpoint version this build writes and reads.
 pub const CHECKPOINT_VERSION: u32 = 1;
+
+/// Games between two checkpoints unless the caller says otherwise (`train
+/// --checkpoint-every`'s default).
+pub const DEFAULT_EVERY: u64 = 1000;
 
 /// The largest checkpoint read: a model file at its bound and a replay memory as large.
 pub const MAX_CHECKPOINT_BYTES: u64 = 2 * MAX_MODEL_BYTES;
@@ -110,6 +115,40 @@ impl Trainer {
                 reason: read_problem(e),
             })?;
         Trainer::read_checkpoint(input, &name)
+    }
+
+    /// The run of `config` a checkpoint file holds, to be played to `config.games` games in
+    /// all; an error if the file holds another run (other settings), or has played more
+    /// games than that.
+    pub fn resume_run(path: &Path, config: &TrainConfig) -> Result<Trainer> {
+        let mut trainer = Trainer::resume(path)?;
+        let fail = |reason: String| AgentError::Checkpoint {
+            path: path.display().to_string(),
+            reason,
+        };
+        let held = TrainConfig {
+            games: config.games,
+            ..trainer.config().clone()
+        };
+        if TrainingMeta::of(&held) != TrainingMeta::of(config) {
+            return Err(fail("it holds a run of other settings".into()));
+        }
+        let played = trainer.report().games;
+        if played > config.games {
+            return Err(fail(format!(
+                "its run has played {played} games, more than the {} asked for",
+                config.games
+            )));
+        }
+        trainer.set_games(config.games);
+        Ok(trainer)
+    }
+
+    /// Whether a run checkpointed every `every` games writes its checkpoint now: after a
+    /// multiple of `every` games, and after the last.
+    pub fn checkpoint_due(&self, every: u64) -> bool {
+        let played = self.report.games;
+        played.is_multiple_of(every.max(1)) || played == self.config.games
     }
 
     /// [`Trainer::resume`] from the bytes of a checkpoint, named `name` in errors.

@@ -78,7 +78,7 @@ mod text;
 pub use arms::{ArmResult, Goals, Measured, Row, Rules, Suite, Table, TestOutcome};
 pub use e1::{Decomposition, Gap, WorldArm};
 pub use e10::{Family, General, SizeFigures, TrainingFigures};
-pub use e8::Budget;
+pub use e8::{ArmRun, Budget, Game, arm_names as e8_arm_names, run_arm_of as run_e8_arm};
 pub use e9::{AgentFigures, Agreement, BlocksWorld, Group, Played, Problem};
 pub use ran::Ran;
 pub use report::{ReportFiles, write_report};
@@ -142,6 +142,9 @@ pub enum ReproduceError {
         /// The id asked for.
         id: String,
     },
+    /// E8's arms could not be run where they were sent (a cluster).
+    #[error("E8's arms: {0}")]
+    Arms(String),
     /// A `results.json` that is not a reproduction's.
     #[error("not a reproduction's results.json: {reason}")]
     Results {
@@ -468,6 +471,25 @@ pub(crate) struct Context<'a> {
     seeds: Seeds,
     budget: Budget,
     progress: &'a dyn ProgressSink,
+    arms: &'a dyn ArmRunner,
+}
+
+/// Runs E8's arms, its costliest work (each a network trained for up to an hour): here on
+/// rayon's pool ([`LocalArms`]), or elsewhere, such as on the nodes of a cluster (the Python
+/// package's `blockstack.reproduce --ray`), each arm then run by [`run_e8_arm`] with
+/// this run's options. Every arm is fixed by its seed, so where it runs changes no figure.
+pub trait ArmRunner: Sync {
+    /// The runs of E8's arms `0..count`, in order; `here` runs one in this process.
+    fn run_arms(&self, count: usize, here: &(dyn Fn(usize) -> Result<ArmRun> + Sync)) -> Result<Vec<ArmRun>>;
+}
+
+/// E8's arms run here, side by side on the current rayon pool.
+pub struct LocalArms;
+
+impl ArmRunner for LocalArms {
+    fn run_arms(&self, count: usize, here: &(dyn Fn(usize) -> Result<ArmRun> + Sync)) -> Result<Vec<ArmRun>> {
+        (0..count).into_par_iter().map(here).collect()
+    }
 }
 
 /// One experiment of the reproduction, as [`EXPERIMENTS`] lists it.
@@ -643,6 +665,12 @@ pub fn reproduce(options: &Options, progress: &dyn ProgressSink) -> Result<Repro
     reproduce_with(options, Scale::new(options.quick), progress)
 }
 
+/// [`reproduce`] with E8's arms run by `arms` (a cluster, say), the rest here: the same
+/// figures.
+pub fn reproduce_on(options: &Options, progress: &dyn ProgressSink, arms: &dyn ArmRunner) -> Result<Reproduction> {
+    run(options, Scale::new(options.quick), progress, arms)
+}
+
 /// Runs the experiments `options` ask for with counts of one's own for E1-E7 (each schedule
 /// in `scale` must have a point, and `replicates` must be at least 1); E8's budget comes
 /// from `options`.
@@ -651,6 +679,11 @@ pub fn reproduce(options: &Options, progress: &dyn ProgressSink) -> Result<Repro
 /// of it run; then the others run. Every result is fixed by its seed, so neither this
 /// order nor the number of threads changes any figure.
 pub fn reproduce_with(options: &Options, scale: Scale, progress: &dyn ProgressSink) -> Result<Reproduction> {
+    run(options, scale, progress, &LocalArms)
+}
+
+/// [`reproduce_with`], E8's arms run by `arms`.
+fn run(options: &Options, scale: Scale, progress: &dyn ProgressSink, arms: &dyn ArmRunner) -> Result<Reproduction> {
     if let Some(id) = options
         .only
         .iter()
@@ -666,6 +699,7 @@ pub fn reproduce_with(options: &Options, scale: Scale, progress: &dyn ProgressSi
         seeds,
         budget: Budget::of(options),
         progress,
+        arms,
     };
     progress.begin(Shared::jobs(&ctx, &needs) + chosen.iter().map(|e| (e.jobs)(&ctx)).sum::<u64>());
     let (free, bound): (Vec<&Spec>, Vec<&Spec>) = chosen.iter().partition(|e| e.needs.is_empty());
@@ -758,6 +792,7 @@ mod tests {
             seeds: Seeds::new(5, &tiny()),
             budget: Budget::Quick,
             progress: &(),
+            arms: &LocalArms,
         };
         let chosen: Vec<&Spec> = EXPERIMENTS
             .iter()
@@ -781,6 +816,59 @@ mod tests {
         assert_eq!(ids, ["E1", "E2", "E3", "E4", "E5", "E6", "E7", "E8", "E9", "E10"]);
     }
 
+    /// E8's arms run one at a time by [`run_e8_arm`] with their runs sent through JSON, as
+    /// a cluster's nodes send them.
+    struct ThroughJson(Options);
+
+    impl ArmRunner for ThroughJson {
+        fn run_arms(&self, count: usize, _: &(dyn Fn(usize) -> Result<ArmRun> + Sync)) -> Result<Vec<ArmRun>> {
+            (0..count)
+                .map(|i| {
+                    let sent = serde_json::to_string(&run_e8_arm(&self.0, i, None)?).unwrap();
+                    Ok(serde_json::from_str(&sent).unwrap())
+                })
+                .collect()
+        }
+    }
+
+    #[test]
+    fn e8_arms_run_elsewhere_give_the_same_report() {
+        let options = Options {
+            seed: 3,
+            quick: true,
+            long: false,
+            only: vec!["E8".into()],
+        };
+        let here = reproduce(&options, &()).unwrap();
+        let elsewhere = reproduce_on(&options, &(), &ThroughJson(options.clone())).unwrap();
+        assert_eq!(
+            serde_json::to_string(&here).unwrap(),
+            serde_json::to_string(&elsewhere).unwrap()
+        );
+        assert_eq!(here, elsewhere, "the samples behind the tables too");
+        assert_eq!(e8_arm_names(&options).unwrap().len(), 2);
+        assert!(run_e8_arm(&options, 2, None).is_err(), "no third arm at this budget");
+    }
+
+    #[test]
+    fn an_e8_arm_goes_on_from_its_checkpoint() {
+        let options = Options {
+            seed: 3,
+            quick: true,
+            long: false,
+            only: vec!["E8".into()],
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let ck = dir.path().join("arm1");
+        let whole = run_e8_arm(&options, 1, None).unwrap();
+        assert_eq!(run_e8_arm(&options, 1, Some(&ck)).unwrap(), whole);
+        // Its checkpoint holds every point of its curve: run again, it only plays the final
+        // tests, the same games.
+        assert_eq!(run_e8_arm(&options, 1, Some(&ck)).unwrap(), whole);
+        let e = run_e8_arm(&options, 0, Some(&ck)).unwrap_err().to_string();
+        assert!(e.contains("holds a run of another arm"), "{e}");
+    }
+
     #[test]
     fn each_experiment_alone_trains_only_what_it_needs_and_gives_the_same_figures() {
         let (all, _, _) = run(2);
@@ -800,6 +888,7 @@ mod tests {
             seeds: Seeds::new(5, &tiny()),
             budget: Budget::Quick,
             progress: &(),
+            arms: &LocalArms,
         };
         assert_eq!(jobs(&["E1"]), e1_own(&ctx));
         assert_eq!(jobs(&["E3"]), e3_own + 1, "one training of our learner");

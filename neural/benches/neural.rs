@@ -18,12 +18,12 @@
 use std::hint::black_box;
 
 use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
-use neural::{DemoSource, DqnConfig, Trainer};
+use neural::{DemoSource, DqnConfig, Preset, Trainer};
 use sim::Env;
 
-const NETS: [(&str, &str); 2] = [("small", "dqfd-planes"), ("paper", "paper-dqfd")];
+const NETS: [(&str, Preset); 2] = [("small", Preset::DqfdPlanes), ("paper", Preset::PaperDqfd)];
 
-fn config(preset: &str) -> DqnConfig {
+fn config(preset: Preset) -> DqnConfig {
     DqnConfig {
         demos: DemoSource::Exact(50),
         pretrain_steps: 1,

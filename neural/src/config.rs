@@ -1,45 +1,12 @@
-//! Everything that defines a training run, and the presets.
+//! Everything that defines a training run.
 //!
-//! # Presets
-//!
-//! - `paper`: the paper's DQN as section III-C and the authors' code describe it: pixels, the
-//!   paper network with batch normalisation, buffer 1000, batch 64, RMSprop at 1e-4, MSE
-//!   loss, the sparse reward, the target network refreshed every 3 training games (the
-//!   paper's "every n epochs", n = 3 or 5), epsilon 0.1 throughout and gamma 0.1 (both from
-//!   the authors' `DQN.py`; the paper gives neither), every action allowed (no mask), no
-//!   demonstrations.
-//! - `paper-dqfd`: the same with the paper's DQfD stage: pre-training on demonstrations
-//!   (here 500 of the exact solver's, where the paper had people's) with the large-margin
-//!   loss, then self-play with the demonstrations kept in the buffer.
-//! - `dqn-planes`: ours without demonstrations: the small network on centred planes, Adam at
-//!   1e-3 falling to 1e-4, Huber loss, double DQN, gamma 0.95, the sparse reward, a
-//!   100,000-step buffer, the target refreshed every 500 gradient steps, epsilon from 1 to
-//!   0.05 over the first half of 50,000 steps (2 blocks) or 300,000 (more), actions that
-//!   change nothing masked, gradients clipped at norm 10.
-//! - `dqfd-planes` (the recommended recipe): `dqn-planes` with DQfD (Hester et al. 2018):
-//!   10,000 exact-solver demonstrations, 30,000 pre-training steps with the 1-step and
-//!   10-step TD losses, the large-margin loss (margin 0.8) and L2 1e-5, then 30,000 steps of
-//!   self-play (90,000 of each on 3 blocks; 40,000 demonstrations and 360,000 steps of
-//!   each on 4 and more) with a quarter of every batch drawn from the demonstrations,
-//!   epsilon from 0.1 to 0.01, the learning rate falling from 1e-3 to 1e-4, and loops corrected: the first
-//!   time a game comes back to a state it was in, the exact solver demonstrates from there
-//!   (the paper's demonstrators correcting the agent, section VI-C, as DQfD data).
-//! - `her-planes`: `dqn-planes` with hindsight relabelling (HER, Andrychowicz et al. 2017,
-//!   [`crate::hindsight`]): no demonstrations; every step stored again with 4 goals that
-//!   stood later in its game.
-//! - `dqfd-pixels`: `dqfd-planes` on the paper's screen with the paper's network (batch
-//!   normalisation): the paper's network and input, our learner. Its budget is a few
-//!   thousand steps (a step of that network costs twenty times one of ours): 1,000
-//!   demonstrations, 6,000 pre-training and 6,000 self-play steps on 2 blocks (epsilon
-//!   falling over the first 2,000); 5,000 and 15,000 on more (epsilon over 7,500).
-//!
-//! Why each of our choices, measured, is in the E8 section of `blockstack reproduce --only
-//! E8 --long`'s report.
+//! The presets that fill it, and the one resolver of a preset and explicit settings, are
+//! [`crate::preset`]'s.
 
 use std::fmt;
 
 use serde::{Deserialize, Serialize};
-use sim::{ActionProtocol, Backend, EnvConfig, Goal, GoalSpec, Grid, RewardModel};
+use sim::{ActionProtocol, EnvConfig, Goal, GoalSpec, Grid};
 
 use crate::error::{NeuralError, Result};
 use crate::input::ObsKind;
@@ -246,178 +213,7 @@ pub const MAX_BUFFER_BYTES: u64 = 8 << 30;
 /// recommended recipe's 10,000.
 pub const MAX_DEMO_EPISODES: u64 = 1_000_000;
 
-/// The preset names, in the order the CLI lists them.
-pub const PRESETS: [&str; 6] = [
-    "paper",
-    "paper-dqfd",
-    "dqn-planes",
-    "dqfd-planes",
-    "her-planes",
-    "dqfd-pixels",
-];
-
 impl DqnConfig {
-    /// The paper's DQN (module docs) on `blocks` blocks, every goal.
-    pub fn paper(blocks: usize) -> Result<DqnConfig> {
-        let net = NetConfig::paper();
-        Ok(DqnConfig {
-            world: EnvConfig {
-                grid: Grid::default(),
-                blocks,
-                goal: GoalSpec::Random,
-                horizon: sim::DEFAULT_HORIZON,
-                reward: RewardModel::from_name("sparse")?,
-                backend: Backend::Grid,
-                protocol: ActionProtocol::Free,
-                ..EnvConfig::default()
-            },
-            goals: Goal::all(blocks)?,
-            net,
-            seed: 1,
-            // A gradient step of the paper network costs about 100 ms here: 5,000 steps
-            // are minutes, where the paper trained for 2-8 hours.
-            steps: 5_000,
-            pretrain_steps: 0,
-            demos: DemoSource::None,
-            loss: LossKind::Dqn,
-            td_loss: TdLoss::Mse,
-            optimizer: OptimizerKind::Rmsprop,
-            lr: 1e-4,
-            lr_final: 1e-4,
-            gamma: 0.1,
-            buffer: 1000,
-            batch: 64,
-            train_every: 1,
-            learning_starts: 64,
-            target_every: TargetEvery::Games(3),
-            epsilon: Epsilon {
-                start: 0.1,
-                end: 0.1,
-                steps: 0,
-            },
-            double: false,
-            clip_norm: None,
-            n_step: 10,
-            margin: agent::correction::DEFAULT_MARGIN,
-            lambda_n_step: 1.0,
-            lambda_margin: 1.0,
-            l2: 1e-5,
-            demo_share: 0.25,
-            mask_noops: false,
-            correct_loops: false,
-            hindsight: 0,
-        })
-    }
-
-    /// A preset by name ([`PRESETS`]) for `blocks` blocks.
-    pub fn preset(name: &str, blocks: usize) -> Result<DqnConfig> {
-        let paper = DqnConfig::paper(blocks)?;
-        match name {
-            "paper" => Ok(paper),
-            "paper-dqfd" => Ok(DqnConfig {
-                demos: DemoSource::Exact(500),
-                loss: LossKind::Dqfd,
-                pretrain_steps: 2_000,
-                steps: 3_000,
-                ..paper
-            }),
-            "dqn-planes" => Ok(DqnConfig::dqn_planes(paper)),
-            "dqfd-planes" => Ok(DqnConfig::dqfd_planes(paper)),
-            "her-planes" => Ok(DqnConfig::her_planes(paper)),
-            "dqfd-pixels" => Ok(DqnConfig::dqfd_pixels(paper)),
-            _ => Err(NeuralError::Config(format!(
-                "unknown preset {name:?}: choose {}",
-                PRESETS.join(", ")
-            ))),
-        }
-    }
-
-    fn dqfd_planes(paper: DqnConfig) -> DqnConfig {
-        // Greedy failures are loops that fade with gradient steps (measured on 3,000 test
-        // games of 3 blocks: 1.9 % at 30,000 + 30,000 steps, 0.8 % at three times that,
-        // 0.4 % at four; on 12,000 of 4 blocks: 14.9 % at 90,000 + 90,000 with 10,000
-        // demonstrations, 9.7 % at twice both, 3.1 % at four times): 3 blocks get three times
-        // 2 blocks' steps, 4 blocks and more four times 3 blocks' steps and demonstrations.
-        let (steps, demos) = match paper.world.blocks {
-            ..=2 => (30_000, 10_000),
-            3 => (90_000, 10_000),
-            _ => (360_000, 40_000),
-        };
-        DqnConfig {
-            steps,
-            pretrain_steps: steps,
-            demos: DemoSource::Exact(demos),
-            loss: LossKind::Dqfd,
-            learning_starts: 1_000,
-            epsilon: Epsilon {
-                start: 0.1,
-                end: 0.01,
-                steps: 15_000,
-            },
-            correct_loops: true,
-            ..DqnConfig::dqn_planes(paper)
-        }
-    }
-
-    fn dqfd_pixels(paper: DqnConfig) -> DqnConfig {
-        let blocks = paper.world.blocks;
-        // A DQfD step of the paper network costs about 40 ms here, a step of the small one
-        // 2 ms: a budget of minutes buys a few thousand steps, so the demonstrations carry
-        // most of the learning and the budget grows with the blocks. On 2 blocks, 4,000 steps
-        // of each left one goal at 94.6 %; 6,000 reach 95 % on every goal (epsilon falling
-        // over the first 2,000 self-play steps, as it did at 4,000).
-        let (demos, steps, fall) = if blocks <= 2 {
-            (1_000, 6_000, 2_000)
-        } else {
-            (5_000, 15_000, 7_500)
-        };
-        let net = paper.net;
-        DqnConfig {
-            demos: DemoSource::Exact(demos),
-            pretrain_steps: steps,
-            steps,
-            learning_starts: 500,
-            epsilon: Epsilon {
-                start: 0.1,
-                end: 0.01,
-                steps: fall,
-            },
-            ..DqnConfig::dqfd_planes(paper).with_net(net)
-        }
-    }
-
-    fn her_planes(paper: DqnConfig) -> DqnConfig {
-        let planes = DqnConfig::dqn_planes(paper);
-        DqnConfig { hindsight: 4, ..planes }
-    }
-
-    fn dqn_planes(paper: DqnConfig) -> DqnConfig {
-        // Exploration alone must find the goal: far longer on 3 blocks than on 2.
-        let steps = if paper.world.blocks <= 2 { 50_000 } else { 300_000 };
-        let net = NetConfig::small();
-        DqnConfig {
-            net,
-            steps,
-            td_loss: TdLoss::Huber,
-            optimizer: OptimizerKind::Adam,
-            lr: 1e-3,
-            lr_final: 1e-4,
-            gamma: 0.95,
-            buffer: 100_000,
-            learning_starts: 5_000,
-            target_every: TargetEvery::Steps(500),
-            epsilon: Epsilon {
-                start: 1.0,
-                end: 0.05,
-                steps: steps / 2,
-            },
-            double: true,
-            clip_norm: Some(10.0),
-            mask_noops: true,
-            ..paper
-        }
-    }
-
     /// The observation the network reads.
     pub fn obs(&self) -> ObsKind {
         self.net.obs()
@@ -615,45 +411,11 @@ impl DqnConfig {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn every_preset_is_valid_and_the_paper_is_the_papers() {
-        for name in PRESETS {
-            DqnConfig::preset(name, 3).unwrap().validate().unwrap();
-        }
-        let p = DqnConfig::preset("paper", 3).unwrap();
-        assert_eq!(
-            (p.buffer, p.batch, p.lr, p.obs()),
-            (1000, 64, 1e-4, ObsKind::PaperScreen)
-        );
-        assert_eq!(p.optimizer, OptimizerKind::Rmsprop);
-        assert_eq!(p.world.reward.name(), "sparse");
-        assert!(DqnConfig::preset("nope", 3).is_err());
-    }
-
-    #[test]
-    fn dqfd_planes_budget_grows_with_the_blocks_and_pixels_keep_their_own() {
-        let budget = |preset: &str, blocks| {
-            let c = DqnConfig::preset(preset, blocks).unwrap();
-            (c.demos, c.pretrain_steps, c.steps)
-        };
-        assert_eq!(budget("dqfd-planes", 2), (DemoSource::Exact(10_000), 30_000, 30_000));
-        assert_eq!(budget("dqfd-planes", 3), (DemoSource::Exact(10_000), 90_000, 90_000));
-        for blocks in [4, 5] {
-            assert_eq!(
-                budget("dqfd-planes", blocks),
-                (DemoSource::Exact(40_000), 360_000, 360_000)
-            );
-            assert_eq!(
-                budget("dqfd-pixels", blocks),
-                (DemoSource::Exact(5_000), 15_000, 15_000)
-            );
-        }
-    }
+    use crate::preset::Preset;
 
     #[test]
     fn sizes_that_cannot_be_allocated_are_refused_up_front() {
-        let base = || DqnConfig::preset("dqn-planes", 3).unwrap();
+        let base = || DqnConfig::preset(Preset::DqnPlanes, 3).unwrap();
         let refused = |c: DqnConfig, words: &str| {
             let e = c.validate().unwrap_err().to_string();
             assert!(e.contains(words), "{e}");

@@ -162,7 +162,7 @@ mod tests {
     fn config(demos: DemoSource) -> DqnConfig {
         DqnConfig {
             demos,
-            ..DqnConfig::preset("dqfd-planes", 3).unwrap()
+            ..DqnConfig::preset(crate::preset::Preset::DqfdPlanes, 3).unwrap()
         }
     }
 

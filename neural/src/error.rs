@@ -29,6 +29,14 @@ pub enum NeuralError {
         /// What is wrong with it.
         reason: String,
     },
+    /// A training checkpoint that cannot be read or written.
+    #[error("checkpoint {path}: {reason}")]
+    Checkpoint {
+        /// The file.
+        path: String,
+        /// What is wrong.
+        reason: String,
+    },
     /// A network used with a world it was not made for.
     #[error("the network does not fit: {0}")]
     Mismatch(String),

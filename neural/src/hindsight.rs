@@ -141,7 +141,7 @@ mod tests {
 
     #[test]
     fn a_game_that_missed_its_goal_is_stored_again_under_the_stack_it_built() {
-        let config = DqnConfig::preset("dqn-planes", 3).unwrap();
+        let config = DqnConfig::preset(crate::preset::Preset::DqnPlanes, 3).unwrap();
         // Block 2 is carried onto block 1, which stands on block 0: the stack 0,1,2 stands
         // after the third step, then block 2 is carried off again. The game's goal is 2,1,0.
         use sim::BlockId;
@@ -191,7 +191,7 @@ mod tests {
 
     #[test]
     fn no_stack_no_relabelling_and_k_zero_none() {
-        let config = DqnConfig::preset("dqn-planes", 3).unwrap();
+        let config = DqnConfig::preset(crate::preset::Preset::DqnPlanes, 3).unwrap();
         let steps = game("0,0;2,0;4,0", "0,1,2", &[Action::Pick(sim::BlockId(0)), Action::Up]);
         assert!(relabel(&steps, 4, &config, &mut sim::seeding::rng(0)).is_empty());
         let stacked = game("1,0;1,1;5,5", "0,1,2", &[Action::Pick(sim::BlockId(2)), Action::Left]);

@@ -24,7 +24,7 @@
 
 use std::collections::HashMap;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::config::{DqnConfig, LossKind, TdLoss};
 use crate::error::Result;
@@ -39,7 +39,8 @@ use crate::replay::Transition;
 const MASKED: f32 = -1e9;
 
 /// The parts of one step's loss.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Losses {
     /// The whole loss minimised (without L2).
     pub total: f32,
@@ -175,12 +176,18 @@ impl Learner {
     pub fn new(online: QNet, config: &DqnConfig) -> Result<Learner> {
         let target = online.try_clone()?;
         let optimizer = Optimizer::new(config.optimizer, config.lr, online.parameter_count());
-        Ok(Learner {
+        Ok(Learner::from_parts(online, target, optimizer, 0))
+    }
+
+    /// A learner in the state these parts describe (a checkpoint's): networks of the same
+    /// shape, and an optimiser of their parameters.
+    pub(crate) fn from_parts(online: QNet, target: QNet, optimizer: Optimizer, gradient_steps: u64) -> Learner {
+        Learner {
             grad: vec![0.0; online.parameter_count()],
             online,
             target,
             optimizer,
-            gradient_steps: 0,
+            gradient_steps,
             train_ws: Workspace::new(),
             eval_ws: [Workspace::new(), Workspace::new()],
             encoder: Encoder::default(),
@@ -191,7 +198,17 @@ impl Learner {
             y1: Vec::new(),
             yn: Vec::new(),
             dq: Vec::new(),
-        })
+        }
+    }
+
+    /// The target network.
+    pub(crate) fn target(&self) -> &QNet {
+        &self.target
+    }
+
+    /// The optimiser.
+    pub(crate) fn optimizer(&self) -> &Optimizer {
+        &self.optimizer
     }
 
     /// The online network.
@@ -355,7 +372,7 @@ mod tests {
             mask_noops: false,
             optimizer: crate::optim::OptimizerKind::Adam,
             lr: 1e-3,
-            ..DqnConfig::preset("dqn-planes", 2).unwrap()
+            ..DqnConfig::preset(crate::preset::Preset::DqnPlanes, 2).unwrap()
         };
         let net_config = NetConfig {
             kind: NetKind::Mlp,

@@ -10,7 +10,9 @@
 //!   step of the DQN and DQfD losses; RMSprop and Adam.
 //! - [`hindsight`]: hindsight relabelling (HER): a game stored again under the stacks it built.
 //! - [`demos`]: demonstrations from the exact solver, the oracle, or a recording.
-//! - [`config`], [`train`]: a run's settings and presets, and the trainer.
+//! - [`config`], [`preset`], [`train`]: a run's settings, the presets and the one resolver
+//!   of a preset and explicit settings ([`DqnConfig::resolve`]), and the trainer.
+//! - [`checkpoint`]: a run written between two steps, and resumed bit for bit.
 //! - [`model`]: a trained network ([`Dqn`]), played through [`agent::Policy`] (so
 //!   `agent::play`, rollouts and evaluation serve it unchanged), saved and read as a
 //!   network file in the project's model container (`files::container`).
@@ -18,6 +20,7 @@
 //! Everything runs on the CPU; every random draw comes from the config's seed.
 
 pub mod any;
+pub mod checkpoint;
 pub mod config;
 pub mod demos;
 pub mod error;
@@ -29,15 +32,17 @@ pub mod mask;
 pub mod model;
 pub mod net;
 pub mod optim;
+pub mod preset;
 pub mod relational;
 pub mod replay;
 pub mod train;
 
 pub use any::AnyModel;
-pub use config::{DemoSource, DqnConfig, Epsilon, LossKind, PRESETS, TargetEvery, TdLoss};
+pub use config::{DemoSource, DqnConfig, Epsilon, LossKind, TargetEvery, TdLoss};
 pub use error::{NeuralError, Result};
 pub use input::ObsKind;
 pub use model::{Dqn, DqnPolicy, TrainReport};
 pub use net::{NetConfig, NetKind};
 pub use optim::OptimizerKind;
+pub use preset::{DqnOverrides, Preset};
 pub use train::{Phase, Progress, Trainer, train};

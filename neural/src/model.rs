@@ -294,7 +294,7 @@ struct Metadata {
 /// the bytes it always did.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct StoredConfig {
+pub(crate) struct StoredConfig {
     grid: Grid,
     blocks: usize,
     goals: Vec<Goal>,
@@ -345,7 +345,7 @@ fn is_default<T: Default + PartialEq>(value: &T) -> bool {
 
 impl StoredConfig {
     /// The stored form of `c`.
-    fn of(c: &DqnConfig) -> StoredConfig {
+    pub(crate) fn of(c: &DqnConfig) -> StoredConfig {
         let w = &c.world;
         StoredConfig {
             grid: w.grid,
@@ -388,7 +388,7 @@ impl StoredConfig {
     }
 
     /// The config this stored form describes: games ending at the goal, the goal drawn.
-    fn config(self) -> DqnConfig {
+    pub(crate) fn config(self) -> DqnConfig {
         DqnConfig {
             world: EnvConfig {
                 grid: self.grid,
@@ -477,7 +477,7 @@ mod tests {
 
     #[test]
     fn the_stored_config_gives_back_the_config_and_leaves_out_defaults() {
-        for name in crate::config::PRESETS {
+        for name in crate::preset::Preset::ALL {
             let config = DqnConfig::preset(name, 3).unwrap();
             let json = serde_json::to_string(&StoredConfig::of(&config)).unwrap();
             // The fields added since the first files are absent at their defaults.
@@ -486,7 +486,7 @@ mod tests {
             let back: StoredConfig = serde_json::from_str(&json).unwrap();
             assert_eq!(back.config(), config, "{name}");
         }
-        let her = DqnConfig::preset("her-planes", 3).unwrap();
+        let her = DqnConfig::preset(crate::preset::Preset::HerPlanes, 3).unwrap();
         let moved = DqnConfig {
             world: EnvConfig {
                 start: StartRule::Paper,

@@ -63,6 +63,49 @@ impl Optimizer {
         self.lr = lr as f32;
     }
 
+    /// The learning rate of the next step.
+    pub(crate) fn lr(&self) -> f32 {
+        self.lr
+    }
+
+    /// Steps taken (Adam's bias correction counts them).
+    pub(crate) fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    /// The moments: RMSprop's square average or Adam's first moment, and Adam's second
+    /// (empty for RMSprop).
+    pub(crate) fn moments(&self) -> (&[f32], &[f32]) {
+        (&self.first, &self.second)
+    }
+
+    /// An optimiser of `kind` for `count` parameters in the state these values describe
+    /// (a checkpoint's); an error unless the moments fit `kind` and `count`.
+    pub(crate) fn restore(
+        kind: OptimizerKind,
+        count: usize,
+        lr: f32,
+        steps: u64,
+        first: Vec<f32>,
+        second: Vec<f32>,
+    ) -> Result<Optimizer, String> {
+        let second_len = if kind == OptimizerKind::Adam { count } else { 0 };
+        if first.len() != count || second.len() != second_len {
+            return Err(format!(
+                "its {kind} moments hold {} and {} values, and the network has {count} parameters",
+                first.len(),
+                second.len()
+            ));
+        }
+        Ok(Optimizer {
+            kind,
+            lr,
+            first,
+            second,
+            steps,
+        })
+    }
+
     /// One update of `params` from `grads` (the same length, the optimiser's): adds
     /// `2 * l2 * w` to each gradient (an L2 term `l2 * sum w^2` in the loss), scales all
     /// gradients down to a global norm of at most `clip` when given, and steps. Returns the

@@ -168,6 +168,41 @@ impl ReplayBuffer {
         self.demos.len()
     }
 
+    /// The agent's transitions in the order they are stored, and where the next one goes
+    /// (the ring's state, as a checkpoint keeps it).
+    pub(crate) fn agent_ring(&self) -> (&[Transition], usize) {
+        (&self.agent, self.next)
+    }
+
+    /// The demonstration transitions, in the order they came.
+    pub(crate) fn demos(&self) -> &[Transition] {
+        &self.demos
+    }
+
+    /// A buffer of `capacity` holding these transitions, the agent's stored as
+    /// [`ReplayBuffer::agent_ring`] gives them; an error unless they fit the capacity.
+    pub(crate) fn restore(
+        capacity: usize,
+        agent: Vec<Transition>,
+        next: usize,
+        demos: Vec<Transition>,
+    ) -> Result<ReplayBuffer, String> {
+        let capacity = capacity.max(1);
+        let full = agent.len() == capacity;
+        if agent.len() > capacity || next >= capacity || (!full && next != agent.len() % capacity) {
+            return Err(format!(
+                "its buffer holds {} of the agent's transitions, the next at {next}, in a ring of {capacity}",
+                agent.len()
+            ));
+        }
+        Ok(ReplayBuffer {
+            capacity,
+            agent,
+            next,
+            demos,
+        })
+    }
+
     /// `batch` transitions drawn uniformly with replacement: `round(demo_share * batch)` of
     /// them from the demonstrations and the rest from the agent's (all from whichever part
     /// is not empty when the other is). Empty if both parts are.

@@ -72,28 +72,31 @@ impl Progress {
 /// A training run in progress: pre-train, play some steps, look at (or evaluate) the
 /// network, play more.
 pub struct Trainer {
-    config: DqnConfig,
-    learner: Learner,
-    buffer: ReplayBuffer,
-    envs: Vec<Env>,
+    pub(crate) config: DqnConfig,
+    pub(crate) learner: Learner,
+    pub(crate) buffer: ReplayBuffer,
+    pub(crate) envs: Vec<Env>,
     /// Exploration and batch draws.
-    rng: SimRng,
-    report: TrainReport,
-    recent: VecDeque<bool>,
+    pub(crate) rng: SimRng,
+    pub(crate) report: TrainReport,
+    pub(crate) recent: VecDeque<bool>,
     /// The game being played: its environment and current observation.
-    current: Option<(usize, Observation)>,
-    n_step: NStep,
-    last_loss: Losses,
+    pub(crate) current: Option<(usize, Observation)>,
+    pub(crate) n_step: NStep,
+    pub(crate) last_loss: Losses,
     /// Games when the target network was last refreshed.
-    target_games: u64,
+    pub(crate) target_games: u64,
     /// The states of the current game, to see it come back to one.
-    visited: HashSet<State>,
+    pub(crate) visited: HashSet<State>,
     /// Whether a demonstrator has demonstrated from a loop of the current game.
-    corrected: bool,
+    pub(crate) corrected: bool,
     /// Who corrects loops.
     corrector: Box<dyn Planner + Send + Sync>,
     /// The current game's steps, for hindsight relabelling (kept only with it).
-    game: Vec<Step>,
+    pub(crate) game: Vec<Step>,
+    /// The current game's actions: what a checkpoint replays to put its environment back
+    /// where it was ([`crate::checkpoint`]).
+    pub(crate) actions: Vec<Action>,
 }
 
 impl Trainer {
@@ -121,11 +124,6 @@ impl Trainer {
                 "pre-training needs demonstrations, and none were found".into(),
             ));
         }
-        let envs = config
-            .goals
-            .iter()
-            .map(|g| Env::new(config.env_config(g.clone())))
-            .collect::<sim::Result<Vec<_>>>()?;
         let mut rng = seeding::rng(config.seed);
         rng.set_stream(3);
         let report = TrainReport {
@@ -133,6 +131,23 @@ impl Trainer {
             demo_transitions: buffer.demo_len() as u64,
             ..TrainReport::default()
         };
+        Trainer::assemble(config, learner, buffer, rng, report)
+    }
+
+    /// A run of `config` at the point these parts describe, between two steps with no game
+    /// going on: the environments and the corrector made for it.
+    pub(crate) fn assemble(
+        config: DqnConfig,
+        learner: Learner,
+        buffer: ReplayBuffer,
+        rng: SimRng,
+        report: TrainReport,
+    ) -> Result<Trainer> {
+        let envs = config
+            .goals
+            .iter()
+            .map(|&g| Env::new(config.env_config(g)))
+            .collect::<sim::Result<Vec<_>>>()?;
         Ok(Trainer {
             n_step: NStep::new(config.n_step, config.gamma),
             learner,
@@ -147,6 +162,7 @@ impl Trainer {
             visited: HashSet::new(),
             corrected: false,
             game: Vec::new(),
+            actions: Vec::new(),
             corrector: match config.demos {
                 DemoSource::Oracle(_) => Box::new(Oracle::new(config.world.grid)),
                 _ => Box::new(ExactSolver::new(config.world.grid)),
@@ -173,12 +189,32 @@ impl Trainer {
         self.learner.online()
     }
 
-    /// Runs the whole config: pre-training, then self-play, telling `progress` after every
-    /// step.
+    /// Runs what is left of the config (all of it for a new run, the rest for one resumed
+    /// from a checkpoint): pre-training, then self-play, telling `progress` after every step.
     pub fn run(mut self, progress: &mut dyn FnMut(&Progress)) -> Result<Dqn> {
-        self.pretrain(self.config.pretrain_steps, progress)?;
-        self.play(self.config.steps, progress)?;
+        self.train_until(self.total_steps(), progress)?;
         self.finish()
+    }
+
+    /// The steps of the whole run: pre-training gradient steps, then self-play environment
+    /// steps.
+    pub fn total_steps(&self) -> u64 {
+        self.config.pretrain_steps + self.config.steps
+    }
+
+    /// The steps of the run done ([`Trainer::total_steps`]' count).
+    pub fn steps_done(&self) -> u64 {
+        self.report.pretrain_steps + self.report.steps
+    }
+
+    /// Trains until `done` steps of the run are done (at most [`Trainer::total_steps`]):
+    /// pre-training first, then self-play. Nothing if that many are done already.
+    pub fn train_until(&mut self, done: u64, progress: &mut dyn FnMut(&Progress)) -> Result<()> {
+        let done = done.min(self.total_steps());
+        let pretrain = done.min(self.config.pretrain_steps);
+        self.pretrain(pretrain.saturating_sub(self.report.pretrain_steps), progress)?;
+        let play = done - pretrain;
+        self.play(play.saturating_sub(self.report.steps), progress)
     }
 
     /// `count` more gradient steps on the demonstrations alone.
@@ -272,6 +308,7 @@ impl Trainer {
                 self.visited.clear();
                 self.corrected = false;
                 self.game.clear();
+                self.actions.clear();
                 (i, obs)
             }
         };
@@ -281,6 +318,7 @@ impl Trainer {
         }
         let action = self.choose(&obs)?;
         let step = self.envs[env_index].step(action)?;
+        self.actions.push(action);
         self.report.steps += 1;
         let done = step.terminated || step.truncated;
         if self.config.hindsight > 0 {
@@ -314,6 +352,7 @@ impl Trainer {
             }
             self.report.successes += u64::from(step.terminated);
             self.current = None;
+            self.actions.clear();
             if let TargetEvery::Games(n) = self.config.target_every
                 && self.report.games - self.target_games >= n
             {

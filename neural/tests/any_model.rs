@@ -14,7 +14,7 @@ fn legal_q_values_map_a_networks_columns_back_to_actions() {
             hidden: 16,
             ..NetConfig::small()
         },
-        ..DqnConfig::preset("dqfd-planes", 2).unwrap()
+        ..DqnConfig::preset(neural::Preset::DqfdPlanes, 2).unwrap()
     };
     let dqn = Trainer::new(config).unwrap().finish().unwrap();
     let goal: Goal = "1,0".parse().unwrap();

@@ -383,7 +383,7 @@ fn the_perceptrons_match_the_reference() {
 }
 
 /// The weights after a few DQfD steps in a pool of `threads` threads.
-fn trained(preset: &str, batch: usize, threads: usize) -> Vec<f32> {
+fn trained(preset: neural::Preset, batch: usize, threads: usize) -> Vec<f32> {
     let config = DqnConfig {
         demos: DemoSource::Exact(20),
         pretrain_steps: 3,
@@ -404,7 +404,7 @@ fn trained(preset: &str, batch: usize, threads: usize) -> Vec<f32> {
 
 #[test]
 fn one_thread_or_two_train_the_same_network_bit_for_bit() {
-    for (preset, batch) in [("dqfd-planes", 64), ("paper-dqfd", 16)] {
+    for (preset, batch) in [(neural::Preset::DqfdPlanes, 64), (neural::Preset::PaperDqfd, 16)] {
         let one = trained(preset, batch, 1);
         assert_eq!(one, trained(preset, batch, 2), "{preset}");
         assert_eq!(one, trained(preset, batch, 1), "{preset}");

@@ -2,6 +2,7 @@
 //! pattern): one link step instead of one per file, and the helpers compiled once.
 
 mod any_model;
+mod checkpoint;
 mod engine;
 mod learning;
 mod main_files;

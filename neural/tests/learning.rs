@@ -17,7 +17,7 @@ fn tiny(seed: u64) -> DqnConfig {
             hidden: 64,
             ..NetConfig::small()
         },
-        ..DqnConfig::preset("dqfd-planes", 2).unwrap()
+        ..DqnConfig::preset(neural::Preset::DqfdPlanes, 2).unwrap()
     }
 }
 
@@ -90,7 +90,7 @@ fn a_network_file_gives_back_the_same_network() {
         steps: 0,
         batch: 8,
         loss: neural::LossKind::Dqfd,
-        ..DqnConfig::preset("paper", 2).unwrap()
+        ..DqnConfig::preset(neural::Preset::Paper, 2).unwrap()
     };
     assert_eq!(config.net.kind, NetKind::Paper);
     for (name, config) in [("paper", config), ("small", tiny(1))] {
@@ -150,7 +150,7 @@ fn hindsight_stores_the_games_again_and_is_seeded() {
             hidden: 32,
             ..NetConfig::small()
         },
-        ..DqnConfig::preset("her-planes", 2).unwrap()
+        ..DqnConfig::preset(neural::Preset::HerPlanes, 2).unwrap()
     };
     let quiet = &mut |_: &neural::Progress| {};
     let her = Trainer::new(config(4)).unwrap().run(quiet).unwrap();

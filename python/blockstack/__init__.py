@@ -23,6 +23,7 @@ the classic Blocks World seen from the side) with Gymnasium::
   Stable-Baselines3's conventions (:class:`Model`).
 - :func:`train`: the Rust tabular trainer, in-process; ``python -m blockstack.sweep`` runs
   grids of it on Ray.
+- :func:`train_dqn`: the Rust network trainer (``blockstack dqn``), in-process.
 
 The world, its rules, rewards, planners and trainer are the Rust crates' (``sim``,
 ``oracle``, ``agent``); this package only carries arguments in and arrays out. Every error
@@ -40,7 +41,7 @@ from blockstack.goal_env import StackGoalEnv
 from blockstack.model import Model, load
 from blockstack import vector
 from blockstack.planning import read_pddl, solve
-from blockstack.training import train
+from blockstack.training import train, train_dqn
 from blockstack.world import World
 
 __all__ = [
@@ -57,6 +58,7 @@ __all__ = [
     "read_recording",
     "solve",
     "train",
+    "train_dqn",
     "vector",
 ]
 

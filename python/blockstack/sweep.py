@@ -1,52 +1,83 @@
-"""Grids of training runs as Ray tasks, each calling the Rust trainer in this process's kind.
+"""Grids of training runs on Ray, tabular or network, each checkpointed to a shared folder so
+that a run lost with its node goes on from its last checkpoint.
 
     python -m blockstack.sweep CONFIG [--address auto] [--num-cpus N] [--out results.csv]
+                                      [--storage DIR] [--retries N]
 
-``CONFIG`` (TOML or JSON) has two tables of ``blockstack train`` flags (``-`` or ``_`` in
-names; the same defaults, i.e. the paper's learner): ``train``, shared by every run, and
-``sweep``, whose every flag is a list; each combination of their values is one run. The
-flags of :func:`blockstack.train` also evaluate each run (``eval_episodes``,
-``eval_goals``, ``eval_seed``, ``eval_epsilon``)::
+``CONFIG`` (TOML or JSON) has two tables of flags (``-`` or ``_`` in names; the same
+defaults): ``train``, shared by every run, and ``sweep``, whose every flag is a list; each
+combination of their values is one run. ``command`` in ``train`` says which trainer:
+``"train"`` (the default: :func:`blockstack.train`, ``blockstack train``'s flags) or
+``"dqn"`` (:func:`blockstack.train_dqn`, ``blockstack dqn``'s flags: any preset and
+flag). Both take ``checkpoint_every`` and evaluate each run with ``eval_episodes``,
+``eval_goals``, ``eval_seed`` and ``eval_epsilon``::
 
     [train]
-    repr = "chasing"
-    reward = "paper"
-    goals = "0,1,2:1,0,2:2,0,1:0,2,1"
-    games = 100
+    command = "dqn"
+    preset = "dqn-planes"
+    blocks = 2
     eval_episodes = 100
-    eval_goals = "2,1,0:1,2,0"
 
     [sweep]
-    gamma = [0.1, 0.5, 0.9]
-    seed = [1, 2, 3, 4, 5]
+    lr = [0.001, 0.0003]
+    seed = [1, 2, 3, 4]
 
-Every run is a Ray task (one CPU) that calls :func:`blockstack.train` in the worker
-process: the Rust trainer, in-process, no subprocess and no files. Without ``--address``
-a local Ray starts with ``--num-cpus`` CPUs (all by default); ``--address auto`` joins a
-running cluster (``ray start --head`` on one machine, ``ray start --address ...`` on the
-others), and every machine needs ``pip install blockstack[ray]``.
+Every run is a Ray task of one CPU that calls the trainer in the worker process (the Rust
+trainer, in-process) with a folder of its own under ``--storage`` (default: ``--out``'s name
+with ``-runs``), named by a hash of its flags: ``checkpoint.safetensors``, written every
+``checkpoint_every`` games or steps; ``model.safetensors``; and ``result.json``, its row of
+the table, once it has ended. A task lost with its node (or its worker) is run again by Ray
+(``--retries`` times); the trainer then finds the run's checkpoint and goes on from it, and
+ends with the model a run that never stopped ends with, byte for byte. A run whose
+``result.json`` exists is not run again: running the same command again after the driver,
+the head or the whole cluster stopped takes every run up where its files left it.
 
-The results are one table: printed, and written as CSV to ``--out`` (one row per run: the
-swept flags, then the training totals and evaluation figures). A run that fails is named
-on stderr and the exit status is 1; the finished runs are still printed and written.
+Why Ray tasks and not Tune trials: a run's checkpoint is the trainer's own file, written
+atomically where every node reads it, and resuming is the trainer's (``train --resume``
+and ``dqn --resume`` from the command line), so Tune's checkpoint copies and its experiment
+state would only hold the same thing twice; a task is retried on another node by Ray core
+alone; and a sweep stopped for any reason resumes by running its command again, with no
+experiment state of Tune's to restore. ``ray`` alone (no ``ray[tune]``) is needed.
+
+Without ``--address`` a local Ray starts with ``--num-cpus`` CPUs (all by default);
+``--address auto`` joins the cluster ``ray start`` made (docs/cluster.md). The results: a
+line as each run ends; one table, printed and written as CSV to ``--out`` (one row per run,
+in the config's order: the swept flags, the run's folder, then the trainer's totals and
+evaluation figures; ``resumed_at`` is the games or steps a run had done when it was last
+taken up from its checkpoint, 0 for a run that never stopped); and one chart beside it
+(``.png`` and ``.svg``): each setting's share of games that reached the goal (the
+evaluation's, else training's), its mean over the seeds with their range. A run that fails
+is named on stderr and the exit status is 1; the finished runs are still printed and
+written.
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
+import hashlib
 import io
 import itertools
 import json
+import os
 import sys
-from typing import Any, Dict, List
+import time
+from typing import Any, Dict, List, Optional, Tuple
 
-from blockstack import _native
-from blockstack.training import check_settings
-
+from blockstack import _native, _ray
+from blockstack.training import check_dqn_settings, check_settings
 
 #: The most runs one sweep may have: combinations are counted before any is built.
 MAX_RUNS = 100_000
+
+#: The trainers a sweep runs, by ``command``.
+COMMANDS = ("train", "dqn")
+
+#: Flags the sweep sets for each run itself.
+OWN_FLAGS = ("out", "checkpoint", "resume")
+
+#: The evaluation's flags, taken by both trainers.
+EVAL_FLAGS = ("eval_episodes", "eval_goals", "eval_seed", "eval_epsilon")
 
 
 def read_config(path: str) -> Dict[str, Dict[str, Any]]:
@@ -83,6 +114,11 @@ def read_config(path: str) -> Dict[str, Dict[str, Any]]:
         if not isinstance(value, dict):
             raise ValueError(f"{path}: {table} must be a table of flags, not {type(value).__name__}")
         tables[table] = {str(k).replace("-", "_"): v for k, v in value.items()}
+    if "command" in tables["sweep"]:
+        raise ValueError(f"{path}: command is not swept: a sweep runs one trainer (a sweep each)")
+    command = tables["train"].get("command", "train")
+    if command not in COMMANDS:
+        raise ValueError(f"{path}: command = {command!r}: choose \"train\" or \"dqn\"")
     count = 1
     for flag, values in tables["sweep"].items():
         if not isinstance(values, list) or not values:
@@ -93,26 +129,54 @@ def read_config(path: str) -> Dict[str, Dict[str, Any]]:
     return tables
 
 
+def command_of(config: Dict[str, Dict[str, Any]]) -> str:
+    """The trainer the config's runs use: ``"train"`` or ``"dqn"``."""
+    return config["train"].get("command", "train")
+
+
 def runs(config: Dict[str, Dict[str, Any]]) -> List[Dict[str, Any]]:
     """The flags of every run: each combination of the sweep's values over the shared flags,
-    each checked as :func:`blockstack.train` checks its settings before training."""
+    each checked as its trainer checks its settings before training."""
+    command = command_of(config)
+    check = check_settings if command == "train" else check_dqn_settings
+    shared = {k: v for k, v in config["train"].items() if k != "command"}
     swept = config["sweep"]
+    own = sorted(set(OWN_FLAGS) & (set(shared) | set(swept)))
+    if own:
+        raise ValueError(f"{', '.join(own)}: the sweep sets each run's files itself (see --storage)")
     names = list(swept)
-    return [
-        check_settings(dict(config["train"], **dict(zip(names, values))))
-        for values in itertools.product(*swept.values())
-    ]
+    return [check(dict(shared, **dict(zip(names, values)))) for values in itertools.product(*swept.values())]
 
 
-def _train(flags: Dict[str, Any]) -> Dict[str, Any]:
+def run_name(command: str, flags: Dict[str, Any]) -> str:
+    """The name of a run's folder: a hash of its trainer and flags, so that the same run
+    finds its files again and another run never does."""
+    text = json.dumps({"command": command, "flags": flags}, sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()[:12]
+
+
+def _run(command: str, flags: Dict[str, Any], folder: str) -> Dict[str, Any]:
+    """One run, in a Ray worker: its row from ``result.json`` if it ended before, else
+    trained (from its checkpoint, if it has one), with the row written there."""
     import blockstack
 
-    return blockstack.train(**flags)
+    result = os.path.join(folder, "result.json")
+    if os.path.exists(result):
+        with open(result) as f:
+            return json.load(f)
+    os.makedirs(folder, exist_ok=True)
+    files = dict(out=os.path.join(folder, "model.safetensors"), checkpoint=os.path.join(folder, "checkpoint.safetensors"))
+    trainer = blockstack.train if command == "train" else blockstack.train_dqn
+    row = trainer(**flags, **files)
+    row["run"] = os.path.basename(folder)
+    _native.write_output(result, json.dumps(row).encode())
+    return row
 
 
 def table(rows: List[Dict[str, Any]], swept: List[str]) -> List[str]:
-    """The columns: the swept flags first, then every result field in the order given."""
-    columns = list(swept)
+    """The columns: the swept flags first, the run's folder, then every result field in the
+    order given."""
+    columns = list(swept) + ["run"]
     for row in rows:
         for key in row:
             if key not in columns:
@@ -129,51 +193,99 @@ def write_csv(path: str, rows: List[Dict[str, Any]], columns: List[str]) -> None
     _native.write_output(path, out.getvalue().encode())
 
 
+def success(row: Dict[str, Any]) -> Tuple[float, str]:
+    """The share of a run's games that reached the goal, in percent, and which games: the
+    evaluation's if it has one, else training's."""
+    if row.get("eval_episodes"):
+        return 100.0 * (1 - row["eval_failures"] / row["eval_episodes"]), "evaluation"
+    return 100.0 * row["successes"] / max(row["games"], 1), "training"
+
+
+def chart_bars(rows: List[Dict[str, Any]], swept: List[str]) -> Tuple[List[Tuple[str, float, Optional[Tuple[float, float]]]], str]:
+    """One bar per setting (the swept flags but ``seed``): the mean success over its runs,
+    with their range when there are several; and which games the bars count."""
+    key = [f for f in swept if f != "seed"]
+    groups: Dict[str, List[float]] = {}
+    which = "evaluation"
+    for row in rows:
+        name = ", ".join(f"{f}={_cell(row.get(f))}" for f in key) or "every run"
+        value, which = success(row)
+        groups.setdefault(name, []).append(value)
+    bars = [
+        (name, sum(v) / len(v), (min(v), max(v)) if len(v) > 1 else None)
+        for name, v in groups.items()
+    ]
+    return bars, which
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m blockstack.sweep", description=__doc__.splitlines()[0])
     parser.add_argument("config", help="a TOML or JSON file with [train] and [sweep] tables")
     parser.add_argument("--address", help="a Ray cluster to join (e.g. auto); default: start a local Ray")
     parser.add_argument("--num-cpus", type=int, help="CPUs of the local Ray (default: all)")
-    parser.add_argument("--out", default="sweep-results.csv", help="the CSV table to write")
+    parser.add_argument("--out", default="sweep-results.csv", help="the CSV table to write (the chart goes beside it)")
+    parser.add_argument("--storage", help="the runs' folders, on storage every node reaches (default: OUT's name + -runs)")
+    parser.add_argument("--retries", type=int, default=3, help="times a run lost with its node is run again (default 3)")
     args = parser.parse_args(argv)
+    stem = os.path.splitext(args.out)[0]
+    storage = os.path.abspath(args.storage or stem + "-runs")
     # Everything that can be checked is checked here, before Ray starts.
     try:
         if args.num_cpus is not None and args.num_cpus < 1:
             raise ValueError(f"--num-cpus must be at least 1, not {args.num_cpus}")
+        if args.retries < 0:
+            raise ValueError(f"--retries must be 0 or more, not {args.retries}")
         config = read_config(args.config)
+        command = command_of(config)
         all_runs = runs(config)
         _native.check_output(args.out)  # before any run, not after all of them
+        _native.check_folder(storage)
     except (OSError, ValueError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
-    try:
-        import ray
-    except ImportError:
-        print("the sweep runs on Ray: pip install 'blockstack[ray]'", file=sys.stderr)
+    ray = _ray.import_ray()
+    if ray is None:
         return 2
-    if args.address:
-        ray.init(address=args.address, logging_level="ERROR")
-    else:
-        ray.init(num_cpus=args.num_cpus, include_dashboard=False, logging_level="ERROR")
+    _ray.start(ray, args.address, args.num_cpus)
     swept = list(config["sweep"])
-    rows, failed = [], []
+    names = [run_name(command, flags) for flags in all_runs]
+    results: Dict[int, Dict[str, Any]] = {}
+    failed = []
+    started = time.monotonic()
     try:
-        task = ray.remote(num_cpus=1)(_train)
-        print(f"{len(all_runs)} runs on {int(ray.cluster_resources().get('CPU', 0))} CPUs", flush=True)
-        pending = [task.remote(flags) for flags in all_runs]
-        # One run's failure keeps every other run's result.
-        for flags, ref in zip(all_runs, pending):
+        task = ray.remote(max_retries=args.retries, **_ray.TASK_OPTIONS)(_run)
+        print(f"{len(all_runs)} {command} runs on {_ray.cpus(ray)} CPUs, checkpoints in {storage}", flush=True)
+        pending = {
+            task.remote(command, flags, os.path.join(storage, name)): i
+            for i, (flags, name) in enumerate(zip(all_runs, names))
+        }
+        # Each run is reported once, as its task ends; one run's failure keeps every other's.
+        while pending:
+            ready, _ = ray.wait(list(pending), num_returns=1)
+            i = pending.pop(ready[0])
+            which = _describe(all_runs[i], swept)
+            elapsed = _ray.clock(time.monotonic() - started)
+            done = f"[{len(results) + len(failed) + 1}/{len(all_runs)}, {elapsed}]"
             try:
-                rows.append(ray.get(ref))
-            except ray.exceptions.RayTaskError as e:
-                failed.append((flags, e.cause if getattr(e, "cause", None) is not None else e))
+                row = ray.get(ready[0])
+            except ray.exceptions.RayError as e:
+                cause = e.cause if getattr(e, "cause", None) is not None else e
+                failed.append((i, cause))
+                print(f"{done} run {which} failed", flush=True)
+                continue
+            results[i] = row
+            value, games = success(row)
+            resumed = f", resumed at {row['resumed_at']}" if row.get("resumed_at") else ""
+            print(f"{done} run {which}: {value:.1f}% of {games} games reached the goal{resumed}", flush=True)
     finally:
         ray.shutdown()
+    rows = [results[i] for i in sorted(results)]
     status = 0
     if rows:
         columns = table(rows, swept)
         # On screen, flags every run shares go on one line; the CSV keeps every column.
-        shared = [c for c in columns if c not in swept and c != "train_seconds" and len({_cell(r.get(c)) for r in rows}) == 1]
+        shared = [c for c in columns if c not in swept and c not in ("run", "train_seconds", "resumed_at")
+                  and len({_cell(r.get(c)) for r in rows}) == 1]
         print("every run: " + ", ".join(f"{c}={_cell(rows[0].get(c))}" for c in shared))
         shown = [c for c in columns if c not in shared]
         out = io.StringIO()
@@ -184,15 +296,30 @@ def main(argv=None) -> int:
         print(out.getvalue(), end="", flush=True)
         try:
             write_csv(args.out, rows, columns)
-            print(f"wrote {args.out}")
+            bars, games = chart_bars(rows, swept)
+            pictures = _native.bar_chart(
+                stem,
+                title=f"{command} sweep: {len(rows)} runs",
+                y_label=f"reached the goal, {games} (%)",
+                bars=bars,
+                value_label="mean over seeds" if "seed" in swept else "run",
+                interval_label="range over seeds",
+                note=f"Each bar: the runs of one setting ({', '.join(f for f in swept if f != 'seed') or 'all'}); "
+                     f"the share of their {games} games that reached the goal.",
+            )
+            print(f"wrote {args.out} and {', '.join(map(str, pictures))}")
         except (OSError, ValueError) as e:
-            print(f"error: the table was not written: {e}", file=sys.stderr)
+            print(f"error: the results were not all written: {e}", file=sys.stderr)
             status = 1
-    for flags, error in failed:
-        which = ", ".join(f"{name}={_cell(flags.get(name))}" for name in swept) or "the only run"
+    for i, error in sorted(failed, key=lambda f: f[0]):
+        which = _describe(all_runs[i], swept)
         print(f"error: run {which} failed: {str(error).strip().splitlines()[-1]}", file=sys.stderr)
         status = 1
     return status
+
+
+def _describe(flags: Dict[str, Any], swept: List[str]) -> str:
+    return ", ".join(f"{name}={_cell(flags.get(name))}" for name in swept) or "the only run"
 
 
 def _cell(value: Any) -> str:

@@ -13,8 +13,11 @@
 //!   (`blockstack.read_pddl`).
 //! - [`demos`]: expert demonstrations and recorded episodes as arrays.
 //! - [`training`]: the tabular trainer, in-process (`blockstack.train`, the Ray sweep).
+//! - [`dqn`]: the network trainer, in-process (`blockstack.train_dqn`).
 //! - [`model`]: a model file of either kind, loaded, played and evaluated (`blockstack.load`).
 //! - [`output`]: files written through the `files` crate (the sweep's table).
+//! - [`reproduce`]: the reproduction (`experiments`), its E8 arms run where a callable
+//!   says (`python -m blockstack.reproduce --ray`).
 //!
 //! Errors: every error of the crates reaches Python as `ValueError` with the crate's own
 //! message; a panic (a bug) is caught at the boundary and raised as `RuntimeError`, so
@@ -25,12 +28,14 @@ use pyo3::prelude::*;
 mod boundary;
 mod config;
 mod demos;
+mod dqn;
 mod env;
 mod goal_env;
 mod model;
 mod observe;
 mod output;
 mod planning;
+mod reproduce;
 mod training;
 mod vector;
 
@@ -48,12 +53,20 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(demos::demonstrations, m)?)?;
     m.add_function(wrap_pyfunction!(demos::read_recording, m)?)?;
     m.add_function(wrap_pyfunction!(training::train, m)?)?;
+    m.add_function(wrap_pyfunction!(dqn::train_dqn, m)?)?;
+    m.add_function(wrap_pyfunction!(reproduce::e8_arms, m)?)?;
+    m.add_function(wrap_pyfunction!(reproduce::run_e8_arm, m)?)?;
+    m.add_function(wrap_pyfunction!(reproduce::reproduce, m)?)?;
     m.add_function(wrap_pyfunction!(config::episode_seed, m)?)?;
     m.add_function(wrap_pyfunction!(config::observation_shape, m)?)?;
     m.add_function(wrap_pyfunction!(config::grid_size, m)?)?;
     m.add("OBS_KINDS", sim::ObsKind::NAMES.to_vec())?;
     m.add_function(wrap_pyfunction!(output::check_output, m)?)?;
     m.add_function(wrap_pyfunction!(output::write_output, m)?)?;
+    m.add_function(wrap_pyfunction!(output::check_folder, m)?)?;
+    m.add_function(wrap_pyfunction!(output::bar_chart, m)?)?;
+    let experiments: Vec<&str> = experiments::reproduce::EXPERIMENTS.iter().map(|e| e.id).collect();
+    m.add("EXPERIMENTS", experiments)?;
     m.add("REWARDS", sim::RewardModel::NAMES.to_vec())?;
     Ok(())
 }

@@ -21,3 +21,56 @@ pub fn check_output(path: PathBuf) -> PyResult<()> {
 pub fn write_output(py: Python<'_>, path: PathBuf, contents: Vec<u8>) -> PyResult<()> {
     py.detach(|| files::write(path, &contents).or_value_error())
 }
+
+/// Makes the folder `path` if it is missing and checks that it can be written; a
+/// `ValueError` naming the problem otherwise (a report's folder, before the run).
+#[pyfunction]
+pub fn check_folder(path: PathBuf) -> PyResult<()> {
+    files::prepare_folder(path).or_value_error()
+}
+
+/// A bar from Python: its name, its value, and an interval `(low, high)` or `None`.
+type PyBar = (String, f64, Option<(f64, f64)>);
+
+/// Draws a bar chart with the `plots` crate (the reproduction's charts' look) and writes
+/// `<stem>.png` and `<stem>.svg`; returns their paths. `bars` holds `(name, value,
+/// (low, high) or None)`; `interval_label` names the intervals in the legend.
+#[pyfunction]
+#[pyo3(signature = (stem, *, title, y_label, bars, value_label, interval_label="", note=""))]
+#[allow(clippy::too_many_arguments)]
+pub fn bar_chart(
+    py: Python<'_>,
+    stem: PathBuf,
+    title: String,
+    y_label: String,
+    bars: Vec<PyBar>,
+    value_label: String,
+    interval_label: &str,
+    note: &str,
+) -> PyResult<Vec<PathBuf>> {
+    let chart = plots::BarChart {
+        title,
+        y_label,
+        bars: bars
+            .into_iter()
+            .map(|(name, value, interval)| plots::Bar {
+                name,
+                value,
+                interval,
+                second: None,
+            })
+            .collect(),
+        value_label,
+        interval_label: interval_label.into(),
+        second_label: String::new(),
+        reference: None,
+        log_scale: false,
+        note: note.into(),
+    };
+    py.detach(|| {
+        crate::boundary::guard(|| {
+            let files = plots::bar_chart(&chart, &stem).or_value_error()?;
+            Ok(vec![files.png, files.svg])
+        })
+    })
+}

@@ -4,8 +4,9 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use agent::eval::EvalOverrides;
+use agent::eval::{EvalOverrides, EvalReport};
 use agent::{Assist, TrainConfig, TrainHooks, TrainOverrides, Trainer};
+use files::OutputPath;
 use neural::AnyModel;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -14,12 +15,28 @@ use sim::{Backend, Goal, RewardModel, View};
 use crate::boundary::{OrValueError, guard, raise_signal, signal_checker, value_error};
 use crate::config;
 
-/// Training hooks that stop the run when Ctrl-C is seen ([`signal_checker`]).
-struct Interruptible<F>(F);
+/// Training hooks that stop the run when Ctrl-C is seen ([`signal_checker`]) and write its
+/// checkpoint every `every` games and after the last, when it has one.
+struct Interruptible<'a, F> {
+    check: F,
+    checkpoint: Option<&'a OutputPath>,
+    every: u64,
+}
 
-impl<F: FnMut() -> agent::Result<()>> TrainHooks for Interruptible<F> {
+impl<F: FnMut() -> agent::Result<()>> TrainHooks for Interruptible<'_, F> {
     fn after_game(&mut self, _: &agent::Progress) -> agent::Result<()> {
-        (self.0)()
+        (self.check)()
+    }
+
+    fn checkpoint_every(&self) -> Option<u64> {
+        self.checkpoint.map(|_| self.every)
+    }
+
+    fn checkpoint(&mut self, trainer: &Trainer) -> agent::Result<()> {
+        match self.checkpoint {
+            Some(out) => trainer.write_checkpoint(out),
+            None => Ok(()),
+        }
     }
 }
 
@@ -44,8 +61,15 @@ where
 /// `eval_episodes`, `eval_failures`, `eval_mean_steps`, `eval_median_steps`,
 /// `eval_mean_steps_failures_as_horizon`, `eval_mean_optimal_steps`,
 /// `eval_mean_ratio_to_optimum` (`None` where no episode reached the goal).
+///
+/// `checkpoint` writes the run there every `checkpoint_every` games (1000 by default) and
+/// after the last, as `blockstack train --checkpoint` does; if the file already holds a
+/// checkpoint of this very run (the same settings), training continues from it (as `train
+/// --resume` would) and ends with the same model, byte for byte, as a run that never
+/// stopped; a checkpoint of another run is a `ValueError`. The dict's `resumed_at` is the
+/// games the run had played when this call took it up (0 for a new run).
 #[pyfunction]
-#[pyo3(signature = (*, blocks=3, grid=None, profile=None, preset=None, protocol=None, start=None, repr=None, reward=None, schedule=None, oracle=None, oscillation=None, goals=None, games=None, seed=1, alpha=None, gamma=None, epsilon=None, initial_q=None, exploring_starts=false, backward_replay=None, final_replay=None, assist="none", horizon=None, backend="physics", view="top", eval_episodes=0, eval_goals=None, eval_seed=2, eval_epsilon=0.1, out=None))]
+#[pyo3(signature = (*, blocks=3, grid=None, profile=None, preset=None, protocol=None, start=None, repr=None, reward=None, schedule=None, oracle=None, oscillation=None, goals=None, games=None, seed=1, alpha=None, gamma=None, epsilon=None, initial_q=None, exploring_starts=false, backward_replay=None, final_replay=None, assist="none", horizon=None, backend="physics", view="top", eval_episodes=0, eval_goals=None, eval_seed=2, eval_epsilon=0.1, out=None, checkpoint=None, checkpoint_every=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn train<'py>(
     py: Python<'py>,
@@ -79,6 +103,8 @@ pub fn train<'py>(
     eval_seed: u64,
     eval_epsilon: f64,
     out: Option<PathBuf>,
+    checkpoint: Option<PathBuf>,
+    checkpoint_every: Option<u64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     // Checked before any work, as the CLI does: a missing folder must not cost a training run.
     let out_path = out
@@ -86,6 +112,12 @@ pub fn train<'py>(
         .map(files::OutputPath::check)
         .transpose()
         .or_value_error()?;
+    let (checkpoint, every) = checkpointing(
+        out.as_deref(),
+        checkpoint,
+        checkpoint_every,
+        agent::checkpoint::DEFAULT_EVERY,
+    )?;
     let overrides = TrainOverrides {
         profile: named(profile)?,
         preset: named(preset)?,
@@ -121,14 +153,23 @@ pub fn train<'py>(
         Some(text) => Goal::parse_list(text, blocks).or_value_error()?,
         None => config.goals.clone(),
     };
-    let (trained, seconds, evaluation) = py.detach(|| {
+    let (trained, seconds, evaluation, resumed_at) = py.detach(|| {
         guard(|| {
             let clock = Instant::now();
+            let mut trainer = match &checkpoint {
+                Some((path, _)) if path.exists() => Trainer::resume_run(path, &config).or_value_error()?,
+                _ => Trainer::new(config.clone()).or_value_error()?,
+            };
+            let resumed_at = trainer.report().games;
             // The run's one loop (`Trainer::run_until`), with Ctrl-C looked for every 100 ms
             // (the GIL taken back only for that): it stops a long run with KeyboardInterrupt.
-            let mut trainer = Trainer::new(config.clone()).or_value_error()?;
             let mut signal = None;
-            let ran = trainer.run_until(config.games, &mut Interruptible(signal_checker(&mut signal)));
+            let mut hooks = Interruptible {
+                check: signal_checker(&mut signal),
+                checkpoint: checkpoint.as_ref().map(|(_, out)| out),
+                every,
+            };
+            let ran = trainer.run_until(config.games, &mut hooks);
             ran.map_err(|e| raise_signal(signal, e))?;
             let trained = trainer.finish();
             let seconds = clock.elapsed().as_secs_f64();
@@ -163,7 +204,7 @@ pub fn train<'py>(
                 agent: *agent,
                 report: trained.report,
             };
-            Ok((trained, seconds, evaluation))
+            Ok((trained, seconds, evaluation, resumed_at))
         })
     })?;
     let d = PyDict::new(py);
@@ -191,18 +232,50 @@ pub fn train<'py>(
     d.set_item("assisted_steps", r.assisted_steps)?;
     d.set_item("replay_sweeps", r.replay_sweeps)?;
     d.set_item("train_seconds", seconds)?;
+    d.set_item("resumed_at", resumed_at)?;
     if let Some(e) = evaluation {
-        let (summary, o) = (e.run.summary, e.optimality);
-        d.set_item("eval_episodes", summary.episodes)?;
-        d.set_item("eval_failures", summary.failures)?;
-        d.set_item("eval_mean_steps", summary.mean_steps)?;
-        d.set_item("eval_median_steps", summary.median_steps)?;
-        d.set_item(
-            "eval_mean_steps_failures_as_horizon",
-            e.run.mean_steps_failures_as_horizon,
-        )?;
-        d.set_item("eval_mean_optimal_steps", o.mean_optimal_steps)?;
-        d.set_item("eval_mean_ratio_to_optimum", o.mean_ratio_to_optimum)?;
+        eval_items(&d, &e)?;
     }
     Ok(d)
+}
+
+/// A run's checkpoint file, checked as an output (and not `out`), and the steps or games
+/// between two checkpoints (`default` unless given); a `ValueError` for `checkpoint_every`
+/// without a checkpoint, or 0.
+pub(crate) fn checkpointing(
+    out: Option<&std::path::Path>,
+    checkpoint: Option<PathBuf>,
+    checkpoint_every: Option<u64>,
+    default: u64,
+) -> PyResult<(Option<(PathBuf, files::OutputPath)>, u64)> {
+    let checkpoint = checkpoint
+        .map(|path| files::OutputPath::check(&path).map(|output| (path, output)))
+        .transpose()
+        .or_value_error()?;
+    if let (Some(out), Some((path, _))) = (out, &checkpoint) {
+        files::refuse_same_file(out, path).or_value_error()?;
+    }
+    let every = match (checkpoint_every, &checkpoint) {
+        (Some(0), _) => return Err(value_error("checkpoint_every must be at least 1")),
+        (Some(_), None) => return Err(value_error("checkpoint_every needs checkpoint")),
+        (every, _) => every.unwrap_or(default),
+    };
+    Ok((checkpoint, every))
+}
+
+/// The evaluation's figures into a run's dict: `eval_episodes`, `eval_failures`,
+/// `eval_mean_steps`, `eval_median_steps`, `eval_mean_steps_failures_as_horizon`,
+/// `eval_mean_optimal_steps`, `eval_mean_ratio_to_optimum`.
+pub(crate) fn eval_items(d: &Bound<'_, PyDict>, e: &EvalReport) -> PyResult<()> {
+    let (summary, o) = (e.run.summary, e.optimality);
+    d.set_item("eval_episodes", summary.episodes)?;
+    d.set_item("eval_failures", summary.failures)?;
+    d.set_item("eval_mean_steps", summary.mean_steps)?;
+    d.set_item("eval_median_steps", summary.median_steps)?;
+    d.set_item(
+        "eval_mean_steps_failures_as_horizon",
+        e.run.mean_steps_failures_as_horizon,
+    )?;
+    d.set_item("eval_mean_optimal_steps", o.mean_optimal_steps)?;
+    d.set_item("eval_mean_ratio_to_optimum", o.mean_ratio_to_optimum)
 }

@@ -77,3 +77,49 @@ def test_a_failed_run_keeps_the_finished_ones_and_is_named(tmp_path, capsys):
     rows = list(csv.DictReader(out.open()))
     assert [r["reward"] for r in rows] == ["sparse"]
     assert "sparse" in captured.out
+
+
+def test_every_run_keeps_its_files_and_a_sweep_run_again_takes_them_up(tmp_path, capsys):
+    pytest.importorskip("ray")
+    config = tmp_path / "sweep.json"
+    config.write_text(json.dumps({"train": {"blocks": 2, "goals": "0,1", "games": 60, "backend": "grid",
+                                            "checkpoint_every": 25, "eval_episodes": 10},
+                                  "sweep": {"seed": [1, 2], "gamma": [0.1, 0.9]}}))
+    out, storage = tmp_path / "results.csv", tmp_path / "runs"
+    argv = [str(config), "--num-cpus", "2", "--out", str(out), "--storage", str(storage)]
+    assert sweep.main(argv) == 0
+    first = out.read_text()
+    rows = list(csv.DictReader(out.open()))
+    assert len({r["run"] for r in rows}) == 4
+    for row in rows:
+        folder = storage / row["run"]
+        assert {p.name for p in folder.iterdir()} == {"checkpoint.safetensors", "model.safetensors", "result.json"}
+        assert int(row["resumed_at"]) == 0
+    # The chart beside the table: one bar per gamma, over the seeds.
+    assert (tmp_path / "results.png").stat().st_size > 0 and (tmp_path / "results.svg").stat().st_size > 0
+    printed = capsys.readouterr().out
+    assert sum(line.startswith("[") for line in printed.splitlines()) == 4, printed
+    # Run again: every run is read from its folder, not trained again; the same table.
+    for row in rows:
+        (storage / row["run"] / "model.safetensors").unlink()
+    assert sweep.main(argv) == 0
+    assert out.read_text() == first
+    assert not any((storage / r["run"] / "model.safetensors").exists() for r in rows)
+
+
+def test_a_sweep_of_networks_names_its_command(tmp_path):
+    config = tmp_path / "c.json"
+    config.write_text(json.dumps({"train": {"command": "dqn", "preset": "dqn-planes", "steps": 10},
+                                  "sweep": {"lr": [0.001, 0.0003]}}))
+    runs = sweep.runs(sweep.read_config(str(config)))
+    assert [r["lr"] for r in runs] == [0.001, 0.0003] and all("command" not in r for r in runs)
+    assert sweep.command_of(sweep.read_config(str(config))) == "dqn"
+    for bad, message in [
+        ({"train": {"command": "tune"}}, "choose \"train\" or \"dqn\""),
+        ({"train": {"command": "dqn", "games": 5}}, "unknown setting"),
+        ({"train": {"out": "m.st"}}, "sets each run's files itself"),
+        ({"sweep": {"command": ["train", "dqn"]}}, "command is not swept"),
+    ]:
+        config.write_text(json.dumps(bad))
+        with pytest.raises(ValueError, match=message):
+            sweep.runs(sweep.read_config(str(config)))

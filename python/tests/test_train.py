@@ -50,3 +50,50 @@ def test_a_grid_is_text_or_a_pair():
     assert a["grid"] == b["grid"] == "5x5"
     with pytest.raises(ValueError, match="grid"):
         blockstack.train(grid=[5, "x"], goals="0,1,2", games=2)
+
+
+# The network trainer: (CLI flags of `blockstack dqn`, keyword arguments of `train_dqn`).
+DQN_SETTINGS = [
+    # DQfD on planes (the preset the demonstrations point to), a small network.
+    (
+        ["--blocks", "2", "--demos", "exact:40", "--pretrain", "60", "--steps", "120", "--hidden", "32", "--seed", "3"],
+        dict(blocks=2, demos="exact:40", pretrain=60, steps=120, hidden=32, seed=3),
+    ),
+    # A named preset, its learning rate changed (the final rate follows), on the paper's screen.
+    (
+        ["--preset", "paper-dqfd", "--blocks", "2", "--demos", "exact:5", "--pretrain", "3", "--steps", "70",
+         "--batch", "8", "--lr", "2e-4", "--goals", "1,0"],
+        dict(preset="paper-dqfd", blocks=2, demos="exact:5", pretrain=3, steps=70, batch=8, lr=2e-4, goals="1,0"),
+    ),
+    # Hindsight relabelling, a 5x5 grid as a pair.
+    (
+        ["--preset", "her-planes", "--blocks", "2", "--grid", "5x5", "--steps", "150", "--hidden", "16",
+         "--buffer", "500"],
+        dict(preset="her-planes", blocks=2, grid=(5, 5), steps=150, hidden=16, buffer=500),
+    ),
+]
+
+
+@pytest.mark.parametrize("flags,kwargs", DQN_SETTINGS)
+def test_python_and_the_cli_write_the_same_network_file(cli, tmp_path, flags, kwargs):
+    by_cli, by_python = tmp_path / "cli.safetensors", tmp_path / "python.safetensors"
+    cli("dqn", *flags, "--out", by_cli)
+    result = blockstack.train_dqn(**kwargs, out=str(by_python))
+    assert by_cli.read_bytes() == by_python.read_bytes()
+    assert result["steps"] == kwargs["steps"] and result["games"] >= 1
+    assert blockstack.load(str(by_python)).kind == "dqn"
+
+
+def test_the_network_trainer_refuses_what_the_cli_refuses(tmp_path):
+    for kwargs, says in [
+        (dict(preset="best"), "unknown preset"),
+        (dict(obs="role-planes", net="paper"), "reads paper-screen"),
+        (dict(pretrain=5, demos="none"), "pre-training needs demonstrations"),
+        (dict(demos="exact:3", demos_file="d.jsonl"), "give one"),
+        (dict(steps=-1), "steps"),
+        (dict(stepz=1), "unknown setting"),
+    ]:
+        with pytest.raises(ValueError, match=says):
+            blockstack.train_dqn(**kwargs)
+    with pytest.raises(ValueError, match="cannot write"):
+        blockstack.train_dqn(steps=10**9, out=str(tmp_path / "missing" / "n.safetensors"))

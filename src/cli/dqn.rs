@@ -5,17 +5,55 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use clap::Args;
+use clap::{ArgGroup, Args};
 use indicatif::{ProgressBar, ProgressStyle};
+use neural::{
+    DemoSource, DqnConfig, DqnOverrides, LossKind, NetKind, ObsKind, OptimizerKind, Phase, Preset, Progress, TdLoss,
+};
 use neural::relational::{RelationalConfig, RelationalModel};
-use neural::{DemoSource, DqnConfig, LossKind, NetKind, ObsKind, OptimizerKind, Phase, Progress, TdLoss};
+use sim::{Goal, View};
 
 use super::stdout::line;
-use super::train::parse_goals;
 use super::world::WorldArgs;
+
+/// The flags that set up a run, which `--resume` takes from its checkpoint instead.
+const RUN_FLAGS: [&str; 31] = [
+    "preset",
+    "obs",
+    "net",
+    "loss",
+    "blocks",
+    "goals",
+    "grid",
+    "steps",
+    "pretrain",
+    "demos",
+    "demos_file",
+    "reward",
+    "gamma",
+    "lr",
+    "lr_final",
+    "optimizer",
+    "td_loss",
+    "buffer",
+    "batch",
+    "hidden",
+    "double",
+    "mask_noops",
+    "batch_norm",
+    "margin",
+    "hindsight",
+    "demo_share",
+    "horizon",
+    "backend",
+    "protocol",
+    "view",
+    "seed",
+];
 
 /// Arguments of `blockstack dqn`. Every setting starts from a preset and may be changed.
 #[derive(Debug, Args)]
+#[command(group(ArgGroup::new("checkpointing").args(["checkpoint", "resume"]).multiple(true)))]
 #[command(mut_arg("blocks", |a| a.help("Number of blocks [default: 3; with --preset general, the most blocks of a training problem: 6]")))]
 #[command(mut_arg("grid", |a| a.help("Grid size, WxH [default: 7x7]")))]
 #[command(mut_arg("reward", |a| a.help("Reward model: sparse, dense, paper or step-cost [default: the preset's]")))]
@@ -115,6 +153,23 @@ pub struct DqnArgs {
     /// Where to write the network.
     #[arg(long)]
     pub out: PathBuf,
+    /// Write the run to this checkpoint file every --checkpoint-every steps and when it ends
+    /// (atomically: a kill loses at most the steps since the last one): its networks,
+    /// optimiser, replay buffer and demonstrations, generator and the game being played;
+    /// `dqn --resume FILE` continues it.
+    #[arg(long, value_name = "FILE")]
+    pub checkpoint: Option<PathBuf>,
+    /// Steps (pre-training gradient steps, then self-play steps) between two checkpoints
+    /// [default: 10000]
+    #[arg(long, value_name = "N", requires = "checkpointing", value_parser = clap::value_parser!(u64).range(1..))]
+    pub checkpoint_every: Option<u64>,
+    /// Continue the run in this checkpoint file, with its settings, to its end; it goes on
+    /// writing checkpoints to the same file unless --checkpoint names another. The flags that
+    /// set up a run (--steps included: the learning rate falls over the planned steps) are
+    /// refused with it: the network it saves is the one the run would have saved had it never
+    /// stopped, byte for byte.
+    #[arg(long, value_name = "FILE", conflicts_with_all = RUN_FLAGS)]
+    pub resume: Option<PathBuf>,
 }
 
 /// The preset that trains a relational policy ([`neural::relational`]), not a Q-network.
@@ -180,144 +235,120 @@ impl DqnArgs {
         Ok(c)
     }
 
-    /// The training config these arguments describe.
+    /// The training config these arguments describe: the library's resolver
+    /// ([`DqnConfig::resolve`]: the preset, then each flag given).
     pub fn config(&self) -> Result<DqnConfig> {
-        if let Some(obs) = self.obs {
-            neural::input::check_network_obs(obs)?;
-        }
-        let demos = match (&self.demos, &self.demos_file) {
-            (_, Some(path)) => Some(DemoSource::File(path.display().to_string())),
-            (Some(d), None) => Some(d.clone()),
-            (None, None) => None,
-        };
-        let preset = match &self.preset {
-            Some(p) => p.clone(),
-            None => {
-                let obs = self.obs.or(self.net.map(|n| {
-                    neural::NetConfig {
-                        kind: n,
-                        ..neural::NetConfig::small()
-                    }
-                    .obs()
-                }));
-                let dqfd = match self.loss {
-                    Some(loss) => loss == LossKind::Dqfd,
-                    None => demos.as_ref().is_some_and(|d| *d != DemoSource::None),
-                };
-                match (obs.unwrap_or(ObsKind::RolePlanes), dqfd) {
-                    (ObsKind::PaperScreen, false) => "paper",
-                    (ObsKind::PaperScreen, true) => "paper-dqfd",
-                    (_, false) => "dqn-planes",
-                    (_, true) => "dqfd-planes",
-                }
-                .into()
-            }
-        };
         let w = &self.world;
         anyhow::ensure!(
-            w.view.is_none_or(|v| v == sim::View::Top),
-            "--view side: a network learns the top view only (train a tabular learner for the side view: blockstack train --view side)"
+            w.view.is_none_or(|v| v == View::Top),
+            "--view side: a network learns the top view only (train a tabular learner for the side view: \
+             blockstack train --view side, or the relational policy: blockstack dqn --preset general)"
         );
-        let blocks = w.blocks.unwrap_or(3);
-        let mut c = DqnConfig::preset(&preset, blocks)?;
-        c.world.grid = w.grid.unwrap_or_default();
-        c.goals = parse_goals(self.goals.as_deref(), blocks)?;
-        c.seed = self.seed;
-        if let Some(kind) = self.net {
-            c = c.with_net(match kind {
-                NetKind::Paper => neural::NetConfig::paper(),
-                _ => neural::NetConfig {
-                    kind,
-                    ..neural::NetConfig::small()
-                },
-            });
-            if let Some(obs) = self.obs {
-                c.net.validate(obs)?;
+        let preset = match self.preset.as_deref() {
+            Some(name) => Some(
+                name.parse::<Preset>()
+                    .map_err(|e| anyhow::anyhow!("{e}, or {GENERAL} (the relational policy)"))?,
+            ),
+            None => None,
+        };
+        let overrides = DqnOverrides {
+            preset,
+            obs: self.obs,
+            net: self.net,
+            loss: self.loss,
+            blocks: w.blocks,
+            goals: self
+                .goals
+                .as_deref()
+                .map(|text| Goal::parse_list(text, w.blocks.unwrap_or(neural::preset::DEFAULT_BLOCKS)))
+                .transpose()?,
+            grid: w.grid,
+            steps: self.steps,
+            pretrain: self.pretrain,
+            demos: match (&self.demos, &self.demos_file) {
+                (_, Some(path)) => Some(DemoSource::File(path.display().to_string())),
+                (demos, None) => demos.clone(),
+            },
+            reward: w.reward,
+            gamma: self.gamma,
+            lr: self.lr,
+            lr_final: self.lr_final,
+            optimizer: self.optimizer,
+            td_loss: self.td_loss,
+            buffer: self.buffer,
+            batch: self.batch,
+            hidden: self.hidden,
+            double: self.double,
+            mask_noops: self.mask_noops,
+            batch_norm: self.batch_norm,
+            margin: self.margin,
+            hindsight: self.hindsight,
+            demo_share: self.demo_share,
+            horizon: w.horizon,
+            backend: w.backend,
+            protocol: self.protocol,
+            seed: Some(self.seed),
+        };
+        DqnConfig::resolve(&overrides).map_err(|e| match e {
+            // The goals were the default's: say which flag chooses others.
+            neural::NeuralError::Sim(sim::SimError::TooManyGoals { .. }) if self.goals.is_none() => {
+                anyhow::Error::new(e).context("without --goals every goal is used")
             }
-        } else if let Some(obs) = self.obs
-            && obs != c.obs()
-        {
-            c = c.with_net(match obs {
-                ObsKind::PaperScreen => neural::NetConfig::paper(),
-                _ => neural::NetConfig::small(),
-            });
-        }
-        if let Some(d) = demos {
-            if d == DemoSource::None {
-                c.pretrain_steps = 0;
-            }
-            c.demos = d;
-        }
-        macro_rules! set {
-            ($($field:ident = $value:expr),* $(,)?) => {
-                $(if let Some(v) = $value { c.$field = v; })*
-            };
-        }
-        set!(
-            loss = self.loss,
-            steps = self.steps,
-            pretrain_steps = self.pretrain,
-            gamma = self.gamma,
-            optimizer = self.optimizer,
-            td_loss = self.td_loss,
-            buffer = self.buffer,
-            batch = self.batch,
-            double = self.double,
-            mask_noops = self.mask_noops,
-            margin = self.margin,
-            demo_share = self.demo_share,
-            hindsight = self.hindsight,
-        );
-        if let Some(h) = w.horizon {
-            c.world.horizon = h;
-        }
-        if let Some(lr) = self.lr {
-            c.lr_final *= lr / c.lr;
-            c.lr = lr;
-        }
-        if let Some(lr) = self.lr_final {
-            c.lr_final = lr;
-        }
-        if let Some(r) = w.reward {
-            c.world.reward = r;
-        }
-        if let Some(b) = w.backend {
-            c.world.backend = b;
-        }
-        if let Some(p) = self.protocol {
-            c.world.protocol = p;
-        }
-        if let Some(h) = self.hidden {
-            c.net.hidden = h;
-        }
-        if let Some(bn) = self.batch_norm {
-            c.net.batch_norm = bn;
-        }
-        c.validate()?;
-        Ok(c)
+            e => e.into(),
+        })
     }
 }
 
 /// How often the progress bar is redrawn, in steps.
 const DRAW_EVERY: u64 = 100;
 
-/// Trains, showing a progress bar on a terminal, and saves the network.
+/// Trains (or resumes a checkpointed run), showing a progress bar on a terminal, writing
+/// checkpoints if asked, and saves the network.
 pub fn dqn(args: DqnArgs) -> Result<()> {
     // Before minutes of work, not after.
     let out = files::OutputPath::check(&args.out)?;
-    super::stdout::claim_for_data(&[Some(&out)])?;
     if args.preset.as_deref() == Some(GENERAL) {
+        anyhow::ensure!(
+            args.checkpoint.is_none() && args.resume.is_none(),
+            "--checkpoint and --resume are a network run's: --preset general trains in minutes and writes none"
+        );
+        super::stdout::claim_for_data(&[Some(&out)])?;
         return general(&args);
     }
+    let checkpoint_path = args.checkpoint.as_ref().or(args.resume.as_ref());
+    let checkpoint = checkpoint_path.map(files::OutputPath::check).transpose()?;
+    anyhow::ensure!(
+        !checkpoint.as_ref().is_some_and(files::OutputPath::is_stdout),
+        "--checkpoint -: a checkpoint is written again every N steps, so it must be a file"
+    );
+    super::stdout::claim_for_data(&[Some(&out), checkpoint.as_ref()])?;
     if let Some(demos) = &args.demos_file {
         files::refuse_same_file(&args.out, demos).context("--out and --demos-file")?;
     }
-    let config = args.config()?;
+    if let Some(path) = checkpoint_path {
+        match (&args.checkpoint, files::refuse_same_file(&args.out, path)) {
+            (_, Ok(())) => {}
+            // The checkpoint is written as well as read: it is not only an input.
+            (Some(_), Err(_)) => anyhow::bail!(
+                "--out {} and --checkpoint {} are the same file: the network and the checkpoint need a file each",
+                args.out.display(),
+                path.display()
+            ),
+            (None, Err(e)) => return Err(anyhow::Error::new(e).context("--out and --resume")),
+        }
+    }
     let clock = Instant::now();
-    let trainer = neural::Trainer::new(config.clone())?;
+    let mut trainer = match &args.resume {
+        Some(path) => neural::Trainer::resume(path)?,
+        None => neural::Trainer::new(args.config()?)?,
+    };
+    let config = trainer.config().clone();
+    let resumed_at = trainer.steps_done();
+    let before = trainer.report();
     let demo_seconds = clock.elapsed().as_secs_f64();
     // Hidden by indicatif itself when stderr is not a terminal.
     let bar = ProgressBar::new(config.pretrain_steps);
+    bar.set_position(trainer.report().pretrain_steps);
     bar.set_style(
         ProgressStyle::with_template("{prefix} {bar:30} {pos}/{len}  {msg}  [{elapsed_precise}, eta {eta}]")
             .expect("a valid template"),
@@ -355,7 +386,21 @@ pub fn dqn(args: DqnArgs) -> Result<()> {
             });
         }
     };
-    let dqn = trainer.run(&mut show)?;
+    let every = args.checkpoint_every.unwrap_or(neural::checkpoint::DEFAULT_EVERY);
+    loop {
+        let until = match &checkpoint {
+            Some(_) => trainer.next_checkpoint(every),
+            None => trainer.total_steps(),
+        };
+        trainer.train_until(until, &mut show)?;
+        if let Some(out) = &checkpoint {
+            trainer.write_checkpoint(out)?;
+        }
+        if trainer.steps_done() == trainer.total_steps() {
+            break;
+        }
+    }
+    let dqn = trainer.finish()?;
     let seconds = clock.elapsed().as_secs_f64();
     bar.finish_and_clear();
     dqn.save(&args.out)
@@ -371,8 +416,19 @@ pub fn dqn(args: DqnArgs) -> Result<()> {
     }
     let r = dqn.report();
     line(format_args!("trained {}: {}", dqn.name(), config.describe()))?;
+    if let Some(path) = &args.resume {
+        line(format_args!(
+            "resumed at step {resumed_at} of {} from {}",
+            config.pretrain_steps + config.steps,
+            path.display()
+        ))?;
+    }
+    let made = match &args.resume {
+        Some(_) => format!("{demo_seconds:.1} s to read the checkpoint"),
+        None => format!("{demo_seconds:.1} s to make"),
+    };
     line(format_args!(
-        "{} demonstrated episodes ({} transitions, {demo_seconds:.1} s to make), {} pre-training steps; \
+        "{} demonstrated episodes ({} transitions, {made}), {} pre-training steps; \
          {} self-play steps in {} games, {} reached the goal; {} demonstrations from a loop; {} relabelled transitions; {} gradient steps",
         r.demo_episodes,
         r.demo_transitions,
@@ -386,9 +442,12 @@ pub fn dqn(args: DqnArgs) -> Result<()> {
     ))?;
     line(format_args!(
         "trained in {seconds:.1} s ({:.0} environment steps/s, {:.0} gradient steps/s)",
-        r.steps as f64 / (seconds - demo_seconds).max(1e-9),
-        r.gradient_steps as f64 / (seconds - demo_seconds).max(1e-9)
+        (r.steps - before.steps) as f64 / (seconds - demo_seconds).max(1e-9),
+        (r.gradient_steps - before.gradient_steps) as f64 / (seconds - demo_seconds).max(1e-9)
     ))?;
+    if let Some(out) = &checkpoint {
+        line(format_args!("checkpoint {}", out.path().display()))?;
+    }
     line(format_args!("saved {}", args.out.display()))
 }
 

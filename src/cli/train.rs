@@ -15,9 +15,6 @@ use super::world::WorldArgs;
 
 use super::stdout::line;
 
-/// Games between two checkpoints unless `--checkpoint-every` says otherwise.
-const DEFAULT_CHECKPOINT_EVERY: u64 = 1000;
-
 /// The flags that set up a run, which `--resume` takes from its checkpoint instead.
 const RUN_FLAGS: [&str; 24] = [
     "preset",
@@ -149,15 +146,6 @@ pub struct TrainArgs {
     /// lasts (0: any free port; the link is printed on standard error).
     #[arg(long, value_name = "PORT", num_args = 0..=1, default_missing_value = "8080")]
     pub serve: Option<u16>,
-}
-
-/// Reads goals separated by ':' (e.g. `0,1,2:1,0,2`), each with `blocks` blocks; every goal
-/// of `blocks` blocks when `text` is `None`.
-pub fn parse_goals(text: Option<&str>, blocks: usize) -> Result<Vec<Goal>> {
-    match text {
-        None => Goal::all(blocks).context("without --goals every goal is used"),
-        Some(text) => Ok(Goal::parse_list(text, blocks)?),
-    }
 }
 
 impl TrainArgs {
@@ -305,7 +293,7 @@ pub fn train(args: TrainArgs) -> Result<()> {
         bar: &bar,
         curve: curve.as_ref(),
         checkpoint: checkpoint.as_ref(),
-        every: args.checkpoint_every.unwrap_or(DEFAULT_CHECKPOINT_EVERY),
+        every: args.checkpoint_every.unwrap_or(agent::checkpoint::DEFAULT_EVERY),
     };
     trainer.run_until(total, &mut hooks)?;
     let config = trainer.config().clone();

@@ -17,15 +17,17 @@
 //! `--quick` checks the pipeline with tiny versions of the default arms. The report says which budget produced
 //! its figures.
 
-use neural::{DemoSource, DqnConfig, NetConfig, NetKind, OptimizerKind, TargetEvery, Trainer};
-use rayon::prelude::*;
-use serde::Serialize;
+use std::path::Path;
+
+use agent::EpisodeResult;
+use neural::{DemoSource, DqnConfig, NetConfig, NetKind, OptimizerKind, Preset, TargetEvery, Trainer};
+use serde::{Deserialize, Serialize};
 use sim::{Goal, Profile, RewardModel};
 
 use super::arms::{ArmResult, Goals, Row, Suite, Table, describe, suite_in};
 use super::shared::Shared;
 use super::text::num;
-use super::{Context, Drawing, Experiment, Figure, HORIZON, Options, Result, Setting};
+use super::{Context, Drawing, Experiment, Figure, HORIZON, Options, ReproduceError, Result, Setting};
 use plots::{CurvesChart, Series};
 
 /// How much E8 trains.
@@ -113,7 +115,7 @@ fn scaled(mut c: DqnConfig, fraction: f64) -> DqnConfig {
     c
 }
 
-fn preset(name: &str, blocks: usize, seed: u64, fraction: f64) -> Result<DqnConfig> {
+fn preset(name: Preset, blocks: usize, seed: u64, fraction: f64) -> Result<DqnConfig> {
     Ok(scaled(
         DqnConfig {
             seed,
@@ -131,12 +133,12 @@ const DEFAULT_SHARE: f64 = 0.6;
 /// ablation keep the 2-block steps so that they cost what they did (`--long`'s own
 /// `dqfd-planes` arm trains at the preset's full budget).
 fn dqfd_planes3(seed: u64, fraction: f64) -> Result<DqnConfig> {
-    let two = DqnConfig::preset("dqfd-planes", 2)?;
+    let two = DqnConfig::preset(Preset::DqfdPlanes, 2)?;
     let config = DqnConfig {
         steps: two.steps,
         pretrain_steps: two.pretrain_steps,
         seed,
-        ..DqnConfig::preset("dqfd-planes", 3)?
+        ..DqnConfig::preset(Preset::DqfdPlanes, 3)?
     };
     Ok(scaled(config, fraction))
 }
@@ -158,7 +160,7 @@ fn arms(budget: Budget, seed: u64) -> Result<Vec<Arm>> {
             "ours: DQfD, planes, 3 blocks",
             Part::Ours,
             if budget == Budget::Long {
-                preset("dqfd-planes", 3, seed, fraction)?
+                preset(Preset::DqfdPlanes, 3, seed, fraction)?
             } else {
                 dqfd_planes3(seed, fraction)?
             },
@@ -166,16 +168,16 @@ fn arms(budget: Budget, seed: u64) -> Result<Vec<Arm>> {
         arm(
             "ours: DQN, planes, 2 blocks",
             Part::Ours,
-            preset("dqn-planes", 2, seed, fraction)?,
+            preset(Preset::DqnPlanes, 2, seed, fraction)?,
         ),
     ];
     if budget != Budget::Long {
         return Ok(arms);
     }
-    let paper2 = preset("paper", 2, seed, 1.0)?;
-    let paper_dqfd2 = preset("paper-dqfd", 2, seed, 1.0)?;
+    let paper2 = preset(Preset::Paper, 2, seed, 1.0)?;
+    let paper_dqfd2 = preset(Preset::PaperDqfd, 2, seed, 1.0)?;
     // Our learner on the paper's pixels and network: what the screen and the network cost.
-    let ours_pixels2 = preset("dqfd-pixels", 2, seed, 1.0)?;
+    let ours_pixels2 = preset(Preset::DqfdPixels, 2, seed, 1.0)?;
     let ours3 = dqfd_planes3(seed, 1.0)?;
     arms.extend([
         arm("paper: DQN, pixels, 2 blocks", Part::Paper, paper2),
@@ -183,7 +185,7 @@ fn arms(budget: Budget, seed: u64) -> Result<Vec<Arm>> {
         arm(
             "ours: DQN with hindsight relabelling, planes, 3 blocks",
             Part::Ours,
-            preset("her-planes", 3, seed, 1.0)?,
+            preset(Preset::HerPlanes, 3, seed, 1.0)?,
         ),
         arm(
             "ours on pixels: DQfD, paper network, 2 blocks",
@@ -243,7 +245,7 @@ fn arms(budget: Budget, seed: u64) -> Result<Vec<Arm>> {
             },
         ),
         // DQN on 3 blocks: `her-planes` without its relabelling.
-        ablate("no demonstrations", preset("dqn-planes", 3, seed, 1.0)?),
+        ablate("no demonstrations", preset(Preset::DqnPlanes, 3, seed, 1.0)?),
         ablate(
             "absolute planes (an MLP, not centred)",
             DqnConfig {
@@ -285,6 +287,104 @@ struct Outcome {
     gradient_steps: u64,
 }
 
+/// How one test game went (its start and goal are the suite's, the same wherever it was
+/// played). The figures read its steps and whether it reached the goal, whole numbers that
+/// cross JSON exactly.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Game {
+    /// Actions taken.
+    pub steps: u32,
+    /// Whether the goal was reached.
+    pub reached_goal: bool,
+    /// Sum of the rewards.
+    pub total_reward: f64,
+}
+
+/// One arm trained and tested: the games it played, to be made into its figures where the
+/// report is written; what an arm run elsewhere (a cluster's node) sends back.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ArmRun {
+    /// At each point of the learning curve: the gradient steps, and the curve suite's games.
+    pub curve: Vec<(u64, Vec<Game>)>,
+    /// The final test's games.
+    pub games: Vec<Game>,
+    /// Gradient steps in all.
+    pub gradient_steps: u64,
+}
+
+/// The games as the suite's results: each paired with the start and goal the suite gave
+/// it; an error if their number is not the suite's.
+fn results_of(suite: &Suite, games: &[Game]) -> Result<Vec<EpisodeResult>> {
+    let starts = suite.starts()?;
+    if starts.len() != games.len() {
+        return Err(ReproduceError::Results {
+            reason: format!("an E8 arm sent {} games for a suite of {}", games.len(), starts.len()),
+        });
+    }
+    let per_goal = suite.episodes.max(1);
+    Ok(starts
+        .iter()
+        .zip(games)
+        .enumerate()
+        .map(|(i, (start, game))| {
+            let k = i as u64 % per_goal;
+            EpisodeResult {
+                episode: k,
+                seed: sim::seeding::episode_seed(suite.seed, k),
+                goal: start.goal,
+                start: start.state,
+                steps: game.steps,
+                reached_goal: game.reached_goal,
+                total_reward: game.total_reward,
+            }
+        })
+        .collect())
+}
+
+fn games_of(results: &[EpisodeResult]) -> Vec<Game> {
+    results
+        .iter()
+        .map(|r| Game {
+            steps: r.steps,
+            reached_goal: r.reached_goal,
+            total_reward: r.total_reward,
+        })
+        .collect()
+}
+
+/// The names of E8's arms at `options`' budget and seed, in the order [`run_arm_of`] takes
+/// them.
+pub fn arm_names(options: &Options) -> Result<Vec<String>> {
+    Ok(arms(Budget::of(options), options.seed)?
+        .into_iter()
+        .map(|a| a.name)
+        .collect())
+}
+
+/// Trains and tests arm `index` of [`arm_names`], as the reproduction with `options` does
+/// (the seeds are `options.seed`'s): the unit of work a cluster runs. With `checkpoint`,
+/// the arm's training and the tests it has played are written there at every point of its
+/// learning curve, and an arm whose checkpoint exists goes on from it (a node lost, the arm
+/// run again elsewhere): the same run either way.
+pub fn run_arm_of(options: &Options, index: usize, checkpoint: Option<&Path>) -> Result<ArmRun> {
+    let budget = Budget::of(options);
+    let arms = arms(budget, options.seed)?;
+    let arm = arms.get(index).ok_or_else(|| ReproduceError::Results {
+        reason: format!("E8 has {} arms at this budget, and no arm {index}", arms.len()),
+    })?;
+    let scale = super::Scale::new(options.quick);
+    let ctx = Context {
+        seeds: super::Seeds::new(options.seed, &scale),
+        scale,
+        budget,
+        progress: &(),
+        arms: &super::LocalArms,
+    };
+    run_arm(&ctx, arm, budget, checkpoint)
+}
+
 /// The suite every arm of `blocks` blocks is tested on: each goal, `games` starts.
 fn suite(ctx: &Context, blocks: usize, games: u64) -> Result<Suite> {
     Ok(suite_in(
@@ -296,55 +396,89 @@ fn suite(ctx: &Context, blocks: usize, games: u64) -> Result<Suite> {
     ))
 }
 
-/// Trains `arm`, testing along the way and at the end.
-fn run_arm(ctx: &Context, arm: &Arm, budget: Budget) -> Result<Outcome> {
+/// Trains `arm`, testing along the way and at the end; with `checkpoint`, see
+/// [`run_arm_of`].
+fn run_arm(ctx: &Context, arm: &Arm, budget: Budget, checkpoint: Option<&Path>) -> Result<ArmRun> {
     let c = &arm.config;
     let (curve_games, points) = budget.curve();
     let curve_suite = suite(ctx, c.blocks(), curve_games)?;
-    let curve_optimum = curve_suite.optimum()?;
     let test_suite = suite(ctx, c.blocks(), budget.test_games())?;
-    let mut trainer = Trainer::new(c.clone())?;
-    let total = c.pretrain_steps + c.steps;
-    let mut done = 0;
-    let mut curve = Vec::with_capacity(points);
+    let out = checkpoint.map(files::OutputPath::check).transpose()?;
+    let (mut trainer, mut curve) = match checkpoint.filter(|path| path.exists()) {
+        Some(path) => {
+            let (trainer, note) = Trainer::resume_with_note(path)?;
+            let curve: Option<Vec<(u64, Vec<Game>)>> = note
+                .map(serde_json::from_value)
+                .transpose()
+                .map_err(|e| ReproduceError::Arms(format!("{}: its tests do not read: {e}", path.display())))?;
+            if trainer.config() != c || curve.as_ref().is_none_or(|curve| curve.len() > points) {
+                return Err(ReproduceError::Arms(format!(
+                    "{} holds a run of another arm, not {:?}'s",
+                    path.display(),
+                    arm.name
+                )));
+            }
+            (trainer, curve.unwrap_or_default())
+        }
+        None => (Trainer::new(c.clone())?, Vec::with_capacity(points)),
+    };
+    let total = trainer.total_steps();
     let quiet = &mut |_: &neural::Progress| {};
-    for i in 1..=points as u64 {
-        let until = total * i / points as u64;
-        let pre = until.min(c.pretrain_steps).saturating_sub(done.min(c.pretrain_steps));
-        trainer.pretrain(pre, quiet)?;
-        let play = until.saturating_sub(c.pretrain_steps) - done.saturating_sub(c.pretrain_steps);
-        trainer.play(play, quiet)?;
-        done = until;
+    for i in curve.len() as u64 + 1..=points as u64 {
+        trainer.train_until(total * i / points as u64, quiet)?;
         let snapshot = trainer.snapshot()?;
         let results = curve_suite.play(&mut snapshot.policy(0.0)?)?;
-        let steps = trainer.report().gradient_steps;
-        curve.push((
-            steps,
-            ArmResult::of(
-                format!("{} @ {steps}", arm.name),
-                c.describe(),
-                Some(0.0),
-                &[results],
-                &curve_optimum,
-                HORIZON,
-            ),
-        ));
+        curve.push((trainer.report().gradient_steps, games_of(&results)));
+        if let Some(out) = &out {
+            let note = serde_json::to_value(&curve).expect("whole numbers and flags");
+            trainer.write_checkpoint_with(out, Some(&note))?;
+        }
         ctx.progress.advance("E8");
     }
     let dqn = trainer.finish()?;
     let results = test_suite.play(&mut dqn.policy(0.0)?)?;
     ctx.progress.advance("E8");
+    Ok(ArmRun {
+        curve,
+        games: games_of(&results),
+        gradient_steps: dqn.report().gradient_steps,
+    })
+}
+
+/// The figures of `arm` from its run.
+fn outcome(ctx: &Context, arm: &Arm, budget: Budget, run: &ArmRun) -> Result<Outcome> {
+    let c = &arm.config;
+    let curve_suite = suite(ctx, c.blocks(), budget.curve().0)?;
+    let curve_optimum = curve_suite.optimum()?;
+    let test_suite = suite(ctx, c.blocks(), budget.test_games())?;
+    let curve = run
+        .curve
+        .iter()
+        .map(|(steps, games)| {
+            Ok((
+                *steps,
+                ArmResult::of(
+                    format!("{} @ {steps}", arm.name),
+                    c.describe(),
+                    Some(0.0),
+                    &[results_of(&curve_suite, games)?],
+                    &curve_optimum,
+                    HORIZON,
+                ),
+            ))
+        })
+        .collect::<Result<_>>()?;
     Ok(Outcome {
         arm: ArmResult::of(
             &arm.name,
             c.describe(),
             Some(0.0),
-            &[results],
+            &[results_of(&test_suite, &run.games)?],
             &test_suite.optimum()?,
             HORIZON,
         ),
         curve,
-        gradient_steps: dqn.report().gradient_steps,
+        gradient_steps: run.gradient_steps,
     })
 }
 
@@ -357,9 +491,13 @@ fn success(a: &ArmResult) -> f64 {
 pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
     let budget = ctx.budget;
     let arms = arms(budget, ctx.seeds.ours)?;
+    let runs = ctx
+        .arms
+        .run_arms(arms.len(), &|i| run_arm(ctx, &arms[i], budget, None))?;
     let outcomes: Vec<Outcome> = arms
-        .par_iter()
-        .map(|a| run_arm(ctx, a, budget))
+        .iter()
+        .zip(&runs)
+        .map(|(a, run)| outcome(ctx, a, budget, run))
         .collect::<Result<_>>()?;
     let mut tables = Vec::new();
     for (part, title) in [

@@ -1,0 +1,574 @@
+//! The presets, and the one resolver of a preset and explicit settings.
+//!
+//! A run of `blockstack dqn` (or Python's `blockstack.train_dqn`) is described in two
+//! layers, the second overriding the first:
+//!
+//! 1. a **preset** ([`Preset`]) gives every setting of a recipe for the number of blocks
+//!    (module docs below); without one, the preset `--obs` (or `--net`) and `--loss` point to
+//!    ([`Preset::default_for`]);
+//! 2. every **explicit setting** ([`DqnOverrides`]) beats it.
+//!
+//! Both front ends call [`DqnConfig::resolve`], so the same settings give the same network
+//! file, byte for byte.
+//!
+//! # Presets
+//!
+//! - `paper`: the paper's DQN as section III-C and the authors' code describe it: pixels, the
+//!   paper network with batch normalisation, buffer 1000, batch 64, RMSprop at 1e-4, MSE
+//!   loss, the sparse reward, the target network refreshed every 3 training games (the
+//!   paper's "every n epochs", n = 3 or 5), epsilon 0.1 throughout and gamma 0.1 (both from
+//!   the authors' `DQN.py`; the paper gives neither), every action allowed (no mask), no
+//!   demonstrations.
+//! - `paper-dqfd`: the same with the paper's DQfD stage: pre-training on demonstrations
+//!   (here 500 of the exact solver's, where the paper had people's) with the large-margin
+//!   loss, then self-play with the demonstrations kept in the buffer.
+//! - `dqn-planes`: ours without demonstrations: the small network on centred planes, Adam at
+//!   1e-3 falling to 1e-4, Huber loss, double DQN, gamma 0.95, the sparse reward, a
+//!   100,000-step buffer, the target refreshed every 500 gradient steps, epsilon from 1 to
+//!   0.05 over the first half of 50,000 steps (2 blocks) or 300,000 (more), actions that
+//!   change nothing masked, gradients clipped at norm 10.
+//! - `dqfd-planes` (the recommended recipe): `dqn-planes` with DQfD (Hester et al. 2018):
+//!   10,000 exact-solver demonstrations, 30,000 pre-training steps with the 1-step and
+//!   10-step TD losses, the large-margin loss (margin 0.8) and L2 1e-5, then 30,000 steps of
+//!   self-play (90,000 of each on 3 blocks; 40,000 demonstrations and 360,000 steps of
+//!   each on 4 and more) with a quarter of every batch drawn from the demonstrations,
+//!   epsilon from 0.1 to 0.01, the learning rate falling from 1e-3 to 1e-4, and loops corrected: the first
+//!   time a game comes back to a state it was in, the exact solver demonstrates from there
+//!   (the paper's demonstrators correcting the agent, section VI-C, as DQfD data).
+//! - `her-planes`: `dqn-planes` with hindsight relabelling (HER, Andrychowicz et al. 2017,
+//!   [`crate::hindsight`]): no demonstrations; every step stored again with 4 goals that
+//!   stood later in its game.
+//! - `dqfd-pixels`: `dqfd-planes` on the paper's screen with the paper's network (batch
+//!   normalisation): the paper's network and input, our learner. Its budget is a few
+//!   thousand steps (a step of that network costs twenty times one of ours): 1,000
+//!   demonstrations, 6,000 pre-training and 6,000 self-play steps on 2 blocks (epsilon
+//!   falling over the first 2,000); 5,000 and 15,000 on more (epsilon over 7,500).
+//!
+//! Why each of our choices, measured, is in the E8 section of `blockstack reproduce --only
+//! E8 --long`'s report.
+
+use serde::{Deserialize, Serialize};
+use sim::{ActionProtocol, Backend, EnvConfig, Goal, GoalSpec, Grid, RewardModel};
+
+use crate::config::{DemoSource, DqnConfig, Epsilon, LossKind, TargetEvery, TdLoss};
+use crate::error::{NeuralError, Result};
+use crate::input::{self, ObsKind};
+use crate::net::{NetConfig, NetKind};
+use crate::optim::OptimizerKind;
+
+/// The blocks of a run whose settings do not say.
+pub const DEFAULT_BLOCKS: usize = 3;
+
+/// A recipe of every setting (`dqn --preset`; module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Preset {
+    /// The paper's DQN on its screen, as its authors configured it.
+    Paper,
+    /// `paper` with the paper's DQfD stage.
+    PaperDqfd,
+    /// Ours without demonstrations, on centred planes.
+    DqnPlanes,
+    /// Ours with DQfD on centred planes: the recommended recipe.
+    DqfdPlanes,
+    /// `dqn-planes` with hindsight relabelling.
+    HerPlanes,
+    /// `dqfd-planes`' learner with the paper's network on the paper's screen.
+    DqfdPixels,
+}
+
+sim::names!(Preset {
+    Paper = "paper",
+    PaperDqfd = "paper-dqfd",
+    DqnPlanes = "dqn-planes",
+    DqfdPlanes = "dqfd-planes",
+    HerPlanes = "her-planes",
+    DqfdPixels = "dqfd-pixels",
+} unknown(name) -> NeuralError {
+    NeuralError::Config(format!("unknown preset {name:?}: choose {}", Preset::NAMES.join(", ")))
+});
+
+impl Preset {
+    /// The preset a run takes when none is named: the paper's on its screen, ours on
+    /// planes; with DQfD when `dqfd`.
+    pub fn default_for(obs: ObsKind, dqfd: bool) -> Preset {
+        match (obs, dqfd) {
+            (ObsKind::PaperScreen, false) => Preset::Paper,
+            (ObsKind::PaperScreen, true) => Preset::PaperDqfd,
+            (_, false) => Preset::DqnPlanes,
+            (_, true) => Preset::DqfdPlanes,
+        }
+    }
+}
+
+/// The settings a user gave explicitly; `None` keeps what the preset says. The field names
+/// are `blockstack dqn`'s flags and Python's keyword arguments.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DqnOverrides {
+    /// `--preset` (default [`Preset::default_for`] the observation and the loss).
+    pub preset: Option<Preset>,
+    /// `--obs`: a network of the preset's kind that reads it, unless `net` names one.
+    pub obs: Option<ObsKind>,
+    /// `--net`.
+    pub net: Option<NetKind>,
+    /// `--loss` (default: the preset's; without a preset, DQfD when demonstrations are
+    /// given).
+    pub loss: Option<LossKind>,
+    /// `--blocks` (default 3).
+    pub blocks: Option<usize>,
+    /// `--goals` (default every goal of the block count).
+    pub goals: Option<Vec<Goal>>,
+    /// `--grid` (default 7 x 7).
+    pub grid: Option<Grid>,
+    /// `--steps`.
+    pub steps: Option<u64>,
+    /// `--pretrain`.
+    pub pretrain: Option<u64>,
+    /// `--demos` or `--demos-file` (a file as [`DemoSource::File`]); `none` also drops the
+    /// preset's pre-training.
+    pub demos: Option<DemoSource>,
+    /// `--reward`.
+    pub reward: Option<RewardModel>,
+    /// `--gamma`.
+    pub gamma: Option<f64>,
+    /// `--lr`: the final rate follows in the preset's proportion unless `lr_final` says.
+    pub lr: Option<f64>,
+    /// `--lr-final`.
+    pub lr_final: Option<f64>,
+    /// `--optimizer`.
+    pub optimizer: Option<OptimizerKind>,
+    /// `--td-loss`.
+    pub td_loss: Option<TdLoss>,
+    /// `--buffer`.
+    pub buffer: Option<usize>,
+    /// `--batch`.
+    pub batch: Option<usize>,
+    /// `--hidden`.
+    pub hidden: Option<usize>,
+    /// `--double`.
+    pub double: Option<bool>,
+    /// `--mask-noops`.
+    pub mask_noops: Option<bool>,
+    /// `--batch-norm`.
+    pub batch_norm: Option<bool>,
+    /// `--margin`.
+    pub margin: Option<f64>,
+    /// `--hindsight`.
+    pub hindsight: Option<usize>,
+    /// `--demo-share`.
+    pub demo_share: Option<f64>,
+    /// `--horizon`.
+    pub horizon: Option<u32>,
+    /// `--backend`.
+    pub backend: Option<Backend>,
+    /// `--protocol`.
+    pub protocol: Option<ActionProtocol>,
+    /// `--seed` (default 1).
+    pub seed: Option<u64>,
+}
+
+/// The network of `kind` as a preset would build it: the paper's with its batch
+/// normalisation, the perceptrons with the small network's width.
+fn network(kind: NetKind) -> NetConfig {
+    match kind {
+        NetKind::Paper => NetConfig::paper(),
+        kind => NetConfig {
+            kind,
+            ..NetConfig::small()
+        },
+    }
+}
+
+/// The network a preset puts on `obs`.
+fn network_for(obs: ObsKind) -> NetConfig {
+    match obs {
+        ObsKind::PaperScreen => NetConfig::paper(),
+        _ => NetConfig::small(),
+    }
+}
+
+impl DqnConfig {
+    /// The run the settings describe (module docs: the preset, then each explicit
+    /// setting), checked.
+    pub fn resolve(settings: &DqnOverrides) -> Result<DqnConfig> {
+        let s = settings;
+        if let Some(obs) = s.obs {
+            input::check_network_obs(obs)?;
+        }
+        let blocks = s.blocks.unwrap_or(DEFAULT_BLOCKS);
+        let preset = match s.preset {
+            Some(p) => p,
+            None => {
+                let obs = s.obs.or(s.net.map(|kind| network(kind).obs()));
+                let dqfd = match s.loss {
+                    Some(loss) => loss == LossKind::Dqfd,
+                    None => s.demos.as_ref().is_some_and(|d| *d != DemoSource::None),
+                };
+                Preset::default_for(obs.unwrap_or(ObsKind::RolePlanes), dqfd)
+            }
+        };
+        let mut c = DqnConfig::preset(preset, blocks)?;
+        c.world.grid = s.grid.unwrap_or_default();
+        if let Some(goals) = &s.goals {
+            c.goals = goals.clone();
+        }
+        c.seed = s.seed.unwrap_or(1);
+        if let Some(kind) = s.net {
+            c = c.with_net(network(kind));
+            if let Some(obs) = s.obs {
+                c.net.validate(obs)?;
+            }
+        } else if let Some(obs) = s.obs
+            && obs != c.obs()
+        {
+            c = c.with_net(network_for(obs));
+        }
+        if let Some(d) = &s.demos {
+            if *d == DemoSource::None {
+                c.pretrain_steps = 0;
+            }
+            c.demos = d.clone();
+        }
+        macro_rules! set {
+            ($($field:ident = $value:expr),* $(,)?) => {
+                $(if let Some(v) = $value { c.$field = v; })*
+            };
+        }
+        set!(
+            loss = s.loss,
+            steps = s.steps,
+            pretrain_steps = s.pretrain,
+            gamma = s.gamma,
+            optimizer = s.optimizer,
+            td_loss = s.td_loss,
+            buffer = s.buffer,
+            batch = s.batch,
+            double = s.double,
+            mask_noops = s.mask_noops,
+            margin = s.margin,
+            demo_share = s.demo_share,
+            hindsight = s.hindsight,
+        );
+        if let Some(h) = s.horizon {
+            c.world.horizon = h;
+        }
+        if let Some(lr) = s.lr {
+            c.lr_final *= lr / c.lr;
+            c.lr = lr;
+        }
+        if let Some(lr) = s.lr_final {
+            c.lr_final = lr;
+        }
+        if let Some(r) = s.reward {
+            c.world.reward = r;
+        }
+        if let Some(b) = s.backend {
+            c.world.backend = b;
+        }
+        if let Some(p) = s.protocol {
+            c.world.protocol = p;
+        }
+        if let Some(h) = s.hidden {
+            c.net.hidden = h;
+        }
+        if let Some(bn) = s.batch_norm {
+            c.net.batch_norm = bn;
+        }
+        c.validate()?;
+        Ok(c)
+    }
+
+    /// The paper's DQN (module docs) on `blocks` blocks, every goal.
+    pub fn paper(blocks: usize) -> Result<DqnConfig> {
+        let net = NetConfig::paper();
+        Ok(DqnConfig {
+            world: EnvConfig {
+                grid: Grid::default(),
+                blocks,
+                goal: GoalSpec::Random,
+                horizon: sim::DEFAULT_HORIZON,
+                reward: RewardModel::from_name("sparse")?,
+                backend: Backend::Grid,
+                protocol: ActionProtocol::Free,
+                obs: net.obs(),
+                ..EnvConfig::default()
+            },
+            goals: Goal::all(blocks)?,
+            net,
+            seed: 1,
+            // A gradient step of the paper network costs about 100 ms here: 5,000 steps
+            // are minutes, where the paper trained for 2-8 hours.
+            steps: 5_000,
+            pretrain_steps: 0,
+            demos: DemoSource::None,
+            loss: LossKind::Dqn,
+            td_loss: TdLoss::Mse,
+            optimizer: OptimizerKind::Rmsprop,
+            lr: 1e-4,
+            lr_final: 1e-4,
+            gamma: 0.1,
+            buffer: 1000,
+            batch: 64,
+            train_every: 1,
+            learning_starts: 64,
+            target_every: TargetEvery::Games(3),
+            epsilon: Epsilon {
+                start: 0.1,
+                end: 0.1,
+                steps: 0,
+            },
+            double: false,
+            clip_norm: None,
+            n_step: 10,
+            margin: agent::correction::DEFAULT_MARGIN,
+            lambda_n_step: 1.0,
+            lambda_margin: 1.0,
+            l2: 1e-5,
+            demo_share: 0.25,
+            mask_noops: false,
+            correct_loops: false,
+            hindsight: 0,
+        })
+    }
+
+    /// The preset `preset` for `blocks` blocks, every goal, seed 1.
+    pub fn preset(preset: Preset, blocks: usize) -> Result<DqnConfig> {
+        let paper = DqnConfig::paper(blocks)?;
+        Ok(match preset {
+            Preset::Paper => paper,
+            Preset::PaperDqfd => DqnConfig {
+                demos: DemoSource::Exact(500),
+                loss: LossKind::Dqfd,
+                pretrain_steps: 2_000,
+                steps: 3_000,
+                ..paper
+            },
+            Preset::DqnPlanes => DqnConfig::dqn_planes(paper),
+            Preset::DqfdPlanes => DqnConfig::dqfd_planes(paper),
+            Preset::HerPlanes => DqnConfig::her_planes(paper),
+            Preset::DqfdPixels => DqnConfig::dqfd_pixels(paper),
+        })
+    }
+
+    fn dqfd_planes(paper: DqnConfig) -> DqnConfig {
+        // Greedy failures are loops that fade with gradient steps (measured on 3,000 test
+        // games of 3 blocks: 1.9 % at 30,000 + 30,000 steps, 0.8 % at three times that,
+        // 0.4 % at four; on 12,000 of 4 blocks: 14.9 % at 90,000 + 90,000 with 10,000
+        // demonstrations, 9.7 % at twice both, 3.1 % at four times): 3 blocks get three times
+        // 2 blocks' steps, 4 blocks and more four times 3 blocks' steps and demonstrations.
+        let (steps, demos) = match paper.world.blocks {
+            ..=2 => (30_000, 10_000),
+            3 => (90_000, 10_000),
+            _ => (360_000, 40_000),
+        };
+        DqnConfig {
+            steps,
+            pretrain_steps: steps,
+            demos: DemoSource::Exact(demos),
+            loss: LossKind::Dqfd,
+            learning_starts: 1_000,
+            epsilon: Epsilon {
+                start: 0.1,
+                end: 0.01,
+                steps: 15_000,
+            },
+            correct_loops: true,
+            ..DqnConfig::dqn_planes(paper)
+        }
+    }
+
+    fn dqfd_pixels(paper: DqnConfig) -> DqnConfig {
+        let blocks = paper.world.blocks;
+        // A DQfD step of the paper network costs about 40 ms here, a step of the small one
+        // 2 ms: a budget of minutes buys a few thousand steps, so the demonstrations carry
+        // most of the learning and the budget grows with the blocks. On 2 blocks, 4,000 steps
+        // of each left one goal at 94.6 %; 6,000 reach 95 % on every goal (epsilon falling
+        // over the first 2,000 self-play steps, as it did at 4,000).
+        let (demos, steps, fall) = if blocks <= 2 {
+            (1_000, 6_000, 2_000)
+        } else {
+            (5_000, 15_000, 7_500)
+        };
+        let net = paper.net;
+        DqnConfig {
+            demos: DemoSource::Exact(demos),
+            pretrain_steps: steps,
+            steps,
+            learning_starts: 500,
+            epsilon: Epsilon {
+                start: 0.1,
+                end: 0.01,
+                steps: fall,
+            },
+            ..DqnConfig::dqfd_planes(paper).with_net(net)
+        }
+    }
+
+    fn her_planes(paper: DqnConfig) -> DqnConfig {
+        let planes = DqnConfig::dqn_planes(paper);
+        DqnConfig { hindsight: 4, ..planes }
+    }
+
+    fn dqn_planes(paper: DqnConfig) -> DqnConfig {
+        // Exploration alone must find the goal: far longer on 3 blocks than on 2.
+        let steps = if paper.world.blocks <= 2 { 50_000 } else { 300_000 };
+        let net = NetConfig::small();
+        DqnConfig {
+            world: EnvConfig {
+                obs: net.obs(),
+                ..paper.world
+            },
+            net,
+            steps,
+            td_loss: TdLoss::Huber,
+            optimizer: OptimizerKind::Adam,
+            lr: 1e-3,
+            lr_final: 1e-4,
+            gamma: 0.95,
+            buffer: 100_000,
+            learning_starts: 5_000,
+            target_every: TargetEvery::Steps(500),
+            epsilon: Epsilon {
+                start: 1.0,
+                end: 0.05,
+                steps: steps / 2,
+            },
+            double: true,
+            clip_norm: Some(10.0),
+            mask_noops: true,
+            ..paper
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_preset_is_valid_and_the_paper_is_the_papers() {
+        for preset in Preset::ALL {
+            DqnConfig::preset(preset, 3).unwrap().validate().unwrap();
+            assert_eq!(preset.name().parse::<Preset>().unwrap(), preset);
+        }
+        let p = DqnConfig::preset(Preset::Paper, 3).unwrap();
+        assert_eq!(
+            (p.buffer, p.batch, p.lr, p.obs()),
+            (1000, 64, 1e-4, ObsKind::PaperScreen)
+        );
+        assert_eq!(p.optimizer, OptimizerKind::Rmsprop);
+        assert_eq!(p.world.reward.name(), "sparse");
+        let e = "nope".parse::<Preset>().unwrap_err().to_string();
+        assert!(e.contains("unknown preset") && e.contains("dqfd-planes"), "{e}");
+    }
+
+    #[test]
+    fn dqfd_planes_budget_grows_with_the_blocks_and_pixels_keep_their_own() {
+        let budget = |preset, blocks| {
+            let c = DqnConfig::preset(preset, blocks).unwrap();
+            (c.demos, c.pretrain_steps, c.steps)
+        };
+        assert_eq!(
+            budget(Preset::DqfdPlanes, 2),
+            (DemoSource::Exact(10_000), 30_000, 30_000)
+        );
+        assert_eq!(
+            budget(Preset::DqfdPlanes, 3),
+            (DemoSource::Exact(10_000), 90_000, 90_000)
+        );
+        for blocks in [4, 5] {
+            assert_eq!(
+                budget(Preset::DqfdPlanes, blocks),
+                (DemoSource::Exact(40_000), 360_000, 360_000)
+            );
+            assert_eq!(
+                budget(Preset::DqfdPixels, blocks),
+                (DemoSource::Exact(5_000), 15_000, 15_000)
+            );
+        }
+    }
+
+    #[test]
+    fn without_a_preset_the_observation_and_the_loss_choose_one() {
+        let resolved = |o: DqnOverrides| DqnConfig::resolve(&o).unwrap();
+        let preset = |p| DqnConfig::preset(p, 3).unwrap();
+        assert_eq!(resolved(DqnOverrides::default()), preset(Preset::DqnPlanes));
+        let demos = DqnOverrides {
+            demos: Some(DemoSource::Exact(10_000)),
+            ..DqnOverrides::default()
+        };
+        assert_eq!(resolved(demos.clone()), preset(Preset::DqfdPlanes));
+        let screen = DqnOverrides {
+            obs: Some(ObsKind::PaperScreen),
+            ..DqnOverrides::default()
+        };
+        assert_eq!(resolved(screen.clone()), preset(Preset::Paper));
+        // --loss beats what the demonstrations imply.
+        let dqn = resolved(DqnOverrides {
+            loss: Some(LossKind::Dqn),
+            ..demos
+        });
+        assert_eq!((dqn.loss, dqn.pretrain_steps, dqn.gamma), (LossKind::Dqn, 0, 0.95));
+        let net = DqnOverrides {
+            net: Some(NetKind::Paper),
+            loss: Some(LossKind::Dqfd),
+            ..DqnOverrides::default()
+        };
+        assert_eq!(resolved(net), preset(Preset::PaperDqfd));
+    }
+
+    #[test]
+    fn explicit_settings_beat_the_preset() {
+        let c = DqnConfig::resolve(&DqnOverrides {
+            preset: Some(Preset::DqfdPlanes),
+            blocks: Some(2),
+            obs: Some(ObsKind::PaperScreen),
+            lr: Some(5e-4),
+            demos: Some(DemoSource::None),
+            loss: Some(LossKind::Dqn),
+            hidden: Some(64),
+            seed: Some(7),
+            backend: Some(Backend::Physics),
+            goals: Some(vec!["1,0".parse().unwrap()]),
+            ..DqnOverrides::default()
+        })
+        .unwrap();
+        // The screen takes the paper network; the learner stays the preset's.
+        assert_eq!(
+            (c.net.kind, c.net.hidden, c.obs()),
+            (NetKind::Paper, 64, ObsKind::PaperScreen)
+        );
+        assert_eq!((c.lr, c.lr_final), (5e-4, 5e-5));
+        assert_eq!((c.demos.clone(), c.pretrain_steps), (DemoSource::None, 0));
+        assert_eq!((c.seed, c.world.backend, c.goals.len()), (7, Backend::Physics, 1));
+        assert!(c.correct_loops && c.double);
+        for (bad, says) in [
+            (
+                DqnOverrides {
+                    obs: Some(ObsKind::RolePlanes),
+                    net: Some(NetKind::Paper),
+                    ..DqnOverrides::default()
+                },
+                "reads paper-screen",
+            ),
+            (
+                DqnOverrides {
+                    obs: Some(ObsKind::Planes),
+                    ..DqnOverrides::default()
+                },
+                "called role-planes now",
+            ),
+            (
+                DqnOverrides {
+                    pretrain: Some(5),
+                    demos: Some(DemoSource::None),
+                    ..DqnOverrides::default()
+                },
+                "pre-training needs demonstrations",
+            ),
+        ] {
+            let e = DqnConfig::resolve(&bad).unwrap_err().to_string();
+            assert!(e.contains(says), "{e}");
+        }
+    }
+}
