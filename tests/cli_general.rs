@@ -16,7 +16,10 @@ fn train(dir: &Path, name: &str) -> PathBuf {
         .flag("seed", 3)
         .flag("out", path(&out))
         .ok();
-    assert!(text.contains("trained relational policy") && text.contains("saved"), "{text}");
+    assert!(
+        text.contains("trained relational policy") && text.contains("saved"),
+        "{text}"
+    );
     out
 }
 
@@ -26,7 +29,11 @@ fn the_general_preset_trains_a_policy_that_run_solve_and_solve_all_play() {
     let model = train(&dir, "general.safetensors");
     let meta = file_metadata(&model, "blockstack-relational");
     assert_eq!(meta["config"]["max_blocks"], 6);
-    assert_eq!(meta["report"].as_array().unwrap().len(), 10, "one report per DAgger iteration");
+    assert_eq!(
+        meta["report"].as_array().unwrap().len(),
+        10,
+        "one report per DAgger iteration"
+    );
 
     // The side view, at the model's default world and at another size; the top view refused.
     let run = |blocks: usize| {
@@ -45,14 +52,22 @@ fn the_general_preset_trains_a_policy_that_run_solve_and_solve_all_play() {
     }
     let top = blockstack(&["run", "--view", "top", "--agent", "dqn", "--model", path(&model)]);
     let e = stderr(&top);
-    assert!(!top.status.success() && e.contains("side view") && e.lines().count() == 1, "{e}");
+    assert!(
+        !top.status.success() && e.contains("side view") && e.lines().count() == 1,
+        "{e}"
+    );
     let q = blockstack(&["run", "--agent", "q", "--model", path(&model)]);
     assert!(stderr(&q).contains("not what --agent q plays"), "{}", stderr(&q));
 
     // PDDL problems: a plan in the competitions' format, replayed over the file's facts; a
     // folder planned as the near-optimal planner plans it.
     let tasks = dir.join("tasks");
-    cli("generate").flag("blocks", 8).flag("count", 3).flag("seed", 5).flag("out", path(&tasks)).ok();
+    cli("generate")
+        .flag("blocks", 8)
+        .flag("count", 3)
+        .flag("seed", 5)
+        .flag("out", path(&tasks))
+        .ok();
     let plan = cli("solve")
         .flag("pddl", path(&tasks.join("p01.pddl")))
         .flag("model", path(&model))
@@ -69,9 +84,18 @@ fn the_general_preset_trains_a_policy_that_run_solve_and_solve_all_play() {
     // A model of another kind is not a policy of block moves.
     let tabular = dir.join("q.safetensors");
     cli("train").flag("games", 10).flag("out", path(&tabular)).ok();
-    let wrong = blockstack(&["solve", "--pddl", path(&tasks.join("p01.pddl")), "--model", path(&tabular)]);
+    let wrong = blockstack(&[
+        "solve",
+        "--pddl",
+        path(&tasks.join("p01.pddl")),
+        "--model",
+        path(&tabular),
+    ]);
     let e = stderr(&wrong);
-    assert!(!wrong.status.success() && e.contains("relational policy") && e.lines().count() == 1, "{e}");
+    assert!(
+        !wrong.status.success() && e.contains("relational policy") && e.lines().count() == 1,
+        "{e}"
+    );
 }
 
 #[test]
@@ -82,9 +106,20 @@ fn flags_the_general_preset_does_not_take_are_refused_in_one_line() {
         let o = blockstack(&[&["dqn", "--preset", "general", "--out", path(&out)][..], &flag[..]].concat());
         let e = stderr(&o);
         assert!(!o.status.success() && e.lines().count() == 1, "{e}");
-        assert!(e.contains(&format!("{} does not apply to --preset general", flag[0])), "{e}");
+        assert!(
+            e.contains(&format!("{} does not apply to --preset general", flag[0])),
+            "{e}"
+        );
         assert!(!out.exists());
     }
-    let o = blockstack(&["dqn", "--preset", "general", "--blocks", "9", "--out", path(&dir.join("x"))]);
+    let o = blockstack(&[
+        "dqn",
+        "--preset",
+        "general",
+        "--blocks",
+        "9",
+        "--out",
+        path(&dir.join("x")),
+    ]);
     assert!(stderr(&o).contains("choose 2 to 8"), "{}", stderr(&o));
 }

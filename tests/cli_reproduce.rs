@@ -20,7 +20,10 @@ fn quick_report() -> PathBuf {
     let o = cli("reproduce").arg("--quick").flag("out", dir.to_str().unwrap()).run();
     assert!(o.status.success(), "{}", stderr(&o));
     let out = String::from_utf8_lossy(&o.stdout);
-    assert!(out.contains("reproduced E1, E2, E3, E4, E5, E6, E7, E8, E9, E10"), "{out}");
+    assert!(
+        out.contains("reproduced E1, E2, E3, E4, E5, E6, E7, E8, E9, E10"),
+        "{out}"
+    );
     dir
 }
 
@@ -49,7 +52,11 @@ fn the_quick_report_holds_every_experiment() {
     let summary = std::fs::read_to_string(dir.join("summary.md")).expect("summary.md exists");
     let text = std::fs::read_to_string(dir.join("results.json")).unwrap();
     assert_eq!(summary, experiments::reproduce::summary(&text).unwrap());
-    assert_eq!(summary.lines().filter(|l| l.starts_with("| E")).count(), 10, "{summary}");
+    assert_eq!(
+        summary.lines().filter(|l| l.starts_with("| E")).count(),
+        10,
+        "{summary}"
+    );
     let experiments = json["experiments"].as_array().unwrap();
     let ids: Vec<&str> = experiments.iter().map(|e| e["id"].as_str().unwrap()).collect();
     assert_eq!(ids, ["E1", "E2", "E3", "E4", "E5", "E6", "E7", "E8", "E9", "E10"]);

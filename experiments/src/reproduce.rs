@@ -77,9 +77,9 @@ mod text;
 
 pub use arms::{ArmResult, Goals, Measured, Row, Rules, Suite, Table, TestOutcome};
 pub use e1::{Decomposition, Gap, WorldArm};
-pub use e10::{Family, General, SizeFigures, TrainingFigures};
 pub use e8::{ArmRun, Budget, Game, arm_names as e8_arm_names, run_arm_of as run_e8_arm};
 pub use e9::{AgentFigures, Agreement, BlocksWorld, Group, Played, Problem};
+pub use e10::{Family, General, SizeFigures, TrainingFigures};
 pub use ran::Ran;
 pub use report::{ReportFiles, write_report};
 pub use spread::{PaperInside, Placement, Spread};

@@ -31,16 +31,16 @@ pub enum AnyModel {
 }
 
 /// The world a relational policy is shown in when nothing says otherwise: the side view of
-/// the most blocks it trained on, on a grid where they fit (as wide as the blocks, a row
-/// more than them, at least the paper's 7 x 7).
+/// the most blocks it trained on, on the side view's default grid for them
+/// ([`Grid::side_default`]).
 fn relational_world(model: &RelationalModel) -> EnvConfig {
     let blocks = model.config().max_blocks;
     EnvConfig {
-        grid: Grid::new(blocks.max(7), (blocks + 1).max(7)).unwrap_or_default(),
+        grid: Grid::side_default(blocks),
         blocks,
         view: sim::View::Side,
         reward: RewardModel::from_name("step-cost").expect("a reward model"),
-        ..EnvConfig::for_profile(Profile::Spec)
+        ..Profile::Spec.world()
     }
 }
 

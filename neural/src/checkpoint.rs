@@ -95,7 +95,7 @@ const N_STEP_TERMINAL: u8 = 2;
 const EXPERT: u8 = 4;
 
 /// What the observations of a transition share: everything but the state.
-#[derive(Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Context {
     grid: Grid,
@@ -108,7 +108,7 @@ impl Context {
     fn of(obs: &Observation) -> Context {
         Context {
             grid: obs.grid,
-            goal: obs.goal,
+            goal: obs.goal.clone(),
             protocol: obs.protocol,
             view: obs.view,
         }
@@ -118,7 +118,7 @@ impl Context {
         Observation {
             grid: self.grid,
             state,
-            goal: self.goal,
+            goal: self.goal.clone(),
             protocol: self.protocol,
             view: self.view,
         }
@@ -161,9 +161,11 @@ fn state_width(blocks: usize) -> usize {
 }
 
 fn put_state(state: &State, out: &mut Vec<u8>) {
-    out.push(state.held_block().map_or(NONE_HELD, |b| b.0));
+    // A network's world has at most 256 cells and 16 blocks (`ObsKind::check`), so every
+    // block id and coordinate fits a byte.
+    out.push(state.held_block().map_or(NONE_HELD, |b| b.0 as u8));
     for c in state.cells() {
-        out.extend([c.x, c.y]);
+        out.extend([c.x as u8, c.y as u8]);
     }
 }
 
@@ -172,7 +174,7 @@ impl Columns {
         let mut c = Columns::default();
         for t in transitions {
             let context = Context::of(&t.obs);
-            let i = *index.entry(context).or_insert_with(|| {
+            let i = *index.entry(context.clone()).or_insert_with(|| {
                 contexts.push(context);
                 (contexts.len() - 1) as u32
             });
@@ -526,7 +528,7 @@ impl Trainer {
         self.n_step = NStep::new(self.config.n_step, self.config.gamma);
         for (played, &action) in actions.iter().enumerate() {
             if self.config.correct_loops {
-                self.visited.insert(obs.state);
+                self.visited.insert(obs.state.clone());
             }
             let step = self.envs[i].step(action)?;
             if step.terminated || step.truncated {
@@ -537,9 +539,9 @@ impl Trainer {
             }
             if self.config.hindsight > 0 {
                 self.game.push(Step {
-                    obs,
+                    obs: obs.clone(),
                     action,
-                    next: step.observation,
+                    next: step.observation.clone(),
                 });
             }
             // Its finished transitions are in the buffer already.
@@ -547,7 +549,7 @@ impl Trainer {
                 obs,
                 action,
                 step.reward as f32,
-                step.observation,
+                step.observation.clone(),
                 step.terminated,
                 false,
             );
@@ -605,9 +607,12 @@ fn read_transitions(
     let state = |bytes: &[u8], grid: Grid| -> std::result::Result<State, String> {
         let held = match bytes[0] {
             NONE_HELD => None,
-            b => Some(BlockId(b)),
+            b => Some(BlockId(u16::from(b))),
         };
-        let cells: Vec<Cell> = bytes[1..].chunks_exact(2).map(|c| Cell::new(c[0], c[1])).collect();
+        let cells: Vec<Cell> = bytes[1..]
+            .chunks_exact(2)
+            .map(|c| Cell::new(u16::from(c[0]), u16::from(c[1])))
+            .collect();
         let s = State::new(&cells, held).map_err(|e| e.to_string())?;
         s.check_fits(grid).map_err(|e| e.to_string())?;
         Ok(s)

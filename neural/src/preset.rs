@@ -290,7 +290,6 @@ impl DqnConfig {
                 reward: RewardModel::from_name("sparse")?,
                 backend: Backend::Grid,
                 protocol: ActionProtocol::Free,
-                obs: net.obs(),
                 ..EnvConfig::default()
             },
             goals: Goal::all(blocks)?,
@@ -414,10 +413,6 @@ impl DqnConfig {
         let steps = if paper.world.blocks <= 2 { 50_000 } else { 300_000 };
         let net = NetConfig::small();
         DqnConfig {
-            world: EnvConfig {
-                obs: net.obs(),
-                ..paper.world
-            },
             net,
             steps,
             td_loss: TdLoss::Huber,

@@ -146,7 +146,7 @@ impl Trainer {
         let envs = config
             .goals
             .iter()
-            .map(|&g| Env::new(config.env_config(g)))
+            .map(|g| Env::new(config.env_config(g.clone())))
             .collect::<sim::Result<Vec<_>>>()?;
         Ok(Trainer {
             n_step: NStep::new(config.n_step, config.gamma),

@@ -76,10 +76,16 @@ fn the_top_view_is_refused_in_one_line() {
     let mut env = Env::new(EnvConfig::default()).unwrap();
     let obs = env.reset(1);
     let mut policy = model.policy(0.0).unwrap();
-    let e = policy.block_move(&obs, &mut sim::seeding::rng(0)).unwrap_err().to_string();
+    let e = policy
+        .block_move(&obs, &mut sim::seeding::rng(0))
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("plays the side view") && !e.contains('\n'), "{e}");
     let any = AnyModel::Relational(Box::new(model));
-    assert!(any.legal_q_values(&obs).is_err(), "it scores block moves, not gripper actions");
+    assert!(
+        any.legal_q_values(&obs).is_err(),
+        "it scores block moves, not gripper actions"
+    );
 }
 
 #[test]

@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
+use agent::eval::EvalOverrides;
 use neural::{AnyModel, DemoSource, DqnConfig, DqnOverrides, Trainer};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -192,8 +193,18 @@ pub fn train_dqn<'py>(
             }
             let report = *dqn.report();
             let evaluation = if eval_episodes > 0 {
+                let backend = dqn.config().world.backend;
                 let model = AnyModel::Dqn(Box::new(dqn));
-                let plan = model.eval_plan(eval_goals, eval_episodes, eval_seed);
+                // Planned as `blockstack.train` plans its evaluation: on the training backend.
+                let plan = model
+                    .eval_plan_with(&EvalOverrides {
+                        goals: Some(eval_goals),
+                        episodes: eval_episodes,
+                        seed: eval_seed,
+                        backend: Some(backend),
+                        ..EvalOverrides::default()
+                    })
+                    .or_value_error()?;
                 let mut signal = None;
                 let evaluated = model.evaluate(&plan, "", eval_epsilon, &mut signal_checker(&mut signal));
                 Some(evaluated.map_err(|e| raise_signal(signal, e))?.report)

@@ -137,8 +137,8 @@ impl NativeModel {
     #[allow(clippy::too_many_arguments)]
     fn act_move(
         &mut self,
-        cells: Vec<(u8, u8)>,
-        held: Option<u8>,
+        cells: Vec<(u16, u16)>,
+        held: Option<u16>,
         goal: Vec<i64>,
         goal_tower: Vec<i64>,
         grid: (usize, usize),

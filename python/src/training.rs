@@ -164,12 +164,14 @@ pub fn train<'py>(
             // The run's one loop (`Trainer::run_until`), with Ctrl-C looked for every 100 ms
             // (the GIL taken back only for that): it stops a long run with KeyboardInterrupt.
             let mut signal = None;
-            let mut hooks = Interruptible {
-                check: signal_checker(&mut signal),
-                checkpoint: checkpoint.as_ref().map(|(_, out)| out),
-                every,
-            };
-            let ran = trainer.run_until(config.games, &mut hooks);
+            let ran = trainer.run_until(
+                config.games,
+                &mut Interruptible {
+                    check: signal_checker(&mut signal),
+                    checkpoint: checkpoint.as_ref().map(|(_, out)| out),
+                    every,
+                },
+            );
             ran.map_err(|e| raise_signal(signal, e))?;
             let trained = trainer.finish();
             let seconds = clock.elapsed().as_secs_f64();

@@ -7,10 +7,10 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use clap::{ArgGroup, Args};
 use indicatif::{ProgressBar, ProgressStyle};
+use neural::relational::{RelationalConfig, RelationalModel};
 use neural::{
     DemoSource, DqnConfig, DqnOverrides, LossKind, NetKind, ObsKind, OptimizerKind, Phase, Preset, Progress, TdLoss,
 };
-use neural::relational::{RelationalConfig, RelationalModel};
 use sim::{Goal, View};
 
 use super::stdout::line;

@@ -7,11 +7,11 @@ use anyhow::{Context, Result};
 use clap::Args;
 use std::path::{Path, PathBuf};
 
+use neural::AnyModel;
+use neural::relational::RelationalModel;
 use oracle::pddl::{self, Problem};
 use oracle::towers::{ExactMoves, MovePlanner, NearOptimal, Place, TowerPlan};
 use oracle::{Cost, CountedPlan, OracleError, PlannerKind};
-use neural::AnyModel;
-use neural::relational::RelationalModel;
 use serde::Serialize;
 use sim::{Goal, Grid, State, View};
 

@@ -85,7 +85,7 @@ fn problems(budget: Budget, blocks: usize) -> u64 {
         // About 10 s of play on two cores at 500 blocks, less below.
         Budget::Default => match blocks {
             ..=100 => 100,
-            ..=200 => 50,
+            101..=200 => 50,
             _ => 20,
         },
         Budget::Long => 1000,
@@ -536,10 +536,10 @@ mod tests {
                 assert!(policy >= 1.0, "no policy beats the fewest moves: {r:?}");
             }
         }
-        assert_eq!(g.nlm.iter().map(|r| r.published).collect::<Vec<_>>(), [
-            Some((1.0, 12.5)),
-            Some((1.0, 85.8))
-        ]);
+        assert_eq!(
+            g.nlm.iter().map(|r| r.published).collect::<Vec<_>>(),
+            [Some((1.0, 12.5)), Some((1.0, 85.8))]
+        );
         assert_eq!(e.figures.len(), 1);
         assert_eq!(quick(), e, "seeded");
     }

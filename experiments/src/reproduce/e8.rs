@@ -333,8 +333,8 @@ fn results_of(suite: &Suite, games: &[Game]) -> Result<Vec<EpisodeResult>> {
             EpisodeResult {
                 episode: k,
                 seed: sim::seeding::episode_seed(suite.seed, k),
-                goal: start.goal,
-                start: start.state,
+                goal: start.goal.clone(),
+                start: start.state.clone(),
                 steps: game.steps,
                 reached_goal: game.reached_goal,
                 total_reward: game.total_reward,

@@ -139,7 +139,10 @@ impl Graph {
         let clear: Vec<u32> = if !list_moves {
             Vec::new()
         } else {
-            (first..first + n).filter(|&b| self.above[b] == NONE).map(|b| b as u32).collect()
+            (first..first + n)
+                .filter(|&b| self.above[b] == NONE)
+                .map(|b| b as u32)
+                .collect()
         };
         for &x in &clear {
             if self.below[x as usize] != NONE {

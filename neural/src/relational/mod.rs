@@ -1,8 +1,8 @@
 //! A learned block-move policy for the classic Blocks World at any number of blocks.
 
 pub mod graph;
-pub mod net;
 pub mod model;
+pub mod net;
 pub mod train;
 
 /// The most moves a game of `blocks` blocks may take before it counts as failed: four per

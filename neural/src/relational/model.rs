@@ -230,7 +230,11 @@ impl<'n> MovePolicy<'n> {
         let (x, to) = self.net.best_move(&graph, &self.tape, 0, table_free)?;
         Some(Move {
             block: x as usize,
-            to: if to == TABLE { Place::Table } else { Place::On(to as usize) },
+            to: if to == TABLE {
+                Place::Table
+            } else {
+                Place::On(to as usize)
+            },
         })
     }
 }

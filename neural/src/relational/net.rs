@@ -222,6 +222,10 @@ impl Tape {
 }
 
 /// Resizes `v` to `n` zeros-or-old values (allocating only when it grows).
+/// A candidate move's score, its order key (its place in `Towers::moves` order, which breaks
+/// ties) and the move, as `(block, destination)`.
+type ScoredMove = (f32, (u32, u32), (u32, u32));
+
 fn fit(v: &mut Vec<f32>, n: usize) {
     v.resize(n, 0.0);
 }
@@ -413,7 +417,15 @@ impl RelationalNet {
                 x[2 * d] = flag(g.stands_as_goal(b));
             }
             cell_forward(p, up, &mut round.up, 0, n);
-            scan(&g.up_order, &g.below, &round.up.o, d, half, &mut round.u, &mut round.u_src);
+            scan(
+                &g.up_order,
+                &g.below,
+                &round.up.o,
+                d,
+                half,
+                &mut round.u,
+                &mut round.u_src,
+            );
             // Down the towers: a local term per block, then its running min / max from the
             // top down.
             let down = &sl.down;
@@ -432,7 +444,15 @@ impl RelationalNet {
                 }
             }
             cell_forward(p, down, &mut round.down, 0, n);
-            scan(&g.down_order, &g.above, &round.down.o, d, half, &mut round.v, &mut round.v_src);
+            scan(
+                &g.down_order,
+                &g.above,
+                &round.down.o,
+                d,
+                half,
+                &mut round.v,
+                &mut round.v_src,
+            );
             // Across the goal.
             let goal = &sl.goal;
             round.goal.reserve(n, goal);
@@ -459,7 +479,11 @@ impl RelationalNet {
                     x[6 * d..7 * d].copy_from_slice(&v[row(h, ga as usize)]);
                 }
                 x[7 * d] = flag(g.stands_as_goal(b));
-                x[7 * d + 1] = if ga == NONE { 0.0 } else { flag(g.stands_as_goal(ga as usize)) };
+                x[7 * d + 1] = if ga == NONE {
+                    0.0
+                } else {
+                    flag(g.stands_as_goal(ga as usize))
+                };
             }
             cell_forward(p, goal, &mut round.goal, 0, n);
         }
@@ -569,17 +593,14 @@ impl RelationalNet {
         // block itself and the two the goal relates it to.
         let mut top: Vec<u32> = Vec::with_capacity(5);
         for &y in &clear {
-            let at = top
-                .iter()
-                .position(|&z| b_of(y) > b_of(z))
-                .unwrap_or(top.len());
+            let at = top.iter().position(|&z| b_of(y) > b_of(z)).unwrap_or(top.len());
             if at < 4 {
                 top.insert(at, y);
                 top.truncate(4);
             }
         }
-        // (score, order key): the order key is the move's place in Towers::moves order.
-        let mut best: Option<(f32, (u32, u32), (u32, u32))> = None;
+        // (score, order key, move): the order key is the move's place in Towers::moves order.
+        let mut best: Option<ScoredMove> = None;
         let mut offer = |score: f32, key: (u32, u32), mv: (u32, u32)| {
             if best.is_none_or(|(s, k, _)| score > s || (score == s && key < k)) {
                 best = Some((score, key, mv));
@@ -752,7 +773,13 @@ impl RelationalNet {
         for (dh, &h0) in t.dh.iter_mut().zip(&t.h0) {
             *dh *= 1.0 - h0 * h0;
         }
-        matmul_tn(&mut grads[sl.embed_w.range()], &t.features, &t.dh, (FEATURES, n, d), true);
+        matmul_tn(
+            &mut grads[sl.embed_w.range()],
+            &t.features,
+            &t.dh,
+            (FEATURES, n, d),
+            true,
+        );
         add_row_sums(&mut grads[sl.embed_b.range()], &t.dh);
     }
 }
@@ -942,7 +969,11 @@ mod tests {
     fn loss(net: &RelationalNet, g: &Graph, w: &[f32]) -> f64 {
         let mut tape = Tape::new();
         net.forward(g, &mut tape);
-        tape.scores().iter().zip(w).map(|(&s, &w)| f64::from(s) * f64::from(w)).sum()
+        tape.scores()
+            .iter()
+            .zip(w)
+            .map(|(&s, &w)| f64::from(s) * f64::from(w))
+            .sum()
     }
 
     #[test]
@@ -960,7 +991,7 @@ mod tests {
         // disagree there, and no more than that.
         let eps = 1e-3f32;
         let mut off = Vec::new();
-        for i in 0..net.params().len() {
+        for (i, &analytic) in grads.iter().enumerate() {
             let keep = net.params[i];
             net.params[i] = keep + eps;
             let plus = loss(&net, &g, &w);
@@ -968,13 +999,22 @@ mod tests {
             let minus = loss(&net, &g, &w);
             net.params[i] = keep;
             let numeric = (plus - minus) / (2.0 * f64::from(eps));
-            let err = (numeric - f64::from(grads[i])).abs() / (1e-2 + numeric.abs().max(f64::from(grads[i]).abs()));
+            let err = (numeric - f64::from(analytic)).abs() / (1e-2 + numeric.abs().max(f64::from(analytic).abs()));
             if err > 2e-2 {
                 let t = net.tensors.iter().find(|t| t.slot.range().contains(&i)).unwrap();
-                off.push(format!("{}[{}]: numeric {numeric} analytic {}", t.name, i - t.slot.offset, grads[i]));
+                off.push(format!(
+                    "{}[{}]: numeric {numeric} analytic {analytic}",
+                    t.name,
+                    i - t.slot.offset
+                ));
             }
         }
-        assert!(off.len() * 100 <= net.params().len(), "{} of {}: {off:?}", off.len(), net.params().len());
+        assert!(
+            off.len() * 100 <= net.params().len(),
+            "{} of {}: {off:?}",
+            off.len(),
+            net.params().len()
+        );
     }
 
     #[test]
@@ -1014,13 +1054,20 @@ mod tests {
             for table_free in [true, false] {
                 // The best listed score (the sums of a and b may round to ties).
                 let allowed = |k: &usize| table_free || listed.moves[*k].1 != TABLE;
-                let best = (0..scores.len()).filter(allowed).map(|k| scores[k]).fold(f32::NEG_INFINITY, f32::max);
+                let best = (0..scores.len())
+                    .filter(allowed)
+                    .map(|k| scores[k])
+                    .fold(f32::NEG_INFINITY, f32::max);
                 let alone = Graph::of([(&state, &goal)]);
                 net.forward(&alone, &mut tape);
                 let got = net.best_move(&alone, &tape, 0, table_free);
                 let k = got.map(|mv| listed.moves.iter().position(|&m| m == mv).expect("a legal move"));
                 match k {
-                    Some(k) => assert!(allowed(&k) && scores[k] >= best - 1e-6, "seed {seed}: {} < {best}", scores[k]),
+                    Some(k) => assert!(
+                        allowed(&k) && scores[k] >= best - 1e-6,
+                        "seed {seed}: {} < {best}",
+                        scores[k]
+                    ),
                     None => assert_eq!(best, f32::NEG_INFINITY, "seed {seed}"),
                 }
             }

@@ -24,8 +24,8 @@ use crate::error::{NeuralError, Result};
 use crate::optim::{Optimizer, OptimizerKind};
 
 use super::graph::Graph;
-use super::net::{RelationalNet, Shape, Tape};
 use super::model::MovePolicy;
+use super::net::{RelationalNet, Shape, Tape};
 
 /// A training run of the relational policy.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -90,7 +90,10 @@ impl RelationalConfig {
             ));
         }
         if !(0.0..=1.0).contains(&self.partial_goals) {
-            return bad(format!("the share of partial goals {} is not in [0, 1]", self.partial_goals));
+            return bad(format!(
+                "the share of partial goals {} is not in [0, 1]",
+                self.partial_goals
+            ));
         }
         if self.batch == 0 || self.batch > 1 << 16 {
             return bad(format!("a batch of {} examples: choose 1 to 65536", self.batch));
@@ -215,7 +218,11 @@ pub fn train(
     let mut labeller = Labeller::new(config.max_blocks)?;
     let mut data = Vec::new();
     for k in 0..config.problems {
-        let (state, goal) = random_problem(config.max_blocks, config.partial_goals, episode_seed(config.seed, 1_000 + k));
+        let (state, goal) = random_problem(
+            config.max_blocks,
+            config.partial_goals,
+            episode_seed(config.seed, 1_000 + k),
+        );
         data.extend(labeller.label(&state, &goal)?);
     }
     let mut opt = Optimizer::new(OptimizerKind::Adam, config.lr, net.params().len());
@@ -260,7 +267,9 @@ pub fn train(
                     break;
                 };
                 data.push(example);
-                let mv = policy.choose(&state, &goal, oracle::towers::Table::Unbounded).expect("a legal move where the goal does not hold");
+                let mv = policy
+                    .choose(&state, &goal, oracle::towers::Table::Unbounded)
+                    .expect("a legal move where the goal does not hold");
                 state.apply(mv, oracle::towers::Table::Unbounded)?;
                 moves += 1;
             }
