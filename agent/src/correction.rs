@@ -58,7 +58,7 @@ use sim::seeding::{SimRng, episode_seed};
 use sim::{Action, Env, EnvConfig, Goal, GoalSpec, Grid, Observation, Profile, RewardModel, Termination};
 
 use crate::demonstrator::{Demonstrator, DemonstratorProfile};
-use crate::demos::{DemoRecord, DemoSink, EpisodeLine, SessionLine, StepLine};
+use crate::demos::{DemoRecord, DemoSink, EpisodeLine, ParticipantLine, SessionLine, StepLine};
 use crate::error::{AgentError, Result};
 use crate::qlearning::{QAgent, check_epsilon};
 use crate::rollout::policy_rng;
@@ -185,24 +185,136 @@ pub fn default_goals(world: &EnvConfig, profile: Profile) -> Result<Vec<Goal>> {
 }
 
 /// A person's command as the steps the session's protocol allows (module docs): the
-/// action itself when it is legal in `obs`; under a protocol that forbids picking while
-/// holding, a pick of another block becomes a Drop and then the Pick, and a pick of the
-/// block held changes nothing (no step). Any other illegal action is the protocol's error,
-/// which names what is allowed.
+/// action itself when it is legal in `obs`; in the top view under a protocol that forbids
+/// picking while holding, a pick of another block becomes a Drop and then the Pick, and a
+/// pick of the block held changes nothing (no step). Any other action outside the legal
+/// ones is the view's error, which names what is allowed (in the side view, whatever the
+/// protocol: a dropped block falls, so a pick while holding is refused, not carried out).
 pub fn person_steps(obs: &Observation, action: Action) -> Result<Vec<Action>> {
     let legal = obs.legal_actions();
     if legal.contains(action) {
         return Ok(vec![action]);
     }
     match (action, obs.held_block()) {
-        (Action::Pick(b), Some(h)) if b.index() < obs.state.block_count() && legal.contains(Action::Drop) => {
+        (Action::Pick(b), Some(h))
+            if obs.view == sim::View::Top && b.index() < obs.state.block_count() && legal.contains(Action::Drop) =>
+        {
             Ok(if b == h { Vec::new() } else { vec![Action::Drop, action] })
         }
-        _ => Err(obs
-            .protocol
-            .check(&obs.state, action)
-            .expect_err("the protocol refuses an action its mask leaves out")
-            .into()),
+        // The view's rules name what is wrong (the side view's, whatever the protocol).
+        _ => match obs.view.check(obs.protocol, &obs.state, action) {
+            Err(e) => Err(e.into()),
+            // Outside the mask but taken as it is: under `free` in the side view the rules
+            // make it change nothing, as `Env::step` does.
+            Ok(()) => Ok(vec![action]),
+        },
+    }
+}
+
+/// Who the person is in a turn: correcting the agent (its proposal was shown) or playing
+/// alone (the agent's proposal was not shown, so choosing is not overriding it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PersonRole {
+    /// The agent's proposal was shown: a choice confirms or overrides it.
+    Corrector,
+    /// The person plays every step; the proposal was not shown.
+    Player,
+}
+
+/// Why a person's command was not carried out; nothing changed.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum Refusal {
+    /// No episode is under way: the next one must begin first.
+    #[error("the episode is over: n begins the next")]
+    EpisodeOver,
+    /// The world's rules forbid the command now (the message names what is allowed).
+    #[error("not now: {0}")]
+    NotAllowed(String),
+}
+
+/// What a person's command did in a session ([`CorrectionSession::person`]): the one turn
+/// the terminal UI and the page both draw.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PersonTurn {
+    /// Nothing was done, and why.
+    Refused(Refusal),
+    /// A pick of the block already held: nothing to do.
+    AlreadyHeld(Action),
+    /// The steps carried out for the command (a Drop and the Pick for a pick while holding
+    /// under the `paper` protocol), each a correction.
+    Taken {
+        /// What the person asked for.
+        command: Action,
+        /// The agent's proposal the person saw, if any ([`PersonRole::Corrector`]).
+        proposed: Option<Action>,
+        /// The steps executed, in order.
+        steps: Vec<SessionStep>,
+    },
+}
+
+impl PersonTurn {
+    /// One line saying what happened, for the person.
+    pub fn message(&self) -> String {
+        match self {
+            PersonTurn::Refused(r) => capitalised(&format!("{r}.")),
+            PersonTurn::AlreadyHeld(action) => format!("{action}: that block is held already."),
+            PersonTurn::Taken {
+                command,
+                proposed,
+                steps,
+            } => {
+                let done = steps
+                    .iter()
+                    .map(|s| s.action.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", then ");
+                let actions: Vec<Action> = steps.iter().map(|s| s.action).collect();
+                match proposed {
+                    Some(p) if actions == [*p] => format!("You confirmed {command}; the agent learnt it."),
+                    Some(p) => format!("You chose {done} instead of {p}; the agent learnt it."),
+                    None => format!("You chose {done}."),
+                }
+            }
+        }
+    }
+
+    /// The corrections the turn made (steps the person chose).
+    pub fn corrections(&self) -> u64 {
+        match self {
+            PersonTurn::Taken { steps, .. } => steps.iter().filter(|s| s.corrected).count() as u64,
+            _ => 0,
+        }
+    }
+}
+
+fn capitalised(text: &str) -> String {
+    let mut chars = text.chars();
+    chars
+        .next()
+        .map_or(String::new(), |c| c.to_uppercase().chain(chars).collect())
+}
+
+/// How an episode of a session ended ([`CorrectionSession::episode_end`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EpisodeEnd {
+    /// It ended by its termination rule (the goal reached); otherwise it was cut off at
+    /// the horizon.
+    pub reached: bool,
+    /// Steps taken in it.
+    pub steps: u32,
+}
+
+impl EpisodeEnd {
+    /// One line saying how the episode ended, with the length of a shortest plan from its
+    /// start when known.
+    pub fn message(&self, shortest: Option<u32>) -> String {
+        let steps = self.steps;
+        let shortest = shortest.map_or(String::new(), |s| format!("; the shortest plan takes {s}"));
+        if self.reached {
+            format!("Goal reached in {steps} steps{shortest}.")
+        } else {
+            format!("Cut off after {steps} steps{shortest}.")
+        }
     }
 }
 
@@ -255,6 +367,20 @@ pub struct CorrectionSession<S: DemoSink> {
     episode: Option<(u64, Env, SimRng)>,
     /// The agent's proposal for the current state, drawn once per state.
     proposal: Option<Action>,
+    /// The current episode's last step.
+    last: Option<SessionStep>,
+}
+
+/// What a session's header line says about who corrects, from which model, and, in a
+/// study, whose session it is.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct SessionLabels {
+    /// Who corrects: `person`, or a simulated demonstrator's name.
+    pub demonstrator: String,
+    /// The model file the agent came from, when known.
+    pub model: Option<String>,
+    /// The study participant, when the session is one's.
+    pub participant: Option<ParticipantLine>,
 }
 
 impl<S: DemoSink> CorrectionSession<S> {
@@ -270,6 +396,27 @@ impl<S: DemoSink> CorrectionSession<S> {
         epsilon: f64,
         demonstrator: &str,
         model: Option<&str>,
+        sink: S,
+    ) -> Result<Self> {
+        let labels = SessionLabels {
+            demonstrator: demonstrator.into(),
+            model: model.map(Into::into),
+            participant: None,
+        };
+        Self::labelled(agent, rule, world, goals, seed, epsilon, labels, sink)
+    }
+
+    /// [`CorrectionSession::new`] with the header's `labels` (a study's participant among
+    /// them).
+    #[allow(clippy::too_many_arguments, reason = "each is one documented setting of the session")]
+    pub fn labelled(
+        agent: QAgent,
+        rule: CorrectionRule,
+        world: EnvConfig,
+        goals: Vec<Goal>,
+        seed: u64,
+        epsilon: f64,
+        labels: SessionLabels,
         mut sink: S,
     ) -> Result<Self> {
         rule.validate()?;
@@ -280,14 +427,17 @@ impl<S: DemoSink> CorrectionSession<S> {
         for goal in &goals {
             env_config(&agent, &world, *goal).validate()?;
         }
-        sink.record(&DemoRecord::Session(SessionLine::new(
+        let mut header = SessionLine::new(
             agent.grid(),
             agent.blocks(),
             agent.identity(),
             rule,
-            demonstrator,
-            model,
-        )))?;
+            &labels.demonstrator,
+            labels.model.as_deref(),
+        );
+        header.view = world.view;
+        header.participant = labels.participant;
+        sink.record(&DemoRecord::Session(header))?;
         Ok(CorrectionSession {
             agent,
             rule,
@@ -299,6 +449,7 @@ impl<S: DemoSink> CorrectionSession<S> {
             report: SessionReport::default(),
             episode: None,
             proposal: None,
+            last: None,
         })
     }
 
@@ -363,6 +514,7 @@ impl<S: DemoSink> CorrectionSession<S> {
         self.sink
             .record(&DemoRecord::Episode(EpisodeLine::new(k, seed, &obs)))?;
         self.episode = Some((k, env, policy_rng(seed)));
+        self.last = None;
         self.report.episodes += 1;
         self.propose()?;
         Ok(obs)
@@ -409,13 +561,58 @@ impl<S: DemoSink> CorrectionSession<S> {
         self.report.corrections += u64::from(corrected);
         self.report.successes += u64::from(step.terminated);
         self.propose()?;
-        Ok(SessionStep {
+        let step = SessionStep {
             proposed,
             action,
             corrected,
             reward: step.reward,
             terminated: step.terminated,
             truncated: step.truncated,
+        };
+        self.last = Some(step);
+        Ok(step)
+    }
+
+    /// The current episode's last step, if it has taken one.
+    pub fn last_step(&self) -> Option<&SessionStep> {
+        self.last.as_ref()
+    }
+
+    /// How the current episode ended, once it has ([`EpisodeEnd`]).
+    pub fn episode_end(&self) -> Option<EpisodeEnd> {
+        self.last.filter(|s| s.terminated || s.truncated).map(|s| EpisodeEnd {
+            reached: s.terminated,
+            steps: self.steps(),
+        })
+    }
+
+    /// Carries out a person's `command` (module docs: under the `paper` protocol a pick
+    /// while holding is a Drop and then the Pick; a pick of the held block does nothing):
+    /// every step a correction, learnt and recorded. A command the rules refuse, or one
+    /// given when no episode is under way, is [`PersonTurn::Refused`] and changes nothing.
+    /// An error only from the session itself (a recording that cannot be written).
+    pub fn person(&mut self, command: Action, role: PersonRole) -> Result<PersonTurn> {
+        let obs = match self.observation() {
+            Some(obs) if !self.is_over() => obs,
+            _ => return Ok(PersonTurn::Refused(Refusal::EpisodeOver)),
+        };
+        let steps = match person_steps(&obs, command) {
+            Err(e) => return Ok(PersonTurn::Refused(Refusal::NotAllowed(e.to_string()))),
+            Ok(steps) if steps.is_empty() => return Ok(PersonTurn::AlreadyHeld(command)),
+            Ok(steps) => steps,
+        };
+        let proposed = self.proposal.filter(|_| role == PersonRole::Corrector);
+        let mut taken = Vec::with_capacity(steps.len());
+        for action in steps {
+            if self.is_over() {
+                break;
+            }
+            taken.push(self.step(Some(action))?);
+        }
+        Ok(PersonTurn::Taken {
+            command,
+            proposed,
+            steps: taken,
         })
     }
 
@@ -676,6 +873,93 @@ mod tests {
             default_goals(&world(3, sim::View::Side), Profile::Spec).unwrap().len(),
             13
         );
+    }
+
+    #[test]
+    fn a_persons_turn_in_the_side_view_keeps_to_its_rules() {
+        // Free protocol, side view: 0 on the table with 1 on it, 2 alone.
+        let agent = QAgent::new(ReprKind::RoleTowers, Grid::default(), 3, QParams::default()).unwrap();
+        let world = EnvConfig {
+            view: sim::View::Side,
+            reward: "step-cost".parse().unwrap(),
+            ..session_world(&agent)
+        };
+        let goal: Goal = "0,2/1".parse().unwrap();
+        let mut session = CorrectionSession::new(
+            agent,
+            CorrectionRule::default(),
+            world,
+            vec![goal],
+            5,
+            0.0,
+            "person",
+            None,
+            (),
+        )
+        .unwrap();
+        let obs = session.next_episode().unwrap();
+        // A move with nothing held: refused with the side view's reason, nothing taken.
+        let turn = session.person(Action::Up, PersonRole::Player).unwrap();
+        assert!(
+            matches!(&turn, PersonTurn::Refused(Refusal::NotAllowed(m)) if m.contains("nothing is held")),
+            "{turn:?}"
+        );
+        assert_eq!(session.steps(), 0);
+        // Holding, a pick of another block is refused (a dropped block falls): drop first.
+        let clear = obs
+            .legal_actions()
+            .iter()
+            .find(|a| matches!(a, Action::Pick(_)))
+            .unwrap();
+        let turn = session.person(clear, PersonRole::Corrector).unwrap();
+        assert_eq!(turn.corrections(), 1);
+        let other = (0..3).map(|b| Action::Pick(BlockId(b))).find(|&a| a != clear).unwrap();
+        let turn = session.person(other, PersonRole::Player).unwrap();
+        assert!(turn.message().contains("drop it first"), "{}", turn.message());
+        assert_eq!(session.steps(), 1);
+    }
+
+    #[test]
+    fn a_turn_and_an_episodes_end_say_what_happened() {
+        let mut session = CorrectionSession::new(
+            agent(),
+            CorrectionRule::default(),
+            EnvConfig::default(),
+            vec!["0,1,2".parse().unwrap()],
+            4,
+            0.0,
+            "person",
+            None,
+            (),
+        )
+        .unwrap();
+        assert_eq!(
+            session.person(Action::Up, PersonRole::Player).unwrap().message(),
+            "The episode is over: n begins the next."
+        );
+        session.next_episode().unwrap();
+        let proposed = session.proposal().unwrap();
+        let turn = session.person(proposed, PersonRole::Corrector).unwrap();
+        assert_eq!(
+            turn.message(),
+            format!("You confirmed {proposed}; the agent learnt it.")
+        );
+        let turn = session.person(Action::Drop, PersonRole::Player).unwrap();
+        assert_eq!(turn.message(), "You chose drop.");
+        assert_eq!(session.episode_end(), None);
+        let end = EpisodeEnd {
+            reached: true,
+            steps: 9,
+        };
+        assert_eq!(
+            end.message(Some(7)),
+            "Goal reached in 9 steps; the shortest plan takes 7."
+        );
+        let cut = EpisodeEnd {
+            reached: false,
+            steps: 1000,
+        };
+        assert_eq!(cut.message(None), "Cut off after 1000 steps.");
     }
 
     #[test]

@@ -320,7 +320,7 @@ pub fn read_recording<'py>(
                 state: e.start,
                 goal: e.goal,
                 protocol,
-                view: sim::View::Top,
+                view: e.view,
             };
             for (k, step) in e.steps.iter().enumerate() {
                 let next = Observation {

@@ -27,6 +27,10 @@ function send(message) {
 
 function act(action) { send({ type: "act", action }); }
 
+// Close codes after which the page does not come back by itself (serve::server::close):
+// an unknown or let-go session (1008), the session opened in another window (4001).
+const FINAL_CLOSES = [1008, 4001];
+
 function connect(token) {
   const scheme = location.protocol === "https:" ? "wss" : "ws";
   socket = new WebSocket(`${scheme}://${location.host}/ws/${token}`);
@@ -43,9 +47,16 @@ function connect(token) {
     view = m;
     draw();
   };
-  socket.onclose = () => {
+  socket.onclose = (event) => {
     setRunning(false);
-    if (!$("error").textContent) $("error").textContent = "The connection to the server is closed: reload the page to go on.";
+    waiting = false;
+    if (FINAL_CLOSES.includes(event.code) || event.code === 1009) {
+      if (!$("error").textContent) $("error").textContent = event.reason || "The connection to the server is closed.";
+      return;
+    }
+    // A connection lost or let go while idle: the session is still there; come back to it.
+    $("error").textContent = "Reconnecting...";
+    setTimeout(() => connect(token), 1000);
   };
 }
 
@@ -87,14 +98,29 @@ function draw() {
   for (let y = 0; y <= h; y++) { ctx.beginPath(); ctx.moveTo(0, y * CELL); ctx.lineTo(w * CELL, y * CELL); ctx.stroke(); }
   view.blocks.forEach(([x, y], i) => drawBlock(ctx, i, x * CELL, (h - 1 - y) * CELL, CELL, view.held === i));
 
-  // The goal: a small stack, bottom block at the bottom.
+  if (view.view === "side") {
+    // The table the towers stand on, under row 0.
+    ctx.fillStyle = "#8b5a2b";
+    ctx.fillRect(0, h * CELL - 4, w * CELL, 4);
+  }
+
+  // The goal: its towers side by side, each bottom block at the bottom (a goal of one
+  // tower comes as its list of blocks, a goal of towers as {towers, blocks}).
+  const towers = Array.isArray(view.goal) ? [view.goal] : view.goal.towers;
   const g = $("goal");
   const gs = 40;
-  g.height = gs * view.goal.length + 8;
-  g.width = gs + 8;
+  const tallest = Math.max(...towers.map((t) => t.length));
+  g.height = gs * tallest + 12;
+  g.width = (gs + 6) * towers.length + 8;
   const gc = g.getContext("2d");
   gc.clearRect(0, 0, g.width, g.height);
-  view.goal.forEach((b, place) => drawBlock(gc, b, 4, g.height - 4 - (place + 1) * gs, gs, false));
+  towers.forEach((tower, i) => {
+    tower.forEach((b, place) => drawBlock(gc, b, 4 + i * (gs + 6), g.height - 8 - (place + 1) * gs, gs, false));
+  });
+  if (view.view === "side") {
+    gc.fillStyle = "#8b5a2b";
+    gc.fillRect(0, g.height - 8, g.width, 4);
+  }
 
   $("condition").textContent = `condition ${view.condition}`;
   const nav = $("modes");

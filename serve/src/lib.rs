@@ -9,6 +9,7 @@
 //!
 //! - [`protocol`]: the messages between page and server.
 //! - [`participant`]: one participant's state machine, with no network in it.
+//! - `registry`: the participants held, numbered and balanced across restarts.
 //! - [`config`]: settings, the study file and the conditions it makes.
 //! - [`server`]: the routes, the WebSocket loop and the bounds.
 //! - [`curve`]: a training run's learning curve, live (`blockstack train ... --serve`).
@@ -18,9 +19,10 @@ pub mod curve;
 pub mod error;
 pub mod participant;
 pub mod protocol;
+mod registry;
 pub mod server;
 
-pub use config::{Limits, ServeConfig, StudyFile};
+pub use config::{ConditionSpec, Limits, ServeConfig, StudyFile};
 pub use curve::{CurveHandle, CurvePoint, serve_curve};
 pub use error::{Result, ServeError};
 pub use server::{Links, Server, run};

@@ -14,14 +14,14 @@
 
 use std::sync::Arc;
 
-use agent::correction::{CorrectionSession, person_steps};
-use agent::demos::DemoSink;
+use agent::correction::{CorrectionSession, EpisodeEnd, PersonRole, PersonTurn, SessionLabels};
+use agent::demos::{DemoSink, ParticipantLine};
 use agent::{DemoRecord, DemoWriter};
 use files::Output;
 use oracle::ExactSolver;
 use sim::render::{colour, label};
 use sim::seeding::{SimRng, episode_seed};
-use sim::{Action, Env, EnvConfig, GoalSpec, Observation};
+use sim::{Action, Env, EnvConfig, Observation};
 
 use crate::config::Condition;
 use crate::protocol::{ActionValue, ClientMessage, Mode, Progress, View};
@@ -84,18 +84,27 @@ pub struct Participant {
 pub type Outcome = std::result::Result<View, String>;
 
 impl Participant {
-    /// A participant in `condition`, recording to `recorder`, in the condition's first mode.
-    pub fn new(condition: Arc<Condition>, recorder: Recorder) -> agent::Result<Participant> {
+    /// A participant in `condition`, recording to `recorder` (its session line naming
+    /// `who`, a study's participant), in the condition's first mode.
+    pub fn new(
+        condition: Arc<Condition>,
+        recorder: Recorder,
+        who: Option<ParticipantLine>,
+    ) -> agent::Result<Participant> {
         let c = &condition;
-        let session = CorrectionSession::new(
+        let labels = SessionLabels {
+            demonstrator: "person".into(),
+            model: c.model_file.clone().filter(|_| c.agent_is_model),
+            participant: who,
+        };
+        let session = CorrectionSession::labelled(
             c.agent.clone(),
             c.rule,
             c.world,
             c.goals.clone(),
             c.seed,
             PROPOSAL_EPSILON,
-            "person",
-            c.model_file.as_deref().filter(|_| c.agent_is_model),
+            labels,
             recorder,
         )?;
         let mode = c.modes[0];
@@ -192,7 +201,7 @@ impl Participant {
 
     fn begin_session_episode(&mut self) -> agent::Result<()> {
         let obs = self.session.next_episode()?;
-        self.shortest = shortest(&self.condition.world, &obs);
+        self.shortest = shortest(&self.condition.world, &obs, self.condition.solver_budget);
         Ok(())
     }
 
@@ -203,11 +212,9 @@ impl Participant {
             .as_ref()
             .ok_or_else(|| agent::AgentError::Config("no model to watch".into()))?;
         let k = self.watching.as_ref().map_or(0, |w| w.k + 1);
-        let goals: Vec<_> = c.goals.iter().filter(|g| g.block_count() == model.blocks()).collect();
+        let goals = c.watch_goals(model);
         let world = EnvConfig {
-            goal: goals
-                .get((k % goals.len().max(1) as u64) as usize)
-                .map_or(GoalSpec::Random, |g| GoalSpec::Fixed(**g)),
+            goal: goals[(k % goals.len() as u64) as usize],
             ..c.watch_world
         };
         let seed = episode_seed(c.seed, k);
@@ -218,7 +225,7 @@ impl Participant {
             env,
             rng: agent::rollout::policy_rng(seed),
             next: None,
-            shortest: shortest(&world, &obs),
+            shortest: shortest(&world, &obs, c.solver_budget),
         };
         w.next = Some(model.policy(0.0)?.act(&obs, &mut w.rng)?);
         self.watching = Some(w);
@@ -247,24 +254,16 @@ impl Participant {
 
     fn act(&mut self, name: &str) -> std::result::Result<(), String> {
         let obs = self.live("an action of your own")?;
-        let action =
-            Action::parse(name, obs.state.block_count()).map_err(|e| format!("{name:?} is not an action here: {e}"))?;
-        let steps = person_steps(&obs, action).map_err(|e| format!("not now: {e}"))?;
-        if steps.is_empty() {
-            self.message = format!("{action}: that block is held already.");
-            return Ok(());
-        }
-        let proposed = self.session.proposal();
-        for &step in &steps {
-            if !self.session.is_over() {
-                self.session.step(Some(step)).map_err(|e| e.to_string())?;
-            }
-        }
-        self.message = match (self.mode, proposed) {
-            (Mode::Correct, Some(p)) if steps == [p] => format!("You confirmed {action}; the agent learnt it."),
-            (Mode::Correct, Some(p)) => format!("You chose {} instead of {p}; the agent learnt it.", join(&steps)),
-            _ => format!("You chose {}.", join(&steps)),
+        // The parser's error names the text and what is allowed: said once.
+        let action = Action::parse(name, obs.state.block_count()).map_err(|e| e.to_string())?;
+        let role = match self.mode {
+            Mode::Correct => PersonRole::Corrector,
+            _ => PersonRole::Player,
         };
+        match self.session.person(action, role).map_err(|e| e.to_string())? {
+            PersonTurn::Refused(refusal) => return Err(refusal.to_string()),
+            turn => self.message = turn.message(),
+        }
         self.after_session_step();
         Ok(())
     }
@@ -281,18 +280,9 @@ impl Participant {
     }
 
     fn after_session_step(&mut self) {
-        if self.session.is_over() {
+        if let Some(end) = self.session.episode_end() {
             self.progress.episodes_done += 1;
-            let steps = self.session.steps();
-            let reached = self.session.observation().is_some_and(|o| o.goal.holds(&o.state));
-            let shortest = self
-                .shortest
-                .map_or(String::new(), |s| format!("; the shortest plan takes {s}"));
-            self.message = if reached {
-                format!("Goal reached in {steps} steps{shortest}.")
-            } else {
-                format!("Cut off after {steps} steps{shortest}.")
-            };
+            self.message = end.message(self.shortest);
             if self.is_done() {
                 self.message.push_str(" That was the last episode: thank you.");
             }
@@ -320,14 +310,12 @@ impl Participant {
             let mut policy = model.policy(0.0).map_err(|e| e.to_string())?;
             Some(policy.act(&obs, &mut w.rng).map_err(|e| e.to_string())?)
         };
-        let steps = w.env.steps();
-        let shortest = w
-            .shortest
-            .map_or(String::new(), |s| format!("; the shortest plan takes {s}"));
-        self.message = if step.terminated {
-            format!("The agent reached the goal in {steps} steps{shortest}.")
-        } else if step.truncated {
-            format!("The agent was cut off after {steps} steps{shortest}.")
+        self.message = if step.terminated || step.truncated {
+            let end = EpisodeEnd {
+                reached: step.terminated,
+                steps: w.env.steps(),
+            };
+            format!("The agent played. {}", end.message(w.shortest))
         } else {
             format!("The agent took {action}.")
         };
@@ -389,7 +377,8 @@ impl Participant {
             grid: [obs.grid.width(), obs.grid.height()],
             blocks: obs.blocks().iter().map(|cell| [cell.x, cell.y]).collect(),
             held: obs.held_block().map(|b| b.0),
-            goal: obs.goal.order().iter().map(|b| b.0).collect(),
+            view: obs.view,
+            goal: obs.goal,
             colours: obs
                 .state
                 .blocks()
@@ -435,31 +424,34 @@ impl Participant {
     }
 }
 
-/// The length of a shortest plan from `obs` under `world`'s protocol, if the exact solver
-/// finds one within its budget.
-fn shortest(world: &EnvConfig, obs: &Observation) -> Option<u32> {
-    ExactSolver::new(world.grid)
-        .with_protocol(world.protocol)
+/// The length of a shortest plan from `obs` in `world` (its view and protocol: in the side
+/// view the fewest gripper steps), if the exact solver finds one within `budget` states. It
+/// can take seconds on many blocks: callers run participants off the async workers.
+fn shortest(world: &EnvConfig, obs: &Observation, budget: usize) -> Option<u32> {
+    ExactSolver::for_world(world)
+        .with_node_budget(budget)
         .distance(&obs.state, &obs.goal)
         .ok()
-}
-
-fn join(steps: &[Action]) -> String {
-    steps
-        .iter()
-        .map(ToString::to_string)
-        .collect::<Vec<_>>()
-        .join(", then ")
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::config::ConditionSpec;
     use sim::Profile;
 
     fn participant(profile: Profile) -> Participant {
-        let c = Condition::prepare("c", None, Some(profile), Some("0,1,2"), 2, None, 7).unwrap();
-        Participant::new(Arc::new(c), Recorder::new(None)).unwrap()
+        let c = Condition::prepare(&ConditionSpec {
+            name: "c".into(),
+            profile: Some(profile),
+            goals: Some("0,1,2".into()),
+            episodes: 2,
+            seed: 7,
+            solver_budget: 100_000,
+            ..ConditionSpec::default()
+        })
+        .unwrap();
+        Participant::new(Arc::new(c), Recorder::new(None), None).unwrap()
     }
 
     fn act(p: &mut Participant, action: &str) -> Outcome {

@@ -7,6 +7,7 @@
 //! Unknown fields and unknown types are refused: the protocol is small and closed.
 
 use serde::{Deserialize, Serialize};
+use sim::Goal;
 
 /// What a person is doing.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -140,8 +141,11 @@ pub struct View {
     pub blocks: Vec<[u8; 2]>,
     /// The held block.
     pub held: Option<u8>,
-    /// The goal, bottom to top.
-    pub goal: Vec<u8>,
+    /// The world's view: `top` (seen from above) or `side` (gravity, towers on a table).
+    pub view: sim::View,
+    /// The goal as recordings write it: one tower of every block as its list of block ids,
+    /// bottom to top (`[1,0,2]`); a goal of towers as `{"towers":[[0,1],[2]],"blocks":3}`.
+    pub goal: Goal,
     /// Every block's colour as `#rrggbb` (`sim::render`'s palette).
     pub colours: Vec<String>,
     /// Every block's label (`sim::render::label`).

@@ -11,7 +11,7 @@
 use std::path::Path;
 
 use sim::trajectory::Episode;
-use sim::{Action, Goal, Grid, State};
+use sim::{Action, Goal, Grid, Observation, State, View};
 
 use super::format::{DemoFile, demos_error};
 use super::replay::{BadLines, DemoLearner, learn_from_reader};
@@ -43,6 +43,8 @@ pub struct DemoEpisode {
     pub episode: u64,
     /// The grid.
     pub grid: Grid,
+    /// The view whose rules the steps keep.
+    pub view: View,
     /// The goal.
     pub goal: Goal,
     /// The start state.
@@ -65,6 +67,7 @@ impl From<Episode> for DemoEpisode {
         DemoEpisode {
             episode: e.episode,
             grid: e.grid,
+            view: e.view,
             goal: e.goal,
             start: e.start,
             steps: e
@@ -130,13 +133,13 @@ impl DemoLearner for Collector {
         None
     }
 
-    fn begin_episode(&mut self, episode: u64, goal: Goal, start: State) -> Result<()> {
-        let (grid, _) = self.world.get().world.expect("the session's world was checked");
+    fn begin_episode(&mut self, episode: u64, start: &Observation) -> Result<()> {
         self.episodes.push(DemoEpisode {
             episode,
-            grid,
-            goal,
-            start,
+            grid: start.grid,
+            view: start.view,
+            goal: start.goal,
+            start: start.state,
             steps: Vec::new(),
         });
         Ok(())

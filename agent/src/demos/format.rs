@@ -40,7 +40,7 @@ use std::path::{Path, PathBuf};
 use files::{Output, OutputPath};
 use serde::{Deserialize, Serialize};
 use sim::trajectory::{Record, TrajectoryReader, read_bounded_line};
-use sim::{Action, Cell, Goal, Grid, Observation, State, Step};
+use sim::{Action, Cell, Goal, Grid, Observation, State, Step, View};
 
 use crate::error::{AgentError, Result};
 pub use crate::rule::CorrectionRule;
@@ -108,6 +108,31 @@ pub struct SessionLine {
     /// present from version 2.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub model_id: Option<String>,
+    /// The world's view, whose rules every step keeps: written only for the side view, so
+    /// a recording made before the side view existed reads back as the top view.
+    #[serde(default, skip_serializing_if = "is_top")]
+    pub view: View,
+    /// The participant of a study whose session this is (`blockstack serve --study`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub participant: Option<ParticipantLine>,
+}
+
+fn is_top(view: &View) -> bool {
+    *view == View::Top
+}
+
+/// Who a study's session belongs to: the server's participant number, the condition, and
+/// the code the participant typed (none when none was typed).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParticipantLine {
+    /// The participant's number on the server, from 0 (in the recording's file name).
+    pub number: u64,
+    /// The study condition the participant was assigned.
+    pub condition: String,
+    /// The participant code typed on joining, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub code: Option<String>,
 }
 
 impl SessionLine {
@@ -130,6 +155,8 @@ impl SessionLine {
             demonstrator: demonstrator.into(),
             model: model.map(Into::into),
             model_id: Some(model_id),
+            view: View::Top,
+            participant: None,
         }
     }
 }

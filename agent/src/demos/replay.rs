@@ -10,7 +10,9 @@
 //! - a step or episode before its session line, a step of another episode than the one
 //!   just opened, a state that does not fit the world;
 //! - a step that breaks the world's rules: its `next` is not what the rules
-//!   ([`sim::World::act`]) make of its `state` and `action`;
+//!   ([`sim::World::act`]) make of its `state` and `action`, in the view the session line
+//!   names (the top view when it names none); in the side view also an action its rules
+//!   refuse, which the world would take as a no-op;
 //! - a step whose reward or `terminated` flag no reward model or termination rule gives,
 //!   or not the one the session's earlier steps agree with ([`sim::trajectory::Outcomes`]);
 //! - a step out of order: its number not above the last step's of its episode (a line
@@ -32,7 +34,7 @@ use std::path::Path;
 
 use sim::reward::Transition;
 use sim::trajectory::Outcomes;
-use sim::{Action, ActionProtocol, Goal, Grid, GridWorld, Observation, State, World};
+use sim::{Action, ActionProtocol, Goal, Grid, GridWorld, Observation, State, View, World};
 
 use super::format::{
     DEMOS_FORMAT, DEMOS_VERSION, DemoRecord, EpisodeLine, MAX_LINE_BYTES, RawLine, RecordingLines, SessionLine,
@@ -123,6 +125,8 @@ impl From<sim::SimError> for LineError {
 #[derive(Clone)]
 struct OpenSession {
     grid: Grid,
+    /// The world's view, whose rules every step keeps.
+    view: View,
     rule: CorrectionRule,
     /// The number of its last episode line used.
     last_episode: Option<u64>,
@@ -156,12 +160,13 @@ pub trait DemoLearner {
     /// model the session corrected, so there is nothing to match).
     fn identity(&self) -> Option<String>;
 
-    /// An episode line opened episode `episode` (numbered in its session) of `goal` from
-    /// `start`, in a world checked to be the learner's: the steps [`DemoLearner::learn`]
-    /// gets next are this episode's, in order, the first from `start`. Learners that keep
-    /// episodes apart begin one here; the tabular agent has nothing to do.
-    fn begin_episode(&mut self, episode: u64, goal: Goal, start: State) -> Result<()> {
-        let _ = (episode, goal, start);
+    /// An episode line opened episode `episode` (numbered in its session) at `start` (its
+    /// grid, start state, goal and view), in a world checked to be the learner's: the steps
+    /// [`DemoLearner::learn`] gets next are this episode's, in order, the first from
+    /// `start`. Learners that keep episodes apart begin one here; the tabular agent has
+    /// nothing to do.
+    fn begin_episode(&mut self, episode: u64, start: &Observation) -> Result<()> {
+        let _ = (episode, start);
         Ok(())
     }
 
@@ -316,6 +321,7 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
         }
         self.session = Some(OpenSession {
             grid,
+            view: s.view,
             rule: s.rule,
             last_episode: None,
             outcomes: Outcomes::default(),
@@ -331,6 +337,7 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
             .as_mut()
             .ok_or_else(|| no_header("an episode", "session"))?;
         let start = e.start.state(session.grid)?;
+        session.view.check_state(&start)?;
         self.agent.check_world(session.grid, e.goal.block_count())?;
         check_blocks(&start, &e.goal)?;
         match session.last_episode {
@@ -354,7 +361,14 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
             }
             _ => {}
         }
-        self.agent.begin_episode(e.episode, e.goal, start)?;
+        let first = Observation {
+            grid: session.grid,
+            state: start,
+            goal: e.goal,
+            protocol: ActionProtocol::Free,
+            view: session.view,
+        };
+        self.agent.begin_episode(e.episode, &first)?;
         session.last_episode = Some(e.episode);
         self.episode = Some(OpenEpisode {
             number: e.episode,
@@ -399,7 +413,7 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
             state: s.state.state(session.grid)?,
             goal: episode.goal,
             protocol: ActionProtocol::Free,
-            view: sim::View::Top,
+            view: session.view,
         };
         let next = Observation {
             state: s.next.state(session.grid)?,
@@ -419,7 +433,12 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
         }
         let action = Action::parse(&s.action, blocks)?;
         Action::parse(&s.proposed, blocks)?;
-        let mut world = GridWorld::new(session.grid, obs.state)?;
+        if session.view == View::Side {
+            // The side view's rules refuse what the world would take as a no-op (as the
+            // trajectory reader does): a session in that view never records one.
+            View::Side.check(ActionProtocol::Free, &obs.state, action)?;
+        }
+        let mut world = GridWorld::new_in(session.view, session.grid, obs.state)?;
         world.act(action)?;
         if world.state() != next.state {
             return Err(LineError::bad(format!(
@@ -930,7 +949,8 @@ mod tests {
             fn identity(&self) -> Option<String> {
                 None
             }
-            fn begin_episode(&mut self, episode: u64, _goal: Goal, start: State) -> Result<()> {
+            fn begin_episode(&mut self, episode: u64, start: &Observation) -> Result<()> {
+                let start = start.state;
                 self.0.push(format!("episode {episode} {start:?}"));
                 Ok(())
             }
@@ -955,5 +975,61 @@ mod tests {
             let start = log.0[k].splitn(3, ' ').nth(2).unwrap();
             assert_eq!(log.0[k + 1], format!("step {start}"));
         }
+    }
+
+    #[test]
+    fn a_side_view_session_replays_under_the_side_views_rules() {
+        use crate::correction::{CorrectionSession, PersonRole, session_world};
+        // A person plays a side-view episode to the goal: picks of clear blocks, moves,
+        // drops that fall onto towers.
+        let agent = QAgent::new(ReprKind::RoleTowers, Grid::default(), 3, QParams::default()).unwrap();
+        let world = sim::EnvConfig {
+            view: View::Side,
+            reward: "step-cost".parse().unwrap(),
+            ..session_world(&agent)
+        };
+        let goal: Goal = "0,1/2".parse().unwrap();
+        let mut session = CorrectionSession::new(
+            agent.clone(),
+            CorrectionRule::default(),
+            world,
+            vec![goal],
+            3,
+            0.0,
+            "person",
+            None,
+            DemoWriter::new(Vec::new(), "memory"),
+        )
+        .unwrap();
+        let obs = session.next_episode().unwrap();
+        let plan = oracle::ExactSolver::for_world(&world)
+            .solve(&obs.state, &obs.goal)
+            .unwrap();
+        for &a in &plan.actions {
+            session.person(a, PersonRole::Player).unwrap();
+        }
+        assert!(session.episode_end().unwrap().reached);
+        let (live, sink, _) = session.finish();
+        let bytes = sink.into_inner();
+        let text = String::from_utf8(bytes.clone()).unwrap();
+        assert!(
+            text.lines().next().unwrap().contains("\"view\":\"side\""),
+            "the recording names its view"
+        );
+        let mut replayed = agent.clone();
+        let mut replay = Replay::new(&mut replayed, BadLines::Fail, "side.jsonl");
+        replay.read(&bytes[..]).unwrap();
+        assert_eq!(replay.finish().steps, plan.len());
+        assert_eq!(replayed, live);
+        // Read as the top view (a file without its view: what every reader did before the
+        // side view was recorded), valid lines are refused (a drop that falls, or its
+        // reward, taken for an invented one).
+        let top = text.replacen(",\"view\":\"side\"", "", 1);
+        let mut as_top = agent.clone();
+        let err = Replay::new(&mut as_top, BadLines::Fail, "top.jsonl")
+            .read(top.as_bytes())
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("top.jsonl: line"), "{err}");
     }
 }
