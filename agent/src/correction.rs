@@ -55,7 +55,7 @@
 
 use serde::{Deserialize, Serialize};
 use sim::seeding::{SimRng, episode_seed};
-use sim::{Action, Env, EnvConfig, Goal, GoalSpec, Grid, Observation, Profile, RewardModel, Termination};
+use sim::{Action, BlockMove, Env, EnvConfig, Goal, GoalSpec, Grid, Observation, Profile, RewardModel, Termination};
 
 use crate::demonstrator::{Demonstrator, DemonstratorProfile};
 use crate::demos::{DemoRecord, DemoSink, EpisodeLine, ParticipantLine, SessionLine, StepLine};
@@ -240,6 +240,14 @@ pub enum PersonTurn {
     Refused(Refusal),
     /// A pick of the block already held: nothing to do.
     AlreadyHeld(Action),
+    /// A block move (side view), carried out as the gripper actions that make it, each a
+    /// correction.
+    Moved {
+        /// The move asked for.
+        mv: BlockMove,
+        /// The steps executed, in order.
+        steps: Vec<SessionStep>,
+    },
     /// The steps carried out for the command (a Drop and the Pick for a pick while holding
     /// under the `paper` protocol), each a correction.
     Taken {
@@ -258,6 +266,9 @@ impl PersonTurn {
         match self {
             PersonTurn::Refused(r) => capitalised(&format!("{r}.")),
             PersonTurn::AlreadyHeld(action) => format!("{action}: that block is held already."),
+            PersonTurn::Moved { mv, steps } => {
+                format!("{}: {} gripper steps.", capitalised(&mv.to_string()), steps.len())
+            }
             PersonTurn::Taken {
                 command,
                 proposed,
@@ -280,9 +291,14 @@ impl PersonTurn {
 
     /// The corrections the turn made (steps the person chose).
     pub fn corrections(&self) -> u64 {
+        self.steps().iter().filter(|s| s.corrected).count() as u64
+    }
+
+    /// The steps the turn executed (none when it was refused or changed nothing).
+    pub fn steps(&self) -> &[SessionStep] {
         match self {
-            PersonTurn::Taken { steps, .. } => steps.iter().filter(|s| s.corrected).count() as u64,
-            _ => 0,
+            PersonTurn::Taken { steps, .. } | PersonTurn::Moved { steps, .. } => steps,
+            _ => &[],
         }
     }
 }
@@ -369,6 +385,14 @@ pub struct CorrectionSession<S: DemoSink> {
     proposal: Option<Action>,
     /// The current episode's last step.
     last: Option<SessionStep>,
+    /// Whether the session keeps time ([`SessionLabels::timed`]).
+    timed: bool,
+    /// The first episode's number.
+    first_episode: u64,
+    /// In a timed session, when the current episode's first view was shown.
+    shown: Option<std::time::Instant>,
+    /// The time recorded for the episode's last step.
+    last_ms: Option<u64>,
 }
 
 /// What a session's header line says about who corrects, from which model, and, in a
@@ -381,6 +405,13 @@ pub struct SessionLabels {
     pub model: Option<String>,
     /// The study participant, when the session is one's.
     pub participant: Option<ParticipantLine>,
+    /// Whether the session keeps time (a person's): each episode's wall-clock start and
+    /// each step's time since the episode's first view are recorded. A simulated
+    /// demonstrator's session is not timed, so its recording is fixed by its seed.
+    pub timed: bool,
+    /// The number of the first episode: 0, or past the episodes of an earlier session of
+    /// the same recording that this one goes on from (a participant resumed).
+    pub first_episode: u64,
 }
 
 impl<S: DemoSink> CorrectionSession<S> {
@@ -402,6 +433,8 @@ impl<S: DemoSink> CorrectionSession<S> {
             demonstrator: demonstrator.into(),
             model: model.map(Into::into),
             participant: None,
+            timed: false,
+            first_episode: 0,
         };
         Self::labelled(agent, rule, world, goals, seed, epsilon, labels, sink)
     }
@@ -437,6 +470,7 @@ impl<S: DemoSink> CorrectionSession<S> {
         );
         header.view = world.view;
         header.participant = labels.participant;
+        header.first_episode = labels.first_episode;
         sink.record(&DemoRecord::Session(header))?;
         Ok(CorrectionSession {
             agent,
@@ -450,6 +484,10 @@ impl<S: DemoSink> CorrectionSession<S> {
             episode: None,
             proposal: None,
             last: None,
+            timed: labels.timed,
+            first_episode: labels.first_episode,
+            shown: None,
+            last_ms: None,
         })
     }
 
@@ -506,15 +544,20 @@ impl<S: DemoSink> CorrectionSession<S> {
     /// Begins the next episode (abandoning the current one, if any) and returns its first
     /// observation.
     pub fn next_episode(&mut self) -> Result<Observation> {
-        let k = self.episode.as_ref().map_or(0, |(k, _, _)| k + 1);
+        let k = self.episode.as_ref().map_or(self.first_episode, |(k, _, _)| k + 1);
         let goal = self.goals[(k % self.goals.len() as u64) as usize];
         let seed = episode_seed(self.seed, k);
         let mut env = Env::new(env_config(&self.agent, &self.world, goal))?;
         let obs = env.reset(seed);
-        self.sink
-            .record(&DemoRecord::Episode(EpisodeLine::new(k, seed, &obs)))?;
+        let mut line = EpisodeLine::new(k, seed, &obs);
+        if self.timed {
+            self.shown = Some(std::time::Instant::now());
+            line.started_ms = Some(crate::demos::unix_ms());
+        }
+        self.sink.record(&DemoRecord::Episode(line))?;
         self.episode = Some((k, env, policy_rng(seed)));
         self.last = None;
+        self.last_ms = None;
         self.report.episodes += 1;
         self.propose()?;
         Ok(obs)
@@ -534,6 +577,15 @@ impl<S: DemoSink> CorrectionSession<S> {
     /// Executes one step: the demonstrator's `correction` if given, the agent's proposal
     /// otherwise; learns from it and records it. An error if no episode is under way.
     pub fn step(&mut self, correction: Option<Action>) -> Result<SessionStep> {
+        self.step_at(correction, None)
+    }
+
+    /// [`CorrectionSession::step`], in a timed session at `page_ms` milliseconds since the
+    /// episode's first view by the clock of the page that showed it (none: the session's
+    /// own clock). A page's time earlier than the episode's last step's, or later than the
+    /// session's own clock allows, is not believed: the session's clock is recorded.
+    pub fn step_at(&mut self, correction: Option<Action>, page_ms: Option<u64>) -> Result<SessionStep> {
+        let time = self.step_time(page_ms);
         let (Some((k, env, _)), Some(proposed)) = (&mut self.episode, self.proposal) else {
             return Err(AgentError::Config(
                 "no episode is under way: begin the next one first".into(),
@@ -555,7 +607,9 @@ impl<S: DemoSink> CorrectionSession<S> {
                 corrected,
             },
         )?;
-        let line = StepLine::new(*k, &obs, proposed, action, corrected, &step);
+        let mut line = StepLine::new(*k, &obs, proposed, action, corrected, &step);
+        (line.t_ms, line.received_ms) = time;
+        self.last_ms = line.t_ms;
         self.sink.record(&DemoRecord::Step(line))?;
         self.report.steps += 1;
         self.report.corrections += u64::from(corrected);
@@ -571,6 +625,25 @@ impl<S: DemoSink> CorrectionSession<S> {
         };
         self.last = Some(step);
         Ok(step)
+    }
+
+    /// The time recorded with a step taken now: milliseconds since the episode's first
+    /// view, and the wall-clock time; none in an untimed session.
+    fn step_time(&self, page_ms: Option<u64>) -> (Option<u64>, Option<u64>) {
+        let Some(shown) = self.shown.filter(|_| self.timed) else {
+            return (None, None);
+        };
+        let own = shown.elapsed().as_millis() as u64;
+        let floor = self.last_ms.unwrap_or(0);
+        // The page's clock is finer for a reaction time (no network in it), but only a time
+        // between the last step's and the session's own clock can be the page's.
+        let t = page_ms.filter(|&p| p >= floor && p <= own).unwrap_or(own.max(floor));
+        (Some(t), Some(crate::demos::unix_ms()))
+    }
+
+    /// The sink the session records to, to add a line of the caller's (a withdrawal).
+    pub fn sink_mut(&mut self) -> &mut S {
+        &mut self.sink
     }
 
     /// The current episode's last step, if it has taken one.
@@ -592,6 +665,12 @@ impl<S: DemoSink> CorrectionSession<S> {
     /// given when no episode is under way, is [`PersonTurn::Refused`] and changes nothing.
     /// An error only from the session itself (a recording that cannot be written).
     pub fn person(&mut self, command: Action, role: PersonRole) -> Result<PersonTurn> {
+        self.person_at(command, role, None)
+    }
+
+    /// [`CorrectionSession::person`] at `page_ms` by the page's clock
+    /// ([`CorrectionSession::step_at`]).
+    pub fn person_at(&mut self, command: Action, role: PersonRole, page_ms: Option<u64>) -> Result<PersonTurn> {
         let obs = match self.observation() {
             Some(obs) if !self.is_over() => obs,
             _ => return Ok(PersonTurn::Refused(Refusal::EpisodeOver)),
@@ -607,13 +686,41 @@ impl<S: DemoSink> CorrectionSession<S> {
             if self.is_over() {
                 break;
             }
-            taken.push(self.step(Some(action))?);
+            taken.push(self.step_at(Some(action), page_ms)?);
         }
         Ok(PersonTurn::Taken {
             command,
             proposed,
             steps: taken,
         })
+    }
+
+    /// Carries out a person's block move `mv` (side view: the gripper actions
+    /// [`sim::block_move::expand`] gives, each a correction, learnt and recorded), at
+    /// `page_ms` by the page's clock. A move the rules refuse now, or one given when no
+    /// episode is under way, is [`PersonTurn::Refused`] and changes nothing.
+    pub fn person_move(&mut self, mv: BlockMove, page_ms: Option<u64>) -> Result<PersonTurn> {
+        let obs = match self.observation() {
+            Some(obs) if !self.is_over() => obs,
+            _ => return Ok(PersonTurn::Refused(Refusal::EpisodeOver)),
+        };
+        if obs.view != sim::View::Side {
+            return Ok(PersonTurn::Refused(Refusal::NotAllowed(
+                "block moves are the side view's; pick, move and drop here".into(),
+            )));
+        }
+        let actions = match sim::block_move::expand(&obs.state, obs.grid, mv) {
+            Ok(actions) => actions,
+            Err(e) => return Ok(PersonTurn::Refused(Refusal::NotAllowed(e.to_string()))),
+        };
+        let mut steps = Vec::with_capacity(actions.len());
+        for action in actions {
+            if self.is_over() {
+                break;
+            }
+            steps.push(self.step_at(Some(action), page_ms)?);
+        }
+        Ok(PersonTurn::Moved { mv, steps })
     }
 
     /// Ends the session: the corrected agent, the sink, and the totals.

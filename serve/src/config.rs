@@ -13,8 +13,8 @@ use std::time::Duration;
 use agent::correction::{CorrectionRule, CorrectionSession, default_goals, session_world_under};
 use agent::{LearnerProfile, QAgent, QParams};
 use neural::AnyModel;
-use serde::Deserialize;
-use sim::{Env, EnvConfig, Goal, GoalSpec, Grid, Profile};
+use serde::{Deserialize, Serialize};
+use sim::{Env, EnvConfig, Goal, GoalSpec, Grid, Profile, View};
 
 use crate::error::{Result, ServeError};
 use crate::protocol::Mode;
@@ -125,7 +125,35 @@ pub struct StudyFile {
     /// folder (at least 1).
     #[serde(default)]
     pub max_participants: Option<u64>,
-    /// The conditions, handed to participants in turn.
+    /// The consent form, Markdown (shown first; declining records nothing).
+    #[serde(default)]
+    pub consent: Option<String>,
+    /// The consent form's Markdown file (relative to the study file), instead of `consent`.
+    #[serde(default)]
+    pub consent_file: Option<PathBuf>,
+    /// The instructions, Markdown (shown after consent, before the first episode).
+    #[serde(default)]
+    pub instructions: Option<String>,
+    /// The instructions' Markdown file, instead of `instructions`.
+    #[serde(default)]
+    pub instructions_file: Option<PathBuf>,
+    /// The URL parameters a crowd-sourcing platform sends, read into the recording's
+    /// header (`["PROLIFIC_PID", "STUDY_ID", "SESSION_ID"]`, `["workerId", "assignmentId"]`):
+    /// the first one identifies the participant, who resumes on returning with it.
+    #[serde(default)]
+    pub participant_ids: Vec<String>,
+    /// The code shown when every episode is done (the platform's completion code).
+    #[serde(default)]
+    pub completion_code: Option<String>,
+    /// Where the page sends the participant when every episode is done (the platform's
+    /// completion link).
+    #[serde(default)]
+    pub completion_url: Option<String>,
+    /// What withdrawing does to the participant's recording: `delete` it, or `mark` it
+    /// withdrawn (kept, left out of every export). Without it, no withdrawal is offered.
+    #[serde(default)]
+    pub withdrawal: Option<String>,
+    /// The conditions, handed to participants to keep them balanced.
     #[serde(rename = "condition")]
     pub conditions: Vec<ConditionFile>,
 }
@@ -151,6 +179,9 @@ pub struct ConditionFile {
     /// The modes offered (default: every mode the model can offer).
     #[serde(default)]
     pub modes: Option<Vec<String>>,
+    /// `top` or `side` (default: the model's, else `top`).
+    #[serde(default)]
+    pub view: Option<String>,
 }
 
 impl StudyFile {
@@ -181,6 +212,31 @@ impl StudyFile {
                 "max_participants = 0 admits no one: give at least 1, or leave it out".into(),
             ));
         }
+        if study.consent.is_some() && study.consent_file.is_some() {
+            return Err(err("give consent or consent_file, not both".into()));
+        }
+        if study.instructions.is_some() && study.instructions_file.is_some() {
+            return Err(err("give instructions or instructions_file, not both".into()));
+        }
+        for (i, id) in study.participant_ids.iter().enumerate() {
+            check_name(id).map_err(|e| err(format!("participant_ids: {e}")))?;
+            if study.participant_ids[..i].contains(id) {
+                return Err(err(format!("participant_ids: {id} is listed twice")));
+            }
+        }
+        if let Some(code) = &study.completion_code {
+            check_name(code).map_err(|e| err(format!("completion_code: {e}")))?;
+        }
+        if let Some(url) = &study.completion_url {
+            if !(url.starts_with("https://") || url.starts_with("http://")) || url.contains(['"', '<', '>', ' ']) {
+                return Err(err(format!(
+                    "completion_url {url:?}: give an http:// or https:// address"
+                )));
+            }
+        }
+        if let Some(w) = &study.withdrawal {
+            w.parse::<Withdrawal>().map_err(|e| err(format!("withdrawal: {e}")))?;
+        }
         for c in &study.conditions {
             check_name(&c.name).map_err(|e| err(format!("condition name: {e}")))?;
             if let Some(modes) = &c.modes {
@@ -209,6 +265,47 @@ pub fn check_name(name: &str) -> std::result::Result<(), String> {
             "{name:?} is not a name: use 1 to 32 letters, digits, - and _ (no paths)"
         ))
     }
+}
+
+/// What a participant's withdrawal does to their recording.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Withdrawal {
+    /// The recording is deleted.
+    Delete,
+    /// The recording is kept, a `withdrawn` line appended: every export leaves it out.
+    Mark,
+}
+
+impl std::str::FromStr for Withdrawal {
+    type Err = String;
+
+    fn from_str(text: &str) -> std::result::Result<Withdrawal, String> {
+        match text {
+            "delete" => Ok(Withdrawal::Delete),
+            "mark" => Ok(Withdrawal::Mark),
+            _ => Err(format!("{text:?} is not a withdrawal: delete or mark")),
+        }
+    }
+}
+
+/// A study's path for its participants: consent, instructions, ids, the end.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct StudyPath {
+    /// The study's name.
+    pub name: String,
+    /// The consent form as safe HTML ([`crate::markdown`]).
+    pub consent: Option<String>,
+    /// The instructions as safe HTML.
+    pub instructions: Option<String>,
+    /// The URL parameters read as the participant's ids; the first identifies them.
+    pub participant_ids: Vec<String>,
+    /// The completion code.
+    pub completion_code: Option<String>,
+    /// The completion link.
+    pub completion_url: Option<String>,
+    /// What withdrawing does, if it is offered.
+    pub withdrawal: Option<Withdrawal>,
 }
 
 /// A condition ready to hand to participants.
@@ -263,6 +360,8 @@ pub struct ConditionSpec {
     pub seed: u64,
     /// The most states a shortest plan's search stores.
     pub solver_budget: usize,
+    /// The view (`None`: the model's, else the top view).
+    pub view: Option<View>,
 }
 
 impl Condition {
@@ -279,6 +378,7 @@ impl Condition {
             modes,
             seed,
             solver_budget,
+            view,
         } = spec;
         let (name, profile, episodes, seed) = (name.as_str(), *profile, *episodes, *seed);
         let (model, goals, modes) = (model.as_deref(), goals.as_deref(), modes.as_deref());
@@ -288,16 +388,22 @@ impl Condition {
             _ => None,
         };
         let agent_is_model = tabular.is_some();
-        let agent = match tabular {
-            Some(q) => q,
-            None => {
-                // An untrained stand-in of the profile, on the model's grid and blocks.
-                let p = LearnerProfile::of(profile.unwrap_or(Profile::Spec));
-                let (grid, blocks) = loaded.as_ref().map_or((Grid::default(), 3), |m| (m.grid(), m.blocks()));
-                QAgent::with_schedule(p.repr, grid, blocks, QParams::default(), p.schedule)?
+        let model_view = loaded.as_ref().map(|m| m.world().view);
+        let view = match (*view, model_view) {
+            (Some(asked), Some(own)) if asked != own => {
+                return Err(ServeError::Config(format!(
+                    "condition {name}: its view is {asked}, and its model plays the {own} view"
+                )));
             }
+            (asked, own) => asked.or(own).unwrap_or(View::Top),
         };
-        let (world, profile) = session_world_under(&agent, profile);
+        let (agent, world, profile) = match tabular {
+            Some(q) => {
+                let (world, profile) = session_world_under(&q, profile);
+                (q, world, profile)
+            }
+            None => stand_in(loaded.as_ref(), profile, view)?,
+        };
         let goals = match goals {
             Some(text) => Goal::parse_list(text, agent.blocks())?,
             None => default_goals(&world, profile)?,
@@ -402,15 +508,45 @@ impl Condition {
     }
 }
 
-/// What a server runs: the study's name, its conditions, and the participants it admits
+/// What a server runs: the study's path, its conditions, and the participants it admits
 /// at most (none: no cap but `--max-sessions` at once).
 pub struct Plan {
-    /// The study's name (`blockstack` without a study).
-    pub name: String,
+    /// The study's path for its participants (its name `blockstack` without a study).
+    pub path: StudyPath,
     /// The conditions, handed to participants to keep them balanced.
     pub conditions: Vec<Arc<Condition>>,
     /// The study's `max_participants`.
     pub max_participants: Option<u64>,
+}
+
+/// The agent that proposes and learns in a condition without a tabular model (a network
+/// is not corrected by the tabular rule), untrained, on the model's grid and blocks (the
+/// default world's without a model); its world and the profile whose rule applies. In the
+/// side view the learner `train --view side` makes, in that world.
+fn stand_in(model: Option<&AnyModel>, profile: Option<Profile>, view: View) -> Result<(QAgent, EnvConfig, Profile)> {
+    let (grid, blocks) = model.map_or((Grid::default(), 3), |m| (m.grid(), m.blocks()));
+    let profile = profile.unwrap_or(Profile::Spec);
+    if view == View::Side {
+        let config = agent::TrainConfig::resolve(&agent::TrainOverrides {
+            view: Some(View::Side),
+            profile: Some(profile),
+            grid: Some(grid),
+            blocks: Some(blocks),
+            ..agent::TrainOverrides::default()
+        })?;
+        let agent = QAgent::with_schedule(config.repr, grid, blocks, config.params, config.schedule)?;
+        let world = EnvConfig {
+            goal: GoalSpec::Random,
+            horizon: sim::DEFAULT_HORIZON,
+            termination: sim::Termination::Goal,
+            ..config.world
+        };
+        return Ok((agent, world, profile));
+    }
+    let p = LearnerProfile::of(profile);
+    let agent = QAgent::with_schedule(p.repr, grid, blocks, QParams::default(), p.schedule)?;
+    let (world, profile) = session_world_under(&agent, Some(profile));
+    Ok((agent, world, profile))
 }
 
 /// What `config` runs: its study's conditions, or the one the command line describes.
@@ -430,9 +566,13 @@ pub fn plan(config: &ServeConfig) -> Result<Plan> {
             modes: None,
             seed: config.seed,
             solver_budget: config.limits.solver_budget,
+            view: None,
         })?;
         return Ok(Plan {
-            name: "blockstack".into(),
+            path: StudyPath {
+                name: "blockstack".into(),
+                ..StudyPath::default()
+            },
             conditions: vec![Arc::new(c)],
             max_participants: None,
         });
@@ -484,12 +624,44 @@ pub fn plan(config: &ServeConfig) -> Result<Plan> {
             modes,
             seed,
             solver_budget: config.limits.solver_budget,
+            view: c
+                .view
+                .as_deref()
+                .map(str::parse::<View>)
+                .transpose()
+                .map_err(|e| err(format!("condition {}: {e}", c.name)))?,
         })
         .map_err(|e| err(format!("condition {}: {e}", c.name)))?;
         conditions.push(Arc::new(prepared));
     }
+    let text = |inline: &Option<String>, file: &Option<PathBuf>, what: &str| -> Result<Option<String>> {
+        let markdown = match (inline, file) {
+            (Some(text), _) => Some(text.clone()),
+            (None, Some(file)) => {
+                let file = folder.join(file);
+                let mut text = String::new();
+                std::io::Read::read_to_string(&mut files::open_bounded(&file, 1 << 20, "a Markdown text")?, &mut text)
+                    .map_err(|e| err(format!("{what} {}: {e}", file.display())))?;
+                Some(text)
+            }
+            (None, None) => None,
+        };
+        Ok(markdown.as_deref().map(crate::markdown::render))
+    };
+    let path_of_study = StudyPath {
+        name: study.name.clone().unwrap_or_else(|| "study".into()),
+        consent: text(&study.consent, &study.consent_file, "consent_file")?,
+        instructions: text(&study.instructions, &study.instructions_file, "instructions_file")?,
+        participant_ids: study.participant_ids.clone(),
+        completion_code: study.completion_code.clone(),
+        completion_url: study.completion_url.clone(),
+        withdrawal: study
+            .withdrawal
+            .as_deref()
+            .map(|w| w.parse().expect("checked on reading")),
+    };
     Ok(Plan {
-        name: study.name.unwrap_or_else(|| "study".into()),
+        path: path_of_study,
         conditions,
         max_participants: study.max_participants,
     })

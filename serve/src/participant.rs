@@ -21,10 +21,10 @@ use files::Output;
 use oracle::ExactSolver;
 use sim::render::{colour, label};
 use sim::seeding::{SimRng, episode_seed};
-use sim::{Action, Env, EnvConfig, Observation};
+use sim::{Action, BlockMove, Env, EnvConfig, Observation};
 
-use crate::config::Condition;
-use crate::protocol::{ActionValue, ClientMessage, Mode, Progress, View};
+use crate::config::{Condition, StudyPath};
+use crate::protocol::{ActionValue, ClientMessage, Completion, Mode, Progress, View};
 
 /// The agent's probability of a random proposal in correct mode: the paper's test policy,
 /// as `blockstack demo`'s default.
@@ -68,9 +68,25 @@ struct Watching {
     shortest: Option<u32>,
 }
 
+/// Where a participant's session goes on from: what an earlier session of the same
+/// recording left (a participant who returned after the server let their session go, or
+/// after a restart).
+#[derive(Clone, Debug)]
+pub struct Resumed {
+    /// The agent as the earlier sessions left it (the condition's, replayed).
+    pub agent: agent::QAgent,
+    /// The number the next episode gets: one past the last begun.
+    pub next_episode: u64,
+    /// The totals so far: episodes done, steps, corrections.
+    pub progress: Progress,
+}
+
 /// One participant.
 pub struct Participant {
     condition: Arc<Condition>,
+    study: Arc<StudyPath>,
+    /// Totals of the earlier sessions of this participant's recording.
+    before: Progress,
     mode: Mode,
     session: CorrectionSession<Recorder>,
     /// The shortest plan from the session episode's start.
@@ -84,21 +100,30 @@ pub struct Participant {
 pub type Outcome = std::result::Result<View, String>;
 
 impl Participant {
-    /// A participant in `condition`, recording to `recorder` (its session line naming
-    /// `who`, a study's participant), in the condition's first mode.
+    /// A participant in `condition` of `study`, recording to `recorder` (its session line
+    /// naming `who`, a study's participant), in the condition's first mode; going on from
+    /// `resumed` when an earlier session of the recording is taken up again.
     pub fn new(
         condition: Arc<Condition>,
+        study: Arc<StudyPath>,
         recorder: Recorder,
         who: Option<ParticipantLine>,
+        resumed: Option<Resumed>,
     ) -> agent::Result<Participant> {
         let c = &condition;
+        let (agent, first_episode, before) = match resumed {
+            Some(r) => (r.agent, r.next_episode, r.progress),
+            None => (c.agent.clone(), 0, Progress::default()),
+        };
         let labels = SessionLabels {
             demonstrator: "person".into(),
             model: c.model_file.clone().filter(|_| c.agent_is_model),
             participant: who,
+            timed: true,
+            first_episode,
         };
         let session = CorrectionSession::labelled(
-            c.agent.clone(),
+            agent,
             c.rule,
             c.world,
             c.goals.clone(),
@@ -111,8 +136,11 @@ impl Participant {
         let mut p = Participant {
             progress: Progress {
                 episodes_total: c.episodes,
+                episodes_done: before.episodes_done,
                 ..Progress::default()
             },
+            before,
+            study,
             condition,
             mode,
             session,
@@ -134,13 +162,18 @@ impl Participant {
         self.mode
     }
 
-    /// Totals.
+    /// Totals, the earlier sessions of the recording included.
     pub fn progress(&self) -> Progress {
         Progress {
-            steps: self.session.report().steps,
-            corrections: self.session.report().corrections,
+            steps: self.before.steps + self.session.report().steps,
+            corrections: self.before.corrections + self.session.report().corrections,
             ..self.progress.clone()
         }
+    }
+
+    /// Appends a line of the server's to the recording (a withdrawal).
+    pub fn record(&mut self, line: &agent::DemoRecord) -> agent::Result<()> {
+        self.session.sink_mut().record(line)
     }
 
     /// Whether every episode asked for is done.
@@ -161,8 +194,9 @@ impl Participant {
                     self.enter(*mode).map_err(|e| e.to_string())?;
                 }
             }
-            ClientMessage::Act { action, .. } => self.act(action)?,
-            ClientMessage::Accept { .. } => self.accept()?,
+            ClientMessage::Act { action, t_ms, .. } => self.act(action, *t_ms)?,
+            ClientMessage::Move { block, to, t_ms, .. } => self.block_move(*block, *to, *t_ms)?,
+            ClientMessage::Accept { t_ms, .. } => self.accept(*t_ms)?,
             ClientMessage::Step { .. } => self.watch_step()?,
             ClientMessage::Next { .. } => match self.mode {
                 Mode::Watch => self.begin_watch().map_err(|e| e.to_string())?,
@@ -186,7 +220,8 @@ impl Participant {
                 self.message = "The agent plays: step it, or let it run at your pace.".into();
             }
             Mode::Play | Mode::Correct => {
-                if !self.is_done() {
+                // A participant resumed when done still sees a world (the last thank-you).
+                if !self.is_done() || self.session.observation().is_none() {
                     self.begin_session_episode()?;
                 }
                 self.message = match mode {
@@ -252,7 +287,7 @@ impl Participant {
         }
     }
 
-    fn act(&mut self, name: &str) -> std::result::Result<(), String> {
+    fn act(&mut self, name: &str, t_ms: Option<u64>) -> std::result::Result<(), String> {
         let obs = self.live("an action of your own")?;
         // The parser's error names the text and what is allowed: said once.
         let action = Action::parse(name, obs.state.block_count()).map_err(|e| e.to_string())?;
@@ -260,20 +295,50 @@ impl Participant {
             Mode::Correct => PersonRole::Corrector,
             _ => PersonRole::Player,
         };
-        match self.session.person(action, role).map_err(|e| e.to_string())? {
-            PersonTurn::Refused(refusal) => return Err(refusal.to_string()),
-            turn => self.message = turn.message(),
+        let turn = self.session.person_at(action, role, t_ms).map_err(|e| e.to_string())?;
+        self.take(turn)
+    }
+
+    /// Side view: `block` onto the top of column `to` (the block there, or the table).
+    fn block_move(&mut self, block: u8, to: u8, t_ms: Option<u64>) -> std::result::Result<(), String> {
+        let obs = self.live("a block move")?;
+        if usize::from(block) >= obs.state.block_count() || usize::from(to) >= obs.grid.width() {
+            return Err(format!(
+                "block {block} onto column {to} is not a move here: the blocks are 0 to {}, the columns 0 to {}",
+                obs.state.block_count() - 1,
+                obs.grid.width() - 1
+            ));
         }
+        let block = sim::BlockId(block);
+        let top = obs
+            .state
+            .blocks()
+            .filter(|&b| b != block && obs.state.cell(b).x == to)
+            .max_by_key(|&b| obs.state.cell(b).y);
+        let mv = match top {
+            Some(target) => BlockMove::Onto { block, target },
+            None => BlockMove::ToTable { block, column: to },
+        };
+        let turn = self.session.person_move(mv, t_ms).map_err(|e| e.to_string())?;
+        self.take(turn)
+    }
+
+    /// Shows what a person's turn did, or refuses it.
+    fn take(&mut self, turn: PersonTurn) -> std::result::Result<(), String> {
+        if let PersonTurn::Refused(refusal) = &turn {
+            return Err(refusal.to_string());
+        }
+        self.message = turn.message();
         self.after_session_step();
         Ok(())
     }
 
-    fn accept(&mut self) -> std::result::Result<(), String> {
+    fn accept(&mut self, t_ms: Option<u64>) -> std::result::Result<(), String> {
         if self.mode != Mode::Correct {
             return Err(format!("accept is part of correct mode, not {}", self.mode.name()));
         }
         self.live("accept")?;
-        let step = self.session.step(None).map_err(|e| e.to_string())?;
+        let step = self.session.step_at(None, t_ms).map_err(|e| e.to_string())?;
         self.message = format!("The agent took {}.", step.action);
         self.after_session_step();
         Ok(())
@@ -408,6 +473,11 @@ impl Participant {
             },
             done: self.is_done(),
             recording: self.session_recording(),
+            completion: self.is_done().then(|| Completion {
+                code: self.study.completion_code.clone(),
+                url: self.study.completion_url.clone(),
+            }),
+            withdrawal: self.study.withdrawal.is_some() && self.session_recording(),
         }
     }
 
@@ -451,13 +521,14 @@ mod tests {
             ..ConditionSpec::default()
         })
         .unwrap();
-        Participant::new(Arc::new(c), Recorder::new(None), None).unwrap()
+        Participant::new(Arc::new(c), Arc::default(), Recorder::new(None), None, None).unwrap()
     }
 
     fn act(p: &mut Participant, action: &str) -> Outcome {
         p.handle(&ClientMessage::Act {
             id: None,
             action: action.into(),
+            t_ms: None,
         })
     }
 

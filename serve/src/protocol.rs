@@ -65,11 +65,31 @@ pub enum ClientMessage {
         id: Option<u64>,
         /// The action's name.
         action: String,
+        /// Milliseconds since the page showed the episode's first view, by the page's
+        /// monotonic clock (recorded as the step's `t_ms` when believable).
+        #[serde(default)]
+        t_ms: Option<u64>,
+    },
+    /// Side view: the person's block move, `block` onto the top of column `to` (onto the
+    /// block there, or the table when the column is empty).
+    Move {
+        /// Repeated in the answer.
+        id: Option<u64>,
+        /// The block moved.
+        block: u8,
+        /// The destination column.
+        to: u8,
+        /// As for `act`.
+        #[serde(default)]
+        t_ms: Option<u64>,
     },
     /// Correct mode: take the agent's proposal.
     Accept {
         /// Repeated in the answer.
         id: Option<u64>,
+        /// As for `act`.
+        #[serde(default)]
+        t_ms: Option<u64>,
     },
     /// Watch mode: the agent's next step (the next episode once one has ended).
     Step {
@@ -89,7 +109,8 @@ impl ClientMessage {
         match self {
             ClientMessage::Mode { id, .. }
             | ClientMessage::Act { id, .. }
-            | ClientMessage::Accept { id }
+            | ClientMessage::Move { id, .. }
+            | ClientMessage::Accept { id, .. }
             | ClientMessage::Step { id }
             | ClientMessage::Next { id } => *id,
         }
@@ -176,6 +197,19 @@ pub struct View {
     pub done: bool,
     /// Whether play and correct mode are recorded.
     pub recording: bool,
+    /// Once every episode asked for is done: the study's completion code and link.
+    pub completion: Option<Completion>,
+    /// Whether the participant may withdraw (the study says what that does).
+    pub withdrawal: bool,
+}
+
+/// What the page shows, and where it goes, at the end of a study.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Completion {
+    /// The code the participant gives the platform.
+    pub code: Option<String>,
+    /// The platform's completion link.
+    pub url: Option<String>,
 }
 
 /// An answer that changed nothing.

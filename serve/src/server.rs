@@ -1,10 +1,14 @@
 //! The HTTP side: the routes, the WebSocket loop and the bounds (docs/serve.md).
 //!
-//! - `GET /`: the page (a join form); `POST /join` makes a participant session (the
-//!   condition with the fewest participants) and sends the browser to `/s/TOKEN`.
+//! - `GET /`: the page: a study's consent and instructions (`GET /api/study`), or a join
+//!   form; `POST /join` makes a participant session (the condition with the fewest
+//!   participants; a participant returning with the platform's id gets theirs back) and
+//!   sends the browser to `/s/TOKEN`; `POST /api/resume` finds a returning participant's.
+//! - `POST /api/withdraw/TOKEN`: the participant withdraws.
 //! - `GET /s/TOKEN`: the page; it opens `GET /ws/TOKEN`, the session's WebSocket.
 //! - `GET /results/TOKEN` and `GET /api/results/TOKEN`: the researcher's page and its data,
-//!   behind a token of its own.
+//!   behind a token of its own; `.../episodes.csv` one row per episode; `GET
+//!   /replay/TOKEN/FILE/EPISODE` (and `/api/replay/...`) an episode step by step.
 //! - `GET /assets/app.js`, `/assets/style.css`: compiled into the binary.
 //!
 //! Tokens are 128 bits from the operating system's generator (`rand::rng()`): the one place
@@ -18,8 +22,8 @@
 //! blocks) runs on tokio's blocking threads, never on the async workers that every other
 //! participant's messages need.
 
+use std::collections::HashMap;
 use std::net::{IpAddr, SocketAddr};
-use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -31,12 +35,13 @@ use axum::http::{HeaderMap, StatusCode, header};
 use axum::middleware::Next;
 use axum::response::{Html, IntoResponse, Redirect, Response};
 use axum::routing::{get, post};
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
-use crate::config::{Condition, Limits, ServeConfig, plan};
+use crate::config::{ServeConfig, plan};
 use crate::error::{Result, ServeError};
 use crate::protocol::{ClientMessage, ErrorMessage};
-use crate::registry::{JoinRefused, Registry, SessionRow, Slot, SlotState, lock};
+use crate::registry::{Arrival, JoinRefused, Registry, Seating, SessionRow, Slot, SlotState, lock};
+use crate::results::{Figures, Table};
 
 /// The page: one HTML file for every view (join, session, results, curve).
 pub(crate) const INDEX_HTML: &str = include_str!("../assets/index.html");
@@ -95,18 +100,28 @@ impl Server {
                 addr: addr.to_string(),
                 source,
             })?;
-        let registry = Registry::new(record_dir.as_deref(), &plan.conditions);
+        let figures = Figures::new(
+            record_dir.clone(),
+            plan.conditions.clone(),
+            config.limits.solver_budget,
+            plan.path.participant_ids.first().cloned(),
+        );
+        let seating = Seating {
+            conditions: plan.conditions,
+            record_dir,
+            limits: config.limits,
+            max_participants: plan.max_participants,
+            study: Arc::new(plan.path),
+        };
+        let registry = Registry::new(&seating);
         Ok(Server {
             listener,
             app: Arc::new(App {
-                study: plan.name,
-                conditions: plan.conditions,
-                max_participants: plan.max_participants,
-                record_dir,
-                limits: config.limits,
+                seating,
                 public,
                 researcher: crate::registry::new_token(),
                 registry: Mutex::new(registry),
+                figures,
                 connections: AtomicU64::new(0),
             }),
         })
@@ -149,7 +164,7 @@ impl Server {
     pub async fn serve(self) -> Result<()> {
         let app = self.app;
         let router = router(app.clone());
-        let limits = app.limits;
+        let limits = app.seating.limits;
         let slots = Arc::new(tokio::sync::Semaphore::new(limits.max_connections));
         tokio::spawn(expire_sessions(app.clone()));
         loop {
@@ -199,10 +214,11 @@ pub fn run(config: ServeConfig, announce: impl FnOnce(&Links) -> std::io::Result
 
 /// Lets idle sessions go, now and then ([`Registry::expire_idle`]).
 async fn expire_sessions(app: Arc<App>) {
-    let every = (app.limits.session_idle / 4).clamp(Duration::from_millis(20), Duration::from_secs(60));
+    let limits = app.seating.limits;
+    let every = (limits.session_idle / 4).clamp(Duration::from_millis(20), Duration::from_secs(60));
     loop {
         tokio::time::sleep(every).await;
-        Registry::expire_idle(&app.registry, &app.limits);
+        Registry::expire_idle(&app.registry, &limits);
     }
 }
 
@@ -243,14 +259,11 @@ fn host_name(authority: &str) -> &str {
 
 /// The server's shared state.
 struct App {
-    study: String,
-    conditions: Vec<Arc<Condition>>,
-    max_participants: Option<u64>,
-    record_dir: Option<PathBuf>,
-    limits: Limits,
+    seating: Seating,
     public: Option<PublicUrl>,
     researcher: String,
     registry: Mutex<Registry>,
+    figures: Figures,
     /// Connections open now.
     connections: AtomicU64,
 }
@@ -283,22 +296,23 @@ impl App {
             return Err(EXPIRED.into());
         };
         let id = message_id(text);
-        if !live.bucket.take(self.limits.actions_per_second) {
+        let limits = &self.seating.limits;
+        if !live.bucket.take(limits.actions_per_second) {
             return Ok(error_line(
                 id,
                 format!(
                     "too many messages: at most {} a second; nothing was done",
-                    self.limits.actions_per_second
+                    limits.actions_per_second
                 ),
             ));
         }
-        if text.len() > self.limits.max_message_bytes {
+        if text.len() > limits.max_message_bytes {
             return Ok(error_line(
                 id,
                 format!(
                     "a message of {} bytes is longer than the {} allowed; nothing was done",
                     text.len(),
-                    self.limits.max_message_bytes
+                    limits.max_message_bytes
                 ),
             ));
         }
@@ -331,6 +345,15 @@ fn message_id(text: &str) -> Option<u64> {
         .as_u64()
 }
 
+/// `value` as a JSON response.
+fn json(value: &impl Serialize) -> Response {
+    (
+        [(header::CONTENT_TYPE, "application/json")],
+        serde_json::to_string(value).expect("answers serialise"),
+    )
+        .into_response()
+}
+
 fn error_line(id: Option<u64>, message: String) -> String {
     serde_json::to_string(&ErrorMessage::new(id, message)).expect("errors serialise")
 }
@@ -338,10 +361,16 @@ fn error_line(id: Option<u64>, message: String) -> String {
 fn router(app: Arc<App>) -> Router {
     Router::new()
         .route("/", get(page))
+        .route("/api/study", get(study))
         .route("/join", post(join))
+        .route("/api/resume", post(resume))
+        .route("/api/withdraw/{token}", post(withdraw))
         .route("/s/{token}", get(page))
         .route("/results/{token}", get(results_page))
+        .route("/replay/{token}/{file}/{episode}", get(replay_page))
         .route("/api/results/{token}", get(results))
+        .route("/api/results/{token}/episodes.csv", get(episodes_csv))
+        .route("/api/replay/{token}/{file}/{episode}", get(replay))
         .route("/ws/{token}", get(socket))
         .merge(asset_routes())
         .layer(axum::middleware::from_fn_with_state(app.clone(), guard))
@@ -362,7 +391,7 @@ async fn guard(State(app): State<Arc<App>>, request: Request, next: Next) -> Res
         )
             .into_response();
     }
-    match tokio::time::timeout(app.limits.request_timeout, next.run(request)).await {
+    match tokio::time::timeout(app.seating.limits.request_timeout, next.run(request)).await {
         Ok(response) => response,
         Err(_) => (StatusCode::REQUEST_TIMEOUT, "the request took too long to arrive").into_response(),
     }
@@ -385,14 +414,44 @@ async fn page() -> Html<&'static str> {
     Html(INDEX_HTML)
 }
 
-/// The join form's fields.
-#[derive(Deserialize)]
-struct JoinForm {
-    #[serde(default)]
-    name: String,
+/// What the page needs to lead a participant: the study's path (consent and
+/// instructions as safe HTML, the id parameters, what withdrawing does).
+async fn study(State(app): State<Arc<App>>) -> Response {
+    json(app.seating.study.as_ref())
 }
 
-async fn join(State(app): State<Arc<App>>, headers: HeaderMap, Form(form): Form<JoinForm>) -> Response {
+/// Who arrives, from a form's fields: `name` (the code typed), `consent` (`agree`), and the
+/// study's id parameters; an error line for any other field.
+fn arrival(fields: HashMap<String, String>) -> std::result::Result<Arrival, String> {
+    let mut arrival = Arrival::default();
+    for (key, value) in fields {
+        match key.as_str() {
+            "name" => arrival.name = Some(value.trim().to_string()).filter(|n| !n.is_empty()),
+            "consent" => arrival.consent = value == "agree",
+            _ => {
+                if !value.is_empty() {
+                    arrival.ids.insert(key, value);
+                }
+            }
+        }
+    }
+    Ok(arrival)
+}
+
+fn refused(refusal: JoinRefused) -> Response {
+    match refusal {
+        JoinRefused::BadRequest(m) => (StatusCode::BAD_REQUEST, m).into_response(),
+        JoinRefused::Full(m) => (StatusCode::SERVICE_UNAVAILABLE, m).into_response(),
+        JoinRefused::Withdrawn => (
+            StatusCode::FORBIDDEN,
+            "you withdrew from this study: nothing more is recorded for you",
+        )
+            .into_response(),
+        JoinRefused::Failed(m) => (StatusCode::INTERNAL_SERVER_ERROR, m).into_response(),
+    }
+}
+
+async fn join(State(app): State<Arc<App>>, headers: HeaderMap, Form(form): Form<HashMap<String, String>>) -> Response {
     // Another site's page may not fill the server with sessions through its own form.
     if !same_origin(&headers) {
         return (
@@ -401,23 +460,59 @@ async fn join(State(app): State<Arc<App>>, headers: HeaderMap, Form(form): Form<
         )
             .into_response();
     }
-    let name = Some(form.name.trim().to_string()).filter(|n| !n.is_empty());
-    let joined = tokio::task::spawn_blocking(move || {
-        Registry::join(
-            &app.registry,
-            &app.conditions,
-            app.record_dir.as_deref(),
-            &app.limits,
-            app.max_participants,
-            name,
-        )
-    })
-    .await;
+    let arrival = match arrival(form) {
+        Ok(a) => a,
+        Err(m) => return (StatusCode::BAD_REQUEST, m).into_response(),
+    };
+    let joined = tokio::task::spawn_blocking(move || Registry::join(&app.registry, &app.seating, arrival)).await;
     match joined {
         Ok(Ok(token)) => Redirect::to(&format!("/s/{token}")).into_response(),
-        Ok(Err(JoinRefused::BadName(m))) => (StatusCode::BAD_REQUEST, m).into_response(),
-        Ok(Err(JoinRefused::Full(m))) => (StatusCode::SERVICE_UNAVAILABLE, m).into_response(),
-        Ok(Err(JoinRefused::Failed(m))) => (StatusCode::INTERNAL_SERVER_ERROR, m).into_response(),
+        Ok(Err(refusal)) => refused(refusal),
+        Err(e) => (StatusCode::INTERNAL_SERVER_ERROR, e.to_string()).into_response(),
+    }
+}
+
+/// A participant who arrives with the platform's ids: their session's token when they
+/// return (`{"token": ...}`), 404 when they are new (the page shows the consent form).
+async fn resume(
+    State(app): State<Arc<App>>,
+    headers: HeaderMap,
+    Form(form): Form<HashMap<String, String>>,
+) -> Response {
+    if !same_origin(&headers) {
+        return (
+            StatusCode::FORBIDDEN,
+            "a page of another origin may not resume a session",
+        )
+            .into_response();
+    }
+    let arrival = match arrival(form) {
+        Ok(a) => a,
+        Err(m) => return (StatusCode::BAD_REQUEST, m).into_response(),
+    };
+    let found = tokio::task::spawn_blocking(move || Registry::returning(&app.registry, &app.seating, &arrival)).await;
+    match found {
+        Ok(Ok(Some(token))) => json(&serde_json::json!({ "token": token })),
+        Ok(Ok(None)) => (StatusCode::NOT_FOUND, "not a returning participant").into_response(),
+        Ok(Err(refusal)) => refused(refusal),
+        Err(e) => (StatusCode::INTERNAL_SERVER_ERROR, e.to_string()).into_response(),
+    }
+}
+
+/// The participant of `token` withdraws (the study says whether their recording is deleted
+/// or marked).
+async fn withdraw(State(app): State<Arc<App>>, Path(token): Path<String>, headers: HeaderMap) -> Response {
+    if !same_origin(&headers) {
+        return (
+            StatusCode::FORBIDDEN,
+            "a page of another origin may not withdraw anyone",
+        )
+            .into_response();
+    }
+    let done = tokio::task::spawn_blocking(move || Registry::withdraw(&app.registry, &app.seating, &token)).await;
+    match done {
+        Ok(Ok(how)) => json(&serde_json::json!({ "withdrawal": how })),
+        Ok(Err(m)) => (StatusCode::BAD_REQUEST, m).into_response(),
         Err(e) => (StatusCode::INTERNAL_SERVER_ERROR, e.to_string()).into_response(),
     }
 }
@@ -439,7 +534,10 @@ struct Results {
     max_participants: Option<u64>,
     /// Participants admitted in all, over every run on the record folder.
     admitted: u64,
+    /// This run's sessions.
     sessions: Vec<SessionRow>,
+    /// The figures of every recording on disk.
+    table: Table,
 }
 
 async fn results(State(app): State<Arc<App>>, Path(token): Path<String>) -> Response {
@@ -451,12 +549,13 @@ async fn results(State(app): State<Arc<App>>, Path(token): Path<String>) -> Resp
         (r.all(), r.admitted())
     };
     let results = tokio::task::spawn_blocking(move || Results {
-        study: app.study.clone(),
-        conditions: app.conditions.iter().map(|c| c.name.clone()).collect(),
-        max_sessions: app.limits.max_sessions,
-        max_participants: app.max_participants,
+        study: app.seating.study.name.clone(),
+        conditions: app.seating.conditions.iter().map(|c| c.name.clone()).collect(),
+        max_sessions: app.seating.limits.max_sessions,
+        max_participants: app.seating.max_participants,
         admitted,
         sessions: slots.iter().map(|slot| slot.row()).collect(),
+        table: app.figures.table(),
     })
     .await
     .expect("the rows are made without panicking");
@@ -465,6 +564,46 @@ async fn results(State(app): State<Arc<App>>, Path(token): Path<String>) -> Resp
         serde_json::to_string(&results).expect("results serialise"),
     )
         .into_response()
+}
+
+/// Every episode of every recording, one row each, as CSV.
+async fn episodes_csv(State(app): State<Arc<App>>, Path(token): Path<String>) -> Response {
+    if !app.is_researcher(&token) {
+        return (StatusCode::NOT_FOUND, "unknown results link").into_response();
+    }
+    let text = tokio::task::spawn_blocking(move || crate::results::csv(&app.figures.table()))
+        .await
+        .expect("the table is made without panicking");
+    (
+        [
+            (header::CONTENT_TYPE, "text/csv; charset=utf-8"),
+            (header::CONTENT_DISPOSITION, "attachment; filename=\"episodes.csv\""),
+        ],
+        text,
+    )
+        .into_response()
+}
+
+async fn replay_page(State(app): State<Arc<App>>, Path((token, _, _)): Path<(String, String, u64)>) -> Response {
+    if app.is_researcher(&token) {
+        Html(INDEX_HTML).into_response()
+    } else {
+        (StatusCode::NOT_FOUND, "unknown results link").into_response()
+    }
+}
+
+/// Episode `episode` of the recording `file`, step by step.
+async fn replay(State(app): State<Arc<App>>, Path((token, file, episode)): Path<(String, String, u64)>) -> Response {
+    if !app.is_researcher(&token) {
+        return (StatusCode::NOT_FOUND, "unknown results link").into_response();
+    }
+    let found = tokio::task::spawn_blocking(move || app.figures.replay(&file, episode))
+        .await
+        .expect("the replay is read without panicking");
+    match found {
+        Some(replay) => json(&replay),
+        None => (StatusCode::NOT_FOUND, "no such episode").into_response(),
+    }
 }
 
 /// Whether a request (a WebSocket, the join form) comes from our own page: a browser names
@@ -499,7 +638,7 @@ async fn socket(
         )
             .into_response();
     }
-    let limit = app.limits.max_frame_bytes;
+    let limit = app.seating.limits.max_frame_bytes;
     upgrade
         .max_message_size(limit)
         .max_frame_size(limit)
@@ -567,7 +706,7 @@ async fn session_socket(mut socket: WebSocket, app: Arc<App>, token: String) {
         page,
     };
     slot.touch();
-    let limits = app.limits;
+    let limits = app.seating.limits;
     let first = {
         let state = lock(&slot.state);
         match &*state {

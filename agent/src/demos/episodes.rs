@@ -13,8 +13,8 @@ use std::path::Path;
 use sim::trajectory::Episode;
 use sim::{Action, Goal, Grid, Observation, State, View};
 
-use super::format::{DemoFile, demos_error};
-use super::replay::{BadLines, DemoLearner, learn_from_reader};
+use super::format::{DemoFile, EpisodeLine, ParticipantLine, SessionLine, demos_error};
+use super::replay::{BadLines, DemoLearner, StepTime, learn_from_reader};
 use crate::error::{AgentError, Result};
 use crate::rule::{CorrectionRule, Experience};
 
@@ -34,6 +34,8 @@ pub struct DemoStep {
     /// A demonstrator chose the action: every step of a trajectory file, the corrections
     /// of a recording.
     pub demonstrated: bool,
+    /// When it happened, in a timed session (a person's, recording version 3).
+    pub time: StepTime,
 }
 
 /// One episode of a demonstrations file, checked against the world's rules.
@@ -51,6 +53,10 @@ pub struct DemoEpisode {
     pub start: State,
     /// The steps, in order, the first from `start`.
     pub steps: Vec<DemoStep>,
+    /// In a timed session: the wall-clock time (Unix milliseconds) of its first view.
+    pub started_ms: Option<u64>,
+    /// The study participant whose session it is, when the recording names one.
+    pub participant: Option<ParticipantLine>,
 }
 
 impl DemoEpisode {
@@ -80,8 +86,11 @@ impl From<Episode> for DemoEpisode {
                     terminated: s.terminated,
                     truncated: s.truncated,
                     demonstrated: true,
+                    time: StepTime::default(),
                 })
                 .collect(),
+            started_ms: None,
+            participant: None,
         }
     }
 }
@@ -118,6 +127,8 @@ impl OneWorld {
 struct Collector {
     world: std::cell::Cell<OneWorld>,
     episodes: Vec<DemoEpisode>,
+    /// The participant the current session names.
+    participant: Option<ParticipantLine>,
 }
 
 impl DemoLearner for Collector {
@@ -133,19 +144,26 @@ impl DemoLearner for Collector {
         None
     }
 
-    fn begin_episode(&mut self, episode: u64, start: &Observation) -> Result<()> {
+    fn begin_session(&mut self, header: &SessionLine) -> Result<()> {
+        self.participant = header.participant.clone();
+        Ok(())
+    }
+
+    fn begin_episode(&mut self, header: &EpisodeLine, start: &Observation) -> Result<()> {
         self.episodes.push(DemoEpisode {
-            episode,
+            episode: header.episode,
             grid: start.grid,
             view: start.view,
             goal: start.goal,
             start: start.state,
             steps: Vec::new(),
+            started_ms: header.started_ms,
+            participant: self.participant.clone(),
         });
         Ok(())
     }
 
-    fn learn(&mut self, _rule: &CorrectionRule, step: &Experience) -> Result<()> {
+    fn learn(&mut self, _rule: &CorrectionRule, step: &Experience, time: StepTime) -> Result<()> {
         let episode = self.episodes.last_mut().expect("the replay begins an episode first");
         episode.steps.push(DemoStep {
             action: step.action,
@@ -154,8 +172,53 @@ impl DemoLearner for Collector {
             terminated: step.terminated,
             truncated: step.truncated,
             demonstrated: step.corrected,
+            time,
         });
         Ok(())
+    }
+}
+
+/// Everything read from a file of demonstrations ([`read_demonstrations`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Demonstrations {
+    /// The episodes, in file order (one cut off by a kill is there with the steps it had).
+    pub episodes: Vec<DemoEpisode>,
+    /// The recording says its participant withdrew: exports leave it out.
+    pub withdrawn: bool,
+    /// The lines that could not be used, skipped (a line cut off by a kill, say).
+    pub bad_lines: Vec<super::replay::BadLine>,
+}
+
+/// The demonstrations at `path` as the researcher's tools read them: every line checked,
+/// a bad one skipped and reported (the last line of a recording a kill cut short), a file
+/// with no step read as no episode's steps, and whether the participant withdrew. `world`
+/// as for [`read_episodes`].
+pub fn read_demonstrations(path: &Path, world: Option<(Grid, usize)>) -> Result<Demonstrations> {
+    let one = OneWorld {
+        world,
+        given: world.is_some(),
+    };
+    match super::format::open(path)? {
+        DemoFile::Recording(input) => {
+            let mut collector = Collector {
+                world: std::cell::Cell::new(one),
+                episodes: Vec::new(),
+                participant: None,
+            };
+            let mut replay = super::replay::Replay::new(&mut collector, BadLines::Skip, &path.display().to_string());
+            replay.read(input)?;
+            let report = replay.finish();
+            Ok(Demonstrations {
+                episodes: collector.episodes,
+                withdrawn: report.withdrawn,
+                bad_lines: report.bad_lines,
+            })
+        }
+        file @ DemoFile::Trajectory(_) => Ok(Demonstrations {
+            episodes: episodes_of(file, path, world)?,
+            withdrawn: false,
+            bad_lines: Vec::new(),
+        }),
     }
 }
 
@@ -177,6 +240,7 @@ pub fn episodes_of(file: DemoFile, path: &Path, world: Option<(Grid, usize)>) ->
             let mut collector = Collector {
                 world: std::cell::Cell::new(one),
                 episodes: Vec::new(),
+                participant: None,
             };
             learn_from_reader(&mut collector, input, path, BadLines::Fail)?;
             Ok(collector.episodes)

@@ -85,6 +85,8 @@ pub struct ReplayReport {
     pub corrections: usize,
     /// The lines skipped, with why (only with [`BadLines::Skip`]).
     pub bad_lines: Vec<BadLine>,
+    /// The recording says its participant withdrew (a `withdrawn` line).
+    pub withdrawn: bool,
 }
 
 /// Why a line cannot be used, and whether that ends the replay whatever the policy.
@@ -125,6 +127,8 @@ impl From<sim::SimError> for LineError {
 #[derive(Clone)]
 struct OpenSession {
     grid: Grid,
+    /// The number its first episode must have.
+    first_episode: u64,
     /// The world's view, whose rules every step keeps.
     view: View,
     rule: CorrectionRule,
@@ -160,18 +164,35 @@ pub trait DemoLearner {
     /// model the session corrected, so there is nothing to match).
     fn identity(&self) -> Option<String>;
 
-    /// An episode line opened episode `episode` (numbered in its session) at `start` (its
-    /// grid, start state, goal and view), in a world checked to be the learner's: the steps
-    /// [`DemoLearner::learn`] gets next are this episode's, in order, the first from
-    /// `start`. Learners that keep episodes apart begin one here; the tabular agent has
-    /// nothing to do.
-    fn begin_episode(&mut self, episode: u64, start: &Observation) -> Result<()> {
-        let _ = (episode, start);
+    /// A session line opened a session (checked: its format, version, world and model).
+    /// Learners that keep who played begin a session here; the tabular agent has nothing
+    /// to do.
+    fn begin_session(&mut self, header: &SessionLine) -> Result<()> {
+        let _ = header;
         Ok(())
     }
 
-    /// Learns from one recorded step, by the session's `rule`.
-    fn learn(&mut self, rule: &CorrectionRule, step: &Experience) -> Result<()>;
+    /// An episode line (`header`) opened an episode at `start` (its grid, start state, goal
+    /// and view), in a world checked to be the learner's: the steps [`DemoLearner::learn`]
+    /// gets next are this episode's, in order, the first from `start`. Learners that keep
+    /// episodes apart begin one here; the tabular agent has nothing to do.
+    fn begin_episode(&mut self, header: &EpisodeLine, start: &Observation) -> Result<()> {
+        let _ = (header, start);
+        Ok(())
+    }
+
+    /// Learns from one recorded step, by the session's `rule`; `time` is the step's, when
+    /// its session was timed.
+    fn learn(&mut self, rule: &CorrectionRule, step: &Experience, time: StepTime) -> Result<()>;
+}
+
+/// When a recorded step happened, in a timed session (the format's module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StepTime {
+    /// Milliseconds since the episode's first view.
+    pub t_ms: Option<u64>,
+    /// The wall-clock time (Unix milliseconds) the step was received.
+    pub received_ms: Option<u64>,
 }
 
 impl DemoLearner for QAgent {
@@ -183,7 +204,7 @@ impl DemoLearner for QAgent {
         Some(QAgent::identity(self))
     }
 
-    fn learn(&mut self, rule: &CorrectionRule, step: &Experience) -> Result<()> {
+    fn learn(&mut self, rule: &CorrectionRule, step: &Experience, _time: StepTime) -> Result<()> {
         rule.learn(self, step).map(|_| ())
     }
 }
@@ -283,6 +304,13 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
             DemoRecord::Session(s) => self.session(s),
             DemoRecord::Episode(e) => self.episode(e),
             DemoRecord::Step(s) => self.step(s),
+            DemoRecord::Withdrawn(_) => {
+                self.session
+                    .as_ref()
+                    .ok_or_else(|| no_header("a withdrawal", "session"))?;
+                self.report.withdrawn = true;
+                Ok(())
+            }
         }
     }
 
@@ -319,8 +347,10 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
                 }
             }
         }
+        self.agent.begin_session(&s)?;
         self.session = Some(OpenSession {
             grid,
+            first_episode: s.first_episode,
             view: s.view,
             rule: s.rule,
             last_episode: None,
@@ -353,10 +383,10 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
                     e.episode
                 )));
             }
-            None if e.episode != 0 && self.policy == BadLines::Fail => {
+            None if e.episode != session.first_episode && self.policy == BadLines::Fail => {
                 return Err(LineError::bad(format!(
-                    "the session's first episode is {}, not 0: episodes are missing",
-                    e.episode
+                    "the session's first episode is {}, not {}: episodes are missing",
+                    e.episode, session.first_episode
                 )));
             }
             _ => {}
@@ -368,7 +398,7 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
             protocol: ActionProtocol::Free,
             view: session.view,
         };
-        self.agent.begin_episode(e.episode, &first)?;
+        self.agent.begin_episode(&e, &first)?;
         session.last_episode = Some(e.episode);
         self.episode = Some(OpenEpisode {
             number: e.episode,
@@ -472,6 +502,10 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
                 terminated: s.terminated,
                 truncated: s.truncated,
                 corrected: s.correction,
+            },
+            StepTime {
+                t_ms: s.t_ms,
+                received_ms: s.received_ms,
             },
         )?;
         self.episode = Some(OpenEpisode {
@@ -688,10 +722,10 @@ mod tests {
             assert!(err.contains("line 2"), "{err}");
         }
         // Another version is refused even when skipping bad lines.
-        let other = session.replace("\"version\":2", "\"version\":3");
+        let other = session.replace("\"version\":3", "\"version\":4");
         let mut replay = Replay::new(&mut agent, BadLines::Skip, "x.jsonl");
         let err = replay.read(other.as_bytes()).unwrap_err().to_string();
-        assert!(err.contains("version 3"), "{err}");
+        assert!(err.contains("version 4"), "{err}");
     }
 
     /// A recording's lines, and the same lines with `edit` applied to line `i` (from 0).
@@ -949,12 +983,12 @@ mod tests {
             fn identity(&self) -> Option<String> {
                 None
             }
-            fn begin_episode(&mut self, episode: u64, start: &Observation) -> Result<()> {
-                let start = start.state;
+            fn begin_episode(&mut self, header: &EpisodeLine, start: &Observation) -> Result<()> {
+                let (episode, start) = (header.episode, start.state);
                 self.0.push(format!("episode {episode} {start:?}"));
                 Ok(())
             }
-            fn learn(&mut self, _rule: &CorrectionRule, step: &Experience) -> Result<()> {
+            fn learn(&mut self, _rule: &CorrectionRule, step: &Experience, _time: StepTime) -> Result<()> {
                 self.0.push(format!("step {:?}", step.obs.state));
                 Ok(())
             }
