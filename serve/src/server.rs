@@ -292,8 +292,10 @@ impl App {
     fn answer(&self, slot: &Slot, text: &str) -> std::result::Result<String, String> {
         slot.touch();
         let mut state = lock(&slot.state);
-        let SlotState::Live(live) = &mut *state else {
-            return Err(EXPIRED.into());
+        let live = match &mut *state {
+            SlotState::Live(live) => live,
+            SlotState::Expired { withdrawn: true, .. } => return Err(WITHDRAWN.into()),
+            SlotState::Expired { .. } => return Err(EXPIRED.into()),
         };
         let id = message_id(text);
         let limits = &self.seating.limits;
@@ -334,6 +336,7 @@ impl App {
 
 const UNKNOWN: &str =
     "this session link is not known here: it is mistyped, or from an earlier run of the server; ask for a new one";
+const WITHDRAWN: &str = "you withdrew from this study: nothing more is recorded for you";
 const EXPIRED: &str =
     "this session was closed after a long time without a page; its recording is kept: ask for a new link";
 

@@ -6,3 +6,4 @@ mod common;
 mod load;
 mod restart;
 mod session;
+mod study;

@@ -456,7 +456,12 @@ fn child_server() {
     let Ok(dir) = std::env::var("SERVE_CHILD_DIR") else {
         return;
     };
-    serve::run(config(std::path::Path::new(&dir)).with_port0(), |links| {
+    let study = std::env::var("SERVE_CHILD_STUDY").ok().map(Into::into);
+    let config = ServeConfig {
+        study,
+        ..config(std::path::Path::new(&dir)).with_port0()
+    };
+    serve::run(config, |links| {
         println!("{}", links.join);
         Ok(())
     })
@@ -473,11 +478,22 @@ impl Port0 for ServeConfig {
     }
 }
 
-#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn recordings_survive_a_kill() {
+/// A server in a child process (this test binary again, [`child_server`]) recording into
+/// `dir`, with the study at `study` if given: killed however the test ends.
+pub struct Child(pub std::process::Child);
+
+impl Drop for Child {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// Starts a [`Child`] server; it and its address.
+pub fn child(dir: &std::path::Path, study: Option<&std::path::Path>) -> (Child, std::net::SocketAddr) {
     use std::io::BufRead;
-    let dir = tempfile::tempdir().unwrap();
-    let mut child = std::process::Command::new(std::env::current_exe().unwrap())
+    let mut command = std::process::Command::new(std::env::current_exe().unwrap());
+    command
         .args([
             "session::child_server",
             "--exact",
@@ -485,20 +501,14 @@ async fn recordings_survive_a_kill() {
             "--nocapture",
             "--test-threads=1",
         ])
-        .env("SERVE_CHILD_DIR", dir.path())
-        .stdout(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut out = std::io::BufReader::new(child.stdout.take().unwrap());
-    // Killed however the test ends, so that no server outlives it.
-    struct Reap(std::process::Child);
-    impl Drop for Reap {
-        fn drop(&mut self) {
-            let _ = self.0.kill();
-            let _ = self.0.wait();
-        }
+        .env("SERVE_CHILD_DIR", dir)
+        .stdout(std::process::Stdio::piped());
+    if let Some(study) = study {
+        command.env("SERVE_CHILD_STUDY", study);
     }
-    let mut child = Reap(child);
+    let mut process = command.spawn().unwrap();
+    let mut out = std::io::BufReader::new(process.stdout.take().unwrap());
+    let child = Child(process);
     let addr = loop {
         let mut line = String::new();
         assert_ne!(out.read_line(&mut line).unwrap(), 0, "the child ended before serving");
@@ -507,6 +517,13 @@ async fn recordings_survive_a_kill() {
             break rest.trim_end_matches('/').parse().unwrap();
         }
     };
+    (child, addr)
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn recordings_survive_a_kill() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mut child, addr) = child(dir.path(), None);
     let token = join(addr, "").await.unwrap();
     let mut socket = connect(addr, &token, None).await.unwrap();
     let mut acknowledged = receive(&mut socket).await["progress"]["recorded_lines"]
