@@ -471,6 +471,7 @@ impl<S: DemoSink> CorrectionSession<S> {
         header.view = world.view;
         header.participant = labels.participant;
         header.first_episode = labels.first_episode;
+        header.world = Some(crate::demos::WorldLine::of(&world));
         sink.record(&DemoRecord::Session(header))?;
         Ok(CorrectionSession {
             agent,
@@ -1024,6 +1025,48 @@ mod tests {
         let turn = session.person(other, PersonRole::Player).unwrap();
         assert!(turn.message().contains("drop it first"), "{}", turn.message());
         assert_eq!(session.steps(), 1);
+    }
+
+    #[test]
+    fn the_session_line_names_the_world_an_exporter_remakes() {
+        let world = EnvConfig {
+            reward: "step-cost".parse().unwrap(),
+            protocol: sim::ActionProtocol::Paper,
+            horizon: 40,
+            ..EnvConfig::default()
+        };
+        let session = CorrectionSession::new(
+            agent(),
+            CorrectionRule::default(),
+            world,
+            vec!["0,1,2".parse().unwrap()],
+            4,
+            0.0,
+            "person",
+            None,
+            Vec::<DemoRecord>::new(),
+        )
+        .unwrap();
+        let [DemoRecord::Session(header)] = session.sink().as_slice() else {
+            panic!("one session line: {:?}", session.sink())
+        };
+        let line = header.world.clone().unwrap();
+        assert_eq!(
+            (line.reward.as_str(), line.protocol, line.horizon),
+            ("step-cost", sim::ActionProtocol::Paper, 40)
+        );
+        assert_eq!(line, crate::demos::WorldLine::of(&world));
+        // Written and read back as JSON: the same line; a version-2 line without it reads as none.
+        let text = serde_json::to_string(&DemoRecord::Session(header.clone())).unwrap();
+        assert!(
+            text.contains(r#""world":{"reward":"step-cost","protocol":"paper","horizon":40}"#),
+            "{text}"
+        );
+        let back: DemoRecord = serde_json::from_str(&text).unwrap();
+        assert!(matches!(back, DemoRecord::Session(h) if h.world == Some(line)));
+        let old = text.replace(r#","world":{"reward":"step-cost","protocol":"paper","horizon":40}"#, "");
+        let old: DemoRecord = serde_json::from_str(&old).unwrap();
+        assert!(matches!(old, DemoRecord::Session(h) if h.world.is_none()));
     }
 
     #[test]

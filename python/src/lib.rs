@@ -44,6 +44,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(goal_env::goal_rewards, m)?)?;
     m.add_function(wrap_pyfunction!(demos::demonstrations, m)?)?;
     m.add_function(wrap_pyfunction!(demos::read_recording, m)?)?;
+    m.add_function(wrap_pyfunction!(demos::recording_episodes, m)?)?;
     m.add_function(wrap_pyfunction!(training::train, m)?)?;
     m.add_function(wrap_pyfunction!(config::episode_seed, m)?)?;
     m.add_function(wrap_pyfunction!(config::observation_shape, m)?)?;

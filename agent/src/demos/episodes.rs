@@ -13,7 +13,7 @@ use std::path::Path;
 use sim::trajectory::Episode;
 use sim::{Action, Goal, Grid, Observation, State, View};
 
-use super::format::{DemoFile, EpisodeLine, ParticipantLine, SessionLine, demos_error};
+use super::format::{DemoFile, EpisodeLine, ParticipantLine, SessionLine, WorldLine, demos_error};
 use super::replay::{BadLines, DemoLearner, StepTime, learn_from_reader};
 use crate::error::{AgentError, Result};
 use crate::rule::{CorrectionRule, Experience};
@@ -57,6 +57,8 @@ pub struct DemoEpisode {
     pub started_ms: Option<u64>,
     /// The study participant whose session it is, when the recording names one.
     pub participant: Option<ParticipantLine>,
+    /// The session's world (reward, protocol, horizon), when the recording names it.
+    pub world: Option<WorldLine>,
 }
 
 impl DemoEpisode {
@@ -91,6 +93,7 @@ impl From<Episode> for DemoEpisode {
                 .collect(),
             started_ms: None,
             participant: None,
+            world: None,
         }
     }
 }
@@ -129,6 +132,8 @@ struct Collector {
     episodes: Vec<DemoEpisode>,
     /// The participant the current session names.
     participant: Option<ParticipantLine>,
+    /// The world the current session names.
+    session_world: Option<WorldLine>,
 }
 
 impl DemoLearner for Collector {
@@ -146,6 +151,7 @@ impl DemoLearner for Collector {
 
     fn begin_session(&mut self, header: &SessionLine) -> Result<()> {
         self.participant = header.participant.clone();
+        self.session_world = header.world.clone();
         Ok(())
     }
 
@@ -159,6 +165,7 @@ impl DemoLearner for Collector {
             steps: Vec::new(),
             started_ms: header.started_ms,
             participant: self.participant.clone(),
+            world: self.session_world.clone(),
         });
         Ok(())
     }
@@ -204,6 +211,7 @@ pub fn read_demonstrations(path: &Path, world: Option<(Grid, usize)>) -> Result<
                 world: std::cell::Cell::new(one),
                 episodes: Vec::new(),
                 participant: None,
+                session_world: None,
             };
             let mut replay = super::replay::Replay::new(&mut collector, BadLines::Skip, &path.display().to_string());
             replay.read(input)?;
@@ -241,6 +249,7 @@ pub fn episodes_of(file: DemoFile, path: &Path, world: Option<(Grid, usize)>) ->
                 world: std::cell::Cell::new(one),
                 episodes: Vec::new(),
                 participant: None,
+                session_world: None,
             };
             learn_from_reader(&mut collector, input, path, BadLines::Fail)?;
             Ok(collector.episodes)

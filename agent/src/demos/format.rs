@@ -130,6 +130,33 @@ pub struct SessionLine {
     /// before it when it goes on from one (written only when not 0).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub first_episode: u64,
+    /// The rules of the world beyond grid, blocks and view (version 3): what an exporter
+    /// needs to make the environment the session was played in.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub world: Option<WorldLine>,
+}
+
+/// A session's world: its reward model, action protocol and horizon.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WorldLine {
+    /// The reward model's name (`sparse`, `paper`, `step-cost`, ...).
+    pub reward: String,
+    /// The action protocol.
+    pub protocol: sim::ActionProtocol,
+    /// Steps before an episode is cut off.
+    pub horizon: u32,
+}
+
+impl WorldLine {
+    /// The line of `world`.
+    pub fn of(world: &sim::EnvConfig) -> WorldLine {
+        WorldLine {
+            reward: world.reward.name().into(),
+            protocol: world.protocol,
+            horizon: world.horizon,
+        }
+    }
 }
 
 fn is_zero(n: &u64) -> bool {
@@ -181,6 +208,7 @@ impl SessionLine {
             view: View::Top,
             participant: None,
             first_episode: 0,
+            world: None,
         }
     }
 }
