@@ -44,7 +44,15 @@ def main(dataset_id: str, out: str) -> None:
         action_size=int(dataset.action_space.n),
     )
     bc = d3rlpy.algos.DiscreteBCConfig(batch_size=32).create(device="cpu:0")
-    bc.fit(mdp, n_steps=20, n_steps_per_epoch=20, show_progress=False, save_interval=10**9)
+    # No logger: d3rlpy's default writes a d3rlpy_logs folder into the working directory.
+    bc.fit(
+        mdp,
+        n_steps=20,
+        n_steps_per_epoch=20,
+        show_progress=False,
+        save_interval=10**9,
+        logger_adapter=d3rlpy.logging.NoopAdapterFactory(),
+    )
     seen = {}
     for k, episode in enumerate(mdp.episodes):
         seen[f"observations_{k}"] = np.asarray(episode.observations)
