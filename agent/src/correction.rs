@@ -55,10 +55,10 @@
 
 use serde::{Deserialize, Serialize};
 use sim::seeding::{SimRng, episode_seed};
-use sim::{Action, Env, EnvConfig, Goal, GoalSpec, Grid, Observation, Profile, RewardModel, Termination};
+use sim::{Action, BlockMove, Env, EnvConfig, Goal, GoalSpec, Grid, Observation, Profile, RewardModel, Termination};
 
 use crate::demonstrator::{Demonstrator, DemonstratorProfile};
-use crate::demos::{DemoRecord, DemoSink, EpisodeLine, SessionLine, StepLine};
+use crate::demos::{DemoRecord, DemoSink, EpisodeLine, ParticipantLine, SessionLine, StepLine};
 use crate::error::{AgentError, Result};
 use crate::qlearning::{QAgent, check_epsilon};
 use crate::rollout::policy_rng;
@@ -189,24 +189,152 @@ pub fn default_goals(world: &EnvConfig, profile: Profile) -> Result<Vec<Goal>> {
 }
 
 /// A person's command as the steps the session's protocol allows (module docs): the
-/// action itself when it is legal in `obs`; under a protocol that forbids picking while
-/// holding, a pick of another block becomes a Drop and then the Pick, and a pick of the
-/// block held changes nothing (no step). Any other illegal action is the protocol's error,
-/// which names what is allowed.
+/// action itself when it is legal in `obs`; in the top view under a protocol that forbids
+/// picking while holding, a pick of another block becomes a Drop and then the Pick, and a
+/// pick of the block held changes nothing (no step). Any other action outside the legal
+/// ones is the view's error, which names what is allowed (in the side view, whatever the
+/// protocol: a dropped block falls, so a pick while holding is refused, not carried out).
 pub fn person_steps(obs: &Observation, action: Action) -> Result<Vec<Action>> {
     let legal = obs.legal_actions();
     if legal.contains(action) {
         return Ok(vec![action]);
     }
     match (action, obs.held_block()) {
-        (Action::Pick(b), Some(h)) if b.index() < obs.state.block_count() && legal.contains(Action::Drop) => {
+        (Action::Pick(b), Some(h))
+            if obs.view == sim::View::Top && b.index() < obs.state.block_count() && legal.contains(Action::Drop) =>
+        {
             Ok(if b == h { Vec::new() } else { vec![Action::Drop, action] })
         }
-        _ => Err(obs
-            .protocol
-            .check(&obs.state, action)
-            .expect_err("the protocol refuses an action its mask leaves out")
-            .into()),
+        // The view's rules name what is wrong (the side view's, whatever the protocol).
+        _ => match obs.view.check(obs.protocol, &obs.state, action) {
+            Err(e) => Err(e.into()),
+            // Outside the mask but taken as it is: under `free` in the side view the rules
+            // make it change nothing, as `Env::step` does.
+            Ok(()) => Ok(vec![action]),
+        },
+    }
+}
+
+/// Who the person is in a turn: correcting the agent (its proposal was shown) or playing
+/// alone (the agent's proposal was not shown, so choosing is not overriding it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PersonRole {
+    /// The agent's proposal was shown: a choice confirms or overrides it.
+    Corrector,
+    /// The person plays every step; the proposal was not shown.
+    Player,
+}
+
+/// Why a person's command was not carried out; nothing changed.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum Refusal {
+    /// No episode is under way: the next one must begin first.
+    #[error("the episode is over: n begins the next")]
+    EpisodeOver,
+    /// The world's rules forbid the command now (the message names what is allowed).
+    #[error("not now: {0}")]
+    NotAllowed(String),
+}
+
+/// What a person's command did in a session ([`CorrectionSession::person`]): the one turn
+/// the terminal UI and the page both draw.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PersonTurn {
+    /// Nothing was done, and why.
+    Refused(Refusal),
+    /// A pick of the block already held: nothing to do.
+    AlreadyHeld(Action),
+    /// A block move (side view), carried out as the gripper actions that make it, each a
+    /// correction.
+    Moved {
+        /// The move asked for.
+        mv: BlockMove,
+        /// The steps executed, in order.
+        steps: Vec<SessionStep>,
+    },
+    /// The steps carried out for the command (a Drop and the Pick for a pick while holding
+    /// under the `paper` protocol), each a correction.
+    Taken {
+        /// What the person asked for.
+        command: Action,
+        /// The agent's proposal the person saw, if any ([`PersonRole::Corrector`]).
+        proposed: Option<Action>,
+        /// The steps executed, in order.
+        steps: Vec<SessionStep>,
+    },
+}
+
+impl PersonTurn {
+    /// One line saying what happened, for the person.
+    pub fn message(&self) -> String {
+        match self {
+            PersonTurn::Refused(r) => capitalised(&format!("{r}.")),
+            PersonTurn::AlreadyHeld(action) => format!("{action}: that block is held already."),
+            PersonTurn::Moved { mv, steps } => {
+                format!("{}: {} gripper steps.", capitalised(&mv.to_string()), steps.len())
+            }
+            PersonTurn::Taken {
+                command,
+                proposed,
+                steps,
+            } => {
+                let done = steps
+                    .iter()
+                    .map(|s| s.action.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", then ");
+                let actions: Vec<Action> = steps.iter().map(|s| s.action).collect();
+                match proposed {
+                    Some(p) if actions == [*p] => format!("You confirmed {command}; the agent learnt it."),
+                    Some(p) => format!("You chose {done} instead of {p}; the agent learnt it."),
+                    None => format!("You chose {done}."),
+                }
+            }
+        }
+    }
+
+    /// The corrections the turn made (steps the person chose).
+    pub fn corrections(&self) -> u64 {
+        self.steps().iter().filter(|s| s.corrected).count() as u64
+    }
+
+    /// The steps the turn executed (none when it was refused or changed nothing).
+    pub fn steps(&self) -> &[SessionStep] {
+        match self {
+            PersonTurn::Taken { steps, .. } | PersonTurn::Moved { steps, .. } => steps,
+            _ => &[],
+        }
+    }
+}
+
+fn capitalised(text: &str) -> String {
+    let mut chars = text.chars();
+    chars
+        .next()
+        .map_or(String::new(), |c| c.to_uppercase().chain(chars).collect())
+}
+
+/// How an episode of a session ended ([`CorrectionSession::episode_end`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EpisodeEnd {
+    /// It ended by its termination rule (the goal reached); otherwise it was cut off at
+    /// the horizon.
+    pub reached: bool,
+    /// Steps taken in it.
+    pub steps: u32,
+}
+
+impl EpisodeEnd {
+    /// One line saying how the episode ended, with the length of a shortest plan from its
+    /// start when known.
+    pub fn message(&self, shortest: Option<u32>) -> String {
+        let steps = self.steps;
+        let shortest = shortest.map_or(String::new(), |s| format!("; the shortest plan takes {s}"));
+        if self.reached {
+            format!("Goal reached in {steps} steps{shortest}.")
+        } else {
+            format!("Cut off after {steps} steps{shortest}.")
+        }
     }
 }
 
@@ -259,6 +387,35 @@ pub struct CorrectionSession<S: DemoSink> {
     episode: Option<(u64, Env, SimRng)>,
     /// The agent's proposal for the current state, drawn once per state.
     proposal: Option<Action>,
+    /// The current episode's last step.
+    last: Option<SessionStep>,
+    /// Whether the session keeps time ([`SessionLabels::timed`]).
+    timed: bool,
+    /// The first episode's number.
+    first_episode: u64,
+    /// In a timed session, when the current episode's first view was shown.
+    shown: Option<std::time::Instant>,
+    /// The time recorded for the episode's last step.
+    last_ms: Option<u64>,
+}
+
+/// What a session's header line says about who corrects, from which model, and, in a
+/// study, whose session it is.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct SessionLabels {
+    /// Who corrects: `person`, or a simulated demonstrator's name.
+    pub demonstrator: String,
+    /// The model file the agent came from, when known.
+    pub model: Option<String>,
+    /// The study participant, when the session is one's.
+    pub participant: Option<ParticipantLine>,
+    /// Whether the session keeps time (a person's): each episode's wall-clock start and
+    /// each step's time since the episode's first view are recorded. A simulated
+    /// demonstrator's session is not timed, so its recording is fixed by its seed.
+    pub timed: bool,
+    /// The number of the first episode: 0, or past the episodes of an earlier session of
+    /// the same recording that this one goes on from (a participant resumed).
+    pub first_episode: u64,
 }
 
 impl<S: DemoSink> CorrectionSession<S> {
@@ -274,6 +431,29 @@ impl<S: DemoSink> CorrectionSession<S> {
         epsilon: f64,
         demonstrator: &str,
         model: Option<&str>,
+        sink: S,
+    ) -> Result<Self> {
+        let labels = SessionLabels {
+            demonstrator: demonstrator.into(),
+            model: model.map(Into::into),
+            participant: None,
+            timed: false,
+            first_episode: 0,
+        };
+        Self::labelled(agent, rule, world, goals, seed, epsilon, labels, sink)
+    }
+
+    /// [`CorrectionSession::new`] with the header's `labels` (a study's participant among
+    /// them).
+    #[allow(clippy::too_many_arguments, reason = "each is one documented setting of the session")]
+    pub fn labelled(
+        agent: QAgent,
+        rule: CorrectionRule,
+        world: EnvConfig,
+        goals: Vec<Goal>,
+        seed: u64,
+        epsilon: f64,
+        labels: SessionLabels,
         mut sink: S,
     ) -> Result<Self> {
         rule.validate()?;
@@ -284,14 +464,19 @@ impl<S: DemoSink> CorrectionSession<S> {
         for goal in &goals {
             env_config(&agent, &world, goal.clone()).validate()?;
         }
-        sink.record(&DemoRecord::Session(SessionLine::new(
+        let mut header = SessionLine::new(
             agent.grid(),
             agent.blocks(),
             agent.identity(),
             rule,
-            demonstrator,
-            model,
-        )))?;
+            &labels.demonstrator,
+            labels.model.as_deref(),
+        );
+        header.view = world.view;
+        header.participant = labels.participant;
+        header.first_episode = labels.first_episode;
+        header.world = Some(crate::demos::WorldLine::of(&world));
+        sink.record(&DemoRecord::Session(header))?;
         Ok(CorrectionSession {
             agent,
             rule,
@@ -303,6 +488,11 @@ impl<S: DemoSink> CorrectionSession<S> {
             report: SessionReport::default(),
             episode: None,
             proposal: None,
+            last: None,
+            timed: labels.timed,
+            first_episode: labels.first_episode,
+            shown: None,
+            last_ms: None,
         })
     }
 
@@ -359,14 +549,20 @@ impl<S: DemoSink> CorrectionSession<S> {
     /// Begins the next episode (abandoning the current one, if any) and returns its first
     /// observation.
     pub fn next_episode(&mut self) -> Result<Observation> {
-        let k = self.episode.as_ref().map_or(0, |(k, _, _)| k + 1);
+        let k = self.episode.as_ref().map_or(self.first_episode, |(k, _, _)| k + 1);
         let goal = self.goals[(k % self.goals.len() as u64) as usize].clone();
         let seed = episode_seed(self.seed, k);
         let mut env = Env::new(env_config(&self.agent, &self.world, goal))?;
         let obs = env.reset(seed);
-        self.sink
-            .record(&DemoRecord::Episode(EpisodeLine::new(k, seed, &obs)))?;
+        let mut line = EpisodeLine::new(k, seed, &obs);
+        if self.timed {
+            self.shown = Some(std::time::Instant::now());
+            line.started_ms = Some(crate::demos::unix_ms());
+        }
+        self.sink.record(&DemoRecord::Episode(line))?;
         self.episode = Some((k, env, policy_rng(seed)));
+        self.last = None;
+        self.last_ms = None;
         self.report.episodes += 1;
         self.propose()?;
         Ok(obs)
@@ -386,6 +582,15 @@ impl<S: DemoSink> CorrectionSession<S> {
     /// Executes one step: the demonstrator's `correction` if given, the agent's proposal
     /// otherwise; learns from it and records it. An error if no episode is under way.
     pub fn step(&mut self, correction: Option<Action>) -> Result<SessionStep> {
+        self.step_at(correction, None)
+    }
+
+    /// [`CorrectionSession::step`], in a timed session at `page_ms` milliseconds since the
+    /// episode's first view by the clock of the page that showed it (none: the session's
+    /// own clock). A page's time earlier than the episode's last step's, or later than the
+    /// session's own clock allows, is not believed: the session's clock is recorded.
+    pub fn step_at(&mut self, correction: Option<Action>, page_ms: Option<u64>) -> Result<SessionStep> {
+        let time = self.step_time(page_ms);
         let (Some((k, env, _)), Some(proposed)) = (&mut self.episode, self.proposal) else {
             return Err(AgentError::Config(
                 "no episode is under way: begin the next one first".into(),
@@ -407,20 +612,120 @@ impl<S: DemoSink> CorrectionSession<S> {
                 corrected,
             },
         )?;
-        let line = StepLine::new(*k, &obs, proposed, action, corrected, &step);
+        let mut line = StepLine::new(*k, &obs, proposed, action, corrected, &step);
+        (line.t_ms, line.received_ms) = time;
+        self.last_ms = line.t_ms;
         self.sink.record(&DemoRecord::Step(line))?;
         self.report.steps += 1;
         self.report.corrections += u64::from(corrected);
         self.report.successes += u64::from(step.terminated);
         self.propose()?;
-        Ok(SessionStep {
+        let step = SessionStep {
             proposed,
             action,
             corrected,
             reward: step.reward,
             terminated: step.terminated,
             truncated: step.truncated,
+        };
+        self.last = Some(step);
+        Ok(step)
+    }
+
+    /// The time recorded with a step taken now: milliseconds since the episode's first
+    /// view, and the wall-clock time; none in an untimed session.
+    fn step_time(&self, page_ms: Option<u64>) -> (Option<u64>, Option<u64>) {
+        let Some(shown) = self.shown.filter(|_| self.timed) else {
+            return (None, None);
+        };
+        let own = shown.elapsed().as_millis() as u64;
+        let floor = self.last_ms.unwrap_or(0);
+        // The page's clock is finer for a reaction time (no network in it), but only a time
+        // between the last step's and the session's own clock can be the page's.
+        let t = page_ms.filter(|&p| p >= floor && p <= own).unwrap_or(own.max(floor));
+        (Some(t), Some(crate::demos::unix_ms()))
+    }
+
+    /// The sink the session records to, to add a line of the caller's (a withdrawal).
+    pub fn sink_mut(&mut self) -> &mut S {
+        &mut self.sink
+    }
+
+    /// The current episode's last step, if it has taken one.
+    pub fn last_step(&self) -> Option<&SessionStep> {
+        self.last.as_ref()
+    }
+
+    /// How the current episode ended, once it has ([`EpisodeEnd`]).
+    pub fn episode_end(&self) -> Option<EpisodeEnd> {
+        self.last.filter(|s| s.terminated || s.truncated).map(|s| EpisodeEnd {
+            reached: s.terminated,
+            steps: self.steps(),
         })
+    }
+
+    /// Carries out a person's `command` (module docs: under the `paper` protocol a pick
+    /// while holding is a Drop and then the Pick; a pick of the held block does nothing):
+    /// every step a correction, learnt and recorded. A command the rules refuse, or one
+    /// given when no episode is under way, is [`PersonTurn::Refused`] and changes nothing.
+    /// An error only from the session itself (a recording that cannot be written).
+    pub fn person(&mut self, command: Action, role: PersonRole) -> Result<PersonTurn> {
+        self.person_at(command, role, None)
+    }
+
+    /// [`CorrectionSession::person`] at `page_ms` by the page's clock
+    /// ([`CorrectionSession::step_at`]).
+    pub fn person_at(&mut self, command: Action, role: PersonRole, page_ms: Option<u64>) -> Result<PersonTurn> {
+        let obs = match self.observation() {
+            Some(obs) if !self.is_over() => obs,
+            _ => return Ok(PersonTurn::Refused(Refusal::EpisodeOver)),
+        };
+        let steps = match person_steps(&obs, command) {
+            Err(e) => return Ok(PersonTurn::Refused(Refusal::NotAllowed(e.to_string()))),
+            Ok(steps) if steps.is_empty() => return Ok(PersonTurn::AlreadyHeld(command)),
+            Ok(steps) => steps,
+        };
+        let proposed = self.proposal.filter(|_| role == PersonRole::Corrector);
+        let mut taken = Vec::with_capacity(steps.len());
+        for action in steps {
+            if self.is_over() {
+                break;
+            }
+            taken.push(self.step_at(Some(action), page_ms)?);
+        }
+        Ok(PersonTurn::Taken {
+            command,
+            proposed,
+            steps: taken,
+        })
+    }
+
+    /// Carries out a person's block move `mv` (side view: the gripper actions
+    /// [`sim::block_move::expand`] gives, each a correction, learnt and recorded), at
+    /// `page_ms` by the page's clock. A move the rules refuse now, or one given when no
+    /// episode is under way, is [`PersonTurn::Refused`] and changes nothing.
+    pub fn person_move(&mut self, mv: BlockMove, page_ms: Option<u64>) -> Result<PersonTurn> {
+        let obs = match self.observation() {
+            Some(obs) if !self.is_over() => obs,
+            _ => return Ok(PersonTurn::Refused(Refusal::EpisodeOver)),
+        };
+        if obs.view != sim::View::Side {
+            return Ok(PersonTurn::Refused(Refusal::NotAllowed(
+                "block moves are the side view's; pick, move and drop here".into(),
+            )));
+        }
+        let actions = match sim::block_move::expand(&obs.state, obs.grid, mv) {
+            Ok(actions) => actions,
+            Err(e) => return Ok(PersonTurn::Refused(Refusal::NotAllowed(e.to_string()))),
+        };
+        let mut steps = Vec::with_capacity(actions.len());
+        for action in actions {
+            if self.is_over() {
+                break;
+            }
+            steps.push(self.step_at(Some(action), page_ms)?);
+        }
+        Ok(PersonTurn::Moved { mv, steps })
     }
 
     /// Ends the session: the corrected agent, the sink, and the totals.
@@ -680,6 +985,135 @@ mod tests {
             default_goals(&world(3, sim::View::Side), Profile::Spec).unwrap().len(),
             13
         );
+    }
+
+    #[test]
+    fn a_persons_turn_in_the_side_view_keeps_to_its_rules() {
+        // Free protocol, side view: 0 on the table with 1 on it, 2 alone.
+        let agent = QAgent::new(ReprKind::RoleTowers, Grid::default(), 3, QParams::default()).unwrap();
+        let world = EnvConfig {
+            view: sim::View::Side,
+            reward: "step-cost".parse().unwrap(),
+            ..session_world(&agent)
+        };
+        let goal: Goal = "0,2/1".parse().unwrap();
+        let mut session = CorrectionSession::new(
+            agent,
+            CorrectionRule::default(),
+            world,
+            vec![goal],
+            5,
+            0.0,
+            "person",
+            None,
+            (),
+        )
+        .unwrap();
+        let obs = session.next_episode().unwrap();
+        // A move with nothing held: refused with the side view's reason, nothing taken.
+        let turn = session.person(Action::Up, PersonRole::Player).unwrap();
+        assert!(
+            matches!(&turn, PersonTurn::Refused(Refusal::NotAllowed(m)) if m.contains("nothing is held")),
+            "{turn:?}"
+        );
+        assert_eq!(session.steps(), 0);
+        // Holding, a pick of another block is refused (a dropped block falls): drop first.
+        let clear = obs
+            .legal_actions()
+            .iter()
+            .find(|a| matches!(a, Action::Pick(_)))
+            .unwrap();
+        let turn = session.person(clear, PersonRole::Corrector).unwrap();
+        assert_eq!(turn.corrections(), 1);
+        let other = (0..3).map(|b| Action::Pick(BlockId(b))).find(|&a| a != clear).unwrap();
+        let turn = session.person(other, PersonRole::Player).unwrap();
+        assert!(turn.message().contains("drop it first"), "{}", turn.message());
+        assert_eq!(session.steps(), 1);
+    }
+
+    #[test]
+    fn the_session_line_names_the_world_an_exporter_remakes() {
+        let world = EnvConfig {
+            reward: "step-cost".parse().unwrap(),
+            protocol: sim::ActionProtocol::Paper,
+            horizon: 40,
+            ..EnvConfig::default()
+        };
+        let session = CorrectionSession::new(
+            agent(),
+            CorrectionRule::default(),
+            world,
+            vec!["0,1,2".parse().unwrap()],
+            4,
+            0.0,
+            "person",
+            None,
+            Vec::<DemoRecord>::new(),
+        )
+        .unwrap();
+        let [DemoRecord::Session(header)] = session.sink().as_slice() else {
+            panic!("one session line: {:?}", session.sink())
+        };
+        let line = header.world.clone().unwrap();
+        assert_eq!(
+            (line.reward.as_str(), line.protocol, line.horizon),
+            ("step-cost", sim::ActionProtocol::Paper, 40)
+        );
+        assert_eq!(line, crate::demos::WorldLine::of(&world));
+        // Written and read back as JSON: the same line; a version-2 line without it reads as none.
+        let text = serde_json::to_string(&DemoRecord::Session(header.clone())).unwrap();
+        assert!(
+            text.contains(r#""world":{"reward":"step-cost","protocol":"paper","horizon":40}"#),
+            "{text}"
+        );
+        let back: DemoRecord = serde_json::from_str(&text).unwrap();
+        assert!(matches!(back, DemoRecord::Session(h) if h.world == Some(line)));
+        let old = text.replace(r#","world":{"reward":"step-cost","protocol":"paper","horizon":40}"#, "");
+        let old: DemoRecord = serde_json::from_str(&old).unwrap();
+        assert!(matches!(old, DemoRecord::Session(h) if h.world.is_none()));
+    }
+
+    #[test]
+    fn a_turn_and_an_episodes_end_say_what_happened() {
+        let mut session = CorrectionSession::new(
+            agent(),
+            CorrectionRule::default(),
+            EnvConfig::default(),
+            vec!["0,1,2".parse().unwrap()],
+            4,
+            0.0,
+            "person",
+            None,
+            (),
+        )
+        .unwrap();
+        assert_eq!(
+            session.person(Action::Up, PersonRole::Player).unwrap().message(),
+            "The episode is over: n begins the next."
+        );
+        session.next_episode().unwrap();
+        let proposed = session.proposal().unwrap();
+        let turn = session.person(proposed, PersonRole::Corrector).unwrap();
+        assert_eq!(
+            turn.message(),
+            format!("You confirmed {proposed}; the agent learnt it.")
+        );
+        let turn = session.person(Action::Drop, PersonRole::Player).unwrap();
+        assert_eq!(turn.message(), "You chose drop.");
+        assert_eq!(session.episode_end(), None);
+        let end = EpisodeEnd {
+            reached: true,
+            steps: 9,
+        };
+        assert_eq!(
+            end.message(Some(7)),
+            "Goal reached in 9 steps; the shortest plan takes 7."
+        );
+        let cut = EpisodeEnd {
+            reached: false,
+            steps: 1000,
+        };
+        assert_eq!(cut.message(None), "Cut off after 1000 steps.");
     }
 
     #[test]

@@ -18,7 +18,8 @@ the classic Blocks World seen from the side) with Gymnasium::
   call into preallocated numpy arrays.
 - :func:`solve`: a shortest (or the oracle's) plan from any state.
 - :func:`demonstrations` and :func:`read_recording`: expert trajectories, and the CLI's
-  recordings, as dicts of numpy arrays.
+  recordings, as dicts of numpy arrays; :func:`to_minari`: recordings as a Minari
+  dataset for offline learners.
 - :func:`load`: a trained model file of either kind, played and evaluated with
   Stable-Baselines3's conventions (:class:`Model`).
 - :func:`train`: the Rust tabular trainer, in-process; ``python -m blockstack.sweep`` runs
@@ -38,6 +39,7 @@ from blockstack._native import REWARDS
 from blockstack.demonstrations import demonstrations, read_recording
 from blockstack.env import BlocksWorldEnv, StackEnv
 from blockstack.goal_env import StackGoalEnv
+from blockstack.minari import to_minari
 from blockstack.model import Model, load
 from blockstack import vector
 from blockstack.planning import read_pddl, solve
@@ -57,6 +59,7 @@ __all__ = [
     "read_pddl",
     "read_recording",
     "solve",
+    "to_minari",
     "train",
     "train_dqn",
     "vector",

@@ -293,7 +293,7 @@ pub fn read_recording<'py>(
                 state: e.start.clone(),
                 goal: e.goal.clone(),
                 protocol,
-                view: sim::View::Top,
+                view: e.view,
             };
             for (k, step) in e.steps.iter().enumerate() {
                 let next = Observation {
@@ -317,15 +317,129 @@ pub fn read_recording<'py>(
     })
 }
 
+/// The episodes of a recording as the researcher's exports read them (Minari's
+/// `to_minari`): `{"withdrawn": bool, "episodes": [...]}`, each episode a dict with its
+/// `observations` (T + 1, encoded as `obs`), `actions`, `rewards`, `terminations`,
+/// `truncations` (T each; an episode a crash or a mode switch cut short ends truncated),
+/// `person` (the person chose the step), `t_ms` (milliseconds since the episode's first
+/// view, -1 untimed) and `received_ms` (-1 untimed); and its `episode` number, `goal`
+/// (text), `view`, `grid`, `blocks`, `started_ms`, `ended` (by its rules), `participant`
+/// (a dict, or `None`) and `world` (`reward`, `protocol`, `horizon`, or `None` before
+/// recording version 3). Every line is checked; a bad one (the last line a kill cut short)
+/// is skipped, as the researcher's page does. Episodes without a step are left out.
+#[pyfunction]
+#[pyo3(signature = (path, obs="planes"))]
+pub fn recording_episodes<'py>(py: Python<'py>, path: PathBuf, obs: &str) -> PyResult<Bound<'py, PyDict>> {
+    let kind = config::obs_kind(obs)?;
+    let read = read_in_thread(py, &path, |p| agent::demos::read_demonstrations(p, None))?;
+    guard(|| {
+        let out = PyDict::new(py);
+        out.set_item("withdrawn", read.withdrawn)?;
+        let episodes = pyo3::types::PyList::empty(py);
+        for e in &read.episodes {
+            let Some(last) = e.steps.last() else { continue };
+            let blocks = e.goal.block_count();
+            let protocol = e.world.as_ref().map_or(sim::ActionProtocol::Free, |w| w.protocol);
+            let first = Observation {
+                grid: e.grid,
+                state: e.start,
+                goal: e.goal,
+                protocol,
+                view: e.view,
+            };
+            let observations: Vec<Observation> = std::iter::once(first)
+                .chain(e.steps.iter().map(|s| Observation {
+                    state: s.state,
+                    ..first
+                }))
+                .collect();
+            let ended = last.terminated || last.truncated;
+            let n = e.steps.len();
+            let d = PyDict::new(py);
+            d.set_item("observations", encode(py, kind, &observations, e.grid, blocks)?)?;
+            d.set_item(
+                "actions",
+                PyArray1::from_vec(py, e.steps.iter().map(|s| s.action.index() as i64).collect()),
+            )?;
+            d.set_item(
+                "rewards",
+                PyArray1::from_vec(py, e.steps.iter().map(|s| s.reward).collect()),
+            )?;
+            d.set_item(
+                "terminations",
+                PyArray1::from_vec(py, e.steps.iter().map(|s| s.terminated).collect()),
+            )?;
+            // Cut short (a crash, the person switching modes): truncated at its last step.
+            let truncations: Vec<bool> = e
+                .steps
+                .iter()
+                .enumerate()
+                .map(|(k, s)| s.truncated || (!ended && k + 1 == n))
+                .collect();
+            d.set_item("truncations", PyArray1::from_vec(py, truncations))?;
+            d.set_item(
+                "person",
+                PyArray1::from_vec(py, e.steps.iter().map(|s| s.demonstrated).collect()),
+            )?;
+            let time = |f: fn(&agent::demos::DemoStep) -> Option<u64>| -> Vec<i64> {
+                e.steps.iter().map(|s| f(s).map_or(-1, |t| t as i64)).collect()
+            };
+            d.set_item("t_ms", PyArray1::from_vec(py, time(|s| s.time.t_ms)))?;
+            d.set_item("received_ms", PyArray1::from_vec(py, time(|s| s.time.received_ms)))?;
+            d.set_item("episode", e.episode)?;
+            d.set_item("goal", e.goal.to_string())?;
+            d.set_item("view", e.view.to_string())?;
+            d.set_item("grid", (e.grid.width(), e.grid.height()))?;
+            d.set_item("blocks", blocks)?;
+            d.set_item("started_ms", e.started_ms)?;
+            d.set_item("ended", ended)?;
+            match &e.participant {
+                Some(p) => {
+                    let who = PyDict::new(py);
+                    who.set_item("number", p.number)?;
+                    who.set_item("condition", &p.condition)?;
+                    who.set_item("code", &p.code)?;
+                    who.set_item("ids", p.ids.clone())?;
+                    d.set_item("participant", who)?;
+                }
+                None => d.set_item("participant", py.None())?,
+            }
+            match &e.world {
+                Some(w) => {
+                    let world = PyDict::new(py);
+                    world.set_item("reward", &w.reward)?;
+                    world.set_item("protocol", w.protocol.to_string())?;
+                    world.set_item("horizon", w.horizon)?;
+                    d.set_item("world", world)?;
+                }
+                None => d.set_item("world", py.None())?,
+            }
+            episodes.append(d)?;
+        }
+        out.set_item("episodes", episodes)?;
+        Ok(out)
+    })
+}
+
 /// [`agent::demos::read_episodes`] of `path` on a thread of its own, the caller checking for
 /// signals (Ctrl-C) every 100 ms: opening a FIFO blocks until a writer comes, which no
 /// signal check inside the reader could interrupt.
 fn read_interruptibly(py: Python<'_>, path: &std::path::Path) -> PyResult<Vec<agent::demos::DemoEpisode>> {
+    read_in_thread(py, path, |p| agent::demos::read_episodes(p, None))
+}
+
+/// `read(path)` on a thread of its own, the caller checking for signals (Ctrl-C) every
+/// 100 ms ([`read_interruptibly`]).
+fn read_in_thread<T: Send + 'static>(
+    py: Python<'_>,
+    path: &std::path::Path,
+    read: fn(&std::path::Path) -> agent::Result<T>,
+) -> PyResult<T> {
     use std::sync::mpsc::{RecvTimeoutError, channel};
     let (sender, receiver) = channel();
     let owned = path.to_path_buf();
     std::thread::spawn(move || {
-        let read = guard(|| agent::demos::read_episodes(&owned, None).or_value_error());
+        let read = guard(|| read(&owned).or_value_error());
         // The caller may have gone (interrupted): nobody is left to tell.
         let _ = sender.send(read);
     });

@@ -52,6 +52,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(goal_env::check_stack_goal, m)?)?;
     m.add_function(wrap_pyfunction!(demos::demonstrations, m)?)?;
     m.add_function(wrap_pyfunction!(demos::read_recording, m)?)?;
+    m.add_function(wrap_pyfunction!(demos::recording_episodes, m)?)?;
     m.add_function(wrap_pyfunction!(training::train, m)?)?;
     m.add_function(wrap_pyfunction!(dqn::train_dqn, m)?)?;
     m.add_function(wrap_pyfunction!(reproduce::e8_arms, m)?)?;

@@ -8,12 +8,13 @@
 use std::net::IpAddr;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::time::Duration;
 
-use agent::correction::{CorrectionRule, default_goals, session_world_under};
+use agent::correction::{CorrectionRule, CorrectionSession, default_goals, session_world_under};
 use agent::{LearnerProfile, QAgent, QParams};
 use neural::AnyModel;
-use serde::Deserialize;
-use sim::{EnvConfig, Goal, Grid, Profile};
+use serde::{Deserialize, Serialize};
+use sim::{Env, EnvConfig, Goal, GoalSpec, Grid, Profile, View};
 
 use crate::error::{Result, ServeError};
 use crate::protocol::Mode;
@@ -21,7 +22,8 @@ use crate::protocol::Mode;
 /// The server's bounds (docs/serve.md, "Security bounds").
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Limits {
-    /// Participant sessions the server holds at most (a study's `max_participants` wins).
+    /// Participant sessions held at once (a session with no page for `session_idle` is let
+    /// go, its recording kept).
     pub max_sessions: usize,
     /// Messages a session may send per second (a bucket of this many, refilled at this rate).
     pub actions_per_second: u32,
@@ -29,16 +31,37 @@ pub struct Limits {
     pub max_message_bytes: usize,
     /// The largest WebSocket message or frame at all; a longer one ends the connection.
     pub max_frame_bytes: usize,
+    /// A session with no page connected for this long is let go.
+    pub session_idle: Duration,
+    /// A request whose head or body takes longer than this to arrive, or a page that does
+    /// not read what it is sent for this long, is cut off.
+    pub request_timeout: Duration,
+    /// A connected page that answers neither a message nor the server's pings for this long
+    /// is disconnected (a browser answers pings by itself, even in a background tab).
+    pub socket_idle: Duration,
+    /// Connections open at once; more wait to be accepted.
+    pub max_connections: usize,
+    /// The most states the exact solver stores to find the shortest plan of an episode's
+    /// start (the page shows none when it gives up): a bound on each participant's memory
+    /// and time at an episode's start.
+    pub solver_budget: usize,
 }
 
 impl Default for Limits {
-    /// 100 sessions, 20 messages per second, messages of 1 KiB (a frame of 64 KiB).
+    /// 100 sessions, 20 messages per second, messages of 1 KiB (a frame of 64 KiB),
+    /// sessions let go after 30 minutes without a page, requests cut off after 10 s, pages
+    /// after 90 s without an answer, 1,000 connections, a million states for a shortest plan.
     fn default() -> Self {
         Limits {
             max_sessions: 100,
             actions_per_second: 20,
             max_message_bytes: 1024,
             max_frame_bytes: 64 * 1024,
+            session_idle: Duration::from_secs(30 * 60),
+            request_timeout: Duration::from_secs(10),
+            socket_idle: Duration::from_secs(90),
+            max_connections: 1000,
+            solver_budget: 1_000_000,
         }
     }
 }
@@ -60,6 +83,10 @@ pub struct ServeConfig {
     pub record_dir: Option<PathBuf>,
     /// The study file.
     pub study: Option<PathBuf>,
+    /// The address participants reach the server at (`http://lab.example.org:8080/`), when
+    /// it is not the address bound: printed as the link, and its host name let through the
+    /// `Host` check (docs/serve.md, "Security bounds").
+    pub public_url: Option<String>,
     /// The seed of every episode's start, without a study (a study names its own).
     pub seed: u64,
     /// The bounds.
@@ -77,6 +104,7 @@ impl Default for ServeConfig {
             goals: None,
             record_dir: None,
             study: None,
+            public_url: None,
             seed: 1,
             limits: Limits::default(),
         }
@@ -93,10 +121,39 @@ pub struct StudyFile {
     /// The seed of the starts: every participant of a condition plays the same starts.
     #[serde(default)]
     pub seed: Option<u64>,
-    /// Participants admitted at most.
+    /// Participants admitted at most, over every run of the server on the same record
+    /// folder (at least 1).
     #[serde(default)]
-    pub max_participants: Option<usize>,
-    /// The conditions, handed to participants in turn.
+    pub max_participants: Option<u64>,
+    /// The consent form, Markdown (shown first; declining records nothing).
+    #[serde(default)]
+    pub consent: Option<String>,
+    /// The consent form's Markdown file (relative to the study file), instead of `consent`.
+    #[serde(default)]
+    pub consent_file: Option<PathBuf>,
+    /// The instructions, Markdown (shown after consent, before the first episode).
+    #[serde(default)]
+    pub instructions: Option<String>,
+    /// The instructions' Markdown file, instead of `instructions`.
+    #[serde(default)]
+    pub instructions_file: Option<PathBuf>,
+    /// The URL parameters a crowd-sourcing platform sends, read into the recording's
+    /// header (`["PROLIFIC_PID", "STUDY_ID", "SESSION_ID"]`, `["workerId", "assignmentId"]`):
+    /// the first one identifies the participant, who resumes on returning with it.
+    #[serde(default)]
+    pub participant_ids: Vec<String>,
+    /// The code shown when every episode is done (the platform's completion code).
+    #[serde(default)]
+    pub completion_code: Option<String>,
+    /// Where the page sends the participant when every episode is done (the platform's
+    /// completion link).
+    #[serde(default)]
+    pub completion_url: Option<String>,
+    /// What withdrawing does to the participant's recording: `delete` it, or `mark` it
+    /// withdrawn (kept, left out of every export). Without it, no withdrawal is offered.
+    #[serde(default)]
+    pub withdrawal: Option<String>,
+    /// The conditions, handed to participants to keep them balanced.
     #[serde(rename = "condition")]
     pub conditions: Vec<ConditionFile>,
 }
@@ -122,6 +179,9 @@ pub struct ConditionFile {
     /// The modes offered (default: every mode the model can offer).
     #[serde(default)]
     pub modes: Option<Vec<String>>,
+    /// `top` or `side` (default: the model's, else `top`).
+    #[serde(default)]
+    pub view: Option<String>,
 }
 
 impl StudyFile {
@@ -131,6 +191,15 @@ impl StudyFile {
             path: path.to_path_buf(),
             reason,
         };
+        // A pipe or a device would block the start (a FIFO until a writer comes) or never end.
+        match std::fs::metadata(path) {
+            Ok(meta) if !meta.is_file() => {
+                return Err(err(
+                    "it is not a regular file (a folder, a pipe or a device): give a TOML file".into(),
+                ));
+            }
+            _ => {}
+        }
         let mut text = String::new();
         std::io::Read::read_to_string(&mut files::open_bounded(path, 1 << 20, "a study file")?, &mut text)
             .map_err(|e| err(format!("cannot read: {e}")))?;
@@ -138,8 +207,45 @@ impl StudyFile {
         if study.conditions.is_empty() {
             return Err(err("it lists no [[condition]]".into()));
         }
+        if study.max_participants == Some(0) {
+            return Err(err(
+                "max_participants = 0 admits no one: give at least 1, or leave it out".into(),
+            ));
+        }
+        if study.consent.is_some() && study.consent_file.is_some() {
+            return Err(err("give consent or consent_file, not both".into()));
+        }
+        if study.instructions.is_some() && study.instructions_file.is_some() {
+            return Err(err("give instructions or instructions_file, not both".into()));
+        }
+        for (i, id) in study.participant_ids.iter().enumerate() {
+            check_name(id).map_err(|e| err(format!("participant_ids: {e}")))?;
+            if study.participant_ids[..i].contains(id) {
+                return Err(err(format!("participant_ids: {id} is listed twice")));
+            }
+        }
+        if let Some(code) = &study.completion_code {
+            check_name(code).map_err(|e| err(format!("completion_code: {e}")))?;
+        }
+        if let Some(url) = &study.completion_url {
+            if !(url.starts_with("https://") || url.starts_with("http://")) || url.contains(['"', '<', '>', ' ']) {
+                return Err(err(format!(
+                    "completion_url {url:?}: give an http:// or https:// address"
+                )));
+            }
+        }
+        if let Some(w) = &study.withdrawal {
+            w.parse::<Withdrawal>().map_err(|e| err(format!("withdrawal: {e}")))?;
+        }
         for c in &study.conditions {
             check_name(&c.name).map_err(|e| err(format!("condition name: {e}")))?;
+            if let Some(modes) = &c.modes {
+                for (i, m) in modes.iter().enumerate() {
+                    if modes[..i].contains(m) {
+                        return Err(err(format!("condition {}: the mode {m} is listed twice", c.name)));
+                    }
+                }
+            }
         }
         Ok(study)
     }
@@ -159,6 +265,47 @@ pub fn check_name(name: &str) -> std::result::Result<(), String> {
             "{name:?} is not a name: use 1 to 32 letters, digits, - and _ (no paths)"
         ))
     }
+}
+
+/// What a participant's withdrawal does to their recording.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Withdrawal {
+    /// The recording is deleted.
+    Delete,
+    /// The recording is kept, a `withdrawn` line appended: every export leaves it out.
+    Mark,
+}
+
+impl std::str::FromStr for Withdrawal {
+    type Err = String;
+
+    fn from_str(text: &str) -> std::result::Result<Withdrawal, String> {
+        match text {
+            "delete" => Ok(Withdrawal::Delete),
+            "mark" => Ok(Withdrawal::Mark),
+            _ => Err(format!("{text:?} is not a withdrawal: delete or mark")),
+        }
+    }
+}
+
+/// A study's path for its participants: consent, instructions, ids, the end.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct StudyPath {
+    /// The study's name.
+    pub name: String,
+    /// The consent form as safe HTML ([`crate::markdown`]).
+    pub consent: Option<String>,
+    /// The instructions as safe HTML.
+    pub instructions: Option<String>,
+    /// The URL parameters read as the participant's ids; the first identifies them.
+    pub participant_ids: Vec<String>,
+    /// The completion code.
+    pub completion_code: Option<String>,
+    /// The completion link.
+    pub completion_url: Option<String>,
+    /// What withdrawing does, if it is offered.
+    pub withdrawal: Option<Withdrawal>,
 }
 
 /// A condition ready to hand to participants.
@@ -189,36 +336,74 @@ pub struct Condition {
     pub modes: Vec<Mode>,
     /// The seed of the starts.
     pub seed: u64,
+    /// The most states a shortest plan's search stores ([`Limits::solver_budget`]).
+    pub solver_budget: usize,
+}
+
+/// What a condition is made of, typed: from a study file's `[[condition]]` or the command
+/// line's flags.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ConditionSpec {
+    /// Its name.
+    pub name: String,
+    /// The model file (a tabular model or a network), if any.
+    pub model: Option<PathBuf>,
+    /// The profile of play and correct mode (`None`: the model's).
+    pub profile: Option<Profile>,
+    /// The goals, `:`-separated (`None`: the profile's default).
+    pub goals: Option<String>,
+    /// Episodes asked for (0: no limit).
+    pub episodes: u64,
+    /// The modes offered (`None`: every mode the model can offer).
+    pub modes: Option<Vec<Mode>>,
+    /// The seed of the starts.
+    pub seed: u64,
+    /// The most states a shortest plan's search stores.
+    pub solver_budget: usize,
+    /// The view (`None`: the model's, else the top view).
+    pub view: Option<View>,
 }
 
 impl Condition {
-    /// Loads and resolves a condition: `model` (a tabular or network file), `profile`,
-    /// `goals` (`:`-separated), `modes` (`None`: every mode the model can offer).
-    pub fn prepare(
-        name: &str,
-        model: Option<&Path>,
-        profile: Option<Profile>,
-        goals: Option<&str>,
-        episodes: u64,
-        modes: Option<&[Mode]>,
-        seed: u64,
-    ) -> Result<Condition> {
+    /// Loads and resolves a condition: its model (a tabular or network file), profile,
+    /// goals and modes; then checks that it runs (every goal's world can be made, an
+    /// episode begun), so that a condition that cannot run is refused before anyone joins.
+    pub fn prepare(spec: &ConditionSpec) -> Result<Condition> {
+        let ConditionSpec {
+            name,
+            model,
+            profile,
+            goals,
+            episodes,
+            modes,
+            seed,
+            solver_budget,
+            view,
+        } = spec;
+        let (name, profile, episodes, seed) = (name.as_str(), *profile, *episodes, *seed);
+        let (model, goals, modes) = (model.as_deref(), goals.as_deref(), modes.as_deref());
         let loaded = model.map(AnyModel::load).transpose()?;
         let tabular = match &loaded {
             Some(AnyModel::Q(q)) => Some((**q).clone()),
             _ => None,
         };
         let agent_is_model = tabular.is_some();
-        let agent = match tabular {
-            Some(q) => q,
-            None => {
-                // An untrained stand-in of the profile, on the model's grid and blocks.
-                let p = LearnerProfile::of(profile.unwrap_or(Profile::Spec));
-                let (grid, blocks) = loaded.as_ref().map_or((Grid::default(), 3), |m| (m.grid(), m.blocks()));
-                QAgent::with_schedule(p.repr, grid, blocks, QParams::default(), p.schedule)?
+        let model_view = loaded.as_ref().map(|m| m.world().view);
+        let view = match (*view, model_view) {
+            (Some(asked), Some(own)) if asked != own => {
+                return Err(ServeError::Config(format!(
+                    "condition {name}: its view is {asked}, and its model plays the {own} view"
+                )));
             }
+            (asked, own) => asked.or(own).unwrap_or(View::Top),
         };
-        let (world, profile) = session_world_under(&agent, profile);
+        let (agent, world, profile) = match tabular {
+            Some(q) => {
+                let (world, profile) = session_world_under(&q, profile);
+                (q, world, profile)
+            }
+            None => stand_in(loaded.as_ref(), profile, view)?,
+        };
         let goals = match goals {
             Some(text) => Goal::parse_list(text, agent.blocks())?,
             None => default_goals(&world, profile)?,
@@ -253,7 +438,7 @@ impl Condition {
             }
         };
         let watch_world = loaded.as_ref().map_or(world.clone(), AnyModel::world);
-        Ok(Condition {
+        let condition = Condition {
             name: name.to_string(),
             model_file: model.map(|p| p.display().to_string()),
             model: loaded.map(Arc::new),
@@ -266,24 +451,131 @@ impl Condition {
             episodes,
             modes,
             seed,
-        })
+            solver_budget: *solver_budget,
+        };
+        condition
+            .check_runs()
+            .map_err(|e| ServeError::Config(format!("condition {name}: {e}")))?;
+        Ok(condition)
+    }
+
+    /// An error unless every mode offered can begin an episode on every goal: the session
+    /// of play and correct mode is begun once here (recording nothing), and watch mode's
+    /// world is made for each of the model's goals, so that a condition that cannot run is
+    /// refused at start-up, not at each participant's join.
+    fn check_runs(&self) -> Result<()> {
+        if self.modes.iter().any(|m| *m != Mode::Watch) {
+            let mut session = CorrectionSession::new(
+                self.agent.clone(),
+                self.rule,
+                self.world,
+                self.goals.clone(),
+                self.seed,
+                0.0,
+                "person",
+                None,
+                (),
+            )?;
+            // Every goal's world was checked by the session; one episode checks the start.
+            session.next_episode()?;
+        }
+        if let (true, Some(model)) = (self.modes.contains(&Mode::Watch), &self.model) {
+            for goal in self.watch_goals(model) {
+                let mut env = Env::new(EnvConfig {
+                    goal,
+                    ..self.watch_world
+                })?;
+                env.reset(self.seed);
+            }
+        }
+        Ok(())
+    }
+
+    /// The goals watch mode plays in turn: those of the condition with the model's block
+    /// count, or drawn ones when there are none.
+    pub fn watch_goals(&self, model: &AnyModel) -> Vec<GoalSpec> {
+        let goals: Vec<GoalSpec> = self
+            .goals
+            .iter()
+            .filter(|g| g.block_count() == model.blocks())
+            .map(|g| GoalSpec::Fixed(*g))
+            .collect();
+        if goals.is_empty() {
+            vec![GoalSpec::Random]
+        } else {
+            goals
+        }
     }
 }
 
-/// The conditions of `config`: its study's, or the one the command line describes; and the
-/// study's name, seed-independent settings applied to `config.limits`.
-pub fn conditions(config: &mut ServeConfig) -> Result<(String, Vec<Arc<Condition>>)> {
+/// What a server runs: the study's path, its conditions, and the participants it admits
+/// at most (none: no cap but `--max-sessions` at once).
+pub struct Plan {
+    /// The study's path for its participants (its name `blockstack` without a study).
+    pub path: StudyPath,
+    /// The conditions, handed to participants to keep them balanced.
+    pub conditions: Vec<Arc<Condition>>,
+    /// The study's `max_participants`.
+    pub max_participants: Option<u64>,
+}
+
+/// The agent that proposes and learns in a condition without a tabular model (a network
+/// is not corrected by the tabular rule), untrained, on the model's grid and blocks (the
+/// default world's without a model); its world and the profile whose rule applies. In the
+/// side view the learner `train --view side` makes, in that world.
+fn stand_in(model: Option<&AnyModel>, profile: Option<Profile>, view: View) -> Result<(QAgent, EnvConfig, Profile)> {
+    let (grid, blocks) = model.map_or((Grid::default(), 3), |m| (m.grid(), m.blocks()));
+    let profile = profile.unwrap_or(Profile::Spec);
+    if view == View::Side {
+        let config = agent::TrainConfig::resolve(&agent::TrainOverrides {
+            view: Some(View::Side),
+            profile: Some(profile),
+            grid: Some(grid),
+            blocks: Some(blocks),
+            ..agent::TrainOverrides::default()
+        })?;
+        let agent = QAgent::with_schedule(config.repr, grid, blocks, config.params, config.schedule)?;
+        let world = EnvConfig {
+            goal: GoalSpec::Random,
+            horizon: sim::DEFAULT_HORIZON,
+            termination: sim::Termination::Goal,
+            ..config.world
+        };
+        return Ok((agent, world, profile));
+    }
+    let p = LearnerProfile::of(profile);
+    let agent = QAgent::with_schedule(p.repr, grid, blocks, QParams::default(), p.schedule)?;
+    let (world, profile) = session_world_under(&agent, Some(profile));
+    Ok((agent, world, profile))
+}
+
+/// What `config` runs: its study's conditions, or the one the command line describes.
+pub fn plan(config: &ServeConfig) -> Result<Plan> {
+    if config.limits.max_sessions == 0 {
+        return Err(ServeError::Config(
+            "--max-sessions 0 holds no session: give at least 1".into(),
+        ));
+    }
     let Some(path) = config.study.clone() else {
-        let c = Condition::prepare(
-            "default",
-            config.model.as_deref(),
-            config.profile,
-            config.goals.as_deref(),
-            0,
-            None,
-            config.seed,
-        )?;
-        return Ok(("blockstack".into(), vec![Arc::new(c)]));
+        let c = Condition::prepare(&ConditionSpec {
+            name: "default".into(),
+            model: config.model.clone(),
+            profile: config.profile,
+            goals: config.goals.clone(),
+            episodes: 0,
+            modes: None,
+            seed: config.seed,
+            solver_budget: config.limits.solver_budget,
+            view: None,
+        })?;
+        return Ok(Plan {
+            path: StudyPath {
+                name: "blockstack".into(),
+                ..StudyPath::default()
+            },
+            conditions: vec![Arc::new(c)],
+            max_participants: None,
+        });
     };
     if config.model.is_some() || config.profile.is_some() || config.goals.is_some() {
         return Err(ServeError::Config(
@@ -301,9 +593,6 @@ pub fn conditions(config: &mut ServeConfig) -> Result<(String, Vec<Arc<Condition
         path: path.clone(),
         reason,
     };
-    if let Some(max) = study.max_participants {
-        config.limits.max_sessions = max;
-    }
     let seed = study.seed.unwrap_or(config.seed);
     let mut conditions = Vec::new();
     for c in &study.conditions {
@@ -326,18 +615,54 @@ pub fn conditions(config: &mut ServeConfig) -> Result<(String, Vec<Arc<Condition
             })
             .transpose()
             .map_err(|e| err(format!("condition {}: {e}", c.name)))?;
-        let model = c.model.as_ref().map(|m| folder.join(m));
-        let prepared = Condition::prepare(
-            &c.name,
-            model.as_deref(),
+        let prepared = Condition::prepare(&ConditionSpec {
+            name: c.name.clone(),
+            model: c.model.as_ref().map(|m| folder.join(m)),
             profile,
-            c.goals.as_deref(),
-            c.episodes,
-            modes.as_deref(),
+            goals: c.goals.clone(),
+            episodes: c.episodes,
+            modes,
             seed,
-        )
+            solver_budget: config.limits.solver_budget,
+            view: c
+                .view
+                .as_deref()
+                .map(str::parse::<View>)
+                .transpose()
+                .map_err(|e| err(format!("condition {}: {e}", c.name)))?,
+        })
         .map_err(|e| err(format!("condition {}: {e}", c.name)))?;
         conditions.push(Arc::new(prepared));
     }
-    Ok((study.name.unwrap_or_else(|| "study".into()), conditions))
+    let text = |inline: &Option<String>, file: &Option<PathBuf>, what: &str| -> Result<Option<String>> {
+        let markdown = match (inline, file) {
+            (Some(text), _) => Some(text.clone()),
+            (None, Some(file)) => {
+                let file = folder.join(file);
+                let mut text = String::new();
+                std::io::Read::read_to_string(&mut files::open_bounded(&file, 1 << 20, "a Markdown text")?, &mut text)
+                    .map_err(|e| err(format!("{what} {}: {e}", file.display())))?;
+                Some(text)
+            }
+            (None, None) => None,
+        };
+        Ok(markdown.as_deref().map(crate::markdown::render))
+    };
+    let path_of_study = StudyPath {
+        name: study.name.clone().unwrap_or_else(|| "study".into()),
+        consent: text(&study.consent, &study.consent_file, "consent_file")?,
+        instructions: text(&study.instructions, &study.instructions_file, "instructions_file")?,
+        participant_ids: study.participant_ids.clone(),
+        completion_code: study.completion_code.clone(),
+        completion_url: study.completion_url.clone(),
+        withdrawal: study
+            .withdrawal
+            .as_deref()
+            .map(|w| w.parse().expect("checked on reading")),
+    };
+    Ok(Plan {
+        path: path_of_study,
+        conditions,
+        max_participants: study.max_participants,
+    })
 }

@@ -9,18 +9,24 @@
 //!
 //! - [`protocol`]: the messages between page and server.
 //! - [`participant`]: one participant's state machine, with no network in it.
+//! - `registry`: the participants held, numbered and balanced across restarts.
 //! - [`config`]: settings, the study file and the conditions it makes.
 //! - [`server`]: the routes, the WebSocket loop and the bounds.
+//! - [`results`]: the researcher's figures, CSV and replay, from the recordings on disk.
+//! - [`markdown`]: a study's consent and instructions, rendered safely.
 //! - [`curve`]: a training run's learning curve, live (`blockstack train ... --serve`).
 
 pub mod config;
 pub mod curve;
 pub mod error;
+pub mod markdown;
 pub mod participant;
 pub mod protocol;
+mod registry;
+pub mod results;
 pub mod server;
 
-pub use config::{Limits, ServeConfig, StudyFile};
+pub use config::{ConditionSpec, Limits, ServeConfig, StudyFile};
 pub use curve::{CurveHandle, CurvePoint, serve_curve};
 pub use error::{Result, ServeError};
 pub use server::{Links, Server, run};

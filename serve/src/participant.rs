@@ -14,17 +14,17 @@
 
 use std::sync::Arc;
 
-use agent::correction::{CorrectionSession, person_steps};
-use agent::demos::DemoSink;
+use agent::correction::{CorrectionSession, EpisodeEnd, PersonRole, PersonTurn, SessionLabels};
+use agent::demos::{DemoSink, ParticipantLine};
 use agent::{DemoRecord, DemoWriter};
 use files::Output;
 use oracle::ExactSolver;
 use sim::render::{colour, label};
 use sim::seeding::{SimRng, episode_seed};
-use sim::{Action, Env, EnvConfig, GoalSpec, Observation};
+use sim::{Action, BlockMove, Env, EnvConfig, Observation};
 
-use crate::config::Condition;
-use crate::protocol::{ActionValue, ClientMessage, Mode, Progress, View};
+use crate::config::{Condition, StudyPath};
+use crate::protocol::{ActionValue, ClientMessage, Completion, Mode, Progress, View};
 
 /// The agent's probability of a random proposal in correct mode: the paper's test policy,
 /// as `blockstack demo`'s default.
@@ -68,9 +68,25 @@ struct Watching {
     shortest: Option<u32>,
 }
 
+/// Where a participant's session goes on from: what an earlier session of the same
+/// recording left (a participant who returned after the server let their session go, or
+/// after a restart).
+#[derive(Clone, Debug)]
+pub struct Resumed {
+    /// The agent as the earlier sessions left it (the condition's, replayed).
+    pub agent: agent::QAgent,
+    /// The number the next episode gets: one past the last begun.
+    pub next_episode: u64,
+    /// The totals so far: episodes done, steps, corrections.
+    pub progress: Progress,
+}
+
 /// One participant.
 pub struct Participant {
     condition: Arc<Condition>,
+    study: Arc<StudyPath>,
+    /// Totals of the earlier sessions of this participant's recording.
+    before: Progress,
     mode: Mode,
     session: CorrectionSession<Recorder>,
     /// The shortest plan from the session episode's start.
@@ -84,26 +100,47 @@ pub struct Participant {
 pub type Outcome = std::result::Result<View, String>;
 
 impl Participant {
-    /// A participant in `condition`, recording to `recorder`, in the condition's first mode.
-    pub fn new(condition: Arc<Condition>, recorder: Recorder) -> agent::Result<Participant> {
+    /// A participant in `condition` of `study`, recording to `recorder` (its session line
+    /// naming `who`, a study's participant), in the condition's first mode; going on from
+    /// `resumed` when an earlier session of the recording is taken up again.
+    pub fn new(
+        condition: Arc<Condition>,
+        study: Arc<StudyPath>,
+        recorder: Recorder,
+        who: Option<ParticipantLine>,
+        resumed: Option<Resumed>,
+    ) -> agent::Result<Participant> {
         let c = &condition;
-        let session = CorrectionSession::new(
-            c.agent.clone(),
+        let (agent, first_episode, before) = match resumed {
+            Some(r) => (r.agent, r.next_episode, r.progress),
+            None => (c.agent.clone(), 0, Progress::default()),
+        };
+        let labels = SessionLabels {
+            demonstrator: "person".into(),
+            model: c.model_file.clone().filter(|_| c.agent_is_model),
+            participant: who,
+            timed: true,
+            first_episode,
+        };
+        let session = CorrectionSession::labelled(
+            agent,
             c.rule,
             c.world.clone(),
             c.goals.clone(),
             c.seed,
             PROPOSAL_EPSILON,
-            "person",
-            c.model_file.as_deref().filter(|_| c.agent_is_model),
+            labels,
             recorder,
         )?;
         let mode = c.modes[0];
         let mut p = Participant {
             progress: Progress {
                 episodes_total: c.episodes,
+                episodes_done: before.episodes_done,
                 ..Progress::default()
             },
+            before,
+            study,
             condition,
             mode,
             session,
@@ -125,13 +162,18 @@ impl Participant {
         self.mode
     }
 
-    /// Totals.
+    /// Totals, the earlier sessions of the recording included.
     pub fn progress(&self) -> Progress {
         Progress {
-            steps: self.session.report().steps,
-            corrections: self.session.report().corrections,
+            steps: self.before.steps + self.session.report().steps,
+            corrections: self.before.corrections + self.session.report().corrections,
             ..self.progress.clone()
         }
+    }
+
+    /// Appends a line of the server's to the recording (a withdrawal).
+    pub fn record(&mut self, line: &agent::DemoRecord) -> agent::Result<()> {
+        self.session.sink_mut().record(line)
     }
 
     /// Whether every episode asked for is done.
@@ -152,8 +194,9 @@ impl Participant {
                     self.enter(*mode).map_err(|e| e.to_string())?;
                 }
             }
-            ClientMessage::Act { action, .. } => self.act(action)?,
-            ClientMessage::Accept { .. } => self.accept()?,
+            ClientMessage::Act { action, t_ms, .. } => self.act(action, *t_ms)?,
+            ClientMessage::Move { block, to, t_ms, .. } => self.block_move(*block, *to, *t_ms)?,
+            ClientMessage::Accept { t_ms, .. } => self.accept(*t_ms)?,
             ClientMessage::Step { .. } => self.watch_step()?,
             ClientMessage::Next { .. } => match self.mode {
                 Mode::Watch => self.begin_watch().map_err(|e| e.to_string())?,
@@ -177,7 +220,8 @@ impl Participant {
                 self.message = "The agent plays: step it, or let it run at your pace.".into();
             }
             Mode::Play | Mode::Correct => {
-                if !self.is_done() {
+                // A participant resumed when done still sees a world (the last thank-you).
+                if !self.is_done() || self.session.observation().is_none() {
                     self.begin_session_episode()?;
                 }
                 self.message = match mode {
@@ -192,7 +236,7 @@ impl Participant {
 
     fn begin_session_episode(&mut self) -> agent::Result<()> {
         let obs = self.session.next_episode()?;
-        self.shortest = shortest(&self.condition.world, &obs);
+        self.shortest = shortest(&self.condition.world, &obs, self.condition.solver_budget);
         Ok(())
     }
 
@@ -203,12 +247,10 @@ impl Participant {
             .as_ref()
             .ok_or_else(|| agent::AgentError::Config("no model to watch".into()))?;
         let k = self.watching.as_ref().map_or(0, |w| w.k + 1);
-        let goals: Vec<_> = c.goals.iter().filter(|g| g.block_count() == model.blocks()).collect();
+        let goals = c.watch_goals(model);
         let world = EnvConfig {
-            goal: goals
-                .get((k % goals.len().max(1) as u64) as usize)
-                .map_or(GoalSpec::Random, |g| GoalSpec::Fixed((*g).clone())),
-            ..c.watch_world
+            goal: goals[(k % goals.len() as u64) as usize].clone(),
+            ..c.watch_world.clone()
         };
         let seed = episode_seed(c.seed, k);
         let mut env = Env::new(world.clone())?;
@@ -218,7 +260,7 @@ impl Participant {
             env,
             rng: agent::rollout::policy_rng(seed),
             next: None,
-            shortest: shortest(&world, &obs),
+            shortest: shortest(&world, &obs, c.solver_budget),
         };
         w.next = Some(model.policy(0.0)?.act(&obs, &mut w.rng)?);
         self.watching = Some(w);
@@ -245,54 +287,67 @@ impl Participant {
         }
     }
 
-    fn act(&mut self, name: &str) -> std::result::Result<(), String> {
+    fn act(&mut self, name: &str, t_ms: Option<u64>) -> std::result::Result<(), String> {
         let obs = self.live("an action of your own")?;
-        let action =
-            Action::parse(name, obs.state.block_count()).map_err(|e| format!("{name:?} is not an action here: {e}"))?;
-        let steps = person_steps(&obs, action).map_err(|e| format!("not now: {e}"))?;
-        if steps.is_empty() {
-            self.message = format!("{action}: that block is held already.");
-            return Ok(());
-        }
-        let proposed = self.session.proposal();
-        for &step in &steps {
-            if !self.session.is_over() {
-                self.session.step(Some(step)).map_err(|e| e.to_string())?;
-            }
-        }
-        self.message = match (self.mode, proposed) {
-            (Mode::Correct, Some(p)) if steps == [p] => format!("You confirmed {action}; the agent learnt it."),
-            (Mode::Correct, Some(p)) => format!("You chose {} instead of {p}; the agent learnt it.", join(&steps)),
-            _ => format!("You chose {}.", join(&steps)),
+        // The parser's error names the text and what is allowed: said once.
+        let action = Action::parse(name, obs.state.block_count()).map_err(|e| e.to_string())?;
+        let role = match self.mode {
+            Mode::Correct => PersonRole::Corrector,
+            _ => PersonRole::Player,
         };
+        let turn = self.session.person_at(action, role, t_ms).map_err(|e| e.to_string())?;
+        self.take(turn)
+    }
+
+    /// Side view: `block` onto the top of column `to` (the block there, or the table).
+    fn block_move(&mut self, block: u8, to: u8, t_ms: Option<u64>) -> std::result::Result<(), String> {
+        let obs = self.live("a block move")?;
+        if usize::from(block) >= obs.state.block_count() || usize::from(to) >= obs.grid.width() {
+            return Err(format!(
+                "block {block} onto column {to} is not a move here: the blocks are 0 to {}, the columns 0 to {}",
+                obs.state.block_count() - 1,
+                obs.grid.width() - 1
+            ));
+        }
+        let block = sim::BlockId(block);
+        let top = obs
+            .state
+            .blocks()
+            .filter(|&b| b != block && obs.state.cell(b).x == to)
+            .max_by_key(|&b| obs.state.cell(b).y);
+        let mv = match top {
+            Some(target) => BlockMove::Onto { block, target },
+            None => BlockMove::ToTable { block, column: to },
+        };
+        let turn = self.session.person_move(mv, t_ms).map_err(|e| e.to_string())?;
+        self.take(turn)
+    }
+
+    /// Shows what a person's turn did, or refuses it.
+    fn take(&mut self, turn: PersonTurn) -> std::result::Result<(), String> {
+        if let PersonTurn::Refused(refusal) = &turn {
+            return Err(refusal.to_string());
+        }
+        self.message = turn.message();
         self.after_session_step();
         Ok(())
     }
 
-    fn accept(&mut self) -> std::result::Result<(), String> {
+    fn accept(&mut self, t_ms: Option<u64>) -> std::result::Result<(), String> {
         if self.mode != Mode::Correct {
             return Err(format!("accept is part of correct mode, not {}", self.mode.name()));
         }
         self.live("accept")?;
-        let step = self.session.step(None).map_err(|e| e.to_string())?;
+        let step = self.session.step_at(None, t_ms).map_err(|e| e.to_string())?;
         self.message = format!("The agent took {}.", step.action);
         self.after_session_step();
         Ok(())
     }
 
     fn after_session_step(&mut self) {
-        if self.session.is_over() {
+        if let Some(end) = self.session.episode_end() {
             self.progress.episodes_done += 1;
-            let steps = self.session.steps();
-            let reached = self.session.observation().is_some_and(|o| o.goal.holds(&o.state));
-            let shortest = self
-                .shortest
-                .map_or(String::new(), |s| format!("; the shortest plan takes {s}"));
-            self.message = if reached {
-                format!("Goal reached in {steps} steps{shortest}.")
-            } else {
-                format!("Cut off after {steps} steps{shortest}.")
-            };
+            self.message = end.message(self.shortest);
             if self.is_done() {
                 self.message.push_str(" That was the last episode: thank you.");
             }
@@ -320,14 +375,12 @@ impl Participant {
             let mut policy = model.policy(0.0).map_err(|e| e.to_string())?;
             Some(policy.act(&obs, &mut w.rng).map_err(|e| e.to_string())?)
         };
-        let steps = w.env.steps();
-        let shortest = w
-            .shortest
-            .map_or(String::new(), |s| format!("; the shortest plan takes {s}"));
-        self.message = if step.terminated {
-            format!("The agent reached the goal in {steps} steps{shortest}.")
-        } else if step.truncated {
-            format!("The agent was cut off after {steps} steps{shortest}.")
+        self.message = if step.terminated || step.truncated {
+            let end = EpisodeEnd {
+                reached: step.terminated,
+                steps: w.env.steps(),
+            };
+            format!("The agent played. {}", end.message(w.shortest))
         } else {
             format!("The agent took {action}.")
         };
@@ -389,7 +442,8 @@ impl Participant {
             grid: [obs.grid.width(), obs.grid.height()],
             blocks: obs.blocks().iter().map(|cell| [cell.x, cell.y]).collect(),
             held: obs.held_block().map(|b| b.0),
-            goal: obs.goal.order().iter().map(|b| b.0).collect(),
+            view: obs.view,
+            goal: obs.goal,
             colours: obs
                 .state
                 .blocks()
@@ -419,6 +473,11 @@ impl Participant {
             },
             done: self.is_done(),
             recording: self.session_recording(),
+            completion: self.is_done().then(|| Completion {
+                code: self.study.completion_code.clone(),
+                url: self.study.completion_url.clone(),
+            }),
+            withdrawal: self.study.withdrawal.is_some() && self.session_recording(),
         }
     }
 
@@ -435,37 +494,41 @@ impl Participant {
     }
 }
 
-/// The length of a shortest plan from `obs` under `world`'s protocol, if the exact solver
-/// finds one within its budget.
-fn shortest(world: &EnvConfig, obs: &Observation) -> Option<u32> {
-    ExactSolver::new(world.grid)
-        .with_protocol(world.protocol)
+/// The length of a shortest plan from `obs` in `world` (its view and protocol: in the side
+/// view the fewest gripper steps), if the exact solver finds one within `budget` states. It
+/// can take seconds on many blocks: callers run participants off the async workers.
+fn shortest(world: &EnvConfig, obs: &Observation, budget: usize) -> Option<u32> {
+    ExactSolver::for_world(world)
+        .with_node_budget(budget)
         .distance(&obs.state, &obs.goal)
         .ok()
-}
-
-fn join(steps: &[Action]) -> String {
-    steps
-        .iter()
-        .map(ToString::to_string)
-        .collect::<Vec<_>>()
-        .join(", then ")
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::config::ConditionSpec;
     use sim::Profile;
 
     fn participant(profile: Profile) -> Participant {
-        let c = Condition::prepare("c", None, Some(profile), Some("0,1,2"), 2, None, 7).unwrap();
-        Participant::new(Arc::new(c), Recorder::new(None)).unwrap()
+        let c = Condition::prepare(&ConditionSpec {
+            name: "c".into(),
+            profile: Some(profile),
+            goals: Some("0,1,2".into()),
+            episodes: 2,
+            seed: 7,
+            solver_budget: 100_000,
+            ..ConditionSpec::default()
+        })
+        .unwrap();
+        Participant::new(Arc::new(c), Arc::default(), Recorder::new(None), None, None).unwrap()
     }
 
     fn act(p: &mut Participant, action: &str) -> Outcome {
         p.handle(&ClientMessage::Act {
             id: None,
             action: action.into(),
+            t_ms: None,
         })
     }
 

@@ -7,6 +7,7 @@
 //! Unknown fields and unknown types are refused: the protocol is small and closed.
 
 use serde::{Deserialize, Serialize};
+use sim::Goal;
 
 /// What a person is doing.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -64,11 +65,31 @@ pub enum ClientMessage {
         id: Option<u64>,
         /// The action's name.
         action: String,
+        /// Milliseconds since the page showed the episode's first view, by the page's
+        /// monotonic clock (recorded as the step's `t_ms` when believable).
+        #[serde(default)]
+        t_ms: Option<u64>,
+    },
+    /// Side view: the person's block move, `block` onto the top of column `to` (onto the
+    /// block there, or the table when the column is empty).
+    Move {
+        /// Repeated in the answer.
+        id: Option<u64>,
+        /// The block moved.
+        block: u8,
+        /// The destination column.
+        to: u8,
+        /// As for `act`.
+        #[serde(default)]
+        t_ms: Option<u64>,
     },
     /// Correct mode: take the agent's proposal.
     Accept {
         /// Repeated in the answer.
         id: Option<u64>,
+        /// As for `act`.
+        #[serde(default)]
+        t_ms: Option<u64>,
     },
     /// Watch mode: the agent's next step (the next episode once one has ended).
     Step {
@@ -88,7 +109,8 @@ impl ClientMessage {
         match self {
             ClientMessage::Mode { id, .. }
             | ClientMessage::Act { id, .. }
-            | ClientMessage::Accept { id }
+            | ClientMessage::Move { id, .. }
+            | ClientMessage::Accept { id, .. }
             | ClientMessage::Step { id }
             | ClientMessage::Next { id } => *id,
         }
@@ -140,8 +162,11 @@ pub struct View {
     pub blocks: Vec<[u16; 2]>,
     /// The held block.
     pub held: Option<u16>,
-    /// The goal, bottom to top.
-    pub goal: Vec<u16>,
+    /// The world's view: `top` (seen from above) or `side` (gravity, towers on a table).
+    pub view: sim::View,
+    /// The goal as recordings write it: one tower of every block as its list of block ids,
+    /// bottom to top (`[1,0,2]`); a goal of towers as `{"towers":[[0,1],[2]],"blocks":3}`.
+    pub goal: Goal,
     /// Every block's colour as `#rrggbb` (`sim::render`'s palette).
     pub colours: Vec<String>,
     /// Every block's label (`sim::render::label`).
@@ -172,6 +197,19 @@ pub struct View {
     pub done: bool,
     /// Whether play and correct mode are recorded.
     pub recording: bool,
+    /// Once every episode asked for is done: the study's completion code and link.
+    pub completion: Option<Completion>,
+    /// Whether the participant may withdraw (the study says what that does).
+    pub withdrawal: bool,
+}
+
+/// What the page shows, and where it goes, at the end of a study.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Completion {
+    /// The code the participant gives the platform.
+    pub code: Option<String>,
+    /// The platform's completion link.
+    pub url: Option<String>,
 }
 
 /// An answer that changed nothing.

@@ -1,43 +1,66 @@
-//! The HTTP side: the routes, the participants' registry, the WebSocket loop and the
-//! bounds (docs/serve.md).
+//! The HTTP side: the routes, the WebSocket loop and the bounds (docs/serve.md).
 //!
-//! - `GET /`: the page (a join form); `POST /join` makes a participant session (the next
-//!   condition in turn) and sends the browser to `/s/TOKEN`.
+//! - `GET /`: the page: a study's consent and instructions (`GET /api/study`), or a join
+//!   form; `POST /join` makes a participant session (the condition with the fewest
+//!   participants; a participant returning with the platform's id gets theirs back) and
+//!   sends the browser to `/s/TOKEN`; `POST /api/resume` finds a returning participant's.
+//! - `POST /api/withdraw/TOKEN`: the participant withdraws.
 //! - `GET /s/TOKEN`: the page; it opens `GET /ws/TOKEN`, the session's WebSocket.
 //! - `GET /results/TOKEN` and `GET /api/results/TOKEN`: the researcher's page and its data,
-//!   behind a token of its own.
+//!   behind a token of its own; `.../episodes.csv` one row per episode; `GET
+//!   /replay/TOKEN/FILE/EPISODE` (and `/api/replay/...`) an episode step by step.
 //! - `GET /assets/app.js`, `/assets/style.css`: compiled into the binary.
 //!
 //! Tokens are 128 bits from the operating system's generator (`rand::rng()`): the one place
 //! blockstack draws unseeded randomness, since a token that a seed could reproduce would
 //! not be a secret. Everything a participant plays is seeded by the condition.
+//!
+//! Connections are served by hyper directly (not `axum::serve`) so that each has bounds:
+//! a request's head must arrive within [`Limits::request_timeout`], a handler must finish
+//! within it, and at most [`Limits::max_connections`] are open at once. A participant's
+//! work (a session begun, a message carried out: the exact solver may take seconds on many
+//! blocks) runs on tokio's blocking threads, never on the async workers that every other
+//! participant's messages need.
 
 use std::collections::HashMap;
-use std::net::SocketAddr;
-use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex, MutexGuard};
-use std::time::Instant;
+use std::net::{IpAddr, SocketAddr};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
 
-use agent::DemoWriter;
 use axum::Router;
 use axum::extract::ws::{CloseFrame, Message, WebSocket, WebSocketUpgrade};
-use axum::extract::{Form, Path, State};
+use axum::extract::{Form, Path, Request, State};
 use axum::http::{HeaderMap, StatusCode, header};
+use axum::middleware::Next;
 use axum::response::{Html, IntoResponse, Redirect, Response};
 use axum::routing::{get, post};
-use files::OutputPath;
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
-use crate::config::{Condition, Limits, ServeConfig, check_name, conditions};
+use crate::config::{ServeConfig, plan};
 use crate::error::{Result, ServeError};
-use crate::participant::{Participant, Recorder};
-use crate::protocol::{ClientMessage, ErrorMessage, Mode, Progress};
+use crate::protocol::{ClientMessage, ErrorMessage};
+use crate::registry::{Arrival, JoinRefused, Registry, Seating, SessionRow, Slot, SlotState, lock};
+use crate::results::{Figures, Table};
 
 /// The page: one HTML file for every view (join, session, results, curve).
 pub(crate) const INDEX_HTML: &str = include_str!("../assets/index.html");
 const APP_JS: &str = include_str!("../assets/app.js");
 const STYLE_CSS: &str = include_str!("../assets/style.css");
+
+/// WebSocket close codes the server uses (RFC 6455 section 7.4; 4000-4999 are the
+/// application's own). The page reconnects after [`close::GOING_AWAY`] and a dropped
+/// connection, and not after the others, which say why in their reason.
+pub mod close {
+    /// The server let an idle page go (it answered no ping): the page may come back.
+    pub const GOING_AWAY: u16 = 1001;
+    /// A session link that is not known here (mistyped, stale, or let go).
+    pub const UNKNOWN_SESSION: u16 = 1008;
+    /// A frame or message over the size bound.
+    pub const TOO_BIG: u16 = 1009;
+    /// The session was opened in another window, which now has it.
+    pub const OPENED_ELSEWHERE: u16 = 4001;
+}
 
 /// The addresses a server answers on, to tell the people who use it.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -46,6 +69,8 @@ pub struct Links {
     pub join: String,
     /// The researcher's page, behind its token.
     pub results: String,
+    /// A line to print after the links, when there is something to say about them.
+    pub note: Option<String>,
 }
 
 /// A bound server, not yet serving.
@@ -55,10 +80,11 @@ pub struct Server {
 }
 
 impl Server {
-    /// Loads the conditions (models, study), prepares the recording folder and binds the
+    /// Loads the conditions (models, study), prepares the recording folder, reads what it
+    /// already holds (numbering, balance and the study's cap go on from it) and binds the
     /// address: every error a user can make is found here, before anyone connects.
-    pub async fn bind(mut config: ServeConfig) -> Result<Server> {
-        let (study, conditions) = conditions(&mut config)?;
+    pub async fn bind(config: ServeConfig) -> Result<Server> {
+        let plan = plan(&config)?;
         let record_dir = match &config.record_dir {
             Some(dir) => {
                 files::prepare_folder(dir)?;
@@ -66,6 +92,7 @@ impl Server {
             }
             None => None,
         };
+        let public = config.public_url.as_deref().map(PublicUrl::parse).transpose()?;
         let addr = SocketAddr::new(config.bind, config.port);
         let listener = tokio::net::TcpListener::bind(addr)
             .await
@@ -73,15 +100,29 @@ impl Server {
                 addr: addr.to_string(),
                 source,
             })?;
+        let figures = Figures::new(
+            record_dir.clone(),
+            plan.conditions.clone(),
+            config.limits.solver_budget,
+            plan.path.participant_ids.first().cloned(),
+        );
+        let seating = Seating {
+            conditions: plan.conditions,
+            record_dir,
+            limits: config.limits,
+            max_participants: plan.max_participants,
+            study: Arc::new(plan.path),
+        };
+        let registry = Registry::new(&seating);
         Ok(Server {
             listener,
             app: Arc::new(App {
-                study,
-                conditions,
-                record_dir,
-                limits: config.limits,
-                researcher: new_token(),
-                registry: Mutex::new(Registry::default()),
+                seating,
+                public,
+                researcher: crate::registry::new_token(),
+                registry: Mutex::new(registry),
+                figures,
+                connections: AtomicU64::new(0),
             }),
         })
     }
@@ -91,19 +132,72 @@ impl Server {
         Ok(self.listener.local_addr()?)
     }
 
-    /// Where participants begin and where the researcher looks.
+    /// Where participants begin and where the researcher looks: the `--public-url` when
+    /// given, else the address bound (loopback's when bound to every address, with a note
+    /// saying so).
     pub fn links(&self) -> Result<Links> {
-        let base = format!("http://{}", self.local_addr()?);
+        let addr = self.local_addr()?;
+        let (base, note) = match &self.app.public {
+            Some(public) => (public.base.clone(), None),
+            None if addr.ip().is_unspecified() => {
+                let here = SocketAddr::new(IpAddr::from([127, 0, 0, 1]), addr.port());
+                (
+                    format!("http://{here}"),
+                    Some(format!(
+                        "listening on every address ({addr}): participants on other machines open this machine's \
+                         IP address at port {}, or a name given with --public-url",
+                        addr.port()
+                    )),
+                )
+            }
+            None => (format!("http://{addr}"), None),
+        };
         Ok(Links {
             join: format!("{base}/"),
             results: format!("{base}/results/{}", self.app.researcher),
+            note,
         })
     }
 
     /// Serves until the process ends. Every recorded line is flushed as it is written, so
     /// killing the process loses none that a page was told of.
     pub async fn serve(self) -> Result<()> {
-        Ok(axum::serve(self.listener, router(self.app)).await?)
+        let app = self.app;
+        let router = router(app.clone());
+        let limits = app.seating.limits;
+        let slots = Arc::new(tokio::sync::Semaphore::new(limits.max_connections));
+        tokio::spawn(expire_sessions(app.clone()));
+        loop {
+            let permit = slots
+                .clone()
+                .acquire_owned()
+                .await
+                .expect("the semaphore is never closed");
+            let stream = match self.listener.accept().await {
+                Ok((stream, _)) => stream,
+                Err(_) => {
+                    // Out of file descriptors, or a connection reset before it was
+                    // accepted: wait a moment rather than spin.
+                    tokio::time::sleep(Duration::from_millis(50)).await;
+                    continue;
+                }
+            };
+            let service = hyper_util::service::TowerToHyperService::new(router.clone());
+            let app = app.clone();
+            tokio::spawn(async move {
+                app.connections.fetch_add(1, Ordering::SeqCst);
+                let mut builder = hyper::server::conn::http1::Builder::new();
+                builder
+                    .timer(hyper_util::rt::TokioTimer::new())
+                    .header_read_timeout(limits.request_timeout);
+                let connection = builder
+                    .serve_connection(hyper_util::rt::TokioIo::new(stream), service)
+                    .with_upgrades();
+                let _ = connection.await;
+                app.connections.fetch_sub(1, Ordering::SeqCst);
+                drop(permit);
+            });
+        }
     }
 }
 
@@ -118,184 +212,133 @@ pub fn run(config: ServeConfig, announce: impl FnOnce(&Links) -> std::io::Result
     })
 }
 
-/// A fresh token: 128 bits from the operating system's generator, as 32 hex digits (the
-/// module docs say why this is not seeded).
-fn new_token() -> String {
-    use rand::RngExt;
-    format!("{:032x}", rand::rng().random::<u128>())
+/// Lets idle sessions go, now and then ([`Registry::expire_idle`]).
+async fn expire_sessions(app: Arc<App>) {
+    let limits = app.seating.limits;
+    let every = (limits.session_idle / 4).clamp(Duration::from_millis(20), Duration::from_secs(60));
+    loop {
+        tokio::time::sleep(every).await;
+        Registry::expire_idle(&app.registry, &limits);
+    }
+}
+
+/// `--public-url`: the base participants use, and its host name.
+struct PublicUrl {
+    /// `http://host[:port]`, no trailing slash.
+    base: String,
+    /// The host, lower case, without port.
+    host: String,
+}
+
+impl PublicUrl {
+    fn parse(text: &str) -> Result<PublicUrl> {
+        let bad = |why: &str| ServeError::Config(format!("--public-url {text:?}: {why}"));
+        let rest = text
+            .strip_prefix("http://")
+            .or_else(|| text.strip_prefix("https://"))
+            .ok_or_else(|| bad("give a URL beginning with http:// or https://"))?;
+        let authority = rest.trim_end_matches('/');
+        if authority.is_empty() || authority.contains(['/', '?', '#', '@', ' ']) {
+            return Err(bad("give the address alone: a scheme, a host and perhaps a port"));
+        }
+        let host = host_name(authority).to_ascii_lowercase();
+        Ok(PublicUrl {
+            base: text.trim_end_matches('/').to_string(),
+            host,
+        })
+    }
+}
+
+/// The host of an `authority` (`name:port`, `[v6]:port`), without the port.
+fn host_name(authority: &str) -> &str {
+    if let Some(v6) = authority.strip_prefix('[') {
+        return v6.split(']').next().unwrap_or(v6);
+    }
+    authority.rsplit_once(':').map_or(authority, |(h, _)| h)
 }
 
 /// The server's shared state.
 struct App {
-    study: String,
-    conditions: Vec<Arc<Condition>>,
-    record_dir: Option<PathBuf>,
-    limits: Limits,
+    seating: Seating,
+    public: Option<PublicUrl>,
     researcher: String,
     registry: Mutex<Registry>,
-}
-
-#[derive(Default)]
-struct Registry {
-    by_token: HashMap<String, Arc<Slot>>,
-    /// In order of arrival, for the researcher's page.
-    all: Vec<Arc<Slot>>,
-}
-
-/// One participant's place on the server.
-struct Slot {
-    number: usize,
-    name: Option<String>,
-    recording: Option<String>,
-    /// A page is connected (one at a time).
-    connected: AtomicBool,
-    inner: Mutex<Inner>,
-}
-
-struct Inner {
-    participant: Participant,
-    bucket: Bucket,
-}
-
-/// Messages a session may still send now: refilled at the limit's rate up to one
-/// second's worth.
-struct Bucket {
-    tokens: f64,
-    last: Instant,
-}
-
-impl Bucket {
-    fn take(&mut self, rate: u32) -> bool {
-        let now = Instant::now();
-        let rate = f64::from(rate);
-        self.tokens = (self.tokens + now.duration_since(self.last).as_secs_f64() * rate).min(rate);
-        self.last = now;
-        if self.tokens >= 1.0 {
-            self.tokens -= 1.0;
-            true
-        } else {
-            false
-        }
-    }
-}
-
-fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(|e| e.into_inner())
+    figures: Figures,
+    /// Connections open now.
+    connections: AtomicU64,
 }
 
 impl App {
-    /// A new participant, in the next condition in turn; its token.
-    fn join(&self, name: Option<String>) -> std::result::Result<String, (StatusCode, String)> {
-        if let Some(n) = &name {
-            check_name(n).map_err(|e| (StatusCode::BAD_REQUEST, format!("participant name: {e}")))?;
-        }
-        let mut registry = lock(&self.registry);
-        if registry.all.len() >= self.limits.max_sessions {
-            return Err((
-                StatusCode::SERVICE_UNAVAILABLE,
-                format!(
-                    "this server takes at most {} sessions, and has them all",
-                    self.limits.max_sessions
-                ),
-            ));
-        }
-        let number = registry.all.len();
-        // Balanced: participant k gets condition k mod n, so the counts never differ by more
-        // than one.
-        let condition = self.conditions[number % self.conditions.len()].clone();
-        let fail = |e: String| (StatusCode::INTERNAL_SERVER_ERROR, e);
-        let (writer, recording) = match &self.record_dir {
-            None => (None, None),
-            Some(dir) => {
-                let (path, file) = recording_path(dir, number, &condition.name, name.as_deref());
-                let out = OutputPath::check(&path).map_err(|e| fail(e.to_string()))?;
-                (
-                    Some(DemoWriter::append(&out).map_err(|e| fail(e.to_string()))?),
-                    Some(file),
-                )
-            }
-        };
-        let participant = Participant::new(condition, Recorder::new(writer)).map_err(|e| fail(e.to_string()))?;
-        let token = new_token();
-        let slot = Arc::new(Slot {
-            number,
-            name,
-            recording,
-            connected: AtomicBool::new(false),
-            inner: Mutex::new(Inner {
-                participant,
-                bucket: Bucket {
-                    tokens: f64::from(self.limits.actions_per_second),
-                    last: Instant::now(),
-                },
-            }),
-        });
-        registry.by_token.insert(token.clone(), slot.clone());
-        registry.all.push(slot);
-        Ok(token)
-    }
-
-    fn find(&self, token: &str) -> Option<Arc<Slot>> {
-        lock(&self.registry).by_token.get(token).cloned()
-    }
-
     fn is_researcher(&self, token: &str) -> bool {
         // Compared in constant time: the token is the page's only lock.
         let (a, b) = (token.as_bytes(), self.researcher.as_bytes());
         a.len() == b.len() && a.iter().zip(b).fold(0u8, |acc, (x, y)| acc | (x ^ y)) == 0
     }
 
-    /// The answer to one text message of a session's page.
-    fn answer(&self, slot: &Slot, text: &str) -> String {
-        let mut inner = lock(&slot.inner);
+    /// Whether a request's `Host` names this server: an IP address, `localhost`, or the
+    /// `--public-url`'s host. A page of another site whose name was made to point at this
+    /// machine (DNS rebinding) sends its own name, and is refused.
+    fn serves_host(&self, host: Option<&str>) -> bool {
+        let Some(host) = host else {
+            return false;
+        };
+        let name = host_name(host);
+        name.parse::<IpAddr>().is_ok()
+            || name.eq_ignore_ascii_case("localhost")
+            || self.public.as_ref().is_some_and(|p| p.host.eq_ignore_ascii_case(name))
+    }
+
+    /// The answer to one text message of a session's page (runs on a blocking thread).
+    fn answer(&self, slot: &Slot, text: &str) -> std::result::Result<String, String> {
+        slot.touch();
+        let mut state = lock(&slot.state);
+        let live = match &mut *state {
+            SlotState::Live(live) => live,
+            SlotState::Expired { withdrawn: true, .. } => return Err(WITHDRAWN.into()),
+            SlotState::Expired { .. } => return Err(EXPIRED.into()),
+        };
         let id = message_id(text);
-        if !inner.bucket.take(self.limits.actions_per_second) {
-            return error_line(
+        let limits = &self.seating.limits;
+        if !live.bucket.take(limits.actions_per_second) {
+            return Ok(error_line(
                 id,
                 format!(
                     "too many messages: at most {} a second; nothing was done",
-                    self.limits.actions_per_second
+                    limits.actions_per_second
                 ),
-            );
+            ));
         }
-        if text.len() > self.limits.max_message_bytes {
-            return error_line(
+        if text.len() > limits.max_message_bytes {
+            return Ok(error_line(
                 id,
                 format!(
                     "a message of {} bytes is longer than the {} allowed; nothing was done",
                     text.len(),
-                    self.limits.max_message_bytes
+                    limits.max_message_bytes
                 ),
-            );
+            ));
         }
         let message: ClientMessage = match serde_json::from_str(text) {
             Ok(m) => m,
-            Err(e) => return error_line(id, format!("not a message of the protocol ({e}); nothing was done")),
+            Err(e) => {
+                return Ok(error_line(
+                    id,
+                    format!("not a message of the protocol ({e}); nothing was done"),
+                ));
+            }
         };
-        match inner.participant.handle(&message) {
+        Ok(match live.participant.handle(&message) {
             Ok(view) => serde_json::to_string(&view).expect("views serialise"),
             Err(e) => error_line(id, format!("{e}; nothing was done")),
-        }
+        })
     }
 }
 
-/// The recording of participant `number` under `dir`: `pNNNN-CONDITION[-NAME].jsonl`, the
-/// first such name not taken (an earlier run's recordings are never appended to). Every
-/// part is checked to be a plain name, so the path stays in `dir`.
-fn recording_path(dir: &std::path::Path, number: usize, condition: &str, name: Option<&str>) -> (PathBuf, String) {
-    let mut n = number;
-    loop {
-        let file = match name {
-            Some(name) => format!("p{n:04}-{condition}-{name}.jsonl"),
-            None => format!("p{n:04}-{condition}.jsonl"),
-        };
-        let path = dir.join(&file);
-        if std::fs::symlink_metadata(&path).is_err() {
-            return (path, file);
-        }
-        n += 1;
-    }
-}
+const UNKNOWN: &str =
+    "this session link is not known here: it is mistyped, or from an earlier run of the server; ask for a new one";
+const WITHDRAWN: &str = "you withdrew from this study: nothing more is recorded for you";
+const EXPIRED: &str =
+    "this session was closed after a long time without a page; its recording is kept: ask for a new link";
 
 /// The `id` of a message, when it is a JSON object with a whole-number `id`.
 fn message_id(text: &str) -> Option<u64> {
@@ -305,6 +348,15 @@ fn message_id(text: &str) -> Option<u64> {
         .as_u64()
 }
 
+/// `value` as a JSON response.
+fn json(value: &impl Serialize) -> Response {
+    (
+        [(header::CONTENT_TYPE, "application/json")],
+        serde_json::to_string(value).expect("answers serialise"),
+    )
+        .into_response()
+}
+
 fn error_line(id: Option<u64>, message: String) -> String {
     serde_json::to_string(&ErrorMessage::new(id, message)).expect("errors serialise")
 }
@@ -312,13 +364,40 @@ fn error_line(id: Option<u64>, message: String) -> String {
 fn router(app: Arc<App>) -> Router {
     Router::new()
         .route("/", get(page))
+        .route("/api/study", get(study))
         .route("/join", post(join))
+        .route("/api/resume", post(resume))
+        .route("/api/withdraw/{token}", post(withdraw))
         .route("/s/{token}", get(page))
         .route("/results/{token}", get(results_page))
+        .route("/replay/{token}/{file}/{episode}", get(replay_page))
         .route("/api/results/{token}", get(results))
+        .route("/api/results/{token}/episodes.csv", get(episodes_csv))
+        .route("/api/replay/{token}/{file}/{episode}", get(replay))
         .route("/ws/{token}", get(socket))
         .merge(asset_routes())
+        .layer(axum::middleware::from_fn_with_state(app.clone(), guard))
         .with_state(app)
+}
+
+/// Every request: its `Host` must name this server ([`App::serves_host`]), and its handler
+/// must answer within [`Limits::request_timeout`] (a body sent slowly is cut off).
+async fn guard(State(app): State<Arc<App>>, request: Request, next: Next) -> Response {
+    let host = request.headers().get(header::HOST).and_then(|h| h.to_str().ok());
+    if !app.serves_host(host) {
+        let host = host.unwrap_or("(none)");
+        return (
+            StatusCode::FORBIDDEN,
+            format!(
+                "this server does not answer to the host {host}: open it by its IP address, or start it with --public-url naming this host"
+            ),
+        )
+            .into_response();
+    }
+    match tokio::time::timeout(app.seating.limits.request_timeout, next.run(request)).await {
+        Ok(response) => response,
+        Err(_) => (StatusCode::REQUEST_TIMEOUT, "the request took too long to arrive").into_response(),
+    }
 }
 
 /// The script and style sheet, compiled in.
@@ -338,14 +417,44 @@ async fn page() -> Html<&'static str> {
     Html(INDEX_HTML)
 }
 
-/// The join form's fields.
-#[derive(Deserialize)]
-struct JoinForm {
-    #[serde(default)]
-    name: String,
+/// What the page needs to lead a participant: the study's path (consent and
+/// instructions as safe HTML, the id parameters, what withdrawing does).
+async fn study(State(app): State<Arc<App>>) -> Response {
+    json(app.seating.study.as_ref())
 }
 
-async fn join(State(app): State<Arc<App>>, headers: HeaderMap, Form(form): Form<JoinForm>) -> Response {
+/// Who arrives, from a form's fields: `name` (the code typed), `consent` (`agree`), and the
+/// study's id parameters; an error line for any other field.
+fn arrival(fields: HashMap<String, String>) -> std::result::Result<Arrival, String> {
+    let mut arrival = Arrival::default();
+    for (key, value) in fields {
+        match key.as_str() {
+            "name" => arrival.name = Some(value.trim().to_string()).filter(|n| !n.is_empty()),
+            "consent" => arrival.consent = value == "agree",
+            _ => {
+                if !value.is_empty() {
+                    arrival.ids.insert(key, value);
+                }
+            }
+        }
+    }
+    Ok(arrival)
+}
+
+fn refused(refusal: JoinRefused) -> Response {
+    match refusal {
+        JoinRefused::BadRequest(m) => (StatusCode::BAD_REQUEST, m).into_response(),
+        JoinRefused::Full(m) => (StatusCode::SERVICE_UNAVAILABLE, m).into_response(),
+        JoinRefused::Withdrawn => (
+            StatusCode::FORBIDDEN,
+            "you withdrew from this study: nothing more is recorded for you",
+        )
+            .into_response(),
+        JoinRefused::Failed(m) => (StatusCode::INTERNAL_SERVER_ERROR, m).into_response(),
+    }
+}
+
+async fn join(State(app): State<Arc<App>>, headers: HeaderMap, Form(form): Form<HashMap<String, String>>) -> Response {
     // Another site's page may not fill the server with sessions through its own form.
     if !same_origin(&headers) {
         return (
@@ -354,10 +463,60 @@ async fn join(State(app): State<Arc<App>>, headers: HeaderMap, Form(form): Form<
         )
             .into_response();
     }
-    let name = Some(form.name.trim().to_string()).filter(|n| !n.is_empty());
-    match app.join(name) {
-        Ok(token) => Redirect::to(&format!("/s/{token}")).into_response(),
-        Err((status, message)) => (status, message).into_response(),
+    let arrival = match arrival(form) {
+        Ok(a) => a,
+        Err(m) => return (StatusCode::BAD_REQUEST, m).into_response(),
+    };
+    let joined = tokio::task::spawn_blocking(move || Registry::join(&app.registry, &app.seating, arrival)).await;
+    match joined {
+        Ok(Ok(token)) => Redirect::to(&format!("/s/{token}")).into_response(),
+        Ok(Err(refusal)) => refused(refusal),
+        Err(e) => (StatusCode::INTERNAL_SERVER_ERROR, e.to_string()).into_response(),
+    }
+}
+
+/// A participant who arrives with the platform's ids: their session's token when they
+/// return (`{"token": ...}`), 404 when they are new (the page shows the consent form).
+async fn resume(
+    State(app): State<Arc<App>>,
+    headers: HeaderMap,
+    Form(form): Form<HashMap<String, String>>,
+) -> Response {
+    if !same_origin(&headers) {
+        return (
+            StatusCode::FORBIDDEN,
+            "a page of another origin may not resume a session",
+        )
+            .into_response();
+    }
+    let arrival = match arrival(form) {
+        Ok(a) => a,
+        Err(m) => return (StatusCode::BAD_REQUEST, m).into_response(),
+    };
+    let found = tokio::task::spawn_blocking(move || Registry::returning(&app.registry, &app.seating, &arrival)).await;
+    match found {
+        Ok(Ok(Some(token))) => json(&serde_json::json!({ "token": token })),
+        Ok(Ok(None)) => (StatusCode::NOT_FOUND, "not a returning participant").into_response(),
+        Ok(Err(refusal)) => refused(refusal),
+        Err(e) => (StatusCode::INTERNAL_SERVER_ERROR, e.to_string()).into_response(),
+    }
+}
+
+/// The participant of `token` withdraws (the study says whether their recording is deleted
+/// or marked).
+async fn withdraw(State(app): State<Arc<App>>, Path(token): Path<String>, headers: HeaderMap) -> Response {
+    if !same_origin(&headers) {
+        return (
+            StatusCode::FORBIDDEN,
+            "a page of another origin may not withdraw anyone",
+        )
+            .into_response();
+    }
+    let done = tokio::task::spawn_blocking(move || Registry::withdraw(&app.registry, &app.seating, &token)).await;
+    match done {
+        Ok(Ok(how)) => json(&serde_json::json!({ "withdrawal": how })),
+        Ok(Err(m)) => (StatusCode::BAD_REQUEST, m).into_response(),
+        Err(e) => (StatusCode::INTERNAL_SERVER_ERROR, e.to_string()).into_response(),
     }
 }
 
@@ -369,56 +528,40 @@ async fn results_page(State(app): State<Arc<App>>, Path(token): Path<String>) ->
     }
 }
 
-/// One participant on the researcher's page.
-#[derive(Serialize)]
-struct SessionRow {
-    number: usize,
-    name: Option<String>,
-    condition: String,
-    mode: Mode,
-    connected: bool,
-    done: bool,
-    recording: Option<String>,
-    progress: Progress,
-}
-
 /// The researcher's page's data.
 #[derive(Serialize)]
 struct Results {
     study: String,
     conditions: Vec<String>,
     max_sessions: usize,
+    max_participants: Option<u64>,
+    /// Participants admitted in all, over every run on the record folder.
+    admitted: u64,
+    /// This run's sessions.
     sessions: Vec<SessionRow>,
+    /// The figures of every recording on disk.
+    table: Table,
 }
 
 async fn results(State(app): State<Arc<App>>, Path(token): Path<String>) -> Response {
     if !app.is_researcher(&token) {
         return (StatusCode::NOT_FOUND, "unknown results link").into_response();
     }
-    let slots = lock(&app.registry).all.clone();
-    let sessions = slots
-        .iter()
-        .map(|slot| {
-            let inner = lock(&slot.inner);
-            let p = &inner.participant;
-            SessionRow {
-                number: slot.number,
-                name: slot.name.clone(),
-                condition: p.condition().name.clone(),
-                mode: p.mode(),
-                connected: slot.connected.load(Ordering::SeqCst),
-                done: p.is_done(),
-                recording: slot.recording.clone(),
-                progress: p.view(None).progress,
-            }
-        })
-        .collect();
-    let results = Results {
-        study: app.study.clone(),
-        conditions: app.conditions.iter().map(|c| c.name.clone()).collect(),
-        max_sessions: app.limits.max_sessions,
-        sessions,
+    let (slots, admitted) = {
+        let r = lock(&app.registry);
+        (r.all(), r.admitted())
     };
+    let results = tokio::task::spawn_blocking(move || Results {
+        study: app.seating.study.name.clone(),
+        conditions: app.seating.conditions.iter().map(|c| c.name.clone()).collect(),
+        max_sessions: app.seating.limits.max_sessions,
+        max_participants: app.seating.max_participants,
+        admitted,
+        sessions: slots.iter().map(|slot| slot.row()).collect(),
+        table: app.figures.table(),
+    })
+    .await
+    .expect("the rows are made without panicking");
     (
         [(header::CONTENT_TYPE, "application/json")],
         serde_json::to_string(&results).expect("results serialise"),
@@ -426,9 +569,50 @@ async fn results(State(app): State<Arc<App>>, Path(token): Path<String>) -> Resp
         .into_response()
 }
 
-/// Whether a request (a WebSocket, the join form) comes from our own page: a browser names the page's origin,
-/// which must be this server as the browser reached it (its `Host`). A client that sends
-/// no `Origin` is not a browser, and no other site's page can make it act.
+/// Every episode of every recording, one row each, as CSV.
+async fn episodes_csv(State(app): State<Arc<App>>, Path(token): Path<String>) -> Response {
+    if !app.is_researcher(&token) {
+        return (StatusCode::NOT_FOUND, "unknown results link").into_response();
+    }
+    let text = tokio::task::spawn_blocking(move || crate::results::csv(&app.figures.table()))
+        .await
+        .expect("the table is made without panicking");
+    (
+        [
+            (header::CONTENT_TYPE, "text/csv; charset=utf-8"),
+            (header::CONTENT_DISPOSITION, "attachment; filename=\"episodes.csv\""),
+        ],
+        text,
+    )
+        .into_response()
+}
+
+async fn replay_page(State(app): State<Arc<App>>, Path((token, _, _)): Path<(String, String, u64)>) -> Response {
+    if app.is_researcher(&token) {
+        Html(INDEX_HTML).into_response()
+    } else {
+        (StatusCode::NOT_FOUND, "unknown results link").into_response()
+    }
+}
+
+/// Episode `episode` of the recording `file`, step by step.
+async fn replay(State(app): State<Arc<App>>, Path((token, file, episode)): Path<(String, String, u64)>) -> Response {
+    if !app.is_researcher(&token) {
+        return (StatusCode::NOT_FOUND, "unknown results link").into_response();
+    }
+    let found = tokio::task::spawn_blocking(move || app.figures.replay(&file, episode))
+        .await
+        .expect("the replay is read without panicking");
+    match found {
+        Some(replay) => json(&replay),
+        None => (StatusCode::NOT_FOUND, "no such episode").into_response(),
+    }
+}
+
+/// Whether a request (a WebSocket, the join form) comes from our own page: a browser names
+/// the page's origin, which must be this server as the browser reached it (its `Host`,
+/// itself checked by [`guard`]). A client that sends no `Origin` is not a browser, and no
+/// other site's page can make it act.
 fn same_origin(headers: &HeaderMap) -> bool {
     let Some(origin) = headers.get(header::ORIGIN) else {
         return true;
@@ -457,67 +641,155 @@ async fn socket(
         )
             .into_response();
     }
-    let limit = app.limits.max_frame_bytes;
+    let limit = app.seating.limits.max_frame_bytes;
     upgrade
         .max_message_size(limit)
         .max_frame_size(limit)
         .on_upgrade(move |socket| session_socket(socket, app, token))
 }
 
-/// Marks a session's page as gone when its connection ends, however it ends.
-struct Connected(Arc<Slot>);
+/// Ids of page connections, so that a session knows which page has it.
+static NEXT_PAGE: AtomicU64 = AtomicU64::new(1);
+
+/// Marks a session's page as gone when its connection ends, however it ends, unless a
+/// newer page has taken the session over.
+struct Connected {
+    slot: Arc<Slot>,
+    page: u64,
+}
 
 impl Drop for Connected {
     fn drop(&mut self) {
-        self.0.connected.store(false, Ordering::SeqCst);
+        let mut page = lock(&self.slot.page);
+        if *page == self.page {
+            *page = 0;
+        }
+        drop(page);
+        self.slot.touch();
     }
 }
 
-async fn refuse(mut socket: WebSocket, message: &str) {
+/// Sends one error line, then closes with `code` and a short `reason`.
+async fn refuse(socket: &mut WebSocket, code: u16, message: &str) {
     let _ = socket
         .send(Message::Text(error_line(None, message.into()).into()))
         .await;
-    let _ = socket.send(Message::Close(None)).await;
+    close(socket, code, message).await;
+}
+
+async fn close(socket: &mut WebSocket, code: u16, reason: &str) {
+    // A close frame's reason holds at most 123 bytes.
+    let mut end = reason.len().min(120);
+    while !reason.is_char_boundary(end) {
+        end -= 1;
+    }
+    let _ = socket
+        .send(Message::Close(Some(CloseFrame {
+            code,
+            reason: reason[..end].into(),
+        })))
+        .await;
+}
+
+/// Sends `message`, or gives up after the request timeout (a page that does not read).
+async fn send_within(socket: &mut WebSocket, limit: Duration, message: Message) -> bool {
+    matches!(tokio::time::timeout(limit, socket.send(message)).await, Ok(Ok(())))
 }
 
 async fn session_socket(mut socket: WebSocket, app: Arc<App>, token: String) {
-    let Some(slot) = app.find(&token) else {
-        return refuse(
-            socket,
-            "this session link is not known here: it is mistyped, or from an earlier run of the server; ask for a new one",
-        )
-        .await;
+    let found = lock(&app.registry).find(&token);
+    let Some(slot) = found else {
+        return refuse(&mut socket, close::UNKNOWN_SESSION, UNKNOWN).await;
     };
-    if slot.connected.swap(true, Ordering::SeqCst) {
-        return refuse(socket, "this session is open in another window: close that one first").await;
-    }
-    let _connected = Connected(slot.clone());
-    let first = serde_json::to_string(&lock(&slot.inner).participant.view(None)).expect("views serialise");
-    if socket.send(Message::Text(first.into())).await.is_err() {
+    // The newest page has the session: one that was frozen or lost keeps no lock on it.
+    let page = NEXT_PAGE.fetch_add(1, Ordering::SeqCst);
+    *lock(&slot.page) = page;
+    let _connected = Connected {
+        slot: slot.clone(),
+        page,
+    };
+    slot.touch();
+    let limits = app.seating.limits;
+    let first = {
+        let state = lock(&slot.state);
+        match &*state {
+            SlotState::Live(live) => {
+                Some(serde_json::to_string(&live.participant.view(None)).expect("views serialise"))
+            }
+            SlotState::Expired { .. } => None,
+        }
+    };
+    let Some(first) = first else {
+        return refuse(&mut socket, close::UNKNOWN_SESSION, EXPIRED).await;
+    };
+    if !send_within(&mut socket, limits.request_timeout, Message::Text(first.into())).await {
         return;
     }
-    while let Some(message) = socket.recv().await {
+    let mut ping = tokio::time::interval(limits.socket_idle / 3);
+    ping.tick().await;
+    let mut heard = tokio::time::Instant::now();
+    loop {
+        let message = tokio::select! {
+            m = socket.recv() => m,
+            _ = ping.tick() => {
+                if *lock(&slot.page) != page {
+                    refuse(&mut socket, close::OPENED_ELSEWHERE, "this session was opened in another window, which has it now").await;
+                    return;
+                }
+                if heard.elapsed() >= limits.socket_idle {
+                    close(&mut socket, close::GOING_AWAY, "no answer for a long time").await;
+                    return;
+                }
+                if !send_within(&mut socket, limits.request_timeout, Message::Ping(Vec::new().into())).await {
+                    return;
+                }
+                continue;
+            }
+        };
+        heard = tokio::time::Instant::now();
+        let Some(message) = message else {
+            return;
+        };
+        if *lock(&slot.page) != page {
+            refuse(
+                &mut socket,
+                close::OPENED_ELSEWHERE,
+                "this session was opened in another window, which has it now",
+            )
+            .await;
+            return;
+        }
         let answer = match message {
-            Ok(Message::Text(text)) => app.answer(&slot, text.as_str()),
+            Ok(Message::Text(text)) => {
+                let (app, slot) = (app.clone(), slot.clone());
+                let done = tokio::task::spawn_blocking(move || app.answer(&slot, text.as_str())).await;
+                match done {
+                    Ok(Ok(answer)) => answer,
+                    Ok(Err(expired)) => return refuse(&mut socket, close::UNKNOWN_SESSION, &expired).await,
+                    Err(e) => error_line(
+                        None,
+                        format!("the server failed to carry this out ({e}); nothing was done"),
+                    ),
+                }
+            }
             Ok(Message::Binary(_)) => error_line(
                 None,
                 "binary messages are not part of the protocol: send JSON text; nothing was done".into(),
             ),
-            Ok(Message::Close(_)) => break,
+            Ok(Message::Close(_)) => return,
             Ok(_) => continue,
             Err(e) => {
-                // Past the frame bound, or a broken connection: say why if it can still hear.
-                let _ = socket
-                    .send(Message::Close(Some(CloseFrame {
-                        code: 1009,
-                        reason: format!("{e}").chars().take(100).collect::<String>().into(),
-                    })))
-                    .await;
-                break;
+                // Past the frame bound (the one error the socket can still hear about);
+                // a broken connection gets no answer.
+                let text = e.to_string();
+                if text.contains("too long") || text.contains("too big") || text.contains("Space limit") {
+                    close(&mut socket, close::TOO_BIG, &text).await;
+                }
+                return;
             }
         };
-        if socket.send(Message::Text(answer.into())).await.is_err() {
-            break;
+        if !send_within(&mut socket, limits.request_timeout, Message::Text(answer.into())).await {
+            return;
         }
     }
 }
@@ -546,31 +818,17 @@ mod tests {
     }
 
     #[test]
-    fn the_bucket_allows_a_seconds_worth_then_refills() {
-        let mut b = Bucket {
-            tokens: 5.0,
-            last: Instant::now(),
-        };
-        assert_eq!((0..10).filter(|_| b.take(5)).count(), 5);
-        b.last -= std::time::Duration::from_millis(400);
-        assert_eq!((0..10).filter(|_| b.take(5)).count(), 2);
-    }
-
-    #[test]
-    fn tokens_are_fresh_128_bit_hex() {
-        let (a, b) = (new_token(), new_token());
-        assert_eq!(a.len(), 32);
-        assert!(a.bytes().all(|c| c.is_ascii_hexdigit()));
-        assert_ne!(a, b);
-    }
-
-    #[test]
-    fn a_recording_never_reuses_a_name_and_stays_in_its_folder() {
-        let dir = tempfile::tempdir().unwrap();
-        let (path, file) = recording_path(dir.path(), 3, "c", Some("P1"));
-        assert_eq!(file, "p0003-c-P1.jsonl");
-        assert_eq!(path.parent().unwrap(), dir.path());
-        std::fs::write(&path, "").unwrap();
-        assert_eq!(recording_path(dir.path(), 3, "c", Some("P1")).1, "p0004-c-P1.jsonl");
+    fn hosts_are_names_of_this_server_only() {
+        assert_eq!(host_name("127.0.0.1:8080"), "127.0.0.1");
+        assert_eq!(host_name("[::1]:8080"), "::1");
+        assert_eq!(host_name("lab.example.org"), "lab.example.org");
+        let public = PublicUrl::parse("https://Lab.Example.org:8443/").unwrap();
+        assert_eq!(
+            (public.base.as_str(), public.host.as_str()),
+            ("https://Lab.Example.org:8443", "lab.example.org")
+        );
+        for bad in ["lab.example.org", "ftp://x", "http://x/study", "http://a@b"] {
+            assert!(PublicUrl::parse(bad).is_err(), "{bad}");
+        }
     }
 }

@@ -69,7 +69,7 @@ async fn a_person_plays_an_episode_and_every_step_is_recorded() {
         lines.len()
     );
     assert_eq!(lines[0]["type"], "session");
-    assert_eq!(lines[0]["version"], 2);
+    assert_eq!(lines[0]["version"], 3);
     assert_eq!(lines[0]["demonstrator"], "person");
     assert_eq!(lines[1]["type"], "episode");
     let steps: Vec<&Value> = lines[2..].iter().collect();
@@ -180,11 +180,13 @@ async fn sessions_are_isolated_and_tokens_checked() {
     }
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
 
-    // A stale or made-up token: one clear error, then the connection closes.
+    // A stale or made-up token: one clear error, then the connection closes with the
+    // policy code (1008), never a second copy of the message.
     let mut stale = connect(addr, &"0".repeat(32), None).await.unwrap();
     let answer = receive(&mut stale).await;
     assert_eq!(answer["type"], "error");
     assert!(answer["message"].as_str().unwrap().contains("not known"));
+    assert_eq!(close_code(&mut stale).await, Some(1008));
     // Another site's page may not open a session.
     let foreign = connect(addr, &a, Some("http://evil.example")).await;
     assert!(foreign.unwrap_err().contains("403"));
@@ -192,16 +194,15 @@ async fn sessions_are_isolated_and_tokens_checked() {
     assert_eq!(status, 403);
     let (status, _) = http_with(addr, "POST", "/join", "name=x", &format!("Origin: http://{addr}\r\n")).await;
     assert_eq!(status, 303);
-    // One page per session.
+    // One page per session: the newest has it (a frozen or lost page locks nothing), and
+    // the one before is told at its next message, then closed.
     let mut first = connect(addr, &a, None).await.unwrap();
     let view_a = receive(&mut first).await;
     let mut second = connect(addr, &a, None).await.unwrap();
-    assert!(
-        receive(&mut second).await["message"]
-            .as_str()
-            .unwrap()
-            .contains("another window")
-    );
+    assert_eq!(receive(&mut second).await["blocks"], view_a["blocks"]);
+    let told = act(&mut first, "up").await;
+    assert!(told["message"].as_str().unwrap().contains("another window"), "{told}");
+    assert_eq!(close_code(&mut first).await, Some(4001));
     // Bob's moves never reach Alice's recording.
     let mut bob = connect(addr, &b, None).await.unwrap();
     let view_b = receive(&mut bob).await;
@@ -420,6 +421,12 @@ async fn a_study_that_cannot_work_is_refused_at_start() {
     let dir = tempfile::tempdir().unwrap();
     let study = dir.path().join("study.toml");
     let cases = [
+        ("max_participants = 0\n[[condition]]\nname = \"a\"\n", "admits no one"),
+        (
+            "[[condition]]\nname = \"a\"\nmodes = [\"play\", \"play\"]\n",
+            "listed twice",
+        ),
+        ("[[condition]]\nname = \"a\"\ngoals = \"0,1/2\"\n", "condition a"),
         ("[[condition]]\nname = \"a\"\nmodes = [\"watch\"]\n", "needs a model"),
         ("[[condition]]\nname = \"../a\"\n", "not a name"),
         ("[[condition]]\nname = \"a\"\ncolour = 1\n", "unknown field"),
@@ -449,7 +456,12 @@ fn child_server() {
     let Ok(dir) = std::env::var("SERVE_CHILD_DIR") else {
         return;
     };
-    serve::run(config(std::path::Path::new(&dir)).with_port0(), |links| {
+    let study = std::env::var("SERVE_CHILD_STUDY").ok().map(Into::into);
+    let config = ServeConfig {
+        study,
+        ..config(std::path::Path::new(&dir)).with_port0()
+    };
+    serve::run(config, |links| {
         println!("{}", links.join);
         Ok(())
     })
@@ -466,11 +478,22 @@ impl Port0 for ServeConfig {
     }
 }
 
-#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn recordings_survive_a_kill() {
+/// A server in a child process (this test binary again, [`child_server`]) recording into
+/// `dir`, with the study at `study` if given: killed however the test ends.
+pub struct Child(pub std::process::Child);
+
+impl Drop for Child {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// Starts a [`Child`] server; it and its address.
+pub fn child(dir: &std::path::Path, study: Option<&std::path::Path>) -> (Child, std::net::SocketAddr) {
     use std::io::BufRead;
-    let dir = tempfile::tempdir().unwrap();
-    let mut child = std::process::Command::new(std::env::current_exe().unwrap())
+    let mut command = std::process::Command::new(std::env::current_exe().unwrap());
+    command
         .args([
             "session::child_server",
             "--exact",
@@ -478,20 +501,14 @@ async fn recordings_survive_a_kill() {
             "--nocapture",
             "--test-threads=1",
         ])
-        .env("SERVE_CHILD_DIR", dir.path())
-        .stdout(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut out = std::io::BufReader::new(child.stdout.take().unwrap());
-    // Killed however the test ends, so that no server outlives it.
-    struct Reap(std::process::Child);
-    impl Drop for Reap {
-        fn drop(&mut self) {
-            let _ = self.0.kill();
-            let _ = self.0.wait();
-        }
+        .env("SERVE_CHILD_DIR", dir)
+        .stdout(std::process::Stdio::piped());
+    if let Some(study) = study {
+        command.env("SERVE_CHILD_STUDY", study);
     }
-    let mut child = Reap(child);
+    let mut process = command.spawn().unwrap();
+    let mut out = std::io::BufReader::new(process.stdout.take().unwrap());
+    let child = Child(process);
     let addr = loop {
         let mut line = String::new();
         assert_ne!(out.read_line(&mut line).unwrap(), 0, "the child ended before serving");
@@ -500,6 +517,13 @@ async fn recordings_survive_a_kill() {
             break rest.trim_end_matches('/').parse().unwrap();
         }
     };
+    (child, addr)
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn recordings_survive_a_kill() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mut child, addr) = child(dir.path(), None);
     let token = join(addr, "").await.unwrap();
     let mut socket = connect(addr, &token, None).await.unwrap();
     let mut acknowledged = receive(&mut socket).await["progress"]["recorded_lines"]
@@ -517,4 +541,47 @@ async fn recordings_survive_a_kill() {
     assert_eq!(lines.len() as u64, acknowledged);
     assert_eq!(lines.len(), 2 + 6);
     agent::demos::read_episodes(&path, None).unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_side_view_shows_goals_of_towers_and_its_own_shortest_plans() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = side_model(dir.path());
+    let record = dir.path().join("recordings");
+    let (addr, _) = start(ServeConfig {
+        model: Some(model.clone()),
+        goals: Some("0,1/2:0/1/2".into()),
+        ..config(&record)
+    })
+    .await;
+    let token = join(addr, "").await.unwrap();
+    let mut socket = connect(addr, &token, None).await.unwrap();
+    let first = receive(&mut socket).await;
+    assert_eq!(first["view"], "side");
+    // Two goals that one flat list would make the same stack.
+    assert_eq!(first["goal"], json!({"towers": [[0, 1], [2]], "blocks": 3}));
+    let (state, goal) = world_of(&first);
+    let world = sim::EnvConfig {
+        view: sim::View::Side,
+        ..sim::EnvConfig::default()
+    };
+    // The side view's shortest plan (gripper steps), not the top view's.
+    let plan = oracle::ExactSolver::for_world(&world).solve(&state, &goal).unwrap();
+    let mut last = first.clone();
+    for a in &plan.actions {
+        last = act(&mut socket, &a.to_string()).await;
+        assert_eq!(last["type"], "view", "{last}");
+    }
+    assert_eq!(last["outcome"], "goal");
+    assert_eq!(last["shortest"].as_u64().unwrap() as usize, plan.len());
+    let next = ask(&mut socket, json!({"type": "next"})).await;
+    assert_eq!(next["goal"], json!({"towers": [[0], [1], [2]], "blocks": 3}));
+    // The recording names its view and replays under the side view's rules.
+    let path = only_recording(&record);
+    assert_eq!(lines(&path)[0]["view"], "side");
+    let mut agent = agent::QAgent::load(&model).unwrap();
+    let report = agent::demos::learn_from_file(&mut agent, &path, agent::BadLines::Fail).unwrap();
+    assert_eq!(report.steps, plan.len());
+    let episodes = agent::demos::read_episodes(&path, None).unwrap();
+    assert_eq!(episodes[0].view, sim::View::Side);
 }

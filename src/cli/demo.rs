@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use agent::correction::{CorrectionRule, CorrectionSession};
+use agent::correction::{CorrectionRule, CorrectionSession, SessionLabels};
 use agent::{DemoWriter, QAgent};
 use anyhow::{Context, Result};
 use clap::Args;
@@ -128,15 +128,21 @@ pub fn demo(args: DemoArgs) -> Result<()> {
     let l = &args.learning;
     let (world, profile) = session_world(&agent, l.profile, l.play, l.reward);
     let goals = demonstration_goals(args.goals.as_deref(), &world, profile)?;
-    let session = CorrectionSession::new(
+    // A person's session keeps time: each step's time since its episode began.
+    let labels = SessionLabels {
+        demonstrator: "person".into(),
+        model: Some(args.model.display().to_string()),
+        timed: true,
+        ..SessionLabels::default()
+    };
+    let session = CorrectionSession::labelled(
         agent,
         l.rule(profile)?,
         world,
         goals,
         args.seed,
         args.learning.epsilon,
-        "person",
-        Some(&args.model.display().to_string()),
+        labels,
         record,
     )?;
     let mut app = DemoApp::new(

@@ -36,9 +36,15 @@ pub struct ServeArgs {
     /// Seed of the starts (a study's own seed wins).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// The most participant sessions held at once (a study's max_participants wins).
+    /// The most participant sessions held at once; a session with no page for 30 minutes
+    /// is let go, its recording kept (a study's max_participants caps the participants in all).
     #[arg(long, default_value_t = serve::Limits::default().max_sessions)]
     pub max_sessions: usize,
+    /// The address participants reach the server at, e.g. http://lab.example.org:8080/, when
+    /// it is not the one bound: printed as the link, and the only host name answered (DNS
+    /// rebinding is refused; IP addresses and localhost are always answered).
+    #[arg(long)]
+    pub public_url: Option<String>,
 }
 
 /// Serves until the process is ended (Ctrl-C).
@@ -51,6 +57,7 @@ pub fn serve(args: ServeArgs) -> Result<()> {
         goals: args.goals,
         record_dir: args.record_dir,
         study: args.study,
+        public_url: args.public_url,
         seed: args.seed,
         limits: serve::Limits {
             max_sessions: args.max_sessions,
@@ -60,6 +67,12 @@ pub fn serve(args: ServeArgs) -> Result<()> {
     serve::run(config, |links| {
         line(format_args!("participants: {}", links.join))
             .and_then(|()| line(format_args!("researcher:   {}", links.results)))
+            .and_then(|()| {
+                links
+                    .note
+                    .as_ref()
+                    .map_or(Ok(()), |note| line(format_args!("note: {note}")))
+            })
             .and_then(|()| super::flush_stdout())
             .map_err(std::io::Error::other)
     })?;

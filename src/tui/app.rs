@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 use std::time::Duration;
 
-use agent::correction::{CorrectionSession, SessionStep};
+use agent::correction::{CorrectionSession, PersonRole, PersonTurn, SessionStep};
 use agent::{DemoSink, QAgent};
 use ratatui::crossterm::event::{KeyCode, KeyEvent, KeyEventKind, KeyModifiers};
 use sim::render::label;
@@ -92,8 +92,6 @@ pub struct DemoApp<S: DemoSink> {
     saved_at: u64,
     /// Corrections in the current episode.
     episode_corrections: u64,
-    /// The last step, to show what happened.
-    last: Option<SessionStep>,
     /// One line about the last thing that happened.
     message: String,
 }
@@ -111,7 +109,6 @@ impl<S: DemoSink> DemoApp<S> {
             quit: false,
             saved_at: 0,
             episode_corrections: 0,
-            last: None,
             message: "The agent plays; step in with the arrows, a digit or d.".into(),
         })
     }
@@ -162,9 +159,9 @@ impl<S: DemoSink> DemoApp<S> {
         self.episode_corrections
     }
 
-    /// The last step taken.
+    /// The last step taken in the episode.
     pub fn last_step(&self) -> Option<&SessionStep> {
-        self.last.as_ref()
+        self.session.last_step()
     }
 
     /// One line about the last thing that happened.
@@ -216,35 +213,11 @@ impl<S: DemoSink> DemoApp<S> {
                 );
             }
             Command::Override(action) => {
-                match self.session.observation().filter(|_| !self.session.is_over()) {
-                    None => self.message = "The episode is over: n begins the next.".into(),
-                    Some(obs) => match agent::correction::person_steps(&obs, action) {
-                        Err(e) => self.message = format!("Not now: {e}."),
-                        Ok(steps) if steps.is_empty() => {
-                            self.message = format!("{action}: that block is held already.")
-                        }
-                        Ok(steps) => {
-                            let proposed = self.session.proposal();
-                            // Under the paper protocol a pick while holding is a Drop and
-                            // then the Pick: two corrections.
-                            for &step in &steps {
-                                if !self.session.is_over() {
-                                    self.take(Some(step))?;
-                                }
-                            }
-                            let done = steps
-                                .iter()
-                                .map(ToString::to_string)
-                                .collect::<Vec<_>>()
-                                .join(", then ");
-                            self.message = match proposed {
-                                Some(p) if steps == [p] => format!("You confirmed {action}; the agent learnt it."),
-                                Some(p) => format!("You chose {done} instead of {p}; the agent learnt it."),
-                                None => format!("You chose {done}."),
-                            };
-                            self.describe_end();
-                        }
-                    },
+                let turn = self.session.person(action, PersonRole::Corrector)?;
+                self.message = turn.message();
+                if let PersonTurn::Taken { steps, .. } = &turn {
+                    self.after_steps(steps)?;
+                    self.describe_end();
                 }
             }
             Command::NextEpisode => {
@@ -277,32 +250,29 @@ impl<S: DemoSink> DemoApp<S> {
 
     fn take(&mut self, correction: Option<Action>) -> agent::Result<()> {
         let step = self.session.step(correction)?;
-        if step.corrected {
-            self.episode_corrections += 1;
-            let corrections = self.session.report().corrections;
-            if self.save.every > 0 && corrections - self.saved_at >= self.save.every {
-                self.save_model()?;
-            }
+        self.after_steps(&[step])
+    }
+
+    /// Counts the corrections among `steps` and saves the model when the policy says so.
+    fn after_steps(&mut self, steps: &[SessionStep]) -> agent::Result<()> {
+        let corrected = steps.iter().filter(|s| s.corrected).count() as u64;
+        self.episode_corrections += corrected;
+        let corrections = self.session.report().corrections;
+        if corrected > 0 && self.save.every > 0 && corrections - self.saved_at >= self.save.every {
+            self.save_model()?;
         }
-        self.last = Some(step);
         Ok(())
     }
 
     fn begin_next(&mut self) -> agent::Result<()> {
         self.session.next_episode()?;
         self.episode_corrections = 0;
-        self.last = None;
         Ok(())
     }
 
     fn describe_end(&mut self) {
-        if let Some(step) = self.last.filter(|s| s.terminated || s.truncated) {
-            let steps = self.session.steps();
-            self.message = if step.terminated {
-                format!("Goal reached in {steps} steps. The next episode follows (n: now).")
-            } else {
-                format!("Cut off after {steps} steps. The next episode follows (n: now).")
-            };
+        if let Some(end) = self.session.episode_end() {
+            self.message = format!("{} The next episode follows (n: now).", end.message(None));
         }
     }
 

@@ -10,86 +10,37 @@ Skipped, with the reason, when Playwright or /usr/bin/chromium is absent. Run wi
 """
 
 import json
-import os
-import pathlib
 import re
 import subprocess
 
 import pytest
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
-BINARY = pathlib.Path(os.environ.get("BLOCKSTACK_BIN", ROOT / "target" / "release" / "blockstack"))
-CHROMIUM = pathlib.Path(os.environ.get("CHROMIUM", "/usr/bin/chromium"))
-CHROMIUM_ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
-SHOTS = pathlib.Path(os.environ.get("BLOCKSTACK_SCREENSHOTS", ROOT / "target" / "browser-shots"))
-NAMES = ["up", "down", "left", "right", "drop"]
+from browser import BINARY, CHROMIUM, SHOTS, action_name, run, start_server, view, wait_view
 
-playwright = pytest.importorskip("playwright.sync_api", reason="Playwright is not installed (pip install playwright)")
+pytest.importorskip("playwright.sync_api", reason="Playwright is not installed (pip install playwright)")
 if not CHROMIUM.exists():
     pytest.skip(f"{CHROMIUM} is absent (apt-get install chromium)", allow_module_level=True)
-
-
-def run(*args):
-    return subprocess.run([str(BINARY), *map(str, args)], check=True, capture_output=True, text=True).stdout
-
-
-def action_name(index):
-    return NAMES[index] if index < 5 else f"pick {index - 5}"
 
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
     """A server on a free loopback port with a small trained tabular model; its links and
     recording folder."""
-    if not BINARY.exists():
-        pytest.fail(f"{BINARY} is missing: build it with `cargo build --release`")
     tmp = tmp_path_factory.mktemp("serve")
     model = tmp / "agent.safetensors"
     run("train", "--games", "300", "--out", model)
     record = tmp / "recordings"
-    proc = subprocess.Popen(
-        [str(BINARY), "serve", "--port", "0", "--model", model, "--goals", "0,1,2:2,1,0", "--record-dir", record],
-        stdout=subprocess.PIPE,
-        text=True,
-    )
-    links = {}
-    while len(links) < 2:
-        line = proc.stdout.readline()
-        assert line, "the server ended before serving"
-        key, _, url = line.partition(":")
-        links[key.strip()] = url.strip()
+    proc, links = start_server("--model", model, "--goals", "0,1,2:2,1,0", "--record-dir", record)
     yield links, record, model
     proc.terminate()
     proc.wait()
 
 
-@pytest.fixture(scope="module")
-def page():
-    with playwright.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
-        page = browser.new_page(viewport={"width": 900, "height": 720})
-        yield page
-        browser.close()
-
-
-def view(page):
-    return page.evaluate("view")
-
-
 def wait_steps(page, steps, episode=None):
-    condition = f"view && view.steps === {steps}"
+    condition = f"view.steps === {steps}"
     if episode is not None:
         condition += f" && view.episode === {episode}"
-    page.wait_for_function(condition, timeout=10_000)
+    wait_view(page, condition)
 
 
 def click_cell(page, x, y):
@@ -111,7 +62,9 @@ def test_play_correct_and_watch_in_the_browser(server, page):
     page.goto(links["participants"])
     page.fill("#name", "tester")
     page.click("#begin")
-    page.wait_for_function("view !== null", timeout=10_000)
+    # #begin navigates to the session's own page, /s/<token>: wait for it to load first.
+    page.wait_for_url(re.compile(r"/s/\w+$"), wait_until="load", timeout=10_000)
+    wait_view(page)
     v = view(page)
     assert v["mode"] == "play" and v["modes"] == ["play", "watch", "correct"]
     # The colours are sim::render's palette: block 0 red.
@@ -156,7 +109,7 @@ def test_play_correct_and_watch_in_the_browser(server, page):
     # Correct: accept the agent's proposal twice (Enter, then the button), then override
     # with a pick (a key) and a move (a button).
     page.click("#modes button[data-mode=correct]")
-    page.wait_for_function("view.mode === 'correct'")
+    wait_view(page, "view.mode === 'correct'")
     expected = []
     episode = view(page)["episode"]
     for k, how in enumerate(["Enter", "#accept", "2", "#moves button[data-act=right]"]):
@@ -185,10 +138,10 @@ def test_play_correct_and_watch_in_the_browser(server, page):
 
     # Watch: the agent runs at the chosen pace; its greedy choice is highlighted.
     page.click("#modes button[data-mode=watch]")
-    page.wait_for_function("view.mode === 'watch'")
+    wait_view(page, "view.mode === 'watch'")
     page.fill("#pace", "6")
     page.click("#run")
-    page.wait_for_function("view.steps >= 3", timeout=10_000)
+    wait_view(page, "view.steps >= 3")
     page.click("#run")
     assert page.locator("#qvalues tr.greedy").count() == 1
     page.screenshot(path=str(SHOTS / "serve-watch.png"))
@@ -196,7 +149,7 @@ def test_play_correct_and_watch_in_the_browser(server, page):
     # The recording, line by line: the play episode's steps are what was pressed, the
     # correct episode's the proposals accepted and the overrides.
     lines = recording(record)
-    assert lines[0]["type"] == "session" and lines[0]["version"] == 2
+    assert lines[0]["type"] == "session" and lines[0]["version"] == 3
     episodes = [line for line in lines if line["type"] == "episode"]
     steps = [line for line in lines if line["type"] == "step"]
     assert [e["episode"] for e in episodes] == [0, 1]

@@ -11,10 +11,10 @@
 use std::path::Path;
 
 use sim::trajectory::Episode;
-use sim::{Action, Goal, Grid, State};
+use sim::{Action, Goal, Grid, Observation, State, View};
 
-use super::format::{DemoFile, demos_error};
-use super::replay::{BadLines, DemoLearner, learn_from_reader};
+use super::format::{DemoFile, EpisodeLine, ParticipantLine, SessionLine, WorldLine, demos_error};
+use super::replay::{BadLines, DemoLearner, StepTime, learn_from_reader};
 use crate::error::{AgentError, Result};
 use crate::rule::{CorrectionRule, Experience};
 
@@ -34,6 +34,8 @@ pub struct DemoStep {
     /// A demonstrator chose the action: every step of a trajectory file, the corrections
     /// of a recording.
     pub demonstrated: bool,
+    /// When it happened, in a timed session (a person's, recording version 3).
+    pub time: StepTime,
 }
 
 /// One episode of a demonstrations file, checked against the world's rules.
@@ -43,12 +45,20 @@ pub struct DemoEpisode {
     pub episode: u64,
     /// The grid.
     pub grid: Grid,
+    /// The view whose rules the steps keep.
+    pub view: View,
     /// The goal.
     pub goal: Goal,
     /// The start state.
     pub start: State,
     /// The steps, in order, the first from `start`.
     pub steps: Vec<DemoStep>,
+    /// In a timed session: the wall-clock time (Unix milliseconds) of its first view.
+    pub started_ms: Option<u64>,
+    /// The study participant whose session it is, when the recording names one.
+    pub participant: Option<ParticipantLine>,
+    /// The session's world (reward, protocol, horizon), when the recording names it.
+    pub world: Option<WorldLine>,
 }
 
 impl DemoEpisode {
@@ -65,6 +75,7 @@ impl From<Episode> for DemoEpisode {
         DemoEpisode {
             episode: e.episode,
             grid: e.grid,
+            view: e.view,
             goal: e.goal,
             start: e.start,
             steps: e
@@ -77,8 +88,12 @@ impl From<Episode> for DemoEpisode {
                     terminated: s.terminated,
                     truncated: s.truncated,
                     demonstrated: true,
+                    time: StepTime::default(),
                 })
                 .collect(),
+            started_ms: None,
+            participant: None,
+            world: None,
         }
     }
 }
@@ -115,6 +130,10 @@ impl OneWorld {
 struct Collector {
     world: std::cell::Cell<OneWorld>,
     episodes: Vec<DemoEpisode>,
+    /// The participant the current session names.
+    participant: Option<ParticipantLine>,
+    /// The world the current session names.
+    session_world: Option<WorldLine>,
 }
 
 impl DemoLearner for Collector {
@@ -130,19 +149,28 @@ impl DemoLearner for Collector {
         None
     }
 
-    fn begin_episode(&mut self, episode: u64, goal: Goal, start: State) -> Result<()> {
-        let (grid, _) = self.world.get().world.expect("the session's world was checked");
+    fn begin_session(&mut self, header: &SessionLine) -> Result<()> {
+        self.participant = header.participant.clone();
+        self.session_world = header.world.clone();
+        Ok(())
+    }
+
+    fn begin_episode(&mut self, header: &EpisodeLine, start: &Observation) -> Result<()> {
         self.episodes.push(DemoEpisode {
-            episode,
-            grid,
-            goal,
-            start,
+            episode: header.episode,
+            grid: start.grid,
+            view: start.view,
+            goal: start.goal,
+            start: start.state,
             steps: Vec::new(),
+            started_ms: header.started_ms,
+            participant: self.participant.clone(),
+            world: self.session_world.clone(),
         });
         Ok(())
     }
 
-    fn learn(&mut self, _rule: &CorrectionRule, step: &Experience) -> Result<()> {
+    fn learn(&mut self, _rule: &CorrectionRule, step: &Experience, time: StepTime) -> Result<()> {
         let episode = self.episodes.last_mut().expect("the replay begins an episode first");
         episode.steps.push(DemoStep {
             action: step.action,
@@ -151,8 +179,54 @@ impl DemoLearner for Collector {
             terminated: step.terminated,
             truncated: step.truncated,
             demonstrated: step.corrected,
+            time,
         });
         Ok(())
+    }
+}
+
+/// Everything read from a file of demonstrations ([`read_demonstrations`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Demonstrations {
+    /// The episodes, in file order (one cut off by a kill is there with the steps it had).
+    pub episodes: Vec<DemoEpisode>,
+    /// The recording says its participant withdrew: exports leave it out.
+    pub withdrawn: bool,
+    /// The lines that could not be used, skipped (a line cut off by a kill, say).
+    pub bad_lines: Vec<super::replay::BadLine>,
+}
+
+/// The demonstrations at `path` as the researcher's tools read them: every line checked,
+/// a bad one skipped and reported (the last line of a recording a kill cut short), a file
+/// with no step read as no episode's steps, and whether the participant withdrew. `world`
+/// as for [`read_episodes`].
+pub fn read_demonstrations(path: &Path, world: Option<(Grid, usize)>) -> Result<Demonstrations> {
+    let one = OneWorld {
+        world,
+        given: world.is_some(),
+    };
+    match super::format::open(path)? {
+        DemoFile::Recording(input) => {
+            let mut collector = Collector {
+                world: std::cell::Cell::new(one),
+                episodes: Vec::new(),
+                participant: None,
+                session_world: None,
+            };
+            let mut replay = super::replay::Replay::new(&mut collector, BadLines::Skip, &path.display().to_string());
+            replay.read(input)?;
+            let report = replay.finish();
+            Ok(Demonstrations {
+                episodes: collector.episodes,
+                withdrawn: report.withdrawn,
+                bad_lines: report.bad_lines,
+            })
+        }
+        file @ DemoFile::Trajectory(_) => Ok(Demonstrations {
+            episodes: episodes_of(file, path, world)?,
+            withdrawn: false,
+            bad_lines: Vec::new(),
+        }),
     }
 }
 
@@ -174,6 +248,8 @@ pub fn episodes_of(file: DemoFile, path: &Path, world: Option<(Grid, usize)>) ->
             let mut collector = Collector {
                 world: std::cell::Cell::new(one),
                 episodes: Vec::new(),
+                participant: None,
+                session_world: None,
             };
             learn_from_reader(&mut collector, input, path, BadLines::Fail)?;
             Ok(collector.episodes)

@@ -1,25 +1,35 @@
-//! The recording format (`blockstack-demos`, version 2): its record types, its writer and
+//! The recording format (`blockstack-demos`, version 3): its record types, its writer and
 //! its bounded reader. Reading a recording needs neither the tabular learner nor a network:
 //! this module depends on `sim`, `serde` and `files` (and the leaf [`crate::rule`] for the
 //! `rule` field), so that every reader of recordings can use it.
 //!
 //! ```text
-//! {"type":"session","format":"blockstack-demos","version":2,"grid":[7,7],"blocks":3,"rule":{"margin":0.8,"learn_agent_steps":true},"demonstrator":"person","model":"agent.safetensors","model_id":"3f9c0a1b2d4e5f60"}
-//! {"type":"episode","episode":0,"seed":123,"goal":[0,1,2],"start":{"blocks":[[1,2],[4,0],[6,6]],"held":null}}
-//! {"type":"step","episode":0,"step":1,"state":{"blocks":[[1,2],[4,0],[6,6]],"held":null},"proposed":"drop","action":"pick 1","correction":true,"reward":0.0,"next":{"blocks":[[1,2],[4,0],[6,6]],"held":1},"terminated":false,"truncated":false}
+//! {"type":"session","format":"blockstack-demos","version":3,"grid":[7,7],"blocks":3,"rule":{"margin":0.8,"learn_agent_steps":true},"demonstrator":"person","model":"agent.safetensors","model_id":"3f9c0a1b2d4e5f60"}
+//! {"type":"episode","episode":0,"seed":123,"goal":[0,1,2],"start":{"blocks":[[1,2],[4,0],[6,6]],"held":null},"started_ms":1764800000000}
+//! {"type":"step","episode":0,"step":1,"state":{"blocks":[[1,2],[4,0],[6,6]],"held":null},"proposed":"drop","action":"pick 1","correction":true,"reward":0.0,"next":{"blocks":[[1,2],[4,0],[6,6]],"held":1},"terminated":false,"truncated":false,"t_ms":2140,"received_ms":1764800002141}
 //! ```
 //!
 //! - A *session* line opens every session; a file may hold several sessions one after the
 //!   other (a recording is appended to, never overwritten). `rule` is how the agent learnt;
 //!   `model` the model file the session started from, when known, and `model_id` that
-//!   model's identity (`QAgent::identity`). Version 1 (before `model_id`) is still read.
+//!   model's identity (`QAgent::identity`); `view` the world's view (side only);
+//!   `participant` a study's participant; `first_episode` the number of its first episode
+//!   when it goes on from an earlier session (a participant resumed after a restart).
+//!   Versions 1 (before `model_id`) and 2 (before time) are still read.
 //! - An *episode* line opens every episode: its number in the session, the seed of its
-//!   start, its goal (bottom to top) and its start state.
+//!   start, its goal (bottom to top), its start state, and in a timed session (a person's)
+//!   `started_ms`, the wall-clock time (Unix milliseconds) its first view was shown.
 //! - A *step* line per executed action: the state before it, the agent's proposed action,
 //!   the executed action (names as `blockstack solve` prints them: `up`, `pick 2`, ...),
 //!   whether a demonstrator chose it (`correction`; it may equal the proposal), the reward,
-//!   and the state after it with the episode's end flags. Each step line holds all a
-//!   learner needs, so any complete line can be learnt from on its own.
+//!   and the state after it with the episode's end flags. In a timed session also `t_ms`,
+//!   the milliseconds since the episode's first view (a monotonic clock: the page's when
+//!   it sent one, else the server's), and `received_ms`, the wall-clock time the step was
+//!   received. Each step line holds all a learner needs, so any complete line can be
+//!   learnt from on its own. A simulated demonstrator's session is not timed: its file is
+//!   fixed by its seed.
+//! - A *withdrawn* line (`{"type":"withdrawn","at_ms":...}`) says the participant withdrew:
+//!   every export leaves the recording out.
 //!
 //! Every line is written with one write and flushed at once: a session that is killed loses
 //! at most the line being written, and every complete line parses. So a recording is
@@ -34,13 +44,14 @@
 //! memory runs out. [`open`] tells a recording from a trajectory file by its first line
 //! and reads the file once, so a pipe can be given too.
 
+use std::collections::BTreeMap;
 use std::io::{BufRead, Cursor, Read, Write};
 use std::path::{Path, PathBuf};
 
 use files::{Output, OutputPath};
 use serde::{Deserialize, Serialize};
 use sim::trajectory::{Record, TrajectoryReader, read_bounded_line};
-use sim::{Action, Cell, Goal, Grid, Observation, State, Step};
+use sim::{Action, Cell, Goal, Grid, Observation, State, Step, View};
 
 use crate::error::{AgentError, Result};
 pub use crate::rule::CorrectionRule;
@@ -48,8 +59,8 @@ pub use crate::rule::CorrectionRule;
 /// The `format` field of every session line.
 pub const DEMOS_FORMAT: &str = "blockstack-demos";
 
-/// The recording format version this build writes (it reads this one and version 1).
-pub const DEMOS_VERSION: u32 = 2;
+/// The recording format version this build writes (it reads this one and versions 1 and 2).
+pub const DEMOS_VERSION: u32 = 3;
 
 /// The largest recording read: 1 GiB, some three million steps.
 pub const MAX_RECORDING_BYTES: u64 = 1 << 30;
@@ -108,6 +119,70 @@ pub struct SessionLine {
     /// present from version 2.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub model_id: Option<String>,
+    /// The world's view, whose rules every step keeps: written only for the side view, so
+    /// a recording made before the side view existed reads back as the top view.
+    #[serde(default, skip_serializing_if = "is_top")]
+    pub view: View,
+    /// The participant of a study whose session this is (`blockstack serve --study`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub participant: Option<ParticipantLine>,
+    /// The number of the session's first episode: 0, or past the episodes of the session
+    /// before it when it goes on from one (written only when not 0).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub first_episode: u64,
+    /// The rules of the world beyond grid, blocks and view (version 3): what an exporter
+    /// needs to make the environment the session was played in.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub world: Option<WorldLine>,
+}
+
+/// A session's world: its reward model, action protocol and horizon.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WorldLine {
+    /// The reward model's name (`sparse`, `paper`, `step-cost`, ...).
+    pub reward: String,
+    /// The action protocol.
+    pub protocol: sim::ActionProtocol,
+    /// Steps before an episode is cut off.
+    pub horizon: u32,
+}
+
+impl WorldLine {
+    /// The line of `world`.
+    pub fn of(world: &sim::EnvConfig) -> WorldLine {
+        WorldLine {
+            reward: world.reward.name().into(),
+            protocol: world.protocol,
+            horizon: world.horizon,
+        }
+    }
+}
+
+fn is_zero(n: &u64) -> bool {
+    *n == 0
+}
+
+fn is_top(view: &View) -> bool {
+    *view == View::Top
+}
+
+/// Who a study's session belongs to: the server's participant number, the condition, and
+/// the code the participant typed (none when none was typed).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParticipantLine {
+    /// The participant's number on the server, from 0 (in the recording's file name).
+    pub number: u64,
+    /// The study condition the participant was assigned.
+    pub condition: String,
+    /// The participant code typed on joining, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub code: Option<String>,
+    /// The crowd-sourcing platform's ids, by the URL parameter that carried each
+    /// (`PROLIFIC_PID`, `STUDY_ID`, `SESSION_ID`, `workerId`, ...).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub ids: BTreeMap<String, String>,
 }
 
 impl SessionLine {
@@ -130,6 +205,10 @@ impl SessionLine {
             demonstrator: demonstrator.into(),
             model: model.map(Into::into),
             model_id: Some(model_id),
+            view: View::Top,
+            participant: None,
+            first_episode: 0,
+            world: None,
         }
     }
 }
@@ -146,16 +225,21 @@ pub struct EpisodeLine {
     pub goal: Goal,
     /// The start state.
     pub start: StateLine,
+    /// In a timed session: the wall-clock time (Unix milliseconds) of the episode's first
+    /// view.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub started_ms: Option<u64>,
 }
 
 impl EpisodeLine {
-    /// The header of episode `episode`, reset with `seed`, starting at `obs`.
+    /// The header of episode `episode`, reset with `seed`, starting at `obs` (untimed).
     pub fn new(episode: u64, seed: u64, obs: &Observation) -> Self {
         EpisodeLine {
             episode,
             seed,
             goal: obs.goal.clone(),
             start: StateLine::of(&obs.state),
+            started_ms: None,
         }
     }
 }
@@ -184,6 +268,12 @@ pub struct StepLine {
     pub terminated: bool,
     /// The horizon was reached without the goal.
     pub truncated: bool,
+    /// In a timed session: milliseconds since the episode's first view (monotonic).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub t_ms: Option<u64>,
+    /// In a timed session: the wall-clock time (Unix milliseconds) the step was received.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub received_ms: Option<u64>,
 }
 
 impl StepLine {
@@ -208,8 +298,25 @@ impl StepLine {
             next: StateLine::of(&step.observation.state),
             terminated: step.terminated,
             truncated: step.truncated,
+            t_ms: None,
+            received_ms: None,
         }
     }
+}
+
+/// The line that says a study's participant withdrew.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WithdrawnLine {
+    /// When (Unix milliseconds).
+    pub at_ms: u64,
+}
+
+/// Milliseconds since the Unix epoch, now (0 on a clock set before 1970).
+pub fn unix_ms() -> u64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_millis() as u64)
 }
 
 /// One line of a recording.
@@ -222,6 +329,8 @@ pub enum DemoRecord {
     Episode(EpisodeLine),
     /// One executed step.
     Step(StepLine),
+    /// The participant withdrew (version 3).
+    Withdrawn(WithdrawnLine),
 }
 
 /// Where a session's lines go, as they happen.

@@ -11,11 +11,12 @@ pub mod episodes;
 pub mod format;
 pub mod replay;
 
-pub use episodes::{DemoEpisode, DemoStep, episodes_of, read_episodes};
+pub use episodes::{DemoEpisode, DemoStep, Demonstrations, episodes_of, read_demonstrations, read_episodes};
 pub use format::{
     DEMOS_FORMAT, DEMOS_VERSION, DemoFile, DemoRecord, DemoSink, DemoWriter, EpisodeLine, MAX_LINE_BYTES,
-    MAX_RECORDING_BYTES, SessionLine, StateLine, StepLine, open,
+    MAX_RECORDING_BYTES, ParticipantLine, SessionLine, StateLine, StepLine, WithdrawnLine, WorldLine, open, unix_ms,
 };
 pub use replay::{
-    BadLine, BadLines, DemoLearner, Replay, ReplayReport, learn_from_file, learn_from_reader, learn_from_records,
+    BadLine, BadLines, DemoLearner, Replay, ReplayReport, StepTime, learn_from_file, learn_from_reader,
+    learn_from_records,
 };

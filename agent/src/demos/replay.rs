@@ -10,7 +10,9 @@
 //! - a step or episode before its session line, a step of another episode than the one
 //!   just opened, a state that does not fit the world;
 //! - a step that breaks the world's rules: its `next` is not what the rules
-//!   ([`sim::World::act`]) make of its `state` and `action`;
+//!   ([`sim::World::act`]) make of its `state` and `action`, in the view the session line
+//!   names (the top view when it names none); in the side view also an action its rules
+//!   refuse, which the world would take as a no-op;
 //! - a step whose reward or `terminated` flag no reward model or termination rule gives,
 //!   or not the one the session's earlier steps agree with ([`sim::trajectory::Outcomes`]);
 //! - a step out of order: its number not above the last step's of its episode (a line
@@ -32,7 +34,7 @@ use std::path::Path;
 
 use sim::reward::Transition;
 use sim::trajectory::Outcomes;
-use sim::{Action, ActionProtocol, Goal, Grid, GridWorld, Observation, State, World};
+use sim::{Action, ActionProtocol, Goal, Grid, GridWorld, Observation, State, View, World};
 
 use super::format::{
     DEMOS_FORMAT, DEMOS_VERSION, DemoRecord, EpisodeLine, MAX_LINE_BYTES, RawLine, RecordingLines, SessionLine,
@@ -83,6 +85,8 @@ pub struct ReplayReport {
     pub corrections: usize,
     /// The lines skipped, with why (only with [`BadLines::Skip`]).
     pub bad_lines: Vec<BadLine>,
+    /// The recording says its participant withdrew (a `withdrawn` line).
+    pub withdrawn: bool,
 }
 
 /// Why a line cannot be used, and whether that ends the replay whatever the policy.
@@ -123,6 +127,10 @@ impl From<sim::SimError> for LineError {
 #[derive(Clone)]
 struct OpenSession {
     grid: Grid,
+    /// The number its first episode must have.
+    first_episode: u64,
+    /// The world's view, whose rules every step keeps.
+    view: View,
     rule: CorrectionRule,
     /// The number of its last episode line used.
     last_episode: Option<u64>,
@@ -156,17 +164,35 @@ pub trait DemoLearner {
     /// model the session corrected, so there is nothing to match).
     fn identity(&self) -> Option<String>;
 
-    /// An episode line opened episode `episode` (numbered in its session) of `goal` from
-    /// `start`, in a world checked to be the learner's: the steps [`DemoLearner::learn`]
-    /// gets next are this episode's, in order, the first from `start`. Learners that keep
-    /// episodes apart begin one here; the tabular agent has nothing to do.
-    fn begin_episode(&mut self, episode: u64, goal: Goal, start: State) -> Result<()> {
-        let _ = (episode, goal, start);
+    /// A session line opened a session (checked: its format, version, world and model).
+    /// Learners that keep who played begin a session here; the tabular agent has nothing
+    /// to do.
+    fn begin_session(&mut self, header: &SessionLine) -> Result<()> {
+        let _ = header;
         Ok(())
     }
 
-    /// Learns from one recorded step, by the session's `rule`.
-    fn learn(&mut self, rule: &CorrectionRule, step: &Experience) -> Result<()>;
+    /// An episode line (`header`) opened an episode at `start` (its grid, start state, goal
+    /// and view), in a world checked to be the learner's: the steps [`DemoLearner::learn`]
+    /// gets next are this episode's, in order, the first from `start`. Learners that keep
+    /// episodes apart begin one here; the tabular agent has nothing to do.
+    fn begin_episode(&mut self, header: &EpisodeLine, start: &Observation) -> Result<()> {
+        let _ = (header, start);
+        Ok(())
+    }
+
+    /// Learns from one recorded step, by the session's `rule`; `time` is the step's, when
+    /// its session was timed.
+    fn learn(&mut self, rule: &CorrectionRule, step: &Experience, time: StepTime) -> Result<()>;
+}
+
+/// When a recorded step happened, in a timed session (the format's module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StepTime {
+    /// Milliseconds since the episode's first view.
+    pub t_ms: Option<u64>,
+    /// The wall-clock time (Unix milliseconds) the step was received.
+    pub received_ms: Option<u64>,
 }
 
 impl DemoLearner for QAgent {
@@ -178,7 +204,7 @@ impl DemoLearner for QAgent {
         Some(QAgent::identity(self))
     }
 
-    fn learn(&mut self, rule: &CorrectionRule, step: &Experience) -> Result<()> {
+    fn learn(&mut self, rule: &CorrectionRule, step: &Experience, _time: StepTime) -> Result<()> {
         rule.learn(self, step).map(|_| ())
     }
 }
@@ -278,6 +304,13 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
             DemoRecord::Session(s) => self.session(s),
             DemoRecord::Episode(e) => self.episode(e),
             DemoRecord::Step(s) => self.step(s),
+            DemoRecord::Withdrawn(_) => {
+                self.session
+                    .as_ref()
+                    .ok_or_else(|| no_header("a withdrawal", "session"))?;
+                self.report.withdrawn = true;
+                Ok(())
+            }
         }
     }
 
@@ -314,8 +347,11 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
                 }
             }
         }
+        self.agent.begin_session(&s)?;
         self.session = Some(OpenSession {
             grid,
+            first_episode: s.first_episode,
+            view: s.view,
             rule: s.rule,
             last_episode: None,
             outcomes: Outcomes::default(),
@@ -331,6 +367,7 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
             .as_mut()
             .ok_or_else(|| no_header("an episode", "session"))?;
         let start = e.start.state(session.grid)?;
+        session.view.check_state(&start)?;
         self.agent.check_world(session.grid, e.goal.block_count())?;
         check_blocks(&start, &e.goal)?;
         match session.last_episode {
@@ -346,15 +383,22 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
                     e.episode
                 )));
             }
-            None if e.episode != 0 && self.policy == BadLines::Fail => {
+            None if e.episode != session.first_episode && self.policy == BadLines::Fail => {
                 return Err(LineError::bad(format!(
-                    "the session's first episode is {}, not 0: episodes are missing",
-                    e.episode
+                    "the session's first episode is {}, not {}: episodes are missing",
+                    e.episode, session.first_episode
                 )));
             }
             _ => {}
         }
-        self.agent.begin_episode(e.episode, e.goal.clone(), start.clone())?;
+        let first = Observation {
+            grid: session.grid,
+            state: start,
+            goal: e.goal.clone(),
+            protocol: ActionProtocol::Free,
+            view: session.view,
+        };
+        self.agent.begin_episode(&e, &first)?;
         session.last_episode = Some(e.episode);
         self.episode = Some(OpenEpisode {
             number: e.episode,
@@ -399,7 +443,7 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
             state: s.state.state(session.grid)?,
             goal: episode.goal.clone(),
             protocol: ActionProtocol::Free,
-            view: sim::View::Top,
+            view: session.view,
         };
         let next = Observation {
             state: s.next.state(session.grid)?,
@@ -419,7 +463,12 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
         }
         let action = Action::parse(&s.action, blocks)?;
         Action::parse(&s.proposed, blocks)?;
-        let mut world = GridWorld::new(session.grid, obs.state.clone())?;
+        if session.view == View::Side {
+            // The side view's rules refuse what the world would take as a no-op (as the
+            // trajectory reader does): a session in that view never records one.
+            View::Side.check(ActionProtocol::Free, &obs.state, action)?;
+        }
+        let mut world = GridWorld::new_in(session.view, session.grid, obs.state.clone())?;
         world.act(action)?;
         if world.state() != next.state {
             return Err(LineError::bad(format!(
@@ -453,6 +502,10 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
                 terminated: s.terminated,
                 truncated: s.truncated,
                 corrected: s.correction,
+            },
+            StepTime {
+                t_ms: s.t_ms,
+                received_ms: s.received_ms,
             },
         )?;
         self.episode = Some(OpenEpisode {
@@ -669,10 +722,10 @@ mod tests {
             assert!(err.contains("line 2"), "{err}");
         }
         // Another version is refused even when skipping bad lines.
-        let other = session.replace("\"version\":2", "\"version\":3");
+        let other = session.replace("\"version\":3", "\"version\":4");
         let mut replay = Replay::new(&mut agent, BadLines::Skip, "x.jsonl");
         let err = replay.read(other.as_bytes()).unwrap_err().to_string();
-        assert!(err.contains("version 3"), "{err}");
+        assert!(err.contains("version 4"), "{err}");
     }
 
     /// A recording's lines, and the same lines with `edit` applied to line `i` (from 0).
@@ -928,11 +981,12 @@ mod tests {
             fn identity(&self) -> Option<String> {
                 None
             }
-            fn begin_episode(&mut self, episode: u64, _goal: Goal, start: State) -> Result<()> {
+            fn begin_episode(&mut self, header: &EpisodeLine, start: &Observation) -> Result<()> {
+                let (episode, start) = (header.episode, start.state);
                 self.0.push(format!("episode {episode} {start:?}"));
                 Ok(())
             }
-            fn learn(&mut self, _rule: &CorrectionRule, step: &Experience) -> Result<()> {
+            fn learn(&mut self, _rule: &CorrectionRule, step: &Experience, _time: StepTime) -> Result<()> {
                 self.0.push(format!("step {:?}", step.obs.state));
                 Ok(())
             }
@@ -953,5 +1007,61 @@ mod tests {
             let start = log.0[k].splitn(3, ' ').nth(2).unwrap();
             assert_eq!(log.0[k + 1], format!("step {start}"));
         }
+    }
+
+    #[test]
+    fn a_side_view_session_replays_under_the_side_views_rules() {
+        use crate::correction::{CorrectionSession, PersonRole, session_world};
+        // A person plays a side-view episode to the goal: picks of clear blocks, moves,
+        // drops that fall onto towers.
+        let agent = QAgent::new(ReprKind::RoleTowers, Grid::default(), 3, QParams::default()).unwrap();
+        let world = sim::EnvConfig {
+            view: View::Side,
+            reward: "step-cost".parse().unwrap(),
+            ..session_world(&agent)
+        };
+        let goal: Goal = "0,1/2".parse().unwrap();
+        let mut session = CorrectionSession::new(
+            agent.clone(),
+            CorrectionRule::default(),
+            world,
+            vec![goal],
+            3,
+            0.0,
+            "person",
+            None,
+            DemoWriter::new(Vec::new(), "memory"),
+        )
+        .unwrap();
+        let obs = session.next_episode().unwrap();
+        let plan = oracle::ExactSolver::for_world(&world)
+            .solve(&obs.state, &obs.goal)
+            .unwrap();
+        for &a in &plan.actions {
+            session.person(a, PersonRole::Player).unwrap();
+        }
+        assert!(session.episode_end().unwrap().reached);
+        let (live, sink, _) = session.finish();
+        let bytes = sink.into_inner();
+        let text = String::from_utf8(bytes.clone()).unwrap();
+        assert!(
+            text.lines().next().unwrap().contains("\"view\":\"side\""),
+            "the recording names its view"
+        );
+        let mut replayed = agent.clone();
+        let mut replay = Replay::new(&mut replayed, BadLines::Fail, "side.jsonl");
+        replay.read(&bytes[..]).unwrap();
+        assert_eq!(replay.finish().steps, plan.len());
+        assert_eq!(replayed, live);
+        // Read as the top view (a file without its view: what every reader did before the
+        // side view was recorded), valid lines are refused (a drop that falls, or its
+        // reward, taken for an invented one).
+        let top = text.replacen(",\"view\":\"side\"", "", 1);
+        let mut as_top = agent.clone();
+        let err = Replay::new(&mut as_top, BadLines::Fail, "top.jsonl")
+            .read(top.as_bytes())
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("top.jsonl: line"), "{err}");
     }
 }

@@ -105,16 +105,8 @@ pub fn world_of(view: &Value) -> (sim::State, sim::Goal) {
         .map(|c| sim::Cell::new(c[0].as_u64().unwrap() as u16, c[1].as_u64().unwrap() as u16))
         .collect();
     let held = view["held"].as_u64().map(|b| sim::BlockId::of(b as usize));
-    let goal: Vec<usize> = view["goal"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|b| b.as_u64().unwrap() as usize)
-        .collect();
-    (
-        sim::State::new(&cells, held).unwrap(),
-        sim::Goal::from_indices(&goal).unwrap(),
-    )
+    let goal: sim::Goal = serde_json::from_value(view["goal"].clone()).unwrap();
+    (sim::State::new(&cells, held).unwrap(), goal)
 }
 
 /// The recording's lines, as JSON.
@@ -145,4 +137,80 @@ pub fn tabular_model(dir: &Path) -> std::path::PathBuf {
     let path = dir.join("agent.safetensors");
     agent.save(&path).unwrap();
     path
+}
+
+/// A tabular model of the side view (3 blocks, `role-towers`, a few games on the grid
+/// backend), saved in `dir` as `side.safetensors`.
+pub fn side_model(dir: &Path) -> std::path::PathBuf {
+    let config = agent::TrainConfig::resolve(&agent::TrainOverrides {
+        view: Some(sim::View::Side),
+        backend: Some(sim::Backend::Grid),
+        games: Some(20),
+        ..agent::TrainOverrides::default()
+    })
+    .unwrap();
+    let trained = agent::train(&config, None).unwrap();
+    let path = dir.join("side.safetensors");
+    trained.agent.save(&path).unwrap();
+    path
+}
+
+/// A tabular model of `blocks` blocks on the default grid, untrained, saved in `dir`.
+pub fn tabular_model_of(dir: &Path, blocks: usize) -> std::path::PathBuf {
+    let agent = agent::QAgent::new(
+        agent::ReprKind::Chasing,
+        sim::Grid::default(),
+        blocks,
+        agent::QParams::default(),
+    )
+    .unwrap();
+    let path = dir.join(format!("agent{blocks}.safetensors"));
+    agent.save(&path).unwrap();
+    path
+}
+
+/// Whether the server closes the raw connection `stream` within `limit` (it reads to the
+/// end; any bytes the server sent first are skipped).
+pub async fn closed_within(stream: &mut TcpStream, limit: Duration) -> bool {
+    let mut buf = [0u8; 4096];
+    tokio::time::timeout(limit, async {
+        loop {
+            match stream.read(&mut buf).await {
+                Ok(0) | Err(_) => return,
+                Ok(_) => {}
+            }
+        }
+    })
+    .await
+    .is_ok()
+}
+
+/// The code of the close frame that ends `socket` (after any other messages), or `None`
+/// when it ends without one.
+pub async fn close_code(socket: &mut Socket) -> Option<u16> {
+    loop {
+        match tokio::time::timeout(Duration::from_secs(10), socket.next())
+            .await
+            .expect("the end within 10 s")
+        {
+            Some(Ok(Message::Close(frame))) => return frame.map(|f| u16::from(f.code)),
+            Some(Ok(_)) => {}
+            None | Some(Err(_)) => return None,
+        }
+    }
+}
+
+/// A raw HTTP/1.1 request naming `host` in its `Host` header (and `origin`, if given, in
+/// its `Origin`); the status.
+pub async fn http_as(addr: SocketAddr, method: &str, path: &str, body: &str, host: &str, origin: Option<&str>) -> u16 {
+    let mut stream = TcpStream::connect(addr).await.unwrap();
+    let origin = origin.map_or(String::new(), |o| format!("Origin: {o}\r\n"));
+    let request = format!(
+        "{method} {path} HTTP/1.1\r\nHost: {host}\r\n{origin}Content-Type: application/x-www-form-urlencoded\r\nContent-Length: {}\r\nConnection: close\r\n\r\n{body}",
+        body.len()
+    );
+    stream.write_all(request.as_bytes()).await.unwrap();
+    let mut response = String::new();
+    stream.read_to_string(&mut response).await.unwrap();
+    response.split(' ').nth(1).unwrap().parse().unwrap()
 }
