@@ -28,16 +28,24 @@ pub fn summary(results_json: &str) -> Result<String> {
         .as_array()
         .ok_or_else(|| bad("it has no list of experiments".into()))?;
     let options = &json["options"];
-    let run = if options["quick"] == true {
-        "a quick run: small counts that check the pipeline, not the paper's"
+    // The command as it was run, so that the figures say which budget made them.
+    let (flag, run) = if options["quick"] == true {
+        (" --quick", "small counts that check the pipeline, not the paper's")
     } else if options["long"] == true {
-        "the full run, E8 at its long budget"
+        (" --long", "every experiment, E8 at its long budget")
     } else {
-        "the full run"
+        ("", "every experiment")
+    };
+    let only = match options["only"].as_array() {
+        Some(ids) if !ids.is_empty() => {
+            let ids: Vec<&str> = ids.iter().filter_map(serde_json::Value::as_str).collect();
+            format!(" --only {}", ids.join(","))
+        }
+        _ => String::new(),
     };
     let ran = &json["ran"];
     let mut md = format!(
-        "Measured by `blockstack reproduce --seed {}` ({run}; {} agents per learner arm) at commit {}, on {} \
+        "Measured by `blockstack reproduce{flag}{only} --seed {}` ({run}; {} agents per learner arm) at commit {}, on {} \
          ({} cores, {} threads). Each figure: the paper's, ours in the paper's world as its authors coded it \
          (original), ours in the SPEC world (spec); failures are shares of the test games, steps* count a failure \
          as 1000.\n\n| experiment | paper | ours, original | ours, spec |\n|---|---|---|---|\n",
