@@ -184,8 +184,12 @@ fn the_quick_report_holds_every_experiment() {
         assert!((0.0..=1.0).contains(&row["success"].as_f64().unwrap()), "{row}");
     }
     for row in e10["exact"].as_array().unwrap() {
-        let near = row["near_optimal_fewest_ratio"].as_f64().unwrap();
-        assert!((1.0..=2.0).contains(&near), "{row}");
+        // Over the problems the policy solved: at the quick budget's tiny training it may
+        // solve none of a size, and then there is no ratio.
+        match row["near_optimal_fewest_ratio"].as_f64() {
+            Some(near) => assert!((1.0..=2.0).contains(&near), "{row}"),
+            None => assert_eq!(row["success"].as_f64(), Some(0.0), "{row}"),
+        }
     }
     assert_eq!(e10["nlm"][1]["published"][1], 85.8);
     assert!(readme.contains("### Neural Logic Machines' generator"));
