@@ -1042,7 +1042,7 @@ mod tests {
         let session = CorrectionSession::new(
             agent(),
             CorrectionRule::default(),
-            world,
+            world.clone(),
             vec!["0,1,2".parse().unwrap()],
             4,
             0.0,

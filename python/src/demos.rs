@@ -342,15 +342,15 @@ pub fn recording_episodes<'py>(py: Python<'py>, path: PathBuf, obs: &str) -> PyR
             let protocol = e.world.as_ref().map_or(sim::ActionProtocol::Free, |w| w.protocol);
             let first = Observation {
                 grid: e.grid,
-                state: e.start,
-                goal: e.goal,
+                state: e.start.clone(),
+                goal: e.goal.clone(),
                 protocol,
                 view: e.view,
             };
-            let observations: Vec<Observation> = std::iter::once(first)
+            let observations: Vec<Observation> = std::iter::once(first.clone())
                 .chain(e.steps.iter().map(|s| Observation {
-                    state: s.state,
-                    ..first
+                    state: s.state.clone(),
+                    ..first.clone()
                 }))
                 .collect();
             let ended = last.terminated || last.truncated;

@@ -227,12 +227,12 @@ impl StudyFile {
         if let Some(code) = &study.completion_code {
             check_name(code).map_err(|e| err(format!("completion_code: {e}")))?;
         }
-        if let Some(url) = &study.completion_url {
-            if !(url.starts_with("https://") || url.starts_with("http://")) || url.contains(['"', '<', '>', ' ']) {
-                return Err(err(format!(
-                    "completion_url {url:?}: give an http:// or https:// address"
-                )));
-            }
+        if let Some(url) = &study.completion_url
+            && (!(url.starts_with("https://") || url.starts_with("http://")) || url.contains(['"', '<', '>', ' ']))
+        {
+            return Err(err(format!(
+                "completion_url {url:?}: give an http:// or https:// address"
+            )));
         }
         if let Some(w) = &study.withdrawal {
             w.parse::<Withdrawal>().map_err(|e| err(format!("withdrawal: {e}")))?;
@@ -468,7 +468,7 @@ impl Condition {
             let mut session = CorrectionSession::new(
                 self.agent.clone(),
                 self.rule,
-                self.world,
+                self.world.clone(),
                 self.goals.clone(),
                 self.seed,
                 0.0,
@@ -498,7 +498,7 @@ impl Condition {
             .goals
             .iter()
             .filter(|g| g.block_count() == model.blocks())
-            .map(|g| GoalSpec::Fixed(*g))
+            .map(|g| GoalSpec::Fixed(g.clone()))
             .collect();
         if goals.is_empty() {
             vec![GoalSpec::Random]

@@ -300,7 +300,7 @@ impl Participant {
     }
 
     /// Side view: `block` onto the top of column `to` (the block there, or the table).
-    fn block_move(&mut self, block: u8, to: u8, t_ms: Option<u64>) -> std::result::Result<(), String> {
+    fn block_move(&mut self, block: u16, to: u16, t_ms: Option<u64>) -> std::result::Result<(), String> {
         let obs = self.live("a block move")?;
         if usize::from(block) >= obs.state.block_count() || usize::from(to) >= obs.grid.width() {
             return Err(format!(
@@ -443,7 +443,7 @@ impl Participant {
             blocks: obs.blocks().iter().map(|cell| [cell.x, cell.y]).collect(),
             held: obs.held_block().map(|b| b.0),
             view: obs.view,
-            goal: obs.goal,
+            goal: obs.goal.clone(),
             colours: obs
                 .state
                 .blocks()

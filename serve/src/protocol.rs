@@ -76,9 +76,9 @@ pub enum ClientMessage {
         /// Repeated in the answer.
         id: Option<u64>,
         /// The block moved.
-        block: u8,
+        block: u16,
         /// The destination column.
-        to: u8,
+        to: u16,
         /// As for `act`.
         #[serde(default)]
         t_ms: Option<u64>,

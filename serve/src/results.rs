@@ -208,7 +208,7 @@ impl Figures {
             row: row.clone(),
             grid: [e.grid.width(), e.grid.height()],
             view: e.view,
-            goal: e.goal,
+            goal: e.goal.clone(),
             colours: e
                 .start
                 .blocks()
@@ -300,7 +300,7 @@ impl Figures {
     /// The shortest plan from `e`'s start, in the world of `condition` (the recorded view
     /// and the free protocol when the study has no such condition), searched once.
     fn optimum(&self, condition: &str, e: &DemoEpisode) -> Option<u32> {
-        let key = (condition.to_string(), e.start, e.goal);
+        let key = (condition.to_string(), e.start.clone(), e.goal.clone());
         if let Some(found) = lock(&self.optimum).get(&key) {
             return *found;
         }
@@ -310,7 +310,7 @@ impl Figures {
                 view: e.view,
                 ..EnvConfig::default()
             },
-            |c| c.world,
+            |c| c.world.clone(),
         );
         let found = ExactSolver::for_world(&EnvConfig { grid: e.grid, ..world })
             .with_node_budget(self.solver_budget)
@@ -327,10 +327,10 @@ fn reaction_times_of(e: &DemoEpisode) -> Vec<u64> {
     let mut out = Vec::new();
     for s in &e.steps {
         let t = s.time.t_ms;
-        if let (true, Some(t), Some(b)) = (s.demonstrated, t, before) {
-            if t > b {
-                out.push(t - b);
-            }
+        if let (true, Some(t), Some(b)) = (s.demonstrated, t, before)
+            && t > b
+        {
+            out.push(t - b);
         }
         if t.is_some() {
             before = t;
@@ -422,9 +422,9 @@ pub struct Replay {
 #[derive(Clone, Debug, Serialize)]
 pub struct ReplayState {
     /// Every block's cell `[x, y]`.
-    pub blocks: Vec<[u8; 2]>,
+    pub blocks: Vec<[u16; 2]>,
     /// The held block.
-    pub held: Option<u8>,
+    pub held: Option<u16>,
 }
 
 /// A step on the replay page.

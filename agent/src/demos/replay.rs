@@ -393,7 +393,7 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
         }
         let first = Observation {
             grid: session.grid,
-            state: start,
+            state: start.clone(),
             goal: e.goal.clone(),
             protocol: ActionProtocol::Free,
             view: session.view,
@@ -982,7 +982,7 @@ mod tests {
                 None
             }
             fn begin_episode(&mut self, header: &EpisodeLine, start: &Observation) -> Result<()> {
-                let (episode, start) = (header.episode, start.state);
+                let (episode, start) = (header.episode, start.state.clone());
                 self.0.push(format!("episode {episode} {start:?}"));
                 Ok(())
             }
@@ -1024,7 +1024,7 @@ mod tests {
         let mut session = CorrectionSession::new(
             agent.clone(),
             CorrectionRule::default(),
-            world,
+            world.clone(),
             vec![goal],
             3,
             0.0,
