@@ -465,8 +465,14 @@ mod tests {
             let c = DqnConfig::preset(preset, blocks).unwrap();
             (c.demos, c.pretrain_steps, c.steps)
         };
-        assert_eq!(budget(Preset::DqfdPlanes, 2), (DemoSource::Exact(10_000), 30_000, 30_000));
-        assert_eq!(budget(Preset::DqfdPlanes, 3), (DemoSource::Exact(10_000), 90_000, 90_000));
+        assert_eq!(
+            budget(Preset::DqfdPlanes, 2),
+            (DemoSource::Exact(10_000), 30_000, 30_000)
+        );
+        assert_eq!(
+            budget(Preset::DqfdPlanes, 3),
+            (DemoSource::Exact(10_000), 90_000, 90_000)
+        );
         for blocks in [4, 5] {
             assert_eq!(
                 budget(Preset::DqfdPlanes, blocks),
@@ -525,7 +531,10 @@ mod tests {
         })
         .unwrap();
         // The screen takes the paper network; the learner stays the preset's.
-        assert_eq!((c.net.kind, c.net.hidden, c.obs()), (NetKind::Paper, 64, ObsKind::PaperScreen));
+        assert_eq!(
+            (c.net.kind, c.net.hidden, c.obs()),
+            (NetKind::Paper, 64, ObsKind::PaperScreen)
+        );
         assert_eq!((c.lr, c.lr_final), (5e-4, 5e-5));
         assert_eq!((c.demos.clone(), c.pretrain_steps), (DemoSource::None, 0));
         assert_eq!((c.seed, c.world.backend, c.goals.len()), (7, Backend::Physics, 1));
