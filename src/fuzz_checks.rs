@@ -31,11 +31,11 @@ pub fn model_file(data: &[u8]) {
 pub fn recording(data: &[u8]) {
     let mut lines = RecordingLines::new(data);
     while let Ok(Some(line)) = lines.next_line() {
-        if let RawLine::Text(text) = line {
-            if let Ok(record) = serde_json::from_str::<DemoRecord>(text.trim()) {
-                let again = serde_json::to_string(&record).expect("records serialise");
-                assert_eq!(serde_json::from_str::<DemoRecord>(&again).ok(), Some(record));
-            }
+        if let RawLine::Text(text) = line
+            && let Ok(record) = serde_json::from_str::<DemoRecord>(text.trim())
+        {
+            let again = serde_json::to_string(&record).expect("records serialise");
+            assert_eq!(serde_json::from_str::<DemoRecord>(&again).ok(), Some(record));
         }
     }
     demonstrations(data);

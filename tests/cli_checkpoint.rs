@@ -132,7 +132,7 @@ fn a_run_killed_mid_way_resumes_from_its_last_checkpoint() {
     child.wait().unwrap();
     assert!(!dir.join("never.st").exists());
     let played = games_played(&ck);
-    assert!(played > 0 && played % 500 == 0 && played < 8000, "{played}");
+    assert!(played > 0 && played.is_multiple_of(500) && played < 8000, "{played}");
 
     train(&["--games", games, "--resume", path(&ck), "--out", path(&resumed)]);
     train(&[&ROLE[..], &["--games", games, "--out", path(&whole)]].concat());

@@ -286,10 +286,11 @@ fn link_targets(text: &str) -> Vec<String> {
         // Code spans hold examples, not links.
         let prose: String = line.split('`').step_by(2).collect::<Vec<_>>().join(" ");
         let trimmed = prose.trim_start();
-        if let Some((label, target)) = trimmed.split_once("]: ") {
-            if label.starts_with('[') && !label.contains(']') {
-                targets.push(target.split_whitespace().next().unwrap_or("").to_string());
-            }
+        if let Some((label, target)) = trimmed.split_once("]: ")
+            && label.starts_with('[')
+            && !label.contains(']')
+        {
+            targets.push(target.split_whitespace().next().unwrap_or("").to_string());
         }
         let mut rest = prose.as_str();
         while let Some(i) = rest.find("](") {

@@ -528,13 +528,13 @@ impl QAgent {
                 t.keys
             )));
         }
-        if let Some(keys) = &keys {
-            if let Some(i) = (0..keys.len()).find(|&i| keys[i] >= t.keys || (i > 0 && keys[i - 1] >= keys[i])) {
-                return Err(corrupt(format!(
-                    "row {i}'s key {} does not fit a table of {} keys in key order",
-                    keys[i], t.keys
-                )));
-            }
+        if let Some(keys) = &keys
+            && let Some(i) = (0..keys.len()).find(|&i| keys[i] >= t.keys || (i > 0 && keys[i - 1] >= keys[i]))
+        {
+            return Err(corrupt(format!(
+                "row {i}'s key {} does not fit a table of {} keys in key order",
+                keys[i], t.keys
+            )));
         }
         let values = to_f32(&values).ok_or_else(|| {
             corrupt(format!(

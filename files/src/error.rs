@@ -155,7 +155,7 @@ impl fmt::Display for Bytes {
         let mut value = self.0;
         let mut unit = None;
         for u in UNITS {
-            if value >= 1024 && value % 1024 == 0 {
+            if value >= 1024 && value.is_multiple_of(1024) {
                 value /= 1024;
                 unit = Some(u);
             } else {

@@ -313,10 +313,10 @@ fn classify(path: &Path) -> Result<Destination> {
                     // A link whose text names no file but which the system follows, to a
                     // special file: `/dev/fd/N` of a pipe (`>(cat > t)`) reads "pipe:[123]".
                     // The special file is written through the link itself.
-                    if fs::symlink_metadata(&next).is_err() {
-                        if let Some(kind) = fs::metadata(&target).ok().and_then(|m| special_of(m.file_type())) {
-                            return Ok(Destination::Special { target, kind });
-                        }
+                    if fs::symlink_metadata(&next).is_err()
+                        && let Some(kind) = fs::metadata(&target).ok().and_then(|m| special_of(m.file_type()))
+                    {
+                        return Ok(Destination::Special { target, kind });
                     }
                     target = next;
                     continue;
@@ -460,10 +460,10 @@ pub fn refuse_same_file(output: impl AsRef<Path>, input: impl AsRef<Path>) -> Re
 fn normalised(path: &Path) -> PathBuf {
     let absolute = std::env::current_dir().map_or_else(|_| path.to_path_buf(), |cwd| cwd.join(path));
     // Resolve the folder when it exists, so that `a/../b` and links to folders compare.
-    if let (Some(dir), Some(name)) = (absolute.parent(), absolute.file_name()) {
-        if let Ok(dir) = fs::canonicalize(dir) {
-            return dir.join(name);
-        }
+    if let (Some(dir), Some(name)) = (absolute.parent(), absolute.file_name())
+        && let Ok(dir) = fs::canonicalize(dir)
+    {
+        return dir.join(name);
     }
     let mut out = PathBuf::new();
     for part in absolute.components() {

@@ -354,13 +354,13 @@ impl DqnConfig {
                 MAX_BUFFER_BYTES >> 20
             ));
         }
-        if let DemoSource::Exact(k) | DemoSource::Oracle(k) = self.demos {
-            if k > MAX_DEMO_EPISODES {
-                return bad(format!(
-                    "{k} demonstrated episodes (--demos {}) are more than the {MAX_DEMO_EPISODES} allowed",
-                    self.demos
-                ));
-            }
+        if let DemoSource::Exact(k) | DemoSource::Oracle(k) = self.demos
+            && k > MAX_DEMO_EPISODES
+        {
+            return bad(format!(
+                "{k} demonstrated episodes (--demos {}) are more than the {MAX_DEMO_EPISODES} allowed",
+                self.demos
+            ));
         }
         if self.train_every == 0 {
             return bad("train-every must be at least 1 step".into());
@@ -396,10 +396,10 @@ impl DqnConfig {
         if self.n_step == 0 {
             return bad("n-step must be at least 1".into());
         }
-        if let Some(c) = self.clip_norm {
-            if !(c > 0.0 && c.is_finite()) {
-                return bad(format!("the gradient clip {c} is not a positive number"));
-            }
+        if let Some(c) = self.clip_norm
+            && !(c > 0.0 && c.is_finite())
+        {
+            return bad(format!("the gradient clip {c} is not a positive number"));
         }
         match self.target_every {
             TargetEvery::Steps(0) | TargetEvery::Games(0) => {

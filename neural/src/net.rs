@@ -559,7 +559,7 @@ impl QNet {
     /// normalisation on its running statistics, as one row per input.
     pub fn q_values(&self, inputs: Vec<f32>) -> Result<Vec<Vec<f32>>> {
         let width = self.input.len();
-        if inputs.len() % width != 0 {
+        if !inputs.len().is_multiple_of(width) {
             return Err(NeuralError::Mismatch(format!(
                 "{} input values are not a whole number of {width}-value inputs",
                 inputs.len()

@@ -200,7 +200,7 @@ impl Trainer {
         for _ in 0..count {
             self.env_step()?;
             let learning = self.buffer.agent_len() as u64 >= self.config.learning_starts.max(1);
-            if learning && self.report.steps % self.config.train_every == 0 {
+            if learning && self.report.steps.is_multiple_of(self.config.train_every) {
                 let batch = self
                     .buffer
                     .sample(self.config.batch, self.config.demo_share, &mut self.rng);
@@ -239,10 +239,10 @@ impl Trainer {
     fn after_gradient_step(&mut self) -> Result<()> {
         let lr = self.learning_rate(self.learner.gradient_steps());
         self.learner.set_lr(lr);
-        if let TargetEvery::Steps(n) = self.config.target_every {
-            if self.learner.gradient_steps() % n == 0 {
-                self.learner.refresh_target()?;
-            }
+        if let TargetEvery::Steps(n) = self.config.target_every
+            && self.learner.gradient_steps().is_multiple_of(n)
+        {
+            self.learner.refresh_target()?;
         }
         Ok(())
     }
@@ -314,11 +314,11 @@ impl Trainer {
             }
             self.report.successes += u64::from(step.terminated);
             self.current = None;
-            if let TargetEvery::Games(n) = self.config.target_every {
-                if self.report.games - self.target_games >= n {
-                    self.learner.refresh_target()?;
-                    self.target_games = self.report.games;
-                }
+            if let TargetEvery::Games(n) = self.config.target_every
+                && self.report.games - self.target_games >= n
+            {
+                self.learner.refresh_target()?;
+                self.target_games = self.report.games;
             }
         } else {
             self.current = Some((env_index, step.observation));

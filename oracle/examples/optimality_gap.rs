@@ -47,10 +47,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         vec![None]
                     };
                     for h in holds {
-                        if let Ok(s) = State::new(&[a, b, c], h.map(BlockId)) {
-                            if !goal.holds(&s) {
-                                every.push(s);
-                            }
+                        if let Ok(s) = State::new(&[a, b, c], h.map(BlockId))
+                            && !goal.holds(&s)
+                        {
+                            every.push(s);
                         }
                     }
                 }

@@ -22,6 +22,9 @@ pub enum OracleError {
     /// A block-move problem or search of [`crate::towers`] was refused.
     #[error(transparent)]
     Towers(#[from] crate::towers::TowersError),
+    /// A PDDL problem or plan was refused ([`crate::pddl`]).
+    #[error(transparent)]
+    Pddl(#[from] crate::pddl::PddlError),
     /// The goal holds already, so there is no next action to give.
     #[error("goal {goal} already holds: there is no next action")]
     GoalAlreadyHolds {

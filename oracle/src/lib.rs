@@ -12,6 +12,7 @@
 //!   towards a stack laid around the blocks' centroid, with a random block when nothing is
 //!   held. It plans nothing and can get stuck; Table I of the paper assisted its learner
 //!   with it.
+//! - [`pddl`]: the planning competitions' Blocks World problems and plans, read and written.
 //! - [`towers`]: block-move planners for the classic Blocks World seen from the side (an
 //!   exact A* solver and a near-optimal planner that scales to thousands of blocks).
 //!
@@ -68,6 +69,7 @@ pub mod error;
 pub mod exact;
 pub mod gap;
 pub mod oracle;
+pub mod pddl;
 mod placement;
 pub mod plan;
 mod route;

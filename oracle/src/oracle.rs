@@ -230,10 +230,10 @@ fn next_stretch(world: &GridWorld, goal: &Goal, placement: Placement, order: Ord
         if let Some(path) = route::route(world, h, target(h)) {
             return Some(path);
         }
-        if in_stack(&h) {
-            if let Some(path) = route::to_nearest(world, h, off_stack) {
-                return Some(path);
-            }
+        if in_stack(&h)
+            && let Some(path) = route::to_nearest(world, h, off_stack)
+        {
+            return Some(path);
         }
     }
     // Rule 3: place a block that can reach its target, chosen as `order` says.

@@ -3,6 +3,7 @@
 
 mod common;
 mod exact;
+mod pddl;
 mod protocol;
 mod side_steps;
 mod soundness;

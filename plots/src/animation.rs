@@ -331,7 +331,7 @@ mod tests {
                 RgbImage::from_fn(7 * side, 7 * side, |x, y| {
                     if (at..at + side).contains(&x) && y >= 3 * side && y < 4 * side {
                         Rgb([200, 40, 40])
-                    } else if (x / side + y / side) % 2 == 0 {
+                    } else if (x / side + y / side).is_multiple_of(2) {
                         Rgb([235, 235, 235])
                     } else {
                         Rgb([250, 250, 250])

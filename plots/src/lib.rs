@@ -564,8 +564,20 @@ where
         .bold_line_style(RGBColor(220, 220, 220));
 }
 
+/// Each category's name as lines of tick text no wider than its share of `plot_width`
+/// pixels, less a gap between neighbours (a word wider than that keeps a line of its own).
+fn category_labels(names: &[String], plot_width: u32) -> Vec<Vec<String>> {
+    let slot = (plot_width / names.len().max(1) as u32).saturating_sub(8).max(1);
+    names
+        .iter()
+        .map(|n| wrap(n, TICK_PX, slot).unwrap_or_else(|_| vec![n.clone()]))
+        .collect()
+}
+
 /// A chart with one category per name along x over the value axis `y`, its mesh drawn in
-/// the house style with `y_label`: the frame bar charts and box plots share.
+/// the house style with `y_label`: the frame bar charts and box plots share. Each name is
+/// wrapped to its category's width (long names side by side once ran into one another),
+/// and the label area grows to hold the most lines.
 fn category_chart<'a, DB, Y>(
     area: &'a DrawingArea<DB, Shift>,
     names: Vec<String>,
@@ -577,19 +589,43 @@ where
     Y: plotters::coord::ranged1d::AsRangedCoord<Value = f64>,
     Y::CoordDescType: plotters::coord::ranged1d::ValueFormatter<f64>,
 {
+    const MARGIN_LEFT: u32 = 10;
+    const MARGIN_RIGHT: u32 = 25;
+    const Y_LABEL_AREA: u32 = 80;
+    const LINE_PX: u32 = TICK_PX + 3;
+    let plot_width = area
+        .dim_in_pixel()
+        .0
+        .saturating_sub(MARGIN_LEFT + MARGIN_RIGHT + Y_LABEL_AREA);
+    let labels = category_labels(&names, plot_width);
+    let lines = labels.iter().map(Vec::len).max().unwrap_or(1).max(1) as u32;
     let mut chart = ChartBuilder::on(area)
-        .margin_left(10)
-        .margin_right(25)
+        .margin_left(MARGIN_LEFT)
+        .margin_right(MARGIN_RIGHT)
         .margin_top(10)
-        .x_label_area_size(45)
-        .y_label_area_size(80)
+        .x_label_area_size(20 + lines * LINE_PX)
+        .y_label_area_size(Y_LABEL_AREA)
         .build_cartesian_2d(Categories(names), y)?;
     let mut mesh = chart.configure_mesh();
     style_mesh(&mut mesh);
     mesh.disable_x_mesh()
+        .x_label_formatter(&|_| String::new())
         .y_desc(y_label)
         .y_label_formatter(&|v| number_label(*v))
         .draw()?;
+    let (xs, ys) = chart.plotting_area().get_pixel_range();
+    let (base_x, base_y) = area.get_base_pixel();
+    let style = TextStyle::from((FONT_FAMILY, TICK_PX).into_font())
+        .color(&BLACK)
+        .pos(Pos::new(HPos::Center, VPos::Top));
+    let n = labels.len().max(1) as f64;
+    for (i, lines) in labels.iter().enumerate() {
+        let centre = xs.start + ((i as f64 + 0.5) / n * f64::from(xs.end - xs.start)).round() as i32;
+        for (k, line) in lines.iter().enumerate() {
+            let top = ys.end + 8 + k as i32 * LINE_PX as i32;
+            area.draw_text(line, &style, (centre - base_x, top - base_y))?;
+        }
+    }
     Ok(chart)
 }
 
@@ -710,6 +746,37 @@ mod tests {
             let err = check_value(|| "x".into(), bad).unwrap_err();
             assert!(matches!(err, PlotError::BadValue { .. }), "{bad}: {err}");
         }
+    }
+
+    #[test]
+    fn long_category_names_wrap_within_their_share_of_the_axis() {
+        // E6's eight arms on its chart's plot width ran into one another on one line.
+        let names: Vec<String> = [
+            "baseline, original",
+            "demonstrator 1, original",
+            "demonstrator 2, original",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        let width = 3 * 90;
+        let labels = category_labels(&names, width);
+        let font = (FONT_FAMILY, TICK_PX).into_font();
+        for (name, lines) in names.iter().zip(&labels) {
+            assert!(lines.len() > 1, "{name:?} was not wrapped: {lines:?}");
+            assert_eq!(lines.join(" "), *name);
+            for line in lines {
+                let single_word = !line.contains(' ');
+                assert!(
+                    single_word || font.box_size(line).unwrap().0 <= 90 - 8,
+                    "{line:?} is wider than its slot"
+                );
+            }
+        }
+        assert_eq!(
+            category_labels(&names, 3000),
+            names.iter().map(|n| vec![n.clone()]).collect::<Vec<_>>()
+        );
     }
 
     #[test]

@@ -38,7 +38,7 @@ from blockstack.env import BlocksWorldEnv, StackEnv
 from blockstack.goal_env import StackGoalEnv
 from blockstack.model import Model, load
 from blockstack import vector
-from blockstack.planning import solve
+from blockstack.planning import read_pddl, solve
 from blockstack.training import train, train_dqn
 
 __all__ = [
@@ -50,6 +50,7 @@ __all__ = [
     "demonstrations",
     "episode_seed",
     "load",
+    "read_pddl",
     "read_recording",
     "solve",
     "train",

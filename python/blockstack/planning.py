@@ -1,4 +1,4 @@
-"""Plans from any state, by the Rust exact solver or oracle."""
+"""Plans from any state, by the Rust exact solver or oracle; PDDL problems."""
 
 from __future__ import annotations
 
@@ -37,3 +37,19 @@ def solve(
     ``blockstack solve --view side --cost ... --json`` prints them.
     """
     return _native.solve([tuple(c) for c in cells], goal, held, tuple(grid), solver, protocol, view, cost)
+
+
+def read_pddl(path) -> dict:
+    """The Blocks World problem in the PDDL file ``path`` (the planning competitions'
+    4-operator domain: ``:objects``, ``:init`` with ``on`` / ``on-table`` / ``clear`` /
+    ``arm-empty``, ``:goal``), as ``blockstack solve --pddl`` reads it: a dict of ``name``,
+    ``domain``, ``blocks`` (the objects' names; block ``i`` is ``blocks[i]``), ``start`` and
+    ``goal`` (lists of towers, each bottom to top, by block index; blocks the goal does not
+    place are free) and ``plan``, the near-optimal planner's plan in the competitions'
+    format (``["(unstack b3 b5)", "(putdown b3)", ...]``, two actions a block move).
+
+    A file that is not such a problem (a block placed twice, a cycle of ``on``, an unknown
+    predicate, a goal naming an undeclared block, a goal of bare ``on`` facts, a file over
+    64 MiB) raises ``ValueError`` naming the file, the line and the problem.
+    """
+    return _native.read_pddl(str(path))

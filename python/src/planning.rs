@@ -120,3 +120,34 @@ fn indices<'py>(py: Python<'py>, actions: &[Action]) -> PyResult<Bound<'py, PyAn
     let indices: Vec<usize> = actions.iter().map(|a| a.index()).collect();
     indices.into_pyobject(py).map(|l| l.into_any())
 }
+
+/// The Blocks World problem in the PDDL file at `path` (the planning competitions'
+/// 4-operator domain, read by `oracle::pddl`): a dict of its `name`, `domain`, the blocks'
+/// names (`blocks`; block `i` is `blocks[i]`), the `start` and the `goal` as lists of towers,
+/// each bottom to top by block index (blocks the goal does not place are free), and the
+/// near-optimal planner's `plan` in the competitions' format (a list of actions such as
+/// `"(unstack b3 b5)"`, checked by replaying it over the file's facts). A file refused is
+/// a `ValueError` naming the file, the line and the problem.
+#[pyfunction]
+pub fn read_pddl<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Bound<'py, PyDict>> {
+    let (problem, plan) = py.detach(|| {
+        guard(|| {
+            let problem = oracle::pddl::Problem::read(&path).or_value_error()?;
+            let moves = oracle::towers::NearOptimal::new()
+                .plan(problem.start(), problem.goal())
+                .or_value_error()?;
+            let actions = oracle::pddl::actions(problem.start(), &moves).or_value_error()?;
+            problem.replay(&actions).or_value_error()?;
+            let plan: Vec<String> = actions.iter().map(|a| a.to_pddl(problem.block_names())).collect();
+            Ok((problem, plan))
+        })
+    })?;
+    let out = PyDict::new(py);
+    out.set_item("name", problem.name())?;
+    out.set_item("domain", problem.domain())?;
+    out.set_item("blocks", problem.block_names().to_vec())?;
+    out.set_item("start", problem.start().towers())?;
+    out.set_item("goal", problem.goal().towers().to_vec())?;
+    out.set_item("plan", plan)?;
+    Ok(out)
+}

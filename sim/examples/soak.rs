@@ -171,7 +171,7 @@ fn main() -> Result<(), sim::SimError> {
                 }
                 continue 'run;
             }
-            if done % 10_000_000 == 0 {
+            if done.is_multiple_of(10_000_000) {
                 eprintln!(
                     "{done} steps, {disagreements} disagreements, {:.0} steps/s",
                     done as f64 / clock.elapsed().as_secs_f64()

@@ -164,14 +164,14 @@ impl Goal {
             order.push(b);
         }
         let goal = Goal::from_indices(&order)?;
-        if let Some(n) = blocks {
-            if n != goal.block_count() {
-                return Err(SimError::BadGoal {
-                    goal: text.to_string(),
-                    count: n,
-                    reason: format!("it has {} blocks", goal.block_count()),
-                });
-            }
+        if let Some(n) = blocks
+            && n != goal.block_count()
+        {
+            return Err(SimError::BadGoal {
+                goal: text.to_string(),
+                count: n,
+                reason: format!("it has {} blocks", goal.block_count()),
+            });
         }
         Ok(goal)
     }

@@ -76,13 +76,13 @@ impl ActionProtocol {
     /// [`ActionProtocol::check`] for a world of `blocks` blocks with `held` in hand.
     #[inline]
     pub(crate) fn check_when(self, held: Option<BlockId>, blocks: usize, action: Action) -> Result<()> {
-        if let Action::Pick(b) = action {
-            if b.index() >= blocks {
-                return Err(SimError::NoSuchBlock {
-                    block: b.index(),
-                    blocks,
-                });
-            }
+        if let Action::Pick(b) = action
+            && b.index() >= blocks
+        {
+            return Err(SimError::NoSuchBlock {
+                block: b.index(),
+                blocks,
+            });
         }
         if self.legal_when(held, blocks).contains(action) {
             Ok(())

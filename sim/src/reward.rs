@@ -137,16 +137,16 @@ impl Default for Paper {
 impl Paper {
     fn reward(&self, t: &Transition) -> f64 {
         let mut r = 0.0;
-        if let (Some(h), Some(h2)) = (t.before.held_block(), t.after.held_block()) {
-            if h == h2 {
-                let d0 = t.goal.chased_distance(h, t.before);
-                let d1 = t.goal.chased_distance(h, t.after);
-                r += match d1.cmp(&d0) {
-                    std::cmp::Ordering::Less => self.closer,
-                    std::cmp::Ordering::Greater => self.farther,
-                    std::cmp::Ordering::Equal => 0.0,
-                };
-            }
+        if let (Some(h), Some(h2)) = (t.before.held_block(), t.after.held_block())
+            && h == h2
+        {
+            let d0 = t.goal.chased_distance(h, t.before);
+            let d1 = t.goal.chased_distance(h, t.after);
+            r += match d1.cmp(&d0) {
+                std::cmp::Ordering::Less => self.closer,
+                std::cmp::Ordering::Greater => self.farther,
+                std::cmp::Ordering::Equal => 0.0,
+            };
         }
         let adjacent = t
             .goal
@@ -155,10 +155,10 @@ impl Paper {
             .count();
         r += self.adjacent_pair * adjacent as f64;
         if t.action == Action::Drop {
-            if let Some(h) = t.before.held_block() {
-                if t.goal.chased_distance(h, t.before) >= self.drop_far_distance {
-                    r += self.drop_far;
-                }
+            if let Some(h) = t.before.held_block()
+                && t.goal.chased_distance(h, t.before) >= self.drop_far_distance
+            {
+                r += self.drop_far;
             }
             if matches!(t.previous_action, Some(Action::Pick(_))) {
                 r += self.pick_then_drop;
@@ -221,14 +221,14 @@ impl PaperCode {
         let before = CodedState::of(t.grid, t.goal, t.before);
         let after = CodedState::of(t.grid, t.goal, t.after);
         let mut r = 0.0;
-        if let (Some(d0), Some(d1)) = (before.held_distance(), after.held_distance()) {
-            if before.held == after.held {
-                r += match d1.cmp(&d0) {
-                    std::cmp::Ordering::Less => self.closer,
-                    std::cmp::Ordering::Greater => self.farther,
-                    std::cmp::Ordering::Equal => 0.0,
-                };
-            }
+        if let (Some(d0), Some(d1)) = (before.held_distance(), after.held_distance())
+            && before.held == after.held
+        {
+            r += match d1.cmp(&d0) {
+                std::cmp::Ordering::Less => self.closer,
+                std::cmp::Ordering::Greater => self.farther,
+                std::cmp::Ordering::Equal => 0.0,
+            };
         }
         if before == after {
             r += self.unchanged;
@@ -238,12 +238,11 @@ impl PaperCode {
                 r += self.pair_in_place * pairs as f64;
             }
         }
-        if t.action == Action::Drop {
-            if let Some(d) = before.held_distance() {
-                if d > self.drop_far_above {
-                    r += self.drop_far;
-                }
-            }
+        if t.action == Action::Drop
+            && let Some(d) = before.held_distance()
+            && d > self.drop_far_above
+        {
+            r += self.drop_far;
         }
         r
     }

@@ -69,13 +69,13 @@ impl State {
                 });
             }
         }
-        if let Some(b) = held {
-            if b.index() >= count {
-                return Err(SimError::NoSuchBlock {
-                    block: b.index(),
-                    blocks: count,
-                });
-            }
+        if let Some(b) = held
+            && b.index() >= count
+        {
+            return Err(SimError::NoSuchBlock {
+                block: b.index(),
+                blocks: count,
+            });
         }
         let mut all = [Cell::default(); MAX_BLOCKS];
         all[..count].copy_from_slice(cells);
@@ -184,13 +184,13 @@ impl State {
 
     /// This state with `held` in hand instead (`None`: nothing held).
     pub fn with_held(mut self, held: Option<BlockId>) -> Result<Self> {
-        if let Some(b) = held {
-            if b.index() >= self.block_count() {
-                return Err(SimError::NoSuchBlock {
-                    block: b.index(),
-                    blocks: self.block_count(),
-                });
-            }
+        if let Some(b) = held
+            && b.index() >= self.block_count()
+        {
+            return Err(SimError::NoSuchBlock {
+                block: b.index(),
+                blocks: self.block_count(),
+            });
         }
         self.held = held;
         Ok(self)

@@ -11,6 +11,7 @@ mod correct;
 mod demo;
 mod dqn;
 mod eval;
+mod generate;
 mod learn_from_demos;
 mod profile;
 mod progress;
@@ -19,6 +20,7 @@ mod reproduce;
 mod run;
 mod serve;
 mod solve;
+mod solve_all;
 mod solver_budget;
 pub mod stdout;
 mod train;
@@ -44,8 +46,12 @@ pub enum Command {
     Run(run::RunArgs),
     /// Draw a start state as a PNG picture or as text.
     Render(render::RenderArgs),
-    /// Plan from a given state with the exact solver or the oracle, and print the plan.
+    /// Plan from a given state with the exact solver or the oracle, or a PDDL problem's block moves, and print the plan.
     Solve(solve::SolveArgs),
+    /// Plan every PDDL problem of a folder and compare the costs with the best known ones.
+    SolveAll(solve_all::SolveAllArgs),
+    /// Write seeded random Blocks World problems as PDDL files.
+    Generate(generate::GenerateArgs),
     /// Train a tabular Q-learner and save it as a model file.
     Train(train::TrainArgs),
     /// Evaluate a model on seeded starts, per goal and overall.
@@ -69,6 +75,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Run(args) => run::run(args),
         Command::Render(args) => render::render(args),
         Command::Solve(args) => solve::solve(args),
+        Command::SolveAll(args) => solve_all::solve_all(args),
+        Command::Generate(args) => generate::generate(args),
         Command::Train(args) => train::train(args),
         Command::Eval(args) => eval::eval(args),
         Command::Demo(args) => demo::demo(args),

@@ -5,7 +5,10 @@
 
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
-use oracle::towers::{MovePlanner, Place, TowerPlan, gripper_actions, plan_side};
+use std::path::{Path, PathBuf};
+
+use oracle::pddl::{self, Problem};
+use oracle::towers::{ExactMoves, MovePlanner, NearOptimal, Place, TowerPlan, gripper_actions, plan_side};
 use oracle::{Oracle, OracleError, Plan};
 use serde::Serialize;
 use sim::{Goal, Grid, State, View};
@@ -50,11 +53,17 @@ pub enum Cost {
 #[derive(Debug, Args)]
 pub struct SolveArgs {
     /// Every block's cell, block 0 first: x,y pairs separated by ';', e.g. "0,0;3,0;5,2".
-    #[arg(long)]
-    pub start: String,
+    #[arg(long, required_unless_present = "pddl")]
+    pub start: Option<String>,
     /// The goal, bottom to top, e.g. 1,0,2.
-    #[arg(long)]
-    pub goal: String,
+    #[arg(long, required_unless_present = "pddl")]
+    pub goal: Option<String>,
+    /// A Blocks World problem in PDDL (the planning competitions' 4-operator domain) in
+    /// place of --start and --goal: the plan is printed in the competitions' format, one
+    /// action per line ((unstack b3 b5), (putdown b3), (pickup b4), (stack b4 b3)), by
+    /// --solver near-optimal (the default here) or exact.
+    #[arg(long, value_name = "PROBLEM.pddl", conflicts_with_all = ["start", "goal", "held", "grid", "view", "cost", "protocol"])]
+    pub pddl: Option<PathBuf>,
     /// The block held at the start (default: none; in the side view only with --cost steps
     /// --solver exact).
     #[arg(long)]
@@ -70,9 +79,9 @@ pub struct SolveArgs {
     /// only count) or moves (block moves; the side view's default).
     #[arg(long, value_enum)]
     pub cost: Option<Cost>,
-    /// The planner.
-    #[arg(long, value_enum, default_value_t = SolverKind::Exact)]
-    pub solver: SolverKind,
+    /// The planner [default: exact; with --pddl, near-optimal]
+    #[arg(long, value_enum)]
+    pub solver: Option<SolverKind>,
     /// The action protocol the plan keeps to: free (every action legal) or paper (nothing
     /// held: only pick; holding: only moves and drop); the exact plan is the shortest legal
     /// one.
@@ -98,32 +107,39 @@ struct SolveReport {
 
 /// Plans and prints the plan.
 pub fn solve(args: SolveArgs) -> Result<()> {
+    if let Some(path) = &args.pddl {
+        return solve_pddl(path, &args);
+    }
+    let solver = args.solver.unwrap_or(SolverKind::Exact);
+    let (Some(start), Some(goal)) = (&args.start, &args.goal) else {
+        anyhow::bail!("solve needs --start and --goal, or --pddl PROBLEM.pddl")
+    };
     let grid: Grid = args.grid.parse().context("--grid")?;
     if args.view == View::Side {
-        return solve_side(&args, grid);
+        return solve_side(&args, grid, start, goal);
     }
     anyhow::ensure!(
         args.cost != Some(Cost::Moves),
         "--cost moves counts block moves, which the side view plans: add --view side"
     );
     anyhow::ensure!(
-        args.solver != SolverKind::NearOptimal,
+        solver != SolverKind::NearOptimal,
         "--solver near-optimal plans block moves in the side view: add --view side"
     );
-    let state = State::parse(&args.start, args.held, grid).with_context(|| {
+    let state = State::parse(start, args.held, grid).with_context(|| {
         if args.held.is_some() {
             "--start and --held"
         } else {
             "--start"
         }
     })?;
-    let goal = Goal::parse(&args.goal, Some(state.block_count())).context("--goal")?;
+    let goal = Goal::parse(goal, Some(state.block_count())).context("--goal")?;
     anyhow::ensure!(
-        args.solver == SolverKind::Exact || args.budget.solver_budget.is_none(),
+        solver == SolverKind::Exact || args.budget.solver_budget.is_none(),
         "--solver-budget is the exact solver's: it does not apply to --solver {}",
-        args.solver.name()
+        solver.name()
     );
-    let plan = match args.solver {
+    let plan = match solver {
         SolverKind::Exact => args
             .budget
             .solver(grid)
@@ -138,13 +154,13 @@ pub fn solve(args: SolveArgs) -> Result<()> {
             length: plan.len(),
             cost: None,
             actions: plan.actions.iter().map(|a| a.index()).collect(),
-            solver: args.solver.name(),
+            solver: solver.name(),
         };
         line(serde_json::to_string(&report)?)?;
     } else {
         line(format_args!(
             "{} plan, goal {goal}, grid {grid}: {} actions",
-            args.solver.name(),
+            solver.name(),
             plan.len()
         ))?;
         if !plan.is_empty() {
@@ -156,9 +172,10 @@ pub fn solve(args: SolveArgs) -> Result<()> {
 
 /// `solve --view side`: a plan from the side-view state `--start` to `--goal`'s towers, in
 /// block moves (on a table as wide as the grid) or in gripper steps.
-fn solve_side(args: &SolveArgs, grid: Grid) -> Result<()> {
+fn solve_side(args: &SolveArgs, grid: Grid, start: &str, goal: &str) -> Result<()> {
+    let solver = args.solver.unwrap_or(SolverKind::Exact);
     let cost = args.cost.unwrap_or(Cost::Moves);
-    let exact_steps = cost == Cost::Steps && args.solver == SolverKind::Exact;
+    let exact_steps = cost == Cost::Steps && solver == SolverKind::Exact;
     anyhow::ensure!(
         args.held.is_none() || exact_steps,
         "--held: a block-move plan starts with nothing held; --cost steps --solver exact plans from a held block"
@@ -167,7 +184,7 @@ fn solve_side(args: &SolveArgs, grid: Grid) -> Result<()> {
         args.budget.solver_budget.is_none() || exact_steps,
         "--solver-budget is the exact gripper-step search's: it applies to --view side only with --cost steps --solver exact"
     );
-    let state = State::parse(&args.start, args.held, grid).with_context(|| {
+    let state = State::parse(start, args.held, grid).with_context(|| {
         if args.held.is_some() {
             "--start and --held"
         } else {
@@ -175,16 +192,16 @@ fn solve_side(args: &SolveArgs, grid: Grid) -> Result<()> {
         }
     })?;
     View::Side.check_state(&state).context("--start")?;
-    let goal = Goal::parse(&args.goal, Some(state.block_count())).context("--goal")?;
+    let goal = Goal::parse(goal, Some(state.block_count())).context("--goal")?;
     goal.check_fits(grid).context("--goal")?;
     // The oracle of the side view is the near-optimal planner (as `run --agent oracle`).
-    let planner = match args.solver {
+    let planner = match solver {
         SolverKind::Exact => MovePlanner::Exact,
         SolverKind::NearOptimal | SolverKind::Oracle => MovePlanner::NearOptimal,
     };
     if cost == Cost::Moves {
         let plan = plan_side(planner, grid, &state, &goal)?;
-        return print_moves(args, grid, &goal, &plan);
+        return print_moves(args, solver, grid, &goal, &plan);
     }
     let plan = if exact_steps {
         args.budget
@@ -210,13 +227,13 @@ fn solve_side(args: &SolveArgs, grid: Grid) -> Result<()> {
             length: plan.len(),
             cost: Some("steps"),
             actions: plan.actions.iter().map(|a| a.index()).collect(),
-            solver: args.solver.name(),
+            solver: solver.name(),
         };
         line(serde_json::to_string(&report)?)
     } else {
         line(format_args!(
             "{} plan, goal {goal}, grid {grid}, side view: {} gripper steps",
-            args.solver.name(),
+            solver.name(),
             plan.len()
         ))?;
         if plan.is_empty() {
@@ -237,7 +254,7 @@ struct MovesReport {
 }
 
 /// Prints a block-move plan, as JSON or text.
-fn print_moves(args: &SolveArgs, grid: Grid, goal: &Goal, plan: &TowerPlan) -> Result<()> {
+fn print_moves(args: &SolveArgs, solver: SolverKind, grid: Grid, goal: &Goal, plan: &TowerPlan) -> Result<()> {
     if args.json {
         let moves = plan
             .moves
@@ -251,13 +268,13 @@ fn print_moves(args: &SolveArgs, grid: Grid, goal: &Goal, plan: &TowerPlan) -> R
             length: plan.len(),
             cost: "moves",
             moves,
-            solver: args.solver.name(),
+            solver: solver.name(),
         };
         line(serde_json::to_string(&report)?)
     } else {
         line(format_args!(
             "{} plan, goal {goal}, grid {grid}, side view: {} block moves",
-            args.solver.name(),
+            solver.name(),
             plan.len()
         ))?;
         if plan.is_empty() {
@@ -265,5 +282,70 @@ fn print_moves(args: &SolveArgs, grid: Grid, goal: &Goal, plan: &TowerPlan) -> R
         }
         let moves: Vec<String> = plan.moves.iter().map(ToString::to_string).collect();
         line(moves.join(" "))
+    }
+}
+
+/// The block-move planner `--solver` names for a PDDL problem (near-optimal unless given;
+/// `oracle` is the near-optimal planner, as in the side view), with `--solver-budget` as the
+/// exact search's budget.
+pub(super) fn pddl_planner(solver: Option<SolverKind>, budget: &SolverBudgetArg) -> Result<MovePlanner> {
+    let planner = match solver.unwrap_or(SolverKind::NearOptimal) {
+        SolverKind::Exact => MovePlanner::Exact,
+        SolverKind::NearOptimal | SolverKind::Oracle => MovePlanner::NearOptimal,
+    };
+    anyhow::ensure!(
+        planner == MovePlanner::Exact || budget.solver_budget.is_none(),
+        "--solver-budget is the exact solver's: it does not apply to --solver near-optimal"
+    );
+    Ok(planner)
+}
+
+/// `planner`'s block-move plan for `problem` on the literature's unbounded table.
+pub(super) fn plan_pddl(planner: MovePlanner, budget: &SolverBudgetArg, problem: &Problem) -> Result<TowerPlan> {
+    Ok(match planner {
+        MovePlanner::Exact => ExactMoves::new()
+            .with_budget(budget.budget())
+            .solve(problem.start(), problem.goal())
+            .map_err(|e| budget.explain(e))?,
+        MovePlanner::NearOptimal => NearOptimal::new().plan(problem.start(), problem.goal())?,
+    })
+}
+
+/// A PDDL plan as JSON: `{"moves": M, "actions": A, "plan": ["(unstack b3 b5)", ...]}`.
+#[derive(Debug, Serialize)]
+pub(super) struct PddlPlanReport {
+    /// Block moves.
+    pub moves: usize,
+    /// Actions: two per move, the competitions' cost.
+    pub actions: usize,
+    /// The actions as PDDL.
+    pub plan: Vec<String>,
+}
+
+impl PddlPlanReport {
+    /// The report of `plan` for `problem`, its actions checked by replaying them over the
+    /// file's facts ([`Problem::replay`]).
+    pub fn new(problem: &Problem, plan: &TowerPlan) -> Result<(Self, Vec<pddl::Action>)> {
+        let actions = pddl::actions(problem.start(), plan)?;
+        problem.replay(&actions)?;
+        let report = PddlPlanReport {
+            moves: plan.len(),
+            actions: actions.len(),
+            plan: actions.iter().map(|a| a.to_pddl(problem.block_names())).collect(),
+        };
+        Ok((report, actions))
+    }
+}
+
+/// `solve --pddl`: the plan for the problem file, in the competitions' format.
+fn solve_pddl(path: &Path, args: &SolveArgs) -> Result<()> {
+    let planner = pddl_planner(args.solver, &args.budget)?;
+    let problem = Problem::read(path)?;
+    let plan = plan_pddl(planner, &args.budget, &problem)?;
+    let (report, actions) = PddlPlanReport::new(&problem, &plan)?;
+    if args.json {
+        line(serde_json::to_string(&report)?)
+    } else {
+        super::stdout::text(&problem.plan_text(&actions))
     }
 }

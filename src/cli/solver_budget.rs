@@ -1,5 +1,6 @@
 //! `--solver-budget`: how many states the exact solver may store, on every command where it
-//! runs (`solve`, `run --agent exact`, `eval`'s optimum).
+//! runs (`solve`, `run --agent exact`, `eval`'s optimum); for a PDDL problem (`solve --pddl`,
+//! `solve-all`), how many states the exact block-move search may generate.
 //!
 //! The exact search's memory grows with the states it stores (about 125 bytes each here: the
 //! default budget, 4,000,000, peaks under half a gigabyte). Past its budget a search gives
@@ -41,7 +42,10 @@ impl SolverBudgetArg {
         let exhausted = e.chain().any(|c| {
             matches!(
                 c.downcast_ref::<oracle::OracleError>(),
-                Some(oracle::OracleError::BudgetExceeded { .. })
+                Some(
+                    oracle::OracleError::BudgetExceeded { .. }
+                        | oracle::OracleError::Towers(oracle::towers::TowersError::BudgetExceeded { .. })
+                )
             ) || matches!(
                 c.downcast_ref::<neural::NeuralError>(),
                 Some(neural::NeuralError::Agent(agent::AgentError::Oracle(

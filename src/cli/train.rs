@@ -137,8 +137,9 @@ pub struct TrainArgs {
     /// World backend: physics (rapier2d) or grid (occupancy model).
     #[arg(long, default_value = "physics")]
     pub backend: String,
-    /// The world: top (the paper's) or side (the classic Blocks World: goals default to
-    /// every goal of towers, --goals 0,1/2:..., and the learner to --repr role-towers).
+    /// The world: top (the paper's) or side (the classic Blocks World: goals default to one
+    /// goal of each shape of towers, e.g. 0,1,2 and 0,1/2 and 0/1/2 for 3 blocks, which the
+    /// role-towers learner plays on every goal of that shape; --goals 0,1/2:... names others).
     #[arg(long, default_value = "top")]
     pub view: String,
     /// Where to write the trained model (a .safetensors file; checked before training).
@@ -265,7 +266,7 @@ pub fn train(args: TrainArgs) -> Result<()> {
         None => None,
     };
     let mut show = |p: &agent::Progress| {
-        if p.games_played % 64 == 0 || p.games_played == p.games_target {
+        if p.games_played.is_multiple_of(64) || p.games_played == p.games_target {
             if let Some(curve) = &curve {
                 curve.push(serve::CurvePoint {
                     games: p.games_played,

@@ -354,15 +354,15 @@ impl<R: BufRead> RecordingLines<R> {
 /// An error if `path` is a model file (any format of `files::container`), naming its format.
 /// Only a regular file is looked at: a pipe would lose what was read.
 pub fn refuse_model_file(path: &Path) -> Result<()> {
-    if std::fs::metadata(path).is_ok_and(|m| m.is_file()) {
-        if let Some(format) = files::container::format_of(path, MAX_RECORDING_BYTES) {
-            return Err(demos_error(
-                path,
-                &format!(
-                    "line 1: it is a model file ({format}), not a recording: give the recording first and the model with --model"
-                ),
-            ));
-        }
+    if std::fs::metadata(path).is_ok_and(|m| m.is_file())
+        && let Some(format) = files::container::format_of(path, MAX_RECORDING_BYTES)
+    {
+        return Err(demos_error(
+            path,
+            &format!(
+                "line 1: it is a model file ({format}), not a recording: give the recording first and the model with --model"
+            ),
+        ));
     }
     Ok(())
 }

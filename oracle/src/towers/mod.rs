@@ -69,6 +69,6 @@ pub use exact::{DEFAULT_MOVE_BUDGET, ExactMoves};
 pub use goal::TowerGoal;
 pub use near_optimal::NearOptimal;
 pub use plan::TowerPlan;
-pub use random::{random_goal, random_state};
+pub use random::{ipc_state, random_goal, random_state};
 pub use side::{MovePlanner, block_move_of, gripper_actions, plan_side};
 pub use state::{Move, Place, Table, Towers};

@@ -30,7 +30,10 @@
 //! of the cycle just broken. Those searches can grow faster than linearly on goals of a few
 //! tall towers (long chains of blocks waiting on the table for one another): measured on
 //! this machine, 100 blocks take about 20 us, 1,000 about 0.1-0.3 ms, 10,000 1-30 ms and
-//! 100,000 0.1-0.7 s (`cargo bench -p oracle --bench towers` times 100 to 10,000).
+//! 100,000 0.1-0.7 s; on a machine busy with other builds, 10,000 blocks took 43 ms
+//! (uniform starts, goals of one to three towers) and 35 ms (the planning competition's
+//! shape, about one tower per ten blocks). `cargo bench -p oracle --bench towers` times 100
+//! to 10,000 blocks of both kinds.
 //!
 //! # A table of few columns
 //!

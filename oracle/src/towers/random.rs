@@ -1,5 +1,6 @@
-//! Seeded random problems: uniformly random states (as Slaney & Thiebaux draw them) and
-//! random goals of a few towers, for tests, benchmarks and experiments.
+//! Seeded random problems: uniformly random states (as Slaney & Thiebaux draw them), states
+//! in the shape of the 2023 planning competition's generator, and random goals of a few
+//! towers, for tests, benchmarks and experiments.
 //!
 //! The states of `n` blocks with `k` towers number `L(n, k) = C(n-1, k-1) n! / k!` (the
 //! Lah numbers): each is `k!` of the (permutation, cut of it into `k` pieces) pairs. So a
@@ -27,6 +28,23 @@ pub fn random_state(blocks: usize, seed: u64) -> Towers {
             for pair in tower.windows(2) {
                 below[pair[1]] = pair[0];
             }
+        }
+    }
+    Towers::from_below(below)
+}
+
+/// A random state of `blocks` blocks in the shape the 2023 planning competition's
+/// generator draws (`ipc2023-learning/benchmarks`, `blocksworld/blocksworld.py`): the blocks
+/// shuffled and stacked in that order, each starting a new tower with probability 1/10.
+/// Not uniform over states: its towers are few and tall (about `blocks / 10`). The same seed
+/// gives the same state.
+pub fn ipc_state(blocks: usize, seed: u64) -> Towers {
+    let mut rng = rng(seed);
+    let order = permutation(blocks, &mut rng);
+    let mut below = vec![NONE; blocks];
+    for pair in order.windows(2) {
+        if rng.random_range(0..10) != 0 {
+            below[pair[1]] = pair[0];
         }
     }
     Towers::from_below(below)

@@ -1,0 +1,176 @@
+//! The competition's plan format, and a replay of its actions over the problem's facts.
+//!
+//! A plan is one action per line, `(unstack b3 b5)`, `(putdown b3)`, `(pickup b4)`,
+//! `(stack b4 b3)`, and `; cost = N (unit cost)` at the end, as the competition's plan
+//! files are. Every block move is two actions, so a plan of `M` moves costs `2 M`.
+//!
+//! [`Problem::replay`] checks a plan the way a plan validator does: it applies each
+//! action's precondition and effects, as the domain file writes them, to the set of facts
+//! the problem file states, and checks the goal's facts at the end. It shares nothing with
+//! the planners' towers, so it checks them independently.
+
+use std::collections::HashSet;
+use std::fmt::Write as _;
+
+use crate::error::Result;
+use crate::towers::{Place, TowerPlan, Towers};
+
+use super::error::PddlError;
+use super::problem::{Fact, Problem};
+
+/// One action of the 4-operator domain; blocks by index into [`Problem::block_names`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Action {
+    /// `(pickup x)`: take the clear block `x` from the table.
+    Pickup(usize),
+    /// `(putdown x)`: put the held block `x` on the table.
+    Putdown(usize),
+    /// `(stack x y)`: put the held block `x` on the clear block `y`.
+    Stack(usize, usize),
+    /// `(unstack x y)`: take the clear block `x` from `y`.
+    Unstack(usize, usize),
+}
+
+impl Action {
+    /// The action as PDDL, with the blocks' names: `(stack b4 b3)`.
+    pub fn to_pddl(self, names: &[String]) -> String {
+        match self {
+            Action::Pickup(x) => format!("(pickup {})", names[x]),
+            Action::Putdown(x) => format!("(putdown {})", names[x]),
+            Action::Stack(x, y) => format!("(stack {} {})", names[x], names[y]),
+            Action::Unstack(x, y) => format!("(unstack {} {})", names[x], names[y]),
+        }
+    }
+}
+
+/// The actions that carry out `plan` from `start`: each move is `pickup` or `unstack` (from
+/// where the block stands then) and `putdown` or `stack`. An error at the first move that
+/// is not legal.
+pub fn actions(start: &Towers, plan: &TowerPlan) -> Result<Vec<Action>> {
+    let mut state = start.clone();
+    let mut out = Vec::with_capacity(2 * plan.len());
+    for &mv in &plan.moves {
+        let take = match state.support(mv.block) {
+            Place::Table => Action::Pickup(mv.block),
+            Place::On(y) => Action::Unstack(mv.block, y),
+        };
+        state.apply(mv, crate::towers::Table::Unbounded)?;
+        out.push(take);
+        out.push(match mv.to {
+            Place::Table => Action::Putdown(mv.block),
+            Place::On(y) => Action::Stack(mv.block, y),
+        });
+    }
+    Ok(out)
+}
+
+impl Problem {
+    /// `actions` in the competition's plan format: one per line, then `; cost = N (unit
+    /// cost)`.
+    pub fn plan_text(&self, actions: &[Action]) -> String {
+        let mut out = String::new();
+        for a in actions {
+            out.push_str(&a.to_pddl(self.block_names()));
+            out.push('\n');
+        }
+        let _ = writeln!(out, "; cost = {} (unit cost)", actions.len());
+        out
+    }
+
+    /// The actions of a plan in the competition's format (blank lines and `;` comments
+    /// skipped, case ignored).
+    pub fn parse_plan(&self, text: &str) -> Result<Vec<Action>> {
+        let index: std::collections::HashMap<String, usize> = self
+            .block_names()
+            .iter()
+            .enumerate()
+            .map(|(i, b)| (b.to_lowercase(), i))
+            .collect();
+        let mut out = Vec::new();
+        for (i, raw) in text.lines().enumerate() {
+            let err = |reason: String| PddlError::PlanSyntax { line: i + 1, reason };
+            let line = raw.split(';').next().unwrap_or("").trim();
+            if line.is_empty() {
+                continue;
+            }
+            let inner = line
+                .strip_prefix('(')
+                .and_then(|l| l.strip_suffix(')'))
+                .ok_or_else(|| err(format!("{line:?} is not an action such as (pickup b1)")))?;
+            let words: Vec<String> = inner.split_whitespace().map(str::to_lowercase).collect();
+            let block = |w: &String| {
+                index
+                    .get(w)
+                    .copied()
+                    .ok_or_else(|| err(format!("{line} names {w}, which the problem does not declare")))
+            };
+            let action = match words.as_slice() {
+                [name, x] if name == "pickup" => Action::Pickup(block(x)?),
+                [name, x] if name == "putdown" => Action::Putdown(block(x)?),
+                [name, x, y] if name == "stack" => Action::Stack(block(x)?, block(y)?),
+                [name, x, y] if name == "unstack" => Action::Unstack(block(x)?, block(y)?),
+                _ => {
+                    return Err(err(format!(
+                        "{line} is not an action of the 4-operator domain: (pickup x), (putdown x), (stack x y), (unstack x y)"
+                    ))
+                    .into());
+                }
+            };
+            out.push(action);
+        }
+        Ok(out)
+    }
+
+    /// Checks that `actions` are applicable one after the other from the problem's initial
+    /// facts and that the goal's facts hold after the last, by the domain's preconditions
+    /// and effects over sets of facts (see the module docs).
+    pub fn replay(&self, actions: &[Action]) -> Result<()> {
+        let names = self.block_names();
+        let mut facts: HashSet<Fact> = self.init_facts().iter().copied().collect();
+        for (i, &a) in actions.iter().enumerate() {
+            let (pre, add, del) = match a {
+                Action::Pickup(x) => (
+                    vec![Fact::Clear(x), Fact::OnTable(x), Fact::ArmEmpty],
+                    vec![Fact::Holding(x)],
+                    vec![Fact::Clear(x), Fact::OnTable(x), Fact::ArmEmpty],
+                ),
+                Action::Putdown(x) => (
+                    vec![Fact::Holding(x)],
+                    vec![Fact::Clear(x), Fact::ArmEmpty, Fact::OnTable(x)],
+                    vec![Fact::Holding(x)],
+                ),
+                Action::Stack(x, y) => (
+                    vec![Fact::Clear(y), Fact::Holding(x)],
+                    vec![Fact::ArmEmpty, Fact::Clear(x), Fact::On(x, y)],
+                    vec![Fact::Clear(y), Fact::Holding(x)],
+                ),
+                Action::Unstack(x, y) => (
+                    vec![Fact::On(x, y), Fact::Clear(x), Fact::ArmEmpty],
+                    vec![Fact::Holding(x), Fact::Clear(y)],
+                    vec![Fact::On(x, y), Fact::Clear(x), Fact::ArmEmpty],
+                ),
+            };
+            if let Some(missing) = pre.iter().find(|f| !facts.contains(f)) {
+                return Err(PddlError::NotApplicable {
+                    step: i + 1,
+                    action: a.to_pddl(names),
+                    reason: format!("{} does not hold", missing.to_pddl(names)),
+                }
+                .into());
+            }
+            // The domain's effects: deletes first, then adds (STRIPS).
+            for f in &del {
+                facts.remove(f);
+            }
+            facts.extend(add);
+        }
+        match self.goal_facts().iter().find(|f| !facts.contains(f)) {
+            Some(f) => Err(PddlError::GoalNotReached {
+                steps: actions.len(),
+                fact: f.to_pddl(names),
+            }
+            .into()),
+            None => Ok(()),
+        }
+    }
+}

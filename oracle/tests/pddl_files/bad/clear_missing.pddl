@@ -1,0 +1,5 @@
+; expect: nothing stands on b2 in the init, but the init lacks (clear b2)
+(define (problem clear-missing) (:domain blocksworld)
+ (:objects b1 b2)
+ (:init (arm-empty) (clear b1) (on-table b1) (on-table b2))
+ (:goal (and (on-table b1))))

@@ -1,0 +1,6 @@
+; expect: block b2 is placed twice in the goal: (on b2 b1) (line 5) and (on-table b2)
+(define (problem goal-placed-twice) (:domain blocksworld)
+ (:objects b1 b2)
+ (:init (arm-empty) (clear b1) (clear b2) (on-table b1) (on-table b2))
+ (:goal (and (on b2 b1)
+             (on-table b2) (on-table b1))))

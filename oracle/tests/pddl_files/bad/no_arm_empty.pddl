@@ -1,0 +1,5 @@
+; expect: the init lacks (arm-empty)
+(define (problem no-arm) (:domain blocksworld)
+ (:objects b1)
+ (:init (clear b1) (on-table b1))
+ (:goal (and (on-table b1))))

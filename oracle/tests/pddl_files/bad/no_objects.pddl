@@ -1,0 +1,5 @@
+; expect: the problem declares no blocks in :objects
+(define (problem empty) (:domain blocksworld)
+ (:objects)
+ (:init (arm-empty))
+ (:goal (and)))

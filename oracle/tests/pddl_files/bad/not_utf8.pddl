@@ -1,0 +1,2 @@
+; expect: it is not UTF-8 text
+(define (problem ÿ) )

@@ -1,0 +1,7 @@
+; expect: line 6: block b1 is placed twice in the init: (on-table b1) (line 5) and (on b1 b2)
+(define (problem placed-twice) (:domain blocksworld)
+ (:objects b1 b2)
+ (:init (arm-empty) (clear b1)
+   (on-table b1)
+   (on b1 b2) (on-table b2))
+ (:goal (and (on-table b1))))

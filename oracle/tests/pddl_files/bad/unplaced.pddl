@@ -1,0 +1,5 @@
+; expect: the init does not say where b2 stands: give (on-table b2) or (on b2 ...)
+(define (problem unplaced) (:domain blocksworld)
+ (:objects b1 b2)
+ (:init (arm-empty) (clear b1) (clear b2) (on-table b1))
+ (:goal (and (on-table b1))))
