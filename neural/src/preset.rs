@@ -215,10 +215,10 @@ impl DqnConfig {
             if let Some(obs) = s.obs {
                 c.net.validate(obs)?;
             }
-        } else if let Some(obs) = s.obs {
-            if obs != c.obs() {
-                c = c.with_net(network_for(obs));
-            }
+        } else if let Some(obs) = s.obs
+            && obs != c.obs()
+        {
+            c = c.with_net(network_for(obs));
         }
         if let Some(d) = &s.demos {
             if *d == DemoSource::None {

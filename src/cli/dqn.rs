@@ -204,7 +204,7 @@ pub fn dqn(args: DqnArgs) -> Result<()> {
             bar.set_length(p.target);
             stretch = (Instant::now(), p.done.saturating_sub(1));
         }
-        if p.done % DRAW_EVERY == 0 || p.done == p.target {
+        if p.done.is_multiple_of(DRAW_EVERY) || p.done == p.target {
             bar.set_position(p.done);
             let rate = (p.done - stretch.1) as f64 / stretch.0.elapsed().as_secs_f64().max(1e-9);
             let unit = if p.phase == Phase::Pretrain {
