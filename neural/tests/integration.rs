@@ -5,3 +5,4 @@ mod any_model;
 mod engine;
 mod learning;
 mod main_files;
+mod picture;

@@ -73,14 +73,14 @@ class StackEnv(gym.Env):
     - ``blocks``: number of blocks ``N`` (2 to 16; default 3).
     - ``goal``: the stack bottom to top (``"1,0,2"`` or ``[1, 0, 2]``); ``None`` draws one
       each episode. ``planes`` does not carry the goal (``role-planes`` name blocks by
-      their place in it, ``frame`` and ``paper-screen`` draw it), so with a drawn goal and
-      ``planes`` use ``info["goal"]``.
+      their place in it, ``frame``, ``paper-screen`` and ``screen`` draw it), so with a
+      drawn goal and ``planes`` use ``info["goal"]``.
     - ``grid``: ``(width, height)`` or text such as ``"7x7"``, default ``(7, 7)``.
     - ``reward``: ``sparse`` (+10 at the goal), ``dense``, ``paper`` or ``step-cost``;
       ``None`` (the default) takes the profile's (``sparse`` in ``spec``).
     - ``backend``: ``physics`` (rapier2d) or ``grid`` (the occupancy model); same rules.
-    - ``obs``: ``planes``, ``role-planes``, ``frame``, ``paper-screen`` or ``state`` (see
-      :mod:`blockstack.spaces`).
+    - ``obs``: ``planes``, ``role-planes``, ``frame``, ``paper-screen``, ``screen`` or
+      ``state`` (see :mod:`blockstack.spaces`).
     - ``profile``: ``spec`` (the world of the SPEC: every action legal) or ``original`` (the
       paper's world as its authors coded it: their action protocol, nothing held: picks
       only, holding: moves and drop only; their start rule; the ``paper-code`` reward).

@@ -32,7 +32,7 @@ where
 /// `demo_transitions`, `pretrain_steps`, `steps`, `games`, `successes`, `corrections`,
 /// `relabelled`, `gradient_steps`, `train_seconds`).
 #[pyfunction]
-#[pyo3(signature = (*, preset=None, obs=None, net=None, loss=None, blocks=3, goals=None, grid=None, steps=None, pretrain=None, demos=None, demos_file=None, reward=None, gamma=None, lr=None, lr_final=None, optimizer=None, td_loss=None, buffer=None, batch=None, hidden=None, double=None, mask_noops=None, batch_norm=None, margin=None, hindsight=None, demo_share=None, horizon=None, backend=None, protocol=None, seed=1, out=None))]
+#[pyo3(signature = (*, preset=None, obs=None, net=None, loss=None, blocks=3, goals=None, grid=None, steps=None, pretrain=None, demos=None, demos_file=None, reward=None, gamma=None, lr=None, lr_final=None, optimizer=None, td_loss=None, buffer=None, batch=None, hidden=None, double=None, mask_noops=None, batch_norm=None, screen=None, margin=None, hindsight=None, demo_share=None, horizon=None, backend=None, protocol=None, seed=1, out=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn train_dqn<'py>(
     py: Python<'py>,
@@ -59,6 +59,7 @@ pub fn train_dqn<'py>(
     double: Option<bool>,
     mask_noops: Option<bool>,
     batch_norm: Option<bool>,
+    screen: Option<&str>,
     margin: Option<f64>,
     hindsight: Option<usize>,
     demo_share: Option<f64>,
@@ -114,6 +115,7 @@ pub fn train_dqn<'py>(
         double,
         mask_noops,
         batch_norm,
+        screen: named(screen)?,
         margin,
         hindsight,
         demo_share,

@@ -10,7 +10,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use neural::{
     DemoSource, DqnConfig, DqnOverrides, LossKind, NetKind, ObsKind, OptimizerKind, Phase, Preset, Progress, TdLoss,
 };
-use sim::{ActionProtocol, Backend, Goal, Grid, RewardModel};
+use sim::{ActionProtocol, Backend, Goal, Grid, RewardModel, ScreenGoal};
 
 use super::stdout::line;
 
@@ -21,14 +21,16 @@ pub struct DqnArgs {
     /// DQfD on 500 exact-solver demonstrations), dqn-planes (ours, no demonstrations),
     /// dqfd-planes (ours with DQfD: the recommended recipe), her-planes (ours without
     /// demonstrations, with hindsight relabelling), dqfd-pixels (our DQfD recipe with the
-    /// paper network on the paper screen). Default: from --obs and --loss.
+    /// paper network on the paper screen), pixels (our DQfD recipe with the conv network on
+    /// the compact screen). Default: from --obs and --loss.
     #[arg(long)]
     pub preset: Option<Preset>,
-    /// What the network sees: role-planes or paper-screen (default: the preset's, else
-    /// role-planes). Earlier releases called them planes and pixels.
+    /// What the network sees: role-planes, paper-screen or screen (default: the preset's,
+    /// else role-planes). Earlier releases called the first two planes and pixels.
     #[arg(long)]
     pub obs: Option<ObsKind>,
-    /// The network: paper (pixels), small (centred planes), mlp (absolute planes).
+    /// The network: paper (the paper screen), small (centred planes), mlp (absolute
+    /// planes), conv (the compact screen).
     #[arg(long)]
     pub net: Option<NetKind>,
     /// The losses: dqfd (with demonstrations) or dqn (default: dqfd when demonstrations
@@ -93,6 +95,11 @@ pub struct DqnArgs {
     /// Batch normalisation in the paper network: true or false.
     #[arg(long)]
     pub batch_norm: Option<bool>,
+    /// How the compact screen (--obs screen, the conv network) shows the goal: colours
+    /// (every block in the colour of its place in the goal) or strip (blocks in their own
+    /// colours, the goal stack in a column of its own).
+    #[arg(long)]
+    pub screen: Option<ScreenGoal>,
     /// The large-margin loss's margin.
     #[arg(long)]
     pub margin: Option<f64>,
@@ -155,6 +162,7 @@ impl DqnArgs {
             double: self.double,
             mask_noops: self.mask_noops,
             batch_norm: self.batch_norm,
+            screen: self.screen,
             margin: self.margin,
             hindsight: self.hindsight,
             demo_share: self.demo_share,
