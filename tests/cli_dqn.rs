@@ -109,6 +109,11 @@ fn bad_files_and_arguments_are_one_line_and_status_2() {
         (vec!["--obs", "role-planes", "--net", "paper"], "reads paper-screen"),
         (vec!["--obs", "planes"], "called role-planes now"),
         (vec!["--obs", "pixels"], "paper-screen"),
+        (vec!["--net", "small", "--screen", "strip"], "only the conv network"),
+        (
+            vec!["--preset", "pixels", "--screen", "corner"],
+            "choose one of colours, strip",
+        ),
         (vec!["--demos", "people:3"], "exact:K"),
         (
             vec!["--pretrain", "5", "--demos", "none"],

@@ -251,6 +251,10 @@ impl DqnConfig {
             ),
             NetKind::Small => format!("small network ({} x 2) on centred planes", self.net.hidden),
             NetKind::Mlp => format!("MLP ({} x 2) on absolute planes", self.net.hidden),
+            NetKind::Conv => format!(
+                "conv network ({} channels a cell, {} x 2) on the compact screen (goal: {})",
+                self.net.channels, self.net.hidden, self.net.screen
+            ),
         };
         format!(
             "{net}; {} loss, {} reward, gamma {}, {} lr {}{}, buffer {}, batch {}; demonstrations {}{}; {} self-play steps{}",

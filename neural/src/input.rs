@@ -2,15 +2,17 @@
 //! turns into floats.
 //!
 //! The observations themselves come from `sim` ([`sim::Observation::pixels`],
-//! [`sim::Observation::role_planes`]); this module only lays them out for a network and adds
+//! [`sim::Observation::role_planes`], [`sim::Observation::screen`]); this module only lays them out for a network and adds
 //! the one input transform of the small network, centring (below).
 //!
 //! # Output columns
 //!
 //! A network has one output per action. On planes, which name blocks by their place in the
 //! goal, a Pick output names a place too (as the `role` table's columns do): column `5 + p`
-//! picks the block at place `p` of the episode's goal, so one network serves every goal. On
-//! pixels, which show the blocks' colours, column `5 + i` picks block `i`. [`InputSpec::column`]
+//! picks the block at place `p` of the episode's goal, so one network serves every goal; so
+//! does the compact screen that colours blocks by goal place. On the pictures that show the
+//! blocks' own colours (the paper's screen, the compact screen's `strip`), column `5 + i`
+//! picks block `i`. [`InputSpec::column`]
 //! and [`InputSpec::action`] translate.
 //!
 //! # Layouts
@@ -19,6 +21,8 @@
 //! (pixels 0-255, planes 0/1) and scaled to `[0, 1]` floats in a batch:
 //!
 //! - `pixels`: the paper's 100 x 100 RGB screen, rows from the top.
+//! - `screen`: the compact screen, `4H x 4W` RGB (`4H x 4(W + 1)` with the goal as a
+//!   strip), rows from the top ([`sim::screen`]).
 //! - `planes`: the role planes, `W x H x (N + 1)`, "rows" are grid columns `x`.
 //! - centred planes (the small network's input): the role planes moved so that the bottom
 //!   block of the goal sits at the centre of a `(2W - 1) x (2H - 1)` canvas, plus one plane
@@ -30,14 +34,14 @@
 
 pub use sim::ObsKind;
 use sim::observation::PIXELS_SIDE;
-use sim::{Action, Goal, Grid, Observation};
+use sim::{Action, Goal, Grid, Observation, ScreenGoal};
 
 use crate::error::{NeuralError, Result};
 use crate::mask::ActionSet;
 
-/// The views a network can read: the role planes and the paper's screen, named as every
-/// layer names them ([`sim::ObsKind`]).
-pub const NETWORK_OBS: [ObsKind; 2] = [ObsKind::RolePlanes, ObsKind::PaperScreen];
+/// The views a network can read: the role planes, the paper's screen and the compact
+/// screen, named as every layer names them ([`sim::ObsKind`]).
+pub const NETWORK_OBS: [ObsKind; 3] = [ObsKind::RolePlanes, ObsKind::PaperScreen, ObsKind::Screen];
 
 /// An error unless networks can read `kind` ([`NETWORK_OBS`]).
 pub fn check_network_obs(kind: ObsKind) -> Result<()> {
@@ -50,7 +54,7 @@ pub fn check_network_obs(kind: ObsKind) -> Result<()> {
         ""
     };
     Err(NeuralError::Config(format!(
-        "a network reads role-planes or paper-screen, not {kind}{hint}"
+        "a network reads role-planes, paper-screen or screen, not {kind}{hint}"
     )))
 }
 
@@ -65,13 +69,15 @@ pub struct InputSpec {
     pub grid: Grid,
     /// Number of blocks.
     pub blocks: usize,
+    /// How the compact screen shows the goal (the screen only).
+    pub screen: ScreenGoal,
 }
 
 impl InputSpec {
     /// The layout; an error for centred pixels.
     pub fn new(kind: ObsKind, centred: bool, grid: Grid, blocks: usize) -> Result<InputSpec> {
         check_network_obs(kind)?;
-        if centred && kind == ObsKind::PaperScreen {
+        if centred && kind != ObsKind::RolePlanes {
             return Err(NeuralError::Config("only planes can be centred".into()));
         }
         Ok(InputSpec {
@@ -79,6 +85,7 @@ impl InputSpec {
             centred,
             grid,
             blocks,
+            screen: ScreenGoal::default(),
         })
     }
 
@@ -87,6 +94,10 @@ impl InputSpec {
         let (w, h, n) = (self.grid.width(), self.grid.height(), self.blocks);
         match (self.kind, self.centred) {
             (ObsKind::PaperScreen, _) => (PIXELS_SIDE, PIXELS_SIDE, 3),
+            (ObsKind::Screen, _) => {
+                let [rows, columns, channels] = self.screen.shape(self.grid);
+                (rows, columns, channels)
+            }
             // Role planes: `InputSpec::new` admits no other kind.
             (_, false) => (w, h, n + 1),
             (_, true) => (2 * w - 1, 2 * h - 1, n + 2),
@@ -107,7 +118,7 @@ impl InputSpec {
     /// The factor that turns a byte into the network's float.
     pub fn scale(&self) -> f32 {
         match self.kind {
-            ObsKind::PaperScreen => 1.0 / 255.0,
+            ObsKind::PaperScreen | ObsKind::Screen => 1.0 / 255.0,
             _ => 1.0,
         }
     }
@@ -130,6 +141,11 @@ impl InputSpec {
     pub fn encode(&self, obs: &Observation, out: &mut Vec<u8>) {
         match (self.kind, self.centred) {
             (ObsKind::PaperScreen, _) => out.extend_from_slice(&obs.pixels().data),
+            (ObsKind::Screen, _) => {
+                let start = out.len();
+                out.resize(start + self.len(), 0);
+                obs.write_screen(self.screen, &mut out[start..]);
+            }
             // Role planes: `InputSpec::new` admits no other kind.
             (_, false) => out.extend_from_slice(&obs.role_planes().data),
             (_, true) => self.encode_centred(obs, out),
@@ -157,9 +173,14 @@ impl InputSpec {
         }
     }
 
-    /// Whether Pick columns name goal places (planes) rather than block ids (pixels).
+    /// Whether Pick columns name goal places (the role planes, and the compact screen that
+    /// colours blocks by goal place) rather than block ids (the other pictures).
     fn by_place(&self) -> bool {
-        self.kind == ObsKind::RolePlanes
+        match self.kind {
+            ObsKind::RolePlanes => true,
+            ObsKind::Screen => self.screen == ScreenGoal::Colours,
+            _ => false,
+        }
     }
 
     /// The output column of `action` under `goal` (module docs).
@@ -255,6 +276,30 @@ mod tests {
         assert!(!cols.contains(&5) && cols.contains(&6) && cols.contains(&7), "{cols:?}");
         let acts: Vec<usize> = pixels.allowed_columns(&o, true).iter().collect();
         assert!(!acts.contains(&7) && acts.contains(&5), "{acts:?}");
+    }
+
+    #[test]
+    fn the_compact_screen_is_the_states_picture_and_names_picks_as_it_colours_them() {
+        let o = obs([Cell::new(1, 2), Cell::new(3, 3), Cell::new(1, 1)], Some(2));
+        for (screen, shape, by_place) in [
+            (ScreenGoal::Colours, (28, 28, 3), true),
+            (ScreenGoal::Strip, (28, 32, 3), false),
+        ] {
+            let spec = InputSpec {
+                screen,
+                ..InputSpec::new(ObsKind::Screen, false, Grid::default(), 3).unwrap()
+            };
+            assert_eq!(spec.shape(), shape);
+            let mut bytes = Vec::new();
+            spec.encode(&o, &mut bytes);
+            assert_eq!(bytes, o.screen(screen), "{screen}");
+            assert_eq!(bytes.len(), spec.len());
+            // Goal 2,0,1: block 0 is at place 1.
+            let pick = sim::Action::Pick(BlockId(0));
+            assert_eq!(spec.column(&o.goal, pick), if by_place { 6 } else { 5 }, "{screen}");
+            assert_eq!(spec.action(&o.goal, spec.column(&o.goal, pick)), pick);
+        }
+        assert!(InputSpec::new(ObsKind::Screen, true, Grid::default(), 3).is_err());
     }
 
     #[test]

@@ -377,7 +377,7 @@ mod tests {
         let net_config = NetConfig {
             kind: NetKind::Mlp,
             hidden: 1,
-            batch_norm: false,
+            ..NetConfig::small()
         };
         let input = net_config.input(Grid::default(), 2).unwrap();
         let mut net = QNet::new(net_config, input, &mut sim::seeding::rng(0)).unwrap();

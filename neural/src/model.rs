@@ -25,10 +25,13 @@ use files::{FilesError, OutputPath};
 use agent::Policy;
 use serde::{Deserialize, Serialize};
 use sim::seeding::SimRng;
-use sim::{Action, ActionProtocol, Backend, EnvConfig, Goal, GoalSpec, Grid, Observation, RewardModel, StartRule};
+use sim::{
+    Action, ActionProtocol, Backend, EnvConfig, Goal, GoalSpec, Grid, Observation, RewardModel, ScreenGoal, StartRule,
+};
 
 use crate::config::{DemoSource, DqnConfig, Epsilon, LossKind, TargetEvery, TdLoss};
 use crate::error::{NeuralError, Result};
+use crate::input::ObsKind;
 use crate::mask::ActionSet;
 use crate::net::{NetConfig, QNet};
 use crate::optim::OptimizerKind;
@@ -159,6 +162,76 @@ impl Dqn {
     pub fn greedy_action(&self, obs: &Observation) -> Result<Action> {
         self.net.input().check(obs)?;
         self.net.greedy_action(obs, self.config.mask_noops)
+    }
+
+    /// The environment observation this network plays on as it is ([`Dqn::act_on_picture`]):
+    /// `paper-screen`, `screen` for the `conv` network on its default screen; `None` for the
+    /// networks on planes (their input is made from the state) and the `strip` screen.
+    pub fn picture(&self) -> Option<ObsKind> {
+        let kind = self.config.obs();
+        let shown = kind == ObsKind::PaperScreen
+            || (kind == ObsKind::Screen && self.net.input().screen == ScreenGoal::default());
+        shown.then_some(kind)
+    }
+
+    /// The action for a picture the environment rendered (`sim::ObsKind::write`'s bytes of
+    /// the kind the network reads: `paper-screen`, or `screen` for the `conv` network on
+    /// its default screen), among the actions of `allowed` (action indices: the
+    /// environment's legal actions; the no-op mask of [`Dqn::greedy_action`] needs the
+    /// state, which a picture does not give): a random one of them with probability
+    /// `epsilon` (drawn from `rng`), else the greedy one. `goal` names the blocks the
+    /// network's Pick columns name by their place in the goal. An error for a network that
+    /// reads planes, or a picture of another size.
+    pub fn act_on_picture(
+        &self,
+        picture: &[u8],
+        goal: &Goal,
+        allowed: ActionSet,
+        epsilon: f64,
+        rng: &mut SimRng,
+    ) -> Result<Action> {
+        use rand::RngExt;
+        agent::qlearning::check_epsilon(epsilon)?;
+        let spec = self.net.input();
+        let kind = self.config.obs();
+        if self.picture().is_none() {
+            let reads = match kind {
+                ObsKind::Screen => format!(
+                    "the screen with the goal as a {}, which no environment shows",
+                    spec.screen
+                ),
+                kind => format!("{kind}, which it makes from the state"),
+            };
+            return Err(NeuralError::Mismatch(format!(
+                "the {} network reads {reads}: play it on the state observation",
+                self.config.net.kind
+            )));
+        }
+        if picture.len() != spec.len() || goal.block_count() != self.blocks() {
+            return Err(NeuralError::Mismatch(format!(
+                "the network reads a {kind} of {} values for {} blocks, and was given {} values and a goal of {} blocks",
+                spec.len(),
+                self.blocks(),
+                picture.len(),
+                goal.block_count()
+            )));
+        }
+        if epsilon > 0.0 && rng.random_bool(epsilon) {
+            let a = allowed
+                .random(rng)
+                .ok_or_else(|| NeuralError::Mismatch("no action is allowed".into()))?;
+            return Ok(Action::from_index(a, self.blocks())?);
+        }
+        let x: Vec<f32> = picture.iter().map(|&b| f32::from(b) * spec.scale()).collect();
+        let q = self.net.q_values(x)?.remove(0);
+        let mut columns = Vec::new();
+        for a in allowed.iter() {
+            columns.push(spec.column(goal, Action::from_index(a, self.blocks())?));
+        }
+        let columns = ActionSet::from_indices(columns);
+        let column = crate::mask::masked_argmax(&q, columns)
+            .ok_or_else(|| NeuralError::Mismatch("no action is allowed".into()))?;
+        Ok(spec.action(goal, column))
     }
 
     /// The network as a [`Policy`]: a uniformly random allowed action with probability

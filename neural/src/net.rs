@@ -1,5 +1,5 @@
-//! The Q-networks: the paper's convolutional network on pixels, and our small network on
-//! centred planes.
+//! The Q-networks: the paper's convolutional network on pixels, our small network on
+//! centred planes, and our convolutional network on the compact screen.
 //!
 //! # The paper's network (`paper`, section III-C)
 //!
@@ -19,6 +19,16 @@
 //! needs. `mlp` is the same perceptron on the absolute planes: the spike's network, kept
 //! to measure what centring buys.
 //!
+//! # Ours on pixels (`conv`, the `pixels` preset)
+//!
+//! The compact screen ([`sim::screen`], `4H x 4W x 3`); one convolution of
+//! [`NetConfig::channels`] filters (default [`CONV_CHANNELS`]) whose kernel and stride are
+//! one cell (4 x 4), without a bias, ReLU; then the small network's perceptron (two hidden
+//! layers of [`NetConfig::hidden`]). The convolution turns each cell's pixels into a
+//! feature vector, the same filters for every cell; without a bias a black cell gives
+//! exactly 0, so the perceptron's first layer sees a few non-zero cells and is computed
+//! sparsely as on planes.
+//!
 //! # How it is computed
 //!
 //! By hand, at the cost of the arithmetic (issue 19): activations are `batch x (rows *
@@ -27,8 +37,8 @@
 //! product; every product runs on the `gemm` crate. Bias, batch normalisation and ReLU are
 //! one pass each way. The backward pass computes only the gradients that are used (none
 //! for the input image). The perceptrons' first layer reads planes of 0/1 values with
-//! about one in sixteen set: it sums the weight rows of the set inputs instead of
-//! multiplying by a mostly-zero matrix. The parameters are one flat buffer, so the
+//! about one in sixteen set (and `conv`'s, the features of the few lit cells): it sums the
+//! weight rows of the set inputs instead of multiplying by a mostly-zero matrix. The parameters are one flat buffer, so the
 //! optimiser ([`crate::optim`]) updates them in one fused pass, and a [`Workspace`] holds
 //! every intermediate buffer from one step to the next.
 //!
@@ -50,8 +60,8 @@ use std::cell::RefCell;
 
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
-use sim::Action;
 use sim::seeding::SimRng;
+use sim::{Action, SCREEN_CELL, ScreenGoal};
 
 use crate::error::{NeuralError, Result};
 use crate::input::{InputSpec, ObsKind};
@@ -67,10 +77,13 @@ pub enum NetKind {
     Small,
     /// The same perceptron on the absolute planes (planes only).
     Mlp,
+    /// Ours on pixels: a convolution of one screen cell, then the small perceptron (the
+    /// compact screen only, [`sim::screen`]).
+    Conv,
 }
 
-sim::names!(NetKind { Paper = "paper", Small = "small", Mlp = "mlp" } unknown(text) -> NeuralError {
-    NeuralError::Config(format!("unknown network {text:?}: choose paper, small or mlp"))
+sim::names!(NetKind { Paper = "paper", Small = "small", Mlp = "mlp", Conv = "conv" } unknown(text) -> NeuralError {
+    NeuralError::Config(format!("unknown network {text:?}: choose paper, small, mlp or conv"))
 });
 
 /// A network's shape.
@@ -83,6 +96,18 @@ pub struct NetConfig {
     pub hidden: usize,
     /// Batch normalisation after each convolution (the paper's network only).
     pub batch_norm: bool,
+    /// How the compact screen shows the goal (the `conv` network only); absent from a
+    /// network file at its default, as in every file before it.
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub screen: ScreenGoal,
+    /// Channels of the `conv` network's convolution; absent from a network file (and 0)
+    /// for the other networks.
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub channels: usize,
+}
+
+fn is_default<T: Default + PartialEq>(v: &T) -> bool {
+    *v == T::default()
 }
 
 impl NetConfig {
@@ -92,6 +117,8 @@ impl NetConfig {
             kind: NetKind::Paper,
             hidden: 256,
             batch_norm: true,
+            screen: ScreenGoal::default(),
+            channels: 0,
         }
     }
 
@@ -101,6 +128,18 @@ impl NetConfig {
             kind: NetKind::Small,
             hidden: 256,
             batch_norm: false,
+            screen: ScreenGoal::default(),
+            channels: 0,
+        }
+    }
+
+    /// Ours on pixels: a convolution of [`CONV_CHANNELS`] channels over each cell of the
+    /// compact screen (blocks coloured by goal place), then two hidden layers of 256.
+    pub fn conv() -> NetConfig {
+        NetConfig {
+            kind: NetKind::Conv,
+            channels: CONV_CHANNELS,
+            ..NetConfig::small()
         }
     }
 
@@ -109,6 +148,7 @@ impl NetConfig {
         match self.kind {
             NetKind::Paper => ObsKind::PaperScreen,
             NetKind::Small | NetKind::Mlp => ObsKind::RolePlanes,
+            NetKind::Conv => ObsKind::Screen,
         }
     }
 
@@ -132,14 +172,34 @@ impl NetConfig {
                 "batch normalisation follows convolutions: only the paper network has it".into(),
             ));
         }
+        let conv = self.kind == NetKind::Conv;
+        if conv && !(1..=1 << 10).contains(&self.channels) {
+            return Err(NeuralError::Config(format!(
+                "{} convolution channels: choose 1 to 1024",
+                self.channels
+            )));
+        }
+        if !conv && (self.channels != 0 || self.screen != ScreenGoal::default()) {
+            return Err(NeuralError::Config(format!(
+                "only the conv network reads the compact screen, not the {} one",
+                self.kind
+            )));
+        }
         Ok(())
     }
 
     /// The input layout of this network in a world of `blocks` blocks on `grid`.
     pub fn input(&self, grid: sim::Grid, blocks: usize) -> Result<InputSpec> {
-        InputSpec::new(self.obs(), self.kind == NetKind::Small, grid, blocks)
+        let spec = InputSpec::new(self.obs(), self.kind == NetKind::Small, grid, blocks)?;
+        Ok(InputSpec {
+            screen: self.screen,
+            ..spec
+        })
     }
 }
+
+/// Channels of the `conv` network's convolution.
+pub const CONV_CHANNELS: usize = 16;
 
 /// Batch normalisation's momentum and epsilon (PyTorch's defaults).
 const BN_MOMENTUM: f32 = 0.1;
@@ -174,16 +234,18 @@ struct Norm {
 
 #[derive(Clone, Debug)]
 enum Layer {
-    /// Convolution (+ batch normalisation) + ReLU.
+    /// Convolution (+ batch normalisation) + ReLU. Without a bias (the `conv` network's),
+    /// an all-black patch gives exactly 0, so the layer after it sees mostly zeros.
     Conv {
         geo: ConvGeometry,
         out: usize,
         weight: Slot,
-        bias: Slot,
+        bias: Option<Slot>,
         norm: Option<Norm>,
     },
-    /// Linear layer, ReLU unless it is the last. `sparse`: the first layer of a perceptron,
-    /// whose inputs are mostly 0, computed as a sum of the weight rows of its non-zero inputs.
+    /// Linear layer, ReLU unless it is the last. `sparse`: the first layer of a perceptron
+    /// (on planes, or on the `conv` network's convolution), whose inputs are mostly 0,
+    /// computed as a sum of the weight rows of its non-zero inputs.
     Linear {
         inputs: usize,
         out: usize,
@@ -386,12 +448,19 @@ impl QNet {
             buffers: Vec::new(),
         };
         let mut width = input.len();
-        if config.kind == NetKind::Paper {
+        // (kernel, stride, channels out) of each convolution.
+        let convolutions = match config.kind {
+            NetKind::Paper => vec![(8, 4, 16), (4, 2, 32)],
+            NetKind::Conv => vec![(SCREEN_CELL, SCREEN_CELL, config.channels)],
+            NetKind::Small | NetKind::Mlp => Vec::new(),
+        };
+        if !convolutions.is_empty() {
             let (mut rows, mut cols, mut ch) = input.shape();
-            for (i, (k, s, out)) in [(8, 4, 16), (4, 2, 32)].into_iter().enumerate() {
+            for (i, (k, s, out)) in convolutions.into_iter().enumerate() {
                 let geo = ConvGeometry::new(rows, cols, ch, k, s).ok_or_else(|| {
                     NeuralError::Config(format!(
-                        "a {rows} x {cols} input is smaller than the paper network's {k} x {k} filters"
+                        "a {rows} x {cols} input is smaller than the {} network's {k} x {k} filters",
+                        config.kind
                     ))
                 })?;
                 let patch = geo.patch();
@@ -403,7 +472,8 @@ impl QNet {
                     &[patch, out],
                     false,
                 );
-                let bias = net.add(&format!("{name}.bias"), uniform(rng, out, bound), &[out], false);
+                let bias = (config.kind == NetKind::Paper)
+                    .then(|| net.add(&format!("{name}.bias"), uniform(rng, out, bound), &[out], false));
                 let norm = config.batch_norm.then(|| Norm {
                     gamma: net.add(&format!("{name}.bn.weight"), vec![1.0; out], &[out], false),
                     beta: net.add(&format!("{name}.bn.bias"), vec![0.0; out], &[out], false),
@@ -442,7 +512,7 @@ impl QNet {
                 weight,
                 bias,
                 relu: i + 2 < widths.len(),
-                sparse: net.layers.is_empty(),
+                sparse: i == 0 && config.kind != NetKind::Paper,
             });
         }
         Ok(net)
@@ -640,13 +710,16 @@ impl QNet {
                     fit(&mut buf.cols, 2 * chunk * positions * patch);
                     fit(&mut buf.pre, batch * positions * out);
                     let w = &self.params[weight.range()];
-                    let b = &self.params[bias.range()];
+                    let b = bias.map(|b| &self.params[b.range()]);
                     let (x0, x1) = input.split_at(half * in_len);
                     let (c0, c1) = buf.cols.split_at_mut(chunk * positions * patch);
                     let (z0, z1) = halves(&mut buf.pre, half * positions * out, parts);
                     // A few samples at a time, so the patches stay in cache.
                     let conv = |x: &[f32], cols: &mut [f32], z: &mut [f32]| {
-                        fill_rows(z, b);
+                        match b {
+                            Some(b) => fill_rows(z, b),
+                            None => z.fill(0.0),
+                        }
                         for (xc, zc) in x.chunks(chunk * in_len).zip(z.chunks_mut(chunk * positions * out)) {
                             let rows = xc.len() / in_len * positions;
                             let cols = &mut cols[..rows * patch];
@@ -742,11 +815,15 @@ impl QNet {
                             // changes no output in training, and its gradient is 0
                             // (computed, it is rounding noise that Adam would turn
                             // into a random walk).
-                            grad[bias.range()].fill(0.0);
+                            if let Some(bias) = bias {
+                                grad[bias.range()].fill(0.0);
+                            }
                         }
                         None => {
                             relu_backward(delta, &buf.out);
-                            sum_rows(delta, &mut grad[bias.range()]);
+                            if let Some(bias) = bias {
+                                sum_rows(delta, &mut grad[bias.range()]);
+                            }
                         }
                     }
                     let w = &self.params[weight.range()];
@@ -815,6 +892,15 @@ impl QNet {
                     sum_rows(delta, &mut grad[bias.range()]);
                     if *sparse {
                         sparse_backward(buf, delta, *out, &mut grad[weight.range()]);
+                        if i == 0 {
+                            continue;
+                        }
+                        // After a convolution: the gradient of the non-zero inputs only (a
+                        // zero input is a ReLU's zero, whose own gradient is 0 anyway).
+                        fit(delta_in, batch * inputs);
+                        let w = &self.params[weight.range()];
+                        sparse_input_gradient(buf, delta, w, *inputs, delta_in);
+                        std::mem::swap(delta, delta_in);
                         continue;
                     }
                     let x = input;
@@ -985,6 +1071,16 @@ kernels::avx2_dispatch! {
 }
 
 kernels::avx2_dispatch! {
+    fn sparse_input_gradient => sparse_input_gradient_any(
+        buf: &LayerBuffers,
+        delta: &[f32],
+        w: &[f32],
+        inputs: usize,
+        delta_in: &mut [f32],
+    )
+}
+
+kernels::avx2_dispatch! {
     fn norm_train => norm_train_any(params: &[f32], n: &Norm, buf: &mut LayerBuffers)
 }
 
@@ -1065,6 +1161,25 @@ fn sparse_backward_any(buf: &LayerBuffers, delta: &[f32], out: usize, grad: &mut
             for (g, &d) in grad[i * out..(i + 1) * out].iter_mut().zip(d) {
                 *g += v * d;
             }
+        }
+    }
+}
+
+/// The sparse layer's input gradient: for each non-zero input `i` of a sample, the dot
+/// product of its `delta` row with weight row `i`; 0 for every other input.
+#[inline(always)]
+fn sparse_input_gradient_any(buf: &LayerBuffers, delta: &[f32], w: &[f32], inputs: usize, delta_in: &mut [f32]) {
+    delta_in.fill(0.0);
+    let out = delta.len() / buf.nz_start.len().saturating_sub(1).max(1);
+    for (b, (d, dx)) in delta
+        .chunks_exact(out)
+        .zip(delta_in.chunks_exact_mut(inputs))
+        .enumerate()
+    {
+        for &(i, _) in &buf.nz[buf.nz_start[b]..buf.nz_start[b + 1]] {
+            let i = i as usize;
+            let row = &w[i * out..(i + 1) * out];
+            dx[i] = row.iter().zip(d).map(|(&w, &d)| w * d).sum();
         }
     }
 }

@@ -43,12 +43,15 @@
 //!   thousand steps (a step of that network costs twenty times one of ours): 1,000
 //!   demonstrations, 6,000 pre-training and 6,000 self-play steps on 2 blocks (epsilon
 //!   falling over the first 2,000); 5,000 and 15,000 on more (epsilon over 7,500).
+//! - `pixels`: `dqfd-planes`, every setting and budget, with the `conv` network on the
+//!   compact screen ([`sim::screen`]): pixels at four a cell, every block in the colour of
+//!   its place in the goal, read by a convolution of one cell ([`crate::net::NetKind::Conv`]).
 //!
 //! Why each of our choices, measured, is in the E8 section of `blockstack reproduce --only
 //! E8 --long`'s report.
 
 use serde::{Deserialize, Serialize};
-use sim::{ActionProtocol, Backend, EnvConfig, Goal, GoalSpec, Grid, RewardModel};
+use sim::{ActionProtocol, Backend, EnvConfig, Goal, GoalSpec, Grid, RewardModel, ScreenGoal};
 
 use crate::config::{DemoSource, DqnConfig, Epsilon, LossKind, TargetEvery, TdLoss};
 use crate::error::{NeuralError, Result};
@@ -75,6 +78,8 @@ pub enum Preset {
     HerPlanes,
     /// `dqfd-planes`' learner with the paper's network on the paper's screen.
     DqfdPixels,
+    /// `dqfd-planes`' learner with the `conv` network on the compact screen.
+    Pixels,
 }
 
 sim::names!(Preset {
@@ -84,6 +89,7 @@ sim::names!(Preset {
     DqfdPlanes = "dqfd-planes",
     HerPlanes = "her-planes",
     DqfdPixels = "dqfd-pixels",
+    Pixels = "pixels",
 } unknown(name) -> NeuralError {
     NeuralError::Config(format!("unknown preset {name:?}: choose {}", Preset::NAMES.join(", ")))
 });
@@ -95,6 +101,7 @@ impl Preset {
         match (obs, dqfd) {
             (ObsKind::PaperScreen, false) => Preset::Paper,
             (ObsKind::PaperScreen, true) => Preset::PaperDqfd,
+            (ObsKind::Screen, _) => Preset::Pixels,
             (_, false) => Preset::DqnPlanes,
             (_, true) => Preset::DqfdPlanes,
         }
@@ -151,6 +158,8 @@ pub struct DqnOverrides {
     pub mask_noops: Option<bool>,
     /// `--batch-norm`.
     pub batch_norm: Option<bool>,
+    /// `--screen`: how the compact screen shows the goal (the `conv` network).
+    pub screen: Option<ScreenGoal>,
     /// `--margin`.
     pub margin: Option<f64>,
     /// `--hindsight`.
@@ -172,6 +181,7 @@ pub struct DqnOverrides {
 fn network(kind: NetKind) -> NetConfig {
     match kind {
         NetKind::Paper => NetConfig::paper(),
+        NetKind::Conv => NetConfig::conv(),
         kind => NetConfig {
             kind,
             ..NetConfig::small()
@@ -183,6 +193,7 @@ fn network(kind: NetKind) -> NetConfig {
 fn network_for(obs: ObsKind) -> NetConfig {
     match obs {
         ObsKind::PaperScreen => NetConfig::paper(),
+        ObsKind::Screen => NetConfig::conv(),
         _ => NetConfig::small(),
     }
 }
@@ -274,6 +285,9 @@ impl DqnConfig {
         if let Some(bn) = s.batch_norm {
             c.net.batch_norm = bn;
         }
+        if let Some(screen) = s.screen {
+            c.net.screen = screen;
+        }
         c.validate()?;
         Ok(c)
     }
@@ -346,6 +360,7 @@ impl DqnConfig {
             Preset::DqfdPlanes => DqnConfig::dqfd_planes(paper),
             Preset::HerPlanes => DqnConfig::her_planes(paper),
             Preset::DqfdPixels => DqnConfig::dqfd_pixels(paper),
+            Preset::Pixels => DqnConfig::pixels(paper),
         })
     }
 
@@ -401,6 +416,10 @@ impl DqnConfig {
             },
             ..DqnConfig::dqfd_planes(paper).with_net(net)
         }
+    }
+
+    fn pixels(paper: DqnConfig) -> DqnConfig {
+        DqnConfig::dqfd_planes(paper).with_net(NetConfig::conv())
     }
 
     fn her_planes(paper: DqnConfig) -> DqnConfig {

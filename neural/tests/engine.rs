@@ -15,7 +15,7 @@ enum Layer {
         geo: (usize, usize, usize, usize, usize),
         out: usize,
         w: usize,
-        b: usize,
+        b: Option<usize>,
         bn: Option<(usize, usize)>,
     },
     Linear {
@@ -45,11 +45,17 @@ fn layers(net: &QNet) -> Vec<Layer> {
     let mut layers = Vec::new();
     let config = net.config();
     let mut width = net.input().len();
-    if config.kind == NetKind::Paper {
+    let convolutions = match config.kind {
+        NetKind::Paper => vec![(8, 4, 16), (4, 2, 32)],
+        NetKind::Conv => vec![(sim::SCREEN_CELL, sim::SCREEN_CELL, config.channels)],
+        _ => Vec::new(),
+    };
+    if !convolutions.is_empty() {
         let (mut rows, mut cols, mut ch) = net.input().shape();
-        for (k, s, out) in [(8, 4, 16), (4, 2, 32)] {
+        for (k, s, out) in convolutions {
             let w = take(k * k * ch * out);
-            let b = take(out);
+            // Only the paper's convolutions have a bias.
+            let b = (config.kind == NetKind::Paper).then(|| take(out));
             let bn = config.batch_norm.then(|| (take(out), take(out)));
             layers.push(Layer::Conv {
                 geo: (rows, cols, ch, k, s),
@@ -103,7 +109,7 @@ fn forward(layers: &[Layer], p: &[f64], x: &[f64], batch: usize) -> (Vec<f64>, V
                         for oc in 0..ocols {
                             let r = (bi * orows + or) * ocols + oc;
                             for co in 0..out {
-                                let mut sum = p[b + co];
+                                let mut sum = b.map_or(0.0, |b| p[b + co]);
                                 for kr in 0..k {
                                     for kc in 0..k {
                                         for c in 0..ch {
@@ -210,7 +216,9 @@ fn backward(layers: &[Layer], p: &[f64], caches: &[Cache], dq: &[f64], batch: us
                             let r = (bi * orows + or) * ocols + oc;
                             for co in 0..out {
                                 let d = delta[r * out + co];
-                                grad[b + co] += d;
+                                if let Some(b) = b {
+                                    grad[b + co] += d;
+                                }
                                 for kr in 0..k {
                                     for kc in 0..k {
                                         for c in 0..ch {
@@ -258,6 +266,11 @@ fn network(kind: NetKind, batch_norm: bool, hidden: usize) -> QNet {
         kind,
         hidden,
         batch_norm,
+        ..if kind == NetKind::Conv {
+            NetConfig::conv()
+        } else {
+            NetConfig::small()
+        }
     };
     let input = config.input(Grid::default(), 3).unwrap();
     let mut net = QNet::new(config, input, &mut sim::seeding::rng(4)).unwrap();
@@ -279,6 +292,26 @@ fn network(kind: NetKind, batch_norm: bool, hidden: usize) -> QNet {
 /// few other values, which the sparse layer must weigh too).
 fn inputs(net: &QNet, batch: usize) -> Vec<f32> {
     let mut rng = sim::seeding::rng(6);
+    if net.config().kind == NetKind::Conv {
+        // A screen: most cells black, a few with colours (and a black pixel or two).
+        let (rows, cols, ch) = net.input().shape();
+        let cell = sim::SCREEN_CELL;
+        let lit: Vec<bool> = (0..batch * rows * cols / (cell * cell))
+            .map(|_| rng.random_range(0..5) == 0)
+            .collect();
+        return (0..batch * rows * cols * ch)
+            .map(|i| {
+                let (sample, pixel) = (i / (rows * cols * ch), i % (rows * cols * ch) / ch);
+                let (r, c) = (pixel / cols / cell, pixel % cols / cell);
+                let on = lit[(sample * (rows / cell) + r) * (cols / cell) + c];
+                if on && rng.random_range(0..8) > 0 {
+                    rng.random_range(0.0..1.0)
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+    }
     (0..batch * net.input().len())
         .map(|_| match net.config().kind {
             NetKind::Paper => rng.random_range(0.0..1.0),
@@ -371,6 +404,11 @@ fn the_paper_network_matches_the_reference() {
 }
 
 #[test]
+fn the_conv_network_matches_the_reference() {
+    check(NetKind::Conv, false, 24, 4);
+}
+
+#[test]
 fn the_paper_network_without_batch_norm_matches_the_reference() {
     check(NetKind::Paper, false, 8, 3);
 }
@@ -404,7 +442,11 @@ fn trained(preset: neural::Preset, batch: usize, threads: usize) -> Vec<f32> {
 
 #[test]
 fn one_thread_or_two_train_the_same_network_bit_for_bit() {
-    for (preset, batch) in [(neural::Preset::DqfdPlanes, 64), (neural::Preset::PaperDqfd, 16)] {
+    for (preset, batch) in [
+        (neural::Preset::DqfdPlanes, 64),
+        (neural::Preset::PaperDqfd, 16),
+        (neural::Preset::Pixels, 64),
+    ] {
         let one = trained(preset, batch, 1);
         assert_eq!(one, trained(preset, batch, 2), "{preset}");
         assert_eq!(one, trained(preset, batch, 1), "{preset}");

@@ -6,4 +6,5 @@ mod checkpoint;
 mod engine;
 mod learning;
 mod main_files;
+mod picture;
 mod relational;

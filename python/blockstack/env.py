@@ -69,9 +69,9 @@ class StackEnv(gym.Env):
     ``start``, ``view``), which every environment and :func:`blockstack.demonstrations`
     take alike, and:
 
-    - ``obs``: ``planes``, ``role-planes``, ``frame``, ``paper-screen`` or ``state`` (see
+    - ``obs``: ``planes``, ``role-planes``, ``frame``, ``paper-screen``, ``screen`` or ``state`` (see
       :mod:`blockstack.spaces`). ``planes`` does not carry the goal (``role-planes`` name
-      blocks by their place in it, ``frame`` and ``paper-screen`` draw it), so with a drawn
+      blocks by their place in it, ``frame``, ``paper-screen`` and ``screen`` draw it), so with a drawn
       goal and ``planes`` use ``info["goal"]``.
     - ``actions``: ``gripper`` (the default, the ``5 + N`` actions) or, in the side view,
       ``moves``: block moves, ``x * (N + W) + d`` puts block ``x`` onto block ``d`` for

@@ -13,7 +13,8 @@ conventions::
 ``predict`` reads the ``state`` observation (a dict of ``blocks``, ``held``, ``goal`` and
 ``goal_tower``),
 which holds everything every kind of model needs; ``make_env`` makes environments that
-show it. A relational policy plays the side view at any number of blocks, a block move at a
+show it; a network on pixels also plays on its own picture (``make_env(obs=model.picture)``,
+``predict(obs, info=info)``). A relational policy plays the side view at any number of blocks, a block move at a
 time: its ``make_env`` takes block moves (``actions="moves"``), and ``predict`` returns a
 block move's index there (pass ``grid=`` for an environment on another grid than the
 model's world's)::
@@ -65,6 +66,13 @@ class Model:
         """The world it was trained in, as :class:`blockstack.StackEnv` keyword arguments."""
         return self._native.world()
 
+    @property
+    def picture(self) -> Optional[str]:
+        """The environment observation a network on pixels reads (``paper-screen`` or
+        ``screen``), which :meth:`predict` takes with the step's info; ``None`` for a model
+        that reads planes or a table."""
+        return self._native.picture
+
     def make_env(self, **overrides: Any) -> StackEnv:
         """A Gymnasium environment of the world the model was trained in, showing the
         ``state`` observation that :meth:`predict` reads; ``overrides`` change any keyword
@@ -86,21 +94,42 @@ class Model:
 
     def predict(
         self,
-        observation: dict,
+        observation: Union[dict, np.ndarray],
         state: Any = None,
         episode_start: Optional[np.ndarray] = None,
         deterministic: bool = True,
         grid: Optional[Tuple[int, int]] = None,
+        info: Optional[dict] = None,
     ) -> Tuple[int, None]:
-        """``(action, None)`` for a ``state`` observation: the greedy legal action, or with
-        ``deterministic=False`` a random legal action with probability 0.1 (the paper's test
-        policy). For a relational policy the action is a block move of an environment with
-        ``actions="moves"`` on ``grid`` (default: the model's world's grid). ``state`` and
+        """``(action, None)``: the greedy action, or with ``deterministic=False`` a random
+        legal action with probability 0.1 (the paper's test policy). ``state`` and
         ``episode_start`` are Stable-Baselines3's arguments for recurrent policies, unused
-        here."""
+        here.
+
+        ``observation`` is the ``state`` observation (a dict of ``blocks``, ``held``, ``goal``
+        and ``goal_tower``), which every kind of model plays as ``blockstack run`` does. For
+        a relational policy the action is a block move of an environment with
+        ``actions="moves"`` on ``grid`` (default: the model's world's grid). For a network on
+        pixels ``observation`` may be the picture it reads (the environment's
+        ``paper-screen``, or ``screen`` for a ``pixels`` network) with the step's ``info``
+        (its ``goal``, ``goal_tower`` and ``action_mask``): greedy among the legal actions,
+        since the no-op mask ``blockstack run`` adds needs the state."""
+        epsilon = 0.0 if deterministic else TEST_EPSILON
+        if isinstance(observation, np.ndarray) and self.picture is not None:
+            if info is None or not {"goal", "action_mask"} <= set(info):
+                raise ValueError(
+                    "predict on a picture needs the step's info (its goal and action_mask): "
+                    "model.predict(obs, info=info)"
+                )
+            goal = [int(b) for b in np.asarray(info["goal"])]
+            towers = [int(t) for t in np.asarray(info.get("goal_tower", [0] * len(goal)))]
+            mask = [int(m) for m in np.asarray(info["action_mask"])]
+            picture = np.ascontiguousarray(observation, dtype=np.uint8)
+            return self._native.act_on_picture(picture, goal, towers, mask, epsilon), None
         if not isinstance(observation, dict) or not {"blocks", "held", "goal"} <= set(observation):
+            also = f", or the {self.picture} observation with the step's info" if self.picture else ""
             raise ValueError(
-                "predict reads the state observation (a dict of blocks, held and goal): make the "
+                f"predict reads the state observation (a dict of blocks, held and goal){also}: make the "
                 "environment with obs='state', as model.make_env() does"
             )
         blocks = _whole_array("blocks", observation["blocks"])
@@ -120,7 +149,6 @@ class Model:
         held = int(held)
         goal = [int(b) for b in goal]
         towers = [int(t) for t in towers]
-        epsilon = 0.0 if deterministic else TEST_EPSILON
         if self.kind == "relational":
             size = tuple(grid) if grid is not None else tuple(self.world["grid"])
             move = self._native.act_move(cells, None if held < 0 else held, goal, towers, size, epsilon)

@@ -48,7 +48,7 @@ where
 /// done when this call took it up from its checkpoint; 0 for a new run) and, with an
 /// evaluation, `blockstack.train`'s `eval_*` figures.
 #[pyfunction]
-#[pyo3(signature = (*, preset=None, obs=None, net=None, loss=None, blocks=3, goals=None, grid=None, steps=None, pretrain=None, demos=None, demos_file=None, reward=None, gamma=None, lr=None, lr_final=None, optimizer=None, td_loss=None, buffer=None, batch=None, hidden=None, double=None, mask_noops=None, batch_norm=None, margin=None, hindsight=None, demo_share=None, horizon=None, backend=None, protocol=None, seed=1, eval_episodes=0, eval_goals=None, eval_seed=2, eval_epsilon=0.1, out=None, checkpoint=None, checkpoint_every=None))]
+#[pyo3(signature = (*, preset=None, obs=None, net=None, loss=None, blocks=3, goals=None, grid=None, steps=None, pretrain=None, demos=None, demos_file=None, reward=None, gamma=None, lr=None, lr_final=None, optimizer=None, td_loss=None, buffer=None, batch=None, hidden=None, double=None, mask_noops=None, batch_norm=None, screen=None, margin=None, hindsight=None, demo_share=None, horizon=None, backend=None, protocol=None, seed=1, eval_episodes=0, eval_goals=None, eval_seed=2, eval_epsilon=0.1, out=None, checkpoint=None, checkpoint_every=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn train_dqn<'py>(
     py: Python<'py>,
@@ -75,6 +75,7 @@ pub fn train_dqn<'py>(
     double: Option<bool>,
     mask_noops: Option<bool>,
     batch_norm: Option<bool>,
+    screen: Option<&str>,
     margin: Option<f64>,
     hindsight: Option<usize>,
     demo_share: Option<f64>,
@@ -142,6 +143,7 @@ pub fn train_dqn<'py>(
         double,
         mask_noops,
         batch_norm,
+        screen: named(screen)?,
         margin,
         hindsight,
         demo_share,

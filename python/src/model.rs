@@ -52,6 +52,16 @@ impl NativeModel {
         }
     }
 
+    /// The environment observation a network on pixels reads (`paper-screen`, or `screen`
+    /// for the `conv` network on its default screen), `None` otherwise.
+    #[getter]
+    fn picture(&self) -> Option<String> {
+        match &self.model {
+            AnyModel::Dqn(d) => d.picture().map(|k| k.to_string()),
+            AnyModel::Q(_) => None,
+        }
+    }
+
     /// The model's name in reports (as `blockstack eval` prints it).
     #[getter]
     fn name(&self) -> String {
@@ -164,6 +174,48 @@ impl NativeModel {
             let mut policy = model.policy(epsilon).or_value_error()?;
             let mv = policy.block_move(&obs, rng).or_value_error()?;
             Ok(mv.index(obs.state.block_count(), grid))
+        })
+    }
+
+    /// The action for a picture observation of the kind the network reads (`paper-screen`,
+    /// or `screen`), as `uint8` bytes, with the episode's `goal` and `goal_tower` (the
+    /// environment's `info`) and `action_mask` (its legal actions): greedy among the legal
+    /// actions with `epsilon` 0, else a random legal action with probability `epsilon`.
+    #[pyo3(signature = (picture, goal, goal_tower, action_mask, epsilon=0.0))]
+    fn act_on_picture(
+        &mut self,
+        picture: numpy::PyReadonlyArrayDyn<'_, u8>,
+        goal: Vec<i64>,
+        goal_tower: Vec<i64>,
+        action_mask: Vec<i64>,
+        epsilon: f64,
+    ) -> PyResult<usize> {
+        let AnyModel::Dqn(dqn) = &self.model else {
+            return Err(value_error(
+                "a tabular model reads the state observation, not a picture: make the environment with obs='state'",
+            ));
+        };
+        let blocks = dqn.blocks();
+        let goal = observe::read_goal(&goal, &goal_tower, blocks)?;
+        if action_mask.len() != sim::Action::count(blocks) {
+            return Err(value_error(format!(
+                "action_mask has {} values; with {blocks} blocks there are {} actions",
+                action_mask.len(),
+                sim::Action::count(blocks)
+            )));
+        }
+        let allowed = neural::mask::ActionSet::from_indices(
+            action_mask.iter().enumerate().filter(|(_, m)| **m != 0).map(|(a, _)| a),
+        );
+        let picture = picture
+            .as_slice()
+            .map_err(|_| value_error("the picture must be a contiguous uint8 array"))?;
+        let rng = &mut self.rng;
+        guard(|| {
+            Ok(dqn
+                .act_on_picture(picture, &goal, allowed, epsilon, rng)
+                .or_value_error()?
+                .index())
         })
     }
 

@@ -196,7 +196,7 @@ def test_solve_counts_gripper_steps_in_the_side_view_as_the_cli_does(cli):
         ({"goal": "0,0,1"}, "is not a permutation"),
         ({"goal": "0,1"}, "goal"),
         ({"backend": "lego"}, "choose physics or grid"),
-        ({"obs": "smell"}, "choose one of planes, role-planes, frame, paper-screen, state"),
+        ({"obs": "smell"}, "choose one of planes, role-planes, frame, paper-screen, screen, state"),
         ({"obs": "pixels"}, "frame .*paper-screen"),
         ({"blocks": 1}, "1 blocks is not allowed"),
         ({"grid": (2, 2), "blocks": 3}, "taller than the grid"),

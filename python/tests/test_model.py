@@ -76,6 +76,46 @@ def test_a_side_view_model_plays_the_clis_greedy_trajectory_on_a_goal_of_towers(
         model.predict({**obs, "goal_tower": obs["goal_tower"][:2]})
 
 
+@pytest.fixture(scope="module")
+def pixel_network(tmp_path_factory, cli):
+    # Without the no-op mask, which a picture cannot give, so that the network plays the
+    # same actions on its picture as on the state.
+    path = tmp_path_factory.mktemp("pixels") / "pixels.safetensors"
+    cli("dqn", "--preset", "pixels", "--blocks", "2", "--demos", "exact:10", "--pretrain", "30", "--steps", "60",
+        "--hidden", "16", "--mask-noops", "false", "--seed", "3", "--out", path)
+    return path
+
+
+def test_a_pixel_network_plays_on_its_picture_what_it_plays_on_the_state(cli, tmp_path, pixel_network):
+    model = blockstack.load(pixel_network)
+    assert model.picture == "screen"
+    expected = cli_actions(cli, tmp_path, pixel_network, "dqn", "1,0", 2, 5, ("--blocks", "2", "--horizon", "40"))
+    assert python_actions(model, "1,0", 2, 5, horizon=40) == expected
+    env = model.make_env(goal="1,0", obs=model.picture, horizon=40)
+    for k in range(2):
+        obs, info = env.reset(seed=blockstack.episode_seed(5, k))
+        assert obs.shape == (28, 28, 3) and obs.dtype == np.uint8
+        actions, done = [], False
+        while not done:
+            action, _ = model.predict(obs, info=info)
+            actions.append(action)
+            obs, _, terminated, truncated, info = env.step(action)
+            done = terminated or truncated
+        assert actions == expected[k]
+    with pytest.raises(ValueError, match="info"):
+        model.predict(obs)
+    with pytest.raises(ValueError, match="values"):
+        model.predict(obs[:-1], info=info)
+
+
+def test_a_network_on_planes_refuses_a_picture(network):
+    model = blockstack.load(network)
+    assert model.picture is None
+    obs, info = model.make_env(obs="role-planes").reset(seed=1)
+    with pytest.raises(ValueError, match="obs='state'"):
+        model.predict(obs, info=info)
+
+
 def test_a_network_plays_the_clis_greedy_trajectory(cli, tmp_path, network):
     model = blockstack.load(network)
     assert model.kind == "dqn" and model.world["blocks"] == 2

@@ -71,6 +71,12 @@ DQN_SETTINGS = [
          "--buffer", "500"],
         dict(preset="her-planes", blocks=2, grid=(5, 5), steps=150, hidden=16, buffer=500),
     ),
+    # The conv network on the compact screen, the goal as a strip.
+    (
+        ["--preset", "pixels", "--blocks", "2", "--demos", "exact:10", "--pretrain", "20", "--steps", "80",
+         "--hidden", "16", "--screen", "strip"],
+        dict(preset="pixels", blocks=2, demos="exact:10", pretrain=20, steps=80, hidden=16, screen="strip"),
+    ),
 ]
 
 
@@ -91,6 +97,8 @@ def test_the_network_trainer_refuses_what_the_cli_refuses(tmp_path):
         (dict(pretrain=5, demos="none"), "pre-training needs demonstrations"),
         (dict(demos="exact:3", demos_file="d.jsonl"), "give one"),
         (dict(steps=-1), "steps"),
+        (dict(net="small", screen="strip"), "only the conv network"),
+        (dict(preset="pixels", screen="corner"), "screen goal"),
         (dict(stepz=1), "unknown setting"),
     ]:
         with pytest.raises(ValueError, match=says):

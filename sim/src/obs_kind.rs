@@ -10,6 +10,7 @@
 //! | `role-planes` | planes by goal place ([`Observation::role_planes`]) | `W x H x (N + 1)`, 0/1 |
 //! | `frame` | the rendered picture ([`crate::render::frame`]) | `height x width x 3`, RGB |
 //! | `paper-screen` | the paper's DQN input ([`Observation::pixels`]) | `100 x 100 x 3`, RGB |
+//! | `screen` | the compact screen, blocks coloured by goal place ([`crate::screen`]) | `4H x 4W x 3`, RGB |
 //! | `state` | block cells, held block and goal, as integers | (not one array) |
 //!
 //! Earlier releases called two of these by other names: `pixels` meant the frame in Python
@@ -23,6 +24,7 @@ use crate::grid::Grid;
 use crate::grid::MAX_CELLS;
 use crate::observation::{Observation, PIXELS_SIDE};
 use crate::render::{CELL_PIXELS, frame_size, picture_size};
+use crate::screen::ScreenGoal;
 use crate::state::MAX_BLOCKS;
 
 /// Which array an observation is shown as (module docs).
@@ -38,6 +40,9 @@ pub enum ObsKind {
     Frame,
     /// The paper's 100 x 100 x 3 screen.
     PaperScreen,
+    /// The compact screen of the `pixels` networks: 4 pixels a cell, every block in the
+    /// colour of its place in the goal ([`crate::screen`]).
+    Screen,
     /// Block cells, held block and goal, as integers (no single array).
     State,
 }
@@ -47,6 +52,7 @@ crate::names!(ObsKind {
     RolePlanes = "role-planes",
     Frame = "frame",
     PaperScreen = "paper-screen",
+    Screen = "screen",
     State = "state",
 } unknown(name) -> SimError {
     SimError::Parse {
@@ -74,6 +80,7 @@ impl ObsKind {
                 Some([fh as usize, fw as usize, 3])
             }
             ObsKind::PaperScreen => Some([PIXELS_SIDE, PIXELS_SIDE, 3]),
+            ObsKind::Screen => Some(ScreenGoal::Colours.shape(grid)),
             ObsKind::State => None,
         }
     }
@@ -125,6 +132,7 @@ impl ObsKind {
             ObsKind::RolePlanes => out.copy_from_slice(&obs.role_planes().data),
             ObsKind::Frame => out.copy_from_slice(obs.rgb().as_raw()),
             ObsKind::PaperScreen => out.copy_from_slice(&obs.pixels().data),
+            ObsKind::Screen => obs.write_screen(ScreenGoal::Colours, out),
             ObsKind::State => unreachable!("refused above: state is not one array"),
         }
         Ok(())
@@ -179,6 +187,7 @@ mod tests {
                 ObsKind::RolePlanes => o.role_planes().data,
                 ObsKind::Frame => o.rgb().into_raw(),
                 ObsKind::PaperScreen => o.pixels().data,
+                ObsKind::Screen => o.screen(ScreenGoal::Colours),
                 ObsKind::State => unreachable!(),
             };
             assert_eq!(out, expected, "{kind}");

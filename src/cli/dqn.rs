@@ -11,13 +11,13 @@ use neural::relational::{RelationalConfig, RelationalModel};
 use neural::{
     DemoSource, DqnConfig, DqnOverrides, LossKind, NetKind, ObsKind, OptimizerKind, Phase, Preset, Progress, TdLoss,
 };
-use sim::{Goal, View};
+use sim::{Goal, ScreenGoal, View};
 
 use super::stdout::line;
 use super::world::WorldArgs;
 
 /// The flags that set up a run, which `--resume` takes from its checkpoint instead.
-const RUN_FLAGS: [&str; 31] = [
+const RUN_FLAGS: [&str; 32] = [
     "preset",
     "obs",
     "net",
@@ -41,6 +41,7 @@ const RUN_FLAGS: [&str; 31] = [
     "double",
     "mask_noops",
     "batch_norm",
+    "screen",
     "margin",
     "hindsight",
     "demo_share",
@@ -67,17 +68,19 @@ pub struct DqnArgs {
     /// DQfD on 500 exact-solver demonstrations), dqn-planes (ours, no demonstrations),
     /// dqfd-planes (ours with DQfD: the recommended recipe), her-planes (ours without
     /// demonstrations, with hindsight relabelling), dqfd-pixels (our DQfD recipe with the
-    /// paper network on the paper screen), general (a relational policy of block moves in
-    /// the side view that plays any number of blocks, learnt from the optimum on up to 6;
-    /// it takes --blocks, --steps, --batch, --lr, --lr-final, --hidden and --seed). Default:
-    /// from --obs and --loss.
+    /// paper network on the paper screen), pixels (our DQfD recipe with the conv network on
+    /// the compact screen), general (a relational policy of block moves in the side view
+    /// that plays any number of blocks, learnt from the optimum on up to 6; it takes
+    /// --blocks, --steps, --batch, --lr, --lr-final, --hidden and --seed). Default: from
+    /// --obs and --loss.
     #[arg(long)]
     pub preset: Option<String>,
-    /// What the network sees: role-planes or paper-screen (default: the preset's, else
-    /// role-planes). Earlier releases called them planes and pixels.
+    /// What the network sees: role-planes, paper-screen or screen (default: the preset's,
+    /// else role-planes). Earlier releases called the first two planes and pixels.
     #[arg(long)]
     pub obs: Option<ObsKind>,
-    /// The network: paper (pixels), small (centred planes), mlp (absolute planes).
+    /// The network: paper (the paper screen), small (centred planes), mlp (absolute
+    /// planes), conv (the compact screen).
     #[arg(long)]
     pub net: Option<NetKind>,
     /// The losses: dqfd (with demonstrations) or dqn (default: dqfd when demonstrations
@@ -133,6 +136,11 @@ pub struct DqnArgs {
     /// Batch normalisation in the paper network: true or false.
     #[arg(long)]
     pub batch_norm: Option<bool>,
+    /// How the compact screen (--obs screen, the conv network) shows the goal: colours
+    /// (every block in the colour of its place in the goal) or strip (blocks in their own
+    /// colours, the goal stack in a column of its own).
+    #[arg(long)]
+    pub screen: Option<ScreenGoal>,
     /// The large-margin loss's margin.
     #[arg(long)]
     pub margin: Option<f64>,
@@ -196,6 +204,7 @@ impl DqnArgs {
             ("--double", self.double.is_some()),
             ("--mask-noops", self.mask_noops.is_some()),
             ("--batch-norm", self.batch_norm.is_some()),
+            ("--screen", self.screen.is_some()),
             ("--margin", self.margin.is_some()),
             ("--hindsight", self.hindsight.is_some()),
             ("--demo-share", self.demo_share.is_some()),
@@ -281,6 +290,7 @@ impl DqnArgs {
             double: self.double,
             mask_noops: self.mask_noops,
             batch_norm: self.batch_norm,
+            screen: self.screen,
             margin: self.margin,
             hindsight: self.hindsight,
             demo_share: self.demo_share,

@@ -1,0 +1,108 @@
+//! `Dqn::act_on_picture`: a network on pixels plays on the picture an environment renders
+//! what it plays on the state (Python's `predict` on the `screen` observation).
+
+use neural::mask::ActionSet;
+use neural::{DemoSource, Dqn, DqnConfig, NetConfig, ObsKind, Trainer};
+use sim::{Action, Env, EnvConfig, ScreenGoal};
+
+fn untrained(preset: neural::Preset, net: NetConfig) -> Dqn {
+    let config = DqnConfig {
+        demos: DemoSource::None,
+        pretrain_steps: 0,
+        mask_noops: false,
+        net,
+        ..DqnConfig::preset(preset, 3).unwrap()
+    };
+    Trainer::new(config).unwrap().finish().unwrap()
+}
+
+fn small_conv() -> NetConfig {
+    NetConfig {
+        hidden: 16,
+        ..NetConfig::conv()
+    }
+}
+
+#[test]
+fn a_pixel_network_acts_on_its_picture_as_on_the_state() {
+    use rand::RngExt;
+    let dqn = untrained(neural::Preset::Pixels, small_conv());
+    assert_eq!(dqn.picture(), Some(ObsKind::Screen));
+    let input = *dqn.net().input();
+    let count = Action::count(3);
+    let every = ActionSet::from_indices(0..count);
+    let rng = &mut sim::seeding::rng(1);
+    let mut env = Env::new(EnvConfig::default()).unwrap();
+    let mut picks = 0;
+    for seed in 0..40 {
+        let mut obs = env.reset(seed);
+        if seed % 2 == 1 {
+            // Hold a block, so that the ring is drawn too.
+            obs = env
+                .step(Action::Pick(sim::BlockId(seed as u8 % 3)))
+                .unwrap()
+                .observation;
+        }
+        let mut picture = vec![0; input.len()];
+        ObsKind::Screen.write(&obs, &mut picture).unwrap();
+        let on_state = dqn.greedy_action(&obs).unwrap();
+        assert_eq!(
+            dqn.act_on_picture(&picture, &obs.goal, every, 0.0, rng).unwrap(),
+            on_state
+        );
+        // Among any allowed actions: the best of them by the state's Q-values (whose Pick
+        // columns name goal places).
+        let q = dqn.q_values(&obs).unwrap();
+        for _ in 0..5 {
+            let allowed: Vec<usize> = (0..count).filter(|_| rng.random_bool(0.5)).collect();
+            let Some(&best) = allowed.iter().max_by(|&&a, &&b| {
+                let value = |a: usize| q[input.column(&obs.goal, Action::from_index(a, 3).unwrap())];
+                value(a).total_cmp(&value(b))
+            }) else {
+                continue;
+            };
+            let set = ActionSet::from_indices(allowed.iter().copied());
+            let chosen = dqn.act_on_picture(&picture, &obs.goal, set, 0.0, rng).unwrap();
+            assert_eq!(chosen.index(), best, "seed {seed}, allowed {allowed:?}");
+            picks += usize::from(matches!(chosen, Action::Pick(_)));
+        }
+        // epsilon 1: a random allowed action.
+        let one = ActionSet::from_indices([2]);
+        assert_eq!(
+            dqn.act_on_picture(&picture, &obs.goal, one, 1.0, rng).unwrap().index(),
+            2
+        );
+        // A picture of another size is refused.
+        assert!(dqn.act_on_picture(&picture[1..], &obs.goal, every, 0.0, rng).is_err());
+    }
+    assert!(picks > 10, "the comparison chose Pick columns {picks} times");
+}
+
+#[test]
+fn networks_that_no_environment_shows_refuse_a_picture() {
+    let strip = untrained(
+        neural::Preset::Pixels,
+        NetConfig {
+            screen: ScreenGoal::Strip,
+            ..small_conv()
+        },
+    );
+    let planes = untrained(
+        neural::Preset::DqfdPlanes,
+        NetConfig {
+            hidden: 16,
+            ..NetConfig::small()
+        },
+    );
+    let obs = Env::new(EnvConfig::default()).unwrap().reset(1);
+    let every = ActionSet::from_indices(0..Action::count(3));
+    for (dqn, says) in [(strip, "strip"), (planes, "role-planes")] {
+        assert_eq!(dqn.picture(), None);
+        let picture = vec![0; dqn.net().input().len()];
+        let err = dqn
+            .act_on_picture(&picture, &obs.goal, every, 0.0, &mut sim::seeding::rng(1))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains(says) && err.contains("state observation"), "{err}");
+    }
+}
