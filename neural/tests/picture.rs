@@ -39,7 +39,7 @@ fn a_pixel_network_acts_on_its_picture_as_on_the_state() {
         if seed % 2 == 1 {
             // Hold a block, so that the ring is drawn too.
             obs = env
-                .step(Action::Pick(sim::BlockId(seed as u8 % 3)))
+                .step(Action::Pick(sim::BlockId::of(seed as usize % 3)))
                 .unwrap()
                 .observation;
         }

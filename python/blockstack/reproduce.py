@@ -57,7 +57,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     unknown = [o for o in only if o.upper() not in _native.EXPERIMENTS]
     try:
         if unknown:
-            raise ValueError(f"--only {unknown[0]}: name experiments E1 to E9")
+            raise ValueError(f"--only {unknown[0]}: name experiments E1 to {_native.EXPERIMENTS[-1]}")
         if args.seed < 0:
             raise ValueError(f"--seed must be a whole number of 0 or more, not {args.seed}")
         for name in ("jobs", "num_cpus"):

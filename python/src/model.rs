@@ -58,7 +58,7 @@ impl NativeModel {
     fn picture(&self) -> Option<String> {
         match &self.model {
             AnyModel::Dqn(d) => d.picture().map(|k| k.to_string()),
-            AnyModel::Q(_) => None,
+            AnyModel::Q(_) | AnyModel::Relational(_) => None,
         }
     }
 

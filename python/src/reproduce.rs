@@ -23,7 +23,8 @@ fn options(seed: u64, quick: bool, long: bool, only: Vec<String>) -> PyResult<Op
             .iter()
             .any(|e| id.eq_ignore_ascii_case(e.id))
         {
-            return Err(value_error(format!("only {id}: name experiments E1 to E9")));
+            let last = experiments_reproduce::EXPERIMENTS.last().map_or("E1", |e| e.id);
+            return Err(value_error(format!("only {id}: name experiments E1 to {last}")));
         }
     }
     Ok(Options {

@@ -31,7 +31,7 @@ def test_e8_on_a_local_ray_writes_the_report_of_one_machine(tmp_path, capsys):
 
 def test_bad_settings_are_refused_before_any_work(tmp_path, capsys):
     for argv, message in [
-        (["--only", "E10"], "--only E10: name experiments E1 to E9"),
+        (["--only", "E11"], "--only E11: name experiments E1 to E10"),
         (["--jobs", "0"], "--jobs must be at least 1"),
         (["--out", str(tmp_path / "a-file" / "report")], "a-file"),
     ]:

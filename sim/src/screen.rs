@@ -90,7 +90,7 @@ impl Observation {
         };
         let place_colour = |place: usize| PALETTE[place % MAX_BLOCKS];
         for (i, &cell) in self.blocks().iter().enumerate() {
-            let block = BlockId(i as u8);
+            let block = BlockId::of(i);
             let rgb = match goal {
                 ScreenGoal::Colours => place_colour(self.goal.place_of(block)),
                 ScreenGoal::Strip => crate::render::colour(block),
@@ -112,7 +112,7 @@ mod tests {
     use crate::protocol::ActionProtocol;
     use crate::{Cell, State, View};
 
-    fn obs(held: Option<u8>) -> Observation {
+    fn obs(held: Option<u16>) -> Observation {
         // Goal 2,0,1: block 2 at the bottom, then 0, then 1.
         let cells = [Cell::new(0, 0), Cell::new(6, 6), Cell::new(3, 2)];
         Observation {
