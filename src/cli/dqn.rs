@@ -80,75 +80,77 @@ pub struct DqnArgs {
     #[arg(long)]
     pub obs: Option<ObsKind>,
     /// The network: paper (the paper screen), small (centred planes), mlp (absolute
-    /// planes), conv (the compact screen).
+    /// planes), conv (the compact screen) [default: the preset's]
     #[arg(long)]
     pub net: Option<NetKind>,
-    /// The losses: dqfd (with demonstrations) or dqn (default: dqfd when demonstrations
-    /// are given).
+    /// The losses: dqfd (with demonstrations) or dqn [default: the preset's; without a
+    /// preset, dqfd when demonstrations are given]
     #[arg(long)]
     pub loss: Option<LossKind>,
     /// Goals to train on, separated by ':', e.g. 0,1,2:1,0,2 (default: every goal).
     #[arg(long)]
     pub goals: Option<String>,
-    /// Environment steps of self-play.
+    /// Environment steps of self-play [default: the preset's]
     #[arg(long)]
     pub steps: Option<u64>,
-    /// Gradient steps on the demonstrations alone, before self-play.
+    /// Gradient steps on the demonstrations alone, before self-play [default: the preset's]
     #[arg(long)]
     pub pretrain: Option<u64>,
-    /// Demonstrations from a planner: exact:K or oracle:K (K episodes), or none.
+    /// Demonstrations from a planner: exact:K or oracle:K (K episodes), or none [default: the preset's]
     #[arg(long, conflicts_with = "demos_file")]
     pub demos: Option<DemoSource>,
     /// Demonstrations from a recording: blockstack-demos JSON Lines (`demo`/`correct
     /// --record`) or a trajectory file (`run --trajectory`).
     #[arg(long)]
     pub demos_file: Option<PathBuf>,
-    /// Discount factor.
+    /// Discount factor [default: the preset's]
     #[arg(long)]
     pub gamma: Option<f64>,
-    /// Learning rate (the final rate follows in the preset's proportion unless --lr-final says).
+    /// Learning rate (the final rate follows in the preset's proportion unless --lr-final
+    /// says) [default: the preset's]
     #[arg(long)]
     pub lr: Option<f64>,
-    /// Learning rate at the end of the run (it falls linearly from --lr).
+    /// Learning rate at the end of the run (it falls linearly from --lr) [default: the
+    /// preset's]
     #[arg(long)]
     pub lr_final: Option<f64>,
-    /// Optimiser: rmsprop or adam.
+    /// Optimiser: rmsprop or adam [default: the preset's]
     #[arg(long)]
     pub optimizer: Option<OptimizerKind>,
-    /// TD loss: huber or mse.
+    /// TD loss: huber or mse [default: the preset's]
     #[arg(long)]
     pub td_loss: Option<TdLoss>,
-    /// Transitions the replay buffer holds.
+    /// Transitions the replay buffer holds [default: the preset's]
     #[arg(long)]
     pub buffer: Option<usize>,
-    /// Transitions per gradient step.
+    /// Transitions per gradient step [default: the preset's]
     #[arg(long)]
     pub batch: Option<usize>,
-    /// Units of each hidden layer.
+    /// Units of each hidden layer [default: the preset's]
     #[arg(long)]
     pub hidden: Option<usize>,
-    /// Double DQN: true or false.
+    /// Double DQN: true or false [default: the preset's]
     #[arg(long)]
     pub double: Option<bool>,
-    /// Leave actions that change nothing out of every choice: true or false.
+    /// Leave actions that change nothing out of every choice: true or false [default: the preset's]
     #[arg(long)]
     pub mask_noops: Option<bool>,
-    /// Batch normalisation in the paper network: true or false.
+    /// Batch normalisation in the paper network: true or false [default: the preset's]
     #[arg(long)]
     pub batch_norm: Option<bool>,
     /// How the compact screen (--obs screen, the conv network) shows the goal: colours
     /// (every block in the colour of its place in the goal) or strip (blocks in their own
-    /// colours, the goal stack in a column of its own).
+    /// colours, the goal stack in a column of its own) [default: the preset's]
     #[arg(long)]
     pub screen: Option<ScreenGoal>,
-    /// The large-margin loss's margin.
+    /// The large-margin loss's margin [default: the preset's]
     #[arg(long)]
     pub margin: Option<f64>,
     /// Hindsight relabelling: store every self-play step again with up to K goals that stood
-    /// later in its game (HER's future strategy); 0 for none.
+    /// later in its game (HER's future strategy); 0 for none [default: the preset's]
     #[arg(long, value_name = "K")]
     pub hindsight: Option<usize>,
-    /// Share of every self-play batch drawn from the demonstrations.
+    /// Share of every self-play batch drawn from the demonstrations [default: the preset's]
     #[arg(long)]
     pub demo_share: Option<f64>,
     /// Action protocol: free (every action legal; default) or paper (pick only with nothing
