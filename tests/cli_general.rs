@@ -1,6 +1,7 @@
 //! `blockstack dqn --preset general`: the relational policy trained, then played by `run`
-//! in the side view, by `solve --pddl` as a plan in the competitions' format and by
-//! `solve-all` over a folder; its flags and worlds refused in one line.
+//! in the side view (and from a PDDL task's start, `run --pddl`), by `solve --pddl` as a
+//! plan in the competitions' format and by `solve-all` over a folder; its flags and worlds
+//! refused in one line.
 
 use std::path::{Path, PathBuf};
 
@@ -74,6 +75,17 @@ fn the_general_preset_trains_a_policy_that_run_solve_and_solve_all_play() {
         .arg("--json")
         .json();
     assert_eq!(plan["actions"].as_u64().unwrap(), 2 * plan["moves"].as_u64().unwrap());
+    // `run --pddl` plays the task's episodes with the policy, at the task's size.
+    let r = cli("run")
+        .flag("pddl", path(&tasks.join("p01.pddl")))
+        .args(&["--agent", "dqn", "--backend", "grid", "--episodes", "2", "--json"])
+        .flag("model", path(&model))
+        .json();
+    assert_eq!(
+        (&r["agent"], &r["blocks"], &r["start"], &r["episodes"]),
+        (&"relational".into(), &8.into(), &"pddl".into(), &2.into()),
+        "{r}"
+    );
     let all = cli("solve-all")
         .flag("tasks", path(&tasks))
         .flag("model", path(&model))

@@ -188,3 +188,148 @@ fn the_exact_solver_refuses_what_its_budget_cannot_finish() {
         .run();
     assert!(stderr(&o).contains("takes at most 25 blocks, not 30"), "{}", stderr(&o));
 }
+
+/// `run --pddl` on the grid backend, as JSON, with `extra` flags.
+fn run_pddl(problem: &std::path::Path, agent: &str, extra: &[&str]) -> Cli {
+    cli("run")
+        .flag("pddl", path(problem))
+        .flag("agent", agent)
+        .args(&["--backend", "grid", "--episodes", "3", "--json"])
+        .args(extra)
+}
+
+#[test]
+fn run_plays_a_problem_from_its_start_towards_its_goal() {
+    let dir = scratch("pddl-run");
+    cli("generate")
+        .args(&["--view", "side"])
+        .flag("blocks", 4)
+        .flag("count", 1)
+        .flag("seed", 11)
+        .flag("out", path(&dir))
+        .ok();
+    let problem = dir.join("p01.pddl");
+    // Every planner agent reaches the task's goal in every episode.
+    let mut steps = std::collections::BTreeMap::new();
+    let mut goal = String::new();
+    for agent in ["exact", "exact-moves", "near-optimal", "oracle"] {
+        let r = run_pddl(&problem, agent, &[]).json();
+        assert_eq!(
+            (r["blocks"].as_u64(), r["grid"].as_str(), r["start"].as_str()),
+            (Some(4), Some("7x7"), Some("pddl")),
+            "{r}"
+        );
+        assert_eq!(
+            (r["episodes"].as_u64(), r["failures"].as_u64()),
+            (Some(3), Some(0)),
+            "{agent}: {r}"
+        );
+        steps.insert(agent, r["mean_steps"].as_f64().unwrap());
+        goal = r["goal"].as_str().unwrap().to_string();
+    }
+    // Every episode starts from the task's start, and the exact agent takes as few gripper
+    // steps as the exact solver finds from there.
+    let trajectory = dir.join("exact.jsonl");
+    run_pddl(&problem, "exact", &["--trajectory", path(&trajectory)]).ok();
+    let text = std::fs::read_to_string(&trajectory).unwrap();
+    let episodes: Vec<serde_json::Value> = text
+        .lines()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
+        .filter(|v| v.get("start").is_some())
+        .collect();
+    assert_eq!(episodes.len(), 3);
+    assert!(episodes.iter().all(|e| e["start"] == episodes[0]["start"]), "{text}");
+    let start: Vec<String> = episodes[0]["start"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| format!("{},{}", c[0], c[1]))
+        .collect();
+    let optimum = cli("solve")
+        .args(&["--view", "side", "--cost", "steps", "--solver", "exact", "--json"])
+        .flag("start", start.join(";"))
+        .flag("goal", &goal)
+        .json();
+    assert_eq!(steps["exact"], optimum["length"].as_f64().unwrap(), "{optimum}");
+    assert!(steps.values().all(|&s| s >= steps["exact"]), "{steps:?}");
+
+    // A random agent plays from the same start too (its own draws differ by episode).
+    let random = dir.join("random.jsonl");
+    run_pddl(&problem, "random", &["--trajectory", path(&random), "--horizon", "20"]).ok();
+    let starts: Vec<serde_json::Value> = std::fs::read_to_string(&random)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
+        .filter_map(|v| v.get("start").cloned())
+        .collect();
+    assert_eq!(starts, vec![episodes[0]["start"].clone(); 3]);
+
+    // A tabular model plays the task of its own size, and refuses another in one line.
+    let model = dir.join("q.safetensors");
+    cli("train")
+        .args(&["--view", "side", "--backend", "grid", "--games", "50"])
+        .flag("out", path(&model))
+        .ok();
+    cli("generate")
+        .args(&["--view", "side"])
+        .flag("blocks", 3)
+        .flag("count", 1)
+        .flag("out", path(&dir.join("three")))
+        .ok();
+    let r = run_pddl(&dir.join("three/p01.pddl"), "q", &["--model", path(&model)]).json();
+    assert_eq!(
+        (r["blocks"].as_u64(), r["episodes"].as_u64()),
+        (Some(3), Some(3)),
+        "{r}"
+    );
+    let o = run_pddl(&problem, "q", &["--model", path(&model)]).run();
+    let e = stderr(&o);
+    assert!(
+        !o.status.success() && e.contains("3 blocks") && e.contains("4 blocks") && e.trim_end().lines().count() == 1,
+        "{e}"
+    );
+}
+
+#[test]
+fn run_refuses_a_problem_with_flags_of_another_world_in_one_line() {
+    let dir = scratch("pddl-run-bad");
+    cli("generate")
+        .args(&["--view", "side"])
+        .flag("blocks", 3)
+        .flag("count", 1)
+        .flag("out", path(&dir))
+        .ok();
+    let problem = dir.join("p01.pddl");
+    for (flag, value) in [("goal", "0,1,2"), ("blocks", "3"), ("grid", "7x7")] {
+        let o = blockstack(&["run", "--pddl", path(&problem), &format!("--{flag}"), value]);
+        let e = stderr(&o);
+        assert!(
+            o.status.code() == Some(2) && e.contains("cannot be used with") && e.contains(&format!("--{flag}")),
+            "{e}"
+        );
+    }
+    let o = blockstack(&["run", "--pddl", path(&problem), "--view", "top"]);
+    let e = stderr(&o);
+    assert!(e.contains("--view top") && e.trim_end().lines().count() == 1, "{e}");
+    let o = blockstack(&["run", "--pddl", path(&dir.join("missing.pddl"))]);
+    let e = stderr(&o);
+    assert!(e.contains("missing.pddl") && e.trim_end().lines().count() == 1, "{e}");
+    // More blocks than the side view holds.
+    let big = dir.join("big.pddl");
+    let names: Vec<String> = (1..=10_001).map(|i| format!("b{i}")).collect();
+    let init: String = names.iter().map(|n| format!("(on-table {n}) (clear {n}) ")).collect();
+    std::fs::write(
+        &big,
+        format!(
+            "(define (problem big) (:domain blocksworld) (:objects {}) (:init (arm-empty) {init}) (:goal (and (on b1 b2) (on-table b2))))",
+            names.join(" ")
+        ),
+    )
+    .unwrap();
+    let o = blockstack(&["run", "--pddl", path(&big)]);
+    let e = stderr(&o);
+    assert!(
+        e.contains("big.pddl") && e.contains("10001") && e.trim_end().lines().count() == 1,
+        "{e}"
+    );
+}

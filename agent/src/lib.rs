@@ -60,7 +60,7 @@ pub use profile::LearnerProfile;
 pub use qlearning::{QAgent, QPolicy};
 pub use qtable::QTable;
 pub use repr::{Repr, ReprKind, Representation};
-pub use rollout::{EpisodeObserver, EpisodeResult, Summary, play, play_episode};
+pub use rollout::{EpisodeObserver, EpisodeResult, EpisodeStart, Summary, play, play_episode, play_episode_from};
 pub use schedule::Schedule;
 pub use towers_policy::TowersPolicy;
 pub use train::{Progress, TrainHooks, TrainReport, Trained, Trainer, train};

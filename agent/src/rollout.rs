@@ -103,6 +103,27 @@ impl EpisodeObserver for Vec<Observation> {
     }
 }
 
+/// Where an episode starts.
+#[derive(Clone, Copy, Debug, Default)]
+pub enum EpisodeStart<'a> {
+    /// Drawn by [`Env::reset`] with the episode's seed (the config's start rule and goal).
+    #[default]
+    Drawn,
+    /// This state, towards this goal, in every episode (e.g. a PDDL task's,
+    /// [`Env::reset_to`]); the episode's seed still seeds the policy's generator.
+    Given(&'a State, &'a Goal),
+}
+
+impl EpisodeStart<'_> {
+    /// Resets `env` to this start for the episode of `seed`.
+    fn reset(self, env: &mut Env, seed: u64) -> Result<Observation> {
+        Ok(match self {
+            EpisodeStart::Drawn => env.reset(seed),
+            EpisodeStart::Given(state, goal) => env.reset_to(state, goal)?,
+        })
+    }
+}
+
 /// Plays one episode of `policy` in `env`, reset with `seed`, as episode `episode` of the
 /// run, shown to `observer` as it goes.
 pub fn play_episode(
@@ -112,7 +133,19 @@ pub fn play_episode(
     seed: u64,
     observer: &mut dyn EpisodeObserver,
 ) -> Result<EpisodeResult> {
-    let obs = env.reset(seed);
+    play_episode_from(env, policy, EpisodeStart::Drawn, episode, seed, observer)
+}
+
+/// [`play_episode`] from `start`.
+pub fn play_episode_from(
+    env: &mut Env,
+    policy: &mut dyn Policy,
+    start: EpisodeStart<'_>,
+    episode: u64,
+    seed: u64,
+    observer: &mut dyn EpisodeObserver,
+) -> Result<EpisodeResult> {
+    let obs = start.reset(env, seed)?;
     let config = env.config().clone();
     observer.start(episode, seed, &config, &obs)?;
     let start = obs.state.clone();
@@ -152,13 +185,22 @@ pub fn play(
     base_seed: u64,
     observer: &mut dyn EpisodeObserver,
 ) -> Result<Vec<EpisodeResult>> {
-    play_observed(env, policy, episodes, base_seed, observer, &mut |_| {})
+    play_observed(
+        env,
+        policy,
+        EpisodeStart::Drawn,
+        episodes,
+        base_seed,
+        observer,
+        &mut |_| {},
+    )
 }
 
-/// [`play`], calling `done` after each episode (a progress bar's hook).
+/// [`play`] from `start`, calling `done` after each episode (a progress bar's hook).
 pub fn play_observed(
     env: &mut Env,
     policy: &mut dyn Policy,
+    start: EpisodeStart<'_>,
     episodes: u64,
     base_seed: u64,
     observer: &mut dyn EpisodeObserver,
@@ -166,7 +208,8 @@ pub fn play_observed(
 ) -> Result<Vec<EpisodeResult>> {
     (0..episodes)
         .map(|k| {
-            let result = play_episode(env, policy, k, seeding::episode_seed(base_seed, k), observer)?;
+            let seed = seeding::episode_seed(base_seed, k);
+            let result = play_episode_from(env, policy, start, k, seed, observer)?;
             done(&result);
             Ok(result)
         })

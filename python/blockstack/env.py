@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from typing import Any, Optional, Tuple
 
 import gymnasium as gym
@@ -187,9 +188,32 @@ class BlocksWorldEnv(StackEnv):
     dynamics decide where on the ``physics`` backend). ``goal`` may name several towers,
     ``"0,1/2"``; ``actions`` is ``gripper`` or ``moves`` (block moves). The other arguments
     are :class:`StackEnv`'s.
+
+    ``pddl``: a Blocks World problem in PDDL (a path; the file
+    :func:`blockstack.read_pddl` reads), played as ``blockstack run --pddl`` plays it: the
+    world's blocks, grid and goal are the task's (so ``blocks``, ``grid`` and ``goal`` are
+    not given with it), and every ``reset()`` starts from the task's start state (its towers
+    on columns 0, 1, ...) unless ``reset(options=...)`` gives another. A file refused is a
+    ``ValueError`` naming it.
     """
 
-    def __init__(self, **kwargs: Any):
+    def __init__(self, pddl: Any = None, **kwargs: Any):
         if "view" in kwargs:
             raise ValueError("BlocksWorld-v0 is the side view: use blockstack/Stack-v0 to choose a view")
+        #: The task's start cells (``None`` without ``pddl``): where every ``reset()`` starts.
+        self._task_start = None
+        if pddl is not None:
+            given = sorted(k for k in ("blocks", "grid", "goal") if k in kwargs)
+            if given:
+                raise ValueError(f"pddl= gives the world's blocks, grid and goal: leave out {', '.join(given)}")
+            if not isinstance(pddl, (str, os.PathLike)):
+                raise ValueError(f"pddl is the path of a PDDL problem file, not {pddl!r}")
+            task = _native.pddl_task(os.fspath(pddl))
+            kwargs.update(blocks=task["blocks"], goal=task["goal"])
+            self._task_start = task["cells"]
         super().__init__(view="side", **kwargs)
+
+    def reset(self, *, seed: Optional[int] = None, options: Optional[dict] = None):
+        if self._task_start is not None and not options:
+            options = {"cells": self._task_start}
+        return super().reset(seed=seed, options=options)

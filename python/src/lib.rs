@@ -47,6 +47,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<model::NativeModel>()?;
     m.add_function(wrap_pyfunction!(planning::solve, m)?)?;
     m.add_function(wrap_pyfunction!(planning::read_pddl, m)?)?;
+    m.add_function(wrap_pyfunction!(planning::pddl_task, m)?)?;
     m.add_function(wrap_pyfunction!(goal_env::achieved_goal, m)?)?;
     m.add_function(wrap_pyfunction!(goal_env::goal_rewards, m)?)?;
     m.add_function(wrap_pyfunction!(goal_env::check_stack_goal, m)?)?;

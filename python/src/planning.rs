@@ -113,3 +113,27 @@ pub fn read_pddl<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Bou
     out.set_item("plan", plan)?;
     Ok(out)
 }
+
+/// The PDDL problem at `path` as the side view plays it (`oracle::pddl::Problem::side_task`,
+/// as `blockstack run --pddl` does): a dict of `blocks` (the count), `goal` (its towers as
+/// the text the world's `goal` takes, e.g. `"1,2/0"`) and `cells` (the start state, every
+/// block's `(x, y)`, as `reset(options={"cells": ...})` takes it), for `BlocksWorld-v0`
+/// built from a task. A file refused, or a task larger than the side view holds, is a
+/// `ValueError` naming it.
+#[pyfunction]
+pub fn pddl_task<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Bound<'py, PyDict>> {
+    let task = py.detach(|| {
+        guard(|| {
+            let problem = oracle::pddl::Problem::read(&path).or_value_error()?;
+            problem
+                .side_task()
+                .map_err(|e| value_error(format!("{}: {e}", path.display())))
+        })
+    })?;
+    let out = PyDict::new(py);
+    out.set_item("blocks", task.start.block_count())?;
+    out.set_item("goal", task.goal.to_string())?;
+    let cells: Vec<(u16, u16)> = task.start.cells().iter().map(|c| (c.x, c.y)).collect();
+    out.set_item("cells", cells)?;
+    Ok(out)
+}

@@ -1,5 +1,6 @@
 """``blockstack.read_pddl``: the planning competitions' Blocks World problems from Python."""
 
+import gymnasium
 import pytest
 
 import blockstack
@@ -38,3 +39,52 @@ def test_a_bad_file_is_a_value_error_naming_its_problem(tmp_path):
         blockstack.read_pddl(bad)
     with pytest.raises(ValueError, match="missing.pddl"):
         blockstack.read_pddl(tmp_path / "missing.pddl")
+
+
+def test_blocks_world_from_a_task_starts_every_episode_at_its_start(cli, tmp_path):
+    cli("generate", "--view", "side", "--blocks", 9, "--count", 1, "--seed", 6, "--out", tmp_path)
+    task = tmp_path / "p01.pddl"
+    p = blockstack.read_pddl(task)
+    env = gymnasium.make("blockstack/BlocksWorld-v0", pddl=str(task), backend="grid", obs="state")
+    base = env.unwrapped
+    assert (base.world.blocks, base.world.grid) == (9, (9, 10))
+    starts = []
+    for seed in (0, 1, None):
+        env.reset(seed=seed)
+        cells, held, _ = base.state()
+        starts.append(cells)
+        assert held is None
+    assert starts[0] == starts[1] == starts[2]
+    # The start is the task's: its towers, bottom to top, on columns 0, 1, ...
+    towers = [[b for b, (x, _) in sorted(enumerate(starts[0]), key=lambda c: c[1][1]) if x == col] for col in range(9)]
+    assert [t for t in towers if t] == p["start"]
+    # The goal is the task's: the near-optimal plan from the start, carried out by the
+    # gripper, ends the episode there.
+    assert base.world.goal.split("/") == [",".join(map(str, t)) for t in p["goal"]]
+    plan = blockstack.solve(
+        starts[0], base.world.goal, grid=base.world.grid, solver="near-optimal", view="side", cost="steps"
+    )
+    for i, action in enumerate(plan):
+        _, _, terminated, truncated, _ = env.step(action)
+        assert terminated == (i == len(plan) - 1) and not truncated
+    # Reset options still give another start.
+    other = [(b, 0) for b in range(9)]
+    env.reset(options={"cells": other})
+    assert base.state()[0] == other
+    env.reset()
+    assert base.state()[0] == starts[0]
+    # The class takes it too.
+    assert blockstack.BlocksWorldEnv(pddl=task, backend="grid").world.blocks == 9
+
+
+def test_blocks_world_refuses_a_bad_task_in_one_value_error(tmp_path):
+    bad = tmp_path / "bad.pddl"
+    bad.write_text("(define (problem p) (:domain blocksworld) (:objects b1 b2)\n (:init (arm-empty) (on b1 b2) (on b2 b1))")
+    with pytest.raises(ValueError, match="bad.pddl"):
+        gymnasium.make("blockstack/BlocksWorld-v0", pddl=bad)
+    with pytest.raises(ValueError, match="missing.pddl"):
+        blockstack.BlocksWorldEnv(pddl=tmp_path / "missing.pddl")
+    with pytest.raises(ValueError, match="leave out blocks, goal"):
+        blockstack.BlocksWorldEnv(pddl=bad, blocks=3, goal="0,1,2")
+    with pytest.raises(ValueError, match="path of a PDDL problem"):
+        blockstack.BlocksWorldEnv(pddl=3)

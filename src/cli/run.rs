@@ -1,20 +1,21 @@
 //! `blockstack run`: play episodes with an agent.
 
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use clap::Args;
 use files::OutputPath;
+use oracle::pddl::{Problem, SideTask};
 use sim::trajectory::TrajectoryWriter;
-use sim::{Env, EnvConfig, GoalSpec};
+use sim::{Env, EnvConfig, GoalSpec, View};
 
 use super::profile::{PlayRulesArgs, ProfileArg, played};
 use super::solver_budget::SolverBudgetArg;
 use super::stdout::line;
 use super::world::{GoalArg, WorldArgs};
 use agent::eval::RunReport;
-use agent::{LearnerProfile, OracleKind, PlayingModel, PolicyKind, PolicyOptions};
+use agent::{EpisodeStart, LearnerProfile, OracleKind, PlayingModel, PolicyKind, PolicyOptions};
 use neural::AnyModel;
 
 /// Arguments of `blockstack run`.
@@ -61,6 +62,11 @@ pub struct RunArgs {
     pub epsilon: Option<f64>,
     #[command(flatten)]
     pub budget: SolverBudgetArg,
+    /// Play a Blocks World problem in PDDL (the planning competitions' 4-operator domain)
+    /// in the side view: every episode starts from its start state towards its goal, on the
+    /// side view's default grid for its blocks.
+    #[arg(long, value_name = "PROBLEM.pddl", conflicts_with_all = ["goal", "blocks", "grid"])]
+    pub pddl: Option<PathBuf>,
 }
 
 /// Refuses, naming the flag, a flag given for an agent that does not use it (it would be
@@ -125,7 +131,15 @@ pub fn run(args: RunArgs) -> Result<()> {
         view: w.view,
         ..EnvConfig::default()
     });
-    let config = args.world.config(base, &rules, args.goal.goal.as_deref())?;
+    let task = args
+        .pddl
+        .as_deref()
+        .map(|path| pddl_task(path, &args.world))
+        .transpose()?;
+    let config = match &task {
+        Some(task) => task_config(task, &args.world, base, &rules)?,
+        None => args.world.config(base, &rules, args.goal.goal.as_deref())?,
+    };
     if let Some(m) = &model {
         m.check_world(config.grid, config.blocks)?;
         // A model plays the world it learnt.
@@ -149,9 +163,13 @@ pub fn run(args: RunArgs) -> Result<()> {
     let mut env = Env::new(config.clone())?;
     let mut trajectory = trajectory_out.as_ref().map(TrajectoryWriter::create).transpose()?;
     let bar = super::progress::bar(args.episodes, "episodes");
+    let start = task
+        .as_ref()
+        .map_or(EpisodeStart::Drawn, |t| EpisodeStart::Given(&t.start, &t.goal));
     let results = agent::rollout::play_observed(
         &mut env,
         policy.as_mut(),
+        start,
         args.episodes,
         args.seed,
         &mut trajectory,
@@ -167,7 +185,11 @@ pub fn run(args: RunArgs) -> Result<()> {
         GoalSpec::Random => None,
     };
     // No timings, so two runs compare equal; `eval --json` holds the same fields and more.
-    let report = RunReport::new(policy.name(), &config, rules.profile, goal, args.seed, &results);
+    let mut report = RunReport::new(policy.name(), &config, rules.profile, goal, args.seed, &results);
+    if task.is_some() {
+        // Not the start rule's draw: every episode began at the task's start.
+        report.start = "pddl".into();
+    }
     if args.json {
         line(serde_json::to_string(&report)?)?;
     } else {
@@ -182,6 +204,32 @@ pub fn run(args: RunArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The side-view task of the problem file at `path`; `--view top` is refused (a problem
+/// is a side-view task; `--blocks`, `--grid` and `--goal` are refused by clap).
+fn pddl_task(path: &Path, world: &WorldArgs) -> Result<SideTask> {
+    anyhow::ensure!(
+        world.view.is_none_or(|v| v == View::Side),
+        "--pddl plays its task in the side view: leave out --view top"
+    );
+    let problem = Problem::read(path)?;
+    problem.side_task().with_context(|| format!("{}", path.display()))
+}
+
+/// The world of `task` (its blocks, grid and goal, the side view), the other flags over
+/// `base` as for any run, checked.
+fn task_config(task: &SideTask, world: &WorldArgs, base: EnvConfig, rules: &sim::ProfileParts) -> Result<EnvConfig> {
+    let world = WorldArgs {
+        blocks: Some(task.start.block_count()),
+        grid: Some(task.grid),
+        view: Some(View::Side),
+        ..*world
+    };
+    let mut config = world.config(base, rules, None)?;
+    config.goal = GoalSpec::Fixed(task.goal.clone());
+    config.validate()?;
+    Ok(config)
 }
 
 fn print_report(r: &RunReport) -> Result<()> {

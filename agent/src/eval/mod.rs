@@ -43,7 +43,8 @@ pub struct RunReport {
     pub profile: String,
     /// The action protocol.
     pub protocol: String,
-    /// The start rule.
+    /// The start rule, or `pddl` for episodes that all began at a PDDL task's start
+    /// (`run --pddl`).
     pub start: String,
     /// Failures and steps.
     #[serde(flatten)]

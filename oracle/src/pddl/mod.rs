@@ -49,8 +49,8 @@
 //!
 //! A problem file is a block-move problem: towers of blocks, a goal of towers, and plans
 //! of block moves, which are [`crate::towers`]' vocabulary; a file says nothing of a grid,
-//! so the side view's world (`sim`) is built from the towers by whoever plays them
-//! (`sim::view::state_of_towers`).
+//! so the side view's world (`sim`) is built from the towers on its default grid
+//! ([`Problem::side_task`]) by whoever plays them.
 //!
 //! # Example
 //!
@@ -80,7 +80,9 @@ pub mod error;
 pub mod plan;
 pub mod problem;
 mod sexpr;
+pub mod world;
 
 pub use error::PddlError;
 pub use plan::{Action, actions};
 pub use problem::{Fact, MAX_PROBLEM_BYTES, Problem};
+pub use world::SideTask;
