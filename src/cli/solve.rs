@@ -40,7 +40,7 @@ pub struct SolveArgs {
     /// Grid size, WxH [default: 7x7; in the side view, 7x7 up to 7 blocks and N x (N+1)
     /// beyond]
     #[arg(long)]
-    pub grid: Option<String>,
+    pub grid: Option<Grid>,
     /// The world: top (the paper's, seen from above) or side (the classic Blocks World; the
     /// goal may be several towers, e.g. 0,1/2).
     #[arg(long, default_value = "top")]
@@ -95,7 +95,9 @@ pub fn solve(args: SolveArgs) -> Result<()> {
     };
     // The blocks `--start` lists (the side view's default grid grows with them).
     let blocks = start.split(';').count();
-    let grid = super::world::grid_or_default(args.grid.as_deref(), args.view, blocks).context("--grid")?;
+    let grid = args
+        .grid
+        .unwrap_or_else(|| super::world::default_grid(Grid::default(), args.view, blocks));
     if args.view == View::Side {
         return solve_side(&args, grid, start, goal);
     }

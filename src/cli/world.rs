@@ -53,7 +53,7 @@ impl WorldArgs {
     pub fn over(&self, base: EnvConfig, rules: &ProfileParts) -> EnvConfig {
         let blocks = self.blocks.unwrap_or(base.blocks);
         let view = self.view.unwrap_or(base.view);
-        let grid = default_grid(&base, view, blocks);
+        let grid = default_grid(base.grid, view, blocks);
         EnvConfig {
             grid: self.grid.unwrap_or(grid),
             blocks,
@@ -79,23 +79,15 @@ impl WorldArgs {
     }
 }
 
-/// The grid when `--grid` is absent: `base`'s (a model's own), or when `base` has the
-/// default grid, the view's default for `blocks` blocks: 7 x 7 in the top view,
+/// The grid when `--grid` is absent: `base` (a model's own), or when `base` is the default
+/// grid, the view's default for `blocks` blocks: 7 x 7 in the top view,
 /// [`Grid::side_default`] in the side view (docs/world.md, "The side view at any size").
-fn default_grid(base: &EnvConfig, view: View, blocks: usize) -> Grid {
-    if view == View::Side && base.grid == Grid::default() {
+pub fn default_grid(base: Grid, view: View, blocks: usize) -> Grid {
+    if view == View::Side && base == Grid::default() {
         Grid::side_default(blocks)
     } else {
-        base.grid
+        base
     }
-}
-
-/// The grid `--grid` names (solve's, as text), or the view's default for `blocks` blocks.
-pub fn grid_or_default(text: Option<&str>, view: View, blocks: usize) -> Result<Grid> {
-    Ok(match text {
-        Some(text) => text.parse()?,
-        None => default_grid(&EnvConfig::default(), view, blocks),
-    })
 }
 
 #[cfg(test)]
