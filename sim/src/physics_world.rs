@@ -43,9 +43,10 @@
 //!   tower of four compressed under its own weight by more than the alignment tolerance.
 //!   CCD is on, so that no fall (up to 15 rows, faster than half a block per step) can pass
 //!   through a block.
-//! - Solver iterations [`SIDE_SOLVER_ITERATIONS`] (rapier's default, 4): a tower that a
-//!   block lands on comes to rest within the alignment tolerance with them (the tests drop
-//!   onto a tower of six), and each iteration costs time on every step of every drop.
+//! - The contact solver ([`SideSolver`]) is chosen by the tallest tower the world can
+//!   build, its block count. Up to [`SIDE_SMALL_WORLD_BLOCKS`] blocks it is rapier's default
+//!   (60 steps a second, 4 iterations, contacts of 30 Hz): the cheapest, and a tower of ten
+//!   comes to rest within the alignment tolerance. See "Tall towers" for more blocks.
 //! - Rest is rapier's own sleep: a drop steps the pipeline until every block sleeps, and a
 //!   block sleeps once it has moved less than 0.05 cells per second (rapier's threshold,
 //!   which counts the solver's position corrections as motion too) for
@@ -57,6 +58,21 @@
 //! - `enhanced-determinism` (on in the workspace's Cargo.toml) makes rapier's arithmetic
 //!   the same on every machine, so a drop comes to rest the same way everywhere; the
 //!   snap to cell centres then makes the logical state exact.
+//!
+//! # Tall towers
+//!
+//! rapier's contacts are soft springs: under load they give a little, and a stack's
+//! give adds up from the bottom, the block at height `k` carrying `N - k` blocks. Under
+//! the default solver the eleventh block of a tower rests 0.052 below its cell, past the
+//! tolerance. Stiffer contacts give less (the give falls as the square of the contact's
+//! frequency), but a contact stiff against the substep rings and never sleeps: at 60 steps
+//! a second with 4 iterations, 120 Hz contacts kept a tower of ten oscillating. So a
+//! world of more blocks uses [`SideSolver::TALL`]: contacts of 300 Hz, 120 steps a second
+//! of 24 iterations each (a substep of 1/2880 s), twelve times the default's solver work
+//! per simulated second, which is why small worlds keep the default. How tall a tower
+//! then stands, and whether random block moves of 20, 50 and 100 blocks end where the grid
+//! model says, is measured by `cargo run --release -p sim --example side_physics` (its
+//! output is docs/results/side-physics.md); the settings were chosen by it.
 //!
 //! # Why the side view casts against each collider
 //!
@@ -108,8 +124,58 @@ pub const SIDE_CONTACT_SKIN: f32 = 0.05;
 /// Side view: gravity, in cells per second squared (downward).
 pub const SIDE_GRAVITY: f32 = 4.0 * 9.81;
 
-/// Side view: the constraint solver's iterations per step.
-pub const SIDE_SOLVER_ITERATIONS: usize = 4;
+/// Side view: the most blocks a world may have for [`SideSolver::SMALL`] to settle its
+/// tallest tower (module docs, "Tall towers"); larger worlds use [`SideSolver::TALL`].
+pub const SIDE_SMALL_WORLD_BLOCKS: usize = 10;
+
+/// Side view: the settings of rapier's contact solver, chosen by the tallest tower a world
+/// can build, its block count (module docs, "Tall towers").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SideSolver {
+    /// Pipeline steps per simulated second (`1 / IntegrationParameters::dt`).
+    pub steps_per_second: f32,
+    /// Solver iterations (substeps) per step.
+    pub iterations: usize,
+    /// The natural frequency (Hz) of a contact between two blocks; a contact with the table
+    /// or a wall is twice as stiff, as in rapier's defaults.
+    pub contact_hz: f32,
+}
+
+impl SideSolver {
+    /// Up to [`SIDE_SMALL_WORLD_BLOCKS`] blocks: rapier's defaults (60 steps a second, 4
+    /// iterations, contacts of 30 Hz), the cheapest settings under which a tower of ten
+    /// stands.
+    pub const SMALL: SideSolver = SideSolver {
+        steps_per_second: 60.0,
+        iterations: 4,
+        contact_hz: 30.0,
+    };
+
+    /// More blocks: contacts ten times as stiff, and as many substeps as keep them from
+    /// ringing (`docs/results/side-physics.md` measures how tall a tower stands).
+    pub const TALL: SideSolver = SideSolver {
+        steps_per_second: 120.0,
+        iterations: 24,
+        contact_hz: 300.0,
+    };
+
+    /// The settings for a world of `blocks` blocks.
+    pub fn for_blocks(blocks: usize) -> SideSolver {
+        if blocks <= SIDE_SMALL_WORLD_BLOCKS {
+            SideSolver::SMALL
+        } else {
+            SideSolver::TALL
+        }
+    }
+
+    /// Writes these settings into `params`; rapier's damping ratio (10) is kept.
+    fn apply(self, params: &mut IntegrationParameters) {
+        params.dt = 1.0 / self.steps_per_second;
+        params.num_solver_iterations = self.iterations;
+        params.contact_softness.natural_frequency = self.contact_hz;
+        params.static_contact_softness.natural_frequency = 2.0 * self.contact_hz;
+    }
+}
 
 /// Side view: how long (simulated seconds) a block must stay still (rapier's sleep
 /// threshold, 0.05 cells per second) before it sleeps; a drop ends when every block sleeps.
@@ -239,7 +305,7 @@ impl PhysicsWorld {
         }
         let mut params = IntegrationParameters::default();
         if side {
-            params.num_solver_iterations = SIDE_SOLVER_ITERATIONS;
+            SideSolver::for_blocks(state.block_count()).apply(&mut params);
         }
         let mut world = PhysicsWorld {
             grid,
