@@ -419,7 +419,19 @@ impl DqnConfig {
     }
 
     fn pixels(paper: DqnConfig) -> DqnConfig {
-        DqnConfig::dqfd_planes(paper).with_net(NetConfig::conv())
+        let planes = DqnConfig::dqfd_planes(paper).with_net(NetConfig::conv());
+        // On 2 blocks two thirds of the planes' budget reach every goal on every test start
+        // (1,000 of 1,000 at 1.000x with 20,000 + 20,000 steps, docs/results/dqn), in about
+        // two thirds of the time.
+        if planes.world.blocks <= 2 {
+            DqnConfig {
+                steps: 20_000,
+                pretrain_steps: 20_000,
+                ..planes
+            }
+        } else {
+            planes
+        }
     }
 
     fn her_planes(paper: DqnConfig) -> DqnConfig {
@@ -500,6 +512,8 @@ mod tests {
                 (DemoSource::Exact(5_000), 15_000, 15_000)
             );
         }
+        assert_eq!(budget(Preset::Pixels, 2), (DemoSource::Exact(10_000), 20_000, 20_000));
+        assert_eq!(budget(Preset::Pixels, 3), budget(Preset::DqfdPlanes, 3));
     }
 
     #[test]
