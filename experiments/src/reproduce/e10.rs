@@ -30,7 +30,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 use sim::seeding::episode_seed;
 
-use super::e8::Budget;
+use super::Budget;
 use super::shared::Shared;
 use super::text::num;
 use super::{Context, Drawing, Experiment, Figure, Result, Setting};

@@ -34,7 +34,7 @@ use serde::Serialize;
 use sim::seeding::{self, episode_seed};
 use sim::{Action, Backend, Env, EnvConfig, Goal, GoalSpec, Grid, Observation, State, Step, View};
 
-use super::e8::Budget;
+use super::Budget;
 use super::shared::Shared;
 use super::text::num;
 use super::{Context, Drawing, Experiment, Figure, HORIZON, Result, Setting};
