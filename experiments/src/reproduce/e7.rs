@@ -175,103 +175,13 @@ pub(super) fn run(ctx: &Context, shared: &Shared) -> Result<Experiment> {
         &policy,
         &arms,
     )?;
-    let (b, p, x) = (&arms[best], &arms[paper_index], &arms[exact]);
-    let to_paper = rows[best]
-        .spec
-        .as_ref()
-        .and_then(|m| m.tests[0].as_ref())
-        .map_or_else(|| "not tested".into(), |t| significance(t.p_value));
-    let reading = format!(
-        "The best learner, {}, failed {} of {} games with mean {} steps, {}x the shortest plan (the exact solver: \
-         {} steps); the paper's learner failed {} with mean {} steps over its successes, {}x; the difference in \
-         steps (a failure at 1000) is {}. The oracle averages {}x the optimum.",
-        b.name,
-        num(Some(b.failures), 0),
-        b.games,
-        num(b.mean_steps, 2),
-        num(b.mean_ratio_to_optimum, 3),
-        num(x.mean_steps, 2),
-        num(Some(p.failures), 0),
-        num(p.mean_steps, 1),
-        num(p.mean_ratio_to_optimum, 1),
-        to_paper,
-        num(arms[oracle].mean_ratio_to_optimum, 4),
-    );
-    let bars = BarChart {
-        title: "E7: steps to goal on the same starts, every goal".into(),
-        y_label: "mean steps (a failure counted as 1000)".into(),
-        bars: AGENTS
-            .iter()
-            .zip(&arms)
-            .map(|(agent, a)| Bar {
-                name: agent.short().into(),
-                value: a.mean_steps_failures_at_horizon,
-                interval: None,
-                second: a.median_steps,
-            })
-            .collect(),
-        value_label: "mean steps, a failure at 1000".into(),
-        interval_label: String::new(),
-        second_label: "median over successes".into(),
-        reference: mean_of(&optimum).map(|v| Reference {
-            label: "mean shortest plan (exact solver)".into(),
-            value: v,
-        }),
-        log_scale: true,
-        note: format!(
-            "{}. Learners play with a random action with probability {eps} unless marked greedy.",
-            describe(&suite)
-        ),
-    };
-    let mut figures = vec![Figure::new(
-        "e7-steps",
-        "Mean steps to goal per agent (a failure at 1000), median over successes, and the mean shortest plan".into(),
-        Drawing::Bars(bars),
-    )];
+    let reading = reading(&arms, &rows, best, paper_index, exact, oracle);
+    let mut figures = vec![steps_chart(&suite, &arms, &optimum, eps)];
     figures.extend(gifs);
     Ok(Experiment {
         id: "E7".into(),
         title: "Every agent against the optimum (ours)".into(),
-        setup: vec![
-            Setting {
-                name: "agents".into(),
-                value: format!(
-                    "random; the paper's learner (chasing + paper reward, {} training games on all six goals, seed \
-                     {}); ours ({}); the oracle; the exact solver",
-                    paper_agent.training().map_or(0, |t| t.games),
-                    paper_agent.training().map_or(0, |t| t.seed),
-                    ours_description(ours)
-                ),
-            },
-            Setting {
-                name: "games".into(),
-                value: format!("{}, per agent", describe(&suite)),
-            },
-            Setting {
-                name: "test policy".into(),
-                value: format!(
-                    "learners: random action with probability {eps} (the paper's), and greedy (epsilon 0) in the \
-                     rows so marked; planners are deterministic"
-                ),
-            },
-            Setting {
-                name: "optimum".into(),
-                value: format!(
-                    "the exact solver's shortest plan from each start: {} steps on average",
-                    num(mean_of(&optimum), 2)
-                ),
-            },
-            Setting {
-                name: "tests".into(),
-                value: "Wilcoxon signed-rank against the paper's learner and against the exact solver, paired by \
-                        start, steps with a failure counted as 1000"
-                    .into(),
-            },
-            Setting {
-                name: "episode pictures".into(),
-                value: format!("game {start} of the table (the paper's learner's most typical success)"),
-            },
-        ],
+        setup: setup(ctx, shared, &suite, &optimum, start),
         tables: vec![Table {
             title: "Steps to goal against the optimum".into(),
             suite: describe(&suite),
@@ -287,6 +197,113 @@ pub(super) fn run(ctx: &Context, shared: &Shared) -> Result<Experiment> {
         blocks_world: None,
         general: None,
     })
+}
+
+/// The settings: the agents, the games, the test policy, the optimum and the tests.
+fn setup(ctx: &Context, shared: &Shared, suite: &Suite, optimum: &[u32], start: usize) -> Vec<Setting> {
+    let (paper_agent, ours) = (shared.paper_spec(), shared.ours());
+    let eps = ctx.test_epsilon();
+    vec![
+        Setting {
+            name: "agents".into(),
+            value: format!(
+                "random; the paper's learner (chasing + paper reward, {} training games on all six goals, seed \
+                     {}); ours ({}); the oracle; the exact solver",
+                paper_agent.training().map_or(0, |t| t.games),
+                paper_agent.training().map_or(0, |t| t.seed),
+                ours_description(ours)
+            ),
+        },
+        Setting {
+            name: "games".into(),
+            value: format!("{}, per agent", describe(suite)),
+        },
+        Setting {
+            name: "test policy".into(),
+            value: format!(
+                "learners: random action with probability {eps} (the paper's), and greedy (epsilon 0) in the \
+                     rows so marked; planners are deterministic"
+            ),
+        },
+        Setting {
+            name: "optimum".into(),
+            value: format!(
+                "the exact solver's shortest plan from each start: {} steps on average",
+                num(mean_of(optimum), 2)
+            ),
+        },
+        Setting {
+            name: "tests".into(),
+            value: "Wilcoxon signed-rank against the paper's learner and against the exact solver, paired by \
+                        start, steps with a failure counted as 1000"
+                .into(),
+        },
+        Setting {
+            name: "episode pictures".into(),
+            value: format!("game {start} of the table (the paper's learner's most typical success)"),
+        },
+    ]
+}
+
+/// The reading: the best learner against the paper's, the exact solver and the oracle.
+fn reading(arms: &[ArmResult], rows: &[Row], best: usize, paper_index: usize, exact: usize, oracle: usize) -> String {
+    let (b, p, x) = (&arms[best], &arms[paper_index], &arms[exact]);
+    let to_paper = rows[best]
+        .spec
+        .as_ref()
+        .and_then(|m| m.tests[0].as_ref())
+        .map_or_else(|| "not tested".into(), |t| significance(t.p_value));
+    format!(
+        "The best learner, {}, failed {} of {} games with mean {} steps, {}x the shortest plan (the exact solver: \
+         {} steps); the paper's learner failed {} with mean {} steps over its successes, {}x; the difference in \
+         steps (a failure at 1000) is {}. The oracle averages {}x the optimum.",
+        b.name,
+        num(Some(b.failures), 0),
+        b.games,
+        num(b.mean_steps, 2),
+        num(b.mean_ratio_to_optimum, 3),
+        num(x.mean_steps, 2),
+        num(Some(p.failures), 0),
+        num(p.mean_steps, 1),
+        num(p.mean_ratio_to_optimum, 1),
+        to_paper,
+        num(arms[oracle].mean_ratio_to_optimum, 4),
+    )
+}
+
+/// The bar chart of mean steps per agent, beside the mean shortest plan.
+fn steps_chart(suite: &Suite, arms: &[ArmResult], optimum: &[u32], eps: f64) -> Figure {
+    let bars = BarChart {
+        title: "E7: steps to goal on the same starts, every goal".into(),
+        y_label: "mean steps (a failure counted as 1000)".into(),
+        bars: AGENTS
+            .iter()
+            .zip(arms)
+            .map(|(agent, a)| Bar {
+                name: agent.short().into(),
+                value: a.mean_steps_failures_at_horizon,
+                interval: None,
+                second: a.median_steps,
+            })
+            .collect(),
+        value_label: "mean steps, a failure at 1000".into(),
+        interval_label: String::new(),
+        second_label: "median over successes".into(),
+        reference: mean_of(optimum).map(|v| Reference {
+            label: "mean shortest plan (exact solver)".into(),
+            value: v,
+        }),
+        log_scale: true,
+        note: format!(
+            "{}. Learners play with a random action with probability {eps} unless marked greedy.",
+            describe(suite)
+        ),
+    };
+    Figure::new(
+        "e7-steps",
+        "Mean steps to goal per agent (a failure at 1000), median over successes, and the mean shortest plan".into(),
+        Drawing::Bars(bars),
+    )
 }
 
 /// The GIFs of `agents` (each with its arm's index) on one start: the game where the
