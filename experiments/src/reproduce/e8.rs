@@ -11,8 +11,8 @@
 //! Budgets: the default run (`blockstack reproduce`) trains our two plane arms only, at
 //! [`DEFAULT_SHARE`] of their presets' budgets, small enough for the whole report to stay
 //! within minutes; `--long` adds the paper's pixel runs, our DQN with hindsight relabelling
-//! (`her-planes`), our recipe on the paper's pixels (`dqfd-pixels`) and the whole
-//! ablation, every arm at its preset's full budget (the ablation, and the default run's
+//! (`her-planes`), our recipe on the paper's pixels (`dqfd-pixels`), our recipe on a
+//! screen drawn to be read (`pixels`, 3 blocks) and the whole ablation, every arm at its preset's full budget (the ablation, and the default run's
 //! `dqfd-planes` arm, with the steps that preset gives 2 blocks: [`dqfd_planes3`]);
 //! `--quick` checks the pipeline with tiny versions of the default arms. The report says which budget produced
 //! its figures.
@@ -27,41 +27,11 @@ use sim::{Goal, Profile, RewardModel};
 use super::arms::{ArmResult, Goals, Row, Suite, Table, describe, suite_in};
 use super::shared::Shared;
 use super::text::num;
-use super::{Context, Drawing, Experiment, Figure, HORIZON, Options, ReproduceError, Result, Setting};
+use super::{Budget, Context, Drawing, Experiment, Figure, HORIZON, Options, ReproduceError, Result, Setting};
 use plots::{CurvesChart, Series};
 
-/// How much E8 trains.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Budget {
-    /// Tiny runs: the pipeline works (`--quick`).
-    Quick,
-    /// The plane arms at a budget the default run affords.
-    Default,
-    /// Every arm at the presets' budgets: the pixel runs and the whole ablation (`--long`).
-    Long,
-}
-
+/// E8's counts at each budget.
 impl Budget {
-    /// The budget `options` ask for.
-    pub fn of(options: &Options) -> Budget {
-        if options.quick {
-            Budget::Quick
-        } else if options.long {
-            Budget::Long
-        } else {
-            Budget::Default
-        }
-    }
-
-    fn name(self) -> &'static str {
-        match self {
-            Budget::Quick => "quick",
-            Budget::Default => "default",
-            Budget::Long => "long",
-        }
-    }
-
     /// Test games per goal at the end of every arm.
     fn test_games(self) -> u64 {
         match self {
@@ -124,6 +94,9 @@ fn preset(name: Preset, blocks: usize, seed: u64, fraction: f64) -> Result<DqnCo
         fraction,
     ))
 }
+
+/// The `--long` arm of the `pixels` preset.
+const PIXELS3: &str = "ours on pixels: DQfD, conv network, compact screen, 3 blocks";
 
 /// The share of the presets' budgets the default run trains its arms at.
 const DEFAULT_SHARE: f64 = 0.6;
@@ -192,6 +165,8 @@ fn arms(budget: Budget, seed: u64) -> Result<Vec<Arm>> {
             Part::Ours,
             ours_pixels2.clone(),
         ),
+        // The `pixels` preset: our learner on a screen drawn to be read (docs/dqn.md).
+        arm(PIXELS3, Part::Ours, preset(Preset::Pixels, 3, seed, 1.0)?),
     ]);
     // The ablation: our recipe with one of the paper's choices put back.
     let ablate = |name: &str, config: DqnConfig| arm(&format!("ours with {name}"), Part::Ablation, config);
@@ -499,6 +474,23 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
         .zip(&runs)
         .map(|(a, run)| outcome(ctx, a, budget, run))
         .collect::<Result<_>>()?;
+    Ok(Experiment {
+        id: "E8".into(),
+        title: "Deep Q-learning from pixels and planes, and DQfD (section III-C)".into(),
+        setup: setup(budget, &arms, &outcomes),
+        tables: tables(ctx, budget, &arms, &outcomes)?,
+        curves: Vec::new(),
+        decomposition: None,
+        paper_notes: Vec::new(),
+        reading: reading(budget, &arms, &outcomes),
+        figures: figures(budget, &arms, &outcomes),
+        blocks_world: None,
+        general: None,
+    })
+}
+
+/// The tables: each part's arms by block count, then every arm's learning curve.
+fn tables(ctx: &Context, budget: Budget, arms: &[Arm], outcomes: &[Outcome]) -> Result<Vec<Table>> {
     let mut tables = Vec::new();
     for (part, title) in [
         (Part::Paper, "(a) The paper's DQN and DQfD on pixels"),
@@ -511,7 +503,7 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
         for blocks in [2, 3] {
             let rows: Vec<Row> = arms
                 .iter()
-                .zip(&outcomes)
+                .zip(outcomes)
                 .filter(|(a, _)| a.part == part && a.config.blocks() == blocks)
                 .map(|(_, o)| Row::spec(None, o.arm.clone(), Vec::new()))
                 .collect();
@@ -541,6 +533,11 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
             .flat_map(|o| o.curve.iter().map(|(_, a)| Row::spec(None, a.clone(), Vec::new())))
             .collect(),
     });
+    Ok(tables)
+}
+
+/// The settings: the budget, the paper's setup, the test, and every arm's configuration.
+fn setup(budget: Budget, arms: &[Arm], outcomes: &[Outcome]) -> Vec<Setting> {
     let mut setup = vec![
         Setting {
             name: "budget".into(),
@@ -575,7 +572,7 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
                 .into(),
         },
     ];
-    for (a, o) in arms.iter().zip(&outcomes) {
+    for (a, o) in arms.iter().zip(outcomes) {
         setup.push(Setting {
             name: a.name.clone(),
             value: format!(
@@ -586,9 +583,14 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
             ),
         });
     }
+    setup
+}
+
+/// The learning-curve charts: ours (with the paper's runs), and the ablation.
+fn figures(budget: Budget, arms: &[Arm], outcomes: &[Outcome]) -> Vec<Figure> {
     let series = |part: Part| -> Vec<Series> {
         arms.iter()
-            .zip(&outcomes)
+            .zip(outcomes)
             .filter(|(a, _)| a.part == part || (part == Part::Ours && a.part == Part::Paper))
             .map(|(a, o)| Series {
                 name: a.name.clone(),
@@ -631,6 +633,11 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
             Drawing::Curves(chart("E8: ablation", ablation)),
         ));
     }
+    figures
+}
+
+/// The one-paragraph reading, computed from the outcomes.
+fn reading(budget: Budget, arms: &[Arm], outcomes: &[Outcome]) -> String {
     let find = |name: &str| arms.iter().position(|a| a.name == name).map(|i| &outcomes[i].arm);
     let figures_of = |a: Option<&ArmResult>| match a {
         None => "-".to_string(),
@@ -654,6 +661,12 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
             figures_of(Some(p))
         );
     }
+    if let Some(p) = find(PIXELS3) {
+        reading += &format!(
+            "; with the conv network on the compact screen (the `pixels` preset) {} on 3 blocks",
+            figures_of(Some(p))
+        );
+    }
     if let (Some(p), Some(d)) = (
         find("paper: DQN, pixels, 2 blocks"),
         find("paper: DQfD, pixels, 2 blocks"),
@@ -666,7 +679,7 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
     }
     let breaking: Vec<String> = arms
         .iter()
-        .zip(&outcomes)
+        .zip(outcomes)
         .filter(|(a, o)| a.part == Part::Ablation && success(&o.arm) < 90.0)
         .map(|(a, o)| format!("{} ({:.0}%)", a.name.trim_start_matches("ours with "), success(&o.arm)))
         .collect();
@@ -681,19 +694,7 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
         };
     }
     reading += &format!(" (budget: {}).", budget.name());
-    Ok(Experiment {
-        id: "E8".into(),
-        title: "Deep Q-learning from pixels and planes, and DQfD (section III-C)".into(),
-        setup,
-        tables,
-        curves: Vec::new(),
-        decomposition: None,
-        paper_notes: Vec::new(),
-        reading,
-        figures,
-        blocks_world: None,
-        general: None,
-    })
+    reading
 }
 
 #[cfg(test)]
@@ -716,6 +717,11 @@ mod tests {
                 .any(|a| a.part == Part::Paper && a.config.net.kind == NetKind::Paper)
         );
         assert!(long.iter().filter(|a| a.part == Part::Ablation).count() >= 5);
+        // The pixels preset's 3-block arm, at its full budget, only under --long.
+        let pixels = long.iter().find(|a| a.name == PIXELS3).unwrap();
+        assert_eq!(pixels.config.net.kind, NetKind::Conv);
+        assert_eq!(pixels.config.steps, DqnConfig::preset(Preset::Pixels, 3).unwrap().steps);
+        assert!(arms(Budget::Default, 1).unwrap().iter().all(|a| a.name != PIXELS3));
         assert_eq!(
             arms(Budget::Quick, 1).unwrap().len(),
             arms(Budget::Default, 1).unwrap().len()
