@@ -193,8 +193,9 @@ class BlocksWorldEnv(StackEnv):
     :func:`blockstack.read_pddl` reads), played as ``blockstack run --pddl`` plays it: the
     world's blocks, grid and goal are the task's (so ``blocks``, ``grid`` and ``goal`` are
     not given with it), and every ``reset()`` starts from the task's start state (its towers
-    on columns 0, 1, ...) unless ``reset(options=...)`` gives another. A file refused is a
-    ``ValueError`` naming it.
+    on columns 0, 1, ...) unless ``reset(options=...)`` gives another. A file refused, or a
+    task whose start already meets its goal (an episode cannot begin over; its plan is
+    empty), is a ``ValueError`` naming it.
     """
 
     def __init__(self, pddl: Any = None, **kwargs: Any):

@@ -118,16 +118,25 @@ pub fn read_pddl<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Bou
 /// as `blockstack run --pddl` does): a dict of `blocks` (the count), `goal` (its towers as
 /// the text the world's `goal` takes, e.g. `"1,2/0"`) and `cells` (the start state, every
 /// block's `(x, y)`, as `reset(options={"cells": ...})` takes it), for `BlocksWorld-v0`
-/// built from a task. A file refused, or a task larger than the side view holds, is a
-/// `ValueError` naming it.
+/// built from a task. A file refused, a task larger than the side view holds, or one whose
+/// start already meets its goal (a Gymnasium episode cannot begin over) is a `ValueError`
+/// naming it.
 #[pyfunction]
 pub fn pddl_task<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Bound<'py, PyDict>> {
     let task = py.detach(|| {
         guard(|| {
             let problem = oracle::pddl::Problem::read(&path).or_value_error()?;
-            problem
+            let task = problem
                 .side_task()
-                .map_err(|e| value_error(format!("{}: {e}", path.display())))
+                .map_err(|e| value_error(format!("{}: {e}", path.display())))?;
+            // A Gymnasium reset cannot return an episode that is already over.
+            if task.goal.holds_in(View::Side, &task.start) {
+                return Err(value_error(format!(
+                    "{}: the task's start already meets its goal, so there is no episode to play (blockstack.read_pddl gives its empty plan)",
+                    path.display()
+                )));
+            }
+            Ok(task)
         })
     })?;
     let out = PyDict::new(py);

@@ -88,3 +88,16 @@ def test_blocks_world_refuses_a_bad_task_in_one_value_error(tmp_path):
         blockstack.BlocksWorldEnv(pddl=bad, blocks=3, goal="0,1,2")
     with pytest.raises(ValueError, match="path of a PDDL problem"):
         blockstack.BlocksWorldEnv(pddl=3)
+
+
+def test_blocks_world_refuses_a_task_already_solved_in_one_value_error(tmp_path):
+    # Gymnasium's reset cannot return an episode that is already over; the plan is empty.
+    done = tmp_path / "done.pddl"
+    done.write_text(
+        "(define (problem p) (:domain blocksworld) (:objects b1 b2)\n"
+        " (:init (arm-empty) (clear b1) (on b1 b2) (on-table b2))\n"
+        " (:goal (and (on b1 b2) (on-table b2))))"
+    )
+    assert blockstack.read_pddl(done)["plan"] == []
+    with pytest.raises(ValueError, match="done.pddl: the task's start already meets its goal"):
+        gymnasium.make("blockstack/BlocksWorld-v0", pddl=done)
