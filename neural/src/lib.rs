@@ -45,4 +45,4 @@ pub use model::{Dqn, DqnPolicy, TrainReport};
 pub use net::{NetConfig, NetKind};
 pub use optim::OptimizerKind;
 pub use preset::{DqnOverrides, Preset};
-pub use train::{Phase, Progress, Trainer, train};
+pub use train::{Phase, Progress, TrainHooks, Trainer, train};

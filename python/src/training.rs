@@ -15,12 +15,16 @@ use sim::{Backend, Goal, RewardModel, View};
 use crate::boundary::{OrValueError, guard, raise_signal, signal_checker, value_error};
 use crate::config;
 
-/// Training hooks that stop the run when Ctrl-C is seen ([`signal_checker`]) and write its
-/// checkpoint every `every` games and after the last, when it has one.
-struct Interruptible<'a, F> {
-    check: F,
-    checkpoint: Option<&'a OutputPath>,
-    every: u64,
+/// Training hooks, of the tabular trainer and the network's alike, that stop the run when
+/// Ctrl-C is seen ([`signal_checker`]) and write its checkpoint every `every` games or steps
+/// and after the last, when it has one.
+pub(crate) struct Interruptible<'a, F> {
+    /// The signal check, called after every game or step.
+    pub check: F,
+    /// Where the checkpoint goes, if the run has one.
+    pub checkpoint: Option<&'a OutputPath>,
+    /// Games or steps between two checkpoints.
+    pub every: u64,
 }
 
 impl<F: FnMut() -> agent::Result<()>> TrainHooks for Interruptible<'_, F> {
@@ -33,6 +37,23 @@ impl<F: FnMut() -> agent::Result<()>> TrainHooks for Interruptible<'_, F> {
     }
 
     fn checkpoint(&mut self, trainer: &Trainer) -> agent::Result<()> {
+        match self.checkpoint {
+            Some(out) => trainer.write_checkpoint(out),
+            None => Ok(()),
+        }
+    }
+}
+
+impl<F: FnMut() -> agent::Result<()>> neural::TrainHooks for Interruptible<'_, F> {
+    fn after_step(&mut self, _: &neural::Progress) -> neural::Result<()> {
+        Ok((self.check)()?)
+    }
+
+    fn checkpoint_every(&self) -> Option<u64> {
+        self.checkpoint.map(|_| self.every)
+    }
+
+    fn checkpoint(&mut self, trainer: &neural::Trainer) -> neural::Result<()> {
         match self.checkpoint {
             Some(out) => trainer.write_checkpoint(out),
             None => Ok(()),
