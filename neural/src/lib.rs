@@ -31,6 +31,7 @@ pub mod learner;
 pub mod mask;
 pub mod model;
 pub mod net;
+mod netfile;
 pub mod optim;
 pub mod preset;
 pub mod relational;
