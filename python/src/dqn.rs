@@ -11,7 +11,7 @@ use sim::{Goal, RewardModel};
 
 use crate::boundary::{OrValueError, guard, raise_signal, signal_checker};
 use crate::config;
-use crate::training::{Interruptible, checkpointing, eval_items};
+use crate::training::{Interruptible, RunOutputs, eval_items, run_outputs};
 
 /// A setting given by name (`None` keeps the preset's).
 fn named<T: std::str::FromStr>(name: Option<&str>) -> PyResult<Option<T>>
@@ -91,18 +91,11 @@ pub fn train_dqn<'py>(
     checkpoint: Option<PathBuf>,
     checkpoint_every: Option<u64>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    // Checked before any work, as the CLI does: a missing folder must not cost a training run.
-    let out_path = out
-        .as_deref()
-        .map(files::OutputPath::check)
-        .transpose()
-        .or_value_error()?;
-    let (checkpoint, every) = checkpointing(
-        out.as_deref(),
+    let RunOutputs {
+        out: out_path,
         checkpoint,
-        checkpoint_every,
-        neural::checkpoint::DEFAULT_EVERY,
-    )?;
+        every,
+    } = run_outputs(out, checkpoint, checkpoint_every, neural::checkpoint::DEFAULT_EVERY)?;
     let demos = match (demos, &demos_file) {
         (Some(_), Some(_)) => {
             return Err(crate::boundary::value_error(
@@ -110,8 +103,8 @@ pub fn train_dqn<'py>(
             ));
         }
         (_, Some(path)) => {
-            if let Some(out) = &out {
-                files::refuse_same_file(out, path).or_value_error()?;
+            if let Some(out) = &out_path {
+                files::refuse_same_file(out.path(), path).or_value_error()?;
             }
             Some(DemoSource::File(path.display().to_string()))
         }

@@ -127,18 +127,11 @@ pub fn train<'py>(
     checkpoint: Option<PathBuf>,
     checkpoint_every: Option<u64>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    // Checked before any work, as the CLI does: a missing folder must not cost a training run.
-    let out_path = out
-        .as_deref()
-        .map(files::OutputPath::check)
-        .transpose()
-        .or_value_error()?;
-    let (checkpoint, every) = checkpointing(
-        out.as_deref(),
+    let RunOutputs {
+        out: out_path,
         checkpoint,
-        checkpoint_every,
-        agent::checkpoint::DEFAULT_EVERY,
-    )?;
+        every,
+    } = run_outputs(out, checkpoint, checkpoint_every, agent::checkpoint::DEFAULT_EVERY)?;
     let overrides = TrainOverrides {
         profile: named(profile)?,
         preset: named(preset)?,
@@ -262,28 +255,41 @@ pub fn train<'py>(
     Ok(d)
 }
 
-/// A run's checkpoint file, checked as an output (and not `out`), and the steps or games
-/// between two checkpoints (`default` unless given); a `ValueError` for `checkpoint_every`
+/// A run's files, checked before any work (as the CLI checks them: a missing folder must not
+/// cost a training run): the model file `out`, the checkpoint file (not `out`) and the steps
+/// or games between two checkpoints.
+pub(crate) struct RunOutputs {
+    /// Where the model goes, if anywhere.
+    pub out: Option<files::OutputPath>,
+    /// The checkpoint file as given, and as an output.
+    pub checkpoint: Option<(PathBuf, files::OutputPath)>,
+    /// Steps or games between two checkpoints.
+    pub every: u64,
+}
+
+/// [`RunOutputs`] of `out`, `checkpoint` and `checkpoint_every` (`default` unless given); a
+/// `ValueError` for a file that cannot be written, one file named twice, `checkpoint_every`
 /// without a checkpoint, or 0.
-pub(crate) fn checkpointing(
-    out: Option<&std::path::Path>,
+pub(crate) fn run_outputs(
+    out: Option<PathBuf>,
     checkpoint: Option<PathBuf>,
     checkpoint_every: Option<u64>,
     default: u64,
-) -> PyResult<(Option<(PathBuf, files::OutputPath)>, u64)> {
+) -> PyResult<RunOutputs> {
+    let out = out.map(files::OutputPath::check).transpose().or_value_error()?;
     let checkpoint = checkpoint
         .map(|path| files::OutputPath::check(&path).map(|output| (path, output)))
         .transpose()
         .or_value_error()?;
-    if let (Some(out), Some((path, _))) = (out, &checkpoint) {
-        files::refuse_same_file(out, path).or_value_error()?;
+    if let (Some(out), Some((path, _))) = (&out, &checkpoint) {
+        files::refuse_same_file(out.path(), path).or_value_error()?;
     }
     let every = match (checkpoint_every, &checkpoint) {
         (Some(0), _) => return Err(value_error("checkpoint_every must be at least 1")),
         (Some(_), None) => return Err(value_error("checkpoint_every needs checkpoint")),
         (every, _) => every.unwrap_or(default),
     };
-    Ok((checkpoint, every))
+    Ok(RunOutputs { out, checkpoint, every })
 }
 
 /// The evaluation's figures into a run's dict: `eval_episodes`, `eval_failures`,
