@@ -349,20 +349,6 @@ impl Trainer {
         Ok(trainer)
     }
 
-    /// Whether a run checkpointed every `every` steps writes its checkpoint now: after a
-    /// multiple of `every` steps ([`Trainer::steps_done`]), and at the end of the run.
-    pub fn checkpoint_due(&self, every: u64) -> bool {
-        let done = self.steps_done();
-        done.is_multiple_of(every.max(1)) || done == self.total_steps()
-    }
-
-    /// The steps after which the next checkpoint of a run checkpointed every `every` steps
-    /// falls: the next multiple of `every`, or the end of the run.
-    pub fn next_checkpoint(&self, every: u64) -> u64 {
-        let every = every.max(1);
-        ((self.steps_done() / every + 1) * every).min(self.total_steps())
-    }
-
     /// [`Trainer::resume`], with the caller's document written with the run, if any
     /// ([`Trainer::write_checkpoint_with`]).
     pub fn resume_with_note(path: &Path) -> Result<(Trainer, Option<serde_json::Value>)> {

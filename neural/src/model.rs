@@ -19,8 +19,7 @@ use std::collections::HashMap;
 use std::io::Read;
 use std::path::Path;
 
-use files::container::{Container, Expect, Tensor};
-use files::{FilesError, OutputPath};
+use files::container::Expect;
 
 use agent::Policy;
 use serde::{Deserialize, Serialize};
@@ -34,6 +33,7 @@ use crate::error::{NeuralError, Result};
 use crate::input::ObsKind;
 use crate::mask::ActionSet;
 use crate::net::{NetConfig, QNet};
+use crate::netfile::{self, NetFile};
 use crate::optim::OptimizerKind;
 
 /// The format name of a network file.
@@ -248,88 +248,50 @@ impl Dqn {
     /// Writes the network file (module docs) through the project's output helper:
     /// atomically for a regular file.
     pub fn save(&self, path: &Path) -> Result<()> {
-        let out = OutputPath::check(path)?;
-        let tensors: Vec<(&str, Tensor<'_>)> = self
-            .net
-            .tensors()
-            .map(|t| {
-                let tensor = Tensor::from_values(t.shape, t.values).expect("a tensor's shape fits its values");
-                (t.name, tensor)
-            })
-            .collect();
         let metadata = Metadata {
             config: StoredConfig::of(&self.config),
             report: self.report,
             warnings: self.warnings.clone(),
         };
-        files::container::write(&out, FORMAT, VERSION, &metadata, &tensors)?;
-        Ok(())
+        netfile::save(path, &EXPECT, &metadata, self.net.tensors())
     }
 
     /// Reads a network file; an error saying what is wrong if it is missing, too large,
     /// truncated, corrupt, of another format or version, or if its tensors do not fit its
     /// config.
     pub fn load(path: &Path) -> Result<Dqn> {
-        let name = path.display().to_string();
-        let input = files::open_bounded(path, MAX_NETWORK_BYTES, EXPECT.what).map_err(|e| read_failure(&name, e))?;
-        Dqn::read_from(input, &name)
+        Dqn::from_file(&NetFile::open(path, &EXPECT)?)
     }
 
     /// Reads a network from the bytes of a network file, named `name` in errors, with the
     /// checks of [`Dqn::load`] (the fuzz target `network_file` feeds it).
     pub fn read_from(input: impl Read, name: &str) -> Result<Dqn> {
-        let fail = |reason: String| NeuralError::Model {
-            path: name.to_string(),
-            reason,
-        };
-        let container = Container::read_from(input, name, &EXPECT).map_err(|e| read_failure(name, e))?;
+        Dqn::from_file(&NetFile::read_from(input, name, &EXPECT)?)
+    }
+
+    /// The network a file read as a container holds, checked against its config.
+    fn from_file(file: &NetFile) -> Result<Dqn> {
         let Metadata {
             config,
             report,
             warnings,
-        } = container
-            .metadata()
-            .map_err(|e| fail(format!("the file is corrupt: its metadata does not read ({e})")))?;
+        } = file.metadata()?;
         let config = config.config();
-        config
-            .validate()
-            .map_err(|e| fail(format!("its training config is not valid: {e}")))?;
+        file.config_checked(config.validate())?;
         let input = config.net.input(config.grid(), config.blocks())?;
         let mut net = QNet::new(config.net, input, &mut sim::seeding::rng(0))?;
-        let names = container.names();
         let expected = net.tensors().count();
-        if names.len() != expected {
-            return Err(fail(format!(
-                "it holds {} tensors, and its {} network has {expected}",
-                names.len(),
-                config.net.kind
-            )));
-        }
-        for name in names {
-            let tensor = container.tensor(&name).expect("a name of the container");
-            let values = tensor
-                .values::<f32>()
-                .ok_or_else(|| fail(format!("tensor {name} is {:?}, not F32", tensor.dtype())))?;
-            net.set_tensor(&name, tensor.shape(), &values)
-                .map_err(|e| fail(e.to_string()))?;
-        }
+        file.fill(
+            &format!("its {} network", config.net.kind),
+            expected,
+            |name, shape, values| net.set_tensor(name, shape, values),
+        )?;
         Ok(Dqn {
             net,
             config,
             report,
             warnings,
         })
-    }
-}
-
-/// A file error while reading network `name`, as one line naming it.
-fn read_failure(name: &str, e: FilesError) -> NeuralError {
-    NeuralError::Model {
-        path: name.to_string(),
-        reason: match e {
-            FilesError::Read { problem, .. } => problem.to_string(),
-            other => other.to_string(),
-        },
     }
 }
 

@@ -221,10 +221,7 @@ impl Trainer {
     pub fn pretrain(&mut self, count: u64, progress: &mut dyn FnMut(&Progress)) -> Result<()> {
         let target = self.report.pretrain_steps + count;
         for _ in 0..count {
-            let batch = self.buffer.sample_demos(self.config.batch, &mut self.rng);
-            self.last_loss = self.learner.step(&batch, &self.config)?;
-            self.report.pretrain_steps += 1;
-            self.after_gradient_step()?;
+            self.pretrain_step()?;
             progress(&self.progress(Phase::Pretrain, self.report.pretrain_steps, target));
         }
         Ok(())
@@ -234,16 +231,69 @@ impl Trainer {
     pub fn play(&mut self, count: u64, progress: &mut dyn FnMut(&Progress)) -> Result<()> {
         let target = self.report.steps + count;
         for _ in 0..count {
-            self.env_step()?;
-            let learning = self.buffer.agent_len() as u64 >= self.config.learning_starts.max(1);
-            if learning && self.report.steps.is_multiple_of(self.config.train_every) {
-                let batch = self
-                    .buffer
-                    .sample(self.config.batch, self.config.demo_share, &mut self.rng);
-                self.last_loss = self.learner.step(&batch, &self.config)?;
-                self.after_gradient_step()?;
-            }
+            self.play_step()?;
             progress(&self.progress(Phase::SelfPlay, self.report.steps, target));
+        }
+        Ok(())
+    }
+
+    /// Trains until `total` steps of the run are done (at most [`Trainer::total_steps`]),
+    /// the one loop of a whole run for the command line and Python: after each step, every
+    /// [`TrainHooks::checkpoint_every`] steps of the run (counted from its first) and after
+    /// the last, [`TrainHooks::checkpoint`]; then [`TrainHooks::after_step`] (progress, and
+    /// stopping: its error ends the run). A run with nothing left to train still writes its
+    /// checkpoint. An error if `total` is below the steps done already.
+    pub fn run_until(&mut self, total: u64, hooks: &mut dyn TrainHooks) -> Result<()> {
+        let total = total.min(self.total_steps());
+        let done = self.steps_done();
+        if total < done {
+            return Err(NeuralError::Config(format!(
+                "{total} steps in all: the run has done {done} already"
+            )));
+        }
+        let every = hooks.checkpoint_every().filter(|&n| n > 0);
+        let due = |steps: u64| every.is_some_and(|n| steps.is_multiple_of(n) || steps == total);
+        // Each phase's progress counts towards the phase's part of `total`.
+        let pretrain_target = total.min(self.config.pretrain_steps);
+        let play_target = total - pretrain_target;
+        while self.steps_done() < total {
+            let progress = if self.report.pretrain_steps < pretrain_target {
+                self.pretrain_step()?;
+                self.progress(Phase::Pretrain, self.report.pretrain_steps, pretrain_target)
+            } else {
+                self.play_step()?;
+                self.progress(Phase::SelfPlay, self.report.steps, play_target)
+            };
+            // The checkpoint first: a run stopped by the hook keeps the one it was due.
+            if due(self.steps_done()) {
+                hooks.checkpoint(self)?;
+            }
+            hooks.after_step(&progress)?;
+        }
+        if done == total && every.is_some() {
+            hooks.checkpoint(self)?;
+        }
+        Ok(())
+    }
+
+    /// One gradient step on the demonstrations alone.
+    fn pretrain_step(&mut self) -> Result<()> {
+        let batch = self.buffer.sample_demos(self.config.batch, &mut self.rng);
+        self.last_loss = self.learner.step(&batch, &self.config)?;
+        self.report.pretrain_steps += 1;
+        self.after_gradient_step()
+    }
+
+    /// One environment step of self-play, and a gradient step when one is due.
+    fn play_step(&mut self) -> Result<()> {
+        self.env_step()?;
+        let learning = self.buffer.agent_len() as u64 >= self.config.learning_starts.max(1);
+        if learning && self.report.steps.is_multiple_of(self.config.train_every) {
+            let batch = self
+                .buffer
+                .sample(self.config.batch, self.config.demo_share, &mut self.rng);
+            self.last_loss = self.learner.step(&batch, &self.config)?;
+            self.after_gradient_step()?;
         }
         Ok(())
     }
@@ -396,7 +446,147 @@ impl Trainer {
     }
 }
 
+/// What a run does beside training ([`Trainer::run_until`]): show progress, stop on the
+/// caller's word, write checkpoints. Every method has a default that does nothing.
+pub trait TrainHooks {
+    /// Called after every step with the run's progress; an error (say, Ctrl-C seen) stops
+    /// the run before the next step.
+    fn after_step(&mut self, _progress: &Progress) -> Result<()> {
+        Ok(())
+    }
+
+    /// Steps between two checkpoints, counted from the run's first step; `None` (the
+    /// default) writes none.
+    fn checkpoint_every(&self) -> Option<u64> {
+        None
+    }
+
+    /// Writes a checkpoint of `trainer` ([`Trainer::write_checkpoint`]).
+    fn checkpoint(&mut self, _trainer: &Trainer) -> Result<()> {
+        Ok(())
+    }
+}
+
+/// No hooks: a run that only trains.
+impl TrainHooks for () {}
+
 /// Trains as `config` says; `progress` is told after every step.
 pub fn train(config: DqnConfig, progress: &mut dyn FnMut(&Progress)) -> Result<Dqn> {
     Trainer::new(config)?.run(progress)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::net::NetConfig;
+    use crate::preset::Preset;
+
+    /// DQfD on 2 blocks, shrunk to a few dozen steps of each phase.
+    fn small() -> DqnConfig {
+        DqnConfig {
+            seed: 3,
+            demos: DemoSource::Exact(6),
+            pretrain_steps: 12,
+            steps: 30,
+            learning_starts: 10,
+            batch: 8,
+            net: NetConfig {
+                hidden: 16,
+                ..NetConfig::small()
+            },
+            ..DqnConfig::preset(Preset::DqfdPlanes, 2).unwrap()
+        }
+    }
+
+    /// Hooks that note the steps at each checkpoint and each progress report, and stop the
+    /// run after `stop_after` steps.
+    #[derive(Default)]
+    struct Notes {
+        every: Option<u64>,
+        stop_after: Option<u64>,
+        checkpoints: Vec<u64>,
+        reports: Vec<(Phase, u64, u64)>,
+    }
+
+    impl TrainHooks for Notes {
+        fn after_step(&mut self, p: &Progress) -> Result<()> {
+            self.reports.push((p.phase, p.done, p.target));
+            match self.stop_after {
+                Some(n) if self.reports.len() as u64 == n => Err(agent::AgentError::Interrupted.into()),
+                _ => Ok(()),
+            }
+        }
+
+        fn checkpoint_every(&self) -> Option<u64> {
+            self.every
+        }
+
+        fn checkpoint(&mut self, trainer: &Trainer) -> Result<()> {
+            self.checkpoints.push(trainer.steps_done());
+            Ok(())
+        }
+    }
+
+    fn weights(trainer: &Trainer) -> Vec<Vec<f32>> {
+        trainer.net().tensors().map(|t| t.values.to_vec()).collect()
+    }
+
+    #[test]
+    fn run_until_checkpoints_every_n_steps_and_at_the_end() {
+        let mut trainer = Trainer::new(small()).unwrap();
+        let mut notes = Notes {
+            every: Some(10),
+            ..Notes::default()
+        };
+        trainer.run_until(trainer.total_steps(), &mut notes).unwrap();
+        assert_eq!(notes.checkpoints, [10, 20, 30, 40, 42]);
+        // Each phase's progress counts towards the phase's own end.
+        assert_eq!(notes.reports.len(), 42);
+        assert_eq!(notes.reports[0], (Phase::Pretrain, 1, 12));
+        assert_eq!(notes.reports[11], (Phase::Pretrain, 12, 12));
+        assert_eq!(notes.reports[12], (Phase::SelfPlay, 1, 30));
+        assert_eq!(notes.reports[41], (Phase::SelfPlay, 30, 30));
+        // The steps are the ones `run` takes.
+        let mut whole = Trainer::new(small()).unwrap();
+        whole.train_until(whole.total_steps(), &mut |_| {}).unwrap();
+        assert_eq!(weights(&trainer), weights(&whole));
+        assert_eq!(trainer.report(), whole.report());
+    }
+
+    #[test]
+    fn a_resumed_run_keeps_the_cadence_and_one_with_nothing_left_still_checkpoints() {
+        let mut trainer = Trainer::new(small()).unwrap();
+        trainer.run_until(20, &mut ()).unwrap();
+        let mut notes = Notes {
+            every: Some(10),
+            ..Notes::default()
+        };
+        trainer.run_until(trainer.total_steps(), &mut notes).unwrap();
+        assert_eq!(notes.checkpoints, [30, 40, 42]);
+        let mut again = Notes {
+            every: Some(10),
+            ..Notes::default()
+        };
+        trainer.run_until(trainer.total_steps(), &mut again).unwrap();
+        assert_eq!((again.checkpoints, again.reports.len()), (vec![42], 0));
+        assert!(trainer.run_until(5, &mut ()).is_err(), "below the steps done");
+    }
+
+    #[test]
+    fn a_hooks_error_stops_the_run_after_its_step() {
+        let mut trainer = Trainer::new(small()).unwrap();
+        let mut notes = Notes {
+            every: Some(10),
+            stop_after: Some(20),
+            ..Notes::default()
+        };
+        let stopped = trainer.run_until(trainer.total_steps(), &mut notes);
+        assert!(matches!(
+            stopped,
+            Err(NeuralError::Agent(agent::AgentError::Interrupted))
+        ));
+        assert_eq!(trainer.steps_done(), 20);
+        // The checkpoint due at the step the run stopped after was written.
+        assert_eq!(notes.checkpoints, [10, 20]);
+    }
 }

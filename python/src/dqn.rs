@@ -1,7 +1,7 @@
 //! The network trainer in-process: one run of `blockstack dqn` from its flags, for Python.
 
 use std::path::PathBuf;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use agent::eval::EvalOverrides;
 use neural::{AnyModel, DemoSource, DqnConfig, DqnOverrides, Trainer};
@@ -11,7 +11,7 @@ use sim::{Goal, RewardModel};
 
 use crate::boundary::{OrValueError, guard, raise_signal, signal_checker};
 use crate::config;
-use crate::training::{checkpointing, eval_items};
+use crate::training::{Interruptible, RunOutputs, eval_items, run_outputs};
 
 /// A setting given by name (`None` keeps the preset's).
 fn named<T: std::str::FromStr>(name: Option<&str>) -> PyResult<Option<T>>
@@ -91,18 +91,11 @@ pub fn train_dqn<'py>(
     checkpoint: Option<PathBuf>,
     checkpoint_every: Option<u64>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    // Checked before any work, as the CLI does: a missing folder must not cost a training run.
-    let out_path = out
-        .as_deref()
-        .map(files::OutputPath::check)
-        .transpose()
-        .or_value_error()?;
-    let (checkpoint, every) = checkpointing(
-        out.as_deref(),
+    let RunOutputs {
+        out: out_path,
         checkpoint,
-        checkpoint_every,
-        neural::checkpoint::DEFAULT_EVERY,
-    )?;
+        every,
+    } = run_outputs(out, checkpoint, checkpoint_every, neural::checkpoint::DEFAULT_EVERY)?;
     let demos = match (demos, &demos_file) {
         (Some(_), Some(_)) => {
             return Err(crate::boundary::value_error(
@@ -110,8 +103,8 @@ pub fn train_dqn<'py>(
             ));
         }
         (_, Some(path)) => {
-            if let Some(out) = &out {
-                files::refuse_same_file(out, path).or_value_error()?;
+            if let Some(out) = &out_path {
+                files::refuse_same_file(out.path(), path).or_value_error()?;
             }
             Some(DemoSource::File(path.display().to_string()))
         }
@@ -165,29 +158,19 @@ pub fn train_dqn<'py>(
                 _ => Trainer::new(config.clone()).or_value_error()?,
             };
             let resumed_at = trainer.steps_done();
-            // A step at a time, so that Ctrl-C (looked at every 50 ms, the GIL taken back only
-            // for that) stops a long run with KeyboardInterrupt. The steps are the ones
-            // `Trainer::run` takes, so the network is the CLI's.
-            let mut looked = Instant::now();
-            let quiet = &mut |_: &neural::Progress| {};
-            while trainer.steps_done() < trainer.total_steps() {
-                trainer.train_until(trainer.steps_done() + 1, quiet).or_value_error()?;
-                if let Some((_, out)) = &checkpoint
-                    && trainer.checkpoint_due(every)
-                {
-                    trainer.write_checkpoint(out).or_value_error()?;
-                }
-                if looked.elapsed() >= Duration::from_millis(50) {
-                    Python::attach(|py| py.check_signals())?;
-                    looked = Instant::now();
-                }
-            }
-            if let Some((_, out)) = &checkpoint {
-                // A run with nothing left to train (or nothing at all) still leaves its file.
-                if !out.path().exists() {
-                    trainer.write_checkpoint(out).or_value_error()?;
-                }
-            }
+            // The run's one loop (`Trainer::run_until`), with Ctrl-C looked for every 100 ms
+            // (the GIL taken back only for that): it stops a long run with KeyboardInterrupt.
+            // The steps are the ones `blockstack dqn` takes, so the network is the CLI's.
+            let mut signal = None;
+            let ran = trainer.run_until(
+                trainer.total_steps(),
+                &mut Interruptible {
+                    check: signal_checker(&mut signal),
+                    checkpoint: checkpoint.as_ref().map(|(_, out)| out),
+                    every,
+                },
+            );
+            ran.map_err(|e| raise_signal(signal, e))?;
             let dqn = trainer.finish().or_value_error()?;
             let seconds = clock.elapsed().as_secs_f64();
             if let Some(out) = &out_path {

@@ -15,12 +15,16 @@ use sim::{Backend, Goal, RewardModel, View};
 use crate::boundary::{OrValueError, guard, raise_signal, signal_checker, value_error};
 use crate::config;
 
-/// Training hooks that stop the run when Ctrl-C is seen ([`signal_checker`]) and write its
-/// checkpoint every `every` games and after the last, when it has one.
-struct Interruptible<'a, F> {
-    check: F,
-    checkpoint: Option<&'a OutputPath>,
-    every: u64,
+/// Training hooks, of the tabular trainer and the network's alike, that stop the run when
+/// Ctrl-C is seen ([`signal_checker`]) and write its checkpoint every `every` games or steps
+/// and after the last, when it has one.
+pub(crate) struct Interruptible<'a, F> {
+    /// The signal check, called after every game or step.
+    pub check: F,
+    /// Where the checkpoint goes, if the run has one.
+    pub checkpoint: Option<&'a OutputPath>,
+    /// Games or steps between two checkpoints.
+    pub every: u64,
 }
 
 impl<F: FnMut() -> agent::Result<()>> TrainHooks for Interruptible<'_, F> {
@@ -33,6 +37,23 @@ impl<F: FnMut() -> agent::Result<()>> TrainHooks for Interruptible<'_, F> {
     }
 
     fn checkpoint(&mut self, trainer: &Trainer) -> agent::Result<()> {
+        match self.checkpoint {
+            Some(out) => trainer.write_checkpoint(out),
+            None => Ok(()),
+        }
+    }
+}
+
+impl<F: FnMut() -> agent::Result<()>> neural::TrainHooks for Interruptible<'_, F> {
+    fn after_step(&mut self, _: &neural::Progress) -> neural::Result<()> {
+        Ok((self.check)()?)
+    }
+
+    fn checkpoint_every(&self) -> Option<u64> {
+        self.checkpoint.map(|_| self.every)
+    }
+
+    fn checkpoint(&mut self, trainer: &neural::Trainer) -> neural::Result<()> {
         match self.checkpoint {
             Some(out) => trainer.write_checkpoint(out),
             None => Ok(()),
@@ -106,18 +127,11 @@ pub fn train<'py>(
     checkpoint: Option<PathBuf>,
     checkpoint_every: Option<u64>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    // Checked before any work, as the CLI does: a missing folder must not cost a training run.
-    let out_path = out
-        .as_deref()
-        .map(files::OutputPath::check)
-        .transpose()
-        .or_value_error()?;
-    let (checkpoint, every) = checkpointing(
-        out.as_deref(),
+    let RunOutputs {
+        out: out_path,
         checkpoint,
-        checkpoint_every,
-        agent::checkpoint::DEFAULT_EVERY,
-    )?;
+        every,
+    } = run_outputs(out, checkpoint, checkpoint_every, agent::checkpoint::DEFAULT_EVERY)?;
     let overrides = TrainOverrides {
         profile: named(profile)?,
         preset: named(preset)?,
@@ -241,28 +255,41 @@ pub fn train<'py>(
     Ok(d)
 }
 
-/// A run's checkpoint file, checked as an output (and not `out`), and the steps or games
-/// between two checkpoints (`default` unless given); a `ValueError` for `checkpoint_every`
+/// A run's files, checked before any work (as the CLI checks them: a missing folder must not
+/// cost a training run): the model file `out`, the checkpoint file (not `out`) and the steps
+/// or games between two checkpoints.
+pub(crate) struct RunOutputs {
+    /// Where the model goes, if anywhere.
+    pub out: Option<files::OutputPath>,
+    /// The checkpoint file as given, and as an output.
+    pub checkpoint: Option<(PathBuf, files::OutputPath)>,
+    /// Steps or games between two checkpoints.
+    pub every: u64,
+}
+
+/// [`RunOutputs`] of `out`, `checkpoint` and `checkpoint_every` (`default` unless given); a
+/// `ValueError` for a file that cannot be written, one file named twice, `checkpoint_every`
 /// without a checkpoint, or 0.
-pub(crate) fn checkpointing(
-    out: Option<&std::path::Path>,
+pub(crate) fn run_outputs(
+    out: Option<PathBuf>,
     checkpoint: Option<PathBuf>,
     checkpoint_every: Option<u64>,
     default: u64,
-) -> PyResult<(Option<(PathBuf, files::OutputPath)>, u64)> {
+) -> PyResult<RunOutputs> {
+    let out = out.map(files::OutputPath::check).transpose().or_value_error()?;
     let checkpoint = checkpoint
         .map(|path| files::OutputPath::check(&path).map(|output| (path, output)))
         .transpose()
         .or_value_error()?;
-    if let (Some(out), Some((path, _))) = (out, &checkpoint) {
-        files::refuse_same_file(out, path).or_value_error()?;
+    if let (Some(out), Some((path, _))) = (&out, &checkpoint) {
+        files::refuse_same_file(out.path(), path).or_value_error()?;
     }
     let every = match (checkpoint_every, &checkpoint) {
         (Some(0), _) => return Err(value_error("checkpoint_every must be at least 1")),
         (Some(_), None) => return Err(value_error("checkpoint_every needs checkpoint")),
         (every, _) => every.unwrap_or(default),
     };
-    Ok((checkpoint, every))
+    Ok(RunOutputs { out, checkpoint, every })
 }
 
 /// The evaluation's figures into a run's dict: `eval_episodes`, `eval_failures`,

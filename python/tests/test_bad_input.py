@@ -223,6 +223,7 @@ def test_sweep_configs_that_are_not_tables_are_one_line_errors(tmp_path, capsys)
     "call",
     [
         "blockstack.train(blocks=2, goals='0,1', games=10**9, backend='grid')",
+        "blockstack.train_dqn(blocks=2, goals='0,1', steps=10**9, demos='none', pretrain=0, backend='grid')",
         "blockstack.demonstrations(10**6, blocks=2, backend='grid')",
         # Training done at once, then a long evaluation.
         "blockstack.train(blocks=2, goals='0,1', games=1, backend='grid', eval_episodes=10**7)",

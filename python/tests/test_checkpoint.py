@@ -57,3 +57,27 @@ def test_a_network_run_writes_the_checkpoint_of_the_command_line(cli, tmp_path):
     assert again.read_bytes() == by_cli.read_bytes()
     with pytest.raises(ValueError, match="other settings"):
         blockstack.train_dqn(**dict(run, seed=4), checkpoint=str(ck_cli))
+
+
+@pytest.mark.parametrize(
+    "trainer, run",
+    [
+        (blockstack.train, dict(RUN, games=10**9)),
+        (blockstack.train_dqn, dict(blocks=2, goals="0,1", steps=10**9, demos="none", pretrain=0, backend="grid")),
+    ],
+    ids=["train", "train_dqn"],
+)
+def test_both_trainers_check_their_files_before_any_work(trainer, run, tmp_path):
+    # A run of 10**9 games or steps: only a check before training ends these calls.
+    ck, out = tmp_path / "ck", tmp_path / "out.st"
+    with pytest.raises(ValueError, match="does not exist"):
+        trainer(**run, out=str(tmp_path / "missing" / "out.st"))
+    with pytest.raises(ValueError, match="does not exist"):
+        trainer(**run, checkpoint=str(tmp_path / "missing" / "ck"))
+    with pytest.raises(ValueError, match="also the input"):
+        trainer(**run, checkpoint=str(out), out=str(out))
+    with pytest.raises(ValueError, match="checkpoint_every needs checkpoint"):
+        trainer(**run, checkpoint_every=5)
+    with pytest.raises(ValueError, match="at least 1"):
+        trainer(**run, checkpoint=str(ck), checkpoint_every=0)
+    assert not ck.exists() and not out.exists()

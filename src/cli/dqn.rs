@@ -311,6 +311,29 @@ impl DqnArgs {
     }
 }
 
+/// The command's part in a run ([`neural::Trainer::run_until`]): the progress bar, and the
+/// checkpoint every `every` steps when one is asked for.
+struct Hooks<'a> {
+    show: &'a mut dyn FnMut(&Progress),
+    checkpoint: Option<&'a files::OutputPath>,
+    every: u64,
+}
+
+impl neural::TrainHooks for Hooks<'_> {
+    fn after_step(&mut self, progress: &Progress) -> neural::Result<()> {
+        (self.show)(progress);
+        Ok(())
+    }
+
+    fn checkpoint_every(&self) -> Option<u64> {
+        self.checkpoint.map(|_| self.every)
+    }
+
+    fn checkpoint(&mut self, trainer: &neural::Trainer) -> neural::Result<()> {
+        self.checkpoint.map_or(Ok(()), |out| trainer.write_checkpoint(out))
+    }
+}
+
 /// How often the progress bar is redrawn, in steps.
 const DRAW_EVERY: u64 = 100;
 
@@ -398,20 +421,12 @@ pub fn dqn(args: DqnArgs) -> Result<()> {
             });
         }
     };
-    let every = args.checkpoint_every.unwrap_or(neural::checkpoint::DEFAULT_EVERY);
-    loop {
-        let until = match &checkpoint {
-            Some(_) => trainer.next_checkpoint(every),
-            None => trainer.total_steps(),
-        };
-        trainer.train_until(until, &mut show)?;
-        if let Some(out) = &checkpoint {
-            trainer.write_checkpoint(out)?;
-        }
-        if trainer.steps_done() == trainer.total_steps() {
-            break;
-        }
-    }
+    let mut hooks = Hooks {
+        show: &mut show,
+        checkpoint: checkpoint.as_ref(),
+        every: args.checkpoint_every.unwrap_or(neural::checkpoint::DEFAULT_EVERY),
+    };
+    trainer.run_until(trainer.total_steps(), &mut hooks)?;
     let dqn = trainer.finish()?;
     let seconds = clock.elapsed().as_secs_f64();
     bar.finish_and_clear();

@@ -16,8 +16,7 @@
 use std::path::Path;
 
 use agent::Policy;
-use files::container::{Container, Expect, Tensor};
-use files::{FilesError, OutputPath};
+use files::container::Expect;
 use oracle::towers::{Move, Place, Table, TowerGoal, Towers};
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
@@ -26,6 +25,7 @@ use sim::seeding::SimRng;
 use sim::{Action, Observation, View};
 
 use crate::error::{NeuralError, Result};
+use crate::netfile::{self, NetFile};
 
 use super::graph::{Graph, TABLE};
 use super::net::{RelationalNet, Tape};
@@ -148,58 +148,25 @@ impl RelationalModel {
     /// Writes the network file (module docs) through the project's output helper:
     /// atomically for a regular file.
     pub fn save(&self, path: &Path) -> Result<()> {
-        let out = OutputPath::check(path)?;
-        let tensors: Vec<(&str, Tensor<'_>)> = self
-            .net
-            .tensors()
-            .map(|t| {
-                let tensor = Tensor::from_values(t.shape, t.values).expect("a tensor's shape fits its values");
-                (t.name, tensor)
-            })
-            .collect();
         let metadata = Metadata {
             config: self.config,
             report: self.report.clone(),
         };
-        files::container::write(&out, FORMAT, VERSION, &metadata, &tensors)?;
-        Ok(())
+        netfile::save(path, &EXPECT, &metadata, self.net.tensors())
     }
 
     /// Reads a relational network file; an error saying what is wrong if it is missing, too
     /// large, truncated, corrupt, of another format or version, or if its tensors do not fit
     /// its config.
     pub fn load(path: &Path) -> Result<RelationalModel> {
-        let fail = |reason: String| NeuralError::Model {
-            path: path.display().to_string(),
-            reason,
-        };
-        let container = Container::read(path, &EXPECT).map_err(|e| match e {
-            FilesError::Read { problem, .. } => fail(problem.to_string()),
-            other => fail(other.to_string()),
-        })?;
-        let Metadata { config, report } = container
-            .metadata()
-            .map_err(|e| fail(format!("the file is corrupt: its metadata does not read ({e})")))?;
-        config
-            .validate()
-            .map_err(|e| fail(format!("its training config is not valid: {e}")))?;
+        let file = NetFile::open(path, &EXPECT)?;
+        let Metadata { config, report } = file.metadata()?;
+        file.config_checked(config.validate())?;
         let mut net = RelationalNet::new(config.shape, &mut sim::seeding::rng(0))?;
-        let names = container.names();
-        if names.len() != net.tensor_count() {
-            return Err(fail(format!(
-                "it holds {} tensors, and its network has {}",
-                names.len(),
-                net.tensor_count()
-            )));
-        }
-        for name in names {
-            let tensor = container.tensor(&name).expect("a name of the container");
-            let values = tensor
-                .values::<f32>()
-                .ok_or_else(|| fail(format!("tensor {name} is {:?}, not F32", tensor.dtype())))?;
-            net.set_tensor(&name, tensor.shape(), &values)
-                .map_err(|e| fail(e.to_string()))?;
-        }
+        let expected = net.tensor_count();
+        file.fill("its network", expected, |name, shape, values| {
+            net.set_tensor(name, shape, values)
+        })?;
         Ok(RelationalModel { net, config, report })
     }
 }
