@@ -24,9 +24,10 @@ from blockstack.env import check_seed
 from blockstack.spaces import action_space, observation_space
 from blockstack.world import world_of
 
-#: Below this many environments one thread steps the batch (``threads=None``): a hand-off
-#: to other threads costs more than it saves (measured by ``benchmarks/python/throughput.py``).
-PARALLEL_FROM_ENVS = 256
+#: Below this many environments one thread steps the batch, whatever ``threads`` says
+#: (``sim::vec_env::PARALLEL_FROM_ENVS``): a hand-off to another thread costs about what it
+#: saves (measured by ``cargo bench -p sim --bench vec_env``; docs/performance.md).
+PARALLEL_FROM_ENVS: int = _native.PARALLEL_FROM_ENVS
 
 _MODES = {AutoresetMode.NEXT_STEP: "next-step", AutoresetMode.SAME_STEP: "same-step"}
 #: The spellings taken for each mode: Gymnasium's values and the native side's names.

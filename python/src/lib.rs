@@ -44,6 +44,8 @@ mod vector;
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<env::NativeEnv>()?;
     m.add_class::<vector::NativeVecEnv>()?;
+    // One home for the size below which a batch stays on the caller's thread.
+    m.add("PARALLEL_FROM_ENVS", sim::vec_env::PARALLEL_FROM_ENVS)?;
     m.add_class::<model::NativeModel>()?;
     m.add_function(wrap_pyfunction!(planning::solve, m)?)?;
     m.add_function(wrap_pyfunction!(planning::read_pddl, m)?)?;

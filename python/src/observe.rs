@@ -4,7 +4,7 @@
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use sim::{Action, Goal, Observation};
+use sim::{Action, ActionMask, Goal, Observation};
 
 use crate::boundary::{OrValueError, value_error};
 use crate::config::ObsKind;
@@ -17,7 +17,11 @@ pub fn held_index(obs: &Observation) -> i64 {
 /// Writes the legal actions of `obs` (under its environment's action protocol) into
 /// `out`, 1 legal and 0 not, one per action index.
 pub fn write_action_mask(obs: &Observation, out: &mut [i8]) {
-    let mask = obs.legal_actions();
+    write_mask(&obs.legal_actions(), out);
+}
+
+/// Writes `mask` into `out`, 1 legal and 0 not, one per action index.
+pub fn write_mask(mask: &ActionMask, out: &mut [i8]) {
     for (i, byte) in out.iter_mut().enumerate() {
         *byte = i8::from(mask.contains_index(i));
     }

@@ -8,7 +8,7 @@ use numpy::{
 };
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use sim::{Action, Autoreset, Observation, VecEnv, VecStep};
+use sim::{Action, ActionMask, Autoreset, Observation, VecEnv, VecStep};
 
 use crate::boundary::{OrValueError, guard, value_error};
 use crate::config::{self, ObsKind, World};
@@ -56,7 +56,9 @@ enum ObsSlot<'a> {
 }
 
 impl Slot<'_> {
-    fn write_obs(&mut self, kind: ObsKind, obs: &Observation) {
+    /// Writes `obs` and its legal actions `mask` (a step's `info.action_mask`: not
+    /// recomputed from the observation, a cost a batch of thousands notices).
+    fn write_obs(&mut self, kind: ObsKind, obs: &Observation, mask: &ActionMask) {
         match &mut self.obs {
             ObsSlot::Bytes(out) => kind
                 .write(obs, out)
@@ -78,7 +80,7 @@ impl Slot<'_> {
                 **held = observe::held_index(obs);
             }
         }
-        observe::write_action_mask(obs, self.mask);
+        observe::write_mask(mask, self.mask);
         observe::write_goal(
             obs,
             observe::GoalOut {
@@ -93,11 +95,11 @@ impl Slot<'_> {
         *self.last = None;
         match result {
             VecStep::Reset(obs) => {
-                self.write_obs(kind, obs);
+                self.write_obs(kind, obs, &obs.legal_actions());
                 (*self.reward, *self.terminated, *self.truncated, *self.blocked) = (0.0, false, false, false);
             }
             VecStep::Stepped(step) => {
-                self.write_obs(kind, &step.observation);
+                self.write_obs(kind, &step.observation, &step.info.action_mask);
                 *self.reward = step.reward;
                 *self.terminated = step.terminated;
                 *self.truncated = step.truncated;

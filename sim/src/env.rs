@@ -271,6 +271,11 @@ enum Phase {
 pub struct Env {
     config: EnvConfig,
     world: AnyWorld,
+    /// The world's state as read back after its last change: every change goes through
+    /// `Env`, so a step reads the physics world's bodies once (after its action) instead
+    /// of also before it and in [`Env::check_action`], the top of a batched step's profile
+    /// (docs/performance.md).
+    state: State,
     rng: SimRng,
     goal: Goal,
     steps: u32,
@@ -304,9 +309,11 @@ impl Env {
             config.protocol.legal_when(None, config.blocks),
             config.protocol.legal_when(Some(BlockId(0)), config.blocks),
         ];
+        let state = world.world().state();
         Ok(Env {
             config,
             world,
+            state,
             rng: seeding::rng(0),
             goal,
             steps: 0,
@@ -360,6 +367,7 @@ impl Env {
     /// [`Termination::Goal`], a start meeting the goal is over at once unless
     /// `keeps_goal_start` (then its first step ends it).
     fn begin(&mut self, start: &State, keeps_goal_start: bool) -> Observation {
+        self.state = self.world.world().state();
         self.steps = 0;
         self.previous_action = None;
         let over = matches!(self.config.termination, Termination::Goal)
@@ -375,7 +383,7 @@ impl Env {
     /// ([`SimError::IllegalAction`]).
     pub fn step(&mut self, action: Action) -> Result<Step> {
         self.check_running()?;
-        let before = self.world.world().state();
+        let before = self.state.clone();
         // Under `free` every action that exists is legal, and `act` refuses one that does
         // not before changing anything: the SPEC world's step pays for no check. In the side
         // view too the world's rules make an action outside the mask a no-op.
@@ -384,6 +392,7 @@ impl Env {
         }
         let effect = self.world.world_mut().act(action)?;
         let after = self.world.world().state();
+        self.state = after.clone();
         self.steps += 1;
         let transition = Transition {
             grid: self.config.grid,
@@ -454,6 +463,7 @@ impl Env {
             if matches!(termination, Termination::Goal) && steps + len <= horizon {
                 world.act(Action::Pick(carry.block))?;
                 world.carry_held(carry.release_cell());
+                self.state = world.state();
                 self.steps += len - 1;
                 self.previous_action = Some(carry.across());
                 return Ok(MoveStep {
@@ -462,7 +472,7 @@ impl Env {
                 });
             }
         }
-        let actions = block_move::expand(&self.state(), self.config.grid, mv)?;
+        let actions = block_move::expand(&self.state, self.config.grid, mv)?;
         let mut last = None;
         for (k, &action) in actions.iter().enumerate() {
             let step = self.step(action)?;
@@ -493,7 +503,7 @@ impl Env {
     /// (episode not started or over, no such block, illegal under the action protocol).
     pub fn check_action(&self, action: Action) -> Result<()> {
         self.check_running()?;
-        self.check_legal(&self.state(), action)
+        self.check_legal(&self.state, action)
     }
 
     /// An error unless an episode is running.
@@ -565,9 +575,9 @@ impl Env {
         self.legal_in(&self.state())
     }
 
-    /// The current state, read back from the backend.
+    /// The current state, as read back from the backend after its last change.
     pub fn state(&self) -> State {
-        self.world.world().state()
+        self.state.clone()
     }
 
     /// The current goal.

@@ -96,6 +96,6 @@ pub use start::StartRule;
 pub use state::{BlockId, Cells, MAX_BLOCKS, MAX_SIDE_BLOCKS, MIN_BLOCKS, MIN_SIDE_BLOCKS, State};
 pub use termination::Termination;
 pub use uniform::UniformStates;
-pub use vec_env::{Autoreset, VecEnv, VecStep};
+pub use vec_env::{Autoreset, PARALLEL_FROM_ENVS, VecEnv, VecStep};
 pub use view::View;
 pub use world::{Effect, World};

@@ -46,11 +46,26 @@ impl VecStep {
     }
 }
 
-/// Environments per rayon task: below this a hand-off to another thread costs more than
-/// the steps it carries (a physics step takes about 0.15 us).
-const MIN_ENVS_PER_TASK: usize = 64;
+/// Below this many environments a [`VecEnv`] steps and resets on the caller's thread
+/// whatever its thread count: waking a second thread and waiting for it costs about as
+/// much as the half of a smaller batch it would take (`cargo bench -p sim --bench
+/// vec_env`, docs/performance.md).
+pub const PARALLEL_FROM_ENVS: usize = 256;
+
+/// The pool and the environments per chunk when a batch of `envs` is stepped in parallel;
+/// `None` when the caller's thread steps it (one thread, or fewer than
+/// [`PARALLEL_FROM_ENVS`] environments).
+fn parallel(pool: Option<&rayon::ThreadPool>, envs: usize) -> Option<(&rayon::ThreadPool, usize)> {
+    let pool = pool?;
+    let threads = pool.current_num_threads();
+    (threads > 1 && envs >= PARALLEL_FROM_ENVS).then(|| (pool, envs.div_ceil(threads)))
+}
 
 /// `M` environments of one config, stepped together on a rayon thread pool.
+///
+/// Threads: a batch of [`PARALLEL_FROM_ENVS`] or more is cut into one contiguous chunk per
+/// thread, so each thread hands off once per call and walks its environments in memory
+/// order; a smaller batch stays on the caller's thread.
 ///
 /// Seeds: environment `i` is reset with `base_seed + i`, and each continues its own
 /// generator from there, so every environment plays its own fixed sequence of episodes.
@@ -142,16 +157,19 @@ impl VecEnv {
         assert_eq!(seeds.len(), self.len(), "one seed per environment");
         assert_eq!(slots.len(), self.len(), "one slot per environment");
         self.ended.fill(false);
-        let reset = |((env, &seed), slot): ((&mut Env, &Option<u64>), &mut T)| write(&env.reset(seed), slot);
-        match &self.pool {
-            None => self.envs.iter_mut().zip(seeds).zip(slots.iter_mut()).for_each(reset),
-            Some(pool) => pool.install(|| {
+        let reset = |(envs, seeds, slots): (&mut [Env], &[Option<u64>], &mut [T])| {
+            for ((env, &seed), slot) in envs.iter_mut().zip(seeds).zip(slots) {
+                write(&env.reset(seed), slot);
+            }
+        };
+        match parallel(self.pool.as_ref(), self.envs.len()) {
+            None => reset((&mut self.envs, seeds, slots)),
+            Some((pool, chunk)) => pool.install(|| {
                 self.envs
-                    .par_iter_mut()
-                    .zip(seeds.par_iter())
-                    .zip(slots.par_iter_mut())
-                    .with_min_len(MIN_ENVS_PER_TASK)
-                    .for_each(reset)
+                    .par_chunks_mut(chunk)
+                    .zip(seeds.par_chunks(chunk))
+                    .zip(slots.par_chunks_mut(chunk))
+                    .for_each(|((envs, seeds), slots)| reset((envs, seeds, slots)))
             }),
         }
     }
@@ -193,14 +211,18 @@ impl VecEnv {
         }
         assert_eq!(slots.len(), self.len(), "one slot per environment");
         // Every environment that takes its action must accept it (running, the block
-        // exists, legal under the protocol); one about to reset ignores its action.
-        for ((env, &action), &ended) in self.envs.iter().zip(actions).zip(&self.ended) {
-            if !ended {
-                env.check_action(action)?;
+        // exists, legal under the protocol); one about to reset ignores its action. The
+        // first refusal in environment order, as a serial check would find it.
+        let check = |(envs, actions, ended): (&[Env], &[Action], &[bool])| -> Result<()> {
+            for ((env, &action), &ended) in envs.iter().zip(actions).zip(ended) {
+                if !ended {
+                    env.check_action(action)?;
+                }
             }
-        }
+            Ok(())
+        };
         let mode = self.autoreset;
-        let step = |(((env, &action), ended), slot): (((&mut Env, &Action), &mut bool), &mut T)| -> Result<()> {
+        let step = |(env, &action, ended, slot): (&mut Env, &Action, &mut bool, &mut T)| -> Result<()> {
             let result = if *ended {
                 *ended = false;
                 VecStep::Reset(env.reset(None))
@@ -222,22 +244,35 @@ impl VecEnv {
             write(&result, slot);
             Ok(())
         };
-        match &self.pool {
-            None => self
-                .envs
-                .iter_mut()
+        let step_chunk = |(envs, actions, ended, slots): (&mut [Env], &[Action], &mut [bool], &mut [T])| {
+            envs.iter_mut()
                 .zip(actions)
-                .zip(self.ended.iter_mut())
+                .zip(ended.iter_mut())
                 .zip(slots.iter_mut())
-                .try_for_each(step),
-            Some(pool) => pool.install(|| {
+                .try_for_each(|(((env, action), ended), slot)| step((env, action, ended, slot)))
+        };
+        match parallel(self.pool.as_ref(), self.envs.len()) {
+            None => {
+                check((&self.envs, actions, &self.ended))?;
+                step_chunk((&mut self.envs, actions, &mut self.ended, slots))
+            }
+            Some((pool, chunk)) => pool.install(|| {
+                // Checked chunk by chunk in parallel, then stepped only if every chunk
+                // passed: the results in chunk order give the first refusal.
+                let checks: Vec<Result<()>> = self
+                    .envs
+                    .par_chunks(chunk)
+                    .zip(actions.par_chunks(chunk))
+                    .zip(self.ended.par_chunks(chunk))
+                    .map(|((envs, actions), ended)| check((envs, actions, ended)))
+                    .collect();
+                checks.into_iter().collect::<Result<()>>()?;
                 self.envs
-                    .par_iter_mut()
-                    .zip(actions.par_iter())
-                    .zip(self.ended.par_iter_mut())
-                    .zip(slots.par_iter_mut())
-                    .with_min_len(MIN_ENVS_PER_TASK)
-                    .try_for_each(step)
+                    .par_chunks_mut(chunk)
+                    .zip(actions.par_chunks(chunk))
+                    .zip(self.ended.par_chunks_mut(chunk))
+                    .zip(slots.par_chunks_mut(chunk))
+                    .try_for_each(|(((envs, actions), ended), slots)| step_chunk((envs, actions, ended, slots)))
             }),
         }
     }

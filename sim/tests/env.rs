@@ -2,8 +2,8 @@
 
 use sim::reward::{Dense, Paper, Sparse, StepCost, Transition};
 use sim::{
-    Action, Autoreset, Backend, BlockId, Cell, Env, EnvConfig, Goal, GoalSpec, Grid, RewardModel, SimError, State,
-    VecEnv, VecStep,
+    Action, Autoreset, Backend, BlockId, Cell, Env, EnvConfig, Goal, GoalSpec, Grid, PARALLEL_FROM_ENVS, RewardModel,
+    SimError, State, VecEnv, VecStep,
 };
 
 fn goal(text: &str) -> Goal {
@@ -386,6 +386,40 @@ fn vec_env_in_next_step_mode_returns_the_last_observation_then_resets() {
         let again = v.step(&picks).unwrap();
         for (i, s) in again.iter().enumerate() {
             assert_eq!(*s, VecStep::Stepped(solo[i].step(picks[i]).unwrap()));
+        }
+    }
+}
+
+/// A batch large enough to be cut into one chunk per thread (an odd count: chunks of
+/// unequal length) plays the same episodes on two threads as on one, in both autoreset
+/// modes and on both backends.
+#[test]
+fn vec_env_chunked_on_two_threads_plays_as_one_thread() {
+    let envs = PARALLEL_FROM_ENVS + 3;
+    let mut rng = sim::seeding::rng(9);
+    let batches: Vec<Vec<Action>> = (0..24)
+        .map(|_| {
+            (0..envs)
+                .map(|_| Action::from_index(rand::RngExt::random_range(&mut rng, 0..Action::count(3)), 3).unwrap())
+                .collect()
+        })
+        .collect();
+    for backend in [Backend::Grid, Backend::Physics] {
+        for mode in [Autoreset::SameStep, Autoreset::NextStep] {
+            let config = EnvConfig {
+                horizon: 5,
+                backend,
+                ..EnvConfig::default()
+            };
+            let play = |threads: usize| {
+                let mut v = VecEnv::new(config.clone(), envs, threads).unwrap().with_autoreset(mode);
+                let mut seen = vec![VecStep::Reset(v.reset(3).swap_remove(envs - 1))];
+                for actions in &batches {
+                    seen.extend(v.step(actions).unwrap());
+                }
+                seen
+            };
+            assert_eq!(play(1), play(2), "{backend} {mode:?}");
         }
     }
 }

@@ -4,8 +4,9 @@
 
 use sim::reward::{PaperCode, Transition};
 use sim::{
-    Action, ActionMask, ActionProtocol, Backend, BlockId, Cell, Env, EnvConfig, Goal, GoalSpec, Grid, Profile,
-    ProfileParts, RewardModel, SimError, StartRule, State, Step, Termination, VecEnv, VecStep,
+    Action, ActionMask, ActionProtocol, Backend, BlockId, Cell, Env, EnvConfig, Goal, GoalSpec, Grid,
+    PARALLEL_FROM_ENVS, Profile, ProfileParts, RewardModel, SimError, StartRule, State, Step, Termination, VecEnv,
+    VecStep,
 };
 
 fn goal(text: &str) -> Goal {
@@ -423,5 +424,35 @@ fn vec_env_masks_and_autoresets_under_paper() {
             assert_eq!(actions(s.info.action_mask.clone()), picks);
             assert_eq!(s.info.action_mask, v.envs()[i].legal_actions());
         }
+    }
+}
+
+/// On two threads a large batch is checked chunk by chunk in parallel: the error is still
+/// the first refusal in environment order, and no environment steps.
+#[test]
+fn vec_env_on_two_threads_reports_the_first_refusal_and_steps_nothing() {
+    let config = EnvConfig {
+        backend: Backend::Grid,
+        ..ProfileParts::of(Profile::Original).apply(EnvConfig::with_goal(goal("0,1,2")))
+    };
+    let envs = PARALLEL_FROM_ENVS + 1;
+    for threads in [1, 2] {
+        let mut v = VecEnv::new(config.clone(), envs, threads).unwrap();
+        v.reset(0);
+        // Nothing is held at the start: only picks are legal. The refusals are in both
+        // halves of the batch; the first is reported.
+        let mut actions = vec![Action::Pick(BlockId(0)); envs];
+        actions[envs / 2 - 10] = Action::Left;
+        actions[envs - 1] = Action::Up;
+        assert_eq!(
+            v.step(&actions).unwrap_err(),
+            SimError::IllegalAction {
+                action: Action::Left,
+                held: None,
+                protocol: ActionProtocol::Paper
+            },
+            "{threads} thread(s)"
+        );
+        assert!(v.envs().iter().all(|e| e.steps() == 0));
     }
 }
