@@ -47,10 +47,11 @@ impl VecStep {
 }
 
 /// Below this many environments a [`VecEnv`] steps and resets on the caller's thread
-/// whatever its thread count: waking a second thread and waiting for it costs about as
-/// much as the half of a smaller batch it would take (`cargo bench -p sim --bench
-/// vec_env`, docs/performance.md).
-pub const PARALLEL_FROM_ENVS: usize = 256;
+/// whatever its thread count. Through Python (`python/benchmarks/throughput.py`, where
+/// every call also converts the actions on one thread) two threads first beat one between
+/// 512 and 768 physics envs on a quiet 2-core machine, and lost at 256
+/// (docs/performance.md); from 1,024 they pay in Rust and Python alike.
+pub const PARALLEL_FROM_ENVS: usize = 1024;
 
 /// The pool and the environments per chunk when a batch of `envs` is stepped in parallel;
 /// `None` when the caller's thread steps it (one thread, or fewer than
