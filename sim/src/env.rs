@@ -495,7 +495,7 @@ impl Env {
         let n = self.config.blocks;
         match self.config.view {
             View::Top => vec![false; BlockMove::count(n, self.config.grid)],
-            View::Side => block_move::legal_moves(&self.state(), self.config.grid),
+            View::Side => block_move::legal_moves(&self.state, self.config.grid),
         }
     }
 
@@ -572,7 +572,7 @@ impl Env {
     /// The legal actions in the current state, by the config's action protocol (in the side
     /// view, by its rules).
     pub fn legal_actions(&self) -> ActionMask {
-        self.legal_in(&self.state())
+        self.legal_in(&self.state)
     }
 
     /// The current state, as read back from the backend after its last change.
