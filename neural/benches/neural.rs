@@ -1,8 +1,9 @@
 //! The neural learner's speed: one gradient step (batch 64) of each network, one greedy
 //! action, and self-play throughput, on 1 and 2 threads.
 //!
-//! `cargo bench -p neural`. `<net>` is `small` (the `dqfd-planes` recipe) or `paper`
-//! (`paper-dqfd`), both on 3 blocks; `<threads>` a rayon pool's size (the networks split
+//! `cargo bench -p neural`. `<net>` is `small` (the `dqfd-planes` recipe), `paper`
+//! (`paper-dqfd`) or `conv` (`pixels`: one convolution of a cell on the compact screen),
+//! each on 3 blocks; `<threads>` a rayon pool's size (the networks split
 //! large layers into two fixed halves, so it changes the time, never the result).
 //!
 //! - `network/<net>/<threads>`: the arithmetic of one DQfD step on inputs already encoded
@@ -21,7 +22,11 @@ use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_mai
 use neural::{DemoSource, DqnConfig, Preset, Trainer};
 use sim::Env;
 
-const NETS: [(&str, Preset); 2] = [("small", Preset::DqfdPlanes), ("paper", Preset::PaperDqfd)];
+const NETS: [(&str, Preset); 3] = [
+    ("small", Preset::DqfdPlanes),
+    ("paper", Preset::PaperDqfd),
+    ("conv", Preset::Pixels),
+];
 
 fn config(preset: Preset) -> DqnConfig {
     DqnConfig {

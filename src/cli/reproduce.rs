@@ -21,8 +21,9 @@ pub struct ReproduceArgs {
     /// Small counts, to check the pipeline in a minute; not the paper's figures.
     #[arg(long)]
     pub quick: bool,
-    /// E8 at its long budget: the paper's pixel runs and the whole ablation (about 47 minutes
-    /// on 2 cores, against 4 for the default run, which trains E8's plane arms only).
+    /// The long budgets: E8's paper pixel runs, `pixels` arm and whole ablation, E9's and E10's
+    /// full problem counts (about 1.5 hours on 2 cores, against minutes for the default run,
+    /// which trains E8's plane arms only).
     #[arg(long, conflicts_with = "quick")]
     pub long: bool,
     /// Run only these experiments, e.g. E8 or E1,E5 (the agents experiments share are

@@ -148,69 +148,12 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
         Some((original.clone(), Vec::new())),
         Some((spec.clone(), Vec::new())),
     );
-    let steps = &gaps[1];
-    let part = |value: f64| {
-        format!(
-            "{value:+.1}{}",
-            steps.share(value).map_or(String::new(), |s| format!(" ({s:.0}%)"))
-        )
-    };
-    let reading = format!(
-        "In the paper's world as coded the random agent failed {} of {} games and took {} steps* on average; in \
-         ours {} and {}. {} Of the gap in mean steps* ({} in the SPEC world, {} in the original), switching one rule \
-         at a time from the SPEC world, the protocol alone accounts for {}, the start rule alone for {}, and their \
-         interaction for {}.",
-        num(Some(original.failures), 1),
-        original.games,
-        num(Some(original.mean_steps_failures_at_horizon), 1),
-        num(Some(spec.failures), 1),
-        num(Some(spec.mean_steps_failures_at_horizon), 1),
-        paper_against(&row),
-        num(Some(steps.spec), 1),
-        num(Some(steps.original), 1),
-        part(steps.protocol),
-        part(steps.start),
-        part(steps.interaction),
-    );
+    let reading = reading(original, spec, &row, &gaps[1]);
     let games = describe(&suite(Rules::of(Profile::Spec)));
     Ok(Experiment {
         id: "E1".into(),
         title: "Random agent, 2 blocks".into(),
-        setup: vec![
-            Setting {
-                name: "agent".into(),
-                value: "uniformly random legal actions: among the 7 (4 moves, drop, pick either block) in the SPEC \
-                        world; a random block when nothing is held and one of the 4 moves and drop when holding in \
-                        the original world (the authors' random agent)"
-                    .into(),
-            },
-            Setting {
-                name: "games".into(),
-                value: format!(
-                    "{games}, in each world, cut into {} replicates of the paper's {per_replicate} games",
-                    ctx.scale.e1_replicates,
-                ),
-            },
-            Setting {
-                name: "worlds between".into(),
-                value: format!(
-                    "the same games in {} and in {}: one rule of the SPEC world switched to the paper's",
-                    WORLDS[1].describe(),
-                    WORLDS[2].describe()
-                ),
-            },
-            Setting {
-                name: "mean optimum".into(),
-                value: format!(
-                    "{} steps from the SPEC world's starts (the exact solver's)",
-                    num(spec_optimum, 2)
-                ),
-            },
-            Setting {
-                name: "test".into(),
-                value: "none (one arm)".into(),
-            },
-        ],
+        setup: setup(ctx, &games, spec_optimum),
         tables: vec![Table {
             title: "Random agent, 2 blocks".into(),
             suite: format!(
@@ -229,4 +172,72 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
         blocks_world: None,
         general: None,
     })
+}
+
+/// The run's reading: the random agent in both worlds, and where the gap in mean steps*
+/// comes from (`steps`, the gap's decomposition).
+fn reading(original: &ArmResult, spec: &ArmResult, row: &Row, steps: &Gap) -> String {
+    let part = |value: f64| {
+        format!(
+            "{value:+.1}{}",
+            steps.share(value).map_or(String::new(), |s| format!(" ({s:.0}%)"))
+        )
+    };
+    format!(
+        "In the paper's world as coded the random agent failed {} of {} games and took {} steps* on average; in \
+         ours {} and {}. {} Of the gap in mean steps* ({} in the SPEC world, {} in the original), switching one rule \
+         at a time from the SPEC world, the protocol alone accounts for {}, the start rule alone for {}, and their \
+         interaction for {}.",
+        num(Some(original.failures), 1),
+        original.games,
+        num(Some(original.mean_steps_failures_at_horizon), 1),
+        num(Some(spec.failures), 1),
+        num(Some(spec.mean_steps_failures_at_horizon), 1),
+        paper_against(row),
+        num(Some(steps.spec), 1),
+        num(Some(steps.original), 1),
+        part(steps.protocol),
+        part(steps.start),
+        part(steps.interaction),
+    )
+}
+
+/// What was run; `games` describes the SPEC world's suite.
+fn setup(ctx: &Context, games: &str, spec_optimum: Option<f64>) -> Vec<Setting> {
+    let per_replicate = ctx.scale.e1_games;
+    vec![
+        Setting {
+            name: "agent".into(),
+            value: "uniformly random legal actions: among the 7 (4 moves, drop, pick either block) in the SPEC \
+                    world; a random block when nothing is held and one of the 4 moves and drop when holding in \
+                    the original world (the authors' random agent)"
+                .into(),
+        },
+        Setting {
+            name: "games".into(),
+            value: format!(
+                "{games}, in each world, cut into {} replicates of the paper's {per_replicate} games",
+                ctx.scale.e1_replicates,
+            ),
+        },
+        Setting {
+            name: "worlds between".into(),
+            value: format!(
+                "the same games in {} and in {}: one rule of the SPEC world switched to the paper's",
+                WORLDS[1].describe(),
+                WORLDS[2].describe()
+            ),
+        },
+        Setting {
+            name: "mean optimum".into(),
+            value: format!(
+                "{} steps from the SPEC world's starts (the exact solver's)",
+                num(spec_optimum, 2)
+            ),
+        },
+        Setting {
+            name: "test".into(),
+            value: "none (one arm)".into(),
+        },
+    ]
 }

@@ -294,8 +294,24 @@ fn figures(blocks: usize, solved: &[Solved], published: Option<(f64, f64)>) -> S
 
 /// The report's section from the results.
 fn experiment(ctx: &Context, model: &RelationalModel, g: General) -> Experiment {
-    let t = &g.training;
-    let c = &t.config;
+    Experiment {
+        id: "E10".into(),
+        title: "One learned policy for the classic Blocks World at every size (ours)".into(),
+        setup: setup(ctx, model, &g),
+        tables: Vec::new(),
+        curves: Vec::new(),
+        decomposition: None,
+        paper_notes: Vec::new(),
+        reading: reading(&g),
+        figures: charts(ctx, &g),
+        blocks_world: None,
+        general: Some(g),
+    }
+}
+
+/// The run's reading: one paragraph computed from the figures.
+fn reading(g: &General) -> String {
+    let c = &g.training.config;
     let all = |rows: &[SizeFigures]| -> (usize, f64) {
         let problems: usize = rows.iter().map(|r| r.problems).sum();
         let won: f64 = rows.iter().map(|r| r.success * r.problems as f64).sum();
@@ -328,7 +344,7 @@ fn experiment(ctx: &Context, model: &RelationalModel, g: General) -> Experiment 
         })
         .collect::<Vec<_>>()
         .join("; ");
-    let reading = format!(
+    format!(
         "Trained on problems of 2 to {} blocks, the policy solved {}% of {uniform_problems} uniform problems of {} \
          blocks greedily, with no search, in {}x the near-optimal planner's block moves (by size; {} at {} blocks); \
          on {} to {} blocks it took {}x the fewest moves, the near-optimal planner {}x. On NLM's generator: {nlm}.",
@@ -346,7 +362,12 @@ fn experiment(ctx: &Context, model: &RelationalModel, g: General) -> Experiment 
         g.exact.last().map_or(0, |r| r.blocks),
         range(&g.exact, &|r| r.fewest_ratio),
         range(&g.exact, &|r| r.near_optimal_fewest_ratio),
-    );
+    )
+}
+
+/// The chart: the policy's block moves against the near-optimal planner's, by size.
+fn charts(ctx: &Context, g: &General) -> Vec<Figure> {
+    let c = &g.training.config;
     let percent_of_near = |rows: &[SizeFigures]| -> Vec<(f64, f64)> {
         rows.iter()
             .filter_map(|r| Some((r.blocks as f64, 100.0 * r.near_optimal_ratio?)))
@@ -399,95 +420,90 @@ fn experiment(ctx: &Context, model: &RelationalModel, g: General) -> Experiment 
             problems(ctx.budget, 100)
         ),
     };
+    vec![Figure::new(
+        "e10-moves",
+        "The policy's block moves as a share of the near-optimal planner's on the same problems, by number of \
+             blocks; the fewest moves (A*) where they were found"
+            .into(),
+        Drawing::Curves(chart),
+    )]
+}
+
+/// What was run: the policy, its training, the problems and the yardsticks.
+fn setup(ctx: &Context, model: &RelationalModel, g: &General) -> Vec<Setting> {
+    let t = &g.training;
+    let c = &t.config;
     let per_size = |rows: &[SizeFigures]| {
         rows.iter()
             .map(|r| format!("{}: {}", r.blocks, r.problems))
             .collect::<Vec<_>>()
             .join(", ")
     };
-    Experiment {
-        id: "E10".into(),
-        title: "One learned policy for the classic Blocks World at every size (ours)".into(),
-        setup: vec![
-            Setting {
-                name: "policy".into(),
-                value: format!(
-                    "{}: scans up and down the towers and a hop across the goal, {} rounds, width {}, over the raw \
-                     relations only (on, on-table, clear, the goal's on and on-table); one forward pass per block \
-                     move, the best-scored legal move taken (docs/dqn.md, \"The general policy\")",
-                    model.name(),
-                    c.shape.rounds,
-                    c.shape.width
-                ),
-            },
-            Setting {
-                name: "training".into(),
-                value: format!(
-                    "imitation of the optimum with DAgger, seed {}: {} random problems of 2 to {} blocks labelled \
-                     with every optimal move, then {} iterations of {} Adam steps (batch {}, learning rate {} to {}) \
-                     each followed by {} greedy games whose states are labelled and kept; {} examples in the end, \
-                     the last iteration's games {}% solved at {}x the fewest moves{}",
-                    c.seed,
-                    c.problems,
-                    c.max_blocks,
-                    c.iterations,
-                    c.steps,
-                    c.batch,
-                    c.lr,
-                    c.lr_final,
-                    c.rollouts,
-                    t.examples,
-                    num(Some(100.0 * t.last_success), 1),
-                    num(Some(t.last_moves_ratio), 3),
-                    if ctx.budget == Budget::Long {
-                        " (the preset, `blockstack dqn --preset general`)"
-                    } else {
-                        " (shorter than the preset's, which --long trains)"
-                    }
-                ),
-            },
-            Setting {
-                name: "problems".into(),
-                value: format!(
-                    "uniform start and goal states naming every block (Slaney & Thiebaux's distribution), per size \
-                     {}; up to 8 blocks {} against the fewest moves; NLM's generator {}; problem j of N blocks of \
-                     family k from seed episode_seed(episode_seed({}, 10000 k + N), j) (k = 1 uniform, 2 NLM's)",
-                    per_size(&g.uniform),
-                    per_size(&g.exact),
-                    per_size(&g.nlm),
-                    ctx.seeds.test
-                ),
-            },
-            Setting {
-                name: "yardsticks".into(),
-                value: "the near-optimal planner (`oracle::towers::NearOptimal`, GN1 of Slaney & Thiebaux, \"Blocks \
-                        World revisited\", 2001: at most twice the fewest moves); the fewest moves by A* \
-                        (`ExactMoves`) up to 8 blocks; Neural Logic Machines' published figures (Dong et al., \
-                        \"Neural Logic Machines\", ICLR 2019) on their generator"
-                    .into(),
-            },
-            Setting {
-                name: "success".into(),
-                value: "the goal holds within 4 N block moves (the near-optimal planner needs at most 2 N); moves are \
-                        counted over the problems solved"
-                    .into(),
-            },
-        ],
-        tables: Vec::new(),
-        curves: Vec::new(),
-        decomposition: None,
-        paper_notes: Vec::new(),
-        reading,
-        figures: vec![Figure::new(
-            "e10-moves",
-            "The policy's block moves as a share of the near-optimal planner's on the same problems, by number of \
-             blocks; the fewest moves (A*) where they were found"
+    vec![
+        Setting {
+            name: "policy".into(),
+            value: format!(
+                "{}: scans up and down the towers and a hop across the goal, {} rounds, width {}, over the raw \
+                 relations only (on, on-table, clear, the goal's on and on-table); one forward pass per block \
+                 move, the best-scored legal move taken (docs/dqn.md, \"The general policy\")",
+                model.name(),
+                c.shape.rounds,
+                c.shape.width
+            ),
+        },
+        Setting {
+            name: "training".into(),
+            value: format!(
+                "imitation of the optimum with DAgger, seed {}: {} random problems of 2 to {} blocks labelled \
+                 with every optimal move, then {} iterations of {} Adam steps (batch {}, learning rate {} to {}) \
+                 each followed by {} greedy games whose states are labelled and kept; {} examples in the end, \
+                 the last iteration's games {}% solved at {}x the fewest moves{}",
+                c.seed,
+                c.problems,
+                c.max_blocks,
+                c.iterations,
+                c.steps,
+                c.batch,
+                c.lr,
+                c.lr_final,
+                c.rollouts,
+                t.examples,
+                num(Some(100.0 * t.last_success), 1),
+                num(Some(t.last_moves_ratio), 3),
+                if ctx.budget == Budget::Long {
+                    " (the preset, `blockstack dqn --preset general`)"
+                } else {
+                    " (shorter than the preset's, which --long trains)"
+                }
+            ),
+        },
+        Setting {
+            name: "problems".into(),
+            value: format!(
+                "uniform start and goal states naming every block (Slaney & Thiebaux's distribution), per size \
+                 {}; up to 8 blocks {} against the fewest moves; NLM's generator {}; problem j of N blocks of \
+                 family k from seed episode_seed(episode_seed({}, 10000 k + N), j) (k = 1 uniform, 2 NLM's)",
+                per_size(&g.uniform),
+                per_size(&g.exact),
+                per_size(&g.nlm),
+                ctx.seeds.test
+            ),
+        },
+        Setting {
+            name: "yardsticks".into(),
+            value: "the near-optimal planner (`oracle::towers::NearOptimal`, GN1 of Slaney & Thiebaux, \"Blocks \
+                    World revisited\", 2001: at most twice the fewest moves); the fewest moves by A* \
+                    (`ExactMoves`) up to 8 blocks; Neural Logic Machines' published figures (Dong et al., \
+                    \"Neural Logic Machines\", ICLR 2019) on their generator"
                 .into(),
-            Drawing::Curves(chart),
-        )],
-        blocks_world: None,
-        general: Some(g),
-    }
+        },
+        Setting {
+            name: "success".into(),
+            value: "the goal holds within 4 N block moves (the near-optimal planner needs at most 2 N); moves are \
+                    counted over the problems solved"
+                .into(),
+        },
+    ]
 }
 
 #[cfg(test)]

@@ -121,6 +121,31 @@ pub(super) fn run(ctx: &Context, shared: &Shared) -> Result<Experiment> {
         Row::spec(None, ours_arms[0].clone(), vec![Some(ks_ours)]),
         Row::spec(None, ours_arms[1].clone(), vec![None]),
     ];
+    let reading = reading(&original, &spec, &rows, &ours_arms[0]);
+    Ok(Experiment {
+        id: "E3".into(),
+        title: "Unseen goals".into(),
+        setup: setup(ctx, ours, &original, &spec),
+        tables: vec![Table {
+            title: "Unseen goals 2,1,0 and 1,2,0".into(),
+            suite: format!("{}, in each world", describe(&spec.suite)),
+            paper: Some(paper::E3),
+            tests: vec!["KS vs random".into()],
+            rows,
+        }],
+        curves: Vec::new(),
+        decomposition: None,
+        paper_notes: vec![paper_ks_note()?],
+        reading,
+        figures: Vec::new(),
+        blocks_world: None,
+        general: None,
+    })
+}
+
+/// The run's reading; `ours` is our learner's arm at the paper's test epsilon.
+fn reading(original: &World, spec: &World, rows: &[Row], ours: &ArmResult) -> String {
+    let theirs = paper::E3.rows;
     let world = |w: &World, profile: Profile| {
         format!(
             "in {} the paper's learner failed {} of {} games against the random agent's {}, the difference {}",
@@ -131,23 +156,28 @@ pub(super) fn run(ctx: &Context, shared: &Shared) -> Result<Experiment> {
             significance(w.ks.p_value),
         )
     };
-    let reading = format!(
+    format!(
         "On the unseen goals the paper reports {} and {} failures of {} (KS p = {}); {}; {}. {} {} Ours, trained on \
          one goal in the SPEC world, failed {} with mean {} steps ({}x the shortest plan).",
         theirs[0].failures.unwrap_or_default(),
         theirs[1].failures.unwrap_or_default(),
         theirs[1].games.unwrap_or_default(),
         p_value(theirs[0].p_value.unwrap_or_default()),
-        world(&original, Profile::Original),
-        world(&spec, Profile::Spec),
+        world(original, Profile::Original),
+        world(spec, Profile::Spec),
         paper_against(&rows[0]),
         paper_against(&rows[1]),
-        num(Some(ours_arms[0].failures), 0),
-        num(ours_arms[0].mean_steps, 1),
-        num(ours_arms[0].mean_ratio_to_optimum, 2),
-    );
+        num(Some(ours.failures), 0),
+        num(ours.mean_steps, 1),
+        num(ours.mean_ratio_to_optimum, 2),
+    )
+}
+
+/// What was run.
+fn setup(ctx: &Context, ours: &QAgent, original: &World, spec: &World) -> Vec<Setting> {
+    let eps = ctx.test_epsilon();
     let mut setup = Vec::new();
-    for (w, profile) in [(&original, Profile::Original), (&spec, Profile::Spec)] {
+    for (w, profile) in [(original, Profile::Original), (spec, Profile::Spec)] {
         setup.push(Setting {
             name: format!("paper's learner, {profile}"),
             value: format!(
@@ -185,25 +215,7 @@ pub(super) fn run(ctx: &Context, shared: &Shared) -> Result<Experiment> {
                 .into(),
         },
     ]);
-    Ok(Experiment {
-        id: "E3".into(),
-        title: "Unseen goals".into(),
-        setup,
-        tables: vec![Table {
-            title: "Unseen goals 2,1,0 and 1,2,0".into(),
-            suite: format!("{}, in each world", describe(&spec.suite)),
-            paper: Some(paper::E3),
-            tests: vec!["KS vs random".into()],
-            rows,
-        }],
-        curves: Vec::new(),
-        decomposition: None,
-        paper_notes: vec![paper_ks_note()?],
-        reading,
-        figures: Vec::new(),
-        blocks_world: None,
-        general: None,
-    })
+    setup
 }
 
 /// The largest p-value the paper's own E3 counts allow, and the smallest distance between

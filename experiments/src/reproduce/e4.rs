@@ -304,6 +304,28 @@ fn experiment(ctx: &Context, paper_curves: PaperCurves, ours: Curve) -> Experime
         original,
         table,
     } = paper_curves;
+    let reading = reading(ctx, &original, &paper_learner, &table, &ours);
+    let figures = figures(ctx, &original, &paper_learner, &ours);
+    let mut curves = original;
+    curves.extend([paper_learner, ours]);
+    Experiment {
+        id: "E4".into(),
+        title: "Learning curve, 3 blocks (Fig. 3)".into(),
+        setup: setup(ctx, &curves),
+        tables: vec![table],
+        curves,
+        decomposition: None,
+        paper_notes: Vec::new(),
+        reading,
+        figures,
+        blocks_world: None,
+        general: None,
+    }
+}
+
+/// The run's reading: Fig. 3 against our spread in the original world, then both learners
+/// in the SPEC world.
+fn reading(ctx: &Context, original: &[Curve], paper_learner: &Curve, table: &Table, ours: &Curve) -> String {
     let rate = |p: Option<&CurvePoint>| p.map_or("-".into(), |p| percent(p.failure_rate));
     let points = &paper_learner.points;
     let at_preset = points.iter().find(|p| p.games == ctx.scale.paper_games);
@@ -341,7 +363,7 @@ fn experiment(ctx: &Context, paper_curves: PaperCurves, ours: Curve) -> Experime
                 .collect()
         })
         .unwrap_or_default();
-    let reading = format!(
+    format!(
         "In the original world, at test epsilon {}, the paper's learner failed {}; of Fig. 3's {} figures (failures \
          and {} at both test epsilons), {} lie inside the spread of our {} agents. In the SPEC world the paper's \
          learner failed {} of its test games untrained and {} after the {} training games the other experiments \
@@ -371,12 +393,16 @@ fn experiment(ctx: &Context, paper_curves: PaperCurves, ours: Curve) -> Experime
             |p| format!("none from {} games on", p.games)
         ),
         num(ours.points.last().and_then(|p| p.mean_steps), 2),
-    );
+    )
+}
+
+/// The three pictures: Fig. 3 beside ours, the paper's learner and ours in the SPEC world.
+fn figures(ctx: &Context, original: &[Curve], paper_learner: &Curve, ours: &Curve) -> Vec<Figure> {
     let note = format!(
         "Test policy: random action with probability {}. Failures are out of all test games of all agents.",
         ctx.test_epsilon()
     );
-    let figures = vec![
+    vec![
         Figure::new(
             "e4-original",
             "Fig. 3 beside ours: the paper's learner in the original world, failures and mean steps* against \
@@ -408,57 +434,48 @@ fn experiment(ctx: &Context, paper_curves: PaperCurves, ours: Curve) -> Experime
                 ),
             )),
         ),
-    ];
-    let mut curves = original;
-    curves.extend([paper_learner, ours]);
-    Experiment {
-        id: "E4".into(),
-        title: "Learning curve, 3 blocks (Fig. 3)".into(),
-        setup: vec![
-            Setting {
-                name: "paper's learner, original".into(),
-                value: curves[0].learner.clone(),
-            },
-            Setting {
-                name: "games at every point, original".into(),
-                value: format!(
-                    "{} (the paper's 100), per agent and test epsilon ({})",
-                    curves[0].suite,
-                    paper::FIG3
-                        .iter()
-                        .map(|c| c.test_epsilon.to_string())
-                        .collect::<Vec<_>>()
-                        .join(" and ")
-                ),
-            },
-            Setting {
-                name: "paper's learner, spec".into(),
-                value: curves[paper::FIG3.len()].learner.clone(),
-            },
-            Setting {
-                name: "our learner, spec".into(),
-                value: curves[paper::FIG3.len() + 1].learner.clone(),
-            },
-            Setting {
-                name: "games at every point, spec".into(),
-                value: format!(
-                    "{}, per agent, test epsilon {} (the paper's)",
-                    curves[paper::FIG3.len()].suite,
-                    ctx.test_epsilon()
-                ),
-            },
-            Setting {
-                name: "paper".into(),
-                value: fig3_text(),
-            },
-        ],
-        tables: vec![table],
-        curves,
-        decomposition: None,
-        paper_notes: Vec::new(),
-        reading,
-        figures,
-        blocks_world: None,
-        general: None,
-    }
+    ]
+}
+
+/// What was run; `curves` are the original world's, then the paper's learner's and ours in
+/// the SPEC world.
+fn setup(ctx: &Context, curves: &[Curve]) -> Vec<Setting> {
+    vec![
+        Setting {
+            name: "paper's learner, original".into(),
+            value: curves[0].learner.clone(),
+        },
+        Setting {
+            name: "games at every point, original".into(),
+            value: format!(
+                "{} (the paper's 100), per agent and test epsilon ({})",
+                curves[0].suite,
+                paper::FIG3
+                    .iter()
+                    .map(|c| c.test_epsilon.to_string())
+                    .collect::<Vec<_>>()
+                    .join(" and ")
+            ),
+        },
+        Setting {
+            name: "paper's learner, spec".into(),
+            value: curves[paper::FIG3.len()].learner.clone(),
+        },
+        Setting {
+            name: "our learner, spec".into(),
+            value: curves[paper::FIG3.len() + 1].learner.clone(),
+        },
+        Setting {
+            name: "games at every point, spec".into(),
+            value: format!(
+                "{}, per agent, test epsilon {} (the paper's)",
+                curves[paper::FIG3.len()].suite,
+                ctx.test_epsilon()
+            ),
+        },
+        Setting {
+            name: "paper".into(),
+            value: fig3_text(),
+        },
+    ]
 }

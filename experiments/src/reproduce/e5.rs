@@ -138,41 +138,7 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
             )
         })
         .collect();
-    let world = |w: &World, profile: Profile| {
-        let (none, both) = (&w.arms[0], &w.arms[2]);
-        format!(
-            "in {} the learner with the oracle on oscillation + 0.1 failed {} games per {} against {} without \
-             help, mean steps* {} against {}, {}; on oscillation alone {} failures, {}",
-            world_name(profile),
-            num(Some(both.failures), 1),
-            both.games,
-            num(Some(none.failures), 1),
-            num(Some(both.mean_steps_failures_at_horizon), 1),
-            num(Some(none.mean_steps_failures_at_horizon), 1),
-            significance(w.tests[1].p_value),
-            num(Some(w.arms[1].failures), 1),
-            significance(w.tests[0].p_value),
-        )
-    };
-    let theirs = paper::TABLE_I.rows;
-    let reading = format!(
-        "The paper: {} and {} failures of {} with and without help (p = {}), {} on oscillation alone (p = {}); {}; \
-         {}. {} {} Table I gives no training length; trained for {} games instead of {}, {}: {}",
-        num(theirs[2].failures.map(f64::from), 0),
-        num(theirs[0].failures.map(f64::from), 0),
-        theirs[0].games.unwrap_or_default(),
-        num(theirs[2].p_value, 3),
-        num(theirs[1].failures.map(f64::from), 0),
-        num(theirs[1].p_value, 3),
-        world(&original, Profile::Original),
-        world(&spec, Profile::Spec),
-        paper_against(&rows[0]),
-        paper_against(&rows[2]),
-        short_training(),
-        ctx.scale.paper_games(Profile::Original),
-        world(&short, Profile::Original),
-        short_rows.iter().map(paper_against).collect::<Vec<_>>().join(" "),
-    );
+    let reading = reading(ctx, [&original, &spec, &short], &rows, &short_rows);
     let figure = Figure::new(
         "e5-steps",
         "Steps per game of each arm in each world (a failure at 1000), with the paper's mean".into(),
@@ -183,37 +149,10 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
             &spec.suite,
         )),
     );
-    let mut setup = Vec::new();
-    for (w, name) in [
-        (&original, format!("learner, {}", Profile::Original)),
-        (&spec, format!("learner, {}", Profile::Spec)),
-        (&short, format!("learner, {}, second table", Profile::Original)),
-    ] {
-        setup.push(Setting {
-            name,
-            value: w.learner.clone(),
-        });
-    }
-    setup.extend([
-        Setting {
-            name: "games".into(),
-            value: format!("{} (the paper's 500) in each world, per agent", describe(&spec.suite)),
-        },
-        Setting {
-            name: "test policy".into(),
-            value: format!("random action with probability {} (the paper's)", ctx.test_epsilon()),
-        },
-        Setting {
-            name: "test".into(),
-            value: "Wilcoxon signed-rank against no assistance, paired by agent seed and start, steps with a failure \
-                    counted as 1000"
-                .into(),
-        },
-    ]);
     Ok(Experiment {
         id: "E5".into(),
         title: "Oracle assistance in training (Table I)".into(),
-        setup,
+        setup: setup(ctx, [&original, &spec, &short]),
         tables: vec![
             Table {
                 title: "Oracle assistance in training".into(),
@@ -241,4 +180,78 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
         blocks_world: None,
         general: None,
     })
+}
+
+/// The run's reading; `worlds` are the original world's, the SPEC world's and the original
+/// world's at the short training.
+fn reading(ctx: &Context, worlds: [&World; 3], rows: &[Row], short_rows: &[Row]) -> String {
+    let [original, spec, short] = worlds;
+    let world = |w: &World, profile: Profile| {
+        let (none, both) = (&w.arms[0], &w.arms[2]);
+        format!(
+            "in {} the learner with the oracle on oscillation + 0.1 failed {} games per {} against {} without \
+             help, mean steps* {} against {}, {}; on oscillation alone {} failures, {}",
+            world_name(profile),
+            num(Some(both.failures), 1),
+            both.games,
+            num(Some(none.failures), 1),
+            num(Some(both.mean_steps_failures_at_horizon), 1),
+            num(Some(none.mean_steps_failures_at_horizon), 1),
+            significance(w.tests[1].p_value),
+            num(Some(w.arms[1].failures), 1),
+            significance(w.tests[0].p_value),
+        )
+    };
+    let theirs = paper::TABLE_I.rows;
+    format!(
+        "The paper: {} and {} failures of {} with and without help (p = {}), {} on oscillation alone (p = {}); {}; \
+         {}. {} {} Table I gives no training length; trained for {} games instead of {}, {}: {}",
+        num(theirs[2].failures.map(f64::from), 0),
+        num(theirs[0].failures.map(f64::from), 0),
+        theirs[0].games.unwrap_or_default(),
+        num(theirs[2].p_value, 3),
+        num(theirs[1].failures.map(f64::from), 0),
+        num(theirs[1].p_value, 3),
+        world(original, Profile::Original),
+        world(spec, Profile::Spec),
+        paper_against(&rows[0]),
+        paper_against(&rows[2]),
+        short_training(),
+        ctx.scale.paper_games(Profile::Original),
+        world(short, Profile::Original),
+        short_rows.iter().map(paper_against).collect::<Vec<_>>().join(" "),
+    )
+}
+
+/// What was run; `worlds` as for [`reading`].
+fn setup(ctx: &Context, worlds: [&World; 3]) -> Vec<Setting> {
+    let [original, spec, short] = worlds;
+    let mut setup = Vec::new();
+    for (w, name) in [
+        (original, format!("learner, {}", Profile::Original)),
+        (spec, format!("learner, {}", Profile::Spec)),
+        (short, format!("learner, {}, second table", Profile::Original)),
+    ] {
+        setup.push(Setting {
+            name,
+            value: w.learner.clone(),
+        });
+    }
+    setup.extend([
+        Setting {
+            name: "games".into(),
+            value: format!("{} (the paper's 500) in each world, per agent", describe(&spec.suite)),
+        },
+        Setting {
+            name: "test policy".into(),
+            value: format!("random action with probability {} (the paper's)", ctx.test_epsilon()),
+        },
+        Setting {
+            name: "test".into(),
+            value: "Wilcoxon signed-rank against no assistance, paired by agent seed and start, steps with a failure \
+                    counted as 1000"
+                .into(),
+        },
+    ]);
+    setup
 }

@@ -95,6 +95,60 @@ fn in_world(ctx: &Context, world: Profile) -> Result<World> {
     let base_agents: Vec<QAgent> = baselines.into_iter().map(|t| t.agent).collect();
     let by_demonstrator: Vec<&[(QAgent, agent::correction::SessionReport)]> =
         corrected.chunks(ctx.scale.replicates).collect();
+    let tables = play_tables(ctx, world, &base_agents, &by_demonstrator, &profiles)?;
+    let corrections: Vec<String> = by_demonstrator
+        .iter()
+        .enumerate()
+        .map(|(d, agents)| {
+            let (steps, fixes) = agents
+                .iter()
+                .fold((0, 0), |(s, c), (_, r)| (s + r.steps, c + r.corrections));
+            format!(
+                "{} ({}): {:.0} steps and {:.0} corrections per session",
+                DEMONSTRATORS[d],
+                profiles[d].name,
+                steps as f64 / agents.len().max(1) as f64,
+                fixes as f64 / agents.len().max(1) as f64
+            )
+        })
+        .collect();
+    let config = ctx.paper_config(world, &trained_on, 0);
+    let text = |goals: &[Goal]| goals.iter().map(Goal::to_string).collect::<Vec<_>>().join(" ");
+    let rule = agent::CorrectionRule::for_profile(world);
+    Ok(World {
+        tables,
+        baseline: format!(
+            "the paper's learner ({}) trained {} games on {}; {} agents, training seeds {:?}",
+            paper_learner(&config),
+            config.games,
+            text(&trained_on),
+            ctx.scale.replicates,
+            ctx.seeds.training
+        ),
+        demonstrations: format!(
+            "each gives {} demonstrations on {} in turn to every baseline agent (session seeds {:?}), correcting \
+             the agent's proposals (epsilon 0.1); the agent learns by {}. {}",
+            ctx.scale.demos,
+            text(&shown),
+            ctx.seeds.demonstrations,
+            match rule.margin {
+                Some(m) => format!("Q-update plus a large margin ({m})"),
+                None => "the plain Q-update (the authors' rule)".into(),
+            },
+            corrections.join("; ")
+        ),
+    })
+}
+
+/// Every suite of the experiment's tables played by the baselines and by each
+/// demonstrator's corrected agents, with each corrected arm's test against the baseline.
+fn play_tables(
+    ctx: &Context,
+    world: Profile,
+    base_agents: &[QAgent],
+    by_demonstrator: &[&[(QAgent, agent::correction::SessionReport)]],
+    profiles: &[DemonstratorProfile],
+) -> Result<Vec<(Suite, Vec<ArmResult>, Vec<TestOutcome>)>> {
     let eps = ctx.test_epsilon();
     let mut tables = Vec::new();
     for (goals, _, _, _) in suites() {
@@ -138,48 +192,7 @@ fn in_world(ctx: &Context, world: Profile) -> Result<World> {
             .collect::<Result<Vec<_>>>()?;
         tables.push((suite, arms, tests));
     }
-    let corrections: Vec<String> = by_demonstrator
-        .iter()
-        .enumerate()
-        .map(|(d, agents)| {
-            let (steps, fixes) = agents
-                .iter()
-                .fold((0, 0), |(s, c), (_, r)| (s + r.steps, c + r.corrections));
-            format!(
-                "{} ({}): {:.0} steps and {:.0} corrections per session",
-                DEMONSTRATORS[d],
-                profiles[d].name,
-                steps as f64 / agents.len().max(1) as f64,
-                fixes as f64 / agents.len().max(1) as f64
-            )
-        })
-        .collect();
-    let config = ctx.paper_config(world, &trained_on, 0);
-    let text = |goals: &[Goal]| goals.iter().map(Goal::to_string).collect::<Vec<_>>().join(" ");
-    let rule = agent::CorrectionRule::for_profile(world);
-    Ok(World {
-        tables,
-        baseline: format!(
-            "the paper's learner ({}) trained {} games on {}; {} agents, training seeds {:?}",
-            paper_learner(&config),
-            config.games,
-            text(&trained_on),
-            ctx.scale.replicates,
-            ctx.seeds.training
-        ),
-        demonstrations: format!(
-            "each gives {} demonstrations on {} in turn to every baseline agent (session seeds {:?}), correcting \
-             the agent's proposals (epsilon 0.1); the agent learns by {}. {}",
-            ctx.scale.demos,
-            text(&shown),
-            ctx.seeds.demonstrations,
-            match rule.margin {
-                Some(m) => format!("Q-update plus a large margin ({m})"),
-                None => "the plain Q-update (the authors' rule)".into(),
-            },
-            corrections.join("; ")
-        ),
-    })
+    Ok(tables)
 }
 
 /// Runs E6.

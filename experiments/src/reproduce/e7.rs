@@ -116,29 +116,7 @@ pub(super) fn run(ctx: &Context, shared: &Shared) -> Result<Experiment> {
     let arms: Vec<ArmResult> = AGENTS
         .iter()
         .zip(&played)
-        .map(|(&a, results)| {
-            let what = match a {
-                Agent::Random => "uniformly random actions".to_string(),
-                Agent::Paper { .. } => {
-                    "the paper's learner, trained on all six goals (E5's first baseline agent)".into()
-                }
-                Agent::Ours { .. } => "our learner (E4's), trained on 0,1,2 only".into(),
-                Agent::Oracle => "the centroid + A* oracle, planning from each start".into(),
-                Agent::Exact => "the exact solver's shortest plan".into(),
-            };
-            let test_epsilon = a.is_learner().then(|| match a {
-                Agent::Paper { greedy } | Agent::Ours { greedy } => epsilon(greedy),
-                _ => eps,
-            });
-            ArmResult::of(
-                a.name(),
-                what,
-                test_epsilon,
-                std::slice::from_ref(results),
-                &optimum,
-                HORIZON,
-            )
-        })
+        .map(|(&a, results)| arm(a, std::slice::from_ref(results), &optimum, eps))
         .collect();
     let index = |agent: Agent| AGENTS.iter().position(|&a| a == agent).expect("every agent has an arm");
     let (exact, oracle) = (index(Agent::Exact), index(Agent::Oracle));
@@ -197,6 +175,23 @@ pub(super) fn run(ctx: &Context, shared: &Shared) -> Result<Experiment> {
         blocks_world: None,
         general: None,
     })
+}
+
+/// An agent's arm from its games (`played`: one replicate); learners play at `eps`, or
+/// greedily.
+fn arm(a: Agent, played: &[Vec<EpisodeResult>], optimum: &[u32], eps: f64) -> ArmResult {
+    let what = match a {
+        Agent::Random => "uniformly random actions".to_string(),
+        Agent::Paper { .. } => "the paper's learner, trained on all six goals (E5's first baseline agent)".into(),
+        Agent::Ours { .. } => "our learner (E4's), trained on 0,1,2 only".into(),
+        Agent::Oracle => "the centroid + A* oracle, planning from each start".into(),
+        Agent::Exact => "the exact solver's shortest plan".into(),
+    };
+    let test_epsilon = match a {
+        Agent::Paper { greedy } | Agent::Ours { greedy } => Some(if greedy { 0.0 } else { eps }),
+        _ => None,
+    };
+    ArmResult::of(a.name(), what, test_epsilon, played, optimum, HORIZON)
 }
 
 /// The settings: the agents, the games, the test policy, the optimum and the tests.

@@ -168,10 +168,20 @@ fn arms(budget: Budget, seed: u64) -> Result<Vec<Arm>> {
         // The `pixels` preset: our learner on a screen drawn to be read (docs/dqn.md).
         arm(PIXELS3, Part::Ours, preset(Preset::Pixels, 3, seed, 1.0)?),
     ]);
-    // The ablation: our recipe with one of the paper's choices put back.
-    let ablate = |name: &str, config: DqnConfig| arm(&format!("ours with {name}"), Part::Ablation, config);
+    arms.extend(ablation(seed, &ours3, ours_pixels2)?);
+    Ok(arms)
+}
+
+/// The ablation: our recipe on 3 blocks (`ours3`) with one of the paper's choices put back,
+/// and the paper network on pixels (`ours_pixels2`) without its batch norm.
+fn ablation(seed: u64, ours3: &DqnConfig, ours_pixels2: DqnConfig) -> Result<Vec<Arm>> {
+    let ablate = |name: &str, config: DqnConfig| Arm {
+        name: format!("ours with {name}"),
+        part: Part::Ablation,
+        config,
+    };
     let dense = RewardModel::from_name("dense")?;
-    arms.extend([
+    Ok(vec![
         ablate(
             "the paper's buffer (1000)",
             DqnConfig {
@@ -241,8 +251,7 @@ fn arms(budget: Budget, seed: u64) -> Result<Vec<Arm>> {
                 ..ours_pixels2
             },
         ),
-    ]);
-    Ok(arms)
+    ])
 }
 
 /// Jobs reported: every point of every arm's curve, and its final test.

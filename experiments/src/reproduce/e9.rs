@@ -566,69 +566,43 @@ fn agreement(blocks: usize, steps: u64, seed: u64) -> Result<Agreement> {
 
 /// The report's section from the results; `learner` is how the learner was trained.
 fn experiment(ctx: &Context, world: BlocksWorld, learner: &TrainConfig) -> Experiment {
+    Experiment {
+        id: "E9".into(),
+        title: "The classic Blocks World, seen from the side (ours)".into(),
+        setup: setup(ctx, &world, learner),
+        tables: Vec::new(),
+        curves: Vec::new(),
+        decomposition: None,
+        paper_notes: Vec::new(),
+        reading: reading(&world),
+        figures: figures(&world),
+        blocks_world: Some(world),
+        general: None,
+    }
+}
+
+/// An agent's figures in a group, if it played the group's problems.
+fn figures_of(group: &Group, agent: Agent) -> Option<&AgentFigures> {
+    group.agents.iter().find(|f| f.agent == agent.name())
+}
+
+/// The run's reading: one paragraph computed from the figures.
+fn reading(world: &BlocksWorld) -> String {
     let all = &world.problems;
     let everything = group(0, &all.iter().collect::<Vec<_>>());
-    let figures_of = |agent: Agent| everything.agents.iter().find(|f| f.agent == agent.name());
     let (exact, near, learned) = (
-        figures_of(Agent::Exact),
-        figures_of(Agent::NearOptimal),
-        figures_of(Agent::Learner),
+        figures_of(&everything, Agent::Exact),
+        figures_of(&everything, Agent::NearOptimal),
+        figures_of(&everything, Agent::Learner),
     );
     let success = |f: Option<&AgentFigures>| num(f.map(|f| 100.0 * f.success), 1);
-    let agreed_drops: u64 = world.agreement.iter().map(|a| a.same_landings).sum();
-    let drops: u64 = world.agreement.iter().map(|a| a.drops).sum();
-    let agreed_steps: u64 = world.agreement.iter().map(|a| a.same_steps).sum();
-    let steps: u64 = world.agreement.iter().map(|a| a.steps).sum();
-    let physics_errors: u64 = world.agreement.iter().map(|a| a.physics_errors).sum();
-    let game_errors: usize = everything.agents.iter().map(|f| f.physics_errors).sum();
-    let errors = if physics_errors + game_errors as u64 == 0 {
-        String::new()
-    } else {
-        let times = |n: u64| {
-            if n == 1 {
-                "once".to_string()
-            } else {
-                format!("{n} times")
-            }
-        };
-        format!(
-            " The physics did not bring a dropped block to rest on a cell {} in random play and {} in the \
-             agents' games (first: {}).",
-            times(physics_errors),
-            times(game_errors as u64),
-            world
-                .agreement
-                .iter()
-                .find_map(|a| a.first_error.as_deref())
-                .unwrap_or("in an agent's game")
-        )
-    };
+    let sum = |field: fn(&Agreement) -> u64| world.agreement.iter().map(field).sum::<u64>();
+    let (agreed_drops, drops) = (sum(|a| a.same_landings), sum(|a| a.drops));
+    let (agreed_steps, steps) = (sum(|a| a.same_steps), sum(|a| a.steps));
+    let errors = physics_errors_reading(world, &everything);
     let deepest = world.by_stacking_steps.last().map_or(0, |g| g.key);
     let per_move = |f: Option<&AgentFigures>| num(f.and_then(|f| Some(f.mean_steps? / f.mean_moves?)), 1);
-    // The gripper steps against their fewest, where searched.
-    let small: Vec<&Problem> = all.iter().filter(|p| p.fewest_steps.is_some()).collect();
-    let small = group(0, &small);
-    let steps_of = |agent: Agent| {
-        num(
-            small
-                .agents
-                .iter()
-                .find(|f| f.agent == agent.name())
-                .and_then(|f| f.steps_ratio),
-            3,
-        )
-    };
-    let steps_reading = if small.problems == 0 {
-        String::new()
-    } else {
-        format!(
-            " On the {} problems of up to {FEWEST_STEPS_BLOCKS} blocks, the exact planner's gripper steps were {}x the \
-             fewest gripper steps, the near-optimal planner's {}x.",
-            small.problems,
-            steps_of(Agent::Exact),
-            steps_of(Agent::NearOptimal)
-        )
-    };
+    let steps_reading = gripper_steps_reading(all);
     let learner_reading = learned.map_or(String::new(), |f| {
         format!(
             " The learner, greedy, reached the goal in {}% of its {} problems of {LEARNER_BLOCKS} blocks, with {}x the \
@@ -642,7 +616,7 @@ fn experiment(ctx: &Context, world: BlocksWorld, learner: &TrainConfig) -> Exper
             ))
         )
     });
-    let reading = format!(
+    format!(
         "Over {} problems of 3 to 10 blocks (up to {deepest} stacking steps), the near-optimal planner's plans were \
          {}x the fewest block moves on average (worst {}x); carried out by the gripper through the physics, the \
          exact planner reached the goal in {}% of the problems and the near-optimal planner in {}%, with {} and {} \
@@ -655,7 +629,57 @@ fn experiment(ctx: &Context, world: BlocksWorld, learner: &TrainConfig) -> Exper
         success(near),
         per_move(exact),
         per_move(near),
-    );
+    )
+}
+
+/// The sentence on Drops the physics did not bring to rest, empty when there were none.
+fn physics_errors_reading(world: &BlocksWorld, everything: &Group) -> String {
+    let physics_errors: u64 = world.agreement.iter().map(|a| a.physics_errors).sum();
+    let game_errors: usize = everything.agents.iter().map(|f| f.physics_errors).sum();
+    if physics_errors + game_errors as u64 == 0 {
+        return String::new();
+    }
+    let times = |n: u64| {
+        if n == 1 {
+            "once".to_string()
+        } else {
+            format!("{n} times")
+        }
+    };
+    format!(
+        " The physics did not bring a dropped block to rest on a cell {} in random play and {} in the \
+         agents' games (first: {}).",
+        times(physics_errors),
+        times(game_errors as u64),
+        world
+            .agreement
+            .iter()
+            .find_map(|a| a.first_error.as_deref())
+            .unwrap_or("in an agent's game")
+    )
+}
+
+/// The sentence on the planners' gripper steps against the fewest, where they were searched
+/// (empty when none was).
+fn gripper_steps_reading(all: &[Problem]) -> String {
+    let small: Vec<&Problem> = all.iter().filter(|p| p.fewest_steps.is_some()).collect();
+    let small = group(0, &small);
+    if small.problems == 0 {
+        return String::new();
+    }
+    let steps_of = |agent: Agent| num(figures_of(&small, agent).and_then(|f| f.steps_ratio), 3);
+    format!(
+        " On the {} problems of up to {FEWEST_STEPS_BLOCKS} blocks, the exact planner's gripper steps were {}x the \
+         fewest gripper steps, the near-optimal planner's {}x.",
+        small.problems,
+        steps_of(Agent::Exact),
+        steps_of(Agent::NearOptimal)
+    )
+}
+
+/// The two charts, by stacking steps: the goal reached, and the block moves beyond the fewest.
+fn figures(world: &BlocksWorld) -> Vec<Figure> {
+    let all = &world.problems;
     // The ratios lie within a few per cent of 1: drawn as the per cent above it.
     let extra = |ratio: f64| 100.0 * (ratio - 1.0);
     let mut series = vec![Series {
@@ -674,15 +698,12 @@ fn experiment(ctx: &Context, world: BlocksWorld, learner: &TrainConfig) -> Exper
             points: world
                 .by_stacking_steps
                 .iter()
-                .filter_map(|g| {
-                    let f = g.agents.iter().find(|f| f.agent == agent.name())?;
-                    Some((g.key as f64, extra(f.moves_ratio?)))
-                })
+                .filter_map(|g| Some((g.key as f64, extra(figures_of(g, agent)?.moves_ratio?))))
                 .collect(),
         });
     }
     series.retain(|s| !s.points.is_empty());
-    let chart = CurvesChart {
+    let moves = CurvesChart {
         title: "E9: block moves beyond the fewest, by stacking steps".into(),
         x_label: "stacking steps (the fewest block moves)".into(),
         y_label: "block moves beyond the fewest (%, mean)".into(),
@@ -700,15 +721,12 @@ fn experiment(ctx: &Context, world: BlocksWorld, learner: &TrainConfig) -> Exper
         y_range: Some((0.0, 100.0)),
         series: AGENTS
             .iter()
-            .map(|agent| Series {
+            .map(|&agent| Series {
                 name: agent.name().into(),
                 points: world
                     .by_stacking_steps
                     .iter()
-                    .filter_map(|g| {
-                        let f = g.agents.iter().find(|f| f.agent == agent.name())?;
-                        Some((g.key as f64, 100.0 * f.success))
-                    })
+                    .filter_map(|g| Some((g.key as f64, 100.0 * figures_of(g, agent)?.success)))
                     .collect(),
             })
             .filter(|s| !s.points.is_empty())
@@ -719,6 +737,24 @@ fn experiment(ctx: &Context, world: BlocksWorld, learner: &TrainConfig) -> Exper
             all.len()
         ),
     };
+    vec![
+        Figure::new(
+            "e9-reached",
+            "Games that reached the goal, by stacking steps: every agent through the gripper".into(),
+            Drawing::Curves(reached),
+        ),
+        Figure::new(
+            "e9-moves",
+            "Block moves beyond the fewest, in per cent, by stacking steps: the near-optimal planner's plans, \
+             and each planner carried out by the gripper"
+                .into(),
+            Drawing::Curves(moves),
+        ),
+    ]
+}
+
+/// What was run: the world, the problems, the planners, the learner and the checks.
+fn setup(ctx: &Context, world: &BlocksWorld, learner: &TrainConfig) -> Vec<Setting> {
     let grids = BLOCKS
         .iter()
         .map(|&n| {
@@ -727,122 +763,99 @@ fn experiment(ctx: &Context, world: BlocksWorld, learner: &TrainConfig) -> Exper
         })
         .collect::<Vec<_>>()
         .join(", ");
-    Experiment {
-        id: "E9".into(),
-        title: "The classic Blocks World, seen from the side (ours)".into(),
-        setup: vec![
-            Setting {
-                name: "world".into(),
-                value: "the side view (docs/world.md section 12): towers under gravity, only a clear block picked, a \
-                        released block falls to the top of the column below; the classic Blocks World of Gupta & Nau \
-                        (\"On the complexity of blocks-world planning\", 1992) and Slaney & Thiebaux (\"Blocks World \
-                        revisited\", 2001)"
-                    .into(),
-            },
-            Setting {
-                name: "problems".into(),
-                value: format!(
-                    "{per} per number of blocks ({}) and of goal towers (1 to {MAX_TOWERS}), {} in all: the goal \
-                     drawn uniformly among those of that many towers naming every block, the start random towers in \
-                     which it does not hold; problem j of N blocks and k towers from seed \
-                     episode_seed(episode_seed({}, 1000 N + k), j)",
-                    BLOCKS.map(|n| n.to_string()).join(", "),
-                    all.len(),
-                    ctx.seeds.test,
-                    per = world.problems_per_cell,
-                ),
-            },
-            Setting {
-                name: "grids".into(),
-                value: format!(
-                    "by blocks, {grids}: as many columns as blocks at least, so the table never runs out (the \
-                     classic world's table is unbounded), and a row more than blocks, for a tower of every block \
-                     and a block carried over it"
-                ),
-            },
-            Setting {
-                name: "planners".into(),
-                value: "the fewest block moves by A* (`oracle::towers::ExactMoves`), the near-optimal planner \
-                        (`NearOptimal`, at most twice the fewest); each also played by the gripper \
-                        (`agent::TowersPolicy`: at each block-move boundary it plans from the state it sees and \
-                        carries the first move out as gripper actions, a move to the table going to the leftmost \
-                        empty column), its Drops counted as block moves"
-                    .into(),
-            },
-            Setting {
-                name: "fewest gripper steps".into(),
-                value: format!(
-                    "for problems of up to {FEWEST_STEPS_BLOCKS} blocks, by the exact solver of the side view \
-                     (`oracle::ExactSolver::for_world`: A* over Pick, moves and Drop); every agent's gripper steps \
-                     are set against it"
-                ),
-            },
-            Setting {
-                name: "learner".into(),
-                value: format!(
-                    "the tabular learner of the side view (`blockstack train --view side`'s preset: {} \
-                     representation, {} reward, alpha {}, gamma {}, epsilon {}), {} training games on the goals {} \
-                     of {LEARNER_BLOCKS} blocks on {} x {}, seed {}; it plays the problems of {LEARNER_BLOCKS} blocks \
-                     greedily (epsilon 0)",
-                    learner.repr,
-                    learner.world.reward.name(),
-                    learner.params.alpha,
-                    learner.params.gamma,
-                    learner.params.epsilon,
-                    learner.games,
-                    learner.goals.iter().map(Goal::to_string).collect::<Vec<_>>().join(", "),
-                    learner.world.grid.width(),
-                    learner.world.grid.height(),
-                    learner.seed
-                ),
-            },
-            Setting {
-                name: "backend".into(),
-                value: format!(
-                    "the games on the {} backend (rapier2d dynamics to rest at every Drop), horizon {HORIZON}",
-                    world.backend
-                ),
-            },
-            Setting {
-                name: "stacking steps".into(),
-                value: "a problem's fewest block moves, as Duan et al. (\"One-Shot Imitation Learning\", 2017) \
-                        group their tasks by stacking steps"
-                    .into(),
-            },
-            Setting {
-                name: "agreement".into(),
-                value: format!(
-                    "per number of blocks, {} uniformly random legal steps on the physics backend and the same \
-                     actions on the grid model, in episodes of up to {AGREEMENT_HORIZON} steps (a goal drawn per \
-                     episode) reset with episode_seed(episode_seed({}, 9000 + N), e); an episode whose outcomes part \
-                     ends there",
-                    agreement_steps(ctx.budget),
-                    ctx.seeds.test
-                ),
-            },
-        ],
-        tables: Vec::new(),
-        curves: Vec::new(),
-        decomposition: None,
-        paper_notes: Vec::new(),
-        reading,
-        figures: vec![
-            Figure::new(
-                "e9-reached",
-                "Games that reached the goal, by stacking steps: every agent through the gripper".into(),
-                Drawing::Curves(reached),
+    let setting = |name: &str, value: String| Setting {
+        name: name.into(),
+        value,
+    };
+    vec![
+        setting(
+            "world",
+            "the side view (docs/world.md section 12): towers under gravity, only a clear block picked, a released \
+             block falls to the top of the column below; the classic Blocks World of Gupta & Nau (\"On the \
+             complexity of blocks-world planning\", 1992) and Slaney & Thiebaux (\"Blocks World revisited\", 2001)"
+                .into(),
+        ),
+        setting(
+            "problems",
+            format!(
+                "{per} per number of blocks ({}) and of goal towers (1 to {MAX_TOWERS}), {} in all: the goal drawn \
+                 uniformly among those of that many towers naming every block, the start random towers in which it \
+                 does not hold; problem j of N blocks and k towers from seed episode_seed(episode_seed({}, 1000 N + \
+                 k), j)",
+                BLOCKS.map(|n| n.to_string()).join(", "),
+                world.problems.len(),
+                ctx.seeds.test,
+                per = world.problems_per_cell,
             ),
-            Figure::new(
-                "e9-moves",
-                "Block moves beyond the fewest, in per cent, by stacking steps: the near-optimal planner's plans, \
-                 and each planner carried out by the gripper"
-                    .into(),
-                Drawing::Curves(chart),
+        ),
+        setting(
+            "grids",
+            format!(
+                "by blocks, {grids}: as many columns as blocks at least, so the table never runs out (the classic \
+                 world's table is unbounded), and a row more than blocks, for a tower of every block and a block \
+                 carried over it"
             ),
-        ],
-        blocks_world: Some(world),
-        general: None,
-    }
+        ),
+        setting(
+            "planners",
+            "the fewest block moves by A* (`oracle::towers::ExactMoves`), the near-optimal planner (`NearOptimal`, \
+             at most twice the fewest); each also played by the gripper (`agent::TowersPolicy`: at each block-move \
+             boundary it plans from the state it sees and carries the first move out as gripper actions, a move to \
+             the table going to the leftmost empty column), its Drops counted as block moves"
+                .into(),
+        ),
+        setting(
+            "fewest gripper steps",
+            format!(
+                "for problems of up to {FEWEST_STEPS_BLOCKS} blocks, by the exact solver of the side view \
+                 (`oracle::ExactSolver::for_world`: A* over Pick, moves and Drop); every agent's gripper steps are \
+                 set against it"
+            ),
+        ),
+        setting("learner", learner_setting(learner)),
+        setting(
+            "backend",
+            format!(
+                "the games on the {} backend (rapier2d dynamics to rest at every Drop), horizon {HORIZON}",
+                world.backend
+            ),
+        ),
+        setting(
+            "stacking steps",
+            "a problem's fewest block moves, as Duan et al. (\"One-Shot Imitation Learning\", 2017) group their \
+             tasks by stacking steps"
+                .into(),
+        ),
+        setting(
+            "agreement",
+            format!(
+                "per number of blocks, {} uniformly random legal steps on the physics backend and the same actions \
+                 on the grid model, in episodes of up to {AGREEMENT_HORIZON} steps (a goal drawn per episode) reset \
+                 with episode_seed(episode_seed({}, 9000 + N), e); an episode whose outcomes part ends there",
+                agreement_steps(ctx.budget),
+                ctx.seeds.test
+            ),
+        ),
+    ]
+}
+
+/// How the learner was trained, in words.
+fn learner_setting(learner: &TrainConfig) -> String {
+    format!(
+        "the tabular learner of the side view (`blockstack train --view side`'s preset: {} representation, {} \
+         reward, alpha {}, gamma {}, epsilon {}), {} training games on the goals {} of {LEARNER_BLOCKS} blocks on {} \
+         x {}, seed {}; it plays the problems of {LEARNER_BLOCKS} blocks greedily (epsilon 0)",
+        learner.repr,
+        learner.world.reward.name(),
+        learner.params.alpha,
+        learner.params.gamma,
+        learner.params.epsilon,
+        learner.games,
+        learner.goals.iter().map(Goal::to_string).collect::<Vec<_>>().join(", "),
+        learner.world.grid.width(),
+        learner.world.grid.height(),
+        learner.seed
+    )
 }
 
 #[cfg(test)]
