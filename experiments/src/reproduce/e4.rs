@@ -408,7 +408,7 @@ fn figures(ctx: &Context, original: &[Curve], paper_learner: &Curve, ours: &Curv
             "Fig. 3 beside ours: the paper's learner in the original world, failures and mean steps* against \
              training games of up to 5000 steps, at test epsilon 0.1 and 0.05"
                 .into(),
-            Drawing::Learning(beside_fig3(&original, ctx.scale.replicates)),
+            Drawing::Learning(beside_fig3(original, ctx.scale.replicates)),
         ),
         Figure::new(
             "e4-paper-learner",
@@ -417,7 +417,7 @@ fn figures(ctx: &Context, original: &[Curve], paper_learner: &Curve, ours: &Curv
                 .into(),
             Drawing::Learning(learning(
                 "E4: the paper's learner in the SPEC world, 3 blocks",
-                &paper_learner,
+                paper_learner,
                 note.clone(),
             )),
         ),
@@ -426,7 +426,7 @@ fn figures(ctx: &Context, original: &[Curve], paper_learner: &Curve, ours: &Curv
             "Our learner: failures and mean steps to goal (over successes) against training games".into(),
             Drawing::Learning(learning(
                 "E4: our learner (role + step-cost), 3 blocks",
-                &ours,
+                ours,
                 format!(
                     "Each point is the agent as training for that many games gives it (final replay included). \
                      Test policy: random action with probability {}.",

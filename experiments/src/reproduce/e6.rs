@@ -55,8 +55,12 @@ fn suites() -> [(Goals, PaperTable, &'static str, &'static str); 3] {
 
 /// One world's E6: per table, the suite, the arms (baseline first) and each corrected
 /// arm's test against the baseline; and what was run.
+/// A suite of one of the experiment's tables, its arms (the baseline first) and each
+/// corrected arm's test against the baseline.
+type PlayedTable = (Suite, Vec<ArmResult>, Vec<TestOutcome>);
+
 struct World {
-    tables: Vec<(Suite, Vec<ArmResult>, Vec<TestOutcome>)>,
+    tables: Vec<PlayedTable>,
     baseline: String,
     demonstrations: String,
 }
@@ -148,7 +152,7 @@ fn play_tables(
     base_agents: &[QAgent],
     by_demonstrator: &[&[(QAgent, agent::correction::SessionReport)]],
     profiles: &[DemonstratorProfile],
-) -> Result<Vec<(Suite, Vec<ArmResult>, Vec<TestOutcome>)>> {
+) -> Result<Vec<PlayedTable>> {
     let eps = ctx.test_epsilon();
     let mut tables = Vec::new();
     for (goals, _, _, _) in suites() {
@@ -156,7 +160,7 @@ fn play_tables(
         let optimum = suite.optimum()?;
         let base = play_replicates(
             &suite,
-            &base_agents,
+            base_agents,
             |a| Ok(Box::new(a.policy(eps)?)),
             ctx.progress,
             "E6",
