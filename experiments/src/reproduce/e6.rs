@@ -53,12 +53,12 @@ fn suites() -> [(Goals, PaperTable, &'static str, &'static str); 3] {
     ]
 }
 
-/// One world's E6: per table, the suite, the arms (baseline first) and each corrected
-/// arm's test against the baseline; and what was run.
 /// A suite of one of the experiment's tables, its arms (the baseline first) and each
 /// corrected arm's test against the baseline.
 type PlayedTable = (Suite, Vec<ArmResult>, Vec<TestOutcome>);
 
+/// One world's E6: per table, the suite, the arms (baseline first) and each corrected
+/// arm's test against the baseline; and what was run.
 struct World {
     tables: Vec<PlayedTable>,
     baseline: String,

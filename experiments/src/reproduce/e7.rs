@@ -64,6 +64,15 @@ impl Agent {
         matches!(self, Agent::Paper { .. } | Agent::Ours { .. })
     }
 
+    /// The probability of a random action it plays with: none for a greedy learner, the
+    /// test's `eps` otherwise.
+    fn epsilon(self, eps: f64) -> f64 {
+        match self {
+            Agent::Paper { greedy: true } | Agent::Ours { greedy: true } => 0.0,
+            _ => eps,
+        }
+    }
+
     /// The kind of policy it is, as `blockstack run --agent` names it.
     fn kind(self) -> PolicyKind {
         match self {
@@ -91,16 +100,15 @@ pub(super) fn run(ctx: &Context, shared: &Shared) -> Result<Experiment> {
     };
     let optimum = suite.optimum()?;
     let eps = ctx.test_epsilon();
-    let epsilon = |greedy: bool| if greedy { 0.0 } else { eps };
     let world = &suite.world;
     let policy = |agent: Agent| -> Result<Box<dyn Policy + '_>> {
-        let (model, greedy): (Option<&dyn PlayingModel>, bool) = match agent {
-            Agent::Paper { greedy } => (Some(paper_agent as &dyn PlayingModel), greedy),
-            Agent::Ours { greedy } => (Some(ours as &dyn PlayingModel), greedy),
-            _ => (None, false),
+        let model: Option<&dyn PlayingModel> = match agent {
+            Agent::Paper { .. } => Some(paper_agent),
+            Agent::Ours { .. } => Some(ours),
+            _ => None,
         };
         let options = PolicyOptions {
-            epsilon: epsilon(greedy),
+            epsilon: agent.epsilon(eps),
             ..PolicyOptions::default()
         };
         Ok(agent.kind().policy(world, model, &options)?)
@@ -187,11 +195,14 @@ fn arm(a: Agent, played: &[Vec<EpisodeResult>], optimum: &[u32], eps: f64) -> Ar
         Agent::Oracle => "the centroid + A* oracle, planning from each start".into(),
         Agent::Exact => "the exact solver's shortest plan".into(),
     };
-    let test_epsilon = match a {
-        Agent::Paper { greedy } | Agent::Ours { greedy } => Some(if greedy { 0.0 } else { eps }),
-        _ => None,
-    };
-    ArmResult::of(a.name(), what, test_epsilon, played, optimum, HORIZON)
+    ArmResult::of(
+        a.name(),
+        what,
+        a.is_learner().then(|| a.epsilon(eps)),
+        played,
+        optimum,
+        HORIZON,
+    )
 }
 
 /// The settings: the agents, the games, the test policy, the optimum and the tests.
