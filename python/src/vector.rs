@@ -6,6 +6,8 @@ use numpy::{
     PyArray1, PyArray2, PyArrayDescrMethods, PyArrayDyn, PyArrayMethods, PyReadwriteArray1, PyReadwriteArray2,
     PyReadwriteArrayDyn, PyUntypedArray, PyUntypedArrayMethods,
 };
+use std::ops::Range;
+
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use sim::{Action, ActionMask, Autoreset, Observation, VecEnv, VecStep};
@@ -40,9 +42,6 @@ struct Slot<'a> {
     pairs: &'a mut i64,
     goal: &'a mut [i64],
     goal_tower: &'a mut [i64],
-    /// Under same-step autoreset, the last observation of an episode that ended in this
-    /// step, and whether that step's move was blocked.
-    last: &'a mut Option<(Observation, bool)>,
 }
 
 enum ObsSlot<'a> {
@@ -58,7 +57,9 @@ enum ObsSlot<'a> {
 impl Slot<'_> {
     /// Writes `obs` and its legal actions `mask` (a step's `info.action_mask`: not
     /// recomputed from the observation, a cost a batch of thousands notices).
-    fn write_obs(&mut self, kind: ObsKind, obs: &Observation, mask: &ActionMask) {
+    /// `pairs` is the step's `info.pairs_in_place` when it describes `obs`, `None` to count
+    /// them.
+    fn write_obs(&mut self, kind: ObsKind, obs: &Observation, mask: &ActionMask, pairs: Option<usize>) {
         match &mut self.obs {
             ObsSlot::Bytes(out) => kind
                 .write(obs, out)
@@ -88,29 +89,105 @@ impl Slot<'_> {
                 tower: self.goal_tower,
             },
         );
-        *self.pairs = obs.goal.pairs_in_place(&obs.state) as i64;
+        *self.pairs = pairs.unwrap_or_else(|| obs.goal.pairs_in_place(&obs.state)) as i64;
     }
 
-    fn write(&mut self, kind: ObsKind, result: &VecStep) {
-        *self.last = None;
+    /// Writes `result`; returns, under same-step autoreset, the last observation of an
+    /// episode that ended in this step and whether that step's move was blocked.
+    fn write(&mut self, kind: ObsKind, result: &VecStep) -> Option<(Observation, bool)> {
         match result {
             VecStep::Reset(obs) => {
-                self.write_obs(kind, obs, &obs.legal_actions());
+                self.write_obs(kind, obs, &obs.legal_actions(), None);
                 (*self.reward, *self.terminated, *self.truncated, *self.blocked) = (0.0, false, false, false);
+                None
             }
             VecStep::Stepped(step) => {
-                self.write_obs(kind, &step.observation, &step.info.action_mask);
+                // After a same-step reset the info's pairs are the ended episode's.
+                let pairs = step
+                    .info
+                    .final_observation
+                    .is_none()
+                    .then_some(step.info.pairs_in_place);
+                self.write_obs(kind, &step.observation, &step.info.action_mask, pairs);
                 *self.reward = step.reward;
                 *self.terminated = step.terminated;
                 *self.truncated = step.truncated;
                 *self.blocked = step.info.blocked;
-                if let Some(last) = step.info.final_observation.as_deref().cloned() {
-                    // The step's info is the reset's; the ended step's goes with its last
-                    // observation, as Gymnasium's same-step mode reports them.
-                    *self.blocked = false;
-                    *self.last = Some((last, step.info.blocked));
-                }
+                let last = step.info.final_observation.as_deref()?;
+                // The step's info is the reset's; the ended step's goes with its last
+                // observation, as Gymnasium's same-step mode reports them.
+                *self.blocked = false;
+                Some((last.clone(), step.info.blocked))
             }
+        }
+    }
+}
+
+/// The part of every buffer that belongs to one of `VecEnv::chunks`' ranges, written by the
+/// thread that steps that range: cut once per range per call, and cut again per
+/// environment on that thread.
+struct Chunk<'a> {
+    /// The index of the chunk's first environment.
+    start: usize,
+    obs: ChunkObs<'a>,
+    rewards: &'a mut [f64],
+    terminations: &'a mut [bool],
+    truncations: &'a mut [bool],
+    mask: &'a mut [i8],
+    blocked: &'a mut [bool],
+    pairs: &'a mut [i64],
+    goal: &'a mut [i64],
+    goal_tower: &'a mut [i64],
+    /// Sizes per environment: observation bytes, actions, blocks.
+    obs_len: usize,
+    actions: usize,
+    blocks: usize,
+    /// `(index, last observation, blocked)` of each episode that ended in this step under
+    /// same-step autoreset, in index order.
+    ended: Vec<(usize, Observation, bool)>,
+}
+
+enum ChunkObs<'a> {
+    Bytes(&'a mut [u8]),
+    State {
+        blocks: &'a mut [i64],
+        held: &'a mut [i64],
+        goal: &'a mut [i64],
+        goal_tower: &'a mut [i64],
+    },
+}
+
+impl Chunk<'_> {
+    /// Writes `result` of the chunk's environment `i`.
+    fn write(&mut self, kind: ObsKind, i: usize, result: &VecStep) {
+        let (o, a, b) = (self.obs_len, self.actions, self.blocks);
+        let obs = match &mut self.obs {
+            ChunkObs::Bytes(bytes) => ObsSlot::Bytes(&mut bytes[i * o..(i + 1) * o]),
+            ChunkObs::State {
+                blocks,
+                held,
+                goal,
+                goal_tower,
+            } => ObsSlot::State {
+                blocks: &mut blocks[2 * b * i..2 * b * (i + 1)],
+                held: &mut held[i],
+                goal: &mut goal[b * i..b * (i + 1)],
+                goal_tower: &mut goal_tower[b * i..b * (i + 1)],
+            },
+        };
+        let mut slot = Slot {
+            obs,
+            reward: &mut self.rewards[i],
+            terminated: &mut self.terminations[i],
+            truncated: &mut self.truncations[i],
+            mask: &mut self.mask[a * i..a * (i + 1)],
+            blocked: &mut self.blocked[i],
+            pairs: &mut self.pairs[i],
+            goal: &mut self.goal[b * i..b * (i + 1)],
+            goal_tower: &mut self.goal_tower[b * i..b * (i + 1)],
+        };
+        if let Some((last, blocked)) = slot.write(kind, result) {
+            self.ended.push((self.start + i, last, blocked));
         }
     }
 }
@@ -131,7 +208,6 @@ pub struct NativeVecEnv {
     pairs_in_place: Py<PyArray1<i64>>,
     goal: Py<PyArray2<i64>>,
     goal_tower: Py<PyArray2<i64>>,
-    last: Vec<Option<(Observation, bool)>>,
 }
 
 /// Borrows of every buffer, alive while a batch call writes into them.
@@ -163,63 +239,76 @@ fn slice<'a, T: numpy::Element, D: numpy::ndarray::Dimension>(
     a.as_slice_mut().expect("the buffers are allocated contiguous")
 }
 
+/// The first `n` items of `rest`, which keeps the others.
+fn take<'a, T>(rest: &mut &'a mut [T], n: usize) -> &'a mut [T] {
+    let (head, tail) = std::mem::take(rest).split_at_mut(n);
+    *rest = tail;
+    head
+}
+
 impl<'py> Borrows<'py> {
-    /// One slot per environment over these buffers.
-    fn slots<'a>(&'a mut self, last: &'a mut [Option<(Observation, bool)>], blocks: usize) -> Vec<Slot<'a>> {
-        let n = last.len();
+    /// One chunk per range of environments (`VecEnv::chunks`, consecutive from 0) over these
+    /// buffers.
+    fn chunks<'a>(&'a mut self, ranges: &[Range<usize>], envs: usize, blocks: usize) -> Vec<Chunk<'a>> {
         let actions = Action::count(blocks);
-        let obs: Vec<ObsSlot<'a>> = match &mut self.obs {
+        enum Rest<'a> {
+            Bytes(&'a mut [u8], usize),
+            State([&'a mut [i64]; 4]),
+        }
+        let mut obs = match &mut self.obs {
             ObsBorrow::Bytes(a) => {
                 let s = slice(a);
-                let len = s.len() / n.max(1);
-                s.chunks_mut(len.max(1)).map(ObsSlot::Bytes).collect()
+                let len = s.len() / envs.max(1);
+                Rest::Bytes(s, len)
             }
             ObsBorrow::State {
-                blocks: b,
+                blocks,
                 held,
                 goal,
                 goal_tower,
-            } => slice(b)
-                .chunks_mut(2 * blocks)
-                .zip(slice(held).iter_mut())
-                .zip(slice(goal).chunks_mut(blocks).zip(slice(goal_tower).chunks_mut(blocks)))
-                .map(|((blocks, held), (goal, goal_tower))| ObsSlot::State {
-                    blocks,
-                    held,
-                    goal,
-                    goal_tower,
-                })
-                .collect(),
+            } => Rest::State([slice(blocks), slice(held), slice(goal), slice(goal_tower)]),
         };
-        obs.into_iter()
-            .zip(slice(&mut self.rewards).iter_mut())
-            .zip(slice(&mut self.terminations).iter_mut())
-            .zip(slice(&mut self.truncations).iter_mut())
-            .zip(slice(&mut self.action_mask).chunks_mut(actions))
-            .zip(slice(&mut self.blocked).iter_mut())
-            .zip(slice(&mut self.pairs_in_place).iter_mut())
-            .zip(
-                slice(&mut self.goal)
-                    .chunks_mut(blocks)
-                    .zip(slice(&mut self.goal_tower).chunks_mut(blocks)),
-            )
-            .zip(last.iter_mut())
-            .map(
-                |((((((((obs, reward), terminated), truncated), mask), blocked), pairs), (goal, goal_tower)), last)| {
-                    Slot {
-                        obs,
-                        reward,
-                        terminated,
-                        truncated,
-                        mask,
-                        blocked,
-                        pairs,
-                        goal,
-                        goal_tower,
-                        last,
-                    }
-                },
-            )
+        let mut rewards = slice(&mut self.rewards);
+        let mut terminations = slice(&mut self.terminations);
+        let mut truncations = slice(&mut self.truncations);
+        let mut mask = slice(&mut self.action_mask);
+        let mut blocked = slice(&mut self.blocked);
+        let mut pairs = slice(&mut self.pairs_in_place);
+        let mut goal = slice(&mut self.goal);
+        let mut goal_tower = slice(&mut self.goal_tower);
+        ranges
+            .iter()
+            .map(|r| {
+                let n = r.len();
+                let (obs, obs_len) = match &mut obs {
+                    Rest::Bytes(bytes, len) => (ChunkObs::Bytes(take(bytes, n * *len)), *len),
+                    Rest::State([b, h, g, t]) => (
+                        ChunkObs::State {
+                            blocks: take(b, n * 2 * blocks),
+                            held: take(h, n),
+                            goal: take(g, n * blocks),
+                            goal_tower: take(t, n * blocks),
+                        },
+                        0,
+                    ),
+                };
+                Chunk {
+                    start: r.start,
+                    obs,
+                    rewards: take(&mut rewards, n),
+                    terminations: take(&mut terminations, n),
+                    truncations: take(&mut truncations, n),
+                    mask: take(&mut mask, n * actions),
+                    blocked: take(&mut blocked, n),
+                    pairs: take(&mut pairs, n),
+                    goal: take(&mut goal, n * blocks),
+                    goal_tower: take(&mut goal_tower, n * blocks),
+                    obs_len,
+                    actions,
+                    blocks,
+                    ended: Vec::new(),
+                }
+            })
             .collect()
     }
 }
@@ -345,7 +434,6 @@ impl NativeVecEnv {
             pairs_in_place: PyArray1::zeros(py, num_envs, false).unbind(),
             goal: PyArray2::zeros(py, [num_envs, blocks], false).unbind(),
             goal_tower: PyArray2::zeros(py, [num_envs, blocks], false).unbind(),
-            last: vec![None; num_envs],
         })
     }
 
@@ -392,12 +480,13 @@ impl NativeVecEnv {
             )));
         }
         let mut borrows = self.borrow(py);
-        let mut slots = borrows.slots(&mut self.last, self.blocks);
+        let ranges = self.vec.chunks();
+        let mut chunks = borrows.chunks(&ranges, self.vec.len(), self.blocks);
         let (vec, kind) = (&mut self.vec, self.kind);
         py.detach(|| {
             guard(|| {
-                vec.reset_with(&seeds, &mut slots, |obs, slot| {
-                    slot.write(kind, &VecStep::Reset(obs.clone()));
+                vec.reset_chunks(&seeds, &mut chunks, |chunk, i, obs| {
+                    chunk.write(kind, i, &VecStep::Reset(obs.clone()));
                 });
                 Ok(())
             })
@@ -410,26 +499,23 @@ impl NativeVecEnv {
     /// otherwise).
     fn step<'py>(&mut self, py: Python<'py>, actions: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyList>> {
         let actions = self.actions(actions)?;
-        {
-            let mut borrows = self.borrow(py);
-            let mut slots = borrows.slots(&mut self.last, self.blocks);
-            let (vec, kind) = (&mut self.vec, self.kind);
-            py.detach(|| {
-                guard(|| {
-                    vec.step_with(&actions, &mut slots, |result, slot| slot.write(kind, result))
-                        .or_value_error()
-                })
-            })?;
-        }
+        let mut borrows = self.borrow(py);
+        let ranges = self.vec.chunks();
+        let mut chunks = borrows.chunks(&ranges, self.vec.len(), self.blocks);
+        let (vec, kind) = (&mut self.vec, self.kind);
+        py.detach(|| {
+            guard(|| {
+                vec.step_chunks(&actions, &mut chunks, |chunk, i, result| chunk.write(kind, i, result))
+                    .or_value_error()
+            })
+        })?;
         let ended = PyList::empty(py);
-        for (i, last) in self.last.iter().enumerate() {
-            if let Some((obs, blocked)) = last {
-                ended.append((
-                    i,
-                    observe::to_python(py, self.kind, obs)?,
-                    observe::info(py, obs, *blocked)?,
-                ))?;
-            }
+        for (i, obs, blocked) in chunks.iter().flat_map(|c| &c.ended) {
+            ended.append((
+                i,
+                observe::to_python(py, self.kind, obs)?,
+                observe::info(py, obs, *blocked)?,
+            ))?;
         }
         Ok(ended)
     }

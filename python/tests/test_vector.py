@@ -86,15 +86,23 @@ def test_stack_vector_env_equals_sync_vector_env(mode, kwargs):
     assert ends > n, "episodes ended, both ways"
 
 
-def test_threads_change_nothing():
-    kwargs = {"obs": "planes", "backend": "grid", "blocks": 3, "max_episode_steps": 25}
-    one = StackVectorEnv(300, threads=1, **kwargs)
-    two = StackVectorEnv(300, threads=2, **kwargs)
+@pytest.mark.parametrize("mode", [AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP])
+@pytest.mark.parametrize("obs", ["planes", "state"])
+def test_threads_change_nothing(mode, obs):
+    # Above PARALLEL_FROM_ENVS, and odd: two threads each write a chunk of unequal length.
+    n = blockstack.vector.PARALLEL_FROM_ENVS + 3
+    kwargs = {"obs": obs, "backend": "grid", "blocks": 3, "max_episode_steps": 25, "autoreset_mode": mode}
+    one = StackVectorEnv(n, threads=1, **kwargs)
+    two = StackVectorEnv(n, threads=2, **kwargs)
     assert_same(one.reset(seed=4), two.reset(seed=4), "reset")
     rng = np.random.default_rng(2)
+    ends = 0
     for t in range(60):
-        actions = rng.integers(0, 8, size=300)
-        assert_same(one.step(actions), two.step(actions), f"step {t}")
+        actions = rng.integers(0, 8, size=n)
+        got = two.step(actions)
+        assert_same(one.step(actions), got, f"step {t}")
+        ends += int(np.sum(got[2] | got[3]))
+    assert ends > n, "episodes ended in both chunks"
 
 
 def test_make_vec_uses_the_native_vector_env():

@@ -1,5 +1,7 @@
 //! Many environments stepped together, in parallel.
 
+use std::ops::Range;
+
 use rayon::prelude::*;
 
 use crate::action::Action;
@@ -142,6 +144,17 @@ impl VecEnv {
             .collect()
     }
 
+    /// The environments each batch call hands to one thread, as consecutive index ranges in
+    /// order: one range covering every environment when the caller's thread steps the batch
+    /// (one thread, or fewer than [`PARALLEL_FROM_ENVS`] environments), otherwise one
+    /// contiguous range per thread. [`VecEnv::step_chunks`] and [`VecEnv::reset_chunks`] take
+    /// one chunk of the caller's per range.
+    pub fn chunks(&self) -> Vec<Range<usize>> {
+        let n = self.envs.len();
+        let len = parallel(self.pool.as_ref(), n).map_or(n, |(_, chunk)| chunk).max(1);
+        (0..n).step_by(len).map(|start| start..(start + len).min(n)).collect()
+    }
+
     /// Resets environment `i` with `seeds[i]` (`None` continues its generator, as
     /// [`Env::reset`] does) and hands its first observation to `write` with `slots[i]`, on
     /// the thread that reset it.
@@ -155,22 +168,48 @@ impl VecEnv {
         slots: &mut [T],
         write: impl Fn(&Observation, &mut T) + Sync,
     ) {
-        assert_eq!(seeds.len(), self.len(), "one seed per environment");
         assert_eq!(slots.len(), self.len(), "one slot per environment");
+        let mut parts = split(slots, &self.chunks());
+        self.reset_chunks(seeds, &mut parts, |part, i, obs| write(obs, &mut part[i]));
+    }
+
+    /// Resets environment `i` with `seeds[i]` as [`VecEnv::reset_with`] does, handing its
+    /// first observation to `write` with the chunk of [`VecEnv::chunks`] it belongs to and
+    /// its index in that chunk, on the thread that reset it: a caller that writes into its
+    /// own buffers cuts them once per chunk rather than once per environment.
+    ///
+    /// # Panics
+    ///
+    /// Unless there is one seed per environment and one chunk per range of
+    /// [`VecEnv::chunks`].
+    pub fn reset_chunks<C: Send>(
+        &mut self,
+        seeds: &[Option<u64>],
+        chunks: &mut [C],
+        write: impl Fn(&mut C, usize, &Observation) + Sync,
+    ) {
+        assert_eq!(seeds.len(), self.len(), "one seed per environment");
+        let ranges = self.chunks();
+        assert_eq!(chunks.len(), ranges.len(), "one chunk per range of VecEnv::chunks");
         self.ended.fill(false);
-        let reset = |(envs, seeds, slots): (&mut [Env], &[Option<u64>], &mut [T])| {
-            for ((env, &seed), slot) in envs.iter_mut().zip(seeds).zip(slots) {
-                write(&env.reset(seed), slot);
+        let reset = |(envs, seeds, chunk): (&mut [Env], &[Option<u64>], &mut C)| {
+            for (i, (env, &seed)) in envs.iter_mut().zip(seeds).enumerate() {
+                write(chunk, i, &env.reset(seed));
             }
         };
+        let len = ranges.first().map_or(1, |r| r.len().max(1));
         match parallel(self.pool.as_ref(), self.envs.len()) {
-            None => reset((&mut self.envs, seeds, slots)),
-            Some((pool, chunk)) => pool.install(|| {
+            None => {
+                if let Some(chunk) = chunks.first_mut() {
+                    reset((&mut self.envs, seeds, chunk));
+                }
+            }
+            Some((pool, _)) => pool.install(|| {
                 self.envs
-                    .par_chunks_mut(chunk)
-                    .zip(seeds.par_chunks(chunk))
-                    .zip(slots.par_chunks_mut(chunk))
-                    .for_each(|((envs, seeds), slots)| reset((envs, seeds, slots)))
+                    .par_chunks_mut(len)
+                    .zip(seeds.par_chunks(len))
+                    .zip(chunks.par_iter_mut())
+                    .for_each(|((envs, seeds), chunk)| reset((envs, seeds, chunk)))
             }),
         }
     }
@@ -204,13 +243,34 @@ impl VecEnv {
         slots: &mut [T],
         write: impl Fn(&VecStep, &mut T) + Sync,
     ) -> Result<()> {
+        assert_eq!(slots.len(), self.len(), "one slot per environment");
+        let mut parts = split(slots, &self.chunks());
+        self.step_chunks(actions, &mut parts, |part, i, result| write(result, &mut part[i]))
+    }
+
+    /// Steps every environment as [`VecEnv::step_with`] does, handing environment `i`'s
+    /// result to `write` with the chunk of [`VecEnv::chunks`] it belongs to and its index in
+    /// that chunk, on the thread that stepped it. A caller with thousands of environments
+    /// builds one writer per thread this way, not one per environment on the calling thread
+    /// (the Python vector env: docs/performance.md).
+    ///
+    /// # Panics
+    ///
+    /// Unless there is one chunk per range of [`VecEnv::chunks`].
+    pub fn step_chunks<C: Send>(
+        &mut self,
+        actions: &[Action],
+        chunks: &mut [C],
+        write: impl Fn(&mut C, usize, &VecStep) + Sync,
+    ) -> Result<()> {
         if actions.len() != self.len() {
             return Err(SimError::ActionCountMismatch {
                 envs: self.len(),
                 actions: actions.len(),
             });
         }
-        assert_eq!(slots.len(), self.len(), "one slot per environment");
+        let ranges = self.chunks();
+        assert_eq!(chunks.len(), ranges.len(), "one chunk per range of VecEnv::chunks");
         // Every environment that takes its action must accept it (running, the block
         // exists, legal under the protocol); one about to reset ignores its action. The
         // first refusal in environment order, as a serial check would find it.
@@ -223,57 +283,56 @@ impl VecEnv {
             Ok(())
         };
         let mode = self.autoreset;
-        let step = |(env, &action, ended, slot): (&mut Env, &Action, &mut bool, &mut T)| -> Result<()> {
-            let result = if *ended {
+        let step = |env: &mut Env, action: Action, ended: &mut bool| -> Result<VecStep> {
+            if *ended {
                 *ended = false;
-                VecStep::Reset(env.reset(None))
-            } else {
-                let mut step = env.step(action)?;
-                if step.terminated || step.truncated {
-                    match mode {
-                        Autoreset::SameStep => {
-                            let first = env.reset(None);
-                            step.info.final_observation =
-                                Some(Box::new(std::mem::replace(&mut step.observation, first)));
-                            step.info.action_mask = step.observation.legal_actions();
-                        }
-                        Autoreset::NextStep => *ended = true,
+                return Ok(VecStep::Reset(env.reset(None)));
+            }
+            let mut step = env.step(action)?;
+            if step.terminated || step.truncated {
+                match mode {
+                    Autoreset::SameStep => {
+                        let first = env.reset(None);
+                        step.info.final_observation = Some(Box::new(std::mem::replace(&mut step.observation, first)));
+                        step.info.action_mask = step.observation.legal_actions();
                     }
+                    Autoreset::NextStep => *ended = true,
                 }
-                VecStep::Stepped(step)
-            };
-            write(&result, slot);
+            }
+            Ok(VecStep::Stepped(step))
+        };
+        let step_chunk = |(envs, actions, ended, chunk): (&mut [Env], &[Action], &mut [bool], &mut C)| {
+            for (i, ((env, &action), ended)) in envs.iter_mut().zip(actions).zip(ended.iter_mut()).enumerate() {
+                write(chunk, i, &step(env, action, ended)?);
+            }
             Ok(())
         };
-        let step_chunk = |(envs, actions, ended, slots): (&mut [Env], &[Action], &mut [bool], &mut [T])| {
-            envs.iter_mut()
-                .zip(actions)
-                .zip(ended.iter_mut())
-                .zip(slots.iter_mut())
-                .try_for_each(|(((env, action), ended), slot)| step((env, action, ended, slot)))
-        };
+        let len = ranges.first().map_or(1, |r| r.len().max(1));
         match parallel(self.pool.as_ref(), self.envs.len()) {
             None => {
                 check((&self.envs, actions, &self.ended))?;
-                step_chunk((&mut self.envs, actions, &mut self.ended, slots))
+                match chunks.first_mut() {
+                    Some(chunk) => step_chunk((&mut self.envs, actions, &mut self.ended, chunk)),
+                    None => Ok(()),
+                }
             }
-            Some((pool, chunk)) => pool.install(|| {
+            Some((pool, _)) => pool.install(|| {
                 // Checked chunk by chunk in parallel, then stepped only if every chunk
                 // passed: the results in chunk order give the first refusal.
                 let checks: Vec<Result<()>> = self
                     .envs
-                    .par_chunks(chunk)
-                    .zip(actions.par_chunks(chunk))
-                    .zip(self.ended.par_chunks(chunk))
+                    .par_chunks(len)
+                    .zip(actions.par_chunks(len))
+                    .zip(self.ended.par_chunks(len))
                     .map(|((envs, actions), ended)| check((envs, actions, ended)))
                     .collect();
                 checks.into_iter().collect::<Result<()>>()?;
                 self.envs
-                    .par_chunks_mut(chunk)
-                    .zip(actions.par_chunks(chunk))
-                    .zip(self.ended.par_chunks_mut(chunk))
-                    .zip(slots.par_chunks_mut(chunk))
-                    .try_for_each(|(((envs, actions), ended), slots)| step_chunk((envs, actions, ended, slots)))
+                    .par_chunks_mut(len)
+                    .zip(actions.par_chunks(len))
+                    .zip(self.ended.par_chunks_mut(len))
+                    .zip(chunks.par_iter_mut())
+                    .try_for_each(|(((envs, actions), ended), chunk)| step_chunk((envs, actions, ended, chunk)))
             }),
         }
     }
@@ -282,4 +341,16 @@ impl VecEnv {
     pub fn envs(&self) -> &[Env] {
         &self.envs
     }
+}
+
+/// `slots` cut at `ranges` (consecutive, covering every slot).
+fn split<'a, T>(mut slots: &'a mut [T], ranges: &[Range<usize>]) -> Vec<&'a mut [T]> {
+    ranges
+        .iter()
+        .map(|r| {
+            let (head, tail) = std::mem::take(&mut slots).split_at_mut(r.len());
+            slots = tail;
+            head
+        })
+        .collect()
 }

@@ -1,5 +1,7 @@
 //! The environment: seeding, episode ends, rewards, observations, config errors, VecEnv.
 
+use std::ops::Range;
+
 use sim::reward::{Dense, Paper, Sparse, StepCost, Transition};
 use sim::{
     Action, Autoreset, Backend, BlockId, Cell, Env, EnvConfig, Goal, GoalSpec, Grid, PARALLEL_FROM_ENVS, RewardModel,
@@ -422,6 +424,38 @@ fn vec_env_chunked_on_two_threads_plays_as_one_thread() {
             assert_eq!(play(1), play(2), "{backend} {mode:?}");
         }
     }
+}
+
+/// A batch is handed out in consecutive ranges covering every environment: one below
+/// the threshold or on one thread, one per thread above it; a writer per range sees each of
+/// its environments once, by its index in the range, and writes what `step` returns.
+#[test]
+fn vec_env_hands_each_thread_one_range_and_its_writer_sees_every_env_of_it() {
+    let config = EnvConfig {
+        backend: Backend::Grid,
+        ..EnvConfig::default()
+    };
+    let big = PARALLEL_FROM_ENVS + 3;
+    let ranges = |envs: usize, threads: usize| VecEnv::new(config.clone(), envs, threads).unwrap().chunks();
+    assert_eq!(ranges(5, 2), vec![Range { start: 0, end: 5 }]);
+    assert_eq!(ranges(big, 1), vec![Range { start: 0, end: big }]);
+    assert_eq!(ranges(big, 2), [0..big.div_ceil(2), big.div_ceil(2)..big]);
+    let mut v = VecEnv::new(config.clone(), big, 2).unwrap();
+    let mut solo = VecEnv::new(config.clone(), big, 1).unwrap();
+    v.reset(7);
+    solo.reset(7);
+    let actions: Vec<Action> = (0..big).map(|i| Action::from_index(i % 8, 3).unwrap()).collect();
+    let mut chunks: Vec<Vec<(usize, VecStep)>> = vec![Vec::new(); 2];
+    v.step_chunks(&actions, &mut chunks, |chunk, i, step| chunk.push((i, step.clone())))
+        .unwrap();
+    let expected = solo.step(&actions).unwrap();
+    let mut seen = Vec::new();
+    for (range, chunk) in v.chunks().into_iter().zip(chunks) {
+        let indices: Vec<usize> = chunk.iter().map(|(i, _)| range.start + i).collect();
+        assert_eq!(indices, range.collect::<Vec<_>>());
+        seen.extend(chunk.into_iter().map(|(_, step)| step));
+    }
+    assert_eq!(seen, expected);
 }
 
 #[test]
