@@ -9,7 +9,7 @@
 //!   picked one after another, lifted over the tower, carried to its column and dropped on
 //!   it, each gripper action through the physics and, in lockstep, through the grid model.
 //!   The solver's settings are the world's (`SideSolver::for_blocks`: a tower of ten is a
-//!   world of ten blocks, under the small-world settings; taller ones under the tall).
+//!   world of ten blocks, under the tall-tower settings, as every taller one).
 //!   A height stands when every drop comes to rest on its cell (no `NotAtRest` error) and
 //!   both backends show the same state after it. For each height: whether it stood, the
 //!   rapier steps of the last drop, and the mean time of a drop and of a carry step.
