@@ -1,6 +1,6 @@
-//! `blockstack reproduce --quick` end to end: the report and results.json hold every
-//! experiment, the pictures exist, and an arm's figures are what `blockstack run` gives on
-//! the same starts.
+//! `blockstack reproduce --quick` and `blockstack benchmark --quick` end to end: the report
+//! and results.json hold every experiment, the pictures exist, and an arm's figures are what
+//! `blockstack run` gives on the same starts.
 //!
 //! CI runs `blockstack reproduce --quick --out DIR` once and sets `BLOCKSTACK_QUICK_REPORT=DIR`
 //! so that this test checks that report instead of making its own.
@@ -21,7 +21,7 @@ fn quick_report() -> PathBuf {
     assert!(o.status.success(), "{}", stderr(&o));
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(
-        out.contains("reproduced E1, E2, E3, E4, E5, E6, E7, E8, E9, E10"),
+        out.contains("reproduced E1, E2, E3, E4, E5, E6, E7, E8 (quick run"),
         "{out}"
     );
     dir
@@ -52,14 +52,11 @@ fn the_quick_report_holds_every_experiment() {
     let summary = std::fs::read_to_string(dir.join("summary.md")).expect("summary.md exists");
     let text = std::fs::read_to_string(dir.join("results.json")).unwrap();
     assert_eq!(summary, experiments::reproduce::summary(&text).unwrap());
-    assert_eq!(
-        summary.lines().filter(|l| l.starts_with("| E")).count(),
-        10,
-        "{summary}"
-    );
+    assert_eq!(summary.lines().filter(|l| l.starts_with("| E")).count(), 8, "{summary}");
+    assert_eq!(json["options"]["report"], "paper");
     let experiments = json["experiments"].as_array().unwrap();
     let ids: Vec<&str> = experiments.iter().map(|e| e["id"].as_str().unwrap()).collect();
-    assert_eq!(ids, ["E1", "E2", "E3", "E4", "E5", "E6", "E7", "E8", "E9", "E10"]);
+    assert_eq!(ids, ["E1", "E2", "E3", "E4", "E5", "E6", "E7", "E8"]);
     for e in experiments {
         let id = e["id"].as_str().unwrap();
         assert!(readme.contains(&format!("## {id}: ")), "{id} has no section");
@@ -67,16 +64,8 @@ fn the_quick_report_holds_every_experiment() {
         assert!(!reading.is_empty() && readme.contains(reading), "{id}'s reading");
         let tables = e["tables"].as_array().unwrap();
         let curves = e["curves"].as_array().unwrap();
-        // E9's figures are its own (grouped problems, physics against the grid model), and
-        // E10's (the learned policy by number of blocks).
-        let blocks_world = !e["blocks_world"].is_null();
-        assert_eq!(blocks_world, id == "E9", "{id}");
-        let general = !e["general"].is_null();
-        assert_eq!(general, id == "E10", "{id}");
-        assert!(
-            !tables.is_empty() || !curves.is_empty() || blocks_world || general,
-            "{id} has no figures"
-        );
+        assert!(e["blocks_world"].is_null() && e["general"].is_null(), "{id}");
+        assert!(!tables.is_empty() || !curves.is_empty(), "{id} has no figures");
         for (t, row) in tables
             .iter()
             .enumerate()
@@ -136,9 +125,6 @@ fn the_quick_report_holds_every_experiment() {
         "e7-steps.png",
         "e7-best.gif",
         "e7-paper.gif",
-        "e9-moves.png",
-        "e9-reached.png",
-        "e10-moves.png",
     ] {
         assert!(dir.join(figure).is_file(), "{figure}");
     }
@@ -154,45 +140,6 @@ fn the_quick_report_holds_every_experiment() {
     for table in e8["tables"].as_array().unwrap() {
         assert!(!table["rows"].as_array().unwrap().is_empty());
     }
-
-    // E9: the planners reach every goal, the near-optimal plans are at most twice the fewest
-    // moves, and the physics and the grid model agree.
-    let e9 = &experiments[8]["blocks_world"];
-    for group in e9["by_blocks"].as_array().unwrap() {
-        assert!(group["near_optimal_worst"].as_f64().unwrap() <= 2.0, "{group}");
-        for agent in group["agents"].as_array().unwrap() {
-            if agent["agent"] != "learner" {
-                assert_eq!(agent["success"], 1.0, "{agent}");
-            }
-        }
-    }
-    for a in e9["agreement"].as_array().unwrap() {
-        assert!(a["drops"].as_u64().unwrap() > 0, "{a}");
-        assert_eq!(
-            (&a["same_steps"], &a["same_landings"]),
-            (&a["steps"], &a["drops"]),
-            "{a}"
-        );
-    }
-    assert!(readme.contains("### Physics against the grid model"));
-
-    // E10: the learned policy played every size it was given, each against the near-optimal
-    // planner, and against the fewest moves where searched; NLM's published figures beside.
-    let e10 = &experiments[9]["general"];
-    for row in e10["uniform"].as_array().unwrap() {
-        assert!(row["problems"].as_u64().unwrap() > 0, "{row}");
-        assert!((0.0..=1.0).contains(&row["success"].as_f64().unwrap()), "{row}");
-    }
-    for row in e10["exact"].as_array().unwrap() {
-        // Over the problems the policy solved: at the quick budget's tiny training it may
-        // solve none of a size, and then there is no ratio.
-        match row["near_optimal_fewest_ratio"].as_f64() {
-            Some(near) => assert!((1.0..=2.0).contains(&near), "{row}"),
-            None => assert_eq!(row["success"].as_f64(), Some(0.0), "{row}"),
-        }
-    }
-    assert_eq!(e10["nlm"][1]["published"][1], 85.8);
-    assert!(readme.contains("### Neural Logic Machines' generator"));
 
     // E1: the paper's figure, ours in both worlds, and where the paper's lies against the
     // spread of each world's replicates, said in the reading.
@@ -286,10 +233,86 @@ fn only_runs_the_experiments_asked_for() {
     assert_eq!(o.status.code(), Some(2));
     assert_eq!(stderr(&o).trim_end().lines().count(), 1, "{}", stderr(&o));
     assert!(
-        stderr(&o).contains("--only E11: name experiments E1 to E10"),
+        stderr(&o).contains("no experiment E11: name experiments E1 to E8"),
         "{}",
         stderr(&o)
     );
+    // An experiment of the benchmark's, asked of the reproduction: the command that has it.
+    let o = cli("reproduce")
+        .arg("--quick")
+        .flag("only", "E9")
+        .flag("out", out.to_str().unwrap())
+        .run();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("run `blockstack benchmark --only E9`"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn the_quick_benchmark_holds_e9_and_e10() {
+    let dir = scratch("benchmark-quick");
+    let o = cli("benchmark").arg("--quick").flag("out", dir.to_str().unwrap()).run();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("benchmarked E9, E10 (quick run, seed 1"), "{out}");
+    let readme = std::fs::read_to_string(dir.join("README.md")).expect("README.md exists");
+    assert!(readme.starts_with("# The Blocks World benchmark\n"), "{readme}");
+    let json = read_json(&dir.join("results.json"));
+    assert_eq!(json["options"]["report"], "blocks-world");
+    let text = std::fs::read_to_string(dir.join("results.json")).unwrap();
+    let summary = std::fs::read_to_string(dir.join("summary.md")).expect("summary.md exists");
+    assert_eq!(summary, experiments::reproduce::summary(&text).unwrap());
+    assert!(
+        summary.starts_with("Measured by `blockstack benchmark --quick --seed 1`"),
+        "{summary}"
+    );
+    let experiments = json["experiments"].as_array().unwrap();
+    let ids: Vec<&str> = experiments.iter().map(|e| e["id"].as_str().unwrap()).collect();
+    assert_eq!(ids, ["E9", "E10"]);
+    for figure in ["e9-moves.png", "e9-reached.png", "e10-moves.png"] {
+        assert!(dir.join(figure).is_file(), "{figure}");
+    }
+    // E9: the planners reach every goal, the near-optimal plans are at most twice the fewest
+    // moves, and the physics and the grid model agree.
+    let e9 = &experiments[0]["blocks_world"];
+    for group in e9["by_blocks"].as_array().unwrap() {
+        assert!(group["near_optimal_worst"].as_f64().unwrap() <= 2.0, "{group}");
+        for agent in group["agents"].as_array().unwrap() {
+            if agent["agent"] != "learner" {
+                assert_eq!(agent["success"], 1.0, "{agent}");
+            }
+        }
+    }
+    for a in e9["agreement"].as_array().unwrap() {
+        assert!(a["drops"].as_u64().unwrap() > 0, "{a}");
+        assert_eq!(
+            (&a["same_steps"], &a["same_landings"]),
+            (&a["steps"], &a["drops"]),
+            "{a}"
+        );
+    }
+    assert!(readme.contains("### Physics against the grid model"));
+
+    // E10: the learned policy played every size it was given, each against the near-optimal
+    // planner, and against the fewest moves where searched; NLM's published figures beside.
+    let e10 = &experiments[1]["general"];
+    for row in e10["uniform"].as_array().unwrap() {
+        assert!(row["problems"].as_u64().unwrap() > 0, "{row}");
+        assert!((0.0..=1.0).contains(&row["success"].as_f64().unwrap()), "{row}");
+    }
+    for row in e10["exact"].as_array().unwrap() {
+        // Over the problems the policy solved: at the quick budget's tiny training it may
+        // solve none of a size, and then there is no ratio.
+        match row["near_optimal_fewest_ratio"].as_f64() {
+            Some(near) => assert!((1.0..=2.0).contains(&near), "{row}"),
+            None => assert_eq!(row["success"].as_f64(), Some(0.0), "{row}"),
+        }
+    }
+    assert_eq!(e10["nlm"][1]["published"][1], 85.8);
+    assert!(readme.contains("### Neural Logic Machines' generator"));
 }
 
 #[test]

@@ -1,8 +1,11 @@
 //! The reproduction of the paper (docs/world.md section 9): experiments E1-E8, each beside the
 //! paper's figures, with their statistical tests, pictures, a report and machine-readable
-//! results; E9, ours, the classic Blocks World seen from the side (docs/world.md section
-//! 12); and E10, ours, one learned policy for that world at every size (docs/dqn.md).
-//! `blockstack reproduce` is the command over it.
+//! results; and, as a benchmark of its own beside it, the classic Blocks World: E9, seen
+//! from the side (docs/world.md section 12), and E10, one learned policy for that world at
+//! every size (docs/dqn.md). `blockstack reproduce` is the command over the first
+//! ([`Report::Paper`]), `blockstack benchmark` over the second ([`Report::BlocksWorld`]):
+//! the same machinery, each its own report, since the benchmark is ours and measures what the
+//! paper never did.
 //!
 //! [`reproduce`] runs the experiments asked for and returns the [`Reproduction`]: data only,
 //! nothing printed, nothing written; [`write_report`] then draws the pictures and writes
@@ -13,7 +16,7 @@
 //!
 //! Every experiment is one module `e1` to `e10` with one signature, `run(&Context, &Shared)`,
 //! listed once in [`EXPERIMENTS`] with its id, the jobs it reports and the parts of the
-//! shared stage it needs. The shared stage (`Shared`) trains the agents several experiments
+//! shared stage it needs; a [`Report`] runs its own of them. The shared stage (`Shared`) trains the agents several experiments
 //! play (our learner, the paper's learner in the SPEC world) before the experiments that
 //! need them, and only those the experiments asked for need: `--only E1` trains none of
 //! them. The experiments that need nothing run while the shared stage trains.
@@ -138,11 +141,13 @@ pub enum ReproduceError {
     /// The report's folder or one of its files could not be written.
     #[error(transparent)]
     Files(#[from] files::FilesError),
-    /// An experiment id that is not in [`EXPERIMENTS`].
-    #[error("no experiment {id}: name experiments E1 to E10")]
+    /// An experiment id that is not one of the report's ([`Report::check`]).
+    #[error("{}", unknown_experiment(id, *report))]
     UnknownExperiment {
         /// The id asked for.
         id: String,
+        /// The report it was asked of.
+        report: Report,
     },
     /// E8's arms could not be run where they were sent (a cluster).
     #[error("E8's arms: {0}")]
@@ -158,9 +163,79 @@ pub enum ReproduceError {
 /// Shorthand for results whose error is a [`ReproduceError`].
 pub type Result<T, E = ReproduceError> = std::result::Result<T, E>;
 
+/// Which report a run writes: the paper's reproduction or the Blocks World benchmark, each
+/// with its own experiments, command and front matter.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Report {
+    /// The paper reproduced: E1-E8 (`blockstack reproduce`).
+    #[default]
+    Paper,
+    /// The classic Blocks World, ours: E9 and E10 (`blockstack benchmark`).
+    BlocksWorld,
+}
+
+impl Report {
+    /// Its experiments, in the report's order.
+    pub fn experiments(self) -> &'static [Spec] {
+        match self {
+            Report::Paper => &EXPERIMENTS[..8],
+            Report::BlocksWorld => &EXPERIMENTS[8..],
+        }
+    }
+
+    /// The `blockstack` subcommand that writes it.
+    pub fn command(self) -> &'static str {
+        match self {
+            Report::Paper => "reproduce",
+            Report::BlocksWorld => "benchmark",
+        }
+    }
+
+    /// Its experiments' ids for messages: "E1 to E8", "E9 and E10".
+    fn ids(self) -> String {
+        let e = self.experiments();
+        let join = if e.len() == 2 { "and" } else { "to" };
+        format!("{} {join} {}", e[0].id, e[e.len() - 1].id)
+    }
+
+    /// `Ok` if every id of `only` names one of its experiments (in any case); otherwise the
+    /// first that does not, with the report that has it if another does.
+    pub fn check(self, only: &[String]) -> Result<()> {
+        match only
+            .iter()
+            .find(|id| !self.experiments().iter().any(|e| e.id.eq_ignore_ascii_case(id)))
+        {
+            Some(id) => Err(ReproduceError::UnknownExperiment {
+                id: id.clone(),
+                report: self,
+            }),
+            None => Ok(()),
+        }
+    }
+}
+
+/// The message for an id `report` does not have: where it is, if another report has it.
+fn unknown_experiment(id: &str, report: Report) -> String {
+    let other = [Report::Paper, Report::BlocksWorld]
+        .into_iter()
+        .find(|r| *r != report && r.experiments().iter().any(|e| e.id.eq_ignore_ascii_case(id)));
+    match other {
+        Some(other) => format!(
+            "{id} is not one of `blockstack {}`'s experiments ({}): run `blockstack {} --only {id}`",
+            report.command(),
+            report.ids(),
+            other.command()
+        ),
+        None => format!("no experiment {id}: name experiments {}", report.ids()),
+    }
+}
+
 /// What the user chose.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
 pub struct Options {
+    /// The report: the paper's reproduction or the Blocks World benchmark.
+    pub report: Report,
     /// The seed everything derives from.
     pub seed: u64,
     /// Small counts (a check that the pipeline works), not the paper's.
@@ -169,8 +244,9 @@ pub struct Options {
     /// preset training and 1,000 problems per size; E9's
     /// many problems.
     pub long: bool,
-    /// The experiments to run, by id ("E1" to "E10", any case); empty for all. The agents
-    /// they share are trained only when one of them needs them.
+    /// The experiments to run, by id (any case; the report's own: [`Report::experiments`]);
+    /// empty for all of the report's. The agents they share are trained only when one of
+    /// them needs them.
     pub only: Vec<String>,
 }
 
@@ -506,9 +582,9 @@ pub struct Spec {
     run: fn(&Context, &Shared) -> Result<Experiment>,
 }
 
-/// Every experiment, in the report's order: E1-E7 are the paper's section VI (E7 the table
-/// it never had), E8 its section III-C, E9 the classic Blocks World (ours), E10 one learned
-/// policy for it at every size (ours).
+/// Every experiment, in the reports' order: E1-E7 are the paper's section VI (E7 the table
+/// it never had), E8 its section III-C ([`Report::Paper`]); E9 the classic Blocks World
+/// (ours), E10 one learned policy for it at every size (ours) ([`Report::BlocksWorld`]).
 pub const EXPERIMENTS: [Spec; 10] = [
     Spec {
         id: "E1",
@@ -686,14 +762,13 @@ pub fn reproduce_with(options: &Options, scale: Scale, progress: &dyn ProgressSi
 
 /// [`reproduce_with`], E8's arms run by `arms`.
 fn run(options: &Options, scale: Scale, progress: &dyn ProgressSink, arms: &dyn ArmRunner) -> Result<Reproduction> {
-    if let Some(id) = options
-        .only
+    options.report.check(&options.only)?;
+    let chosen: Vec<&Spec> = options
+        .report
+        .experiments()
         .iter()
-        .find(|id| !EXPERIMENTS.iter().any(|e| e.id.eq_ignore_ascii_case(id)))
-    {
-        return Err(ReproduceError::UnknownExperiment { id: id.clone() });
-    }
-    let chosen: Vec<&Spec> = EXPERIMENTS.iter().filter(|e| options.runs(e.id)).collect();
+        .filter(|e| options.runs(e.id))
+        .collect();
     let needs = needs(&chosen);
     let seeds = Seeds::new(options.seed, &scale);
     let ctx = Context {
@@ -767,12 +842,13 @@ mod tests {
         }
     }
 
-    /// The experiments `only` asks for, on `threads` threads: the results, the jobs
-    /// announced and the jobs reported.
-    fn run_only(threads: usize, only: &[&str]) -> (Reproduction, u64, u64) {
+    /// The experiments of `report` that `only` asks for, on `threads` threads: the results,
+    /// the jobs announced and the jobs reported.
+    fn run_only(threads: usize, report: Report, only: &[&str]) -> (Reproduction, u64, u64) {
         let count = Count::default();
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         let options = Options {
+            report,
             seed: 5,
             quick: true,
             long: false,
@@ -782,13 +858,13 @@ mod tests {
         (r, count.announced.into_inner(), count.done.into_inner())
     }
 
-    fn run(threads: usize) -> (Reproduction, u64, u64) {
-        run_only(threads, &[])
+    fn run(threads: usize, report: Report) -> (Reproduction, u64, u64) {
+        run_only(threads, report, &[])
     }
 
-    /// The jobs the run of `only` (empty: all) announces: each experiment's and the shared
-    /// parts they need.
-    fn jobs(only: &[&str]) -> u64 {
+    /// The jobs the run of `report`'s `only` (empty: all) announces: each experiment's and
+    /// the shared parts they need.
+    fn jobs(report: Report, only: &[&str]) -> u64 {
         let ctx = Context {
             scale: tiny(),
             seeds: Seeds::new(5, &tiny()),
@@ -796,7 +872,8 @@ mod tests {
             progress: &(),
             arms: &LocalArms,
         };
-        let chosen: Vec<&Spec> = EXPERIMENTS
+        let chosen: Vec<&Spec> = report
+            .experiments()
             .iter()
             .filter(|e| only.is_empty() || only.contains(&e.id))
             .collect();
@@ -805,17 +882,22 @@ mod tests {
 
     #[test]
     fn the_results_do_not_depend_on_the_threads_and_every_job_is_reported() {
-        let (one, announced, done) = run(1);
-        let (three, _, _) = run(3);
-        assert_eq!(
-            serde_json::to_string(&one).unwrap(),
-            serde_json::to_string(&three).unwrap()
-        );
-        assert_eq!(one, three, "the samples behind the tables too");
-        assert_eq!(announced, jobs(&[]));
-        assert_eq!(done, announced);
-        let ids: Vec<&str> = one.experiments.iter().map(|e| e.id.as_str()).collect();
-        assert_eq!(ids, ["E1", "E2", "E3", "E4", "E5", "E6", "E7", "E8", "E9", "E10"]);
+        for (report, expected) in [
+            (Report::Paper, &["E1", "E2", "E3", "E4", "E5", "E6", "E7", "E8"][..]),
+            (Report::BlocksWorld, &["E9", "E10"][..]),
+        ] {
+            let (one, announced, done) = run(1, report);
+            let (three, _, _) = run(3, report);
+            assert_eq!(
+                serde_json::to_string(&one).unwrap(),
+                serde_json::to_string(&three).unwrap()
+            );
+            assert_eq!(one, three, "the samples behind the tables too");
+            assert_eq!(announced, jobs(report, &[]));
+            assert_eq!(done, announced);
+            let ids: Vec<&str> = one.experiments.iter().map(|e| e.id.as_str()).collect();
+            assert_eq!(ids, expected);
+        }
     }
 
     /// E8's arms run one at a time by [`run_e8_arm`] with their runs sent through JSON, as
@@ -836,6 +918,7 @@ mod tests {
     #[test]
     fn e8_arms_run_elsewhere_give_the_same_report() {
         let options = Options {
+            report: Report::Paper,
             seed: 3,
             quick: true,
             long: false,
@@ -855,6 +938,7 @@ mod tests {
     #[test]
     fn an_e8_arm_goes_on_from_its_checkpoint() {
         let options = Options {
+            report: Report::Paper,
             seed: 3,
             quick: true,
             long: false,
@@ -873,11 +957,14 @@ mod tests {
 
     #[test]
     fn each_experiment_alone_trains_only_what_it_needs_and_gives_the_same_figures() {
-        let (all, _, _) = run(2);
-        for (spec, full) in EXPERIMENTS.iter().zip(&all.experiments) {
-            let (alone, announced, done) = run_only(2, &[spec.id]);
-            assert_eq!(alone.experiments, std::slice::from_ref(full), "{}", spec.id);
-            assert_eq!((announced, done), (jobs(&[spec.id]), announced), "{}", spec.id);
+        for report in [Report::Paper, Report::BlocksWorld] {
+            let (all, _, _) = run(2, report);
+            assert_eq!(all.experiments.len(), report.experiments().len());
+            for (spec, full) in report.experiments().iter().zip(&all.experiments) {
+                let (alone, announced, done) = run_only(2, report, &[spec.id]);
+                assert_eq!(alone.experiments, std::slice::from_ref(full), "{}", spec.id);
+                assert_eq!((announced, done), (jobs(report, &[spec.id]), announced), "{}", spec.id);
+            }
         }
         // E1 needs no shared agent; E3 plays our learner, trained without the tests along its
         // curve, which only E4 needs (and which give E3 its agent when both run).
@@ -892,25 +979,42 @@ mod tests {
             progress: &(),
             arms: &LocalArms,
         };
-        assert_eq!(jobs(&["E1"]), e1_own(&ctx));
-        assert_eq!(jobs(&["E3"]), e3_own + 1, "one training of our learner");
-        assert_eq!(jobs(&["E4"]), e4::jobs(&ctx) + curve);
-        assert_eq!(jobs(&["E3", "E4"]), e3_own + e4::jobs(&ctx) + curve);
-        let (e3, _, _) = run_only(1, &["e3"]);
+        let paper = Report::Paper;
+        assert_eq!(jobs(paper, &["E1"]), e1_own(&ctx));
+        assert_eq!(jobs(paper, &["E3"]), e3_own + 1, "one training of our learner");
+        assert_eq!(jobs(paper, &["E4"]), e4::jobs(&ctx) + curve);
+        assert_eq!(jobs(paper, &["E3", "E4"]), e3_own + e4::jobs(&ctx) + curve);
+        let (e3, _, _) = run_only(1, paper, &["e3"]);
         assert_eq!(e3.experiments.len(), 1, "ids in any case");
-        let options = Options {
-            seed: 5,
-            quick: true,
-            long: false,
-            only: vec!["E11".into()],
-        };
-        let err = reproduce_with(&options, tiny(), &()).unwrap_err();
-        assert_eq!(err.to_string(), "no experiment E11: name experiments E1 to E10");
+        // An id no report has, and one the other report has: each says what to run instead.
+        for (report, id, message) in [
+            (paper, "E11", "no experiment E11: name experiments E1 to E8"),
+            (
+                paper,
+                "e9",
+                "e9 is not one of `blockstack reproduce`'s experiments (E1 to E8): run `blockstack benchmark --only e9`",
+            ),
+            (
+                Report::BlocksWorld,
+                "E8",
+                "E8 is not one of `blockstack benchmark`'s experiments (E9 and E10): run `blockstack reproduce --only E8`",
+            ),
+        ] {
+            let options = Options {
+                report,
+                seed: 5,
+                quick: true,
+                long: false,
+                only: vec![id.into()],
+            };
+            let err = reproduce_with(&options, tiny(), &()).unwrap_err();
+            assert_eq!(err.to_string(), message);
+        }
     }
 
     #[test]
     fn the_report_holds_every_experiment_and_its_pictures() {
-        let (r, _, _) = run(2);
+        let (r, _, _) = run(2, Report::Paper);
         let dir = tempfile::tempdir().unwrap();
         let dir = dir.path().join("report");
         let ran = Ran {
@@ -952,14 +1056,14 @@ mod tests {
         assert_eq!(summary_md, summary(&text).unwrap());
         assert!(summary_md.contains("at commit abc1234, on a test CPU (4 cores, 2 threads)"));
         let table: Vec<&str> = summary_md.lines().filter(|l| l.starts_with("| E")).collect();
-        assert_eq!(table.len(), 10, "{summary_md}");
+        assert_eq!(table.len(), 8, "{summary_md}");
         assert!(table[0].starts_with("| E1 random agent, 2 blocks"), "{}", table[0]);
         assert!(
             table[0].contains("| 4.0%, 263.55 |"),
             "the paper's E1 figures: {}",
             table[0]
         );
-        assert_eq!(json["experiments"].as_array().unwrap().len(), 10);
+        assert_eq!(json["experiments"].as_array().unwrap().len(), 8);
         // Every arm's figures and the paper's beside them.
         let e5 = &json["experiments"][4]["tables"][0]["rows"];
         assert_eq!(e5[0]["paper"]["failures"], 186);
@@ -984,5 +1088,25 @@ mod tests {
         let parts =
             gap["protocol"].as_f64().unwrap() + gap["start"].as_f64().unwrap() + gap["interaction"].as_f64().unwrap();
         assert!((parts - gap["gap"].as_f64().unwrap()).abs() < 1e-9);
+        // The benchmark's report: its own title, command and summary rows, none of the
+        // paper's front matter.
+        let (b, _, _) = run(2, Report::BlocksWorld);
+        let bench = tempfile::tempdir().unwrap();
+        let files = write_report(&b, &ran, bench.path()).unwrap();
+        let readme = std::fs::read_to_string(&files.readme).unwrap();
+        assert!(readme.starts_with("# The Blocks World benchmark\n"), "{readme}");
+        assert!(readme.contains("Written by `blockstack benchmark --seed 5 --quick`"));
+        assert!(!readme.contains("The paper's figures beside ours"));
+        let summary_md = std::fs::read_to_string(&files.summary).unwrap();
+        assert!(
+            summary_md.starts_with("Measured by `blockstack benchmark --quick --seed 5`"),
+            "{summary_md}"
+        );
+        let rows: Vec<&str> = summary_md.lines().filter(|l| l.starts_with("| E")).collect();
+        assert_eq!(rows.len(), 2, "{summary_md}");
+        assert!(
+            rows[0].starts_with("| E9 ") && rows[1].starts_with("| E10 "),
+            "{summary_md}"
+        );
     }
 }

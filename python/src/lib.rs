@@ -69,7 +69,11 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(output::write_output, m)?)?;
     m.add_function(wrap_pyfunction!(output::check_folder, m)?)?;
     m.add_function(wrap_pyfunction!(output::bar_chart, m)?)?;
-    let experiments: Vec<&str> = experiments::reproduce::EXPERIMENTS.iter().map(|e| e.id).collect();
+    let experiments: Vec<&str> = experiments::reproduce::Report::Paper
+        .experiments()
+        .iter()
+        .map(|e| e.id)
+        .collect();
     m.add("EXPERIMENTS", experiments)?;
     m.add("REWARDS", sim::RewardModel::NAMES.to_vec())?;
     Ok(())

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use std::sync::Mutex;
 use std::time::Instant;
 
-use experiments::reproduce::{self as experiments_reproduce, ArmRun, ArmRunner, Options, ReproduceError};
+use experiments::reproduce::{self as experiments_reproduce, ArmRun, ArmRunner, Options, Report, ReproduceError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -18,16 +18,9 @@ fn options(seed: u64, quick: bool, long: bool, only: Vec<String>) -> PyResult<Op
     if quick && long {
         return Err(value_error("quick and long: choose one budget"));
     }
-    for id in &only {
-        if !experiments_reproduce::EXPERIMENTS
-            .iter()
-            .any(|e| id.eq_ignore_ascii_case(e.id))
-        {
-            let last = experiments_reproduce::EXPERIMENTS.last().map_or("E1", |e| e.id);
-            return Err(value_error(format!("only {id}: name experiments E1 to {last}")));
-        }
-    }
+    Report::Paper.check(&only).or_value_error()?;
     Ok(Options {
+        report: Report::Paper,
         seed,
         quick,
         long,
@@ -35,11 +28,12 @@ fn options(seed: u64, quick: bool, long: bool, only: Vec<String>) -> PyResult<Op
     })
 }
 
-/// The names of E8's arms at this budget, in the order [`run_e8_arm`] numbers them.
+/// The names of E8's arms at this budget, in the order [`run_e8_arm`] numbers them; a
+/// `ValueError` for settings a run refuses (`only` naming no experiment of the paper's).
 #[pyfunction]
-#[pyo3(signature = (*, seed=1, quick=false, long=false))]
-pub fn e8_arms(seed: u64, quick: bool, long: bool) -> PyResult<Vec<String>> {
-    experiments_reproduce::e8_arm_names(&options(seed, quick, long, Vec::new())?).or_value_error()
+#[pyo3(signature = (*, seed=1, quick=false, long=false, only=Vec::new()))]
+pub fn e8_arms(seed: u64, quick: bool, long: bool, only: Vec<String>) -> PyResult<Vec<String>> {
+    experiments_reproduce::e8_arm_names(&options(seed, quick, long, only)?).or_value_error()
 }
 
 /// Trains and tests E8's arm `index` as the reproduction with these settings does, in this

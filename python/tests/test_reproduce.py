@@ -31,7 +31,8 @@ def test_e8_on_a_local_ray_writes_the_report_of_one_machine(tmp_path, capsys):
 
 def test_bad_settings_are_refused_before_any_work(tmp_path, capsys):
     for argv, message in [
-        (["--only", "E11"], "--only E11: name experiments E1 to E10"),
+        (["--only", "E11"], "no experiment E11: name experiments E1 to E8"),
+        (["--only", "E9"], "E9 is not one of `blockstack reproduce`'s experiments (E1 to E8): run `blockstack benchmark --only E9`"),
         (["--jobs", "0"], "--jobs must be at least 1"),
         (["--out", str(tmp_path / "a-file" / "report")], "a-file"),
     ]:

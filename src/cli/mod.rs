@@ -6,6 +6,7 @@
 //! [`stdout`], never `println!`.
 
 use clap::{Parser, Subcommand};
+use experiments::reproduce::Report;
 
 mod correct;
 mod demo;
@@ -40,8 +41,10 @@ pub struct Cli {
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Reproduce the paper: run experiments E1-E10 and write the report (README.md, results.json, pictures).
+    /// Reproduce the paper: run experiments E1-E8 and write the report (README.md, results.json, pictures).
     Reproduce(reproduce::ReproduceArgs),
+    /// The classic Blocks World benchmark, ours: run E9 and E10 and write their report (as `reproduce` does).
+    Benchmark(reproduce::ReproduceArgs),
     /// Play episodes with an agent and report failures and steps to goal.
     Run(run::RunArgs),
     /// Draw a start state as a PNG picture or as text.
@@ -96,7 +99,8 @@ pub fn bad_value(e: &clap::Error) -> Option<String> {
 /// Carries out `cli`'s command.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
-        Command::Reproduce(args) => reproduce::reproduce(args),
+        Command::Reproduce(args) => reproduce::reproduce(args, Report::Paper),
+        Command::Benchmark(args) => reproduce::reproduce(args, Report::BlocksWorld),
         Command::Run(args) => run::run(args),
         Command::Render(args) => render::render(args),
         Command::Solve(args) => solve::solve(args),

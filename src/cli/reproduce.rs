@@ -1,4 +1,5 @@
-//! `blockstack reproduce`: run experiments E1-E10 and write the report.
+//! `blockstack reproduce` and `blockstack benchmark`: run the paper's experiments E1-E8, or
+//! the Blocks World benchmark's E9 and E10, and write the report.
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -6,24 +7,25 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use clap::Args;
-use experiments::reproduce::{self, Options, ProgressSink};
+use experiments::reproduce::{self, Options, ProgressSink, Report};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::stdout::line;
 
-/// Arguments of `blockstack reproduce`.
+/// Arguments of `blockstack reproduce` and `blockstack benchmark`.
 #[derive(Debug, Args)]
 pub struct ReproduceArgs {
     /// Directory to write the report to (README.md, results.json, summary.md, pictures);
-    /// made if missing, checked to be writable before the run.
-    #[arg(long, default_value = "report")]
-    pub out: PathBuf,
-    /// Small counts, to check the pipeline in a minute; not the paper's figures.
+    /// made if missing, checked to be writable before the run [default: report for
+    /// reproduce, benchmark for benchmark].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Small counts, to check the pipeline in a minute; not the real figures.
     #[arg(long)]
     pub quick: bool,
-    /// The long budgets: E8's paper pixel runs, `pixels` arm and whole ablation, E9's and E10's
-    /// full problem counts (about 1.5 hours on 2 cores, against minutes for the default run,
-    /// which trains E8's plane arms only).
+    /// The long budgets: for reproduce, E8's paper pixel runs, `pixels` arm and whole
+    /// ablation (about 1.5 hours on 2 cores, against minutes for the default run, which trains
+    /// E8's plane arms only); for benchmark, E9's and E10's full problem counts.
     #[arg(long, conflicts_with = "quick")]
     pub long: bool,
     /// Run only these experiments, e.g. E8 or E1,E5 (the agents experiments share are
@@ -52,10 +54,15 @@ impl ProgressSink for Bar {
     }
 }
 
-/// Runs the experiments and writes the report.
-pub fn reproduce(args: ReproduceArgs) -> Result<()> {
+/// Runs `report`'s experiments and writes its report.
+pub fn reproduce(args: ReproduceArgs, report: Report) -> Result<()> {
+    let out = args.out.clone().unwrap_or_else(|| match report {
+        Report::Paper => "report".into(),
+        Report::BlocksWorld => "benchmark".into(),
+    });
+    report.check(&args.only)?;
     // Before minutes of work, not after.
-    files::prepare_folder(&args.out)?;
+    files::prepare_folder(&out)?;
     let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(n) = args.jobs {
         pool = pool.num_threads(usize::from(n));
@@ -70,13 +77,8 @@ pub fn reproduce(args: ReproduceArgs) -> Result<()> {
         ProgressStyle::with_template("{bar:30} {pos}/{len} jobs  {msg}  [{elapsed_precise}]")
             .expect("a valid template"),
     );
-    for id in &args.only {
-        anyhow::ensure!(
-            reproduce::EXPERIMENTS.iter().any(|e| id.eq_ignore_ascii_case(e.id)),
-            "--only {id}: name experiments E1 to E10"
-        );
-    }
     let options = Options {
+        report,
         seed: args.seed,
         quick: args.quick,
         long: args.long,
@@ -87,10 +89,14 @@ pub fn reproduce(args: ReproduceArgs) -> Result<()> {
     let results = pool.install(|| reproduce::reproduce(&options, &sink))?;
     sink.0.finish_and_clear();
     let ran = reproduce::Ran::here(pool.current_num_threads());
-    let written = reproduce::write_report(&results, &ran, &args.out)?;
+    let written = reproduce::write_report(&results, &ran, &out)?;
     let ids: Vec<&str> = results.experiments.iter().map(|e| e.id.as_str()).collect();
     line(format_args!(
-        "reproduced {} ({} run, seed {}, {} thread{}) in {:.0} s",
+        "{} {} ({} run, seed {}, {} thread{}) in {:.0} s",
+        match report {
+            Report::Paper => "reproduced",
+            Report::BlocksWorld => "benchmarked",
+        },
         ids.join(", "),
         if args.quick {
             "quick"

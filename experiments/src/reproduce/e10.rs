@@ -508,11 +508,12 @@ fn setup(ctx: &Context, model: &RelationalModel, g: &General) -> Vec<Setting> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{Options, reproduce};
+    use super::super::{Options, Report, reproduce};
     use super::*;
 
     fn quick() -> Experiment {
         let options = Options {
+            report: Report::BlocksWorld,
             seed: 3,
             quick: true,
             long: false,

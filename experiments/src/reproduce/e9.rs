@@ -860,12 +860,13 @@ fn learner_setting(learner: &TrainConfig) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{Options, reproduce};
+    use super::super::{Options, Report, reproduce};
     use super::*;
 
     /// E9 alone, at the quick budget.
     fn quick() -> Experiment {
         let options = Options {
+            report: Report::BlocksWorld,
             seed: 3,
             quick: true,
             long: false,
