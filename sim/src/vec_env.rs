@@ -189,22 +189,24 @@ impl VecEnv {
         write: impl Fn(&mut C, usize, &Observation) + Sync,
     ) {
         assert_eq!(seeds.len(), self.len(), "one seed per environment");
-        let ranges = self.chunks();
-        assert_eq!(chunks.len(), ranges.len(), "one chunk per range of VecEnv::chunks");
+        assert_eq!(
+            chunks.len(),
+            self.chunks().len(),
+            "one chunk per range of VecEnv::chunks"
+        );
         self.ended.fill(false);
         let reset = |(envs, seeds, chunk): (&mut [Env], &[Option<u64>], &mut C)| {
             for (i, (env, &seed)) in envs.iter_mut().zip(seeds).enumerate() {
                 write(chunk, i, &env.reset(seed));
             }
         };
-        let len = ranges.first().map_or(1, |r| r.len().max(1));
         match parallel(self.pool.as_ref(), self.envs.len()) {
             None => {
                 if let Some(chunk) = chunks.first_mut() {
                     reset((&mut self.envs, seeds, chunk));
                 }
             }
-            Some((pool, _)) => pool.install(|| {
+            Some((pool, len)) => pool.install(|| {
                 self.envs
                     .par_chunks_mut(len)
                     .zip(seeds.par_chunks(len))
@@ -269,8 +271,11 @@ impl VecEnv {
                 actions: actions.len(),
             });
         }
-        let ranges = self.chunks();
-        assert_eq!(chunks.len(), ranges.len(), "one chunk per range of VecEnv::chunks");
+        assert_eq!(
+            chunks.len(),
+            self.chunks().len(),
+            "one chunk per range of VecEnv::chunks"
+        );
         // Every environment that takes its action must accept it (running, the block
         // exists, legal under the protocol); one about to reset ignores its action. The
         // first refusal in environment order, as a serial check would find it.
@@ -307,7 +312,6 @@ impl VecEnv {
             }
             Ok(())
         };
-        let len = ranges.first().map_or(1, |r| r.len().max(1));
         match parallel(self.pool.as_ref(), self.envs.len()) {
             None => {
                 check((&self.envs, actions, &self.ended))?;
@@ -316,7 +320,7 @@ impl VecEnv {
                     None => Ok(()),
                 }
             }
-            Some((pool, _)) => pool.install(|| {
+            Some((pool, len)) => pool.install(|| {
                 // Checked chunk by chunk in parallel, then stepped only if every chunk
                 // passed: the results in chunk order give the first refusal.
                 let checks: Vec<Result<()>> = self
