@@ -10,7 +10,7 @@ use std::ops::Range;
 
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use sim::{Action, ActionMask, Autoreset, Observation, VecEnv, VecStep};
+use sim::{Action, ActionMask, Autoreset, Effect, Observation, VecEnv, VecStepRef};
 
 use crate::boundary::{OrValueError, guard, value_error};
 use crate::config::{self, ObsKind, World};
@@ -94,32 +94,24 @@ impl Slot<'_> {
 
     /// Writes `result`; returns, under same-step autoreset, the last observation of an
     /// episode that ended in this step and whether that step's move was blocked.
-    fn write(&mut self, kind: ObsKind, result: &VecStep) -> Option<(Observation, bool)> {
-        match result {
-            VecStep::Reset(obs) => {
-                self.write_obs(kind, obs, &obs.legal_actions(), None);
-                (*self.reward, *self.terminated, *self.truncated, *self.blocked) = (0.0, false, false, false);
-                None
-            }
-            VecStep::Stepped(step) => {
-                // After a same-step reset the info's pairs are the ended episode's.
-                let pairs = step
-                    .info
-                    .final_observation
-                    .is_none()
-                    .then_some(step.info.pairs_in_place);
-                self.write_obs(kind, &step.observation, &step.info.action_mask, pairs);
-                *self.reward = step.reward;
-                *self.terminated = step.terminated;
-                *self.truncated = step.truncated;
-                *self.blocked = step.info.blocked;
-                let last = step.info.final_observation.as_deref()?;
-                // The step's info is the reset's; the ended step's goes with its last
-                // observation, as Gymnasium's same-step mode reports them.
-                *self.blocked = false;
-                Some((last.clone(), step.info.blocked))
-            }
-        }
+    fn write(&mut self, kind: ObsKind, result: &VecStepRef<'_>) -> Option<(Observation, bool)> {
+        let Some(outcome) = result.outcome else {
+            self.write_obs(kind, result.observation, &result.action_mask, None);
+            (*self.reward, *self.terminated, *self.truncated, *self.blocked) = (0.0, false, false, false);
+            return None;
+        };
+        // After a same-step reset the outcome's pairs are the ended episode's.
+        let pairs = result.final_observation.is_none().then_some(outcome.pairs_in_place);
+        self.write_obs(kind, result.observation, &result.action_mask, pairs);
+        *self.reward = outcome.reward;
+        *self.terminated = outcome.terminated;
+        *self.truncated = outcome.truncated;
+        let blocked = outcome.effect == Effect::Blocked;
+        // The step's info is the reset's; the ended step's goes with its last observation,
+        // as Gymnasium's same-step mode reports them.
+        *self.blocked = blocked && result.final_observation.is_none();
+        let last = result.final_observation?;
+        Some((last.clone(), blocked))
     }
 }
 
@@ -159,7 +151,7 @@ enum ChunkObs<'a> {
 
 impl Chunk<'_> {
     /// Writes `result` of the chunk's environment `i`.
-    fn write(&mut self, kind: ObsKind, i: usize, result: &VecStep) {
+    fn write(&mut self, kind: ObsKind, i: usize, result: &VecStepRef<'_>) {
         let (o, a, b) = (self.obs_len, self.actions, self.blocks);
         let obs = match &mut self.obs {
             ChunkObs::Bytes(bytes) => ObsSlot::Bytes(&mut bytes[i * o..(i + 1) * o]),
@@ -485,9 +477,7 @@ impl NativeVecEnv {
         let (vec, kind) = (&mut self.vec, self.kind);
         py.detach(|| {
             guard(|| {
-                vec.reset_chunks(&seeds, &mut chunks, |chunk, i, obs| {
-                    chunk.write(kind, i, &VecStep::Reset(obs.clone()));
-                });
+                vec.reset_chunks(&seeds, &mut chunks, |chunk, i, result| chunk.write(kind, i, result));
                 Ok(())
             })
         })

@@ -1,4 +1,4 @@
-//! `VecEnv::step_with` as the Python vector env drives it: 64, 1,024 and 4,096 environments
+//! `VecEnv::step_with` (each result lent in place, a `VecStepRef`) as the Python vector env drives it: 64, 1,024 and 4,096 environments
 //! of the SPEC world (3 blocks), on 1 and 2 threads, physics and grid backends, each
 //! environment's result written into its slot of flat buffers (the `planes` observation,
 //! reward, flags, goal pairs in place and action mask) on the thread that stepped it, as
@@ -12,7 +12,7 @@ use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use rand::RngExt;
-use sim::{Action, Backend, EnvConfig, ObsKind, VecEnv, VecStep};
+use sim::{Action, Backend, EnvConfig, ObsKind, VecEnv, VecStepRef};
 
 /// One environment's part of the buffers.
 struct Slot<'a> {
@@ -24,19 +24,19 @@ struct Slot<'a> {
 }
 
 /// Writes one environment's result into its slot.
-fn write(result: &VecStep, slot: &mut Slot<'_>) {
-    let obs = result.observation();
+fn write(result: &VecStepRef<'_>, slot: &mut Slot<'_>) {
+    let obs = result.observation;
     ObsKind::Planes
         .write(obs, slot.obs)
         .expect("the buffer has the planes' shape");
-    match result {
-        VecStep::Stepped(step) => (*slot.reward, *slot.done) = (step.reward, step.terminated || step.truncated),
-        VecStep::Reset(_) => (*slot.reward, *slot.done) = (0.0, false),
-    }
-    *slot.pairs = obs.goal.pairs_in_place(&obs.state);
-    let mask = obs.legal_actions();
+    (*slot.reward, *slot.done) = result
+        .outcome
+        .map_or((0.0, false), |o| (o.reward, o.terminated || o.truncated));
+    // After a same-step reset the outcome's pairs are the ended episode's.
+    let pairs = result.outcome.filter(|_| result.final_observation.is_none());
+    *slot.pairs = pairs.map_or_else(|| obs.goal.pairs_in_place(&obs.state), |o| o.pairs_in_place);
     for (i, m) in slot.mask.iter_mut().enumerate() {
-        *m = mask.contains_index(i);
+        *m = result.action_mask.contains_index(i);
     }
 }
 

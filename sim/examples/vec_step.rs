@@ -45,7 +45,7 @@ fn main() -> Result<(), sim::SimError> {
     for i in 0..batches {
         v.step_with(&actions[i % actions.len()], &mut slots, |result, slot| {
             ObsKind::Planes
-                .write(result.observation(), slot)
+                .write(result.observation, slot)
                 .expect("the buffer has the planes' shape");
         })?;
     }

@@ -218,6 +218,47 @@ pub struct Step {
     pub info: Info,
 }
 
+/// What one step did, without the observation it leaves: [`Env::advance`]'s result. The
+/// observation and its legal actions are the environment's own after the step
+/// ([`Env::current_observation`], [`Env::legal_actions`]); [`Outcome::into_step`] puts them
+/// together as [`Env::step`] returns them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Outcome {
+    /// The reward of the action.
+    pub reward: f64,
+    /// The episode ended by its termination rule.
+    pub terminated: bool,
+    /// The horizon was reached without the episode terminating.
+    pub truncated: bool,
+    /// What the action did.
+    pub effect: Effect,
+    /// How many of the goal's consecutive pairs stand in place after the action.
+    pub pairs_in_place: usize,
+    /// Steps taken in this episode, this one included.
+    pub steps: u32,
+}
+
+impl Outcome {
+    /// The [`Step`] of this outcome, whose observation is `observation` with legal actions
+    /// `action_mask` (no final observation).
+    pub fn into_step(self, observation: Observation, action_mask: ActionMask) -> Step {
+        Step {
+            observation,
+            reward: self.reward,
+            terminated: self.terminated,
+            truncated: self.truncated,
+            info: Info {
+                effect: self.effect,
+                blocked: self.effect == Effect::Blocked,
+                pairs_in_place: self.pairs_in_place,
+                steps: self.steps,
+                action_mask,
+                final_observation: None,
+            },
+        }
+    }
+}
+
 /// The result of a block move ([`Env::step_block_move`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct MoveStep {
@@ -271,13 +312,14 @@ enum Phase {
 pub struct Env {
     config: EnvConfig,
     world: AnyWorld,
-    /// The world's state as read back after its last change: every change goes through
-    /// `Env`, so a step reads the physics world's bodies once (after its action) instead
-    /// of also before it and in [`Env::check_action`], the top of a batched step's profile
+    /// The current observation: the world's state as read back after its last change, and
+    /// the episode's goal. Every change goes through `Env`, so a step reads the physics
+    /// world's bodies once (after its action) instead of also before it and in
+    /// [`Env::check_action`]; and a batched step writes its results from this one copy
+    /// instead of an owned [`Step`] per environment, the top of its profile once
     /// (docs/performance.md).
-    state: State,
+    now: Observation,
     rng: SimRng,
-    goal: Goal,
     steps: u32,
     phase: Phase,
     previous_action: Option<Action>,
@@ -309,13 +351,18 @@ impl Env {
             config.protocol.legal_when(None, config.blocks),
             config.protocol.legal_when(Some(BlockId(0)), config.blocks),
         ];
-        let state = world.world().state();
+        let now = Observation {
+            grid,
+            state: world.world().state(),
+            goal,
+            protocol: config.protocol,
+            view,
+        };
         Ok(Env {
             config,
             world,
-            state,
+            now,
             rng: seeding::rng(0),
-            goal,
             steps: 0,
             phase: Phase::NotReset,
             previous_action: None,
@@ -331,12 +378,12 @@ impl Env {
             self.rng = seeding::rng(seed);
         }
         if let GoalSpec::Random = self.config.goal {
-            self.goal = Goal::random(self.config.blocks, &mut self.rng).expect("the config was validated");
+            self.now.goal = Goal::random(self.config.blocks, &mut self.rng).expect("the config was validated");
         }
         let start = self
             .config
             .start
-            .draw_in(self.config.view, self.config.grid, &self.goal, &mut self.rng);
+            .draw_in(self.config.view, self.config.grid, &self.now.goal, &mut self.rng);
         // Drawn for this world's grid and block count: it fits without a check.
         self.world.world_mut().put(&start);
         self.begin(&start, self.config.start.keeps_goal_starts())
@@ -359,7 +406,7 @@ impl Env {
         goal.check_fits(self.config.grid)?;
         self.config.reward.check_goal(goal)?;
         self.world.world_mut().place(state)?;
-        self.goal = goal.clone();
+        self.now.goal = goal.clone();
         Ok(self.begin(state, false))
     }
 
@@ -367,12 +414,12 @@ impl Env {
     /// [`Termination::Goal`], a start meeting the goal is over at once unless
     /// `keeps_goal_start` (then its first step ends it).
     fn begin(&mut self, start: &State, keeps_goal_start: bool) -> Observation {
-        self.state = self.world.world().state();
+        self.now.state = self.world.world().state();
         self.steps = 0;
         self.previous_action = None;
         let over = matches!(self.config.termination, Termination::Goal)
             && !keeps_goal_start
-            && self.goal.holds_in(self.config.view, start);
+            && self.now.goal.holds_in(self.config.view, start);
         self.phase = if over { Phase::Over } else { Phase::Running };
         self.observation()
     }
@@ -382,59 +429,63 @@ impl Env {
     /// the config's action protocol forbids it in the current state
     /// ([`SimError::IllegalAction`]).
     pub fn step(&mut self, action: Action) -> Result<Step> {
+        let outcome = self.advance(action)?;
+        Ok(outcome.into_step(self.observation(), self.legal_actions()))
+    }
+
+    /// Takes one action as [`Env::step`] does (the same errors, the same episode), but
+    /// returns only what the step did: its observation is [`Env::current_observation`] and
+    /// its legal actions [`Env::legal_actions`], read in place. A caller that copies them
+    /// into its own buffers ([`VecEnv::step_chunks`](crate::VecEnv::step_chunks)) builds no
+    /// owned [`Step`].
+    pub fn advance(&mut self, action: Action) -> Result<Outcome> {
         self.check_running()?;
-        let before = self.state.clone();
         // Under `free` every action that exists is legal, and `act` refuses one that does
         // not before changing anything: the SPEC world's step pays for no check. In the side
         // view too the world's rules make an action outside the mask a no-op.
         if !matches!(self.config.protocol, ActionProtocol::Free) {
-            self.check_legal(&before, action)?;
+            self.check_legal(&self.now.state, action)?;
         }
+        self.advance_checked(action)
+    }
+
+    /// [`Env::advance`] for an action [`Env::check_action`] has accepted in the current
+    /// state: a [`VecEnv`](crate::VecEnv) checks a whole batch before it steps any of it,
+    /// and does not pay for the check twice.
+    pub(crate) fn advance_checked(&mut self, action: Action) -> Result<Outcome> {
         let effect = self.world.world_mut().act(action)?;
-        let after = self.world.world().state();
-        self.state = after.clone();
+        let before = std::mem::replace(&mut self.now.state, self.world.world().state());
         self.steps += 1;
+        let (now, config) = (&self.now, &self.config);
+        let after = &now.state;
         let transition = Transition {
-            grid: self.config.grid,
-            view: self.config.view,
-            goal: &self.goal,
+            grid: config.grid,
+            view: config.view,
+            goal: &now.goal,
             before: &before,
             action,
             previous_action: self.previous_action,
-            after: &after,
+            after,
         };
-        let reward = self.config.reward.reward(&transition);
-        let pairs_in_place = self.goal.pairs_in_place(&after);
-        let goal_holds = match self.config.view {
-            View::Top => pairs_in_place == self.goal.pair_count(),
-            View::Side => self.goal.holds_in(View::Side, &after),
+        let reward = config.reward.reward(&transition);
+        let pairs_in_place = now.goal.pairs_in_place(after);
+        let goal_holds = match config.view {
+            View::Top => pairs_in_place == now.goal.pair_count(),
+            View::Side => now.goal.holds_in(View::Side, after),
         };
-        let terminated = self.config.termination.ends(reward, goal_holds);
-        let truncated = !terminated && self.steps >= self.config.horizon;
+        let terminated = config.termination.ends(reward, goal_holds);
+        let truncated = !terminated && self.steps >= config.horizon;
         self.previous_action = Some(action);
         if terminated || truncated {
             self.phase = Phase::Over;
         }
-        let action_mask = self.legal_in(&after);
-        Ok(Step {
-            observation: Observation {
-                grid: self.config.grid,
-                state: after,
-                goal: self.goal.clone(),
-                protocol: self.config.protocol,
-                view: self.config.view,
-            },
+        Ok(Outcome {
             reward,
             terminated,
             truncated,
-            info: Info {
-                effect,
-                blocked: effect == Effect::Blocked,
-                pairs_in_place,
-                steps: self.steps,
-                action_mask,
-                final_observation: None,
-            },
+            effect,
+            pairs_in_place,
+            steps: self.steps,
         })
     }
 
@@ -463,7 +514,7 @@ impl Env {
             if matches!(termination, Termination::Goal) && steps + len <= horizon {
                 world.act(Action::Pick(carry.block))?;
                 world.carry_held(carry.release_cell());
-                self.state = world.state();
+                self.now.state = world.state();
                 self.steps += len - 1;
                 self.previous_action = Some(carry.across());
                 return Ok(MoveStep {
@@ -472,7 +523,7 @@ impl Env {
                 });
             }
         }
-        let actions = block_move::expand(&self.state, self.config.grid, mv)?;
+        let actions = block_move::expand(&self.now.state, self.config.grid, mv)?;
         let mut last = None;
         for (k, &action) in actions.iter().enumerate() {
             let step = self.step(action)?;
@@ -495,7 +546,7 @@ impl Env {
         let n = self.config.blocks;
         match self.config.view {
             View::Top => vec![false; BlockMove::count(n, self.config.grid)],
-            View::Side => block_move::legal_moves(&self.state, self.config.grid),
+            View::Side => block_move::legal_moves(&self.now.state, self.config.grid),
         }
     }
 
@@ -503,7 +554,7 @@ impl Env {
     /// (episode not started or over, no such block, illegal under the action protocol).
     pub fn check_action(&self, action: Action) -> Result<()> {
         self.check_running()?;
-        self.check_legal(&self.state, action)
+        self.check_legal(&self.now.state, action)
     }
 
     /// An error unless an episode is running.
@@ -560,29 +611,28 @@ impl Env {
 
     /// The current observation.
     pub fn observation(&self) -> Observation {
-        Observation {
-            grid: self.config.grid,
-            state: self.state(),
-            goal: self.goal.clone(),
-            protocol: self.config.protocol,
-            view: self.config.view,
-        }
+        self.now.clone()
+    }
+
+    /// The current observation, borrowed: what [`Env::observation`] copies.
+    pub fn current_observation(&self) -> &Observation {
+        &self.now
     }
 
     /// The legal actions in the current state, by the config's action protocol (in the side
     /// view, by its rules).
     pub fn legal_actions(&self) -> ActionMask {
-        self.legal_in(&self.state)
+        self.legal_in(&self.now.state)
     }
 
     /// The current state, as read back from the backend after its last change.
     pub fn state(&self) -> State {
-        self.state.clone()
+        self.now.state.clone()
     }
 
     /// The current goal.
     pub fn goal(&self) -> &Goal {
-        &self.goal
+        &self.now.goal
     }
 
     /// The configuration.

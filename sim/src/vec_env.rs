@@ -5,9 +5,10 @@ use std::ops::Range;
 use rayon::prelude::*;
 
 use crate::action::Action;
-use crate::env::{Env, EnvConfig, Step};
+use crate::env::{Env, EnvConfig, Outcome, Step};
 use crate::error::{Result, SimError};
 use crate::observation::Observation;
+use crate::protocol::ActionMask;
 
 /// How a [`VecEnv`] starts the next episode of an environment whose episode ended: the
 /// two modes of Gymnasium 1.x's `AutoresetMode`.
@@ -44,6 +45,39 @@ impl VecStep {
         match self {
             VecStep::Stepped(step) => &step.observation,
             VecStep::Reset(obs) => obs,
+        }
+    }
+}
+
+/// One environment's result in a batched call, borrowed from the environment: what
+/// [`VecEnv::step_chunks`] and [`VecEnv::reset_chunks`] hand their writer. A batch of
+/// thousands copies each result into its buffers from here, in place, rather than building
+/// an owned [`VecStep`] per environment (a copy of the observation and the step's moves
+/// were a third of the grid backend's batched step: docs/performance.md).
+#[derive(Clone, Debug)]
+pub struct VecStepRef<'a> {
+    /// The observation the agent acts on next (after a reset, the new episode's first).
+    pub observation: &'a Observation,
+    /// Its legal actions (Gymnasium's `info["action_mask"]`).
+    pub action_mask: ActionMask,
+    /// What the step did; `None` when the environment was reset instead (by
+    /// [`VecEnv::reset_chunks`], or ignoring its action under [`Autoreset::NextStep`]).
+    pub outcome: Option<Outcome>,
+    /// Under [`Autoreset::SameStep`], the last observation of the episode this step ended
+    /// (`observation` is then the next episode's first).
+    pub final_observation: Option<&'a Observation>,
+}
+
+impl VecStepRef<'_> {
+    /// The owned result, as [`VecEnv::step`] returns it.
+    pub fn to_vec_step(&self) -> VecStep {
+        match self.outcome {
+            None => VecStep::Reset(self.observation.clone()),
+            Some(outcome) => {
+                let mut step = outcome.into_step(self.observation.clone(), self.action_mask.clone());
+                step.info.final_observation = self.final_observation.map(|last| Box::new(last.clone()));
+                VecStep::Stepped(step)
+            }
         }
     }
 }
@@ -170,13 +204,16 @@ impl VecEnv {
     ) {
         assert_eq!(slots.len(), self.len(), "one slot per environment");
         let mut parts = split(slots, &self.chunks());
-        self.reset_chunks(seeds, &mut parts, |part, i, obs| write(obs, &mut part[i]));
+        self.reset_chunks(seeds, &mut parts, |part, i, result| {
+            write(result.observation, &mut part[i])
+        });
     }
 
     /// Resets environment `i` with `seeds[i]` as [`VecEnv::reset_with`] does, handing its
-    /// first observation to `write` with the chunk of [`VecEnv::chunks`] it belongs to and
-    /// its index in that chunk, on the thread that reset it: a caller that writes into its
-    /// own buffers cuts them once per chunk rather than once per environment.
+    /// first observation (a [`VecStepRef`] with no outcome) to `write` with the chunk of
+    /// [`VecEnv::chunks`] it belongs to and its index in that chunk, on the thread that
+    /// reset it: a caller that writes into its own buffers cuts them once per chunk rather
+    /// than once per environment.
     ///
     /// # Panics
     ///
@@ -186,7 +223,7 @@ impl VecEnv {
         &mut self,
         seeds: &[Option<u64>],
         chunks: &mut [C],
-        write: impl Fn(&mut C, usize, &Observation) + Sync,
+        write: impl Fn(&mut C, usize, &VecStepRef<'_>) + Sync,
     ) {
         assert_eq!(seeds.len(), self.len(), "one seed per environment");
         assert_eq!(
@@ -197,7 +234,8 @@ impl VecEnv {
         self.ended.fill(false);
         let reset = |(envs, seeds, chunk): (&mut [Env], &[Option<u64>], &mut C)| {
             for (i, (env, &seed)) in envs.iter_mut().zip(seeds).enumerate() {
-                write(chunk, i, &env.reset(seed));
+                env.reset(seed);
+                write(chunk, i, &first(env));
             }
         };
         match parallel(self.pool.as_ref(), self.envs.len()) {
@@ -221,16 +259,17 @@ impl VecEnv {
     /// count, or if any step fails (the first such error).
     pub fn step(&mut self, actions: &[Action]) -> Result<Vec<VecStep>> {
         let mut out = vec![None; self.len()];
-        self.step_with(actions, &mut out, |step, slot| *slot = Some(step.clone()))?;
+        self.step_with(actions, &mut out, |step, slot| *slot = Some(step.to_vec_step()))?;
         Ok(out
             .into_iter()
             .map(|s| s.expect("every environment was stepped"))
             .collect())
     }
 
-    /// Steps every environment as [`VecEnv::step`] does and hands environment `i`'s result
-    /// to `write` with `slots[i]`, on the thread that stepped it: a caller that copies
-    /// results into its own buffers does so in parallel, with nothing collected in between.
+    /// Steps every environment as [`VecEnv::step`] does and hands environment `i`'s result,
+    /// borrowed ([`VecStepRef`]), to `write` with `slots[i]`, on the thread that stepped it:
+    /// a caller that copies results into its own buffers does so in parallel, with nothing
+    /// built or collected in between.
     ///
     /// Nothing is stepped unless every environment can be: an error first if the action
     /// count differs from the environment count, or if an environment would refuse its
@@ -243,7 +282,7 @@ impl VecEnv {
         &mut self,
         actions: &[Action],
         slots: &mut [T],
-        write: impl Fn(&VecStep, &mut T) + Sync,
+        write: impl Fn(&VecStepRef<'_>, &mut T) + Sync,
     ) -> Result<()> {
         assert_eq!(slots.len(), self.len(), "one slot per environment");
         let mut parts = split(slots, &self.chunks());
@@ -263,7 +302,7 @@ impl VecEnv {
         &mut self,
         actions: &[Action],
         chunks: &mut [C],
-        write: impl Fn(&mut C, usize, &VecStep) + Sync,
+        write: impl Fn(&mut C, usize, &VecStepRef<'_>) + Sync,
     ) -> Result<()> {
         if actions.len() != self.len() {
             return Err(SimError::ActionCountMismatch {
@@ -288,27 +327,36 @@ impl VecEnv {
             Ok(())
         };
         let mode = self.autoreset;
-        let step = |env: &mut Env, action: Action, ended: &mut bool| -> Result<VecStep> {
-            if *ended {
-                *ended = false;
-                return Ok(VecStep::Reset(env.reset(None)));
-            }
-            let mut step = env.step(action)?;
-            if step.terminated || step.truncated {
-                match mode {
-                    Autoreset::SameStep => {
-                        let first = env.reset(None);
-                        step.info.final_observation = Some(Box::new(std::mem::replace(&mut step.observation, first)));
-                        step.info.action_mask = step.observation.legal_actions();
-                    }
-                    Autoreset::NextStep => *ended = true,
-                }
-            }
-            Ok(VecStep::Stepped(step))
-        };
+        // Steps each environment of a chunk (or resets one whose episode ended under next-step
+        // autoreset) and lends its result to `write`; `last` holds the observation a same-step
+        // reset replaced.
         let step_chunk = |(envs, actions, ended, chunk): (&mut [Env], &[Action], &mut [bool], &mut C)| {
             for (i, ((env, &action), ended)) in envs.iter_mut().zip(actions).zip(ended.iter_mut()).enumerate() {
-                write(chunk, i, &step(env, action, ended)?);
+                if *ended {
+                    *ended = false;
+                    env.reset(None);
+                    write(chunk, i, &first(env));
+                    continue;
+                }
+                // The batch's check pass has accepted the action.
+                let outcome = env.advance_checked(action)?;
+                let mut last = None;
+                if outcome.terminated || outcome.truncated {
+                    match mode {
+                        Autoreset::SameStep => {
+                            last = Some(env.observation());
+                            env.reset(None);
+                        }
+                        Autoreset::NextStep => *ended = true,
+                    }
+                }
+                let result = VecStepRef {
+                    observation: env.current_observation(),
+                    action_mask: env.legal_actions(),
+                    outcome: Some(outcome),
+                    final_observation: last.as_ref(),
+                };
+                write(chunk, i, &result);
             }
             Ok(())
         };
@@ -344,6 +392,16 @@ impl VecEnv {
     /// The environments, for reading their state.
     pub fn envs(&self) -> &[Env] {
         &self.envs
+    }
+}
+
+/// `env`'s result right after a reset: its first observation, no outcome.
+fn first(env: &Env) -> VecStepRef<'_> {
+    VecStepRef {
+        observation: env.current_observation(),
+        action_mask: env.legal_actions(),
+        outcome: None,
+        final_observation: None,
     }
 }
 

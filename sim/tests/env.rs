@@ -446,8 +446,10 @@ fn vec_env_hands_each_thread_one_range_and_its_writer_sees_every_env_of_it() {
     solo.reset(7);
     let actions: Vec<Action> = (0..big).map(|i| Action::from_index(i % 8, 3).unwrap()).collect();
     let mut chunks: Vec<Vec<(usize, VecStep)>> = vec![Vec::new(); 2];
-    v.step_chunks(&actions, &mut chunks, |chunk, i, step| chunk.push((i, step.clone())))
-        .unwrap();
+    v.step_chunks(&actions, &mut chunks, |chunk, i, step| {
+        chunk.push((i, step.to_vec_step()))
+    })
+    .unwrap();
     let expected = solo.step(&actions).unwrap();
     let mut seen = Vec::new();
     for (range, chunk) in v.chunks().into_iter().zip(chunks) {
@@ -474,4 +476,45 @@ fn a_world_that_named_its_observation_reads_back() {
     written["obs"] = serde_json::json!("paper-screen");
     let read: EnvConfig = serde_json::from_value(written).unwrap();
     assert_eq!(read, EnvConfig::default());
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+
+    /// `Env::advance` plays the episode `Env::step` plays, and what it leaves in place (the
+    /// current observation, its legal actions) is what `step` returns: in either view, on
+    /// either backend, under either protocol, across episode ends.
+    #[test]
+    fn advance_leaves_in_place_what_step_returns(
+        side in proptest::bool::ANY,
+        physics in proptest::bool::ANY,
+        paper in proptest::bool::ANY,
+        blocks in 2usize..=5,
+        seed in 0u64..1_000,
+        picks in proptest::collection::vec(0usize..64, 1..200),
+    ) {
+        let config = EnvConfig {
+            blocks,
+            view: if side { sim::View::Side } else { sim::View::Top },
+            backend: if physics { Backend::Physics } else { Backend::Grid },
+            protocol: if paper { sim::ActionProtocol::Paper } else { sim::ActionProtocol::Free },
+            horizon: 40,
+            ..EnvConfig::default()
+        };
+        let (mut stepped, mut advanced) = (Env::new(config.clone()).unwrap(), Env::new(config).unwrap());
+        proptest::prop_assert_eq!(stepped.reset(seed), advanced.reset(seed));
+        for pick in picks {
+            let mask = stepped.legal_actions();
+            let action = mask.nth(pick % mask.count()).unwrap();
+            let step = stepped.step(action).unwrap();
+            let outcome = advanced.advance(action).unwrap();
+            proptest::prop_assert_eq!(
+                &outcome.into_step(advanced.current_observation().clone(), advanced.legal_actions()),
+                &step
+            );
+            if step.terminated || step.truncated {
+                proptest::prop_assert_eq!(stepped.reset(None), advanced.reset(None));
+            }
+        }
+    }
 }
