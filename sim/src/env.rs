@@ -454,7 +454,8 @@ impl Env {
     /// and does not pay for the check twice.
     pub(crate) fn advance_checked(&mut self, action: Action) -> Result<Outcome> {
         let effect = self.world.world_mut().act(action)?;
-        let before = std::mem::replace(&mut self.now.state, self.world.world().state());
+        let before = self.now.state.clone();
+        self.world.world().read_back(&mut self.now.state, effect);
         self.steps += 1;
         let (now, config) = (&self.now, &self.config);
         let after = &now.state;

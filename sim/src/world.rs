@@ -89,6 +89,25 @@ pub trait World {
     /// The whole logical state, read back from the backend.
     fn state(&self) -> State;
 
+    /// Brings `state`, this world's state before its last action, up to date after that
+    /// action had `effect`, reading back only what the action can have changed. In the top
+    /// view nothing moves but the held block, and only when it [`Effect::Moved`], so a
+    /// physics world reads one body instead of every block's: the read-back was the largest
+    /// share of a batched physics step (docs/performance.md). In the side view a drop lets
+    /// every block settle, so the whole state is read ([`World::state`]).
+    #[inline]
+    fn read_back(&self, state: &mut State, effect: Effect) {
+        if self.view() == View::Side {
+            *state = self.state();
+            return;
+        }
+        let held = self.held_block();
+        state.set_held(held);
+        if let (Effect::Moved, Some(block)) = (effect, held) {
+            state.set_cell(block, self.cell_of(block));
+        }
+    }
+
     /// Carries out `action` by the rules of docs/world.md section 2 and, in the side view,
     /// its section "The side view": a pick only with nothing held and only of a clear block
     /// (otherwise nothing changes), and a released block falls to the top of the column

@@ -1,5 +1,6 @@
 //! docs/world.md section 4's invariants: the physics world and the occupancy model agree step for
-//! step, and every body sits on its cell centre after every step.
+//! step, every body sits on its cell centre after every step, and what a step reads back is
+//! the whole state.
 
 use proptest::prelude::*;
 use sim::{
@@ -101,11 +102,18 @@ proptest! {
         let mut env = Env::new(EnvConfig { goal: GoalSpec::Fixed(Goal::identity(blocks).unwrap()), blocks, ..EnvConfig::default() }).unwrap();
         let start = env.reset(seed).state;
         let mut physics = PhysicsWorld::new(grid, start.clone()).unwrap();
-        let mut occupancy = GridWorld::new(grid, start).unwrap();
+        let mut occupancy = GridWorld::new(grid, start.clone()).unwrap();
+        // What `World::read_back` keeps up to date from the effects alone, per backend.
+        let (mut physics_known, mut occupancy_known) = (start.clone(), start);
         for &a in &actions {
             let action = Action::from_index(a % Action::count(blocks), blocks).unwrap();
-            prop_assert_eq!(physics.act(action).unwrap(), occupancy.act(action).unwrap());
+            let effect = physics.act(action).unwrap();
+            prop_assert_eq!(effect, occupancy.act(action).unwrap());
             prop_assert_eq!(physics.state(), occupancy.state());
+            physics.read_back(&mut physics_known, effect);
+            occupancy.read_back(&mut occupancy_known, effect);
+            prop_assert_eq!(&physics_known, &physics.state());
+            prop_assert_eq!(&occupancy_known, &occupancy.state());
             prop_assert!(physics.max_centre_error() < CENTRE_TOLERANCE, "error {}", physics.max_centre_error());
         }
     }
