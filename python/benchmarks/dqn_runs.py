@@ -115,6 +115,12 @@ def minutes(seconds: float) -> str:
 
 
 def table(_args: argparse.Namespace) -> None:
+    write_atomically(RESULTS / "README.md", render_table())
+    print(f"wrote {(RESULTS / 'README.md').relative_to(ROOT)}")
+
+
+def render_table() -> str:
+    """docs/results/dqn/README.md as the records beside it make it."""
     rows = []
     for path in sorted(RESULTS.glob("*.json")):
         r = json.loads(path.read_text())
@@ -129,7 +135,7 @@ def table(_args: argparse.Namespace) -> None:
             f"| {100 * worst:.1f} % | {e['mean_ratio_to_optimum']:.3f}x | {minutes(t['wall_seconds'])} "
             f"| {t['user_seconds']:,.0f} s | {t['other_cores_busy']:.2f} |"
         )
-    text = "\n".join(
+    return "\n".join(
         [
             "# Network runs",
             "",
@@ -147,8 +153,6 @@ def table(_args: argparse.Namespace) -> None:
             "",
         ]
     )
-    write_atomically(RESULTS / "README.md", text)
-    print(f"wrote {(RESULTS / 'README.md').relative_to(ROOT)}")
 
 
 def main() -> None:
