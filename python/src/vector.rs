@@ -10,7 +10,7 @@ use std::ops::Range;
 
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use sim::{Action, ActionMask, Autoreset, Effect, Observation, VecEnv, VecStepRef};
+use sim::{Action, ActionMask, Autoreset, Observation, VecEnv, VecStepRef};
 
 use crate::boundary::{OrValueError, guard, value_error};
 use crate::config::{self, ObsKind, World};
@@ -106,7 +106,7 @@ impl Slot<'_> {
         *self.reward = outcome.reward;
         *self.terminated = outcome.terminated;
         *self.truncated = outcome.truncated;
-        let blocked = outcome.effect == Effect::Blocked;
+        let blocked = outcome.blocked();
         // The step's info is the reset's; the ended step's goes with its last observation,
         // as Gymnasium's same-step mode reports them.
         *self.blocked = blocked && result.final_observation.is_none();

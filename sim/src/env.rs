@@ -239,6 +239,11 @@ pub struct Outcome {
 }
 
 impl Outcome {
+    /// Whether a held block's move was stopped by a wall or a block (`info.blocked`).
+    pub fn blocked(&self) -> bool {
+        self.effect == Effect::Blocked
+    }
+
     /// The [`Step`] of this outcome, whose observation is `observation` with legal actions
     /// `action_mask` (no final observation).
     pub fn into_step(self, observation: Observation, action_mask: ActionMask) -> Step {
@@ -249,7 +254,7 @@ impl Outcome {
             truncated: self.truncated,
             info: Info {
                 effect: self.effect,
-                blocked: self.effect == Effect::Blocked,
+                blocked: self.blocked(),
                 pairs_in_place: self.pairs_in_place,
                 steps: self.steps,
                 action_mask,

@@ -184,9 +184,20 @@ impl VecEnv {
     /// contiguous range per thread. [`VecEnv::step_chunks`] and [`VecEnv::reset_chunks`] take
     /// one chunk of the caller's per range.
     pub fn chunks(&self) -> Vec<Range<usize>> {
-        let n = self.envs.len();
-        let len = parallel(self.pool.as_ref(), n).map_or(n, |(_, chunk)| chunk).max(1);
+        let (n, len) = (self.envs.len(), self.chunk_len());
         (0..n).step_by(len).map(|start| start..(start + len).min(n)).collect()
+    }
+
+    /// The environments per range of [`VecEnv::chunks`] (the last may hold fewer).
+    fn chunk_len(&self) -> usize {
+        let n = self.envs.len();
+        parallel(self.pool.as_ref(), n).map_or(n, |(_, chunk)| chunk).max(1)
+    }
+
+    /// How many ranges [`VecEnv::chunks`] has, counted without building them: the batch
+    /// calls check their caller's chunks against it on every call.
+    fn chunk_count(&self) -> usize {
+        self.envs.len().div_ceil(self.chunk_len())
     }
 
     /// Resets environment `i` with `seeds[i]` (`None` continues its generator, as
@@ -228,7 +239,7 @@ impl VecEnv {
         assert_eq!(seeds.len(), self.len(), "one seed per environment");
         assert_eq!(
             chunks.len(),
-            self.chunks().len(),
+            self.chunk_count(),
             "one chunk per range of VecEnv::chunks"
         );
         self.ended.fill(false);
@@ -312,7 +323,7 @@ impl VecEnv {
         }
         assert_eq!(
             chunks.len(),
-            self.chunks().len(),
+            self.chunk_count(),
             "one chunk per range of VecEnv::chunks"
         );
         // Every environment that takes its action must accept it (running, the block
