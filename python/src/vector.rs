@@ -10,7 +10,7 @@ use std::ops::Range;
 
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use sim::{Action, ActionMask, Autoreset, Observation, VecEnv, VecStepRef};
+use sim::{Action, Autoreset, Observation, VecEnv, VecStepRef};
 
 use crate::boundary::{OrValueError, guard, value_error};
 use crate::config::{self, ObsKind, World};
@@ -55,11 +55,10 @@ enum ObsSlot<'a> {
 }
 
 impl Slot<'_> {
-    /// Writes `obs` and its legal actions `mask` (a step's `info.action_mask`: not
-    /// recomputed from the observation, a cost a batch of thousands notices).
-    /// `pairs` is the step's `info.pairs_in_place` when it describes `obs`, `None` to count
-    /// them.
-    fn write_obs(&mut self, kind: ObsKind, obs: &Observation, mask: &ActionMask, pairs: Option<usize>) {
+    /// Writes `result`'s observation, its legal actions (the step's mask: not recomputed
+    /// from the observation, a cost a batch of thousands notices) and its pairs in place.
+    fn write_obs(&mut self, kind: ObsKind, result: &VecStepRef<'_>) {
+        let obs = result.observation;
         match &mut self.obs {
             ObsSlot::Bytes(out) => kind
                 .write(obs, out)
@@ -81,7 +80,7 @@ impl Slot<'_> {
                 **held = observe::held_index(obs);
             }
         }
-        observe::write_mask(mask, self.mask);
+        observe::write_mask(&result.action_mask, self.mask);
         observe::write_goal(
             obs,
             observe::GoalOut {
@@ -89,20 +88,17 @@ impl Slot<'_> {
                 tower: self.goal_tower,
             },
         );
-        *self.pairs = pairs.unwrap_or_else(|| obs.goal.pairs_in_place(&obs.state)) as i64;
+        *self.pairs = result.pairs_in_place() as i64;
     }
 
     /// Writes `result`; returns, under same-step autoreset, the last observation of an
     /// episode that ended in this step and whether that step's move was blocked.
     fn write(&mut self, kind: ObsKind, result: &VecStepRef<'_>) -> Option<(Observation, bool)> {
+        self.write_obs(kind, result);
         let Some(outcome) = result.outcome else {
-            self.write_obs(kind, result.observation, &result.action_mask, None);
             (*self.reward, *self.terminated, *self.truncated, *self.blocked) = (0.0, false, false, false);
             return None;
         };
-        // After a same-step reset the outcome's pairs are the ended episode's.
-        let pairs = result.final_observation.is_none().then_some(outcome.pairs_in_place);
-        self.write_obs(kind, result.observation, &result.action_mask, pairs);
         *self.reward = outcome.reward;
         *self.terminated = outcome.terminated;
         *self.truncated = outcome.truncated;

@@ -32,9 +32,7 @@ fn write(result: &VecStepRef<'_>, slot: &mut Slot<'_>) {
     (*slot.reward, *slot.done) = result
         .outcome
         .map_or((0.0, false), |o| (o.reward, o.terminated || o.truncated));
-    // After a same-step reset the outcome's pairs are the ended episode's.
-    let pairs = result.outcome.filter(|_| result.final_observation.is_none());
-    *slot.pairs = pairs.map_or_else(|| obs.goal.pairs_in_place(&obs.state), |o| o.pairs_in_place);
+    *slot.pairs = result.pairs_in_place();
     for (i, m) in slot.mask.iter_mut().enumerate() {
         *m = result.action_mask.contains_index(i);
     }

@@ -69,6 +69,16 @@ pub struct VecStepRef<'a> {
 }
 
 impl VecStepRef<'_> {
+    /// How many of the goal's consecutive pairs stand in place in `observation`: the
+    /// outcome's count when it describes `observation`, counted otherwise (after a reset,
+    /// and after a same-step reset, whose outcome counts the ended episode's last state).
+    pub fn pairs_in_place(&self) -> usize {
+        match self.outcome {
+            Some(outcome) if self.final_observation.is_none() => outcome.pairs_in_place,
+            _ => self.observation.goal.pairs_in_place(&self.observation.state),
+        }
+    }
+
     /// The owned result, as [`VecEnv::step`] returns it.
     pub fn to_vec_step(&self) -> VecStep {
         match self.outcome {

@@ -318,6 +318,40 @@ fn ascii_marks_the_held_block_and_shows_the_goal() {
     assert!(text.ends_with("held: 2\n"));
 }
 
+/// A lent result's pairs in place describe the observation it lends, in both autoreset
+/// modes, across episode ends (where the outcome's count is the ended episode's).
+#[test]
+fn vec_step_ref_counts_the_pairs_of_the_observation_it_lends() {
+    for mode in [Autoreset::SameStep, Autoreset::NextStep] {
+        let config = EnvConfig {
+            horizon: 5,
+            backend: Backend::Grid,
+            ..EnvConfig::default()
+        };
+        let mut v = VecEnv::new(config, 8, 1).unwrap().with_autoreset(mode);
+        v.reset(3);
+        let mut slots = vec![(0, 0, false); 8];
+        let mut ends = 0;
+        for k in 0..40 {
+            let actions: Vec<Action> = (0..8).map(|i| Action::from_index((i + k) % 8, 3).unwrap()).collect();
+            v.step_with(&actions, &mut slots, |r, slot| {
+                let obs = r.observation;
+                *slot = (
+                    r.pairs_in_place(),
+                    obs.goal.pairs_in_place(&obs.state),
+                    r.outcome.is_some_and(|o| o.truncated || o.terminated),
+                );
+            })
+            .unwrap();
+            for &(lent, counted, ended) in &slots {
+                assert_eq!(lent, counted);
+                ends += usize::from(ended);
+            }
+        }
+        assert!(ends > 0, "{mode:?}: no episode ended");
+    }
+}
+
 #[test]
 fn vec_env_seeds_each_env_and_resets_in_the_same_step() {
     let config = EnvConfig {
