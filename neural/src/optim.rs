@@ -5,7 +5,7 @@
 //! clip of the gradients' global norm. The parameters and the gradients are each one flat
 //! slice ([`crate::net::QNet::params`]), so a step is two passes over memory, in place: one
 //! that adds the L2 term and measures the norm, one that updates the moments and the
-//! weights. Nothing is allocated after the optimiser is made. Subnormal values flush to
+//! weights, cut in two fixed halves that two threads share. Nothing is allocated after the optimiser is made. Subnormal values flush to
 //! zero ([`crate::kernels::without_subnormals`]): the moments of weights no input reaches
 //! decay into them.
 
@@ -109,63 +109,118 @@ impl Optimizer {
     /// One update of `params` from `grads` (the same length, the optimiser's): adds
     /// `2 * l2 * w` to each gradient (an L2 term `l2 * sum w^2` in the loss), scales all
     /// gradients down to a global norm of at most `clip` when given, and steps. Returns the
-    /// gradients' global norm before the clip.
-    pub fn step(&mut self, params: &mut [f32], grads: &mut [f32], l2: f64, clip: Option<f64>) -> f64 {
+    /// gradients' global norm before the clip when there is a clip; without one the norm is
+    /// not measured, and `grads` is left as it was.
+    ///
+    /// Without a clip a step is one pass over memory: each value's update reads only its
+    /// own weight, gradient and moments. The pass is cut into two fixed halves
+    /// ([`crate::kernels::join`]), on two threads when the pool has them, which give the
+    /// bits one pass does: the network's largest pass over memory (Adam reads and writes
+    /// four values a parameter) is shared. A clip needs the norm first, a pass of its own.
+    pub fn step(&mut self, params: &mut [f32], grads: &mut [f32], l2: f64, clip: Option<f64>) -> Option<f64> {
         assert!(
             params.len() == self.first.len() && grads.len() == params.len(),
             "the optimiser's parameters"
         );
         self.steps += 1;
         let t = self.steps.min(i32::MAX as u64) as i32;
-        let settings = (self.kind, self.lr, t, l2, clip);
-        let (first, second) = (&mut self.first, &mut self.second);
-        crate::kernels::without_subnormals(|| update(settings, params, grads, first, second))
+        let k = if l2 > 0.0 { (2.0 * l2) as f32 } else { 0.0 };
+        // With a clip, the L2 term is added to `grads` by the pass that measures the norm.
+        let (norm, settings) = match clip {
+            Some(clip) => {
+                let (norm, scale) = crate::kernels::without_subnormals(|| measure(params, grads, k, clip));
+                (Some(norm), (self.kind, self.lr, t, 0.0, scale))
+            }
+            None => (None, (self.kind, self.lr, t, k, 1.0)),
+        };
+        let grads = &*grads;
+        let half = halfway(params.len());
+        if half == 0 {
+            crate::kernels::without_subnormals(|| update(settings, params, grads, &mut self.first, &mut self.second));
+            return norm;
+        }
+        let (params_a, params_b) = params.split_at_mut(half);
+        let (grads_a, grads_b) = grads.split_at(half);
+        let (first_a, first_b) = self.first.split_at_mut(half);
+        // Adam's second moment, or RMSprop's empty one.
+        let second_half = half.min(self.second.len());
+        let (second_a, second_b) = self.second.split_at_mut(second_half);
+        crate::kernels::join(
+            || update(settings, params_a, grads_a, first_a, second_a),
+            || update(settings, params_b, grads_b, first_b, second_b),
+        );
+        norm
     }
 }
 
+/// Parameters below which the update pass stays whole: two threads' hand-off costs more
+/// than half a pass over fewer.
+const SPLIT_FROM: usize = 1 << 16;
+
+/// Where the update pass is cut: the middle rounded down to a whole 64-byte line, or 0
+/// (no cut) for a buffer below [`SPLIT_FROM`]. The same for every thread count.
+fn halfway(len: usize) -> usize {
+    if len < SPLIT_FROM { 0 } else { len / 2 / 16 * 16 }
+}
+
 /// What one update needs beside the buffers: the kind, the learning rate, the step number
-/// (from 1), the L2 weight and the clip.
-type Settings = (OptimizerKind, f32, i32, f64, Option<f64>);
+/// (from 1), the L2 term's factor still to add to each gradient (0 once added) and the
+/// factor the clip scales the gradients by.
+type Settings = (OptimizerKind, f32, i32, f32, f32);
+
+crate::kernels::avx2_dispatch! {
+    fn measure => measure_any(params: &[f32], grads: &mut [f32], k: f32, clip: f64) -> (f64, f32)
+}
 
 crate::kernels::avx2_dispatch! {
     fn update => update_any(
         settings: Settings,
         params: &mut [f32],
-        grads: &mut [f32],
+        grads: &[f32],
         first: &mut [f32],
         second: &mut [f32],
-    ) -> f64
+    )
 }
 
-/// [`Optimizer::step`]'s two passes.
+/// [`Optimizer::step`]'s pass before a clip: adds `k * w` to the gradients (unless `k` is
+/// 0) and returns their global norm and the factor the clip scales them by.
 #[inline(always)]
-fn update_any(
-    (kind, lr, t, l2, clip): Settings,
-    params: &mut [f32],
-    grads: &mut [f32],
-    first: &mut [f32],
-    second: &mut [f32],
-) -> f64 {
-    let k = (2.0 * l2) as f32;
+fn measure_any(params: &[f32], grads: &mut [f32], k: f32, clip: f64) -> (f64, f32) {
     // Eight partial sums in a fixed order: vectorised, and the same bits every time.
     let mut lanes = [0.0f64; 8];
     for (g, w) in grads.chunks_mut(8).zip(params.chunks(8)) {
         for ((g, &w), lane) in g.iter_mut().zip(w).zip(lanes.iter_mut()) {
-            if l2 > 0.0 {
+            if k != 0.0 {
                 *g += k * w;
             }
             *lane += f64::from(*g) * f64::from(*g);
         }
     }
     let norm = lanes.iter().sum::<f64>().sqrt();
-    let scale = match clip {
-        Some(c) if norm > c && norm > 0.0 => (c / norm) as f32,
-        _ => 1.0,
+    let scale = if norm > clip && norm > 0.0 {
+        (clip / norm) as f32
+    } else {
+        1.0
     };
+    (norm, scale)
+}
+
+/// [`Optimizer::step`]'s update of one part of the buffers: the moments and the weights,
+/// from each gradient plus its L2 term, scaled.
+#[inline(always)]
+fn update_any(
+    (kind, lr, t, k, scale): Settings,
+    params: &mut [f32],
+    grads: &[f32],
+    first: &mut [f32],
+    second: &mut [f32],
+) {
+    // The gradient the measuring pass would have stored: `g + k * w`, then scaled.
+    let gradient = |g: f32, w: f32| (if k != 0.0 { g + k * w } else { g }) * scale;
     match kind {
         OptimizerKind::Rmsprop => {
             for ((w, &g), sq) in params.iter_mut().zip(grads.iter()).zip(first.iter_mut()) {
-                let g = g * scale;
+                let g = gradient(g, *w);
                 *sq = RMS_ALPHA * *sq + (1.0 - RMS_ALPHA) * g * g;
                 *w -= lr * g / (sq.sqrt() + EPS);
             }
@@ -178,14 +233,13 @@ fn update_any(
             let (step, inv_c2) = (lr / c1, 1.0 / c2);
             let moments = first.iter_mut().zip(second.iter_mut());
             for ((w, &g), (m, s)) in params.iter_mut().zip(grads.iter()).zip(moments) {
-                let g = g * scale;
+                let g = gradient(g, *w);
                 *m = b1 * *m + (1.0 - b1) * g;
                 *s = b2 * *s + (1.0 - b2) * g * g;
                 *w -= step * *m / ((*s * inv_c2).sqrt() + EPS);
             }
         }
     }
-    norm
 }
 
 #[cfg(test)]
@@ -223,7 +277,9 @@ mod tests {
         let mut opt = Optimizer::new(OptimizerKind::Rmsprop, 0.01, 2);
         // The gradient of (w - (30, 40))^2 at 0.
         let mut grad = [-60f32, -80.0];
-        let norm = opt.step(&mut w, &mut grad, 0.0, Some(1.0));
+        let norm = opt
+            .step(&mut w, &mut grad, 0.0, Some(1.0))
+            .expect("a clip measures the norm");
         assert!((norm - 100.0).abs() < 1e-3, "gradient (-60, -80) has norm 100: {norm}");
     }
 
@@ -232,7 +288,55 @@ mod tests {
         // w = 2, zero loss gradient, l2 0.25: the gradient is 2 * 0.25 * 2 = 1.
         let mut w = [2f32];
         let mut opt = Optimizer::new(OptimizerKind::Adam, 0.1, 1);
-        let norm = opt.step(&mut w, &mut [0.0], 0.25, None);
-        assert!((norm - 1.0).abs() < 1e-9 && (w[0] - 1.9).abs() < 1e-5, "{norm} {w:?}");
+        let mut opt_clipped = Optimizer::new(OptimizerKind::Adam, 0.1, 1);
+        let norm = opt_clipped
+            .step(&mut [2.0], &mut [0.0], 0.25, Some(100.0))
+            .expect("a clip measures the norm");
+        assert!((norm - 1.0).abs() < 1e-9, "{norm}");
+        assert_eq!(opt.step(&mut w, &mut [0.0], 0.25, None), None, "no clip, no norm");
+        assert!((w[0] - 1.9).abs() < 1e-5, "{w:?}");
+    }
+
+    #[test]
+    fn a_step_cut_in_halves_on_two_threads_gives_the_bits_of_one_pass() {
+        // A buffer past SPLIT_FROM: three steps of each optimiser on a pool of two threads,
+        // against the same steps as one whole pass over every buffer.
+        let count = SPLIT_FROM * 2 + 40;
+        let value = |i: usize, k: u64| ((i as u64 * 2_654_435_761 + k * 97) % 2_001) as f32 / 1_000.0 - 1.0;
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        for kind in [OptimizerKind::Adam, OptimizerKind::Rmsprop] {
+            let mut cut: Vec<f32> = (0..count).map(|i| value(i, 0)).collect();
+            let mut whole = cut.clone();
+            let mut opt = Optimizer::new(kind, 0.01, count);
+            let (mut first, mut second) = (opt.first.clone(), opt.second.clone());
+            for step in 1..=3 {
+                let grads: Vec<f32> = (0..count).map(|i| value(i, step)).collect();
+                // Without a clip (one fused pass, cut in two), then with one (the norm
+                // pass first): each against the two passes over the whole buffers.
+                let clip = (step == 3).then_some(50.0);
+                pool.install(|| opt.step(&mut cut, &mut grads.clone(), 1e-4, clip));
+                let mut g = grads.clone();
+                let (_, scale) = measure_any(&whole, &mut g, 2e-4, clip.unwrap_or(f64::INFINITY));
+                update_any(
+                    (kind, 0.01, step as i32, 0.0, scale),
+                    &mut whole,
+                    &g,
+                    &mut first,
+                    &mut second,
+                );
+            }
+            assert!(halfway(count) > 0, "the buffer is cut");
+            let differ = cut
+                .iter()
+                .zip(&whole)
+                .filter(|(a, b)| a.to_bits() != b.to_bits())
+                .count();
+            assert_eq!(differ, 0, "{kind}: {differ} of {count} weights differ");
+            assert_eq!(
+                (&opt.first, &opt.second),
+                (&first, &second),
+                "{kind}: the moments differ"
+            );
+        }
     }
 }

@@ -276,6 +276,20 @@ impl Trainer {
         Ok(())
     }
 
+    /// [`Trainer::run_until`] on a thread of rayon's global pool, for a caller outside every
+    /// pool (the command line's main thread); the same steps, so the same bits.
+    ///
+    /// Why: a network's passes are split in two halves ([`crate::kernels::join`]). Called
+    /// from outside a pool, each split hands both halves to the pool and puts the caller to
+    /// sleep until they end: two thread wake-ups a split, several splits a step. On a pool
+    /// thread the caller runs one half while the other thread takes the second, or takes it
+    /// back itself if that thread is slow to wake (docs/performance.md measures it). The
+    /// hooks run on that thread, so they must be `Send`. Python's stay with `run_until`:
+    /// they look for Ctrl-C, which only the main thread can see.
+    pub fn run_until_on_pool(&mut self, total: u64, hooks: &mut (dyn TrainHooks + Send)) -> Result<()> {
+        rayon::scope(|_| self.run_until(total, hooks))
+    }
+
     /// One gradient step on the demonstrations alone.
     fn pretrain_step(&mut self) -> Result<()> {
         let batch = self.buffer.sample_demos(self.config.batch, &mut self.rng);

@@ -1,6 +1,7 @@
 """Steps per second of blockstack beside MiniGrid and FrozenLake, through the same paths.
 
     python python/benchmarks/throughput.py [--seconds 2] [--quick] [--view top|side] [--blocks 3]
+    python python/benchmarks/throughput.py --scaling 7 [--seconds 0.5] [--sizes 256,512,1024]
 
 Prints one table: (a) ``blockstack/Stack-v0`` through ``gymnasium.make``, one env, random
 legal actions; (b) the same through ``gymnasium.vector.SyncVectorEnv`` of 64; (c)
@@ -16,11 +17,18 @@ observations unless it says otherwise; actions are drawn uniformly from the lega
 rapier's dynamics until the blocks rest; the native vector env's actions are then drawn
 among the legal ones (``action_masks()``) too, that draw included in the time. The peers
 are left out. ``--blocks`` sets the block count of every blockstack row (3 by default).
+
+``--scaling PAIRS`` prints, instead of the table, what a second thread buys
+``StackVectorEnv`` on either backend at each of ``--sizes``: PAIRS runs on 1 thread
+alternated with PAIRS on 2, ``--seconds`` each, and their medians and the median of the
+pairs' ratios. Alternated short runs and medians, since a shared machine's load moves a
+single run by a third.
 """
 
 from __future__ import annotations
 
 import argparse
+import statistics
 import time
 
 import gymnasium as gym
@@ -105,15 +113,37 @@ def native(num_envs: int, threads: int, seconds: float, **kwargs) -> float:
     return timed(step, seconds)
 
 
+def scaling(pairs: int, seconds: float, sizes: list[int], **world) -> None:
+    """1 thread against 2 at each size and backend: medians of alternated runs."""
+    print(f"  {'backend':<8} {'envs':>6} {'1 thread':>12} {'2 threads':>12} {'ratio':>7} {'range':>12}")
+    for backend in ("physics", "grid"):
+        for num_envs in sizes:
+            one, two = [], []
+            for _ in range(pairs):
+                one.append(native(num_envs, 1, seconds, backend=backend, **world))
+                two.append(native(num_envs, 2, seconds, backend=backend, **world))
+            ratios = sorted(b / a for a, b in zip(one, two))
+            print(
+                f"  {backend:<8} {num_envs:>6} {statistics.median(one):>12,.0f} {statistics.median(two):>12,.0f}"
+                f" {statistics.median(ratios):>6.2f}x {ratios[0]:>5.2f}-{ratios[-1]:.2f}x",
+                flush=True,
+            )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=2.0, help="time per row")
     parser.add_argument("--quick", action="store_true", help="skip 4096 envs and the peers")
     parser.add_argument("--view", choices=["top", "side"], default="top", help="the world measured")
     parser.add_argument("--blocks", type=int, default=3, help="blocks in every blockstack env")
+    parser.add_argument("--scaling", type=int, metavar="PAIRS", help="1 thread against 2: PAIRS alternated runs each")
+    parser.add_argument("--sizes", default="256,512,1024,2048,4096", help="envs measured by --scaling")
     args = parser.parse_args()
     s = args.seconds
     side = args.view == "side"
+    if args.scaling:
+        scaling(args.scaling, s, [int(n) for n in args.sizes.split(",")], blocks=args.blocks, view=args.view)
+        return
     name = "blockstack/BlocksWorld-v0" if side else "blockstack/Stack-v0"
     world = {"blocks": args.blocks, "view": args.view}
     rows = []

@@ -111,6 +111,10 @@ class StackVectorEnv(VectorEnv):
         self.action_space = batch_space(self.single_action_space, num_envs)
         self.observation_space = batch_space(self.single_observation_space, num_envs)
         self._buffers = self._native.buffers()
+        # Every info key is present for every environment: one mask, made once (read-only,
+        # as the buffers are the caller's to read, not to write; copies when ``copy``).
+        self._every_env = np.ones(num_envs, dtype=bool)
+        self._every_env.flags.writeable = False
 
     def _out(self, value):
         if isinstance(value, dict):
@@ -122,7 +126,7 @@ class StackVectorEnv(VectorEnv):
         infos = {}
         for key in _INFO_KEYS:
             infos[key] = self._out(self._buffers[key])
-            infos["_" + key] = np.ones(n, dtype=bool)
+            infos["_" + key] = self._out(self._every_env)
         if ended:
             final_obs = np.full(n, None, dtype=object)
             has_final = np.zeros(n, dtype=bool)
@@ -165,14 +169,12 @@ class StackVectorEnv(VectorEnv):
 
     def step(self, actions):
         actions = np.asarray(actions)
-        if actions.dtype.kind in "iu" and actions.size:
-            count = self.single_action_space.n
+        if actions.dtype == np.uint64 and actions.size:
             # Checked here, in Python's integers: a uint64 beyond int64 would wrap natively.
-            for value in (actions.min(), actions.max()):
-                if not 0 <= int(value) < count:
-                    raise ValueError(
-                        f"action {int(value)} is out of range: with {count - 5} blocks the actions are 0..{count}"
-                    )
+            # The native step checks every other integer type itself.
+            count, value = self.single_action_space.n, int(actions.max())
+            if value >= count:
+                raise ValueError(f"action {value} is out of range: with {count - 5} blocks the actions are 0..{count}")
         with self._lock:
             ended = self._native.step(actions)
             b = self._buffers

@@ -1,7 +1,9 @@
 //! The network trainer in-process: one run of `blockstack dqn` from its flags, for Python.
 
 use std::path::PathBuf;
-use std::time::Instant;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{self, RecvTimeoutError};
+use std::time::{Duration, Instant};
 
 use agent::eval::EvalOverrides;
 use neural::{AnyModel, DemoSource, DqnConfig, DqnOverrides, Trainer};
@@ -158,18 +160,38 @@ pub fn train_dqn<'py>(
                 _ => Trainer::new(config.clone()).or_value_error()?,
             };
             let resumed_at = trainer.steps_done();
-            // The run's one loop (`Trainer::run_until`), with Ctrl-C looked for every 100 ms
-            // (the GIL taken back only for that): it stops a long run with KeyboardInterrupt.
-            // The steps are the ones `blockstack dqn` takes, so the network is the CLI's.
+            // The run's one loop on a thread of rayon's pool, as `blockstack dqn` runs it
+            // (`Trainer::run_until_on_pool`: the same steps, so the CLI's network), while this
+            // thread looks for Ctrl-C every 100 ms (the GIL taken back only for that; only
+            // the main thread sees signals): it stops a long run with KeyboardInterrupt.
             let mut signal = None;
-            let ran = trainer.run_until(
-                trainer.total_steps(),
-                &mut Interruptible {
-                    check: signal_checker(&mut signal),
-                    checkpoint: checkpoint.as_ref().map(|(_, out)| out),
-                    every,
-                },
-            );
+            let stop = AtomicBool::new(false);
+            let total = trainer.total_steps();
+            let ran = std::thread::scope(|scope| {
+                let (ended, end) = mpsc::channel::<()>();
+                let run = scope.spawn(|| {
+                    // Sends when dropped, even by a panic: the wait below ends either way.
+                    let _ended = ended;
+                    trainer.run_until_on_pool(
+                        total,
+                        &mut Interruptible {
+                            check: || match stop.load(Ordering::Acquire) {
+                                true => Err(agent::AgentError::Interrupted),
+                                false => Ok(()),
+                            },
+                            checkpoint: checkpoint.as_ref().map(|(_, out)| out),
+                            every,
+                        },
+                    )
+                });
+                let mut look = signal_checker(&mut signal);
+                while let Err(RecvTimeoutError::Timeout) = end.recv_timeout(Duration::from_millis(100)) {
+                    if look().is_err() {
+                        stop.store(true, Ordering::Release);
+                    }
+                }
+                run.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+            });
             ran.map_err(|e| raise_signal(signal, e))?;
             let dqn = trainer.finish().or_value_error()?;
             let seconds = clock.elapsed().as_secs_f64();

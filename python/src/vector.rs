@@ -9,7 +9,7 @@ use numpy::{
 use std::ops::Range;
 
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
+use pyo3::types::{IntoPyDict, PyDict, PyList};
 use sim::{Action, Autoreset, Observation, VecEnv, VecStepRef};
 
 use crate::boundary::{OrValueError, guard, value_error};
@@ -346,7 +346,9 @@ impl NativeVecEnv {
                 array.shape()
             )));
         }
-        let as_i64 = array.call_method1("astype", ("int64",))?;
+        // No copy when the array already holds int64, the usual case.
+        let no_copy = [("copy", false)].into_py_dict(actions.py())?;
+        let as_i64 = array.call_method("astype", ("int64",), Some(&no_copy))?;
         let values = as_i64.cast::<PyArray1<i64>>()?.readonly();
         values
             .as_array()

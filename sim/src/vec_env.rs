@@ -2,13 +2,12 @@
 
 use std::ops::Range;
 
-use rayon::prelude::*;
-
 use crate::action::Action;
 use crate::env::{Env, EnvConfig, Outcome, Step};
 use crate::error::{Result, SimError};
 use crate::observation::Observation;
 use crate::protocol::ActionMask;
+use crate::team::Team;
 
 /// How a [`VecEnv`] starts the next episode of an environment whose episode ended: the
 /// two modes of Gymnasium 1.x's `AutoresetMode`.
@@ -94,25 +93,26 @@ impl VecStepRef<'_> {
 
 /// Below this many environments a [`VecEnv`] steps and resets on the caller's thread
 /// whatever its thread count. Through Python (`python/benchmarks/throughput.py`, where
-/// every call also converts the actions on one thread) two threads first beat one between
-/// 512 and 768 physics envs on a quiet 2-core machine, and lost at 256
-/// (docs/performance.md); from 1,024 they pay in Rust and Python alike.
-pub const PARALLEL_FROM_ENVS: usize = 1024;
+/// every call also converts the actions on one thread), with the caller's thread stepping
+/// a chunk and the workers kept awake between calls, two threads first beat one at 512
+/// envs of either backend on a quiet 2-core machine, and tied at 256 (docs/performance.md).
+pub const PARALLEL_FROM_ENVS: usize = 512;
 
-/// The pool and the environments per chunk when a batch of `envs` is stepped in parallel;
-/// `None` when the caller's thread steps it (one thread, or fewer than
+/// The team and the environments per chunk when a batch of `envs` is stepped in parallel;
+/// `None` when the caller's thread steps it alone (one thread, or fewer than
 /// [`PARALLEL_FROM_ENVS`] environments).
-fn parallel(pool: Option<&rayon::ThreadPool>, envs: usize) -> Option<(&rayon::ThreadPool, usize)> {
-    let pool = pool?;
-    let threads = pool.current_num_threads();
-    (threads > 1 && envs >= PARALLEL_FROM_ENVS).then(|| (pool, envs.div_ceil(threads)))
+fn parallel(team: Option<&Team>, envs: usize) -> Option<(&Team, usize)> {
+    let team = team?;
+    (envs >= PARALLEL_FROM_ENVS).then(|| (team, envs.div_ceil(team.threads())))
 }
 
-/// `M` environments of one config, stepped together on a rayon thread pool.
+/// `M` environments of one config, stepped together on the caller's thread and a pool's.
 ///
 /// Threads: a batch of [`PARALLEL_FROM_ENVS`] or more is cut into one contiguous chunk per
 /// thread, so each thread hands off once per call and walks its environments in memory
-/// order; a smaller batch stays on the caller's thread.
+/// order; the caller's thread steps the first chunk, and the pool's workers spin briefly
+/// between calls so the next finds them awake (the `team` module). A smaller batch stays on
+/// the caller's thread.
 ///
 /// Seeds: environment `i` is reset with `base_seed + i`, and each continues its own
 /// generator from there, so every environment plays its own fixed sequence of episodes.
@@ -122,7 +122,7 @@ pub struct VecEnv {
     envs: Vec<Env>,
     /// `None` for one thread: the caller's thread steps the environments itself, which
     /// spares a hand-off to a pool thread and back on every step.
-    pool: Option<rayon::ThreadPool>,
+    team: Option<Team>,
     autoreset: Autoreset,
     /// Under [`Autoreset::NextStep`]: whose episode ended on the last step.
     ended: Vec<bool>,
@@ -135,21 +135,14 @@ impl VecEnv {
         let envs = (0..count)
             .map(|_| Env::new(config.clone()))
             .collect::<Result<Vec<_>>>()?;
-        let pool = match threads {
-            1 => None,
-            _ => Some(
-                rayon::ThreadPoolBuilder::new()
-                    .num_threads(threads)
-                    .build()
-                    .map_err(|e| SimError::ThreadPool {
-                        threads,
-                        reason: e.to_string(),
-                    })?,
-            ),
+        let threads = match threads {
+            0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+            n => n,
         };
+        let team = (threads > 1).then(|| Team::new(threads)).transpose()?;
         Ok(VecEnv {
             envs,
-            pool,
+            team,
             autoreset: Autoreset::default(),
             ended: vec![false; count],
         })
@@ -201,7 +194,7 @@ impl VecEnv {
     /// The environments per range of [`VecEnv::chunks`] (the last may hold fewer).
     fn chunk_len(&self) -> usize {
         let n = self.envs.len();
-        parallel(self.pool.as_ref(), n).map_or(n, |(_, chunk)| chunk).max(1)
+        parallel(self.team.as_ref(), n).map_or(n, |(_, chunk)| chunk).max(1)
     }
 
     /// How many ranges [`VecEnv::chunks`] has, counted without building them: the batch
@@ -259,19 +252,19 @@ impl VecEnv {
                 write(chunk, i, &first(env));
             }
         };
-        match parallel(self.pool.as_ref(), self.envs.len()) {
+        match parallel(self.team.as_ref(), self.envs.len()) {
             None => {
                 if let Some(chunk) = chunks.first_mut() {
                     reset((&mut self.envs, seeds, chunk));
                 }
             }
-            Some((pool, len)) => pool.install(|| {
-                self.envs
-                    .par_chunks_mut(len)
-                    .zip(seeds.par_chunks(len))
-                    .zip(chunks.par_iter_mut())
-                    .for_each(|((envs, seeds), chunk)| reset((envs, seeds, chunk)))
-            }),
+            Some((team, len)) => {
+                let parts = self.envs.chunks_mut(len).zip(seeds.chunks(len)).zip(chunks.iter_mut());
+                team.run(
+                    parts.map(|((envs, seeds), chunk)| (envs, seeds, chunk)).collect(),
+                    reset,
+                );
+            }
         }
     }
 
@@ -381,7 +374,7 @@ impl VecEnv {
             }
             Ok(())
         };
-        match parallel(self.pool.as_ref(), self.envs.len()) {
+        match parallel(self.team.as_ref(), self.envs.len()) {
             None => {
                 check((&self.envs, actions, &self.ended))?;
                 match chunks.first_mut() {
@@ -389,24 +382,23 @@ impl VecEnv {
                     None => Ok(()),
                 }
             }
-            Some((pool, len)) => pool.install(|| {
-                // Checked chunk by chunk in parallel, then stepped only if every chunk
-                // passed: the results in chunk order give the first refusal.
-                let checks: Vec<Result<()>> = self
+            Some((team, len)) => {
+                // Each chunk checked on its thread, then stepped only once every chunk has
+                // passed: the refusals in chunk order give the first, as a serial check would.
+                let parts = self
                     .envs
-                    .par_chunks(len)
-                    .zip(actions.par_chunks(len))
-                    .zip(self.ended.par_chunks(len))
-                    .map(|((envs, actions), ended)| check((envs, actions, ended)))
-                    .collect();
-                checks.into_iter().collect::<Result<()>>()?;
-                self.envs
-                    .par_chunks_mut(len)
-                    .zip(actions.par_chunks(len))
-                    .zip(self.ended.par_chunks_mut(len))
-                    .zip(chunks.par_iter_mut())
-                    .try_for_each(|(((envs, actions), ended), chunk)| step_chunk((envs, actions, ended, chunk)))
-            }),
+                    .chunks_mut(len)
+                    .zip(actions.chunks(len))
+                    .zip(self.ended.chunks_mut(len))
+                    .zip(chunks.iter_mut());
+                let parts = parts.map(|(((envs, actions), ended), chunk)| (envs, actions, ended, chunk));
+                let checked = |(envs, actions, ended, _): &(&mut [Env], &[Action], &mut [bool], &mut C)| {
+                    check((envs, actions, ended))
+                };
+                team.run_checked(parts.collect(), checked, step_chunk)?
+                    .into_iter()
+                    .collect()
+            }
         }
     }
 

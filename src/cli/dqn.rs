@@ -311,10 +311,10 @@ impl DqnArgs {
     }
 }
 
-/// The command's part in a run ([`neural::Trainer::run_until`]): the progress bar, and the
+/// The command's part in a run ([`neural::Trainer::run_until_on_pool`]): the progress bar, and the
 /// checkpoint every `every` steps when one is asked for.
 struct Hooks<'a> {
-    show: &'a mut dyn FnMut(&Progress),
+    show: &'a mut (dyn FnMut(&Progress) + Send),
     checkpoint: Option<&'a files::OutputPath>,
     every: u64,
 }
@@ -426,7 +426,7 @@ pub fn dqn(args: DqnArgs) -> Result<()> {
         checkpoint: checkpoint.as_ref(),
         every: args.checkpoint_every.unwrap_or(neural::checkpoint::DEFAULT_EVERY),
     };
-    trainer.run_until(trainer.total_steps(), &mut hooks)?;
+    trainer.run_until_on_pool(trainer.total_steps(), &mut hooks)?;
     let dqn = trainer.finish()?;
     let seconds = clock.elapsed().as_secs_f64();
     bar.finish_and_clear();
