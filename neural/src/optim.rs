@@ -3,11 +3,12 @@
 //! PyTorch's update rules with its default constants, no weight decay of their own
 //! (DQfD's L2 term is added to the gradient here, on the learner's word), and an optional
 //! clip of the gradients' global norm. The parameters and the gradients are each one flat
-//! slice ([`crate::net::QNet::params`]), so a step is two passes over memory, in place: one
-//! that adds the L2 term and measures the norm, one that updates the moments and the
-//! weights, cut in two fixed halves that two threads share. Nothing is allocated after the optimiser is made. Subnormal values flush to
-//! zero ([`crate::kernels::without_subnormals`]): the moments of weights no input reaches
-//! decay into them.
+//! slice ([`crate::net::QNet::params`]), so a step is at most two passes over memory, in
+//! place: with a clip, one that adds the L2 term and measures the norm; then one that
+//! updates the moments and the weights, cut in two fixed halves that two threads share.
+//! Nothing is allocated after the optimiser is made. Subnormal values flush to zero
+//! ([`crate::kernels::without_subnormals`]): the moments of weights no input reaches decay
+//! into them.
 
 use serde::{Deserialize, Serialize};
 
@@ -134,11 +135,12 @@ impl Optimizer {
             None => (None, (self.kind, self.lr, t, k, 1.0)),
         };
         let grads = &*grads;
-        let half = halfway(params.len());
-        if half == 0 {
+        let parts = crate::kernels::parts(params.len(), MIN_HALF);
+        if parts == 1 {
             crate::kernels::without_subnormals(|| update(settings, params, grads, &mut self.first, &mut self.second));
             return norm;
         }
+        let half = crate::kernels::part_start(params.len(), parts, 1);
         let (params_a, params_b) = params.split_at_mut(half);
         let (grads_a, grads_b) = grads.split_at(half);
         let (first_a, first_b) = self.first.split_at_mut(half);
@@ -153,15 +155,9 @@ impl Optimizer {
     }
 }
 
-/// Parameters below which the update pass stays whole: two threads' hand-off costs more
-/// than half a pass over fewer.
-const SPLIT_FROM: usize = 1 << 16;
-
-/// Where the update pass is cut: the middle rounded down to a whole 64-byte line, or 0
-/// (no cut) for a buffer below [`SPLIT_FROM`]. The same for every thread count.
-fn halfway(len: usize) -> usize {
-    if len < SPLIT_FROM { 0 } else { len / 2 / 16 * 16 }
-}
+/// Parameters each half of the update pass must hold, or it stays whole
+/// ([`crate::kernels::parts`]): two threads' hand-off costs more than half a shorter pass.
+const MIN_HALF: usize = 1 << 15;
 
 /// What one update needs beside the buffers: the kind, the learning rate, the step number
 /// (from 1), the L2 term's factor still to add to each gradient (0 once added) and the
@@ -299,9 +295,9 @@ mod tests {
 
     #[test]
     fn a_step_cut_in_halves_on_two_threads_gives_the_bits_of_one_pass() {
-        // A buffer past SPLIT_FROM: three steps of each optimiser on a pool of two threads,
+        // A buffer cut in two: three steps of each optimiser on a pool of two threads,
         // against the same steps as one whole pass over every buffer.
-        let count = SPLIT_FROM * 2 + 40;
+        let count = MIN_HALF * 4 + 40;
         let value = |i: usize, k: u64| ((i as u64 * 2_654_435_761 + k * 97) % 2_001) as f32 / 1_000.0 - 1.0;
         let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
         for kind in [OptimizerKind::Adam, OptimizerKind::Rmsprop] {
@@ -325,7 +321,7 @@ mod tests {
                     &mut second,
                 );
             }
-            assert!(halfway(count) > 0, "the buffer is cut");
+            assert_eq!(crate::kernels::parts(count, MIN_HALF), 2, "the buffer is cut");
             let differ = cut
                 .iter()
                 .zip(&whole)

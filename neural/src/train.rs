@@ -284,8 +284,8 @@ impl Trainer {
     /// sleep until they end: two thread wake-ups a split, several splits a step. On a pool
     /// thread the caller runs one half while the other thread takes the second, or takes it
     /// back itself if that thread is slow to wake (docs/performance.md measures it). The
-    /// hooks run on that thread, so they must be `Send`. Python's stay with `run_until`:
-    /// they look for Ctrl-C, which only the main thread can see.
+    /// hooks run on that thread, so they must be `Send`, and cannot look for Ctrl-C, which
+    /// only the main thread sees: Python's trainer looks for it on its own thread meanwhile.
     pub fn run_until_on_pool(&mut self, total: u64, hooks: &mut (dyn TrainHooks + Send)) -> Result<()> {
         rayon::scope(|_| self.run_until(total, hooks))
     }

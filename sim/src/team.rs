@@ -7,10 +7,10 @@
 //! (docs/performance.md measures it). A [`Team`] runs the first part of a batch on the
 //! caller's thread while its workers take the others, waits for them by spinning (they are
 //! at most a wake-up behind), and keeps its workers spinning for [`WARM_FOR`] after each
-//! call, so a call that follows soon finds them awake. It hands the parts out with
-//! `spawn` and counts them back itself: at the end of a `rayon::scope` the caller can
-//! still miss the last part's signal by a few instructions and sleep until it is woken. OpenMP's default wait policy spins
-//! the same way before it sleeps.
+//! call, so a call that follows soon finds them awake; OpenMP's default wait policy spins
+//! the same way before it sleeps. It hands the parts out with `spawn` and counts them back
+//! itself: at the end of a `rayon::scope` the caller can still miss the last part's signal
+//! by a few instructions and sleep until it is woken.
 
 use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};
 use std::sync::Arc;

@@ -311,8 +311,8 @@ impl DqnArgs {
     }
 }
 
-/// The command's part in a run ([`neural::Trainer::run_until_on_pool`]): the progress bar, and the
-/// checkpoint every `every` steps when one is asked for.
+/// The command's part in a run ([`neural::Trainer::run_until_on_pool`]): the progress bar,
+/// and the checkpoint every `every` steps when one is asked for.
 struct Hooks<'a> {
     show: &'a mut (dyn FnMut(&Progress) + Send),
     checkpoint: Option<&'a files::OutputPath>,
