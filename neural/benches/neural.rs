@@ -4,7 +4,9 @@
 //! `cargo bench -p neural`. `<net>` is `small` (the `dqfd-planes` recipe), `paper`
 //! (`paper-dqfd`) or `conv` (`pixels`: one convolution of a cell on the compact screen),
 //! each on 3 blocks; `<threads>` a rayon pool's size (the networks split
-//! large layers into two fixed halves, so it changes the time, never the result).
+//! large layers into two fixed halves, so it changes the time, never the result). The
+//! steps run as the trainer's loop does, with the pool's other threads kept awake
+//! (`neural::kernels::on_pool_awake`).
 //!
 //! - `network/<net>/<threads>`: the arithmetic of one DQfD step on inputs already encoded
 //!   (target and choosing passes on 128 next observations, training pass and backward pass
@@ -38,6 +40,12 @@ fn config(preset: Preset) -> DqnConfig {
     }
 }
 
+/// `f` as the trainer runs its loop: on a pool thread, the others awake
+/// (`Trainer::run_until_on_pool`).
+fn awake<R: Send>(f: impl FnOnce() -> R + Send) -> R {
+    neural::kernels::on_pool_awake(f)
+}
+
 fn pool(threads: usize) -> rayon::ThreadPool {
     rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap()
 }
@@ -50,7 +58,7 @@ fn train_step(c: &mut Criterion) {
         for threads in [1, 2] {
             let pool = pool(threads);
             group.bench_function(format!("{name}/{threads}"), |b| {
-                pool.install(|| b.iter(|| trainer.pretrain(1, &mut |_: &neural::Progress| {}).unwrap()))
+                pool.install(|| awake(|| b.iter(|| trainer.pretrain(1, &mut |_: &neural::Progress| {}).unwrap())))
             });
         }
     }
@@ -85,14 +93,16 @@ fn network(c: &mut Criterion) {
             let pool = pool(threads);
             group.bench_function(format!("{name}/{threads}"), |b| {
                 pool.install(|| {
-                    b.iter(|| {
-                        black_box(target.forward(&next, &mut eval));
-                        if config.double {
-                            black_box(online.forward(&next, &mut eval));
-                        }
-                        online.forward_train(&x, &mut train);
-                        online.backward(&x, &mut train, &dq, &mut grad);
-                        optimizer.step(online.params_mut(), &mut grad, config.l2, config.clip_norm)
+                    awake(|| {
+                        b.iter(|| {
+                            black_box(target.forward(&next, &mut eval));
+                            if config.double {
+                                black_box(online.forward(&next, &mut eval));
+                            }
+                            online.forward_train(&x, &mut train);
+                            online.backward(&x, &mut train, &dq, &mut grad);
+                            optimizer.step(online.params_mut(), &mut grad, config.l2, config.clip_norm)
+                        })
                     })
                 })
             });
@@ -125,15 +135,17 @@ fn self_play(c: &mut Criterion) {
             let pool = pool(threads);
             group.bench_function(format!("{name}/{threads}"), |b| {
                 pool.install(|| {
-                    b.iter_batched(
-                        || {
-                            let mut t = Trainer::new(config(preset)).unwrap();
-                            t.play(64, &mut |_: &neural::Progress| {}).unwrap();
-                            t
-                        },
-                        |mut t| t.play(100, &mut |_: &neural::Progress| {}).unwrap(),
-                        BatchSize::PerIteration,
-                    )
+                    awake(|| {
+                        b.iter_batched(
+                            || {
+                                let mut t = Trainer::new(config(preset)).unwrap();
+                                t.play(64, &mut |_: &neural::Progress| {}).unwrap();
+                                t
+                            },
+                            |mut t| t.play(100, &mut |_: &neural::Progress| {}).unwrap(),
+                            BatchSize::PerIteration,
+                        )
+                    })
                 })
             });
         }

@@ -85,29 +85,48 @@ const SCREEN_CACHE_BYTES: usize = 256 << 20;
 /// not kept. The inputs are the same either way.
 #[derive(Default)]
 struct Encoder {
-    bytes: Vec<u8>,
+    /// Each half's encoded bytes, before they become floats.
+    bytes: [Vec<u8>; 2],
     screens: HashMap<sim::Observation, Box<[u8]>>,
     cached: usize,
 }
 
+/// Samples each half of an encoding must hold, or it stays whole
+/// ([`kernels::parts`]): planes take a microsecond or two a sample.
+const MIN_HALF_ENCODE: usize = 16;
+
 impl Encoder {
     /// The inputs of observations `0..count` as floats into `out`.
+    /// Planes and the compact screen are encoded in two fixed halves, on two threads
+    /// when the pool has them (each sample's floats are its own, so the bits are one
+    /// pass's); the paper's screens go through the cache, one at a time.
     fn encode<'a>(
         &mut self,
         spec: &InputSpec,
         count: usize,
-        observation: impl Fn(usize) -> &'a sim::Observation,
+        observation: impl Fn(usize) -> &'a sim::Observation + Sync,
         out: &mut Vec<f32>,
     ) {
         let width = spec.len();
         out.resize(count * width, 0.0);
         let scale = spec.scale();
         if spec.kind != ObsKind::PaperScreen {
-            self.bytes.clear();
-            for i in 0..count {
-                spec.encode(observation(i), &mut self.bytes);
+            let part = |samples: std::ops::Range<usize>, bytes: &mut Vec<u8>, out: &mut [f32]| {
+                bytes.clear();
+                for i in samples {
+                    spec.encode(observation(i), bytes);
+                }
+                to_floats(bytes, out, scale);
+            };
+            let parts = kernels::parts(count, MIN_HALF_ENCODE);
+            let half = kernels::part_start(count, parts, 1);
+            let (out_a, out_b) = out.split_at_mut(half * width);
+            let [bytes_a, bytes_b] = &mut self.bytes;
+            if parts == 2 {
+                kernels::join(|| part(0..half, bytes_a, out_a), || part(half..count, bytes_b, out_b));
+            } else {
+                part(0..count, bytes_a, out_a);
             }
-            to_floats(&self.bytes, out, scale);
             return;
         }
         for (i, x) in out.chunks_exact_mut(width).enumerate() {
@@ -117,9 +136,10 @@ impl Encoder {
                     self.screens.clear();
                     self.cached = 0;
                 }
-                self.bytes.clear();
-                spec.encode(obs, &mut self.bytes);
-                self.screens.insert(obs.clone(), self.bytes.as_slice().into());
+                let bytes = &mut self.bytes[0];
+                bytes.clear();
+                spec.encode(obs, bytes);
+                self.screens.insert(obs.clone(), bytes.as_slice().into());
                 self.cached += width;
             }
             to_floats(&self.screens[obs], x, scale);

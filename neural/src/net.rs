@@ -51,7 +51,10 @@
 //! Large layers split a batch into two fixed halves that run on two threads when the
 //! rayon pool has them. The split depends on the layer's size only, and every sum runs in
 //! a fixed order, so the same seed gives the same network, bit for bit, on one thread or
-//! two (on the same machine: `gemm` picks its kernels for the CPU).
+//! two (on the same machine: `gemm` picks its kernels for the CPU). The sparse layer's
+//! weight gradient is cut by rows where its work halves, which moves with the batch's
+//! inputs, but each row's sums are its own and run in sample order, so the cut changes no
+//! bit.
 //!
 //! Weights start as PyTorch's defaults do, uniform in `±1/sqrt(fan_in)`, drawn from the
 //! seeded generator: same seed, same network.
@@ -330,6 +333,9 @@ struct LayerBuffers {
     /// A sparse layer's non-zero inputs: sample `b`'s are `nz[nz_start[b]..nz_start[b + 1]]`.
     nz: Vec<(u32, f32)>,
     nz_start: Vec<usize>,
+    /// The second half's, while the two halves are found apart.
+    nz_half: Vec<(u32, f32)>,
+    nz_start_half: Vec<usize>,
 }
 
 /// Reusable buffers for passes through one network shape: made once, grown to the largest
@@ -350,6 +356,10 @@ pub struct Workspace {
     /// Per-channel sums and coefficients of the batch-normalisation backward pass.
     sums: Vec<f64>,
     coef: Vec<f32>,
+    /// A sparse layer's non-zero inputs regrouped by input: input `i`'s samples and
+    /// values are `by_input[input_start[i]..input_start[i + 1]]`, in sample order.
+    by_input: Vec<(u32, f32)>,
+    input_start: Vec<usize>,
 }
 
 impl Workspace {
@@ -749,7 +759,7 @@ impl QNet {
                     let w = &self.params[weight.range()];
                     let b = &self.params[bias.range()];
                     if *sparse {
-                        sparse_forward(input, *inputs, w, b, buf);
+                        sparse_layer_forward(input, *inputs, w, b, buf, parts);
                     } else {
                         let (x0, x1) = input.split_at(half * inputs);
                         let (y0, y1) = halves(&mut buf.out, half * out, parts);
@@ -789,6 +799,8 @@ impl QNet {
             dw_half,
             sums,
             coef,
+            by_input,
+            input_start,
             ..
         } = ws;
         fit(delta, dq.len());
@@ -891,7 +903,8 @@ impl QNet {
                     }
                     sum_rows(delta, &mut grad[bias.range()]);
                     if *sparse {
-                        sparse_backward(buf, delta, *out, &mut grad[weight.range()]);
+                        let g = &mut grad[weight.range()];
+                        sparse_weight_gradient(buf, delta, *inputs, g, by_input, input_start);
                         if i == 0 {
                             continue;
                         }
@@ -1063,11 +1076,19 @@ kernels::avx2_dispatch! {
 }
 
 kernels::avx2_dispatch! {
-    fn sparse_forward => sparse_forward_any(x: &[f32], inputs: usize, w: &[f32], b: &[f32], buf: &mut LayerBuffers)
+    fn sparse_forward => sparse_forward_any(
+        x: &[f32],
+        inputs: usize,
+        w: &[f32],
+        b: &[f32],
+        y: &mut [f32],
+        nz: &mut Vec<(u32, f32)>,
+        nz_start: &mut Vec<usize>,
+    )
 }
 
 kernels::avx2_dispatch! {
-    fn sparse_backward => sparse_backward_any(buf: &LayerBuffers, delta: &[f32], out: usize, grad: &mut [f32])
+    fn sparse_backward => sparse_backward_any(by_input: &[(u32, f32)], starts: &[usize], delta: &[f32], grad: &mut [f32])
 }
 
 kernels::avx2_dispatch! {
@@ -1113,20 +1134,30 @@ fn relu_any(v: &mut [f32]) {
 }
 
 /// The first layer of a perceptron: for each sample, the bias plus `x_i` times weight row
-/// `i` for every non-zero input `i` (planes are 0/1 with about one value in sixteen set).
+/// `i` for every non-zero input `i` (planes are 0/1 with about one value in sixteen set),
+/// into `y`; the non-zero inputs are kept in `nz`, sample `s`'s at
+/// `nz[nz_start[s]..nz_start[s + 1]]`.
 #[inline(always)]
-fn sparse_forward_any(x: &[f32], inputs: usize, w: &[f32], b: &[f32], buf: &mut LayerBuffers) {
+fn sparse_forward_any(
+    x: &[f32],
+    inputs: usize,
+    w: &[f32],
+    b: &[f32],
+    y: &mut [f32],
+    nz_all: &mut Vec<(u32, f32)>,
+    nz_start: &mut Vec<usize>,
+) {
     /// Outputs summed at a time: eight 256-bit registers that stay put while the weight
     /// rows stream past (the same sums in the same order as one output at a time).
     const BLOCK: usize = 64;
     let out = b.len();
-    buf.nz.clear();
-    buf.nz_start.clear();
-    for (sample, y) in x.chunks_exact(inputs).zip(buf.out.chunks_exact_mut(out)) {
-        let start = buf.nz.len();
-        buf.nz_start.push(start);
-        push_nonzero(sample, &mut buf.nz);
-        let nz = &buf.nz[start..];
+    nz_all.clear();
+    nz_start.clear();
+    for (sample, y) in x.chunks_exact(inputs).zip(y.chunks_exact_mut(out)) {
+        let start = nz_all.len();
+        nz_start.push(start);
+        push_nonzero(sample, nz_all);
+        let nz = &nz_all[start..];
         let blocks = out / BLOCK * BLOCK;
         for k in (0..blocks).step_by(BLOCK) {
             let mut acc: [f32; BLOCK] = b[k..k + BLOCK].try_into().expect("a block");
@@ -1146,7 +1177,7 @@ fn sparse_forward_any(x: &[f32], inputs: usize, w: &[f32], b: &[f32], buf: &mut 
             }
         }
     }
-    buf.nz_start.push(buf.nz.len());
+    nz_start.push(nz_all.len());
 }
 
 /// Appends the index and value of every non-zero value of `sample` to `nz`, in order.
@@ -1172,15 +1203,115 @@ fn push_nonzero(sample: &[f32], nz: &mut Vec<(u32, f32)>) {
     nz.extend(rest.map(|(j, &v)| ((base + j) as u32, v)));
 }
 
-/// The sparse layer's weight gradient: `delta`'s row added, times `x_i`, to weight row `i`
-/// for each non-zero input, sample after sample.
+/// [`sparse_forward`] of a batch in `parts` fixed halves (one or two, as
+/// [`kernels::parts`] gives), on two threads when there are two, with one list of the
+/// batch's non-zero inputs after: each sample's outputs are its own, so the bits are one
+/// pass's.
+fn sparse_layer_forward(x: &[f32], inputs: usize, w: &[f32], b: &[f32], buf: &mut LayerBuffers, parts: usize) {
+    let batch = x.len() / inputs;
+    let half = kernels::part_start(batch, parts, 1);
+    let LayerBuffers {
+        out: y,
+        nz,
+        nz_start,
+        nz_half,
+        nz_start_half,
+        ..
+    } = buf;
+    let (x0, x1) = x.split_at(half * inputs);
+    let (y0, y1) = halves(y, half * b.len(), parts);
+    both(
+        parts,
+        || sparse_forward(x0, inputs, w, b, y0, nz, nz_start),
+        || sparse_forward(x1, inputs, w, b, y1, nz_half, nz_start_half),
+    );
+    if parts == 2 {
+        // One list for the backward pass, the second half's after the first's.
+        let base = nz.len();
+        nz_start.pop();
+        nz_start.extend(nz_start_half.iter().map(|s| s + base));
+        nz.extend_from_slice(nz_half);
+    }
+}
+
+/// The sparse layer's weight gradient into `grad` (`inputs` rows), from `delta`, the
+/// gradient with respect to its outputs, and the non-zero inputs of its last pass in
+/// `buf`; `by_input` and `input_start` are its workspace. The rows are cut in two parts
+/// of about as many sums each, on two threads when the pool has them: each row's sums are
+/// its own, so where the cut falls changes no bit.
+fn sparse_weight_gradient(
+    buf: &LayerBuffers,
+    delta: &[f32],
+    inputs: usize,
+    grad: &mut [f32],
+    by_input: &mut Vec<(u32, f32)>,
+    input_start: &mut Vec<usize>,
+) {
+    let out = grad.len() / inputs;
+    let rows = by_inputs(buf, inputs, by_input, input_start);
+    let cut = input_start.partition_point(|&s| s < rows.len() / 2).min(inputs);
+    let (starts_a, starts_b) = (&input_start[..=cut], &input_start[cut..]);
+    let (g_a, g_b) = grad.split_at_mut(cut * out);
+    let parts = if rows.len() >= 2 * MIN_HALF_SPARSE_ROWS { 2 } else { 1 };
+    both(
+        parts,
+        || sparse_backward(rows, starts_a, delta, g_a),
+        || sparse_backward(rows, starts_b, delta, g_b),
+    );
+}
+
+/// Sparse-layer weight-gradient sums a part must hold, or the rows stay whole: a sum is a
+/// row of a few hundred values.
+const MIN_HALF_SPARSE_ROWS: usize = 256;
+
+/// The sparse layer's non-zero inputs of the last pass regrouped by input, each input's in
+/// sample order (a stable counting sort) into `by_input`, with `input_start` (`inputs + 1`
+/// values) where each input's begin; returns them.
+fn by_inputs<'a>(
+    buf: &LayerBuffers,
+    inputs: usize,
+    by_input: &'a mut Vec<(u32, f32)>,
+    input_start: &mut Vec<usize>,
+) -> &'a [(u32, f32)] {
+    input_start.clear();
+    input_start.resize(inputs + 2, 0);
+    for &(i, _) in &buf.nz {
+        input_start[i as usize + 2] += 1;
+    }
+    for i in 2..input_start.len() {
+        input_start[i] += input_start[i - 1];
+    }
+    // Now input `i`'s first free place is `input_start[i + 1]`; filling moves it to its end,
+    // which is input `i + 1`'s beginning.
+    fit(by_input, buf.nz.len());
+    for (sample, ends) in buf.nz_start.windows(2).enumerate() {
+        for &(i, v) in &buf.nz[ends[0]..ends[1]] {
+            let place = &mut input_start[i as usize + 1];
+            by_input[*place] = (sample as u32, v);
+            *place += 1;
+        }
+    }
+    input_start.pop();
+    by_input
+}
+
+/// The sparse layer's weight gradient for the weight rows `grad` holds (`starts.len() - 1`
+/// of them): for each row `i`, `delta`'s row of every sample whose input `i` is non-zero,
+/// times that input, added sample after sample. Each row stays in cache while its samples
+/// stream past, and each value gets the same sums in the same order as when the samples
+/// were the outer loop.
 #[inline(always)]
-fn sparse_backward_any(buf: &LayerBuffers, delta: &[f32], out: usize, grad: &mut [f32]) {
-    grad.fill(0.0);
-    for (b, d) in delta.chunks_exact(out).enumerate() {
-        for &(i, v) in &buf.nz[buf.nz_start[b]..buf.nz_start[b + 1]] {
-            let i = i as usize;
-            for (g, &d) in grad[i * out..(i + 1) * out].iter_mut().zip(d) {
+fn sparse_backward_any(by_input: &[(u32, f32)], starts: &[usize], delta: &[f32], grad: &mut [f32]) {
+    let rows = starts.len().saturating_sub(1);
+    if rows == 0 {
+        return;
+    }
+    let out = grad.len() / rows;
+    for (g, ends) in grad.chunks_exact_mut(out).zip(starts.windows(2)) {
+        g.fill(0.0);
+        for &(sample, v) in &by_input[ends[0]..ends[1]] {
+            let d = &delta[sample as usize * out..][..out];
+            for (g, &d) in g.iter_mut().zip(d) {
                 *g += v * d;
             }
         }
@@ -1223,6 +1354,43 @@ mod tests {
                 .chain(sample.iter().enumerate().filter(|(_, v)| **v != 0.0).map(|(i, &v)| (i as u32, v)))
                 .collect();
             prop_assert_eq!(nz, expected);
+        }
+
+        #[test]
+        fn the_sparse_layer_in_halves_gives_one_pass_bits(
+            (inputs, samples, x, delta) in (1usize..40, 0usize..24).prop_flat_map(|(inputs, samples)| (
+                Just(inputs),
+                Just(samples),
+                prop::collection::vec(prop_oneof![4 => Just(0.0f32), 1 => -2.0f32..2.0], inputs * samples),
+                prop::collection::vec(-1.0f32..1.0, samples * 3),
+            )),
+        ) {
+            const OUT: usize = 3;
+            let w: Vec<f32> = (0..inputs * OUT).map(|i| (i as f32 * 0.37).sin()).collect();
+            let b = [0.1, -0.2, 0.3];
+            // The reference: sample after sample, every output's sum in input order.
+            let mut y_ref = vec![0.0f32; samples * OUT];
+            let mut grad_ref = vec![0.0f32; inputs * OUT];
+            for (s, x) in x.chunks_exact(inputs).enumerate() {
+                for o in 0..OUT {
+                    let mut sum = b[o];
+                    for (i, &v) in x.iter().enumerate().filter(|(_, v)| **v != 0.0) {
+                        sum += v * w[i * OUT + o];
+                        grad_ref[i * OUT + o] += v * delta[s * OUT + o];
+                    }
+                    y_ref[s * OUT + o] = sum;
+                }
+            }
+            for parts in [1, 2] {
+                let mut buf = LayerBuffers { out: vec![0.0; samples * OUT], ..LayerBuffers::default() };
+                sparse_layer_forward(&x, inputs, &w, &b, &mut buf, parts);
+                prop_assert_eq!(&buf.out, &y_ref);
+                prop_assert_eq!(buf.nz_start.len(), samples + 1);
+                let mut grad = vec![f32::NAN; inputs * OUT];
+                let (mut by_input, mut input_start) = (Vec::new(), Vec::new());
+                sparse_weight_gradient(&buf, &delta, inputs, &mut grad, &mut by_input, &mut input_start);
+                prop_assert_eq!(&grad, &grad_ref);
+            }
         }
     }
 

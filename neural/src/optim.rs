@@ -182,15 +182,31 @@ crate::kernels::avx2_dispatch! {
 /// 0) and returns their global norm and the factor the clip scales them by.
 #[inline(always)]
 fn measure_any(params: &[f32], grads: &mut [f32], k: f32, clip: f64) -> (f64, f32) {
-    // Eight partial sums in a fixed order: vectorised, and the same bits every time.
+    // Eight partial sums in a fixed order (value `i` into sum `i % 8`): vectorised, and the
+    // same bits every time. Each sum's additions are a chain, so the sums are whole
+    // arrays that stay in registers: kept in memory, every addition also waited for the
+    // store of the one before.
     let mut lanes = [0.0f64; 8];
-    for (g, w) in grads.chunks_mut(8).zip(params.chunks(8)) {
-        for ((g, &w), lane) in g.iter_mut().zip(w).zip(lanes.iter_mut()) {
-            if k != 0.0 {
-                *g += k * w;
-            }
-            *lane += f64::from(*g) * f64::from(*g);
+    let add = |g: &mut f32, w: f32, lane: &mut f64| {
+        if k != 0.0 {
+            *g += k * w;
         }
+        *lane += f64::from(*g) * f64::from(*g);
+    };
+    let mut g_eights = grads.chunks_exact_mut(8);
+    let mut w_eights = params.chunks_exact(8);
+    for (g, w) in g_eights.by_ref().zip(w_eights.by_ref()) {
+        let g: &mut [f32; 8] = g.try_into().expect("eight values");
+        let w: &[f32; 8] = w.try_into().expect("eight values");
+        let mut eight = lanes;
+        for j in 0..8 {
+            add(&mut g[j], w[j], &mut eight[j]);
+        }
+        lanes = eight;
+    }
+    let rest = g_eights.into_remainder().iter_mut().zip(w_eights.remainder());
+    for ((g, &w), lane) in rest.zip(lanes.iter_mut()) {
+        add(g, w, lane);
     }
     let norm = lanes.iter().sum::<f64>().sqrt();
     let scale = if norm > clip && norm > 0.0 {

@@ -276,18 +276,20 @@ impl Trainer {
         Ok(())
     }
 
-    /// [`Trainer::run_until`] on a thread of rayon's global pool, for a caller outside every
-    /// pool (the command line's main thread); the same steps, so the same bits.
+    /// [`Trainer::run_until`] on a thread of rayon's global pool while the pool's other
+    /// threads stay awake to take the second halves of its splits
+    /// ([`crate::kernels::on_pool_awake`]), for a caller outside every pool (the command
+    /// line's main thread, Python's trainer); the same steps, so the same bits.
     ///
     /// Why: a network's passes are split in two halves ([`crate::kernels::join`]). Called
     /// from outside a pool, each split hands both halves to the pool and puts the caller to
     /// sleep until they end: two thread wake-ups a split, several splits a step. On a pool
-    /// thread the caller runs one half while the other thread takes the second, or takes it
-    /// back itself if that thread is slow to wake (docs/performance.md measures it). The
+    /// thread the caller runs one half while the other thread takes the second, and that
+    /// thread, kept awake, takes it at once (docs/performance.md measures both). The
     /// hooks run on that thread, so they must be `Send`, and cannot look for Ctrl-C, which
     /// only the main thread sees: Python's trainer looks for it on its own thread meanwhile.
     pub fn run_until_on_pool(&mut self, total: u64, hooks: &mut (dyn TrainHooks + Send)) -> Result<()> {
-        rayon::scope(|_| self.run_until(total, hooks))
+        crate::kernels::on_pool_awake(|| self.run_until(total, hooks))
     }
 
     /// One gradient step on the demonstrations alone.
