@@ -91,12 +91,13 @@ struct Encoder {
     cached: usize,
 }
 
-/// Samples each half of an encoding must hold, or it stays whole
-/// ([`kernels::parts`]): planes take a microsecond or two a sample.
+/// Samples each half of an encoding must hold, or it stays whole ([`kernels::parts`]):
+/// a few samples' encoding costs less than handing them to another thread.
 const MIN_HALF_ENCODE: usize = 16;
 
 impl Encoder {
     /// The inputs of observations `0..count` as floats into `out`.
+    ///
     /// Planes and the compact screen are encoded in two fixed halves, on two threads
     /// when the pool has them (each sample's floats are its own, so the bits are one
     /// pass's); the paper's screens go through the cache, one at a time.

@@ -1082,7 +1082,7 @@ kernels::avx2_dispatch! {
         w: &[f32],
         b: &[f32],
         y: &mut [f32],
-        nz: &mut Vec<(u32, f32)>,
+        nz_all: &mut Vec<(u32, f32)>,
         nz_start: &mut Vec<usize>,
     )
 }
@@ -1135,8 +1135,8 @@ fn relu_any(v: &mut [f32]) {
 
 /// The first layer of a perceptron: for each sample, the bias plus `x_i` times weight row
 /// `i` for every non-zero input `i` (planes are 0/1 with about one value in sixteen set),
-/// into `y`; the non-zero inputs are kept in `nz`, sample `s`'s at
-/// `nz[nz_start[s]..nz_start[s + 1]]`.
+/// into `y`; the non-zero inputs are kept in `nz_all`, sample `s`'s at
+/// `nz_all[nz_start[s]..nz_start[s + 1]]`.
 #[inline(always)]
 fn sparse_forward_any(
     x: &[f32],

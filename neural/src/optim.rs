@@ -183,9 +183,9 @@ crate::kernels::avx2_dispatch! {
 #[inline(always)]
 fn measure_any(params: &[f32], grads: &mut [f32], k: f32, clip: f64) -> (f64, f32) {
     // Eight partial sums in a fixed order (value `i` into sum `i % 8`): vectorised, and the
-    // same bits every time. Each sum's additions are a chain, so the sums are whole
-    // arrays that stay in registers: kept in memory, every addition also waited for the
-    // store of the one before.
+    // same bits every time. Each sum's additions form a chain, so each round works on a
+    // local copy of the eight, which the compiler keeps in registers: updated in the array
+    // itself, every addition also waited for the store of the one before.
     let mut lanes = [0.0f64; 8];
     let add = |g: &mut f32, w: f32, lane: &mut f64| {
         if k != 0.0 {
