@@ -293,14 +293,15 @@ pub fn join<A: FnOnce() -> RA + Send, B: FnOnce() -> RB + Send, RA: Send, RB: Se
 
 /// Runs `f` on a thread of the current rayon pool (the global one outside every pool)
 /// while the pool's other threads stay awake until it returns, each looking for work
-/// ([`rayon::yield_now`]) and spinning between finds, so the halves [`join`] offers are
-/// taken at once. Nothing changes which half runs what, so results are the same bits.
+/// ([`rayon::yield_now`]) and yielding its core between looks, so the halves [`join`]
+/// offers are taken at once. Nothing changes which half runs what, so results are the
+/// same bits.
 ///
 /// Why: a training step is a few splits apart from serial stretches (the gradients' norm,
 /// the input encoding) of tens of microseconds, long enough for an idle rayon thread to go
 /// to sleep, and then each split pays a wake-up in the kernel (docs/performance.md
-/// measures it). The price is the other threads' cores for as long as `f` runs, as with
-/// OpenMP's spinning wait policy.
+/// measures it). The price is the other threads' cores for as long as `f` runs, when
+/// nothing else wants them.
 pub fn on_pool_awake<R: Send>(f: impl FnOnce() -> R + Send) -> R {
     /// Ends the helpers when `f` returns or unwinds: the scope waits for them.
     struct Done<'a>(&'a AtomicBool);
@@ -321,8 +322,12 @@ pub fn on_pool_awake<R: Send>(f: impl FnOnce() -> R + Send) -> R {
                     return;
                 }
                 while !done.load(Ordering::Acquire) {
+                    // Between looks the core is offered to the scheduler: given back at
+                    // once when nothing else wants it, and shared when something does (a
+                    // pure spin made a run on a busy machine 1.8 times slower than no
+                    // helper at all: docs/performance.md).
                     if rayon::yield_now() != Some(rayon::Yield::Executed) {
-                        std::hint::spin_loop();
+                        std::thread::yield_now();
                     }
                 }
             });
