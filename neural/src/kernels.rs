@@ -298,8 +298,8 @@ pub fn join<A: FnOnce() -> RA + Send, B: FnOnce() -> RB + Send, RA: Send, RB: Se
 /// same bits.
 ///
 /// Why: a training step is a few splits apart from serial stretches (the gradients' norm,
-/// the input encoding) of tens of microseconds, long enough for an idle rayon thread to go
-/// to sleep, and then each split pays a wake-up in the kernel (docs/performance.md
+/// the losses) of tens of microseconds, long enough for an idle rayon thread to go to
+/// sleep, and then each split pays a wake-up in the kernel (docs/performance.md
 /// measures it). The price is the other threads' cores for as long as `f` runs, when
 /// nothing else wants them.
 pub fn on_pool_awake<R: Send>(f: impl FnOnce() -> R + Send) -> R {
