@@ -291,6 +291,20 @@ pub fn join<A: FnOnce() -> RA + Send, B: FnOnce() -> RB + Send, RA: Send, RB: Se
     }
 }
 
+/// Runs the two halves of a split into `parts` ([`parts`]): with two, as [`join`] does;
+/// with one, `a` then `b` on this thread (`b`'s half then empty), also
+/// [`without_subnormals`].
+pub fn both<A: FnOnce() + Send, B: FnOnce() + Send>(parts: usize, a: A, b: B) {
+    if parts == 2 {
+        join(a, b);
+    } else {
+        without_subnormals(|| {
+            a();
+            b();
+        });
+    }
+}
+
 /// Runs `f` on a thread of the current rayon pool (the global one outside every pool)
 /// while the pool's other threads stay awake until it returns, each looking for work
 /// ([`rayon::yield_now`]) and yielding its core between looks, so the halves [`join`]

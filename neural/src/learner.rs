@@ -123,11 +123,11 @@ impl Encoder {
             let half = kernels::part_start(count, parts, 1);
             let (out_a, out_b) = out.split_at_mut(half * width);
             let [bytes_a, bytes_b] = &mut self.bytes;
-            if parts == 2 {
-                kernels::join(|| part(0..half, bytes_a, out_a), || part(half..count, bytes_b, out_b));
-            } else {
-                part(0..count, bytes_a, out_a);
-            }
+            kernels::both(
+                parts,
+                || part(0..half, bytes_a, out_a),
+                || part(half..count, bytes_b, out_b),
+            );
             return;
         }
         for (i, x) in out.chunks_exact_mut(width).enumerate() {

@@ -393,16 +393,6 @@ fn halves(v: &mut [f32], at: usize, parts: usize) -> (&mut [f32], &mut [f32]) {
     if parts == 2 { v.split_at_mut(at) } else { (v, &mut []) }
 }
 
-/// Runs both halves' work, on two threads when there are two parts.
-fn both<A: FnOnce() + Send, B: FnOnce() + Send>(parts: usize, a: A, b: B) {
-    if parts == 2 {
-        kernels::join(a, b);
-    } else {
-        a();
-        b();
-    }
-}
-
 /// Sets every row of `rows` (of `bias.len()` values) to `bias`.
 #[inline(always)]
 fn fill_rows_any(rows: &mut [f32], bias: &[f32]) {
@@ -737,7 +727,7 @@ impl QNet {
                             matmul(zc, cols, w, (rows, patch, *out), true);
                         }
                     };
-                    both(parts, || conv(x0, c0, z0), || conv(x1, c1, z1));
+                    kernels::both(parts, || conv(x0, c0, z0), || conv(x1, c1, z1));
                     match norm {
                         Some(n) if train => norm_train(&self.params, n, buf),
                         Some(n) => norm_eval(&self.params, &self.buffers, n, buf),
@@ -767,7 +757,7 @@ impl QNet {
                             fill_rows(y, b);
                             matmul(y, x, w, (y.len() / out, *inputs, *out), true);
                         };
-                        both(parts, || linear(x0, y0), || linear(x1, y1));
+                        kernels::both(parts, || linear(x0, y0), || linear(x1, y1));
                     }
                     if *relu {
                         relu_in_place(&mut buf.out);
@@ -879,7 +869,7 @@ impl QNet {
                                 }
                             }
                         };
-                    both(
+                    kernels::both(
                         parts,
                         || conv(x0, cols0, d0, g0, dc0, dx0),
                         || conv(x1, cols1, d1, g1, dc1, dx1),
@@ -929,7 +919,7 @@ impl QNet {
                         matmul_tn(g, x, d, (*inputs, r, *out), false);
                         matmul_nt(dx, d, w, (r, *out, *inputs), false);
                     };
-                    both(parts, || linear(x0, d0, g0, dx0), || linear(x1, d1, g1, dx1));
+                    kernels::both(parts, || linear(x0, d0, g0, dx0), || linear(x1, d1, g1, dx1));
                     if parts == 2 {
                         for (g, &h) in grad[weight.range()].iter_mut().zip(dw_half.iter()) {
                             *g += h;
@@ -1220,7 +1210,7 @@ fn sparse_layer_forward(x: &[f32], inputs: usize, w: &[f32], b: &[f32], buf: &mu
     } = buf;
     let (x0, x1) = x.split_at(half * inputs);
     let (y0, y1) = halves(y, half * b.len(), parts);
-    both(
+    kernels::both(
         parts,
         || sparse_forward(x0, inputs, w, b, y0, nz, nz_start),
         || sparse_forward(x1, inputs, w, b, y1, nz_half, nz_start_half),
@@ -1252,8 +1242,8 @@ fn sparse_weight_gradient(
     let cut = input_start.partition_point(|&s| s < rows.len() / 2).min(inputs);
     let (starts_a, starts_b) = (&input_start[..=cut], &input_start[cut..]);
     let (g_a, g_b) = grad.split_at_mut(cut * out);
-    let parts = if rows.len() >= 2 * MIN_HALF_SPARSE_ROWS { 2 } else { 1 };
-    both(
+    let parts = kernels::parts(rows.len(), MIN_HALF_SPARSE_ROWS);
+    kernels::both(
         parts,
         || sparse_backward(rows, starts_a, delta, g_a),
         || sparse_backward(rows, starts_b, delta, g_b),

@@ -115,7 +115,7 @@ impl Optimizer {
     ///
     /// Without a clip a step is one pass over memory: each value's update reads only its
     /// own weight, gradient and moments. The pass is cut into two fixed halves
-    /// ([`crate::kernels::join`]), on two threads when the pool has them, which give the
+    /// ([`crate::kernels::both`]), on two threads when the pool has them, which give the
     /// bits one pass does: the network's largest pass over memory (Adam reads and writes
     /// four values a parameter) is shared. A clip needs the norm first, a pass of its own.
     pub fn step(&mut self, params: &mut [f32], grads: &mut [f32], l2: f64, clip: Option<f64>) -> Option<f64> {
@@ -136,10 +136,6 @@ impl Optimizer {
         };
         let grads = &*grads;
         let parts = crate::kernels::parts(params.len(), MIN_HALF);
-        if parts == 1 {
-            crate::kernels::without_subnormals(|| update(settings, params, grads, &mut self.first, &mut self.second));
-            return norm;
-        }
         let half = crate::kernels::part_start(params.len(), parts, 1);
         let (params_a, params_b) = params.split_at_mut(half);
         let (grads_a, grads_b) = grads.split_at(half);
@@ -147,7 +143,8 @@ impl Optimizer {
         // Adam's second moment, or RMSprop's empty one.
         let second_half = half.min(self.second.len());
         let (second_a, second_b) = self.second.split_at_mut(second_half);
-        crate::kernels::join(
+        crate::kernels::both(
+            parts,
             || update(settings, params_a, grads_a, first_a, second_a),
             || update(settings, params_b, grads_b, first_b, second_b),
         );
