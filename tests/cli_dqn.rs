@@ -110,6 +110,11 @@ fn bad_files_and_arguments_are_one_line_and_status_2() {
         (vec!["--obs", "planes"], "called role-planes now"),
         (vec!["--obs", "pixels"], "paper-screen"),
         (vec!["--net", "small", "--screen", "strip"], "only the conv network"),
+        (vec!["--net", "conv", "--obs", "paper-screen"], "`--screen paper`"),
+        (
+            vec!["--preset", "pixels", "--screen", "paper", "--grid", "7x5"],
+            "square grid",
+        ),
         (
             vec!["--preset", "pixels", "--screen", "corner"],
             "choose one of colours, strip",

@@ -6,7 +6,7 @@
 use std::fmt;
 
 use serde::{Deserialize, Serialize};
-use sim::{ActionProtocol, EnvConfig, Goal, GoalSpec, Grid};
+use sim::{ActionProtocol, EnvConfig, Goal, GoalSpec, Grid, ScreenGoal};
 
 use crate::error::{NeuralError, Result};
 use crate::input::ObsKind;
@@ -251,6 +251,10 @@ impl DqnConfig {
             ),
             NetKind::Small => format!("small network ({} x 2) on centred planes", self.net.hidden),
             NetKind::Mlp => format!("MLP ({} x 2) on absolute planes", self.net.hidden),
+            NetKind::Conv if self.net.screen == ScreenGoal::Paper => format!(
+                "conv network ({} channels a cell, {} x 2) on the paper's screen (goal: a picture in the corner)",
+                self.net.channels, self.net.hidden
+            ),
             NetKind::Conv => format!(
                 "conv network ({} channels a cell, {} x 2) on the compact screen (goal: {})",
                 self.net.channels, self.net.hidden, self.net.screen

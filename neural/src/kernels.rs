@@ -148,10 +148,13 @@ impl ConvGeometry {
     /// Gathers every patch of the samples in `x` (`samples * input_len`) into `cols`
     /// (`samples * positions` rows of `patch`): `k` contiguous copies of `k * ch` values each.
     pub fn im2col(&self, x: &[f32], cols: &mut [f32]) {
-        // The paper network's runs (8 x 3 and 4 x 16 values) as fixed-size copies: inline
-        // vector moves rather than a call to memcpy each.
+        // The runs of the paper network (8 x 3 and 4 x 16 values) and of the conv network
+        // (a cell of RGB: 4 x 3 on the compact screen, 16 x 3 on the paper's) as fixed-size
+        // copies: inline vector moves rather than a call to memcpy each.
         match self.k * self.ch {
+            12 => self.gather::<12>(x, cols),
             24 => self.gather::<24>(x, cols),
+            48 => self.gather::<48>(x, cols),
             64 => self.gather::<64>(x, cols),
             _ => self.gather::<0>(x, cols),
         }

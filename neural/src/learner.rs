@@ -89,18 +89,27 @@ struct Encoder {
     bytes: [Vec<u8>; 2],
     screens: HashMap<sim::Observation, Box<[u8]>>,
     cached: usize,
+    /// The samples of a batch whose screen is not yet cached, one per observation.
+    missing: Vec<usize>,
+    /// Their screens, rendered.
+    rendered: [Vec<Box<[u8]>>; 2],
 }
 
 /// Samples each half of an encoding must hold, or it stays whole ([`kernels::parts`]):
 /// a few samples' encoding costs less than handing them to another thread.
 const MIN_HALF_ENCODE: usize = 16;
 
+/// Screens each half of a batch's rendering must hold, or it stays whole: one screen
+/// costs about 0.1 ms, far more than a hand-off.
+const MIN_HALF_RENDER: usize = 2;
+
 impl Encoder {
     /// The inputs of observations `0..count` as floats into `out`.
     ///
-    /// Planes and the compact screen are encoded in two fixed halves, on two threads
-    /// when the pool has them (each sample's floats are its own, so the bits are one
-    /// pass's); the paper's screens go through the cache, one at a time.
+    /// Every part runs in two fixed halves, on two threads when the pool has them (each
+    /// sample's floats are its own, so the bits are one pass's): planes and the compact
+    /// screen are encoded whole; the paper's screens not yet cached are rendered, then
+    /// kept, and every sample's floats read from the cache.
     fn encode<'a>(
         &mut self,
         spec: &InputSpec,
@@ -119,33 +128,69 @@ impl Encoder {
                 }
                 to_floats(bytes, out, scale);
             };
-            let parts = kernels::parts(count, MIN_HALF_ENCODE);
-            let half = kernels::part_start(count, parts, 1);
-            let (out_a, out_b) = out.split_at_mut(half * width);
-            let [bytes_a, bytes_b] = &mut self.bytes;
-            kernels::both(
-                parts,
-                || part(0..half, bytes_a, out_a),
-                || part(half..count, bytes_b, out_b),
-            );
+            halves(count, MIN_HALF_ENCODE, width, out, &mut self.bytes, part);
             return;
         }
-        for (i, x) in out.chunks_exact_mut(width).enumerate() {
-            let obs = observation(i);
-            if !self.screens.contains_key(obs) {
-                if self.cached + width > SCREEN_CACHE_BYTES {
-                    self.screens.clear();
-                    self.cached = 0;
-                }
-                let bytes = &mut self.bytes[0];
-                bytes.clear();
-                spec.encode(obs, bytes);
-                self.screens.insert(obs.clone(), bytes.as_slice().into());
-                self.cached += width;
-            }
-            to_floats(&self.screens[obs], x, scale);
+        // Room for the whole batch first, so that no screen it needs is dropped midway.
+        if self.cached + count * width > SCREEN_CACHE_BYTES {
+            self.screens.clear();
+            self.cached = 0;
         }
+        self.missing.clear();
+        let mut seen = std::collections::HashSet::new();
+        for i in 0..count {
+            let obs = observation(i);
+            if !self.screens.contains_key(obs) && seen.insert(obs) {
+                self.missing.push(i);
+            }
+        }
+        let missing = &self.missing;
+        let render = |samples: &[usize], screens: &mut Vec<Box<[u8]>>| {
+            screens.clear();
+            screens.extend(samples.iter().map(|&i| {
+                let mut bytes = Vec::with_capacity(width);
+                spec.encode(observation(i), &mut bytes);
+                bytes.into_boxed_slice()
+            }));
+        };
+        let parts = kernels::parts(missing.len(), MIN_HALF_RENDER);
+        let (first, second) = missing.split_at(kernels::part_start(missing.len(), parts, 1));
+        let [rendered_a, rendered_b] = &mut self.rendered;
+        kernels::both(parts, || render(first, rendered_a), || render(second, rendered_b));
+        for (&i, screen) in missing.iter().zip(rendered_a.drain(..).chain(rendered_b.drain(..))) {
+            self.screens.insert(observation(i).clone(), screen);
+            self.cached += width;
+        }
+        let screens = &self.screens;
+        let part = |samples: std::ops::Range<usize>, _: &mut Vec<u8>, out: &mut [f32]| {
+            for (i, x) in samples.zip(out.chunks_exact_mut(width)) {
+                to_floats(&screens[observation(i)], x, scale);
+            }
+        };
+        halves(count, MIN_HALF_ENCODE, width, out, &mut self.bytes, part);
     }
+}
+
+/// Runs `part` on samples `0..count` in two fixed halves ([`kernels::parts`] with
+/// `min_half`), each with its own byte buffer and its rows of `out` (`width` floats a
+/// sample).
+fn halves(
+    count: usize,
+    min_half: usize,
+    width: usize,
+    out: &mut [f32],
+    bytes: &mut [Vec<u8>; 2],
+    part: impl Fn(std::ops::Range<usize>, &mut Vec<u8>, &mut [f32]) + Sync,
+) {
+    let parts = kernels::parts(count, min_half);
+    let half = kernels::part_start(count, parts, 1);
+    let (out_a, out_b) = out.split_at_mut(half * width);
+    let [bytes_a, bytes_b] = bytes;
+    kernels::both(
+        parts,
+        || part(0..half, bytes_a, out_a),
+        || part(half..count, bytes_b, out_b),
+    );
 }
 
 kernels::avx2_dispatch! {

@@ -165,8 +165,9 @@ impl Dqn {
     }
 
     /// The environment observation this network plays on as it is ([`Dqn::act_on_picture`]):
-    /// `paper-screen`, `screen` for the `conv` network on its default screen; `None` for the
-    /// networks on planes (their input is made from the state) and the `strip` screen.
+    /// `paper-screen` (the paper network's, and the `conv` network's on `--screen paper`),
+    /// `screen` for the `conv` network on its default screen; `None` for the networks on
+    /// planes (their input is made from the state) and the `strip` screen.
     pub fn picture(&self) -> Option<ObsKind> {
         let kind = self.config.obs();
         let shown = kind == ObsKind::PaperScreen

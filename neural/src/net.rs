@@ -1,5 +1,5 @@
 //! The Q-networks: the paper's convolutional network on pixels, our small network on
-//! centred planes, and our convolutional network on the compact screen.
+//! centred planes, and our convolutional network on the compact screen (or the paper's).
 //!
 //! # The paper's network (`paper`, section III-C)
 //!
@@ -28,6 +28,10 @@
 //! feature vector, the same filters for every cell; without a bias a black cell gives
 //! exactly 0, so the perceptron's first layer sees a few non-zero cells and is computed
 //! sparsely as on planes.
+//!
+//! The same network reads the paper's screen (`--screen paper`, 100 x 100 x 3, the goal a
+//! picture in the corner) with a kernel of one of its cells ([`conv_cell`]): the learner
+//! and the perceptron unchanged, only the goal's presentation differs.
 //!
 //! # How it is computed
 //!
@@ -63,6 +67,7 @@ use std::cell::RefCell;
 
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
+use sim::observation::PIXELS_SIDE;
 use sim::seeding::SimRng;
 use sim::{Action, SCREEN_CELL, ScreenGoal};
 
@@ -151,6 +156,7 @@ impl NetConfig {
         match self.kind {
             NetKind::Paper => ObsKind::PaperScreen,
             NetKind::Small | NetKind::Mlp => ObsKind::RolePlanes,
+            NetKind::Conv if self.screen == ScreenGoal::Paper => ObsKind::PaperScreen,
             NetKind::Conv => ObsKind::Screen,
         }
     }
@@ -158,8 +164,13 @@ impl NetConfig {
     /// An error naming what cannot work.
     pub fn validate(&self, obs: ObsKind) -> Result<()> {
         if obs != self.obs() {
+            let hint = if self.kind == NetKind::Conv && obs == ObsKind::PaperScreen {
+                " (`--screen paper` puts it on the paper's screen)"
+            } else {
+                ""
+            };
             return Err(NeuralError::Config(format!(
-                "the {} network reads {}, not {obs}",
+                "the {} network reads {}, not {obs}{hint}",
                 self.kind,
                 self.obs()
             )));
@@ -191,18 +202,47 @@ impl NetConfig {
         Ok(())
     }
 
-    /// The input layout of this network in a world of `blocks` blocks on `grid`.
+    /// The input layout of this network in a world of `blocks` blocks on `grid`; an error
+    /// if the `conv` network's kernel cannot be one of its cells ([`conv_cell`]).
     pub fn input(&self, grid: sim::Grid, blocks: usize) -> Result<InputSpec> {
-        let spec = InputSpec::new(self.obs(), self.kind == NetKind::Small, grid, blocks)?;
-        Ok(InputSpec {
+        let spec = InputSpec {
             screen: self.screen,
-            ..spec
-        })
+            ..InputSpec::new(self.obs(), self.kind == NetKind::Small, grid, blocks)?
+        };
+        if self.kind == NetKind::Conv {
+            conv_cell(&spec)?;
+        }
+        Ok(spec)
     }
 }
 
 /// Channels of the `conv` network's convolution.
 pub const CONV_CHANNELS: usize = 16;
+
+/// The `conv` network's kernel and stride on `input`: one cell of the screen.
+///
+/// On the compact screen a cell is [`SCREEN_CELL`] pixels. On the paper's screen, a square
+/// grid of `n` cells scaled to [`PIXELS_SIDE`] pixels, a cell is `100 / n` pixels, not
+/// a whole number (14.3 on 7 x 7): the stride is its whole part and the kernel reaches to
+/// the screen's edge from the last stride (16 and 14 on 7 x 7), so that there are `n x n`
+/// positions and each holds its whole cell and at most two pixels of its neighbours (which
+/// the bilinear scaling blurs into anyway). A grid that is not square has cells of two
+/// shapes there, which one square kernel cannot follow: an error.
+pub fn conv_cell(input: &InputSpec) -> Result<(usize, usize)> {
+    if input.kind != ObsKind::PaperScreen {
+        return Ok((SCREEN_CELL, SCREEN_CELL));
+    }
+    let n = input.grid.width();
+    if input.grid.height() != n || n > PIXELS_SIDE {
+        return Err(NeuralError::Config(format!(
+            "the conv network reads the paper's screen of a square grid of at most {} cells a side, not of {}: \
+             its kernel is one cell",
+            PIXELS_SIDE, input.grid
+        )));
+    }
+    let stride = PIXELS_SIDE / n;
+    Ok((PIXELS_SIDE - stride * (n - 1), stride))
+}
 
 /// Batch normalisation's momentum and epsilon (PyTorch's defaults).
 const BN_MOMENTUM: f32 = 0.1;
@@ -451,7 +491,10 @@ impl QNet {
         // (kernel, stride, channels out) of each convolution.
         let convolutions = match config.kind {
             NetKind::Paper => vec![(8, 4, 16), (4, 2, 32)],
-            NetKind::Conv => vec![(SCREEN_CELL, SCREEN_CELL, config.channels)],
+            NetKind::Conv => {
+                let (k, s) = conv_cell(&input)?;
+                vec![(k, s, config.channels)]
+            }
             NetKind::Small | NetKind::Mlp => Vec::new(),
         };
         if !convolutions.is_empty() {

@@ -46,6 +46,8 @@
 //! - `pixels`: `dqfd-planes`, every setting and budget, with the `conv` network on the
 //!   compact screen ([`sim::screen`]): pixels at four a cell, every block in the colour of
 //!   its place in the goal, read by a convolution of one cell ([`crate::net::NetKind::Conv`]).
+//!   `--screen paper` puts the same network and learner on the paper's own screen (the
+//!   goal a picture in the corner), a convolution of one of its cells ([`crate::net::conv_cell`]).
 //!
 //! Why each of our choices, measured, is in the E8 section of `blockstack reproduce --only
 //! E8 --long`'s report.

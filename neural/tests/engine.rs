@@ -6,7 +6,7 @@
 use neural::net::{NetConfig, NetKind, QNet, Workspace};
 use neural::{DemoSource, DqnConfig, Trainer};
 use rand::RngExt;
-use sim::Grid;
+use sim::{Grid, ScreenGoal};
 
 /// One layer of the reference, with its parameters' offsets in the flat buffer (the
 /// engine's layout: weight `[in, out]`, bias, then batch norm's scale and shift).
@@ -47,6 +47,9 @@ fn layers(net: &QNet) -> Vec<Layer> {
     let mut width = net.input().len();
     let convolutions = match config.kind {
         NetKind::Paper => vec![(8, 4, 16), (4, 2, 32)],
+        // A cell of the compact screen, or of the paper's 7 x 7 screen (14.3 pixels: stride
+        // 14, a kernel to the edge).
+        NetKind::Conv if config.screen == ScreenGoal::Paper => vec![(16, 14, config.channels)],
         NetKind::Conv => vec![(sim::SCREEN_CELL, sim::SCREEN_CELL, config.channels)],
         _ => Vec::new(),
     };
@@ -261,17 +264,7 @@ fn backward(layers: &[Layer], p: &[f64], caches: &[Cache], dq: &[f64], batch: us
     grad
 }
 
-fn network(kind: NetKind, batch_norm: bool, hidden: usize) -> QNet {
-    let config = NetConfig {
-        kind,
-        hidden,
-        batch_norm,
-        ..if kind == NetKind::Conv {
-            NetConfig::conv()
-        } else {
-            NetConfig::small()
-        }
-    };
+fn network(config: NetConfig) -> QNet {
     let input = config.input(Grid::default(), 3).unwrap();
     let mut net = QNet::new(config, input, &mut sim::seeding::rng(4)).unwrap();
     // Batch norm's scale and shift away from 1 and 0, so their gradients are exercised.
@@ -292,7 +285,7 @@ fn network(kind: NetKind, batch_norm: bool, hidden: usize) -> QNet {
 /// few other values, which the sparse layer must weigh too).
 fn inputs(net: &QNet, batch: usize) -> Vec<f32> {
     let mut rng = sim::seeding::rng(6);
-    if net.config().kind == NetKind::Conv {
+    if net.config().kind == NetKind::Conv && net.config().screen != ScreenGoal::Paper {
         // A screen: most cells black, a few with colours (and a black pixel or two).
         let (rows, cols, ch) = net.input().shape();
         let cell = sim::SCREEN_CELL;
@@ -315,6 +308,11 @@ fn inputs(net: &QNet, batch: usize) -> Vec<f32> {
     (0..batch * net.input().len())
         .map(|_| match net.config().kind {
             NetKind::Paper => rng.random_range(0.0..1.0),
+            // The paper's screen: mostly black.
+            NetKind::Conv => match rng.random_range(0..6) {
+                0 => rng.random_range(0.0..1.0),
+                _ => 0.0,
+            },
             _ => match rng.random_range(0..40) {
                 0..=3 => 1.0,
                 4 => 0.5,
@@ -325,7 +323,24 @@ fn inputs(net: &QNet, batch: usize) -> Vec<f32> {
 }
 
 fn check(kind: NetKind, batch_norm: bool, hidden: usize, batch: usize) {
-    let mut net = network(kind, batch_norm, hidden);
+    check_config(
+        NetConfig {
+            kind,
+            hidden,
+            batch_norm,
+            ..if kind == NetKind::Conv {
+                NetConfig::conv()
+            } else {
+                NetConfig::small()
+            }
+        },
+        batch,
+    );
+}
+
+fn check_config(config: NetConfig, batch: usize) {
+    let kind = config.kind;
+    let mut net = network(config);
     let layers = layers(&net);
     let p: Vec<f64> = net.params().iter().map(|&v| f64::from(v)).collect();
     let x = inputs(&net, batch);
@@ -409,6 +424,17 @@ fn the_conv_network_matches_the_reference() {
 }
 
 #[test]
+fn the_conv_network_on_the_papers_screen_matches_the_reference() {
+    let config = NetConfig {
+        hidden: 8,
+        channels: 4,
+        screen: ScreenGoal::Paper,
+        ..NetConfig::conv()
+    };
+    check_config(config, 3);
+}
+
+#[test]
 fn the_paper_network_without_batch_norm_matches_the_reference() {
     check(NetKind::Paper, false, 8, 3);
 }
@@ -421,8 +447,8 @@ fn the_perceptrons_match_the_reference() {
 }
 
 /// The weights after a few DQfD steps in a pool of `threads` threads.
-fn trained(preset: neural::Preset, batch: usize, threads: usize) -> Vec<f32> {
-    let config = DqnConfig {
+fn trained(preset: neural::Preset, screen: Option<ScreenGoal>, batch: usize, threads: usize) -> Vec<f32> {
+    let mut config = DqnConfig {
         demos: DemoSource::Exact(20),
         pretrain_steps: 3,
         steps: 0,
@@ -430,6 +456,9 @@ fn trained(preset: neural::Preset, batch: usize, threads: usize) -> Vec<f32> {
         seed: 11,
         ..DqnConfig::preset(preset, 2).unwrap()
     };
+    if let Some(screen) = screen {
+        config.net.screen = screen;
+    }
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
     pool.install(|| {
         let dqn = Trainer::new(config)
@@ -442,13 +471,14 @@ fn trained(preset: neural::Preset, batch: usize, threads: usize) -> Vec<f32> {
 
 #[test]
 fn one_thread_or_two_train_the_same_network_bit_for_bit() {
-    for (preset, batch) in [
-        (neural::Preset::DqfdPlanes, 64),
-        (neural::Preset::PaperDqfd, 16),
-        (neural::Preset::Pixels, 64),
+    for (preset, screen, batch) in [
+        (neural::Preset::DqfdPlanes, None, 64),
+        (neural::Preset::PaperDqfd, None, 16),
+        (neural::Preset::Pixels, None, 64),
+        (neural::Preset::Pixels, Some(ScreenGoal::Paper), 64),
     ] {
-        let one = trained(preset, batch, 1);
-        assert_eq!(one, trained(preset, batch, 2), "{preset}");
-        assert_eq!(one, trained(preset, batch, 1), "{preset}");
+        let one = trained(preset, screen, batch, 1);
+        assert_eq!(one, trained(preset, screen, batch, 2), "{preset} {screen:?}");
+        assert_eq!(one, trained(preset, screen, batch, 1), "{preset} {screen:?}");
     }
 }

@@ -1,5 +1,6 @@
 //! `Dqn::act_on_picture`: a network on pixels plays on the picture an environment renders
-//! what it plays on the state (Python's `predict` on the `screen` observation).
+//! what it plays on the state (Python's `predict` on the `screen` and `paper-screen`
+//! observations).
 
 use neural::mask::ActionSet;
 use neural::{DemoSource, Dqn, DqnConfig, NetConfig, ObsKind, Trainer};
@@ -25,9 +26,24 @@ fn small_conv() -> NetConfig {
 
 #[test]
 fn a_pixel_network_acts_on_its_picture_as_on_the_state() {
+    acts_on_its_picture_as_on_the_state(small_conv(), ObsKind::Screen);
+}
+
+#[test]
+fn the_conv_network_on_the_papers_screen_acts_on_it_as_on_the_state() {
+    let net = NetConfig {
+        screen: ScreenGoal::Paper,
+        ..small_conv()
+    };
+    acts_on_its_picture_as_on_the_state(net, ObsKind::PaperScreen);
+}
+
+/// The `conv` network `net` plays on the environment's `kind` observation what it plays on
+/// the state, among every action or some.
+fn acts_on_its_picture_as_on_the_state(net: NetConfig, kind: ObsKind) {
     use rand::RngExt;
-    let dqn = untrained(neural::Preset::Pixels, small_conv());
-    assert_eq!(dqn.picture(), Some(ObsKind::Screen));
+    let dqn = untrained(neural::Preset::Pixels, net);
+    assert_eq!(dqn.picture(), Some(kind));
     let input = *dqn.net().input();
     let count = Action::count(3);
     let every = ActionSet::from_indices(0..count);
@@ -44,17 +60,19 @@ fn a_pixel_network_acts_on_its_picture_as_on_the_state() {
                 .observation;
         }
         let mut picture = vec![0; input.len()];
-        ObsKind::Screen.write(&obs, &mut picture).unwrap();
+        kind.write(&obs, &mut picture).unwrap();
         let on_state = dqn.greedy_action(&obs).unwrap();
         assert_eq!(
             dqn.act_on_picture(&picture, &obs.goal, every, 0.0, rng).unwrap(),
             on_state
         );
         // Among any allowed actions: the best of them by the state's Q-values (whose Pick
-        // columns name goal places).
+        // columns name goal places on the compact screen, blocks on the paper's).
         let q = dqn.q_values(&obs).unwrap();
-        for _ in 0..5 {
-            let allowed: Vec<usize> = (0..count).filter(|_| rng.random_bool(0.5)).collect();
+        for round in 0..6 {
+            // Every third set among the Picks alone, so that Pick columns are chosen often.
+            let first = if round % 3 == 2 { 5 } else { 0 };
+            let allowed: Vec<usize> = (first..count).filter(|_| rng.random_bool(0.5)).collect();
             let Some(&best) = allowed.iter().max_by(|&&a, &&b| {
                 let value = |a: usize| q[input.column(&obs.goal, Action::from_index(a, 3).unwrap())];
                 value(a).total_cmp(&value(b))

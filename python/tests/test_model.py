@@ -108,6 +108,27 @@ def test_a_pixel_network_plays_on_its_picture_what_it_plays_on_the_state(cli, tm
         model.predict(obs[:-1], info=info)
 
 
+def test_the_pixels_network_on_the_papers_screen_plays_on_it(tmp_path):
+    # Trained by Python's trainer with screen="paper": it reads the environment's
+    # paper-screen observation, and plays on it what it plays on the state.
+    path = tmp_path / "paper.safetensors"
+    blockstack.train_dqn(preset="pixels", blocks=2, screen="paper", demos="exact:10", pretrain=20, steps=30,
+                         hidden=16, mask_noops=False, seed=3, out=str(path))
+    model = blockstack.load(path)
+    assert model.picture == "paper-screen"
+    env, state_env = (model.make_env(goal="0,1", obs=obs, horizon=30) for obs in ("paper-screen", "state"))
+    for seed in range(3):
+        (obs, info), (state, _) = env.reset(seed=seed), state_env.reset(seed=seed)
+        assert obs.shape == (100, 100, 3) and obs.dtype == np.uint8
+        done = False
+        while not done:
+            action, _ = model.predict(obs, info=info)
+            assert action == model.predict(state)[0]
+            obs, _, terminated, truncated, info = env.step(action)
+            state, *_ = state_env.step(action)
+            done = terminated or truncated
+
+
 def test_a_network_on_planes_refuses_a_picture(network):
     model = blockstack.load(network)
     assert model.picture is None

@@ -98,6 +98,7 @@ def test_the_network_trainer_refuses_what_the_cli_refuses(tmp_path):
         (dict(demos="exact:3", demos_file="d.jsonl"), "give one"),
         (dict(steps=-1), "steps"),
         (dict(net="small", screen="strip"), "only the conv network"),
+        (dict(preset="pixels", screen="paper", grid="7x5"), "square grid"),
         (dict(preset="pixels", screen="corner"), "screen goal"),
         (dict(stepz=1), "unknown setting"),
     ]:

@@ -15,14 +15,17 @@
 //!   the picture's own scale: the paper's goal picture, made legible.
 //!
 //! Either way the background is black and the held block is drawn in its colour inside a
-//! white ring. A cell is a `SCREEN_CELL x SCREEN_CELL` square, so that a convolution whose
+//! white ring. A third choice, `paper`, is no compact screen but the paper's own
+//! ([`Observation::pixels`]: 100 x 100, blocks in their own colours, the goal a picture of
+//! 2 x 2-pixel blocks in the corner), so that the network that reads these screens can be
+//! put on the paper's and what the goal's presentation costs be measured (docs/dqn.md). A cell is a `SCREEN_CELL x SCREEN_CELL` square, so that a convolution whose
 //! kernel and stride are one cell reads each cell once. Rows run from the top (the grid's
 //! top row first), as in any image; 3 bytes (RGB) a pixel.
 
 use serde::{Deserialize, Serialize};
 
 use crate::grid::Grid;
-use crate::observation::{Observation, PIXELS_HELD};
+use crate::observation::{Observation, PIXELS_HELD, PIXELS_SIDE};
 use crate::render::PALETTE;
 use crate::state::{BlockId, MAX_BLOCKS};
 
@@ -38,9 +41,11 @@ pub enum ScreenGoal {
     Colours,
     /// Every block in its own colour, the goal stack in a column of its own.
     Strip,
+    /// The paper's screen ([`Observation::pixels`]), goal picture in the corner and all.
+    Paper,
 }
 
-crate::names!(ScreenGoal { Colours = "colours", Strip = "strip" } unknown(name) -> crate::SimError {
+crate::names!(ScreenGoal { Colours = "colours", Strip = "strip", Paper = "paper" } unknown(name) -> crate::SimError {
     crate::SimError::Parse {
         what: "screen goal",
         text: name.to_string(),
@@ -54,6 +59,7 @@ impl ScreenGoal {
         let columns = match self {
             ScreenGoal::Colours => grid.width(),
             ScreenGoal::Strip => grid.width() + 1,
+            ScreenGoal::Paper => return [PIXELS_SIDE, PIXELS_SIDE, 3],
         };
         [grid.height() * SCREEN_CELL, columns * SCREEN_CELL, 3]
     }
@@ -75,6 +81,10 @@ impl Observation {
     pub fn write_screen(&self, goal: ScreenGoal, out: &mut [u8]) {
         let [rows, columns, _] = goal.shape(self.grid);
         assert_eq!(out.len(), rows * columns * 3, "a buffer of the screen's size");
+        if goal == ScreenGoal::Paper {
+            out.copy_from_slice(&self.pixels().data);
+            return;
+        }
         out.fill(0);
         let height = self.grid.height();
         // Grid rows grow upward, screen rows downward.
@@ -93,7 +103,7 @@ impl Observation {
             let block = BlockId::of(i);
             let rgb = match goal {
                 ScreenGoal::Colours => place_colour(self.goal.place_of(block)),
-                ScreenGoal::Strip => crate::render::colour(block),
+                ScreenGoal::Strip | ScreenGoal::Paper => crate::render::colour(block),
             };
             let held = self.held_block() == Some(block);
             square(usize::from(cell.x), usize::from(cell.y), rgb, held);
@@ -180,6 +190,13 @@ mod tests {
         let grid_part = |v: &[u8]| v.chunks(32 * 3).map(|row| row[..28 * 3].to_vec()).collect::<Vec<_>>();
         assert_eq!(grid_part(&s), grid_part(&t));
         assert_ne!(s, t);
+    }
+
+    #[test]
+    fn paper_is_the_papers_own_screen() {
+        let o = obs(Some(0));
+        assert_eq!(ScreenGoal::Paper.shape(Grid::new(5, 9).unwrap()), [100, 100, 3]);
+        assert_eq!(o.screen(ScreenGoal::Paper), o.pixels().data);
     }
 
     #[test]

@@ -138,9 +138,11 @@ pub struct DqnArgs {
     /// Batch normalisation in the paper network: true or false [default: the preset's]
     #[arg(long)]
     pub batch_norm: Option<bool>,
-    /// How the compact screen (--obs screen, the conv network) shows the goal: colours
-    /// (every block in the colour of its place in the goal) or strip (blocks in their own
-    /// colours, the goal stack in a column of its own) [default: the preset's]
+    /// How the conv network's screen shows the goal: colours (the compact screen, every
+    /// block in the colour of its place in the goal), strip (the compact screen, blocks in
+    /// their own colours, the goal stack in a column of its own) or paper (the paper's own
+    /// screen, the goal a picture in the corner; the network reads paper-screen)
+    /// [default: the preset's]
     #[arg(long)]
     pub screen: Option<ScreenGoal>,
     /// The large-margin loss's margin [default: the preset's]

@@ -12,17 +12,18 @@
 //! [`DEFAULT_SHARE`] of their presets' budgets, small enough for the whole report to stay
 //! within minutes; `--long` adds the paper's pixel runs, our DQN with hindsight relabelling
 //! (`her-planes`), our recipe on the paper's pixels (`dqfd-pixels`), our recipe on a
-//! screen drawn to be read (`pixels`, 3 blocks) and the whole ablation, every arm at its preset's full budget (the ablation, and the default run's
-//! `dqfd-planes` arm, with the steps that preset gives 2 blocks: [`dqfd_planes3`]);
-//! `--quick` checks the pipeline with tiny versions of the default arms. The report says which budget produced
-//! its figures.
+//! screen drawn to be read (`pixels`, 3 blocks) and the same on the paper's own screen
+//! (`pixels --screen paper`), and the whole ablation, every arm at its preset's full
+//! budget (the ablation, and the default run's `dqfd-planes` arm, with the steps that
+//! preset gives 2 blocks: [`dqfd_planes3`]); `--quick` checks the pipeline with tiny
+//! versions of the default arms. The report says which budget produced its figures.
 
 use std::path::Path;
 
 use agent::EpisodeResult;
 use neural::{DemoSource, DqnConfig, NetConfig, NetKind, OptimizerKind, Preset, TargetEvery, Trainer};
 use serde::{Deserialize, Serialize};
-use sim::{Goal, Profile, RewardModel};
+use sim::{Goal, Profile, RewardModel, ScreenGoal};
 
 use super::arms::{ArmResult, Goals, Row, Suite, Table, describe, suite_in};
 use super::shared::Shared;
@@ -98,6 +99,10 @@ fn preset(name: Preset, blocks: usize, seed: u64, fraction: f64) -> Result<DqnCo
 /// The `--long` arm of the `pixels` preset.
 const PIXELS3: &str = "ours on pixels: DQfD, conv network, compact screen, 3 blocks";
 
+/// The `--long` arm of the `pixels` preset on the paper's own screen (`--screen paper`):
+/// [`PIXELS3`] but for how the goal is shown.
+const PAPER_SCREEN3: &str = "ours on the paper's screen: DQfD, conv network, 3 blocks";
+
 /// The share of the presets' budgets the default run trains its arms at.
 const DEFAULT_SHARE: f64 = 0.6;
 
@@ -152,6 +157,7 @@ fn arms(budget: Budget, seed: u64) -> Result<Vec<Arm>> {
     // Our learner on the paper's pixels and network: what the screen and the network cost.
     let ours_pixels2 = preset(Preset::DqfdPixels, 2, seed, 1.0)?;
     let ours3 = dqfd_planes3(seed, 1.0)?;
+    let pixels3 = preset(Preset::Pixels, 3, seed, 1.0)?;
     arms.extend([
         arm("paper: DQN, pixels, 2 blocks", Part::Paper, paper2),
         arm("paper: DQfD, pixels, 2 blocks", Part::Paper, paper_dqfd2),
@@ -166,7 +172,20 @@ fn arms(budget: Budget, seed: u64) -> Result<Vec<Arm>> {
             ours_pixels2.clone(),
         ),
         // The `pixels` preset: our learner on a screen drawn to be read (docs/dqn.md).
-        arm(PIXELS3, Part::Ours, preset(Preset::Pixels, 3, seed, 1.0)?),
+        arm(PIXELS3, Part::Ours, pixels3.clone()),
+        // The same learner and budget on the paper's screen: what the goal's presentation
+        // alone costs.
+        arm(
+            PAPER_SCREEN3,
+            Part::Ours,
+            DqnConfig {
+                net: NetConfig {
+                    screen: ScreenGoal::Paper,
+                    ..pixels3.net
+                },
+                ..pixels3
+            },
+        ),
     ]);
     arms.extend(ablation(seed, &ours3, ours_pixels2)?);
     Ok(arms)
@@ -676,6 +695,12 @@ fn reading(budget: Budget, arms: &[Arm], outcomes: &[Outcome]) -> String {
             figures_of(Some(p))
         );
     }
+    if let Some(p) = find(PAPER_SCREEN3) {
+        reading += &format!(
+            ", and on the paper's own screen, its goal a picture in the corner, {}",
+            figures_of(Some(p))
+        );
+    }
     if let (Some(p), Some(d)) = (
         find("paper: DQN, pixels, 2 blocks"),
         find("paper: DQfD, pixels, 2 blocks"),
@@ -731,6 +756,17 @@ mod tests {
         assert_eq!(pixels.config.net.kind, NetKind::Conv);
         assert_eq!(pixels.config.steps, DqnConfig::preset(Preset::Pixels, 3).unwrap().steps);
         assert!(arms(Budget::Default, 1).unwrap().iter().all(|a| a.name != PIXELS3));
+        // Its twin on the paper's screen differs from it in the screen alone.
+        let paper = long.iter().find(|a| a.name == PAPER_SCREEN3).unwrap();
+        assert_eq!(paper.config.obs(), sim::ObsKind::PaperScreen);
+        let as_pixels = DqnConfig {
+            net: NetConfig {
+                screen: ScreenGoal::Colours,
+                ..paper.config.net
+            },
+            ..paper.config.clone()
+        };
+        assert_eq!(as_pixels, pixels.config);
         assert_eq!(
             arms(Budget::Quick, 1).unwrap().len(),
             arms(Budget::Default, 1).unwrap().len()
