@@ -115,6 +115,13 @@ class StackVectorEnv(VectorEnv):
         # as the buffers are the caller's to read, not to write; copies when ``copy``).
         self._every_env = np.ones(num_envs, dtype=bool)
         self._every_env.flags.writeable = False
+        # Without copies, the infos of a step are the same arrays every time: a fresh dict of
+        # them per step (the caller may add keys) costs less than building it key by key,
+        # which every step pays on the caller's thread alone.
+        self._shared_infos = {}
+        for key in _INFO_KEYS:
+            self._shared_infos[key] = self._buffers[key]
+            self._shared_infos["_" + key] = self._every_env
 
     def _out(self, value):
         if isinstance(value, dict):
@@ -123,10 +130,7 @@ class StackVectorEnv(VectorEnv):
 
     def _infos(self, ended: Sequence) -> dict:
         n = self.num_envs
-        infos = {}
-        for key in _INFO_KEYS:
-            infos[key] = self._out(self._buffers[key])
-            infos["_" + key] = self._out(self._every_env)
+        infos = self._out(self._shared_infos) if self.copy else dict(self._shared_infos)
         if ended:
             final_obs = np.full(n, None, dtype=object)
             has_final = np.zeros(n, dtype=bool)

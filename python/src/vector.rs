@@ -329,8 +329,11 @@ impl NativeVecEnv {
         }
     }
 
-    /// The actions from a 1-D integer array with one action per environment, each in range.
-    fn actions(&self, actions: &Bound<'_, PyAny>) -> PyResult<Vec<Action>> {
+    /// The actions from a 1-D integer array with one action per environment, as `int64`
+    /// values, copied while the GIL is held (another Python thread may write the array once
+    /// it is released). Their range is checked where they are converted, on the threads
+    /// that step them ([`to_action`]).
+    fn actions(&self, actions: &Bound<'_, PyAny>) -> PyResult<Vec<i64>> {
         let n = self.vec.len();
         let array = actions.cast::<PyUntypedArray>().map_err(|_| {
             value_error(format!(
@@ -346,24 +349,42 @@ impl NativeVecEnv {
                 array.shape()
             )));
         }
-        // No copy when the array already holds int64, the usual case.
-        let no_copy = [("copy", false)].into_py_dict(actions.py())?;
-        let as_i64 = array.call_method("astype", ("int64",), Some(&no_copy))?;
-        let values = as_i64.cast::<PyArray1<i64>>()?.readonly();
-        values
-            .as_array()
-            .iter()
-            .map(|&i| {
-                let index = usize::try_from(i).map_err(|_| {
-                    value_error(format!(
-                        "action {i} is out of range: with {} blocks the actions are 0..{}",
-                        self.blocks,
-                        Action::count(self.blocks)
-                    ))
-                })?;
-                Action::from_index(index, self.blocks).or_value_error()
-            })
-            .collect()
+        // An int64 array, the usual case, is read as it is; any other integer type goes
+        // through numpy's conversion first (a Python call, which costs as much as stepping
+        // dozens of environments).
+        let values = match actions.cast::<PyArray1<i64>>() {
+            Ok(int64) => int64.readonly(),
+            Err(_) => {
+                let no_copy = [("copy", false)].into_py_dict(actions.py())?;
+                let as_i64 = array.call_method("astype", ("int64",), Some(&no_copy))?;
+                as_i64.cast_into::<PyArray1<i64>>()?.readonly()
+            }
+        };
+        Ok(match values.as_slice() {
+            Ok(contiguous) => contiguous.to_vec(),
+            Err(_) => values.as_array().to_vec(),
+        })
+    }
+}
+
+/// Why a batch call failed, raised as a `ValueError` with its message: a refused action
+/// value, or the world's error.
+struct Refusal(String);
+
+impl From<sim::SimError> for Refusal {
+    fn from(e: sim::SimError) -> Refusal {
+        Refusal(e.to_string())
+    }
+}
+
+/// The action of index `index` in a world of `blocks` blocks.
+fn to_action(index: i64, blocks: usize) -> Result<Action, Refusal> {
+    match usize::try_from(index) {
+        Ok(i) => Ok(Action::from_index(i, blocks)?),
+        Err(_) => Err(Refusal(format!(
+            "action {index} is out of range: with {blocks} blocks the actions are 0..{}",
+            Action::count(blocks)
+        ))),
     }
 }
 
@@ -491,10 +512,16 @@ impl NativeVecEnv {
         let ranges = self.vec.chunks();
         let mut chunks = borrows.chunks(&ranges, self.vec.len(), self.blocks);
         let (vec, kind) = (&mut self.vec, self.kind);
+        let blocks = self.blocks;
         py.detach(|| {
             guard(|| {
-                vec.step_chunks(&actions, &mut chunks, |chunk, i, result| chunk.write(kind, i, result))
-                    .or_value_error()
+                vec.step_chunks_of(
+                    &actions,
+                    |&i| to_action(i, blocks),
+                    &mut chunks,
+                    |chunk, i, result| chunk.write(kind, i, result),
+                )
+                .map_err(|Refusal(message)| value_error(message))
             })
         })?;
         let ended = PyList::empty(py);

@@ -93,7 +93,7 @@ impl VecStepRef<'_> {
 
 /// Below this many environments a [`VecEnv`] steps and resets on the caller's thread
 /// whatever its thread count. Through Python (`python/benchmarks/throughput.py`, where
-/// every call also converts the actions on one thread), with the caller's thread stepping
+/// every call also reads the actions and lends the buffers on one thread), with the caller's thread stepping
 /// a chunk and the workers kept awake between calls, two threads first beat one at 512
 /// envs of either backend on a quiet 2-core machine, and tied at 256 (docs/performance.md).
 pub const PARALLEL_FROM_ENVS: usize = 512;
@@ -318,11 +318,32 @@ impl VecEnv {
         chunks: &mut [C],
         write: impl Fn(&mut C, usize, &VecStepRef<'_>) + Sync,
     ) -> Result<()> {
+        self.step_chunks_of(actions, |&action| Ok::<_, SimError>(action), chunks, write)
+    }
+
+    /// [`VecEnv::step_chunks`] with the actions given as values that `action` turns into
+    /// [`Action`]s, on the thread that steps them: a caller holding action indices
+    /// (Python's arrays of integers) spares its own thread a pass over the whole batch
+    /// before the others can start. Every value is converted, an environment about to reset
+    /// included; the first value refused (in environment order, before any check of the
+    /// converted actions of later environments) is the error, and nothing is stepped.
+    ///
+    /// # Panics
+    ///
+    /// Unless there is one chunk per range of [`VecEnv::chunks`].
+    pub fn step_chunks_of<A: Sync, C: Send, E: From<SimError> + Send>(
+        &mut self,
+        actions: &[A],
+        action: impl Fn(&A) -> std::result::Result<Action, E> + Sync,
+        chunks: &mut [C],
+        write: impl Fn(&mut C, usize, &VecStepRef<'_>) + Sync,
+    ) -> std::result::Result<(), E> {
         if actions.len() != self.len() {
             return Err(SimError::ActionCountMismatch {
                 envs: self.len(),
                 actions: actions.len(),
-            });
+            }
+            .into());
         }
         assert_eq!(
             chunks.len(),
@@ -332,8 +353,9 @@ impl VecEnv {
         // Every environment that takes its action must accept it (running, the block
         // exists, legal under the protocol); one about to reset ignores its action. The
         // first refusal in environment order, as a serial check would find it.
-        let check = |(envs, actions, ended): (&[Env], &[Action], &[bool])| -> Result<()> {
-            for ((env, &action), &ended) in envs.iter().zip(actions).zip(ended) {
+        let check = |(envs, actions, ended): (&[Env], &[A], &[bool])| -> std::result::Result<(), E> {
+            for ((env, raw), &ended) in envs.iter().zip(actions).zip(ended) {
+                let action = action(raw)?;
                 if !ended {
                     env.check_action(action)?;
                 }
@@ -344,16 +366,16 @@ impl VecEnv {
         // Steps each environment of a chunk (or resets one whose episode ended under next-step
         // autoreset) and lends its result to `write`; `last` holds the observation a same-step
         // reset replaced.
-        let step_chunk = |(envs, actions, ended, chunk): (&mut [Env], &[Action], &mut [bool], &mut C)| {
-            for (i, ((env, &action), ended)) in envs.iter_mut().zip(actions).zip(ended.iter_mut()).enumerate() {
+        let step_chunk = |(envs, actions, ended, chunk): (&mut [Env], &[A], &mut [bool], &mut C)| {
+            for (i, ((env, raw), ended)) in envs.iter_mut().zip(actions).zip(ended.iter_mut()).enumerate() {
                 if *ended {
                     *ended = false;
                     env.reset(None);
                     write(chunk, i, &first(env));
                     continue;
                 }
-                // The batch's check pass has accepted the action.
-                let outcome = env.advance_checked(action)?;
+                // The batch's check pass has converted and accepted the action.
+                let outcome = env.advance_checked(action(raw)?)?;
                 let mut last = None;
                 if outcome.terminated || outcome.truncated {
                     match mode {
@@ -392,9 +414,8 @@ impl VecEnv {
                     .zip(self.ended.chunks_mut(len))
                     .zip(chunks.iter_mut());
                 let parts = parts.map(|(((envs, actions), ended), chunk)| (envs, actions, ended, chunk));
-                let checked = |(envs, actions, ended, _): &(&mut [Env], &[Action], &mut [bool], &mut C)| {
-                    check((envs, actions, ended))
-                };
+                let checked =
+                    |(envs, actions, ended, _): &(&mut [Env], &[A], &mut [bool], &mut C)| check((envs, actions, ended));
                 team.run_checked(parts.collect(), checked, step_chunk)?
                     .into_iter()
                     .collect()

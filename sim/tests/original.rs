@@ -456,3 +456,63 @@ fn vec_env_on_two_threads_reports_the_first_refusal_and_steps_nothing() {
         assert!(v.envs().iter().all(|e| e.steps() == 0));
     }
 }
+
+/// Actions given as indices are converted on the threads that step them: a value out of
+/// range is refused as a refused action is, the first in environment order, and nothing
+/// steps; in range, the batch steps as the converted actions would.
+#[test]
+fn vec_env_converts_action_values_where_it_steps_them() {
+    let config = EnvConfig {
+        backend: Backend::Grid,
+        ..ProfileParts::of(Profile::Original).apply(EnvConfig::with_goal(goal("0,1,2")))
+    };
+    let envs = PARALLEL_FROM_ENVS + 1;
+    let convert = |&i: &i64| match usize::try_from(i) {
+        Ok(i) => Action::from_index(i, 3),
+        Err(_) => Err(SimError::ActionOutOfRange {
+            index: usize::MAX,
+            blocks: 3,
+        }),
+    };
+    for threads in [1, 2] {
+        let mut v = VecEnv::new(config.clone(), envs, threads).unwrap();
+        v.reset(0);
+        let mut chunks = vec![(); v.chunks().len()];
+        // Nothing is held: Left is refused in the first half, 9 is out of range in the
+        // second; with the refusal moved after it, the value is the first error.
+        let mut values = vec![5i64; envs];
+        values[envs - 3] = 9;
+        for (left_at, expected) in [
+            (
+                envs / 2 - 10,
+                SimError::IllegalAction {
+                    action: Action::Left,
+                    held: None,
+                    protocol: ActionProtocol::Paper,
+                },
+            ),
+            (envs - 1, SimError::ActionOutOfRange { index: 9, blocks: 3 }),
+        ] {
+            let mut with_left = values.clone();
+            with_left[left_at] = 2;
+            let e = v
+                .step_chunks_of(&with_left, convert, &mut chunks, |_, _, _| {})
+                .unwrap_err();
+            assert_eq!(e, expected, "{threads} thread(s)");
+            assert!(v.envs().iter().all(|e| e.steps() == 0));
+        }
+        let picks: Vec<Action> = vec![Action::Pick(BlockId(0)); envs];
+        let mut by_index = VecEnv::new(config.clone(), envs, threads).unwrap();
+        by_index.reset(0);
+        let stepped = std::sync::Mutex::new(0);
+        by_index
+            .step_chunks_of(&vec![5i64; envs], convert, &mut chunks, |_, _, _| {
+                *stepped.lock().unwrap() += 1
+            })
+            .unwrap();
+        v.step(&picks).unwrap();
+        assert_eq!(*stepped.lock().unwrap(), envs);
+        let states = |v: &VecEnv| v.envs().iter().map(|e| e.state().clone()).collect::<Vec<_>>();
+        assert_eq!(states(&by_index), states(&v));
+    }
+}
