@@ -1,7 +1,7 @@
 //! Training checkpoints: a [`Trainer`] written to a file between two games, and read back
 //! to play on exactly as if it had never stopped.
 //!
-//! A run is fixed by its config and its seed ([`crate::train`]): game `k` draws everything
+//! A run is fixed by its config and its seed ([`crate::train`](mod@crate::train)): game `k` draws everything
 //! from `episode_seed(seed, k)`, and each game's environment is reset from its seed. So
 //! what a trainer carries from one game to the next is all a checkpoint needs: the agent
 //! (its table, and for `paper-code` the entries it has seen), the totals, the recent

@@ -1,7 +1,7 @@
 //! Training checkpoints: a [`Trainer`] written to a file between two steps, and read back to
 //! train on exactly as if it had never stopped.
 //!
-//! A run is fixed by its config and seed ([`crate::train`]), but unlike the tabular trainer's
+//! A run is fixed by its config and seed ([`crate::train`](mod@crate::train)), but unlike the tabular trainer's
 //! a network's run carries a lot from one step to the next: both networks, the optimiser's
 //! moments, the replay buffer (the demonstrations among it, and those added by corrections),
 //! the generator the exploration and the batches draw from, the totals, and the game being

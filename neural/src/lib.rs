@@ -10,7 +10,7 @@
 //!   step of the DQN and DQfD losses; RMSprop and Adam.
 //! - [`hindsight`]: hindsight relabelling (HER): a game stored again under the stacks it built.
 //! - [`demos`]: demonstrations from the exact solver, the oracle, or a recording.
-//! - [`config`], [`preset`], [`train`]: a run's settings, the presets and the one resolver
+//! - [`config`], [`preset`], [`train`](mod@train): a run's settings, the presets and the one resolver
 //!   of a preset and explicit settings ([`DqnConfig::resolve`]), and the trainer.
 //! - [`checkpoint`]: a run written between two steps, and resumed bit for bit.
 //! - [`model`]: a trained network ([`Dqn`]), played through [`agent::Policy`] (so

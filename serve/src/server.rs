@@ -16,8 +16,8 @@
 //! not be a secret. Everything a participant plays is seeded by the condition.
 //!
 //! Connections are served by hyper directly (not `axum::serve`) so that each has bounds:
-//! a request's head must arrive within [`Limits::request_timeout`], a handler must finish
-//! within it, and at most [`Limits::max_connections`] are open at once. A participant's
+//! a request's head must arrive within [`Limits::request_timeout`](crate::Limits::request_timeout), a handler must finish
+//! within it, and at most [`Limits::max_connections`](crate::Limits::max_connections) are open at once. A participant's
 //! work (a session begun, a message carried out: the exact solver may take seconds on many
 //! blocks) runs on tokio's blocking threads, never on the async workers that every other
 //! participant's messages need.

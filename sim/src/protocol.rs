@@ -262,7 +262,7 @@ impl ActionMask {
     }
 
     /// The set as the bits of one `u32` (bit `i`: action `i`), for callers that keep a mask
-    /// in a word: the learners, whose worlds have at most [`MAX_BLOCKS`] blocks (21
+    /// in a word: the learners, whose worlds have at most [`MAX_BLOCKS`](crate::MAX_BLOCKS) blocks (21
     /// actions). `None` for a world of more than 32 actions.
     #[inline]
     pub fn as_u32(&self) -> Option<u32> {

@@ -1,7 +1,7 @@
 //! Standard output through a fallible writer.
 //!
 //! `println!` panics when standard output fails (a closed pipe, a full disk); every
-//! command prints through [`line`] and [`text`] instead, whose errors travel back to
+//! command prints through [`line`](fn@line) and [`text`] instead, whose errors travel back to
 //! `main` like any other: a closed pipe ends the command quietly with status 0
 //! ([`is_closed_pipe`]), any other failure with one line and status 2. Commands print
 //! after their files are written, so a closed pipe never costs a model.

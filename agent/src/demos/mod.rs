@@ -1,7 +1,7 @@
 //! Demonstration recordings: every step of a correction session as JSON Lines, written as it
-//! happens ([`format`]), and their replay into a learner ([`replay`]).
+//! happens ([`format`](mod@format)), and their replay into a learner ([`replay`]).
 //!
-//! The two halves are apart so that reading a recording needs no learner: [`format`] holds
+//! The two halves are apart so that reading a recording needs no learner: [`format`](mod@format) holds
 //! the records, the writer and the bounded reader; [`replay`] checks each line against the
 //! world's rules and hands the steps to a [`DemoLearner`]; [`episodes`] reads a file of
 //! either kind (recording or trajectory) into checked episodes for learners that are not
