@@ -224,7 +224,7 @@ pub const CONV_CHANNELS: usize = 16;
 /// On the compact screen a cell is [`SCREEN_CELL`] pixels. On the paper's screen, a square
 /// grid of `n` cells scaled to [`PIXELS_SIDE`] pixels, a cell is `100 / n` pixels, not
 /// a whole number (14.3 on 7 x 7): the stride is its whole part and the kernel reaches to
-/// the screen's edge from the last stride (16 and 14 on 7 x 7), so that there are `n x n`
+/// the screen's edge from the last stride (14 and 16 on 7 x 7), so that there are `n x n`
 /// positions and each holds its whole cell and at most two pixels of its neighbours (which
 /// the bilinear scaling blurs into anyway). A grid that is not square has cells of two
 /// shapes there, which one square kernel cannot follow: an error.

@@ -93,9 +93,10 @@ impl VecStepRef<'_> {
 
 /// Below this many environments a [`VecEnv`] steps and resets on the caller's thread
 /// whatever its thread count. Through Python (`python/benchmarks/throughput.py`, where
-/// every call also reads the actions and lends the buffers on one thread), with the caller's thread stepping
-/// a chunk and the workers kept awake between calls, two threads first beat one at 512
-/// envs of either backend on a quiet 2-core machine, and tied at 256 (docs/performance.md).
+/// every call also reads the actions and lends the buffers on one thread), with the
+/// caller's thread stepping a chunk and the workers kept awake between calls, two threads
+/// first beat one at 512 envs of either backend on a quiet 2-core machine, and tied at 256
+/// (docs/performance.md).
 pub const PARALLEL_FROM_ENVS: usize = 512;
 
 /// The team and the environments per chunk when a batch of `envs` is stepped in parallel;
@@ -325,8 +326,8 @@ impl VecEnv {
     /// [`Action`]s, on the thread that steps them: a caller holding action indices
     /// (Python's arrays of integers) spares its own thread a pass over the whole batch
     /// before the others can start. Every value is converted, an environment about to reset
-    /// included; the first value refused (in environment order, before any check of the
-    /// converted actions of later environments) is the error, and nothing is stepped.
+    /// included; the first refusal in environment order, of a value or of its action, is
+    /// the error, and nothing is stepped.
     ///
     /// # Panics
     ///
