@@ -557,16 +557,52 @@ pub(crate) struct Context<'a> {
 /// package's `blockstack.reproduce --ray`), each arm then run by [`run_e8_arm`] with
 /// this run's options. Every arm is fixed by its seed, so where it runs changes no figure.
 pub trait ArmRunner: Sync {
-    /// The runs of E8's arms `0..count`, in order; `here` runs one in this process.
-    fn run_arms(&self, count: usize, here: &(dyn Fn(usize) -> Result<ArmRun> + Sync)) -> Result<Vec<ArmRun>>;
+    /// The runs of E8's arms `0..start.len()`, in the arms' order; `here` runs one in this
+    /// process. `start` lists the arms' indices costliest first (E8's estimate): a runner
+    /// with fewer threads than arms starts them in that order, so that the longest is not
+    /// left to the end, when the other threads would have nothing to do.
+    fn run_arms(&self, start: &[usize], here: &(dyn Fn(usize) -> Result<ArmRun> + Sync)) -> Result<Vec<ArmRun>>;
 }
 
-/// E8's arms run here, side by side on the current rayon pool.
+/// E8's arms run here, side by side on the current rayon pool: each thread takes the next
+/// arm of `start` as it finishes one (the longest first, then the others: a greedy
+/// packing whose end is within the last arm's length of the best). After an arm fails no
+/// other is started, and the error of the first failed arm in the arms' order is returned.
 pub struct LocalArms;
 
 impl ArmRunner for LocalArms {
-    fn run_arms(&self, count: usize, here: &(dyn Fn(usize) -> Result<ArmRun> + Sync)) -> Result<Vec<ArmRun>> {
-        (0..count).into_par_iter().map(here).collect()
+    fn run_arms(&self, start: &[usize], here: &(dyn Fn(usize) -> Result<ArmRun> + Sync)) -> Result<Vec<ArmRun>> {
+        use std::sync::Mutex;
+        use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+        let (next, failed) = (AtomicUsize::new(0), AtomicBool::new(false));
+        let runs: Vec<Mutex<Option<Result<ArmRun>>>> = start.iter().map(|_| Mutex::new(None)).collect();
+        rayon::scope(|s| {
+            for _ in 0..rayon::current_num_threads().min(start.len()) {
+                s.spawn(|_| {
+                    while !failed.load(Ordering::Acquire) {
+                        let Some(&arm) = start.get(next.fetch_add(1, Ordering::AcqRel)) else {
+                            break;
+                        };
+                        let run = here(arm);
+                        if run.is_err() {
+                            failed.store(true, Ordering::Release);
+                        }
+                        *runs[arm].lock().expect("no arm panics holding it") = Some(run);
+                    }
+                });
+            }
+        });
+        let runs: Vec<Option<Result<ArmRun>>> = runs
+            .into_iter()
+            .map(|m| m.into_inner().expect("no arm panics holding it"))
+            .collect();
+        if let Some(e) = runs.iter().position(|r| matches!(r, Some(Err(_)))) {
+            return Err(runs.into_iter().nth(e).flatten().expect("found above").unwrap_err());
+        }
+        Ok(runs
+            .into_iter()
+            .map(|r| r.expect("every arm ran").expect("none failed"))
+            .collect())
     }
 }
 
@@ -900,13 +936,55 @@ mod tests {
         }
     }
 
+    /// Local arms start in the order given and come back in the arms' order; after a
+    /// failure no arm starts, and the error is the first failed arm's.
+    #[test]
+    fn local_arms_start_costliest_first_and_come_back_in_order() {
+        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        let run = |i: usize| ArmRun {
+            curve: Vec::new(),
+            games: Vec::new(),
+            gradient_steps: i as u64,
+        };
+        let started = std::sync::Mutex::new(Vec::new());
+        let runs = one
+            .install(|| {
+                LocalArms.run_arms(&[2, 0, 3, 1], &|i| {
+                    started.lock().unwrap().push(i);
+                    Ok(run(i))
+                })
+            })
+            .unwrap();
+        assert_eq!(*started.lock().unwrap(), [2, 0, 3, 1]);
+        assert_eq!(runs, (0..4).map(run).collect::<Vec<_>>());
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let started = std::sync::Mutex::new(Vec::new());
+            let e = pool
+                .install(|| {
+                    LocalArms.run_arms(&[3, 1, 0, 2], &|i| {
+                        started.lock().unwrap().push(i);
+                        match i {
+                            3 => Err(ReproduceError::Arms("arm 3".into())),
+                            i => Ok(run(i)),
+                        }
+                    })
+                })
+                .unwrap_err();
+            assert_eq!(e.to_string(), "E8's arms: arm 3");
+            if threads == 1 {
+                assert_eq!(*started.lock().unwrap(), [3], "nothing starts after a failure");
+            }
+        }
+    }
+
     /// E8's arms run one at a time by [`run_e8_arm`] with their runs sent through JSON, as
     /// a cluster's nodes send them.
     struct ThroughJson(Options);
 
     impl ArmRunner for ThroughJson {
-        fn run_arms(&self, count: usize, _: &(dyn Fn(usize) -> Result<ArmRun> + Sync)) -> Result<Vec<ArmRun>> {
-            (0..count)
+        fn run_arms(&self, start: &[usize], _: &(dyn Fn(usize) -> Result<ArmRun> + Sync)) -> Result<Vec<ArmRun>> {
+            (0..start.len())
                 .map(|i| {
                     let sent = serde_json::to_string(&run_e8_arm(&self.0, i, None)?).unwrap();
                     Ok(serde_json::from_str(&sent).unwrap())

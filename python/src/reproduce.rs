@@ -70,9 +70,11 @@ struct PythonArms {
 impl ArmRunner for PythonArms {
     fn run_arms(
         &self,
-        count: usize,
+        start: &[usize],
         _here: &(dyn Fn(usize) -> experiments_reproduce::Result<ArmRun> + Sync),
     ) -> experiments_reproduce::Result<Vec<ArmRun>> {
+        // Ray was handed every arm when the run began; the order is its scheduler's.
+        let count = start.len();
         let texts = Python::attach(|py| {
             self.e8_runs
                 .call1(py, (count,))
