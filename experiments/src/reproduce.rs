@@ -82,7 +82,7 @@ mod text;
 pub use arms::{ArmResult, Goals, Measured, Row, Rules, Suite, Table, TestOutcome};
 pub use budget::Budget;
 pub use e1::{Decomposition, Gap, WorldArm};
-pub use e8::{ArmRun, Game, arm_names as e8_arm_names, run_arm_of as run_e8_arm};
+pub use e8::{ArmRun, Game, arm_names as e8_arm_names, run_arm_of as run_e8_arm, start_order as e8_start_order};
 pub use e9::{AgentFigures, Agreement, BlocksWorld, Group, Played, Problem};
 pub use e10::{Family, General, SizeFigures, TrainingFigures};
 pub use ran::Ran;

@@ -6,7 +6,8 @@
 The same experiments, settings and report as ``blockstack reproduce`` (docs/cli.md), run by
 the same Rust code in this process. With ``--ray``, E8's arms (each a network trained for up
 to an hour: most of ``--long``'s two CPU-hours) are sent to Ray as tasks of one CPU as soon as
-the run starts, one task an arm, and the other experiments run here meanwhile; the report
+the run starts, one task an arm, the costliest first (Ray starts them in that order as CPUs
+free up), and the other experiments run here meanwhile; the report
 waits for the arms and is written here. Every arm is fixed by its seed, so the report's
 figures are the ones a run on one machine gives.
 
@@ -64,6 +65,7 @@ def main(argv: Optional[List[str]] = None) -> int:
         if args.retries < 0:
             raise ValueError(f"--retries must be 0 or more, not {args.retries}")
         names = _native.e8_arms(seed=args.seed, quick=args.quick, long=args.long, only=only)
+        start = _native.e8_start_order(seed=args.seed, quick=args.quick, long=args.long, only=only)
         _native.check_folder(args.out)
         storage = os.path.abspath(args.storage or args.out.rstrip(os.sep) + "-e8-arms")
         on_ray = args.ray is not None and (not only or "E8" in (o.upper() for o in only))
@@ -83,7 +85,10 @@ def main(argv: Optional[List[str]] = None) -> int:
         task = ray.remote(max_retries=args.retries, **_ray.TASK_OPTIONS)(_run_arm)
         budget = "quick" if args.quick else "long" if args.long else "default"
         checkpoints = [os.path.join(storage, f"{budget}-seed{args.seed}-arm{i:02d}.safetensors") for i in range(len(names))]
-        refs = [task.remote(i, args.seed, args.quick, args.long, checkpoints[i]) for i in range(len(names))]
+        # Submitted costliest first: Ray starts tasks as CPUs free up, in the order sent.
+        refs = [None] * len(names)
+        for i in start:
+            refs[i] = task.remote(i, args.seed, args.quick, args.long, checkpoints[i])
         print(f"E8: {len(names)} arms sent to Ray ({_ray.cpus(ray)} CPUs), checkpoints in {storage}", flush=True)
         started = time.monotonic()
 

@@ -59,6 +59,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(training::train, m)?)?;
     m.add_function(wrap_pyfunction!(dqn::train_dqn, m)?)?;
     m.add_function(wrap_pyfunction!(reproduce::e8_arms, m)?)?;
+    m.add_function(wrap_pyfunction!(reproduce::e8_start_order, m)?)?;
     m.add_function(wrap_pyfunction!(reproduce::run_e8_arm, m)?)?;
     m.add_function(wrap_pyfunction!(reproduce::reproduce, m)?)?;
     m.add_function(wrap_pyfunction!(config::episode_seed, m)?)?;

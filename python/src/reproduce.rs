@@ -36,6 +36,14 @@ pub fn e8_arms(seed: u64, quick: bool, long: bool, only: Vec<String>) -> PyResul
     experiments_reproduce::e8_arm_names(&options(seed, quick, long, only)?).or_value_error()
 }
 
+/// The indices of E8's arms (as [`e8_arms`] lists them) in the order to start them: the
+/// costliest first, so that on a few CPUs the longest arm is not left to the end.
+#[pyfunction]
+#[pyo3(signature = (*, seed=1, quick=false, long=false, only=Vec::new()))]
+pub fn e8_start_order(seed: u64, quick: bool, long: bool, only: Vec<String>) -> PyResult<Vec<usize>> {
+    experiments_reproduce::e8_start_order(&options(seed, quick, long, only)?).or_value_error()
+}
+
 /// Trains and tests E8's arm `index` as the reproduction with these settings does, in this
 /// process with the GIL released; returns its games as JSON text (for [`reproduce`]'s
 /// `e8_runs`). With `checkpoint`, the arm is written there at every point of its learning
@@ -73,7 +81,7 @@ impl ArmRunner for PythonArms {
         start: &[usize],
         _here: &(dyn Fn(usize) -> experiments_reproduce::Result<ArmRun> + Sync),
     ) -> experiments_reproduce::Result<Vec<ArmRun>> {
-        // Ray was handed every arm when the run began; the order is its scheduler's.
+        // Ray was handed every arm, in this order, when the run began.
         let count = start.len();
         let texts = Python::attach(|py| {
             self.e8_runs

@@ -39,3 +39,13 @@ def test_bad_settings_are_refused_before_any_work(tmp_path, capsys):
         (tmp_path / "a-file").write_text("")
         assert reproduce.main(argv + ([] if "--out" in argv else ["--out", str(tmp_path / "r")])) == 2
         assert message in capsys.readouterr().err
+
+
+def test_e8_arms_are_sent_costliest_first():
+    # At the long budget the arm on the paper's screen, about an hour of one core, goes
+    # first; every arm is sent once.
+    from blockstack import _native
+    names = _native.e8_arms(long=True)
+    start = _native.e8_start_order(long=True)
+    assert sorted(start) == list(range(len(names)))
+    assert names[start[0]] == "ours on the paper's screen: DQfD, conv network, 3 blocks"

@@ -386,6 +386,12 @@ pub fn arm_names(options: &Options) -> Result<Vec<String>> {
         .collect())
 }
 
+/// The indices of [`arm_names`] in the order a runner should start them: the costliest
+/// first (see [`ArmRunner`](super::ArmRunner)).
+pub fn start_order(options: &Options) -> Result<Vec<usize>> {
+    Ok(costliest_first(&arms(Budget::of(options), options.seed)?))
+}
+
 /// Trains and tests arm `index` of [`arm_names`], as the reproduction with `options` does
 /// (the seeds are `options.seed`'s): the unit of work a cluster runs. With `checkpoint`,
 /// the arm's training and the tests it has played are written there at every point of its
