@@ -592,17 +592,14 @@ impl ArmRunner for LocalArms {
                 });
             }
         });
-        let runs: Vec<Option<Result<ArmRun>>> = runs
+        // The arms that ran, in the arms' order: after a failure some never started, and
+        // the first failed arm's error is the answer; without one, every arm ran.
+        let runs = runs
             .into_iter()
-            .map(|m| m.into_inner().expect("no arm panics holding it"))
-            .collect();
-        if let Some(e) = runs.iter().position(|r| matches!(r, Some(Err(_)))) {
-            return Err(runs.into_iter().nth(e).flatten().expect("found above").unwrap_err());
-        }
-        Ok(runs
-            .into_iter()
-            .map(|r| r.expect("every arm ran").expect("none failed"))
-            .collect())
+            .filter_map(|m| m.into_inner().expect("no arm panics holding it"))
+            .collect::<Result<Vec<ArmRun>>>()?;
+        assert_eq!(runs.len(), start.len(), "every arm ran");
+        Ok(runs)
     }
 }
 

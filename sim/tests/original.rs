@@ -18,13 +18,17 @@ fn state(cells: &[(u16, u16)], held: Option<u16>) -> State {
     State::new(&cells, held.map(BlockId)).unwrap()
 }
 
-/// An environment of the `original` profile on a fixed goal.
-fn original(goal_text: &str, backend: Backend) -> Env {
-    Env::new(EnvConfig {
+/// The world of the `original` profile on a fixed goal.
+fn original_config(goal_text: &str, backend: Backend) -> EnvConfig {
+    EnvConfig {
         backend,
         ..ProfileParts::of(Profile::Original).apply(EnvConfig::with_goal(goal(goal_text)))
-    })
-    .unwrap()
+    }
+}
+
+/// An environment of the `original` profile on a fixed goal.
+fn original(goal_text: &str, backend: Backend) -> Env {
+    Env::new(original_config(goal_text, backend)).unwrap()
 }
 
 const BACKENDS: [Backend; 2] = [Backend::Grid, Backend::Physics];
@@ -237,9 +241,8 @@ fn the_paper_start_rule_refuses_grids_it_cannot_fill() {
 fn reward_above_ends_on_the_reward_not_on_the_goal() {
     for backend in BACKENDS {
         let config = |termination| EnvConfig {
-            backend,
             termination,
-            ..ProfileParts::of(Profile::Original).apply(EnvConfig::with_goal(goal("0,1,2")))
+            ..original_config("0,1,2", backend)
         };
         // 1 stands on 0; 2 is held diagonally above 1. Left puts 2 on 1: d of (1, 2) falls
         // from 3125 to 625 (+1) and both pairs stand (+100): 101 > 70.
@@ -384,9 +387,8 @@ fn stepped(steps: Vec<VecStep>) -> Vec<Step> {
 #[test]
 fn vec_env_masks_and_autoresets_under_paper() {
     let config = EnvConfig {
-        backend: Backend::Grid,
         horizon: 3,
-        ..ProfileParts::of(Profile::Original).apply(EnvConfig::with_goal(goal("0,1,2")))
+        ..original_config("0,1,2", Backend::Grid)
     };
     for threads in [1, 2] {
         let mut v = VecEnv::new(config.clone(), 3, threads).unwrap();
@@ -431,10 +433,7 @@ fn vec_env_masks_and_autoresets_under_paper() {
 /// the first refusal in environment order, and no environment steps.
 #[test]
 fn vec_env_on_two_threads_reports_the_first_refusal_and_steps_nothing() {
-    let config = EnvConfig {
-        backend: Backend::Grid,
-        ..ProfileParts::of(Profile::Original).apply(EnvConfig::with_goal(goal("0,1,2")))
-    };
+    let config = original_config("0,1,2", Backend::Grid);
     let envs = PARALLEL_FROM_ENVS + 1;
     for threads in [1, 2] {
         let mut v = VecEnv::new(config.clone(), envs, threads).unwrap();
@@ -462,10 +461,7 @@ fn vec_env_on_two_threads_reports_the_first_refusal_and_steps_nothing() {
 /// steps; in range, the batch steps as the converted actions would.
 #[test]
 fn vec_env_converts_action_values_where_it_steps_them() {
-    let config = EnvConfig {
-        backend: Backend::Grid,
-        ..ProfileParts::of(Profile::Original).apply(EnvConfig::with_goal(goal("0,1,2")))
-    };
+    let config = original_config("0,1,2", Backend::Grid);
     let envs = PARALLEL_FROM_ENVS + 1;
     let convert = |&i: &i64| match usize::try_from(i) {
         Ok(i) => Action::from_index(i, 3),
