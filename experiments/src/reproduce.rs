@@ -381,6 +381,10 @@ pub trait ProgressSink: Sync {
     fn begin(&self, _jobs: u64) {}
     /// A job of experiment `stage` (e.g. "E5") ended.
     fn advance(&self, _stage: &str) {}
+    /// Part `part` of experiment `stage` ended after `took` of wall time (E8: an arm,
+    /// trained and tested): where a long run's time goes, for its log; never a figure of
+    /// the report, which does not depend on the machine.
+    fn finished(&self, _stage: &str, _part: &str, _took: std::time::Duration) {}
 }
 
 /// No progress reports.
@@ -839,11 +843,12 @@ mod tests {
     use super::*;
     use std::sync::atomic::{AtomicU64, Ordering};
 
-    /// Counts the jobs announced and reported.
+    /// Counts the jobs announced and reported, and keeps the parts said to have finished.
     #[derive(Default)]
     struct Count {
         announced: AtomicU64,
         done: AtomicU64,
+        finished: std::sync::Mutex<Vec<String>>,
     }
 
     impl ProgressSink for Count {
@@ -853,6 +858,10 @@ mod tests {
 
         fn advance(&self, _stage: &str) {
             self.done.fetch_add(1, Ordering::SeqCst);
+        }
+
+        fn finished(&self, stage: &str, part: &str, _took: std::time::Duration) {
+            self.finished.lock().unwrap().push(format!("{stage}: {part}"));
         }
     }
 
@@ -931,6 +940,31 @@ mod tests {
             let ids: Vec<&str> = one.experiments.iter().map(|e| e.id.as_str()).collect();
             assert_eq!(ids, expected);
         }
+    }
+
+    /// Each E8 arm is said to have finished once, by its name, whichever thread ran it.
+    #[test]
+    fn every_e8_arm_is_said_to_have_finished_once() {
+        let count = Count::default();
+        let options = Options {
+            report: Report::Paper,
+            seed: 5,
+            quick: true,
+            long: false,
+            only: vec!["E8".into()],
+        };
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        pool.install(|| reproduce_with(&options, tiny(), &count)).unwrap();
+        let mut finished = count.finished.into_inner().unwrap();
+        finished.sort();
+        let mut arms: Vec<String> = e8::arm_names(&options)
+            .unwrap()
+            .into_iter()
+            .map(|name| format!("E8: {name}"))
+            .collect();
+        arms.sort();
+        assert!(!arms.is_empty());
+        assert_eq!(finished, arms);
     }
 
     /// Local arms start in the order given and come back in the arms' order; after a

@@ -52,6 +52,13 @@ impl ProgressSink for Bar {
         self.0.set_message(stage.to_string());
         self.0.inc(1);
     }
+    /// One line on stderr, above the bar when it is drawn: a long run's log of where its
+    /// time went.
+    fn finished(&self, stage: &str, part: &str, took: std::time::Duration) {
+        let secs = took.as_secs();
+        let line = format!("{stage}: {part}: {} min {:02} s", secs / 60, secs % 60);
+        self.0.suspend(|| eprintln!("{line}"));
+    }
 }
 
 /// Runs `report`'s experiments and writes its report.

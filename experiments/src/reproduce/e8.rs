@@ -428,6 +428,7 @@ fn suite(ctx: &Context, blocks: usize, games: u64) -> Result<Suite> {
 /// Trains `arm`, testing along the way and at the end; with `checkpoint`, see
 /// [`run_arm_of`].
 fn run_arm(ctx: &Context, arm: &Arm, budget: Budget, checkpoint: Option<&Path>) -> Result<ArmRun> {
+    let started = std::time::Instant::now();
     let c = &arm.config;
     let (curve_games, points) = budget.curve();
     let curve_suite = suite(ctx, c.blocks(), curve_games)?;
@@ -467,6 +468,7 @@ fn run_arm(ctx: &Context, arm: &Arm, budget: Budget, checkpoint: Option<&Path>) 
     let dqn = trainer.finish()?;
     let results = test_suite.play(&mut dqn.policy(0.0)?)?;
     ctx.progress.advance("E8");
+    ctx.progress.finished("E8", &arm.name, started.elapsed());
     Ok(ArmRun {
         curve,
         games: games_of(&results),
