@@ -888,16 +888,26 @@ mod tests {
     /// the jobs announced and the jobs reported.
     fn run_only(threads: usize, report: Report, only: &[&str]) -> (Reproduction, u64, u64) {
         let count = Count::default();
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        let options = Options {
+        let r = run_counted(threads, report, only, &count);
+        (r, count.announced.into_inner(), count.done.into_inner())
+    }
+
+    /// The quick run of `report`'s `only` (empty: all) that these tests make, seed 5.
+    fn quick_options(report: Report, only: &[&str]) -> Options {
+        Options {
             report,
             seed: 5,
             quick: true,
             long: false,
             only: only.iter().map(|id| id.to_string()).collect(),
-        };
-        let r = pool.install(|| reproduce_with(&options, tiny(), &count)).unwrap();
-        (r, count.announced.into_inner(), count.done.into_inner())
+        }
+    }
+
+    /// That run with [`tiny`] counts on `threads` threads, its progress told to `count`.
+    fn run_counted(threads: usize, report: Report, only: &[&str], count: &Count) -> Reproduction {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| reproduce_with(&quick_options(report, only), tiny(), count))
+            .unwrap()
     }
 
     fn run(threads: usize, report: Report) -> (Reproduction, u64, u64) {
@@ -946,18 +956,10 @@ mod tests {
     #[test]
     fn every_e8_arm_is_said_to_have_finished_once() {
         let count = Count::default();
-        let options = Options {
-            report: Report::Paper,
-            seed: 5,
-            quick: true,
-            long: false,
-            only: vec!["E8".into()],
-        };
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
-        pool.install(|| reproduce_with(&options, tiny(), &count)).unwrap();
+        run_counted(2, Report::Paper, &["E8"], &count);
         let mut finished = count.finished.into_inner().unwrap();
         finished.sort();
-        let mut arms: Vec<String> = e8::arm_names(&options)
+        let mut arms: Vec<String> = e8::arm_names(&quick_options(Report::Paper, &["E8"]))
             .unwrap()
             .into_iter()
             .map(|name| format!("E8: {name}"))
