@@ -17,7 +17,7 @@ use std::path::Path;
 
 use agent::Policy;
 use files::container::Expect;
-use oracle::towers::{Move, Place, Table, TowerGoal, Towers};
+use oracle::towers::{BlockPlanner, Move, Place, Table, TowerGoal, TowerPlan, Towers, TowersError};
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
 use sim::block_move::{self, BlockMove};
@@ -168,6 +168,37 @@ impl RelationalModel {
             net.set_tensor(name, shape, values)
         })?;
         Ok(RelationalModel { net, config, report })
+    }
+}
+
+/// The policy as a planner: played greedily ([`RelationalModel::play`]); a game that does
+/// not reach the goal within [`super::move_limit`] moves is an error that says so.
+impl BlockPlanner for RelationalModel {
+    fn name(&self) -> &str {
+        "relational policy"
+    }
+
+    fn plan(&self, start: &Towers, goal: &TowerGoal) -> oracle::Result<TowerPlan> {
+        let game = self.play(start, goal).map_err(|e| match e {
+            NeuralError::Oracle(e) => e,
+            other => TowersError::NoPlan {
+                planner: "relational policy".into(),
+                reason: other.to_string(),
+            }
+            .into(),
+        })?;
+        if !game.reached {
+            return Err(TowersError::NoPlan {
+                planner: "relational policy".into(),
+                reason: format!(
+                    "it did not reach the goal within {} block moves ({} blocks)",
+                    super::move_limit(start.blocks()),
+                    start.blocks()
+                ),
+            }
+            .into());
+        }
+        Ok(TowerPlan { moves: game.moves })
     }
 }
 

@@ -83,6 +83,6 @@ mod sexpr;
 pub mod world;
 
 pub use error::PddlError;
-pub use plan::{Action, actions};
+pub use plan::{Action, PddlPlan, actions};
 pub use problem::{Fact, MAX_PROBLEM_BYTES, Problem};
 pub use world::SideTask;

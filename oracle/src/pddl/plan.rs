@@ -13,7 +13,7 @@ use std::collections::HashSet;
 use std::fmt::Write as _;
 
 use crate::error::Result;
-use crate::towers::{Place, TowerPlan, Towers};
+use crate::towers::{BlockPlanner, Place, TowerPlan, Towers};
 
 use super::error::PddlError;
 use super::problem::{Fact, Problem};
@@ -64,7 +64,34 @@ pub fn actions(start: &Towers, plan: &TowerPlan) -> Result<Vec<Action>> {
     Ok(out)
 }
 
+/// A plan for a [`Problem`], checked: its block moves and the actions that carry them out,
+/// replayed over the file's facts before it is returned ([`Problem::solve`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct PddlPlan {
+    /// The block moves, first to last.
+    pub moves: TowerPlan,
+    /// The actions, two per move: the competitions' cost is their number.
+    pub actions: Vec<Action>,
+}
+
+impl PddlPlan {
+    /// The plan's cost in the competitions' unit: its number of actions.
+    pub fn cost(&self) -> usize {
+        self.actions.len()
+    }
+}
+
 impl Problem {
+    /// `planner`'s plan for this problem on the literature's unbounded table, its actions
+    /// checked by replaying them over the file's facts ([`Problem::replay`]): a plan that
+    /// breaks a precondition or misses a goal fact is an error, never returned.
+    pub fn solve(&self, planner: &dyn BlockPlanner) -> Result<PddlPlan> {
+        let moves = planner.plan(self.start(), self.goal())?;
+        let actions = actions(self.start(), &moves)?;
+        self.replay(&actions)?;
+        Ok(PddlPlan { moves, actions })
+    }
+
     /// `actions` in the competition's plan format: one per line, then `; cost = N (unit
     /// cost)`.
     pub fn plan_text(&self, actions: &[Action]) -> String {

@@ -129,6 +129,15 @@ pub enum TowersError {
         /// The name given.
         name: String,
     },
+    /// A planner found no plan: a learned policy that did not reach the goal within its
+    /// move limit ([`super::BlockPlanner`]).
+    #[error("the {planner} found no plan: {reason}")]
+    NoPlan {
+        /// The planner's name.
+        planner: String,
+        /// Why, in the planner's words.
+        reason: String,
+    },
     /// A random goal of this shape cannot be drawn.
     #[error("cannot draw a goal of {stacks} towers naming {named} of {blocks} blocks")]
     GoalShape {

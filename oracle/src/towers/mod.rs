@@ -34,6 +34,9 @@
 //!   time each and its searches for deadlocks are near-linear in practice: a thousand
 //!   blocks in well under a millisecond ([`near_optimal`] gives the figures).
 //!
+//! Both implement [`BlockPlanner`], the one trait through which a task is planned by
+//! whichever planner is given (the learned relational policy of `neural` implements it too).
+//!
 //! Bad input (an empty tower, a block named twice, a goal naming a block the state lacks)
 //! is an [`OracleError::Towers`](crate::OracleError::Towers) error, never a panic.
 //!
@@ -60,6 +63,7 @@ pub mod exact;
 pub mod goal;
 pub mod near_optimal;
 pub mod plan;
+pub mod planner;
 pub mod random;
 pub mod side;
 pub mod space;
@@ -70,6 +74,7 @@ pub use exact::{DEFAULT_MOVE_BUDGET, ExactMoves};
 pub use goal::TowerGoal;
 pub use near_optimal::NearOptimal;
 pub use plan::TowerPlan;
+pub use planner::BlockPlanner;
 pub use random::{ipc_state, nlm_state, random_goal, random_state};
 pub use side::{MovePlanner, block_move_of, gripper_actions, plan_side};
 pub use space::{Distances, StateSpace};
