@@ -53,10 +53,15 @@ def test_block_moves_count_moves_and_gripper_steps():
         return block * per + dest
 
     assert info["action_mask"][move(1, 2)] == 1 and info["action_mask"][move(0, 2)] == 0
+    # A move from under another block changes nothing: one step, said to be illegal.
+    _, _, _, _, info = env.step(move(0, 2))
+    assert info["illegal"] and info["gripper_steps"] == 1 and env.unwrapped.state()[0] == [(0, 0), (0, 1), (2, 0)]
+    strict = gym.make(ENV_ID, blocks=3, goal="2,0,1", grid=(4, 4), actions="moves", strict=True)
+    strict.reset(options={"cells": [(0, 0), (0, 1), (2, 0)]})
     with pytest.raises(ValueError, match="block 1 stands on block 0"):
-        env.step(move(0, 2))
+        strict.step(move(0, 2))
     _, _, _, _, info = env.step(move(1, 3 + 3))  # 1 onto the table at column 3
-    assert info["gripper_steps"] == 5
+    assert info["gripper_steps"] == 5 and not info["illegal"]
     env.step(move(0, 2))  # 0 onto 2
     _, _, terminated, _, info = env.step(move(1, 0))  # 1 onto 0
     assert terminated and info["gripper_steps"] == 5
