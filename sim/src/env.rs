@@ -288,7 +288,9 @@ impl Outcome {
 /// The result of a block move ([`Env::step_block_move`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct MoveStep {
-    /// The last gripper step the move took (its Drop, unless the episode ended first).
+    /// The last gripper step the move took (its Drop, unless the episode ended first), with
+    /// the reward of the whole move: the sum of its gripper steps' rewards, as a
+    /// macro-action's reward is.
     pub step: Step,
     /// How many gripper steps the move took.
     pub gripper_steps: u32,
@@ -576,15 +578,18 @@ impl Env {
     /// [`block_move::expand`] gives, each one a step of the episode. An error, with nothing
     /// changed, if the episode is not running or the move cannot be carried out now. The
     /// episode may end before the move's last action (at the horizon); the result says how
-    /// many gripper steps were taken and holds the last one.
+    /// many gripper steps were taken and holds the last one, rewarded with the sum of their
+    /// rewards.
     ///
     /// The physics backend carries out every gripper action through rapier. The grid
-    /// backend, when the episode ends only at the goal and the move ends before the horizon,
-    /// carries the block straight to the cell the Drop releases it from and takes the Drop
-    /// as an ordinary step: the same world, step count and last step as every action one by
-    /// one (none of the actions before the Drop can end the episode: the goal cannot hold
-    /// while a block it names is held, nor start to hold while a block it leaves free moves),
-    /// at O(N + W) for the whole move instead of O(N) for each of its gripper steps.
+    /// backend, when the episode ends only at the goal, the move ends before the horizon and
+    /// the reward model pays the steps before the Drop a known amount (`sparse`: nothing;
+    /// `step-cost`: its cost each), carries the block straight to the cell the Drop releases
+    /// it from and takes the Drop as an ordinary step: the same world, step count, last step
+    /// and reward as every action one by one (none of the actions before the Drop can end the
+    /// episode: the goal cannot hold while a block it names is held, nor start to hold while
+    /// a block it leaves free moves), at O(N + W) for the whole move instead of O(N) for each
+    /// of its gripper steps.
     pub fn step_block_move(&mut self, mv: BlockMove) -> Result<MoveStep> {
         if self.config.view != View::Side {
             return Err(SimError::MovesNeedSideView);
@@ -600,7 +605,14 @@ impl Env {
             });
         }
         let (termination, horizon, steps) = (self.config.termination, self.config.horizon, self.steps);
-        if let AnyWorld::Grid(world) = &mut self.world {
+        // What the reward model pays each step before the Drop, when it is known without
+        // taking them: the goal cannot hold while a block is carried.
+        let carried = match self.config.reward {
+            RewardModel::Sparse(_) => Some(0.0),
+            RewardModel::StepCost(c) => Some(c.cost),
+            _ => None,
+        };
+        if let (AnyWorld::Grid(world), Some(carried)) = (&mut self.world, carried) {
             let carry = block_move::route_in(world, mv)?;
             let len = carry.len() as u32;
             if matches!(termination, Termination::Goal) && steps + len <= horizon {
@@ -609,23 +621,28 @@ impl Env {
                 self.now.state = world.state();
                 self.steps += len - 1;
                 self.previous_action = Some(carry.across());
+                let mut step = self.step(Action::Drop)?;
+                step.reward += carried * f64::from(len - 1);
                 return Ok(MoveStep {
-                    step: self.step(Action::Drop)?,
+                    step,
                     gripper_steps: len,
                 });
             }
         }
         let actions = block_move::expand(&self.now.state, self.config.grid, mv)?;
         let mut last = None;
+        let mut reward = 0.0;
         for (k, &action) in actions.iter().enumerate() {
             let step = self.step(action)?;
+            reward += step.reward;
             let over = step.terminated || step.truncated;
             last = Some((step, k + 1));
             if over {
                 break;
             }
         }
-        let (step, taken) = last.expect("a move has at least a pick and a drop");
+        let (mut step, taken) = last.expect("a move has at least a pick and a drop");
+        step.reward = reward;
         Ok(MoveStep {
             step,
             gripper_steps: taken as u32,
