@@ -28,6 +28,8 @@ pub struct NativeEnv {
     /// episode played by `expert_action` plans once. (A mutex only because a Python class
     /// must be `Sync`; calls on one environment take turns anyway.)
     experts: [std::sync::Mutex<Option<Box<dyn Policy + Send>>>; 2],
+    /// How the experts play this world: its profile's oracle ([`PolicyOptions::of_profile`]).
+    options: PolicyOptions,
 }
 
 /// The index of `action`, one integer (a Python int, a numpy integer or a 0-d integer
@@ -82,11 +84,7 @@ impl NativeEnv {
         guard(|| {
             let policy = match slot {
                 Some(policy) => policy,
-                None => slot.insert(
-                    PolicyKind::from(kind)
-                        .expert(config, &PolicyOptions::default())
-                        .or_value_error()?,
-                ),
+                None => slot.insert(PolicyKind::from(kind).expert(config, &self.options).or_value_error()?),
             };
             // The planners draw nothing: the generator is only the trait's argument.
             let action = policy.act(obs, &mut sim::seeding::rng(0)).or_value_error()?;
@@ -153,11 +151,13 @@ impl NativeEnv {
             )));
         }
         let refusal = if strict { Refusal::Error } else { Refusal::Step };
+        let options = PolicyOptions::of_profile(config::profile(&world.profile)?);
         Ok(NativeEnv {
             env: guard(|| Ok(Env::new(config).or_value_error()?.with_refusal(refusal)))?,
             kind,
             moves,
             experts: Default::default(),
+            options,
         })
     }
 

@@ -108,16 +108,6 @@ def test_the_tabular_learner_trains_and_plays_the_side_view(tmp_path):
     assert report["mean_ratio_to_optimum"] <= 1.05
 
 
-@pytest.mark.parametrize("expert", ["exact", "oracle"])
-def test_side_view_demonstrations_reach_their_goals(expert):
-    demos = blockstack.demonstrations(6, expert=expert, blocks=3, goal="0,1/2", view="side", backend="grid", seed=4)
-    assert demos["terminations"].sum() == 6, "every episode reaches the goal"
-    assert not demos["truncations"].any()
-    # Only legal actions: Pick of clear blocks, moves and Drop while holding.
-    chosen = demos["action_masks"][np.arange(len(demos["actions"])), demos["actions"]]
-    assert chosen.all()
-
-
 def test_the_state_observation_keeps_the_goals_towers_apart():
     # `0,1/2` and `0,1,2` list the same blocks; `goal_tower` tells them apart, and a goal
     # that leaves a block free marks the entries past its blocks -1.

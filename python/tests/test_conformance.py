@@ -279,19 +279,47 @@ def test_the_expert_is_legal_reaches_the_goal_and_takes_the_fewest_steps(world, 
         assert terminated and steps == fewest, (world.name, start, steps, fewest)
 
 
-@by_name([w for w in WORLDS if w.env_id != blockstack.GOAL_ENV_ID and not w.moves and "pddl" not in w.kwargs])
-def test_demonstrations_play_the_expert_legally_to_the_goal(world):
-    kwargs = dict(world.kwargs, backend="grid", blocks=2 if world.view == "top" else 3)
+# CLI = Python ------------------------------------------------------------------------------
+
+
+#: Every expert by the name ``run --agent`` and ``demonstrations(expert=...)`` take, by view.
+EXPERTS = {"top": ("exact", "oracle"), "side": ("exact", "exact-moves", "near-optimal", "oracle")}
+
+#: The gripper worlds that ``demonstrations`` plays (it takes world keywords, not a task).
+DEMONSTRATED = [
+    (w, e)
+    for w in WORLDS
+    if w.env_id != blockstack.GOAL_ENV_ID and not w.moves and "pddl" not in w.kwargs
+    for e in EXPERTS[w.view]
+]
+
+
+def _cli_episodes(cli, tmp_path, agent, flags, episodes, seed) -> dict:
+    """Each episode ``blockstack run --agent AGENT`` plays: its ``(action, reward)`` steps."""
+    out = tmp_path / f"{agent}.jsonl"
+    cli("run", "--agent", agent, "--episodes", episodes, "--seed", seed, "--trajectory", out, *flags)
+    played = collections.defaultdict(list)
+    for line in out.read_text().splitlines():
+        record = json.loads(line)
+        if record.get("type") == "step":
+            played[record["episode"]].append((record["action"], record["reward"]))
+    return played
+
+
+@pytest.mark.parametrize("world, expert", DEMONSTRATED, ids=[f"{w.name}-{e}" for w, e in DEMONSTRATED])
+def test_demonstrations_play_what_the_cli_plays_legally_to_the_goal(world, expert, cli, tmp_path, task):
+    kwargs = dict(world.kwargs, backend="grid", blocks=2 if world.view == "top" else 3, view=world.view)
     kwargs.pop("actions", None)
-    if world.env_id == blockstack.BLOCKS_WORLD_ID:
-        kwargs["view"] = "side"
-    demos = blockstack.demonstrations(4, obs="state", **kwargs)
+    demos = blockstack.demonstrations(3, expert=expert, obs="state", seed=5, **kwargs)
     rows = np.arange(len(demos["actions"]))
     assert demos["action_masks"][rows, demos["actions"]].all(), "every demonstrated action is legal"
-    assert demos["terminations"].sum() == 4
-
-
-# CLI = Python ------------------------------------------------------------------------------
+    # The oracle of the original profile is the authors' greedy walker, which can get stuck.
+    if not (expert == "oracle" and world.kwargs["profile"] == "original"):
+        assert demos["terminations"].sum() == 3, "every episode reaches the goal"
+    played = _cli_episodes(cli, tmp_path, expert, _cli_flags(world, task), 3, 5)
+    for k in range(3):
+        ours = demos["actions"][demos["episodes"] == k].tolist()
+        assert ours == [a for a, _ in played[k]], (world.name, expert, k)
 
 
 def _cli_flags(world, task) -> list:
@@ -308,14 +336,8 @@ def test_the_cli_plays_what_the_python_expert_plays(world, task, cli, tmp_path):
     """Gripper actions: the same actions and rewards, step for step. Block moves: the CLI's
     fewest block moves carried out by the gripper (``exact-moves``) take the gripper steps
     and earn the reward the moves environment reports for its expert's moves."""
-    out = tmp_path / "t.jsonl"
     agent = "exact-moves" if world.moves else "exact"
-    cli("run", "--agent", agent, "--episodes", "2", "--seed", "5", "--trajectory", out, *_cli_flags(world, task))
-    episodes = collections.defaultdict(list)
-    for line in out.read_text().splitlines():
-        record = json.loads(line)
-        if record.get("type") == "step":
-            episodes[record["episode"]].append((record["action"], record["reward"]))
+    episodes = _cli_episodes(cli, tmp_path, agent, _cli_flags(world, task), 2, 5)
     env = world.make(task)
     for k in range(2):
         env.reset(seed=blockstack.episode_seed(5, k))
