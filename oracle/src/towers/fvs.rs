@@ -263,9 +263,14 @@ pub(crate) fn minimum_fvs(succ: Vec<BitSet>, deadline: Instant) -> Fvs {
         }
         let solved = Search::new(deadline).run(local);
         lower_bound += solved.lower_bound;
-        if let (Some(set), Some(more)) = (set.as_mut(), solved.set) {
-            set.extend(more.into_iter().map(|v| comp[v]));
-        }
+        // A component stopped before any set was found leaves the whole without one.
+        set = match (set, solved.set) {
+            (Some(mut set), Some(more)) => {
+                set.extend(more.into_iter().map(|v| comp[v]));
+                Some(set)
+            }
+            _ => None,
+        };
     }
     Fvs { set, lower_bound }
 }
