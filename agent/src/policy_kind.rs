@@ -196,7 +196,7 @@ mod tests {
         assert_eq!(planners, PlannerKind::ALL.len());
         let err = "human".parse::<PolicyKind>().unwrap_err().to_string();
         assert!(
-            err.contains("random, oracle, exact, exact-moves, near-optimal, q, dqn"),
+            err.contains("random, oracle, exact, exact-moves, near-optimal, optimal, q, dqn"),
             "{err}"
         );
     }
