@@ -4,12 +4,21 @@
 
 use crate::common::{Cli, blockstack, cli, path, scratch, stderr};
 
-/// The IPC actions of a plan printed by `solve --pddl`, checked to be of the format.
+/// The IPC actions of a plan printed by `solve --pddl`, checked to be of the format: the
+/// actions, the cost, the lower bound, and `; optimal` if it is proven.
 fn actions(plan: &str) -> Vec<String> {
     let mut lines: Vec<&str> = plan.lines().collect();
+    let mut last = lines.pop().expect("a bound line");
+    let proven = last == "; optimal";
+    if proven {
+        last = lines.pop().expect("a bound line");
+    }
+    let bound: usize = last.strip_prefix("; lower bound = ").expect(plan).parse().unwrap();
     let cost = lines.pop().expect("a cost line");
     let actions: Vec<String> = lines.iter().map(|l| l.to_string()).collect();
     assert_eq!(cost, format!("; cost = {} (unit cost)", actions.len()));
+    assert!(bound <= actions.len());
+    assert_eq!(proven, bound == actions.len());
     for a in &actions {
         let words: Vec<&str> = a.trim_start_matches('(').trim_end_matches(')').split(' ').collect();
         let arity = match words[0] {
@@ -69,6 +78,16 @@ fn generate_writes_problems_that_solve_and_solve_all_plans_a_folder() {
         );
     }
     assert!(exact["moves"].as_u64() <= near["moves"].as_u64());
+    // The optimal solver proves the exact solver's optimum; every plan carries its bound.
+    let optimal = solve("optimal").json();
+    assert_eq!(optimal["moves"], exact["moves"]);
+    assert_eq!(optimal["optimal"], true);
+    assert_eq!(optimal["lower_bound"], optimal["actions"]);
+    assert_eq!(exact["lower_bound"], exact["actions"]);
+    assert!(near["lower_bound"].as_u64() <= near["actions"].as_u64());
+    let c = &optimal["certificate"];
+    let parts = c["misplaced"].as_u64().unwrap() + c["forced"].as_u64().unwrap() + c["breakers"].as_u64().unwrap();
+    assert_eq!(2 * parts, optimal["lower_bound"].as_u64().unwrap());
     let text = cli("solve").flag("pddl", path(&uniform.join("p02.pddl"))).ok();
     let printed = actions(&text);
     assert_eq!(serde_json::json!(printed), near["plan"]);
@@ -92,7 +111,7 @@ fn generate_writes_problems_that_solve_and_solve_all_plans_a_folder() {
     let tasks = all["tasks"].as_array().unwrap();
     assert_eq!(tasks.len(), 7, "{all}");
     assert_eq!(tasks[0]["task"], "ipc/p01.pddl");
-    assert_eq!(tasks[0]["bound"], 1000);
+    assert_eq!(tasks[0]["best_known"], 1000);
     let p02 = tasks.iter().find(|t| t["task"] == "uniform/p02.pddl").unwrap();
     assert_eq!(
         p02["ratio"].as_f64().unwrap(),
@@ -110,6 +129,21 @@ fn generate_writes_problems_that_solve_and_solve_all_plans_a_folder() {
         .map(|g| g["group"].as_str().unwrap())
         .collect();
     assert_eq!(groups, ["ipc", "uniform"]);
+    let proven = cli("solve-all")
+        .flag("tasks", path(&dir.join("tasks")))
+        .flag("solver", "optimal")
+        .flag("time-limit", 30)
+        .arg("--json")
+        .json();
+    assert_eq!(proven["solver"], "optimal");
+    assert_eq!(proven["overall"]["optimal"], 6, "{proven}");
+    assert!(
+        proven["tasks"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|t| t["error"].is_string() || t["gap"] == 0)
+    );
     let table = cli("solve-all").flag("tasks", path(&dir.join("tasks"))).ok();
     assert!(
         table.contains("near-optimal plans, each replayed over its file's facts"),
@@ -146,7 +180,14 @@ fn bad_problems_and_flags_are_refused_in_one_line() {
             .flag("pddl", path(&file))
             .flag("solver", "near-optimal")
             .flag("solver-budget", 10),
-        "--solver-budget is the exact solver's",
+        "--solver-budget: the search budget is the exact solver's",
+    );
+    refused(
+        cli("solve")
+            .flag("pddl", path(&file))
+            .flag("solver", "exact")
+            .flag("time-limit", 1),
+        "--time-limit: the time limit is the optimal solver's",
     );
     refused(
         cli("generate")

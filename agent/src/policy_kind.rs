@@ -6,8 +6,8 @@
 //! given. The planners' names and what each plans in either view are
 //! [`oracle::PlannerKind`]'s: `exact` is the fewest gripper steps in both views,
 //! `exact-moves` the fewest block moves carried out by the gripper (side view),
-//! `near-optimal` the near-optimal block-move planner carried out (side view) and `oracle`
-//! the view's oracle. `q` and `dqn` play a trained model ([`PlayingModel`]).
+//! `near-optimal` the near-optimal block-move planner carried out (side view), `optimal`
+//! the optimal block-move solver carried out (side view) and `oracle` the view's oracle. `q` and `dqn` play a trained model ([`PlayingModel`]).
 //!
 //! A planner plays by planning from the state it sees and following its plan
 //! ([`PlannerPolicy`]; in the side view the block-move planners plan again at each move,
@@ -37,13 +37,15 @@ pub enum PolicyKind {
     ExactMoves,
     /// The near-optimal block-move planner, carried out ([`PlannerKind::NearOptimal`]).
     NearOptimal,
+    /// The optimal block-move solver, carried out ([`PlannerKind::Optimal`]).
+    Optimal,
     /// A trained tabular Q-learner.
     Q,
     /// A trained network.
     Dqn,
 }
 
-sim::names!(PolicyKind { Random = "random", Oracle = "oracle", Exact = "exact", ExactMoves = "exact-moves", NearOptimal = "near-optimal", Q = "q", Dqn = "dqn" } unknown(text) -> AgentError {
+sim::names!(PolicyKind { Random = "random", Oracle = "oracle", Exact = "exact", ExactMoves = "exact-moves", NearOptimal = "near-optimal", Optimal = "optimal", Q = "q", Dqn = "dqn" } unknown(text) -> AgentError {
     AgentError::Config(format!("unknown agent {text:?}: choose one of {}", PolicyKind::NAMES.join(", ")))
 });
 
@@ -53,6 +55,7 @@ impl From<PlannerKind> for PolicyKind {
             PlannerKind::Exact => PolicyKind::Exact,
             PlannerKind::ExactMoves => PolicyKind::ExactMoves,
             PlannerKind::NearOptimal => PolicyKind::NearOptimal,
+            PlannerKind::Optimal => PolicyKind::Optimal,
             PlannerKind::Oracle => PolicyKind::Oracle,
         }
     }
@@ -115,6 +118,7 @@ impl PolicyKind {
             PolicyKind::Exact => Some(PlannerKind::Exact),
             PolicyKind::ExactMoves => Some(PlannerKind::ExactMoves),
             PolicyKind::NearOptimal => Some(PlannerKind::NearOptimal),
+            PolicyKind::Optimal => Some(PlannerKind::Optimal),
             PolicyKind::Oracle => Some(PlannerKind::Oracle),
             PolicyKind::Random | PolicyKind::Q | PolicyKind::Dqn => None,
         }
@@ -207,7 +211,7 @@ mod tests {
         assert_eq!(planners, PlannerKind::ALL.len());
         let err = "human".parse::<PolicyKind>().unwrap_err().to_string();
         assert!(
-            err.contains("random, oracle, exact, exact-moves, near-optimal, q, dqn"),
+            err.contains("random, oracle, exact, exact-moves, near-optimal, optimal, q, dqn"),
             "{err}"
         );
     }

@@ -57,6 +57,7 @@ impl Policy for TowersPolicy {
         match self.planner {
             MovePlanner::Exact => oracle::PlannerKind::ExactMoves.name().into(),
             MovePlanner::NearOptimal => oracle::PlannerKind::NearOptimal.name().into(),
+            MovePlanner::Optimal => oracle::PlannerKind::Optimal.name().into(),
         }
     }
 

@@ -12,6 +12,8 @@
 //!   as a model is refused, never read until memory runs out.
 //! - [`container`]: the model container, safetensors (named tensors) with blockstack's
 //!   metadata (format, version, a CRC-32, the writer's JSON), readable from numpy.
+//! - [`walk`]: every file below a folder, links followed, each folder entered once (a
+//!   visited set by device and inode), so a link loop ends and nothing is listed twice.
 //!
 //! It is the bottom layer: it depends on no other blockstack crate.
 //!
@@ -33,9 +35,11 @@ pub mod error;
 pub mod input;
 pub mod output;
 pub mod temp;
+pub mod walk;
 
 pub use container::{Container, Dtype, Element, Expect, Tensor};
 pub use error::{Bytes, FilesError, ReadProblem, Result};
 pub use input::{BoundedReader, digest_file, open_bounded};
 pub use output::{Destination, Output, OutputPath, STDOUT, Special, prepare_folder, refuse_same_file, write};
 pub use temp::{live_temp_files, remove_temp_files};
+pub use walk::files_below;

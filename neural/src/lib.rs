@@ -16,6 +16,7 @@
 //! - [`model`]: a trained network ([`Dqn`]), played through [`agent::Policy`] (so
 //!   `agent::play`, rollouts and evaluation serve it unchanged), saved and read as a
 //!   network file in the project's model container (`files::container`).
+//! - [`planning`]: the planner of a block-move task, chosen by name or by model file.
 //!
 //! Everything runs on the CPU; every random draw comes from the config's seed.
 
@@ -33,6 +34,7 @@ pub mod model;
 pub mod net;
 mod netfile;
 pub mod optim;
+pub mod planning;
 pub mod preset;
 pub mod relational;
 pub mod replay;

@@ -87,6 +87,17 @@ pub enum OracleError {
         /// The grid, `WxH`.
         grid: String,
     },
+    /// A planner option given to a planner it does not apply to (a search budget to the
+    /// optimal solver, a time limit to the exact one).
+    #[error("the {option} is the {owner}'s: it does not apply to the {planner} planner")]
+    OptionNotApplicable {
+        /// The option, in words ("search budget", "time limit").
+        option: &'static str,
+        /// The planner it belongs to.
+        owner: &'static str,
+        /// The planner it was given to.
+        planner: &'static str,
+    },
 }
 
 /// Shorthand for results whose error is an [`OracleError`].

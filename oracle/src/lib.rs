@@ -83,4 +83,4 @@ pub use error::{OracleError, Result};
 pub use exact::{DEFAULT_NODE_BUDGET, ExactSolver, SearchStats};
 pub use oracle::{FALLBACK_NODE_BUDGET, Oracle};
 pub use plan::{Plan, Planner, legalize};
-pub use planner_kind::{Cost, CountedPlan, PlannerKind};
+pub use planner_kind::{Cost, CountedPlan, PlanOptions, PlannerKind};

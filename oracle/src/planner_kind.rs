@@ -9,12 +9,19 @@
 //! | `exact` | the fewest gripper steps ([`ExactSolver`]) | the fewest gripper steps ([`ExactSolver::with_view`]) |
 //! | `exact-moves` | refused | the fewest block moves ([`MovePlanner::Exact`]), carried out by the gripper |
 //! | `near-optimal` | refused | at most twice the fewest block moves ([`MovePlanner::NearOptimal`]), carried out |
+//! | `optimal` | refused | the fewest block moves at any size, with its proof ([`MovePlanner::Optimal`]), carried out |
 //! | `oracle` | the centroid + A* [`Oracle`] | the view's oracle: `near-optimal` |
 //!
 //! Counted in gripper steps (what an environment counts, and what every agent plays), `exact`
 //! is the shortest plan in both views. A plan counted in block moves (`solve --view side
 //! --cost moves`) is the block-move planner's own plan: there `exact` and `exact-moves` are
-//! both the fewest moves, `near-optimal` and `oracle` the near-optimal planner's.
+//! both the fewest moves, `near-optimal` and `oracle` the near-optimal planner's, and
+//! `optimal` the fewest too (where its time limit lets it prove so; see
+//! [`crate::towers::optimal`]).
+//!
+//! A problem of block moves on the literature's unbounded table (a PDDL task) takes the
+//! planner as a [`BlockPlanner`] ([`PlannerKind::block_planner`]), with the options that
+//! apply to it ([`PlanOptions`]).
 
 use sim::{Goal, State, View};
 
@@ -22,7 +29,22 @@ use crate::error::{OracleError, Result};
 use crate::exact::ExactSolver;
 use crate::oracle::Oracle;
 use crate::plan::Plan;
-use crate::towers::{MovePlanner, TowerPlan, gripper_actions, plan_side};
+use crate::towers::{
+    BlockPlanner, CertifiedPlan, DEFAULT_MOVE_BUDGET, ExactMoves, MovePlanner, NearOptimal, OptimalMoves,
+    gripper_actions, plan_side_certified,
+};
+
+/// The options of a block-move planner ([`PlannerKind::block_planner`]); each applies to
+/// one planner, and `None` takes its default.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PlanOptions {
+    /// The most states the exact search generates
+    /// ([`DEFAULT_MOVE_BUDGET`](crate::towers::DEFAULT_MOVE_BUDGET) by default).
+    pub budget: Option<usize>,
+    /// How long the optimal solver searches for its proof
+    /// ([`DEFAULT_TIME_LIMIT`](crate::towers::optimal::DEFAULT_TIME_LIMIT) by default).
+    pub time_limit: Option<std::time::Duration>,
+}
 
 /// What a plan's length counts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -54,8 +76,8 @@ impl Cost {
 pub enum CountedPlan {
     /// Gripper actions.
     Steps(Plan),
-    /// Block moves.
-    Moves(TowerPlan),
+    /// Block moves, with the lower bound they are measured against.
+    Moves(CertifiedPlan),
 }
 
 impl CountedPlan {
@@ -63,7 +85,7 @@ impl CountedPlan {
     pub fn len(&self) -> usize {
         match self {
             CountedPlan::Steps(p) => p.len(),
-            CountedPlan::Moves(p) => p.len(),
+            CountedPlan::Moves(p) => p.plan.len(),
         }
     }
 
@@ -82,11 +104,13 @@ pub enum PlannerKind {
     ExactMoves,
     /// The near-optimal block-move planner, carried out by the gripper (side view).
     NearOptimal,
+    /// The optimal block-move solver with its certificate, carried out (side view).
+    Optimal,
     /// The view's oracle: centroid + A* from above, the near-optimal planner from the side.
     Oracle,
 }
 
-sim::names!(PlannerKind { Exact = "exact", ExactMoves = "exact-moves", NearOptimal = "near-optimal", Oracle = "oracle" } unknown(text) -> OracleError {
+sim::names!(PlannerKind { Exact = "exact", ExactMoves = "exact-moves", NearOptimal = "near-optimal", Optimal = "optimal", Oracle = "oracle" } unknown(text) -> OracleError {
     OracleError::UnknownPlanner { name: text.to_string() }
 });
 
@@ -97,6 +121,9 @@ impl PlannerKind {
             PlannerKind::Exact => "the fewest gripper steps, in either view",
             PlannerKind::ExactMoves => "the fewest block moves carried out by the gripper (side view)",
             PlannerKind::NearOptimal => "at most twice the fewest block moves, carried out by the gripper (side view)",
+            PlannerKind::Optimal => {
+                "the fewest block moves at any size with its proof, carried out by the gripper (side view)"
+            }
             PlannerKind::Oracle => {
                 "the view's oracle: centroid + A* from above, the near-optimal planner from the side"
             }
@@ -107,7 +134,7 @@ impl PlannerKind {
     /// block moves, which only the side view has.
     pub fn check_view(self, view: View) -> Result<()> {
         match (self, view) {
-            (PlannerKind::ExactMoves | PlannerKind::NearOptimal, View::Top) => {
+            (PlannerKind::ExactMoves | PlannerKind::NearOptimal | PlannerKind::Optimal, View::Top) => {
                 Err(OracleError::PlannerNotInView { planner: self.name() })
             }
             _ => Ok(()),
@@ -115,12 +142,44 @@ impl PlannerKind {
     }
 
     /// The block-move planner this one plans with in the side view: the exact one for
-    /// `exact` and `exact-moves`, the near-optimal one for `near-optimal` and `oracle`.
+    /// `exact` and `exact-moves`, the near-optimal one for `near-optimal` and `oracle`, the
+    /// optimal one for `optimal`.
     pub const fn move_planner(self) -> MovePlanner {
         match self {
             PlannerKind::Exact | PlannerKind::ExactMoves => MovePlanner::Exact,
             PlannerKind::NearOptimal | PlannerKind::Oracle => MovePlanner::NearOptimal,
+            PlannerKind::Optimal => MovePlanner::Optimal,
         }
+    }
+
+    /// The planner of block moves on the literature's unbounded table (a PDDL task, a folder
+    /// of them) that this name means ([`PlannerKind::move_planner`]), with `options`; an
+    /// error for an option that does not apply to it.
+    pub fn block_planner(self, options: &PlanOptions) -> Result<Box<dyn BlockPlanner>> {
+        let planner = self.move_planner();
+        let refuse = |option, owner| {
+            Err(OracleError::OptionNotApplicable {
+                option,
+                owner,
+                planner: planner.name(),
+            })
+        };
+        if options.budget.is_some() && planner != MovePlanner::Exact {
+            return refuse("search budget", "exact solver");
+        }
+        if options.time_limit.is_some() && planner != MovePlanner::Optimal {
+            return refuse("time limit", "optimal solver");
+        }
+        Ok(match planner {
+            MovePlanner::Exact => {
+                Box::new(ExactMoves::new().with_budget(options.budget.unwrap_or(DEFAULT_MOVE_BUDGET)))
+            }
+            MovePlanner::NearOptimal => Box::new(NearOptimal::new()),
+            MovePlanner::Optimal => Box::new(match options.time_limit {
+                Some(limit) => OptimalMoves::new().with_time_limit(limit),
+                None => OptimalMoves::new(),
+            }),
+        })
     }
 
     /// A plan in gripper steps from `state` to `goal` in the world of `solver` (its grid,
@@ -134,7 +193,7 @@ impl PlannerKind {
                 .with_protocol(solver.protocol())
                 .plan(state, goal),
             (_, _) => {
-                let moves = self.plan_moves(solver.grid(), state, goal)?;
+                let moves = self.plan_moves(solver.grid(), state, goal)?.plan;
                 Ok(Plan {
                     actions: gripper_actions(solver.grid(), state, &moves)?,
                 })
@@ -157,9 +216,10 @@ impl PlannerKind {
     }
 
     /// A plan in block moves from the side-view `state` to `goal` on a table as wide as
-    /// `grid` (module docs: `exact` and `exact-moves` are both the fewest moves).
-    pub fn plan_moves(self, grid: sim::Grid, state: &State, goal: &Goal) -> Result<TowerPlan> {
-        plan_side(self.move_planner(), grid, state, goal)
+    /// `grid`, with its lower bound (module docs: `exact` and `exact-moves` are both the
+    /// fewest moves).
+    pub fn plan_moves(self, grid: sim::Grid, state: &State, goal: &Goal) -> Result<CertifiedPlan> {
+        plan_side_certified(self.move_planner(), grid, state, goal)
     }
 }
 
@@ -188,9 +248,10 @@ mod tests {
             }
         }
         // Counted in moves, exact and exact-moves are the same planner.
-        let moves = |k: PlannerKind| k.plan_moves(grid, &state, &goal).unwrap();
+        let moves = |k: PlannerKind| k.plan_moves(grid, &state, &goal).unwrap().plan;
         assert_eq!(moves(PlannerKind::Exact), moves(PlannerKind::ExactMoves));
         assert_eq!(moves(PlannerKind::Oracle), moves(PlannerKind::NearOptimal));
+        assert_eq!(moves(PlannerKind::Optimal).len(), moves(PlannerKind::Exact).len());
         // The fewest moves, carried out, take more gripper steps than the fewest steps here.
         let carried = PlannerKind::ExactMoves.plan_steps(&side, &state, &goal).unwrap();
         assert_eq!(moves(PlannerKind::ExactMoves).len(), 4);
@@ -202,7 +263,7 @@ mod tests {
         let top = ExactSolver::new(Grid::default());
         let state = State::parse("0,0;3,0;5,2", None, Grid::default()).unwrap();
         let goal: Goal = "1,0,2".parse().unwrap();
-        for kind in [PlannerKind::ExactMoves, PlannerKind::NearOptimal] {
+        for kind in [PlannerKind::ExactMoves, PlannerKind::NearOptimal, PlannerKind::Optimal] {
             let err = kind.plan_steps(&top, &state, &goal).unwrap_err().to_string();
             assert!(err.contains("side view"), "{err}");
         }
@@ -212,6 +273,38 @@ mod tests {
             assert_eq!(name.parse::<PlannerKind>().unwrap().name(), name);
         }
         let err = "greedy".parse::<PlannerKind>().unwrap_err().to_string();
-        assert!(err.contains("exact, exact-moves, near-optimal, oracle"), "{err}");
+        assert!(
+            err.contains("exact, exact-moves, near-optimal, optimal, oracle"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn a_block_planner_takes_only_its_own_options() {
+        let limit = PlanOptions {
+            time_limit: Some(std::time::Duration::from_secs(1)),
+            ..PlanOptions::default()
+        };
+        let budget = PlanOptions {
+            budget: Some(10),
+            ..PlanOptions::default()
+        };
+        assert_eq!(PlannerKind::Optimal.block_planner(&limit).unwrap().name(), "optimal");
+        assert_eq!(PlannerKind::ExactMoves.block_planner(&budget).unwrap().name(), "exact");
+        assert_eq!(
+            PlannerKind::Oracle
+                .block_planner(&PlanOptions::default())
+                .unwrap()
+                .name(),
+            "near-optimal"
+        );
+        let err = PlannerKind::NearOptimal
+            .block_planner(&limit)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(err.contains("time limit is the optimal solver's"), "{err}");
+        let err = PlannerKind::Optimal.block_planner(&budget).err().unwrap().to_string();
+        assert!(err.contains("search budget is the exact solver's"), "{err}");
     }
 }

@@ -42,7 +42,7 @@ from blockstack.goal_env import StackGoalEnv
 from blockstack.minari import to_minari
 from blockstack.model import Model, load
 from blockstack import vector
-from blockstack.planning import read_pddl, solve
+from blockstack.planning import read_pddl, solve, solve_all, solve_pddl
 from blockstack.training import train, train_dqn
 from blockstack.world import World
 
@@ -59,6 +59,8 @@ __all__ = [
     "read_pddl",
     "read_recording",
     "solve",
+    "solve_all",
+    "solve_pddl",
     "to_minari",
     "train",
     "train_dqn",

@@ -1,7 +1,10 @@
-"""Plans from any state, by the Rust exact solver or oracle; PDDL problems."""
+"""Plans from any state, by the Rust exact solver or oracle; PDDL problems, one or a
+folder of them."""
 
 from __future__ import annotations
 
+import json
+import os
 from typing import Optional, Sequence, Tuple
 
 from blockstack import _native
@@ -61,4 +64,50 @@ def read_pddl(path) -> dict:
     predicate, a goal naming an undeclared block, a goal of bare ``on`` facts, a file over
     64 MiB) raises ``ValueError`` naming the file, the line and the problem.
     """
-    return _native.read_pddl(str(path))
+    return _native.read_pddl(_path("path", path))
+
+
+def _path(name: str, value) -> str:
+    """``value`` as a file name: text or an ``os.PathLike`` of text; ``TypeError`` for
+    anything else (``None``, a number, bytes), never turned into a name."""
+    if isinstance(value, (str, os.PathLike)):
+        path = os.fspath(value)
+        if isinstance(path, str):
+            return path
+    raise TypeError(f"{name} is a file name (str or os.PathLike), not {value!r}")
+
+
+def _name(name: str, value) -> Optional[str]:
+    if value is not None and not isinstance(value, str):
+        raise TypeError(f"{name} is a name (str), not {value!r}")
+    return value
+
+
+def solve_pddl(path, solver: Optional[str] = None, model=None, budget: Optional[int] = None,
+               time_limit: Optional[float] = None) -> dict:
+    """The plan of the PDDL problem ``path``, as ``blockstack solve --pddl`` makes it: by the
+    planner ``solver`` names (``"near-optimal"``, the default, ``"optimal"`` or ``"exact"``)
+    or by the relational policy in the model file ``model``, checked by replaying it over
+    the file's facts. A dict of ``solver``, ``moves``, ``cost`` (actions), ``lower_bound``
+    (no plan costs less), ``optimal`` (the cost meets the bound), ``certificate`` (the
+    bound's parts in block moves: ``misplaced``, ``forced``, ``breakers``), ``plan`` (the
+    actions) and ``text`` (the plan file). ``budget`` is the exact solver's states,
+    ``time_limit`` the optimal solver's seconds. A file or option refused is a
+    ``ValueError``.
+    """
+    model = None if model is None else _path("model", model)
+    return _native.solve_pddl(_path("path", path), _name("solver", solver), model, budget, time_limit)
+
+
+def solve_all(folder, solver: Optional[str] = None, model=None, bounds=None, budget: Optional[int] = None,
+              time_limit: Optional[float] = None) -> dict:
+    """Every PDDL problem below ``folder`` planned as :func:`solve_pddl` plans one, as
+    ``blockstack solve-all --json`` reports it: a dict of ``solver``, ``tasks`` (a row per
+    task: its cost, lower bound, gap, whether proven optimal, the best known cost and ratio
+    where ``bounds``, a file of best known costs, gives one, or its error), ``groups`` (a
+    summary per subfolder) and ``overall``. Links are followed, each folder once.
+    """
+    model = None if model is None else _path("model", model)
+    bounds = None if bounds is None else _path("bounds", bounds)
+    text = _native.solve_all(_path("folder", folder), _name("solver", solver), model, bounds, budget, time_limit)
+    return json.loads(text)

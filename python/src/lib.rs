@@ -10,7 +10,7 @@
 //! - [`goal_env`]: the goal a state achieves and the goal rewards, behind
 //!   `blockstack.StackGoalEnv` (Gymnasium-Robotics' `GoalEnv`, for hindsight relabelling).
 //! - [`planning`]: the exact solver and the oracle (`blockstack.solve`), PDDL problems
-//!   (`blockstack.read_pddl`).
+//!   read and planned (`blockstack.read_pddl`, `solve_pddl`, `solve_all`).
 //! - [`demos`]: expert demonstrations and recorded episodes as arrays.
 //! - [`training`]: the tabular trainer, in-process (`blockstack.train`, the Ray sweep).
 //! - [`dqn`]: the network trainer, in-process (`blockstack.train_dqn`).
@@ -49,6 +49,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<model::NativeModel>()?;
     m.add_function(wrap_pyfunction!(planning::solve, m)?)?;
     m.add_function(wrap_pyfunction!(planning::read_pddl, m)?)?;
+    m.add_function(wrap_pyfunction!(planning::solve_pddl, m)?)?;
+    m.add_function(wrap_pyfunction!(planning::solve_all, m)?)?;
     m.add_function(wrap_pyfunction!(planning::pddl_task, m)?)?;
     m.add_function(wrap_pyfunction!(goal_env::achieved_goal, m)?)?;
     m.add_function(wrap_pyfunction!(goal_env::goal_rewards, m)?)?;

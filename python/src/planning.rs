@@ -2,8 +2,11 @@
 //! the top view; in the side view, in block moves by the block-move planners, or in gripper
 //! steps by the exact solver's side-view search or a block-move plan carried out.
 
+use std::time::Duration;
+
+use oracle::pddl::{BestKnown, PddlPlan, Problem};
 use oracle::towers::Place;
-use oracle::{Cost, CountedPlan, ExactSolver, PlannerKind};
+use oracle::{Cost, CountedPlan, ExactSolver, PlanOptions, PlannerKind};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sim::{Action, ActionProtocol, Grid, View};
@@ -58,8 +61,9 @@ pub fn solve<'py>(
     let plan = py.detach(|| guard(|| planner.plan(&solver, cost, &state, &goal).or_value_error()))?;
     match plan {
         CountedPlan::Steps(plan) => indices(py, &plan.actions),
-        CountedPlan::Moves(plan) => {
-            let moves = plan
+        CountedPlan::Moves(certified) => {
+            let moves = certified
+                .plan
                 .moves
                 .iter()
                 .map(|m| {
@@ -88,19 +92,14 @@ fn indices<'py>(py: Python<'py>, actions: &[Action]) -> PyResult<Bound<'py, PyAn
 /// names (`blocks`; block `i` is `blocks[i]`), the `start` and the `goal` as lists of towers,
 /// each bottom to top by block index (blocks the goal does not place are free), and the
 /// near-optimal planner's `plan` in the competitions' format (a list of actions such as
-/// `"(unstack b3 b5)"`, checked by replaying it over the file's facts). A file refused is
-/// a `ValueError` naming the file, the line and the problem.
+/// `"(unstack b3 b5)"`, checked by `Problem::solve`). A file refused is a `ValueError`
+/// naming the file, the line and the problem.
 #[pyfunction]
 pub fn read_pddl<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Bound<'py, PyDict>> {
     let (problem, plan) = py.detach(|| {
         guard(|| {
-            let problem = oracle::pddl::Problem::read(&path).or_value_error()?;
-            let moves = oracle::towers::NearOptimal::new()
-                .plan(problem.start(), problem.goal())
-                .or_value_error()?;
-            let actions = oracle::pddl::actions(problem.start(), &moves).or_value_error()?;
-            problem.replay(&actions).or_value_error()?;
-            let plan: Vec<String> = actions.iter().map(|a| a.to_pddl(problem.block_names())).collect();
+            let problem = Problem::read(&path).or_value_error()?;
+            let plan = problem.solve(&oracle::towers::NearOptimal::new()).or_value_error()?;
             Ok((problem, plan))
         })
     })?;
@@ -110,8 +109,102 @@ pub fn read_pddl<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Bou
     out.set_item("blocks", problem.block_names().to_vec())?;
     out.set_item("start", problem.start().towers())?;
     out.set_item("goal", problem.goal().towers().to_vec())?;
-    out.set_item("plan", plan)?;
+    out.set_item("plan", actions_of(&problem, &plan))?;
     Ok(out)
+}
+
+/// The plan's actions as PDDL.
+fn actions_of(problem: &Problem, plan: &PddlPlan) -> Vec<String> {
+    plan.actions.iter().map(|a| a.to_pddl(problem.block_names())).collect()
+}
+
+/// The planner of a task: `solver` by name, or the relational policy of the model file
+/// `model` (`neural::planning::block_planner`), with a search budget or a time limit.
+fn task_planner(
+    solver: Option<&str>,
+    model: Option<std::path::PathBuf>,
+    budget: Option<usize>,
+    time_limit: Option<f64>,
+) -> PyResult<Box<dyn oracle::towers::BlockPlanner>> {
+    let solver = solver.map(|s| s.parse::<PlannerKind>()).transpose().or_value_error()?;
+    let time_limit = match time_limit {
+        Some(s) if s.is_finite() && s > 0.0 && s <= 86_400.0 => Some(Duration::from_secs_f64(s)),
+        Some(s) => {
+            return Err(value_error(format!(
+                "time_limit is seconds above 0 and at most 86400, not {s}"
+            )));
+        }
+        None => None,
+    };
+    let options = PlanOptions { budget, time_limit };
+    neural::planning::block_planner(solver, model.as_deref(), &options).or_value_error()
+}
+
+/// The plan of the PDDL problem at `path` by `solver` (a name, as `blockstack solve --pddl
+/// --solver` takes; the near-optimal planner if neither it nor `model` is given) or by the
+/// relational policy in the file `model`, checked by replaying it over the file's facts:
+/// a dict of `solver`, `moves`, `cost` (actions), `lower_bound` (no plan costs less),
+/// `optimal` (the cost meets the bound), `certificate` (the bound's parts in block moves:
+/// `misplaced`, `forced`, `breakers`), `plan` (the actions as PDDL) and `text` (the plan
+/// file `blockstack solve --pddl` prints). `budget` is the exact solver's, `time_limit`
+/// (seconds) the optimal solver's.
+#[pyfunction]
+#[pyo3(signature = (path, solver=None, model=None, budget=None, time_limit=None))]
+pub fn solve_pddl<'py>(
+    py: Python<'py>,
+    path: std::path::PathBuf,
+    solver: Option<&str>,
+    model: Option<std::path::PathBuf>,
+    budget: Option<usize>,
+    time_limit: Option<f64>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let planner = task_planner(solver, model, budget, time_limit)?;
+    let (problem, plan) = py.detach(|| {
+        guard(|| {
+            let problem = Problem::read(&path).or_value_error()?;
+            let plan = problem.solve(planner.as_ref()).or_value_error()?;
+            Ok((problem, plan))
+        })
+    })?;
+    let out = PyDict::new(py);
+    out.set_item("solver", planner.name())?;
+    out.set_item("moves", plan.moves.len())?;
+    out.set_item("cost", plan.cost())?;
+    out.set_item("lower_bound", plan.lower_bound_cost())?;
+    out.set_item("optimal", plan.is_optimal())?;
+    let certificate = PyDict::new(py);
+    certificate.set_item("misplaced", plan.certificate.misplaced)?;
+    certificate.set_item("forced", plan.certificate.forced)?;
+    certificate.set_item("breakers", plan.certificate.breakers)?;
+    out.set_item("certificate", certificate)?;
+    out.set_item("plan", actions_of(&problem, &plan))?;
+    out.set_item("text", plan.text(&problem))?;
+    Ok(out)
+}
+
+/// Every task below `folder` planned as `solve_pddl` plans one (`oracle::pddl::suite`): the
+/// report `blockstack solve-all --json` prints, as JSON text (its rows, groups and overall
+/// summary); `bounds` a file of best known costs.
+#[pyfunction]
+#[pyo3(signature = (folder, solver=None, model=None, bounds=None, budget=None, time_limit=None))]
+pub fn solve_all(
+    py: Python<'_>,
+    folder: std::path::PathBuf,
+    solver: Option<&str>,
+    model: Option<std::path::PathBuf>,
+    bounds: Option<std::path::PathBuf>,
+    budget: Option<usize>,
+    time_limit: Option<f64>,
+) -> PyResult<String> {
+    let planner = task_planner(solver, model, budget, time_limit)?;
+    py.detach(|| {
+        guard(|| {
+            let known = bounds.as_deref().map(BestKnown::read).transpose().or_value_error()?;
+            let report =
+                oracle::pddl::suite::run(&folder, planner.as_ref(), known.as_ref(), &mut |_, _| {}).or_value_error()?;
+            serde_json::to_string(&report).or_value_error()
+        })
+    })
 }
 
 /// The PDDL problem at `path` as the side view plays it (`oracle::pddl::Problem::side_task`,
@@ -125,7 +218,7 @@ pub fn read_pddl<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Bou
 pub fn pddl_task<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Bound<'py, PyDict>> {
     let task = py.detach(|| {
         guard(|| {
-            let problem = oracle::pddl::Problem::read(&path).or_value_error()?;
+            let problem = Problem::read(&path).or_value_error()?;
             let task = problem
                 .side_task()
                 .map_err(|e| value_error(format!("{}: {e}", path.display())))?;

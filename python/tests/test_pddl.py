@@ -1,4 +1,7 @@
-"""``blockstack.read_pddl``: the planning competitions' Blocks World problems from Python."""
+"""``blockstack.read_pddl``, ``solve_pddl`` and ``solve_all``: the planning competitions'
+Blocks World problems from Python."""
+
+import json
 
 import gymnasium
 import pytest
@@ -14,7 +17,8 @@ def test_a_generated_problem_reads_with_its_towers_and_a_plan_that_reaches_its_g
     assert sorted(b for t in p["start"] for b in t) == list(range(9))
     assert sorted(b for t in p["goal"] for b in t) == list(range(9))
     # The plan is the CLI's, move for move; replayed here over towers to the goal.
-    assert cli("solve", "--pddl", tmp_path / "p01.pddl").splitlines()[:-1] == p["plan"]
+    printed = cli("solve", "--pddl", tmp_path / "p01.pddl").splitlines()
+    assert [line for line in printed if not line.startswith(";")] == p["plan"]
     below = {}
     for tower in p["start"]:
         for i, b in enumerate(tower):
@@ -26,6 +30,38 @@ def test_a_generated_problem_reads_with_its_towers_and_a_plan_that_reaches_its_g
             below[index[words[1]]] = index[words[2]] if words[0] == "stack" else None
     for tower in p["goal"]:
         assert all(below[b] == (tower[i - 1] if i else None) for i, b in enumerate(tower))
+
+
+def test_solve_pddl_and_solve_all_are_the_cli_s(cli, tmp_path):
+    cli("generate", "--blocks", 10, "--count", 2, "--seed", 5, "--shape", "ipc", "--out", tmp_path / "tasks")
+    task = tmp_path / "tasks" / "p01.pddl"
+    for solver in ("near-optimal", "optimal", "exact"):
+        ours = blockstack.solve_pddl(task, solver=solver)
+        theirs = json.loads(cli("solve", "--pddl", task, "--solver", solver, "--json"))
+        assert ours["plan"] == theirs["plan"] and ours["cost"] == theirs["actions"]
+        assert ours["lower_bound"] == theirs["lower_bound"] <= ours["cost"]
+        assert ours["optimal"] == theirs["optimal"]
+        assert ours["text"] == cli("solve", "--pddl", task, "--solver", solver)
+    proven = blockstack.solve_pddl(task, solver="optimal", time_limit=30)
+    assert proven["optimal"] and proven["cost"] == blockstack.solve_pddl(task, solver="exact")["cost"]
+    c = proven["certificate"]
+    assert 2 * (c["misplaced"] + c["forced"] + c["breakers"]) == proven["lower_bound"]
+    report = blockstack.solve_all(tmp_path / "tasks", solver="optimal")
+    assert report["overall"]["tasks"] == 2 and report["overall"]["optimal"] == 2
+    cli_report = json.loads(cli("solve-all", "--tasks", tmp_path / "tasks", "--solver", "optimal", "--json"))
+    strip = lambda rows: [{k: v for k, v in r.items() if k != "seconds"} for r in rows]
+    assert strip(report["tasks"]) == strip(cli_report["tasks"])
+    with pytest.raises(ValueError, match="time limit is the optimal solver's"):
+        blockstack.solve_pddl(task, solver="exact", time_limit=1)
+    with pytest.raises(ValueError, match="unknown planner"):
+        blockstack.solve_pddl(task, solver="greedy")
+
+
+@pytest.mark.parametrize("path", [None, 3, b"p.pddl"])
+def test_a_path_that_is_not_text_is_a_type_error(path):
+    for call in (blockstack.read_pddl, blockstack.solve_pddl, blockstack.solve_all):
+        with pytest.raises(TypeError, match="is a file name"):
+            call(path)
 
 
 def test_a_bad_file_is_a_value_error_naming_its_problem(tmp_path):

@@ -7,15 +7,13 @@ use anyhow::{Context, Result};
 use clap::Args;
 use std::path::{Path, PathBuf};
 
-use neural::AnyModel;
-use neural::relational::RelationalModel;
-use oracle::pddl::{self, Problem};
-use oracle::towers::{ExactMoves, MovePlanner, NearOptimal, Place, TowerPlan};
+use oracle::pddl::Problem;
+use oracle::towers::{Certificate, CertifiedPlan, Place};
 use oracle::{Cost, CountedPlan, OracleError, PlannerKind};
 use serde::Serialize;
 use sim::{Goal, Grid, State, View};
 
-use super::solver_budget::SolverBudgetArg;
+use super::solver_budget::{SolverBudgetArg, TimeLimitArg};
 use super::stdout::line;
 
 /// Arguments of `blockstack solve`.
@@ -29,8 +27,9 @@ pub struct SolveArgs {
     pub goal: Option<String>,
     /// A Blocks World problem in PDDL (the planning competitions' 4-operator domain) in
     /// place of --start and --goal: the plan is printed in the competitions' format, one
-    /// action per line ((unstack b3 b5), (putdown b3), (pickup b4), (stack b4 b3)), by
-    /// --solver near-optimal (the default here) or exact.
+    /// action per line ((unstack b3 b5), (putdown b3), (pickup b4), (stack b4 b3)), then
+    /// "; lower bound = L" and, when proven, "; optimal"; by --solver near-optimal (the
+    /// default here), optimal or exact.
     #[arg(long, value_name = "PROBLEM.pddl", conflicts_with_all = ["start", "goal", "held", "grid", "view", "cost", "protocol"])]
     pub pddl: Option<PathBuf>,
     /// The block held at the start (default: none; in the side view only with --cost steps
@@ -52,9 +51,10 @@ pub struct SolveArgs {
     /// The planner: exact (the shortest plan in the count asked for: the fewest gripper
     /// steps, or from the side the fewest block moves with --cost moves), exact-moves (the
     /// fewest block moves, carried out by the gripper with --cost steps; side view),
-    /// near-optimal (at most twice the fewest block moves; side view) or oracle (the view's:
-    /// centroid + A* from above, near-optimal from the side) [default: exact; with --pddl,
-    /// near-optimal]
+    /// near-optimal (at most twice the fewest block moves; side view), optimal (the fewest
+    /// block moves at any size, with its proof within --time-limit; side view) or oracle
+    /// (the view's: centroid + A* from above, near-optimal from the side) [default: exact;
+    /// with --pddl, near-optimal]
     #[arg(long)]
     pub solver: Option<PlannerKind>,
     /// With --pddl: plan with a learned policy of block moves (`dqn --preset general`) in
@@ -68,7 +68,10 @@ pub struct SolveArgs {
     pub protocol: sim::ActionProtocol,
     #[command(flatten)]
     pub budget: SolverBudgetArg,
-    /// Print the plan as one JSON object: {"length":L,"actions":[indices],"solver":"exact"}.
+    #[command(flatten)]
+    pub time_limit: TimeLimitArg,
+    /// Print the plan as one JSON object: {"length":L,"actions":[indices],"solver":"exact"};
+    /// a plan of block moves adds "lower_bound" and "optimal".
     #[arg(long)]
     pub json: bool,
 }
@@ -90,6 +93,10 @@ pub fn solve(args: SolveArgs) -> Result<()> {
         return solve_pddl(path, &args);
     }
     let solver = args.solver.unwrap_or(PlannerKind::Exact);
+    anyhow::ensure!(
+        args.time_limit.time_limit.is_none(),
+        "--time-limit applies to --pddl with --solver optimal; from --start the optimal solver searches for its default 10 s"
+    );
     let (Some(start), Some(goal)) = (&args.start, &args.goal) else {
         anyhow::bail!("solve needs --start and --goal, or --pddl PROBLEM.pddl")
     };
@@ -211,11 +218,34 @@ struct MovesReport {
     cost: &'static str,
     /// Each move as `{"block": B, "onto": "table"}` or `{"block": B, "onto": C}`.
     moves: Vec<serde_json::Value>,
+    /// No plan has fewer block moves.
+    lower_bound: usize,
+    /// The bound's parts.
+    certificate: CertificateReport,
+    /// Whether the plan's length meets the bound.
+    optimal: bool,
     solver: &'static str,
 }
 
+impl CertificateReport {
+    fn of(c: Certificate) -> Self {
+        CertificateReport {
+            misplaced: c.misplaced,
+            forced: c.forced,
+            breakers: c.breakers,
+        }
+    }
+}
+
 /// Prints a block-move plan, as JSON or text.
-fn print_moves(args: &SolveArgs, solver: PlannerKind, grid: Grid, goal: &Goal, plan: &TowerPlan) -> Result<()> {
+fn print_moves(
+    args: &SolveArgs,
+    solver: PlannerKind,
+    grid: Grid,
+    goal: &Goal,
+    certified: &CertifiedPlan,
+) -> Result<()> {
+    let plan = &certified.plan;
     if args.json {
         let moves = plan
             .moves
@@ -229,14 +259,19 @@ fn print_moves(args: &SolveArgs, solver: PlannerKind, grid: Grid, goal: &Goal, p
             length: plan.len(),
             cost: "moves",
             moves,
+            lower_bound: certified.lower_bound,
+            certificate: CertificateReport::of(certified.certificate),
+            optimal: certified.is_optimal(),
             solver: solver.name(),
         };
         line(serde_json::to_string(&report)?)
     } else {
         line(format_args!(
-            "{} plan, goal {goal}, grid {grid}, side view: {} block moves",
+            "{} plan, goal {goal}, grid {grid}, side view: {} block moves (lower bound {}{})",
             solver,
-            plan.len()
+            plan.len(),
+            certified.lower_bound,
+            if certified.is_optimal() { ", optimal" } else { "" }
         ))?;
         if plan.is_empty() {
             return Ok(());
@@ -246,115 +281,52 @@ fn print_moves(args: &SolveArgs, solver: PlannerKind, grid: Grid, goal: &Goal, p
     }
 }
 
-/// What plans a PDDL problem: a block-move planner, or a learned policy played greedily.
-pub(super) enum PddlPlanner {
-    /// A planner of `oracle::towers`.
-    Planner(MovePlanner),
-    /// A relational policy (`dqn --preset general`).
-    Policy(Box<RelationalModel>),
-}
-
-impl PddlPlanner {
-    /// Its name in reports: the planner's, or "relational policy".
-    pub(super) fn name(&self) -> &'static str {
-        match self {
-            PddlPlanner::Planner(MovePlanner::Exact) => "exact",
-            PddlPlanner::Planner(MovePlanner::NearOptimal) => "near-optimal",
-            PddlPlanner::Policy(_) => "relational policy",
-        }
-    }
-}
-
-/// The block-move planner `--solver` names for a PDDL problem (near-optimal unless given;
-/// a PDDL plan counts block moves, so `exact` and `exact-moves` are the fewest moves and
-/// `oracle` the near-optimal planner, as in the side view: `PlannerKind::move_planner`),
-/// with `--solver-budget` as the exact search's budget; or the relational policy of
-/// `--model`.
-pub(super) fn pddl_planner(
-    solver: Option<PlannerKind>,
-    model: Option<&Path>,
-    budget: &SolverBudgetArg,
-) -> Result<PddlPlanner> {
-    if let Some(path) = model {
-        anyhow::ensure!(
-            budget.solver_budget.is_none(),
-            "--solver-budget is the exact solver's: it does not apply to --model"
-        );
-        return match super::eval::load_model(path)? {
-            AnyModel::Relational(policy) => Ok(PddlPlanner::Policy(policy)),
-            other => anyhow::bail!(
-                "--model {} holds a {} model: a PDDL problem is played by a relational policy of block moves \
-                 (blockstack dqn --preset general)",
-                path.display(),
-                other.name()
-            ),
-        };
-    }
-    let planner = solver.unwrap_or(PlannerKind::NearOptimal).move_planner();
-    anyhow::ensure!(
-        planner == MovePlanner::Exact || budget.solver_budget.is_none(),
-        "--solver-budget is the exact solver's: it does not apply to --solver near-optimal"
-    );
-    Ok(PddlPlanner::Planner(planner))
-}
-
-/// `planner`'s block-move plan for `problem` on the literature's unbounded table; a policy
-/// that does not reach the goal within its move limit is an error that says so.
-pub(super) fn plan_pddl(planner: &PddlPlanner, budget: &SolverBudgetArg, problem: &Problem) -> Result<TowerPlan> {
-    Ok(match planner {
-        PddlPlanner::Planner(MovePlanner::Exact) => ExactMoves::new()
-            .with_budget(budget.budget())
-            .solve(problem.start(), problem.goal())
-            .map_err(|e| budget.explain(e))?,
-        PddlPlanner::Planner(MovePlanner::NearOptimal) => NearOptimal::new().plan(problem.start(), problem.goal())?,
-        PddlPlanner::Policy(policy) => {
-            let game = policy.play(problem.start(), problem.goal())?;
-            anyhow::ensure!(
-                game.reached,
-                "the policy did not reach the goal within {} block moves ({} blocks)",
-                neural::relational::move_limit(problem.start().blocks()),
-                problem.start().blocks()
-            );
-            TowerPlan { moves: game.moves }
-        }
-    })
-}
-
-/// A PDDL plan as JSON: `{"moves": M, "actions": A, "plan": ["(unstack b3 b5)", ...]}`.
+/// A PDDL plan as JSON: `{"moves": M, "actions": A, "lower_bound": L, "optimal": B, "plan":
+/// ["(unstack b3 b5)", ...]}`; costs in actions.
 #[derive(Debug, Serialize)]
-pub(super) struct PddlPlanReport {
+struct PddlPlanReport {
     /// Block moves.
-    pub moves: usize,
+    moves: usize,
     /// Actions: two per move, the competitions' cost.
-    pub actions: usize,
+    actions: usize,
+    /// No plan costs fewer actions.
+    lower_bound: usize,
+    /// The bound's parts, in block moves.
+    certificate: CertificateReport,
+    /// Whether the plan's cost meets the bound.
+    optimal: bool,
+    solver: String,
     /// The actions as PDDL.
-    pub plan: Vec<String>,
+    plan: Vec<String>,
 }
 
-impl PddlPlanReport {
-    /// The report of `plan` for `problem`, its actions checked by replaying them over the
-    /// file's facts ([`Problem::replay`]).
-    pub fn new(problem: &Problem, plan: &TowerPlan) -> Result<(Self, Vec<pddl::Action>)> {
-        let actions = pddl::actions(problem.start(), plan)?;
-        problem.replay(&actions)?;
-        let report = PddlPlanReport {
-            moves: plan.len(),
-            actions: actions.len(),
-            plan: actions.iter().map(|a| a.to_pddl(problem.block_names())).collect(),
-        };
-        Ok((report, actions))
-    }
+/// A certificate's parts, in block moves.
+#[derive(Debug, Serialize)]
+struct CertificateReport {
+    misplaced: usize,
+    forced: usize,
+    breakers: usize,
 }
 
 /// `solve --pddl`: the plan for the problem file, in the competitions' format.
 fn solve_pddl(path: &Path, args: &SolveArgs) -> Result<()> {
-    let planner = pddl_planner(args.solver, args.model.as_deref(), &args.budget)?;
+    let planner = args
+        .budget
+        .task_planner(args.time_limit, args.solver, args.model.as_deref())?;
     let problem = Problem::read(path)?;
-    let plan = plan_pddl(&planner, &args.budget, &problem)?;
-    let (report, actions) = PddlPlanReport::new(&problem, &plan)?;
+    let plan = problem.solve(planner.as_ref()).map_err(|e| args.budget.explain(e))?;
     if args.json {
+        let report = PddlPlanReport {
+            moves: plan.moves.len(),
+            actions: plan.cost(),
+            lower_bound: plan.lower_bound_cost(),
+            certificate: CertificateReport::of(plan.certificate),
+            optimal: plan.is_optimal(),
+            solver: planner.name().to_string(),
+            plan: plan.actions.iter().map(|a| a.to_pddl(problem.block_names())).collect(),
+        };
         line(serde_json::to_string(&report)?)
     } else {
-        super::stdout::text(&problem.plan_text(&actions))
+        super::stdout::text(&plan.text(&problem))
     }
 }

@@ -42,6 +42,20 @@ pub enum PddlError {
         /// The precondition that fails.
         reason: String,
     },
+    /// A file of best known costs that is not a JSON object from task paths to costs.
+    #[error("{file}: {reason}; expected a JSON object from task paths to costs, e.g. {{\"easy/p01.pddl\": 10}}")]
+    Bounds {
+        /// The file's path.
+        file: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A folder of tasks that holds none.
+    #[error("{folder} holds no .pddl problem (domain.pddl is not one)")]
+    NoTasks {
+        /// The folder's path.
+        folder: String,
+    },
     /// A plan after which a fact of the goal does not hold.
     #[error("after the plan's {steps} steps the goal's {fact} does not hold")]
     GoalNotReached {

@@ -80,9 +80,11 @@ pub mod error;
 pub mod plan;
 pub mod problem;
 mod sexpr;
+pub mod suite;
 pub mod world;
 
 pub use error::PddlError;
 pub use plan::{Action, PddlPlan, actions};
 pub use problem::{Fact, MAX_PROBLEM_BYTES, Problem};
+pub use suite::{BestKnown, SuiteReport, Summary, TaskRow};
 pub use world::SideTask;

@@ -2,7 +2,9 @@
 //!
 //! A plan is one action per line, `(unstack b3 b5)`, `(putdown b3)`, `(pickup b4)`,
 //! `(stack b4 b3)`, and `; cost = N (unit cost)` at the end, as the competition's plan
-//! files are. Every block move is two actions, so a plan of `M` moves costs `2 M`.
+//! files are. Every block move is two actions, so a plan of `M` moves costs `2 M`. A plan
+//! planned here ([`PddlPlan::text`]) adds `; lower bound = L`, the cost no plan can beat
+//! ([`crate::towers::Certificate`]), and `; optimal` when the plan's cost meets it.
 //!
 //! [`Problem::replay`] checks a plan the way a plan validator does: it applies each
 //! action's precondition and effects, as the domain file writes them, to the set of facts
@@ -13,7 +15,7 @@ use std::collections::HashSet;
 use std::fmt::Write as _;
 
 use crate::error::Result;
-use crate::towers::{BlockPlanner, Place, TowerPlan, Towers};
+use crate::towers::{BlockPlanner, Certificate, Place, TowerPlan, Towers};
 
 use super::error::PddlError;
 use super::problem::{Fact, Problem};
@@ -65,19 +67,46 @@ pub fn actions(start: &Towers, plan: &TowerPlan) -> Result<Vec<Action>> {
 }
 
 /// A plan for a [`Problem`], checked: its block moves and the actions that carry them out,
-/// replayed over the file's facts before it is returned ([`Problem::solve`]).
+/// replayed over the file's facts before it is returned ([`Problem::solve`]), with the
+/// lower bound it is measured against.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct PddlPlan {
     /// The block moves, first to last.
     pub moves: TowerPlan,
     /// The actions, two per move: the competitions' cost is their number.
     pub actions: Vec<Action>,
+    /// The bound's parts, in block moves.
+    pub certificate: Certificate,
+    /// The best proven lower bound on the fewest block moves
+    /// ([`crate::towers::CertifiedPlan::lower_bound`]).
+    pub lower_bound: usize,
 }
 
 impl PddlPlan {
     /// The plan's cost in the competitions' unit: its number of actions.
     pub fn cost(&self) -> usize {
         self.actions.len()
+    }
+
+    /// The lower bound in the competitions' unit: no plan costs less.
+    pub fn lower_bound_cost(&self) -> usize {
+        2 * self.lower_bound
+    }
+
+    /// Whether the plan is proven optimal: its cost meets the bound.
+    pub fn is_optimal(&self) -> bool {
+        self.moves.len() == self.lower_bound
+    }
+
+    /// The plan in the competition's format ([`Problem::plan_text`]), then `; lower bound =
+    /// L` and, if proven, `; optimal`.
+    pub fn text(&self, problem: &Problem) -> String {
+        let mut out = problem.plan_text(&self.actions);
+        let _ = writeln!(out, "; lower bound = {}", self.lower_bound_cost());
+        if self.is_optimal() {
+            out.push_str("; optimal\n");
+        }
+        out
     }
 }
 
@@ -86,10 +115,15 @@ impl Problem {
     /// checked by replaying them over the file's facts ([`Problem::replay`]): a plan that
     /// breaks a precondition or misses a goal fact is an error, never returned.
     pub fn solve(&self, planner: &dyn BlockPlanner) -> Result<PddlPlan> {
-        let moves = planner.plan(self.start(), self.goal())?;
-        let actions = actions(self.start(), &moves)?;
+        let certified = planner.plan_certified(self.start(), self.goal())?;
+        let actions = actions(self.start(), &certified.plan)?;
         self.replay(&actions)?;
-        Ok(PddlPlan { moves, actions })
+        Ok(PddlPlan {
+            moves: certified.plan,
+            actions,
+            certificate: certified.certificate,
+            lower_bound: certified.lower_bound,
+        })
     }
 
     /// `actions` in the competition's plan format: one per line, then `; cost = N (unit

@@ -16,6 +16,7 @@
 //! deadlocks; finding the fewest blocks that break every cycle is what makes optimal
 //! Blocks World planning NP-hard).
 
+use super::bitset::BitSet;
 use super::goal::TowerGoal;
 use super::state::NONE;
 
@@ -144,4 +145,99 @@ fn bits(mut mask: u32) -> impl Iterator<Item = usize> {
             b
         })
     })
+}
+
+/// The deadlock graph of a problem of any size, over the blocks that may need a second
+/// move (docs of [`super::optimal`]): an edge `x -> y` when, with `x` and `y` each moved
+/// once, `x` must move before `y` is placed, through the chains of the start's towers
+/// (down) and the goal's (up). A set of blocks moved twice (to the table, then to where
+/// they end) gives a plan exactly when the graph without them has no cycle; a loop marks a
+/// block that moves twice in every plan.
+pub(crate) struct DeadlockGraph {
+    /// How many blocks are misplaced (each moves at least once).
+    pub(crate) misplaced: usize,
+    /// The block of each vertex.
+    pub(crate) blocks: Vec<usize>,
+    /// Each vertex's successors (a loop included).
+    pub(crate) succ: Vec<BitSet>,
+    /// Which blocks are well placed.
+    pub(crate) well_placed: Vec<bool>,
+}
+
+impl DeadlockGraph {
+    /// How many vertices have a loop: blocks that move twice in every plan.
+    pub(crate) fn loops(&self) -> usize {
+        self.succ.iter().enumerate().filter(|(v, row)| row.contains(*v)).count()
+    }
+
+    /// The graph of the problem from `start` (with `below`/`above` its supports) to `goal`.
+    pub(crate) fn of(below: &[usize], above: &[usize], goal: &TowerGoal) -> DeadlockGraph {
+        let n = below.len();
+        let wp = goal.well_placed(below, above);
+        let misplaced = wp.iter().filter(|&&w| !w).count();
+        // A block can need a second move only if a path can enter its goal side from below
+        // (its goal support is misplaced, or well placed with a block on it now) and leave
+        // its start side downwards (it stands on a misplaced block, or on a well-placed one
+        // that another block must stand on): every other block's cycles pass around it.
+        let is_vertex = |x: usize| {
+            if wp[x] || !goal.is_named(x) {
+                return false;
+            }
+            let g = goal.below_of(x);
+            let s = below[x];
+            g != NONE && (!wp[g] || above[g] != NONE) && s != NONE && (!wp[s] || goal.above_of(s) != NONE)
+        };
+        let mut vertex = vec![NONE; n];
+        let mut blocks = Vec::new();
+        for x in (0..n).filter(|&x| is_vertex(x)) {
+            vertex[x] = blocks.len();
+            blocks.push(x);
+        }
+        let k = blocks.len();
+        // The vertices at or above `w` in its goal tower.
+        let up = |w: usize, into: &mut BitSet| {
+            let mut u = w;
+            while u != NONE {
+                if vertex[u] != NONE {
+                    into.insert(vertex[u]);
+                }
+                u = goal.above_of(u);
+            }
+        };
+        let mut succ = vec![BitSet::new(k); k];
+        // Each start tower's misplaced blocks, bottom up: a block reaches what every block
+        // below it reaches (it leaves first), and what stands above each in the goal.
+        for bottom in (0..n).filter(|&b| below[b] == NONE) {
+            let mut b = bottom;
+            while b != NONE && wp[b] {
+                b = above[b];
+            }
+            if b == NONE {
+                continue;
+            }
+            let mut reach = BitSet::new(k);
+            let s = below[b];
+            if s != NONE && goal.above_of(s) != NONE {
+                up(goal.above_of(s), &mut reach);
+            }
+            while b != NONE {
+                let looped = vertex[b] != NONE && reach.contains(vertex[b]);
+                up(b, &mut reach);
+                if vertex[b] != NONE {
+                    let mut row = reach.clone();
+                    if !looped {
+                        row.remove(vertex[b]);
+                    }
+                    succ[vertex[b]] = row;
+                }
+                b = above[b];
+            }
+        }
+        DeadlockGraph {
+            misplaced,
+            blocks,
+            succ,
+            well_placed: wp,
+        }
+    }
 }

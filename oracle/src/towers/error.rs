@@ -124,7 +124,7 @@ pub enum TowersError {
         rows: usize,
     },
     /// A planner name that is not one.
-    #[error("unknown block-move planner {name:?}: choose exact or near-optimal")]
+    #[error("unknown block-move planner {name:?}: choose exact, near-optimal or optimal")]
     UnknownPlanner {
         /// The name given.
         name: String,

@@ -57,11 +57,14 @@
 //! # Ok::<(), oracle::OracleError>(())
 //! ```
 
+mod bitset;
 mod deadlock;
 pub mod error;
 pub mod exact;
+mod fvs;
 pub mod goal;
 pub mod near_optimal;
+pub mod optimal;
 pub mod plan;
 pub mod planner;
 pub mod random;
@@ -73,9 +76,10 @@ pub use error::{Part, TowersError};
 pub use exact::{DEFAULT_MOVE_BUDGET, ExactMoves};
 pub use goal::TowerGoal;
 pub use near_optimal::NearOptimal;
+pub use optimal::{Certificate, CertifiedPlan, OptimalMoves};
 pub use plan::TowerPlan;
 pub use planner::BlockPlanner;
 pub use random::{ipc_state, nlm_state, random_goal, random_state};
-pub use side::{MovePlanner, block_move_of, gripper_actions, next_block_move, plan_side};
+pub use side::{MovePlanner, block_move_of, gripper_actions, next_block_move, plan_side, plan_side_certified};
 pub use space::{Distances, StateSpace};
 pub use state::{Move, Place, Table, Towers};

@@ -12,7 +12,10 @@
 use sim::block_move::{self, BlockMove};
 use sim::{Action, BlockId, Goal, Grid, GridWorld, State, View, World};
 
-use super::{ExactMoves, Move, NearOptimal, Place, Table, TowerGoal, TowerPlan, Towers, TowersError};
+use super::{
+    Certificate, CertifiedPlan, ExactMoves, Move, NearOptimal, OptimalMoves, Place, Table, TowerGoal, TowerPlan,
+    Towers, TowersError,
+};
 use crate::error::{OracleError, Result};
 
 /// Which block-move planner.
@@ -22,9 +25,13 @@ pub enum MovePlanner {
     Exact,
     /// [`NearOptimal`]: at most twice the fewest, for any number of blocks.
     NearOptimal,
+    /// [`OptimalMoves`]: the fewest, with its proof, at any size the side view holds (its
+    /// plan, made on an unbounded table, is refused if it needs more columns than the grid
+    /// has).
+    Optimal,
 }
 
-sim::names!(MovePlanner { Exact = "exact", NearOptimal = "near-optimal" } unknown(text) -> OracleError {
+sim::names!(MovePlanner { Exact = "exact", NearOptimal = "near-optimal", Optimal = "optimal" } unknown(text) -> OracleError {
     TowersError::UnknownPlanner { name: text.to_string() }.into()
 });
 
@@ -32,16 +39,31 @@ sim::names!(MovePlanner { Exact = "exact", NearOptimal = "near-optimal" } unknow
 /// standing) to `goal`, on a table as wide as `grid`; an error if the towers do not fit the
 /// grid, the goal cannot be reached, or the plan would stack higher than the grid.
 pub fn plan_side(planner: MovePlanner, grid: Grid, state: &State, goal: &Goal) -> Result<TowerPlan> {
+    Ok(plan_side_certified(planner, grid, state, goal)?.plan)
+}
+
+/// [`plan_side`]'s plan with the lower bound it is measured against: the exact solver's
+/// plan is proven shortest, the optimal solver's comes with its certificate, the
+/// near-optimal planner's with the bound that takes no search ([`Certificate::quick`]).
+/// A bound of the unbounded table holds on the grid's too.
+pub fn plan_side_certified(planner: MovePlanner, grid: Grid, state: &State, goal: &Goal) -> Result<CertifiedPlan> {
     let start = Towers::new(&sim::view::towers(state)?)?;
     let towers = TowerGoal::new(&goal.tower_lists())?;
     towers.check_blocks(start.blocks())?;
     let table = Table::Columns(grid.width());
-    let plan = match planner {
-        MovePlanner::Exact => ExactMoves::new().with_table(table).solve(&start, &towers)?,
-        MovePlanner::NearOptimal => NearOptimal::new().with_table(table).plan(&start, &towers)?,
+    let certified = match planner {
+        MovePlanner::Exact => CertifiedPlan::proven(
+            ExactMoves::new().with_table(table).solve(&start, &towers)?,
+            Certificate::quick(&start, &towers)?,
+        ),
+        MovePlanner::NearOptimal => CertifiedPlan::new(
+            NearOptimal::new().with_table(table).plan(&start, &towers)?,
+            Certificate::quick(&start, &towers)?,
+        ),
+        MovePlanner::Optimal => OptimalMoves::new().solve(&start, &towers)?,
     };
     let mut now = start;
-    for &mv in &plan.moves {
+    for &mv in &certified.plan.moves {
         now.apply(mv, table)?;
         let tallest = now.towers().iter().map(Vec::len).max().unwrap_or(0);
         if tallest > grid.height() {
@@ -52,7 +74,7 @@ pub fn plan_side(planner: MovePlanner, grid: Grid, state: &State, goal: &Goal) -
             .into());
         }
     }
-    Ok(plan)
+    Ok(certified)
 }
 
 /// The first block move of `planner`'s plan from the side-view `state` to `goal` on `grid`
