@@ -9,7 +9,10 @@
 //!
 //! - [`protocol`]: the messages between page and server.
 //! - [`participant`]: one participant's state machine, with no network in it.
-//! - `registry`: the participants held, numbered and balanced across restarts.
+//! - `registry`: the participants held, numbered and balanced across restarts; only those
+//!   who act count, and a session is reached by its token only.
+//! - `ledger`: what a study's record folder keeps beside the recordings: tokens and
+//!   withdrawn ids as keyed hashes, and the key of per-participant completion codes.
 //! - [`config`]: settings, the study file and the conditions it makes.
 //! - [`server`]: the routes, the WebSocket loop and the bounds.
 //! - [`results`]: the researcher's figures, CSV and replay, from the recordings on disk.
@@ -19,6 +22,7 @@
 pub mod config;
 pub mod curve;
 pub mod error;
+mod ledger;
 pub mod markdown;
 pub mod participant;
 pub mod protocol;
