@@ -710,13 +710,14 @@ impl Registry {
             return;
         };
         slot.expired.store(true, Ordering::SeqCst);
-        if acted {
-            let mut state = lock(&slot.state);
-            if let SlotState::Live(live) = &*state {
-                let ended = SlotState::ended(&live.participant, false);
-                *state = ended;
-            }
-        } else {
+        // The participant's state is dropped here: only its totals stay.
+        let mut state = lock(&slot.state);
+        if let SlotState::Live(live) = &*state {
+            let ended = SlotState::ended(&live.participant, false);
+            *state = ended;
+        }
+        drop(state);
+        if !acted {
             self.all.retain(|s| !Arc::ptr_eq(s, &slot));
         }
     }

@@ -418,6 +418,10 @@ impl App {
     /// may refuse it) and noted in the ledger once it is on disk. The registry's lock is
     /// never taken while the session's is held.
     fn answer(&self, slot: &Slot, text: &str) -> std::result::Result<String, String> {
+        if slot.expired.load(Ordering::SeqCst) {
+            let withdrawn = matches!(*lock(&slot.state), SlotState::Expired { withdrawn: true, .. });
+            return Err(if withdrawn { WITHDRAWN } else { EXPIRED }.into());
+        }
         slot.touch();
         let id = message_id(text);
         let limits = &self.seating.limits;
