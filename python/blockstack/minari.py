@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import inspect
 import os
+import warnings
 from typing import Iterable, Optional, Union
 
 import numpy as np
@@ -93,6 +94,7 @@ def to_minari(
     code_permalink: Optional[str] = None,
     reference_episodes: int = 100,
     seed: int = 0,
+    include_withdrawn: bool = False,
 ):
     """The recordings at ``paths`` (one path or several) as the Minari dataset
     ``dataset_id`` (``namespace/env/name-v0``, e.g. ``blockstack/stack/crowd-v0``), written
@@ -106,7 +108,8 @@ def to_minari(
     says which differs. Observations are stored as they are: Minari's writer would
     JPEG-encode image-like arrays (``paper-screen``), so it is told not to.
     ``reference_episodes`` episodes from ``reference_episodes`` seeded starts (``seed``)
-    give the reference scores.
+    give the reference scores. Withdrawn participants' recordings are left out (a warning
+    names them) unless ``include_withdrawn=True`` (an audit).
     """
     try:
         import minari
@@ -120,15 +123,25 @@ def to_minari(
     if isinstance(paths, (str, bytes)) or hasattr(paths, "__fspath__"):
         paths = [paths]
     episodes = []
-    left_out = 0
+    withdrawn = []
     for path in paths:
-        read = _native.recording_episodes(str(path), obs)
-        if read["withdrawn"]:
-            left_out += 1
+        read = _native.recording_episodes(str(path), obs, include_withdrawn)
+        if read["withdrawn"] and not include_withdrawn:
+            withdrawn.append(os.fspath(path))
             continue
+        if read["note"]:
+            warnings.warn(read["note"], stacklevel=2)
         episodes.extend(read["episodes"])
+    left_out = len(withdrawn)
+    if withdrawn:
+        warnings.warn(f"left out {left_out} withdrawn participants' recordings: {', '.join(withdrawn)}", stacklevel=2)
+    if not episodes and withdrawn:
+        raise ValueError(
+            f"every recording given is a withdrawn participant's ({', '.join(withdrawn)}): left out of every "
+            "analysis; include_withdrawn=True reads them for an audit"
+        )
     if not episodes:
-        raise ValueError("the recordings hold no episode with a step (or every participant withdrew)")
+        raise ValueError("the recordings hold no episode with a step")
     first = episodes[0]
     for e in episodes[1:]:
         if _world_key(e) != _world_key(first):
