@@ -18,6 +18,8 @@
 //! - [`results`]: the researcher's figures, CSV and replay, from the recordings on disk.
 //! - [`markdown`]: a study's consent and instructions, rendered safely.
 //! - [`curve`]: a training run's learning curve, live (`blockstack train ... --serve`).
+//! - [`pilot`]: simulated participants sent through the real server before a launch
+//!   (`blockstack pilot`).
 
 pub mod config;
 pub mod curve;
@@ -25,6 +27,7 @@ pub mod error;
 mod ledger;
 pub mod markdown;
 pub mod participant;
+pub mod pilot;
 pub mod protocol;
 mod registry;
 pub mod results;
@@ -33,4 +36,5 @@ pub mod server;
 pub use config::{ConditionSpec, Limits, ServeConfig, StudyFile};
 pub use curve::{CurveHandle, CurvePoint, serve_curve};
 pub use error::{Result, ServeError};
+pub use pilot::{PilotConfig, PilotReport, pilot};
 pub use server::{Links, Server, run};
