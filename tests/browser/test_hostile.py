@@ -260,3 +260,23 @@ def test_joins_from_one_address_are_rate_limited(study):
     assert 429 in statuses, statuses
     # Another address is not held back by that one.
     assert request(study, "POST", "/join", "consent=agree&" + ids("other"), source="127.0.0.10")[0] == 303
+
+
+def test_a_thousand_scripted_joins_cost_at_most_100_mb(study):
+    """Sessions that never act share their condition's model: 1,000 of them (from 1,000
+    addresses, under the per-address bound) raise the server's memory by at most 100 MB.
+    `pytest -s` prints the figure docs/serve.md gives."""
+    state = study["launch"]("--max-sessions", "1010")
+    pid = state["procs"][-1].pid
+    before = rss_kb(pid)
+    statuses = [
+        request(study, "POST", "/join", "consent=agree&" + ids(f"bot{n}"), source=f"127.0.{1 + n // 250}.{2 + n % 250}")[0]
+        for n in range(1000)
+    ]
+    after = rss_kb(pid)
+    assert statuses.count(303) == 1000, sorted(set(statuses))
+    grown = (after - before) / 1024
+    print(f"1,000 joins that never act: RSS {before / 1024:.1f} MB -> {after / 1024:.1f} MB, "
+          f"+{grown:.1f} MB, {(after - before) / 1000:.1f} KB a session")
+    assert grown <= 100, f"{grown:.1f} MB"
+    assert not study["record"].exists() or not any(study["record"].glob("p*.jsonl"))
