@@ -257,7 +257,7 @@ impl StudyFile {
             check_name(code).map_err(|e| err(format!("completion_code: {e}")))?;
             if study.code_per_participant {
                 return Err(err(
-                    "give completion_code or code_per_participant = true, not both".into(),
+                    "give completion_code or code_per_participant = true, not both".into()
                 ));
             }
         }
@@ -265,7 +265,9 @@ impl StudyFile {
             return Err(err("require_ids = true needs participant_ids to require".into()));
         }
         if study.idle_minutes == Some(0) {
-            return Err(err("idle_minutes = 0 lets every session go at once: give at least 1".into()));
+            return Err(err(
+                "idle_minutes = 0 lets every session go at once: give at least 1".into()
+            ));
         }
         if study.joins_per_minute == Some(0) {
             return Err(err("joins_per_minute = 0 admits no one: give at least 1".into()));
@@ -694,7 +696,11 @@ pub fn plan(config: &ServeConfig) -> Result<Plan> {
                 .transpose()
                 .map_err(|e| err(format!("condition {}: {e}", c.name)))?,
         })
-        .map_err(|e| err(format!("condition {}: {e}", c.name)))?;
+        .map_err(|e| match e {
+            // Condition::prepare's own lines name the condition already (P22: not twice).
+            ServeError::Config(line) => err(line),
+            other => err(format!("condition {}: {other}", c.name)),
+        })?;
         conditions.push(Arc::new(prepared));
     }
     let text = |inline: &Option<String>, file: &Option<PathBuf>, what: &str| -> Result<Option<String>> {

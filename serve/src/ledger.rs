@@ -86,7 +86,9 @@ impl Ledger {
             match line {
                 Line::Ledger { format, version, key } if n == 0 => {
                     if format != FORMAT || version != VERSION {
-                        return Err(bad(format!("it is {format} version {version}, not {FORMAT} version {VERSION}")));
+                        return Err(bad(format!(
+                            "it is {format} version {version}, not {FORMAT} version {VERSION}"
+                        )));
                     }
                     ledger.key = parse_key(&key).ok_or_else(|| bad("its key is not 64 hex digits".into()))?;
                 }
@@ -262,7 +264,11 @@ fn hmac(key: &[u8; 32], message: &[u8]) -> [u8; 32] {
     block[..32].copy_from_slice(key);
     let pad = |byte: u8| block.map(|k| k ^ byte);
     let inner = Sha256::new().chain_update(pad(0x36)).chain_update(message).finalize();
-    Sha256::new().chain_update(pad(0x5c)).chain_update(inner).finalize().into()
+    Sha256::new()
+        .chain_update(pad(0x5c))
+        .chain_update(inner)
+        .finalize()
+        .into()
 }
 
 #[cfg(test)]
@@ -304,6 +310,9 @@ mod tests {
         assert_eq!(again.codes(Some("C0DE"), false).of(8).as_deref(), Some("C0DE"));
         // Another folder, another key: another code.
         let other = tempfile::tempdir().unwrap();
-        assert_ne!(Ledger::open(Some(other.path())).unwrap().codes(None, true).of(7), Some(code));
+        assert_ne!(
+            Ledger::open(Some(other.path())).unwrap().codes(None, true).of(7),
+            Some(code)
+        );
     }
 }

@@ -137,7 +137,9 @@ pub struct PilotReport {
 /// Runs the pilot (module docs).
 pub fn pilot(config: &PilotConfig) -> Result<PilotReport> {
     if config.participants == 0 {
-        return Err(ServeError::Config("--participants 0 pilots no one: give at least 1".into()));
+        return Err(ServeError::Config(
+            "--participants 0 pilots no one: give at least 1".into(),
+        ));
     }
     let serve = ServeConfig {
         study: Some(config.study.clone()),
@@ -157,7 +159,9 @@ pub fn pilot(config: &PilotConfig) -> Result<PilotReport> {
         for k in 0..config.participants {
             let conditions = conditions.clone();
             let seed = config.seed;
-            tasks.push(tokio::spawn(async move { participant(addr, k, seed, &conditions).await }));
+            tasks.push(tokio::spawn(
+                async move { participant(addr, k, seed, &conditions).await },
+            ));
         }
         let mut participants = Vec::new();
         for task in tasks {
@@ -281,7 +285,11 @@ async fn participant(addr: SocketAddr, k: u64, seed: u64, conditions: &[Arc<Cond
         .iter()
         .find(|c| c.name == condition)
         .map(|c| c.world.clone())
-        .ok_or_else(|| failed(format!("{id} was given the condition {condition:?}, which the study does not have")))?;
+        .ok_or_else(|| {
+            failed(format!(
+                "{id} was given the condition {condition:?}, which the study does not have"
+            ))
+        })?;
     let mut choices = rng(episode_seed(seed, k));
     let mut demonstrator = match &role {
         Role::Demonstrator(_) => Some(Demonstrator::new(

@@ -354,7 +354,8 @@ impl Registry {
 
     /// The study's completion codes (the researcher's CSV lists them).
     pub(crate) fn codes(&self, study: &StudyPath) -> Codes {
-        self.ledger.codes(study.completion_code.as_deref(), study.code_per_participant)
+        self.ledger
+            .codes(study.completion_code.as_deref(), study.code_per_participant)
     }
 
     /// The completion code and link participant `number` is given at the end.
@@ -423,7 +424,13 @@ impl Registry {
             }
             (known, index, found.path)
         };
-        let resumed = resume(seating, &known, index, &path, &lock(registry).completion(&seating.study, known.number));
+        let resumed = resume(
+            seating,
+            &known,
+            index,
+            &path,
+            &lock(registry).completion(&seating.study, known.number),
+        );
         let mut r = lock(registry);
         r.resuming.remove(token);
         let slot = Slot::new(&known, index, token.to_string(), resumed?, &seating.limits);
@@ -514,15 +521,8 @@ impl Registry {
             code: name,
             ids: arrival.ids.clone(),
         };
-        let participant = Participant::new(
-            condition,
-            seating.study.clone(),
-            recorder,
-            Some(who),
-            None,
-            completion,
-        )
-        .map_err(|e| JoinRefused::Failed(e.to_string()))?;
+        let participant = Participant::new(condition, seating.study.clone(), recorder, Some(who), None, completion)
+            .map_err(|e| JoinRefused::Failed(e.to_string()))?;
         let slot = Slot::new(&known, index, new_token(), participant, &seating.limits);
         let token = slot.token.clone();
         let mut r = lock(registry);
@@ -593,7 +593,11 @@ impl Registry {
     /// A resume link for participant `number` (the researcher's page): a fresh token that
     /// reaches their recording, for another browser. `None` when no recording of theirs
     /// is on disk.
-    pub(crate) fn resume_link(registry: &Mutex<Registry>, seating: &Seating, number: u64) -> Result<Option<String>, String> {
+    pub(crate) fn resume_link(
+        registry: &Mutex<Registry>,
+        seating: &Seating,
+        number: u64,
+    ) -> Result<Option<String>, String> {
         let Some(dir) = &seating.record_dir else {
             return Ok(None);
         };

@@ -321,7 +321,9 @@ impl Figures {
             .iter()
             .filter(|e| e.steps.last().is_some_and(|s| s.terminated || s.truncated))
             .count() as u64;
-        (asked > 0 && ended >= asked).then(|| self.codes.of(who.number)).flatten()
+        (asked > 0 && ended >= asked)
+            .then(|| self.codes.of(who.number))
+            .flatten()
     }
 
     /// The participant's platform id: the study's first id parameter's value (none when

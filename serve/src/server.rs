@@ -198,9 +198,8 @@ impl Server {
                 }
             };
             // Each request knows the address it came from (joins are bounded per address).
-            let service = hyper_util::service::TowerToHyperService::new(
-                router.clone().layer(axum::Extension(Peer(peer.ip()))),
-            );
+            let service =
+                hyper_util::service::TowerToHyperService::new(router.clone().layer(axum::Extension(Peer(peer.ip()))));
             let app = app.clone();
             tokio::spawn(async move {
                 app.connections.fetch_add(1, Ordering::SeqCst);
@@ -295,9 +294,7 @@ fn same_origin(public: Option<&PublicUrl>, headers: &HeaderMap) -> bool {
         return true;
     };
     if origin == "null" {
-        return headers
-            .get("sec-fetch-site")
-            .is_some_and(|site| site == "same-origin");
+        return headers.get("sec-fetch-site").is_some_and(|site| site == "same-origin");
     }
     let host = headers.get(header::HOST).and_then(|h| h.to_str().ok());
     let (Ok(origin), Some(host)) = (origin.to_str(), host) else {
@@ -431,7 +428,9 @@ impl App {
         let first = !slot.has_acted()
             && matches!(
                 parsed,
-                Ok(Some(ClientMessage::Act { .. } | ClientMessage::Move { .. } | ClientMessage::Accept { .. }))
+                Ok(Some(
+                    ClientMessage::Act { .. } | ClientMessage::Move { .. } | ClientMessage::Accept { .. }
+                ))
             );
         if first && let Err(full) = Registry::first_step(&self.registry, &self.seating, slot) {
             return Ok(error_line(id, format!("{full}; nothing was done")));
@@ -773,11 +772,13 @@ async fn resume_link(
         Some(public) => public.base.clone(),
         None => format!(
             "http://{}",
-            headers.get(header::HOST).and_then(|h| h.to_str().ok()).unwrap_or("127.0.0.1")
+            headers
+                .get(header::HOST)
+                .and_then(|h| h.to_str().ok())
+                .unwrap_or("127.0.0.1")
         ),
     };
-    let issued =
-        tokio::task::spawn_blocking(move || Registry::resume_link(&app.registry, &app.seating, number)).await;
+    let issued = tokio::task::spawn_blocking(move || Registry::resume_link(&app.registry, &app.seating, number)).await;
     match issued {
         Ok(Ok(Some(token))) => json(&serde_json::json!({ "link": format!("{base}/s/{token}") })),
         Ok(Ok(None)) => (
@@ -1107,7 +1108,10 @@ mod tests {
         let mut h = HeaderMap::new();
         h.insert(header::COOKIE, "a=1; blockstack_session=abc123; b=2".parse().unwrap());
         assert_eq!(cookie_token(&h).as_deref(), Some("abc123"));
-        h.insert(header::COOKIE, "blockstack_sessionx=1; blockstack_session=".parse().unwrap());
+        h.insert(
+            header::COOKIE,
+            "blockstack_sessionx=1; blockstack_session=".parse().unwrap(),
+        );
         assert_eq!(cookie_token(&h), None);
     }
 

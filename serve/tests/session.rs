@@ -448,6 +448,8 @@ async fn a_study_that_cannot_work_is_refused_at_start() {
         .unwrap()
         .to_string();
         assert!(error.contains(expected), "{text} -> {error}");
+        // The condition is named once (P22: "condition a: condition a: ..." before).
+        assert!(error.matches("condition a:").count() <= 1, "{error}");
     }
 }
 

@@ -64,7 +64,9 @@ pub fn pilot(args: PilotArgs) -> Result<()> {
         report.admitted, report.withdrawn_left_out, report.csv_rows
     ))?;
     for c in report.conditions.as_array().into_iter().flatten() {
-        let share = c["success"].as_f64().map_or("-".to_string(), |s| format!("{:.0}%", 100.0 * s));
+        let share = c["success"]
+            .as_f64()
+            .map_or("-".to_string(), |s| format!("{:.0}%", 100.0 * s));
         line(format_args!(
             "  {}: {} participants, {} episodes ended, {share} reached the goal, {} corrections",
             c["condition"].as_str().unwrap_or_default(),

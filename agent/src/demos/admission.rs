@@ -203,7 +203,10 @@ mod tests {
     fn a_world_admits_its_own_and_names_both_otherwise() {
         let top = world(View::Top, 3, Some(ActionProtocol::Free));
         assert!(top.admits(&top));
-        assert!(top.admits(&world(View::Top, 3, None)), "an older recording names no protocol");
+        assert!(
+            top.admits(&world(View::Top, 3, None)),
+            "an older recording names no protocol"
+        );
         for other in [
             world(View::Side, 3, Some(ActionProtocol::Free)),
             world(View::Top, 4, Some(ActionProtocol::Free)),
