@@ -18,7 +18,7 @@
 //! - [`results`]: the researcher's figures, CSV and replay, from the recordings on disk.
 //! - [`markdown`]: a study's consent and instructions, rendered safely.
 //! - [`curve`]: a training run's learning curve, live (`blockstack train ... --serve`).
-//! - [`pilot`]: simulated participants sent through the real server before a launch
+//! - [`pilot`](mod@pilot): simulated participants sent through the real server before a launch
 //!   (`blockstack pilot`).
 
 pub mod config;
