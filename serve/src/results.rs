@@ -210,20 +210,22 @@ impl Figures {
     }
 
     /// Episode `episode` of the recording `file` (a name in the record folder) for the
-    /// replay, or `None` when there is no such (or a withdrawn participant's).
-    pub fn replay(&self, file: &str, episode: u64) -> Option<Replay> {
-        let dir = self.dir.as_ref()?;
+    /// replay, or the line saying why not: there is no such, or its participant withdrew.
+    pub fn replay(&self, file: &str, episode: u64) -> Result<Replay, &'static str> {
+        const NONE: &str = "no such episode";
+        let dir = self.dir.as_ref().ok_or(NONE)?;
         let found = recordings_in(dir)
             .into_iter()
-            .find(|f| f.path.file_name().is_some_and(|n| n == file))?;
-        let read = self.read(&found.path)?;
+            .find(|f| f.path.file_name().is_some_and(|n| n == file))
+            .ok_or(NONE)?;
+        let read = self.read(&found.path).ok_or(NONE)?;
         if read.withdrawn {
-            return None;
+            return Err("this participant withdrew: their recording is left out of every analysis");
         }
-        let e = read.episodes.iter().find(|e| e.episode == episode)?;
-        let row = read.rows.iter().find(|r| r.episode == episode)?;
+        let e = read.episodes.iter().find(|e| e.episode == episode).ok_or(NONE)?;
+        let row = read.rows.iter().find(|r| r.episode == episode).ok_or(NONE)?;
         let cells = |s: &State| s.cells().iter().map(|c| [c.x, c.y]).collect::<Vec<_>>();
-        Some(Replay {
+        Ok(Replay {
             recording: file.to_string(),
             row: row.clone(),
             grid: [e.grid.width(), e.grid.height()],

@@ -875,8 +875,8 @@ async fn replay(State(app): State<Arc<App>>, Path((token, file, episode)): Path<
         .await
         .expect("the replay is read without panicking");
     match found {
-        Some(replay) => json(&replay),
-        None => (StatusCode::NOT_FOUND, "no such episode").into_response(),
+        Ok(replay) => json(&replay),
+        Err(why) => (StatusCode::NOT_FOUND, why).into_response(),
     }
 }
 

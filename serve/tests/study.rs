@@ -288,6 +288,14 @@ async fn a_withdrawal_marks_or_deletes_and_leaves_the_participant_out() {
         let data: Value = serde_json::from_str(body_of(&response)).unwrap();
         assert_eq!(data["table"]["episodes"], json!([]), "{how}");
         assert_eq!(data["table"]["conditions"][0]["participants"], 0);
+        if how == "mark" {
+            // The page says one was left out; its replay says why.
+            assert_eq!(data["table"]["withdrawn"], 1);
+            let replay = api.replace("/api/results/", "/api/replay/") + "/p0000-top.jsonl/0";
+            let (status, response) = http(addr, "GET", &replay, "").await;
+            assert_eq!(status, 404);
+            assert!(response.contains("withdrew"), "{response}");
+        }
         let next = join_form(addr, &ids("w2")).await.unwrap();
         let mut socket = connect(addr, &next, None).await.unwrap();
         assert_eq!(receive(&mut socket).await["condition"], "top", "{how}");
@@ -320,4 +328,81 @@ async fn a_page_that_reconnects_mid_episode_loses_nothing() {
         .map(|l| l["step"].as_u64().unwrap())
         .collect();
     assert_eq!(steps, [1, 2, 3, 4]);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn own_codes_required_ids_and_a_code_for_those_who_withdraw() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("study.toml");
+    std::fs::write(
+        &path,
+        r#"
+participant_ids = ["PROLIFIC_PID", "STUDY_ID", "SESSION_ID"]
+require_ids = true
+code_per_participant = true
+completion_url = "https://app.example.org/done?cc={code}"
+completion_on_withdrawal = true
+withdrawal = "mark"
+idle_minutes = 45
+joins_per_minute = 5
+
+[[condition]]
+name = "top"
+episodes = 1
+goals = "0,1,2"
+modes = ["play"]
+"#,
+    )
+    .unwrap();
+    let config = ServeConfig {
+        study: Some(path),
+        record_dir: Some(dir.path().join("rec")),
+        ..ServeConfig::default()
+    };
+    let (addr, results) = start(config).await;
+    // Without every id the study names: refused.
+    let (status, response) = http(addr, "POST", "/join", "PROLIFIC_PID=a1").await;
+    assert_eq!(status, 400, "{response}");
+    assert!(response.contains("STUDY_ID"), "{response}");
+    // Two participants finish: each gets a code of their own, in the link too.
+    let mut codes = Vec::new();
+    for pid in ["a1", "b2"] {
+        let token = join_form(addr, &ids(pid)).await.unwrap();
+        let mut socket = connect(addr, &token, None).await.unwrap();
+        let view = receive(&mut socket).await;
+        let last = solve_view(&mut socket, &view).await;
+        let code = last["completion"]["code"].as_str().unwrap().to_string();
+        assert_eq!(code.len(), 8);
+        assert_eq!(
+            last["completion"]["url"].as_str().unwrap(),
+            format!("https://app.example.org/done?cc={code}")
+        );
+        codes.push(code);
+    }
+    assert_ne!(codes[0], codes[1]);
+    // The CSV lists each finished participant's code.
+    let api = results
+        .split_once(&addr.to_string())
+        .unwrap()
+        .1
+        .replace("/results/", "/api/results/");
+    let (_, response) = http(addr, "GET", &format!("{api}/episodes.csv"), "").await;
+    let csv = body_of(&response);
+    assert!(csv.lines().next().unwrap().ends_with(",completion_code"), "{csv}");
+    for code in &codes {
+        assert_eq!(csv.matches(code.as_str()).count(), 1, "{csv}");
+    }
+    // One who withdraws is given their code too (the study says so).
+    let token = join_form(addr, &ids("c3")).await.unwrap();
+    let mut socket = connect(addr, &token, None).await.unwrap();
+    receive(&mut socket).await;
+    act(&mut socket, "pick 0").await;
+    let (status, response) = http(addr, "POST", &format!("/api/withdraw/{token}"), "").await;
+    assert_eq!(status, 200, "{response}");
+    let answer: Value = serde_json::from_str(body_of(&response)).unwrap();
+    assert_eq!(answer["completion"]["code"].as_str().unwrap().len(), 8, "{answer}");
+    // The fifth join from this address within the minute is refused (joins_per_minute = 5:
+    // a1, b2, c3 and the refused one above made four).
+    assert!(join_form(addr, &ids("d4")).await.is_ok());
+    assert_eq!(join_form(addr, &ids("e5")).await.unwrap_err().0, 429);
 }
