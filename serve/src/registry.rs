@@ -553,6 +553,12 @@ impl Registry {
         r.admitted += 1;
         r.assigned[slot.index] += 1;
         slot.acted.store(true, Ordering::SeqCst);
+        r.take_id(slot, false);
+        Ok(())
+    }
+
+    /// The platform id of `slot`'s participant is taken: they acted, or `withdrawn`.
+    fn take_id(&mut self, slot: &Slot, withdrawn: bool) {
         if let Some(id) = &slot.id {
             let known = Known {
                 number: slot.number,
@@ -561,22 +567,30 @@ impl Registry {
                 ids: BTreeMap::new(),
                 id: Some(id.clone()),
                 name: slot.name.clone(),
-                withdrawn: false,
+                withdrawn,
             };
-            r.by_id.insert(id.clone(), known);
+            self.by_id.insert(id.clone(), known);
         }
-        Ok(())
+    }
+
+    /// `slot`'s participant counts no more towards the cap and the balance; whether they
+    /// did.
+    fn uncount(&mut self, slot: &Slot) -> bool {
+        let counted = slot.acted.swap(false, Ordering::SeqCst);
+        if counted {
+            self.admitted = self.admitted.saturating_sub(1);
+            self.assigned[slot.index] = self.assigned[slot.index].saturating_sub(1);
+        }
+        counted
     }
 
     /// [`Registry::first_step`] taken back: the message took no step after all.
     pub(crate) fn no_first_step(registry: &Mutex<Registry>, slot: &Slot) {
         let mut r = lock(registry);
-        if slot.acted.swap(false, Ordering::SeqCst) {
-            r.admitted = r.admitted.saturating_sub(1);
-            r.assigned[slot.index] = r.assigned[slot.index].saturating_sub(1);
-            if let Some(id) = &slot.id {
-                r.by_id.remove(id);
-            }
+        if r.uncount(slot)
+            && let Some(id) = &slot.id
+        {
+            r.by_id.remove(id);
         }
     }
 
@@ -663,22 +677,8 @@ impl Registry {
         slot.expired.store(true, Ordering::SeqCst);
         let mut r = lock(registry);
         r.live.remove(&slot.token);
-        if slot.acted.swap(false, Ordering::SeqCst) {
-            r.admitted = r.admitted.saturating_sub(1);
-            r.assigned[slot.index] = r.assigned[slot.index].saturating_sub(1);
-        }
-        if let Some(id) = &slot.id {
-            let known = Known {
-                number: slot.number,
-                condition: slot.condition.clone(),
-                file: slot.recording.clone(),
-                ids: BTreeMap::new(),
-                id: Some(id.clone()),
-                name: slot.name.clone(),
-                withdrawn: true,
-            };
-            r.by_id.insert(id.clone(), known);
-        }
+        r.uncount(&slot);
+        r.take_id(&slot, true);
         Ok((how, completion))
     }
 
