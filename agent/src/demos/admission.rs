@@ -227,4 +227,81 @@ mod tests {
         assert!(!paper.admits(&world(View::Top, 3, Some(ActionProtocol::Free))));
         assert_eq!(paper.to_string(), "the paper protocol");
     }
+
+    /// A side-view session played to its goal by a person, recorded to `path`.
+    fn side_recording(path: &Path) {
+        use crate::correction::{CorrectionSession, PersonRole, session_world};
+        use crate::{CorrectionRule, QAgent, QParams, ReprKind};
+        let agent = QAgent::new(ReprKind::RoleTowers, Grid::default(), 3, QParams::default()).unwrap();
+        let world = EnvConfig {
+            view: View::Side,
+            reward: "step-cost".parse().unwrap(),
+            ..session_world(&agent)
+        };
+        let out = files::OutputPath::check(path).unwrap();
+        let writer = crate::DemoWriter::append(&out).unwrap();
+        let goal: sim::Goal = "0,1/2".parse().unwrap();
+        let mut session = CorrectionSession::new(
+            agent,
+            CorrectionRule::default(),
+            world.clone(),
+            vec![goal],
+            3,
+            0.0,
+            "person",
+            None,
+            writer,
+        )
+        .unwrap();
+        let obs = session.next_episode().unwrap();
+        let plan = oracle::ExactSolver::for_world(&world)
+            .solve(&obs.state, &obs.goal)
+            .unwrap();
+        for &a in &plan.actions {
+            session.person(a, PersonRole::Player).unwrap();
+        }
+    }
+
+    #[test]
+    fn a_reader_refuses_another_worlds_recording_and_a_withdrawn_one_unless_audited() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("side.jsonl");
+        side_recording(&path);
+        let side = RunWorld {
+            protocol: Some(ActionProtocol::Free),
+            ..world(View::Side, 3, None)
+        };
+        let as_side = Admission {
+            world: Some(side),
+            include_withdrawn: false,
+        };
+        let read = read_admitted(&path, &as_side).unwrap();
+        assert!(read.note.is_none() && !read.read.is_empty());
+        // The top view's run: refused at the session line, both worlds named.
+        let as_top = Admission {
+            world: Some(RunWorld {
+                view: Some(View::Top),
+                ..side
+            }),
+            ..as_side
+        };
+        let err = read_admitted(&path, &as_top).unwrap_err().to_string();
+        assert!(
+            err.contains("line 1: the recording is of the side view") && err.contains("this run is of the top view"),
+            "{err}"
+        );
+        // Withdrawn: refused by default, naming the withdrawal; read for an audit, with a note.
+        let mut text = std::fs::read_to_string(&path).unwrap();
+        text.push_str("{\"type\":\"withdrawn\",\"at_ms\":1}\n");
+        std::fs::write(&path, text).unwrap();
+        let err = read_admitted(&path, &as_side).unwrap_err().to_string();
+        assert!(err.contains("withdrew") && err.contains("--include-withdrawn"), "{err}");
+        let audit = Admission {
+            include_withdrawn: true,
+            ..as_side
+        };
+        let read = read_admitted(&path, &audit).unwrap();
+        assert!(read.note.unwrap().contains("for an audit"));
+        assert!(!read.read.is_empty());
+    }
 }
