@@ -600,3 +600,32 @@ fn no_episodes_is_refused_in_one_line() {
     }
     assert!(!t.exists());
 }
+
+#[test]
+fn generate_refuses_a_link_in_its_folder_and_a_run_too_large_before_writing() {
+    let dir = scratch("generate-link");
+    let out = dir.join("problems");
+    fs::create_dir(&out).unwrap();
+    let outside = dir.join("outside.txt");
+    fs::write(&outside, "keep me").unwrap();
+    std::os::unix::fs::symlink(&outside, out.join("p02.pddl")).unwrap();
+    let o = cli("generate")
+        .flag("blocks", 4)
+        .flag("count", 3)
+        .flag("out", path(&out))
+        .run();
+    assert_eq!(o.status.code(), Some(2));
+    let err = stderr(&o);
+    assert!(err.contains("p02.pddl is a link") && err.lines().count() == 1, "{err}");
+    assert_eq!(fs::read_to_string(&outside).unwrap(), "keep me");
+    assert_eq!(listing(&out), ["p02.pddl"], "nothing written, not even p01");
+    let o = cli("generate")
+        .flag("blocks", 100000)
+        .flag("count", 100000)
+        .flag("out", path(&dir.join("huge")))
+        .run();
+    assert_eq!(o.status.code(), Some(2));
+    let err = stderr(&o);
+    assert!(err.contains("10000000 blocks in one run"), "{err}");
+    assert!(!dir.join("huge").exists());
+}

@@ -93,6 +93,21 @@ impl Default for PolicyOptions {
     }
 }
 
+impl PolicyOptions {
+    /// What an agent of a world of `profile` plays with unless told otherwise: the
+    /// profile's test epsilon and oracle (ours under `spec`, the authors' greedy walker under
+    /// `original`) and the exact solver's default budget. The one rule `blockstack run`,
+    /// Python's `demonstrations` and environments' `oracle_action` share.
+    pub fn of_profile(profile: sim::Profile) -> PolicyOptions {
+        let learner = crate::LearnerProfile::of(profile);
+        PolicyOptions {
+            epsilon: learner.test_epsilon,
+            oracle: learner.oracle,
+            ..PolicyOptions::default()
+        }
+    }
+}
+
 impl PolicyKind {
     /// The planner this agent is, if it is one.
     pub const fn planner(self) -> Option<PlannerKind> {

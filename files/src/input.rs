@@ -2,10 +2,12 @@
 //!
 //! A file given as an input may be anything: `/dev/zero`, a FIFO, a 40 GB log. Every
 //! reader of blockstack's files knows how large its files can be, and reads through
-//! [`open_bounded`]: a regular file larger than the bound is refused from its metadata,
-//! before a byte is read; anything else (a device, a pipe) is read until the bound and
-//! refused at the first byte beyond it. Either way the error is one line naming the
-//! bound, and memory never grows past it.
+//! [`open_bounded`]: anything but a regular file (a folder, a pipe, a device, a socket) is
+//! refused from its metadata before it is opened (opening a FIFO with no writer blocks,
+//! and a device may never end); a regular file larger than the bound is refused from its
+//! metadata, before a byte is read; and a file that grows while it is read is refused at
+//! the first byte beyond the bound. Either way the error is one line, and memory never
+//! grows past the bound.
 
 use std::fs::File;
 use std::io::{self, Read};
@@ -71,13 +73,49 @@ impl<R: Read> Read for BoundedReader<R> {
 pub fn open_bounded(path: &Path, bound: u64, what: &'static str) -> Result<BoundedReader<File>> {
     let shown = path.display().to_string();
     let fail = |problem| FilesError::read(&shown, problem);
+    // Looked at before it is opened: opening a FIFO with no writer blocks until one comes.
+    let before = std::fs::metadata(path).map_err(|e| fail(ReadProblem::Io(e.to_string())))?;
+    check_regular(&before, bound, what).map_err(fail)?;
     let file = File::open(path).map_err(|e| fail(ReadProblem::Io(e.to_string())))?;
+    // And again once open, in case the path was swapped for something else in between.
     let meta = file.metadata().map_err(|e| fail(ReadProblem::Io(e.to_string())))?;
-    if meta.is_dir() {
-        return Err(fail(ReadProblem::Io("it is a directory, not a file".into())));
-    }
-    if meta.is_file() && meta.len() > bound {
-        return Err(fail(ReadProblem::TooLarge { bound, what }));
-    }
+    check_regular(&meta, bound, what).map_err(fail)?;
     Ok(BoundedReader::new(file, bound, what))
+}
+
+/// `Ok` for a regular file of at most `bound` bytes; otherwise the problem, in words.
+fn check_regular(meta: &std::fs::Metadata, bound: u64, what: &'static str) -> std::result::Result<(), ReadProblem> {
+    if meta.is_dir() {
+        return Err(ReadProblem::Io("it is a directory, not a file".into()));
+    }
+    if !meta.is_file() {
+        return Err(ReadProblem::Io(format!(
+            "it is a pipe or a device, not a regular file: {what} is read from a file (save it to one first)"
+        )));
+    }
+    if meta.len() > bound {
+        return Err(ReadProblem::TooLarge { bound, what });
+    }
+    Ok(())
+}
+
+/// The SHA-256 of the file at `path`, as 64 hex digits, read through [`open_bounded`] (so a
+/// pipe, a device or a file over `bound` is refused, naming `what`): what a run that reads
+/// the file is keyed by, so that a changed file is a new run.
+pub fn digest_file(path: &Path, bound: u64, what: &'static str) -> Result<String> {
+    use sha2::{Digest, Sha256};
+    let shown = path.display().to_string();
+    let mut reader = open_bounded(path, bound, what)?;
+    let mut hash = Sha256::new();
+    let mut buf = vec![0u8; 1 << 16];
+    loop {
+        let n = reader
+            .read(&mut buf)
+            .map_err(|e| FilesError::read(&shown, ReadProblem::Io(e.to_string())))?;
+        if n == 0 {
+            break;
+        }
+        hash.update(&buf[..n]);
+    }
+    Ok(hash.finalize().iter().map(|b| format!("{b:02x}")).collect())
 }

@@ -36,6 +36,6 @@ pub mod temp;
 
 pub use container::{Container, Dtype, Element, Expect, Tensor};
 pub use error::{Bytes, FilesError, ReadProblem, Result};
-pub use input::{BoundedReader, open_bounded};
+pub use input::{BoundedReader, digest_file, open_bounded};
 pub use output::{Destination, Output, OutputPath, STDOUT, Special, prepare_folder, refuse_same_file, write};
 pub use temp::{live_temp_files, remove_temp_files};

@@ -1,6 +1,7 @@
-//! Bounded reading: regular files by their size, anything else by what it yields.
+//! Bounded reading: regular files by their size; a pipe or a device refused before it is opened.
 
-use std::io::{Read, Write};
+use std::io::Read;
+use std::path::Path;
 use std::process::Command;
 
 use files::{FilesError, ReadProblem, open_bounded};
@@ -44,28 +45,34 @@ fn a_regular_file_larger_than_the_bound_is_refused_from_its_size() {
 }
 
 #[test]
-fn a_pipe_is_read_until_the_bound_and_no_further() {
+fn a_pipe_or_a_device_is_refused_before_it_is_opened() {
     let dir = scratch("fifo");
     let fifo = dir.join("pipe");
     assert!(Command::new("mkfifo").arg(&fifo).status().unwrap().success());
-    let writer = {
-        let fifo = fifo.clone();
-        // Writes more than the bound; stops when the reader goes.
-        std::thread::spawn(move || {
-            let mut f = std::fs::OpenOptions::new().write(true).open(&fifo).unwrap();
-            for _ in 0..64 {
-                if f.write_all(&[1u8; 1 << 16]).is_err() {
-                    break;
-                }
-            }
-        })
-    };
-    let mut reader = open_bounded(&fifo, 1 << 20, "a recording").unwrap();
-    let mut bytes = Vec::new();
-    let err = reader.read_to_end(&mut bytes).unwrap_err();
-    assert_eq!(err.kind(), std::io::ErrorKind::FileTooLarge);
-    assert!(err.to_string().contains("1 MiB, the most a recording can be"), "{err}");
-    assert!(bytes.len() as u64 <= (1 << 20) + (1 << 16));
-    drop(reader);
-    writer.join().unwrap();
+    // No writer: opening the FIFO would block until one came; it is refused at once.
+    for path in [fifo.as_path(), Path::new("/dev/zero"), Path::new("/dev/null")] {
+        let err = open_bounded(path, 1 << 20, "a recording").unwrap_err().to_string();
+        assert!(err.contains("a pipe or a device, not a regular file"), "{err}");
+        assert!(err.contains("a recording is read from a file"), "{err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+    }
+}
+
+#[test]
+fn a_digest_is_the_files_sha256_and_changes_with_its_contents() {
+    let dir = scratch("digest");
+    let path = dir.join("demos.jsonl");
+    std::fs::write(&path, b"abc").unwrap();
+    // The SHA-256 of "abc" (FIPS 180-2's example).
+    assert_eq!(
+        files::digest_file(&path, 1 << 20, "a recording").unwrap(),
+        "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+    );
+    std::fs::write(&path, b"abd").unwrap();
+    assert_ne!(
+        files::digest_file(&path, 1 << 20, "a recording").unwrap(),
+        "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+    );
+    let err = files::digest_file(&path, 2, "a recording").unwrap_err().to_string();
+    assert!(err.contains("the most a recording can be"), "{err}");
 }

@@ -80,14 +80,21 @@ class StackEnv(gym.Env):
       gripper steps it takes (``info["gripper_steps"]``); ``info["action_mask"]`` marks the
       legal moves.
     - ``render_mode``: ``None``, ``rgb_array`` (the frame) or ``ansi`` (text).
+    - ``strict``: what ``step`` does with an action the world's rules refuse (below).
 
-    The world: under ``profile="original"`` (the paper's world as its authors coded it:
-    nothing held, picks only; holding, moves and drop only) an illegal action is a
-    ``ValueError`` that changes nothing; ``info["action_mask"]`` says which are legal.
-    (``gymnasium.utils.env_checker.check_env`` steps random actions, so it passes in
-    ``spec`` only.) In the side view (``view="side"``, ``blockstack/BlocksWorld-v0``: towers
-    on a table, only a clear block can be picked, a released block falls) the legal actions
-    are its own whatever the protocol. ``max_episode_steps`` is the horizon: an episode that
+    Every action of the action space is accepted, as Gymnasium's contract asks (random
+    agents, ``gymnasium.utils.env_checker.check_env``, learners without masks). An action
+    the world's rules refuse (under ``protocol="paper"`` or ``profile="original"``, the
+    paper's world as its authors coded it: nothing held, picks only; holding, moves and drop
+    only; from the side, a pick while holding or of a block under another; with
+    ``actions="moves"``, a block moved onto itself or from under another) changes nothing:
+    it still counts as a step towards the horizon, gets the world's reward for a step that
+    changes nothing (under ``original`` the authors' code's -0.1 for a step that leaves the
+    state as it was), and says so in ``info["illegal"] = True``. With ``strict=True`` it is
+    a ``ValueError`` that changes nothing instead. ``info["action_mask"]`` says which
+    actions are legal. In the side view (``view="side"``, ``blockstack/BlocksWorld-v0``:
+    towers on a table, only a clear block can be picked, a released block falls) the legal
+    actions are its own whatever the protocol. ``max_episode_steps`` is the horizon: an episode that
     has not reached the goal after this many steps is truncated by the Rust environment
     itself. (``gymnasium.make`` keeps its own ``max_episode_steps`` argument for Gymnasium's
     ``TimeLimit``: pass the horizon as ``horizon=`` there, or leave both at 1000.)
@@ -99,7 +106,7 @@ class StackEnv(gym.Env):
 
     ``info`` of ``reset`` and ``step``: ``action_mask`` (int8, 1 for every legal action,
     from the Rust ``ActionMask``; all ones in the ``spec`` world), ``blocked`` (a held block's move was
-    stopped), ``pairs_in_place`` (goal pairs standing), ``goal`` and ``goal_tower`` (int64,
+    stopped), ``illegal`` (the world's rules refused the action: nothing changed), ``pairs_in_place`` (goal pairs standing), ``goal`` and ``goal_tower`` (int64,
     as the ``state`` observation has them: :mod:`blockstack.spaces`).
     ``reset(options={"cells": [(x, y), ...], "held": i, "goal": "1,0,2"})`` starts from a
     given state instead (``held`` and ``goal`` only with ``cells``; any other key, or a
@@ -111,15 +118,24 @@ class StackEnv(gym.Env):
 
     metadata = {"render_modes": ["rgb_array", "ansi"], "render_fps": 4}
 
-    def __init__(self, obs: str = "planes", render_mode: Optional[str] = None, actions: str = "gripper", **world: Any):
+    def __init__(
+        self,
+        obs: str = "planes",
+        render_mode: Optional[str] = None,
+        actions: str = "gripper",
+        strict: bool = False,
+        **world: Any,
+    ):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"cannot read render mode from {render_mode!r}: choose None, rgb_array or ansi")
         for name, value in (("obs", obs), ("actions", actions)):
             if not isinstance(value, str):
                 raise ValueError(f"{name} is a name (text), not {value!r}")
+        if not isinstance(strict, bool):
+            raise ValueError(f"strict is True or False, not {strict!r}")
         #: The world this environment plays (:class:`blockstack.world.World`).
         self.world = world_of(world)
-        self._native = _native.NativeEnv(self.world, obs, actions)
+        self._native = _native.NativeEnv(self.world, obs, actions, strict)
         blocks, grid = self.world.blocks, self.world.grid
         self.render_mode = render_mode
         self.obs_kind = obs
@@ -165,15 +181,19 @@ class StackEnv(gym.Env):
         return self._mask.astype(bool)
 
     def expert_action(self) -> int:
-        """The exact solver's next action: the first of a shortest plan from here."""
+        """The exact solver's next action, under the world's rules (its view and action
+        protocol): the first of a shortest legal plan from here, in this environment's
+        actions (with ``actions="moves"``, of the fewest block moves)."""
         return self._native.expert_action()
 
     def oracle_action(self) -> int:
-        """The oracle's next action from here."""
+        """The world's oracle's next action from here, under its rules (from the side, the
+        near-optimal block-move planner's)."""
         return self._native.oracle_action()
 
     def optimal_steps(self) -> int:
-        """The length of a shortest plan from here to the goal."""
+        """The length of a shortest legal plan from here to the goal, in this environment's
+        actions."""
         return self._native.optimal_steps()
 
     def state(self):

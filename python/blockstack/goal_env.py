@@ -39,8 +39,9 @@ class StackGoalEnv(gym.Env):
     """Blocks to stack in a goal's order, with the goal beside the observation.
 
     Arguments (keyword, as ``gymnasium.make("blockstack/StackGoal-v0", ...)`` passes them):
-    the world keywords of :mod:`blockstack.world`, as every environment takes them, and
-    ``render_mode``. Two differ here:
+    the world keywords of :mod:`blockstack.world`, as every environment takes them,
+    ``render_mode`` and ``strict`` (as :class:`blockstack.StackEnv` takes them: an action
+    the world's rules refuse changes nothing, ``info["illegal"]``). Two differ here:
 
     - ``reward``: ``sparse`` (+10 at the goal, the default) or ``step-cost`` (-1 a step, 0
       at the goal): a goal environment's reward is a function of the achieved and desired
@@ -67,12 +68,12 @@ class StackGoalEnv(gym.Env):
 
     metadata = {"render_modes": ["rgb_array", "ansi"], "render_fps": 4}
 
-    def __init__(self, render_mode: Optional[str] = None, **world: Any):
+    def __init__(self, render_mode: Optional[str] = None, strict: bool = False, **world: Any):
         reward = world.setdefault("reward", "sparse")
         if reward not in GOAL_REWARDS:
             # The Rust side says why; asked here so the error comes before the world is made.
             _native.goal_rewards(str(reward), 2, (7, 7))
-        self._env = StackEnv(obs="planes", render_mode=render_mode, **world)
+        self._env = StackEnv(obs="planes", render_mode=render_mode, strict=strict, **world)
         self.world = self._env.world
         if self.world.goal is not None:
             _native.check_stack_goal(self.world.goal, self.world.blocks)
@@ -148,7 +149,8 @@ class StackGoalEnv(gym.Env):
         return self._env.render()
 
     def expert_action(self) -> int:
-        """The exact solver's next action: the first of a shortest plan from here."""
+        """The exact solver's next action under the world's rules: the first of a shortest
+        legal plan from here."""
         return self._env.expert_action()
 
     def optimal_steps(self) -> int:

@@ -26,7 +26,9 @@ Every run is a Ray task of one CPU that calls the trainer in the worker process 
 trainer, in-process) with a folder of its own under ``--storage`` (default: ``--out``'s name
 with ``-runs``), named by a hash of its flags: ``checkpoint.safetensors``, written every
 ``checkpoint_every`` games or steps; ``model.safetensors``; and ``result.json``, its row of
-the table, once it has ended. A task lost with its node (or its worker) is run again by Ray
+the table, once it has ended. A file a run reads (``demos_file``) is part of its key by its
+contents (SHA-256), not only its path: a run whose file changed is a new run, never an old
+run's result. A task lost with its node (or its worker) is run again by Ray
 (``--retries`` times); the trainer then finds the run's checkpoint and goes on from it, and
 ends with the model a run that never stopped ends with, byte for byte. A run whose
 ``result.json`` exists is not run again: running the same command again after the driver,
@@ -76,6 +78,9 @@ COMMANDS = ("train", "dqn")
 #: Flags the sweep sets for each run itself.
 OWN_FLAGS = ("out", "checkpoint", "resume")
 
+#: Flags that name a file a run reads: its contents are part of the run's key.
+FILE_FLAGS = ("demos_file",)
+
 #: The evaluation's flags, taken by both trainers.
 EVAL_FLAGS = ("eval_episodes", "eval_goals", "eval_seed", "eval_epsilon")
 
@@ -84,11 +89,11 @@ def read_config(path: str) -> Dict[str, Dict[str, Any]]:
     """The ``train`` and ``sweep`` tables of a TOML or JSON file, flag names with ``_``.
 
     Every way a file can be wrong is a ``ValueError`` (or ``OSError``) of one line naming
-    the file: syntax errors, a file or table that is not a table, a swept flag that is not
-    a non-empty list, more than :data:`MAX_RUNS` combinations.
+    the file: a pipe, a device or a file over 2 MiB (refused before it is read), syntax
+    errors, a file or table that is not a table, a swept flag that is not a non-empty list,
+    more than :data:`MAX_RUNS` combinations.
     """
-    with open(path, "rb") as f:
-        data = f.read()
+    data = _native.read_config_file(path)
     try:
         if path.endswith(".json"):
             config = json.loads(data)
@@ -149,10 +154,15 @@ def runs(config: Dict[str, Dict[str, Any]]) -> List[Dict[str, Any]]:
 
 
 def run_name(command: str, flags: Dict[str, Any]) -> str:
-    """The name of a run's folder: a hash of its trainer and flags, so that the same run
-    finds its files again and another run never does."""
-    text = json.dumps({"command": command, "flags": flags}, sort_keys=True)
-    return hashlib.sha256(text.encode()).hexdigest()[:12]
+    """The name of a run's folder: a hash of its trainer, its flags and the contents of the
+    files they name (:data:`FILE_FLAGS`), so that the same run finds its files again and
+    another run, or the same flags over a changed file, never does. A file that cannot be
+    read is a ``ValueError`` naming it."""
+    key: Dict[str, Any] = {"command": command, "flags": flags}
+    contents = {flag: _native.file_digest(str(flags[flag])) for flag in FILE_FLAGS if flags.get(flag) is not None}
+    if contents:
+        key["contents"] = contents
+    return hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:12]
 
 
 def _run(command: str, flags: Dict[str, Any], folder: str) -> Dict[str, Any]:
@@ -238,6 +248,7 @@ def main(argv=None) -> int:
         config = read_config(args.config)
         command = command_of(config)
         all_runs = runs(config)
+        names = [run_name(command, flags) for flags in all_runs]
         _native.check_output(args.out)  # before any run, not after all of them
         _native.check_folder(storage)
     except (OSError, ValueError) as e:
@@ -248,7 +259,6 @@ def main(argv=None) -> int:
         return 2
     _ray.start(ray, args.address, args.num_cpus)
     swept = list(config["sweep"])
-    names = [run_name(command, flags) for flags in all_runs]
     results: Dict[int, Dict[str, Any]] = {}
     failed = []
     started = time.monotonic()

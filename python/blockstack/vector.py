@@ -32,7 +32,7 @@ PARALLEL_FROM_ENVS: int = _native.PARALLEL_FROM_ENVS
 _MODES = {AutoresetMode.NEXT_STEP: "next-step", AutoresetMode.SAME_STEP: "same-step"}
 #: The spellings taken for each mode: Gymnasium's values and the native side's names.
 _SPELLINGS = {spelling: mode for mode, name in _MODES.items() for spelling in (mode.value, name)}
-_INFO_KEYS = ("action_mask", "blocked", "pairs_in_place", "goal", "goal_tower")
+_INFO_KEYS = ("action_mask", "blocked", "illegal", "pairs_in_place", "goal", "goal_tower")
 
 
 def _cores() -> int:
@@ -57,6 +57,9 @@ class StackVectorEnv(VectorEnv):
       in ``infos["final_obs"]`` / ``infos["final_info"]``). Declared in ``metadata``.
     - ``copy``: ``True`` (Gymnasium's default) returns copies; ``False`` returns the
       buffers themselves, overwritten by the next call (the fastest way to read them).
+    - ``strict``: as :class:`blockstack.StackEnv` takes it. By default an action the
+      world's rules refuse is a step that changes nothing, marked in ``infos["illegal"]``;
+      with ``strict=True`` it is a ``ValueError`` and nothing is stepped.
 
     ``num_envs`` is refused with a ``ValueError`` when the buffers and environments would
     need more than the machine's physical memory (about 8 KiB and an observation each).
@@ -77,6 +80,7 @@ class StackVectorEnv(VectorEnv):
         threads: Optional[int] = None,
         autoreset_mode: Union[AutoresetMode, str] = AutoresetMode.NEXT_STEP,
         copy: bool = True,
+        strict: bool = False,
         **world: Any,
     ):
         key = autoreset_mode.value if isinstance(autoreset_mode, AutoresetMode) else autoreset_mode
@@ -96,9 +100,11 @@ class StackVectorEnv(VectorEnv):
         threads = whole("threads", threads, 0, 4096)
         # Every buffer and environment, counted before any is made: an allocation that
         # fails in Rust would abort the interpreter.
-        per_env = observation_bytes(obs, blocks, grid) + 8 * (blocks + 2) + (5 + blocks) + 3 + ENV_BYTES
+        per_env = observation_bytes(obs, blocks, grid) + 8 * (blocks + 2) + (5 + blocks) + 4 + ENV_BYTES
         fits_in_memory(f"num_envs={num_envs}", num_envs * per_env)
-        self._native = _native.NativeVecEnv(num_envs, self.world, obs, threads, _MODES[mode])
+        if not isinstance(strict, bool):
+            raise ValueError(f"strict is True or False, not {strict!r}")
+        self._native = _native.NativeVecEnv(num_envs, self.world, obs, threads, _MODES[mode], strict)
         self._lock = threading.Lock()
         self.metadata = dict(self.metadata, autoreset_mode=mode)
         self.autoreset_mode = mode

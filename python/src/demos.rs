@@ -224,7 +224,7 @@ pub fn demonstrations<'py>(
     // The experts are the planners, by the names `blockstack run --agent` gives them.
     let expert: PlannerKind = expert.parse().or_value_error()?;
     let mut policy = PolicyKind::from(expert)
-        .expert(&config, &PolicyOptions::default())
+        .expert(&config, &PolicyOptions::of_profile(config::profile(&world.profile)?))
         .or_value_error()?;
     let columns = py.detach(|| {
         guard(|| {

@@ -1,9 +1,11 @@
 //! One environment: `sim::Env` with its observation kind, behind `blockstack.StackEnv`.
 
-use oracle::{ExactSolver, Oracle, Planner};
+use agent::{Policy, PolicyKind, PolicyOptions};
+use oracle::towers::{MovePlanner, next_block_move, plan_side};
+use oracle::{ExactSolver, PlannerKind};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyTuple};
-use sim::{Action, BlockId, BlockMove, Cell, Env, Observation, State, Termination, View};
+use sim::{Action, BlockId, BlockMove, Cell, Effect, Env, Observation, Refusal, State, Termination, View};
 
 use crate::boundary::{OrValueError, guard, value_error};
 use crate::config::{self, ObsKind, World, goal_from};
@@ -21,6 +23,13 @@ pub struct NativeEnv {
     /// `actions="moves"`: an action is a block move (`sim::BlockMove`'s index), carried out
     /// as the gripper steps it takes.
     moves: bool,
+    /// The exact solver and the world's oracle as agents (`[exact, oracle]`), made when
+    /// first asked: each follows its plan and replans only when the world left it, so an
+    /// episode played by `expert_action` plans once. (A mutex only because a Python class
+    /// must be `Sync`; calls on one environment take turns anyway.)
+    experts: [std::sync::Mutex<Option<Box<dyn Policy + Send>>>; 2],
+    /// How the experts play this world: its profile's oracle ([`PolicyOptions::of_profile`]).
+    options: PolicyOptions,
 }
 
 /// The index of `action`, one integer (a Python int, a numpy integer or a 0-d integer
@@ -56,9 +65,31 @@ pub fn action_index(action: &Bound<'_, PyAny>, blocks: usize) -> PyResult<usize>
 }
 
 impl NativeEnv {
-    fn planner_action(&self, planner: &dyn Planner) -> PyResult<usize> {
-        let obs = self.env.observation();
-        guard(|| Ok(planner.next_action(&obs.state, &obs.goal).or_value_error()?.index()))
+    /// The next action of `kind`'s plan from here under the world's rules (its grid, view
+    /// and action protocol): a block move's index with `actions="moves"` (the exact solver's
+    /// fewest moves, or the near-optimal planner for the oracle), else a gripper action's.
+    fn expert_index(&self, kind: PlannerKind) -> PyResult<usize> {
+        let config = self.env.config();
+        let obs = self.env.current_observation();
+        if self.moves {
+            return guard(|| {
+                let mv = next_block_move(kind.move_planner(), config.grid, &obs.state, &obs.goal).or_value_error()?;
+                Ok(mv.index(config.blocks, config.grid))
+            });
+        }
+        let mut slot = self.experts[usize::from(kind != PlannerKind::Exact)]
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let slot = &mut *slot;
+        guard(|| {
+            let policy = match slot {
+                Some(policy) => policy,
+                None => slot.insert(PolicyKind::from(kind).expert(config, &self.options).or_value_error()?),
+            };
+            // The planners draw nothing: the generator is only the trait's argument.
+            let action = policy.act(obs, &mut sim::seeding::rng(0)).or_value_error()?;
+            Ok(action.index())
+        })
     }
 
     fn obs_info<'py>(
@@ -66,8 +97,10 @@ impl NativeEnv {
         py: Python<'py>,
         obs: &Observation,
         blocked: bool,
+        illegal: bool,
     ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
         let info = observe::info(py, obs, blocked)?;
+        info.set_item("illegal", illegal)?;
         if self.moves {
             // The legal block moves replace the gripper's mask.
             let legal: Vec<i8> = self.env.legal_moves().into_iter().map(i8::from).collect();
@@ -91,9 +124,12 @@ impl NativeEnv {
 impl NativeEnv {
     /// An environment of `world` (the world keywords, [`World`]) showing `obs`, acting with
     /// `actions`; a `ValueError` with the crate's message for a config that cannot make one.
+    /// An action the world's rules refuse is a step that changes nothing
+    /// (`sim::Refusal::Step`, `info["illegal"]`), or with `strict` a `ValueError` that
+    /// changes nothing.
     #[new]
-    #[pyo3(signature = (world, obs="planes", actions="gripper"))]
-    fn new(world: World, obs: &str, actions: &str) -> PyResult<Self> {
+    #[pyo3(signature = (world, obs="planes", actions="gripper", strict=false))]
+    fn new(world: World, obs: &str, actions: &str, strict: bool) -> PyResult<Self> {
         let kind = config::obs_kind(obs)?;
         let config = world.config()?;
         let moves = match actions {
@@ -114,10 +150,14 @@ impl NativeEnv {
                 config.blocks, config.grid
             )));
         }
+        let refusal = if strict { Refusal::Error } else { Refusal::Step };
+        let options = PolicyOptions::of_profile(config::profile(&world.profile)?);
         Ok(NativeEnv {
-            env: guard(|| Env::new(config).or_value_error())?,
+            env: guard(|| Ok(Env::new(config).or_value_error()?.with_refusal(refusal)))?,
             kind,
             moves,
+            experts: Default::default(),
+            options,
         })
     }
 
@@ -132,7 +172,7 @@ impl NativeEnv {
     #[pyo3(signature = (seed=None))]
     fn reset<'py>(&mut self, py: Python<'py>, seed: Option<u64>) -> PyResult<Bound<'py, PyTuple>> {
         let obs = guard(|| Ok(self.env.reset(seed)))?;
-        let (o, i) = self.obs_info(py, &obs, false)?;
+        let (o, i) = self.obs_info(py, &obs, false, false)?;
         PyTuple::new(py, [o, i])
     }
 
@@ -159,7 +199,7 @@ impl NativeEnv {
             )));
         }
         let obs = guard(|| self.env.reset_to(state, goal).or_value_error())?;
-        let (o, i) = self.obs_info(py, &obs, false)?;
+        let (o, i) = self.obs_info(py, &obs, false, false)?;
         PyTuple::new(py, [o, i])
     }
 
@@ -184,7 +224,8 @@ impl NativeEnv {
             let index = action_index(action, config.blocks)?;
             (guard(|| self.env.step_index(index).or_value_error())?, 1)
         };
-        let (o, i) = self.obs_info(py, &step.observation, step.info.blocked)?;
+        let illegal = step.info.effect == Effect::Refused;
+        let (o, i) = self.obs_info(py, &step.observation, step.info.blocked, illegal)?;
         if self.moves {
             i.cast::<pyo3::types::PyDict>()?
                 .set_item("gripper_steps", gripper_steps)?;
@@ -216,22 +257,29 @@ impl NativeEnv {
         sim::render::ascii(&self.env.observation(), sim::render::Colour::Never)
     }
 
-    /// The exact solver's next action from the current state: the first of a shortest plan.
+    /// The exact solver's next action from the current state, under the world's rules: the
+    /// first of a shortest legal plan (with `actions="moves"`, of the fewest block moves).
     fn expert_action(&self) -> PyResult<usize> {
-        self.planner_action(&ExactSolver::new(self.env.config().grid).with_view(self.env.config().view))
+        self.expert_index(PlannerKind::Exact)
     }
 
-    /// The oracle's next action from the current state.
+    /// The world's oracle's next action from the current state, under its rules (from the
+    /// side, the near-optimal block-move planner's).
     fn oracle_action(&self) -> PyResult<usize> {
-        self.planner_action(&Oracle::new(self.env.config().grid))
+        self.expert_index(PlannerKind::Oracle)
     }
 
-    /// The length of a shortest plan from the current state to the goal.
+    /// The length of a shortest legal plan from the current state to the goal, in this
+    /// environment's actions (gripper steps, or block moves with `actions="moves"`).
     fn optimal_steps(&self) -> PyResult<u32> {
-        let obs = self.env.observation();
+        let config = self.env.config();
+        let obs = self.env.current_observation();
         guard(|| {
-            ExactSolver::new(self.env.config().grid)
-                .with_view(self.env.config().view)
+            if self.moves {
+                let plan = plan_side(MovePlanner::Exact, config.grid, &obs.state, &obs.goal).or_value_error()?;
+                return Ok(plan.len() as u32);
+            }
+            ExactSolver::for_world(config)
                 .distance(&obs.state, &obs.goal)
                 .or_value_error()
         })

@@ -69,6 +69,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(output::check_output, m)?)?;
     m.add_function(wrap_pyfunction!(output::write_output, m)?)?;
     m.add_function(wrap_pyfunction!(output::check_folder, m)?)?;
+    m.add_function(wrap_pyfunction!(output::read_config_file, m)?)?;
+    m.add_function(wrap_pyfunction!(output::file_digest, m)?)?;
     m.add_function(wrap_pyfunction!(output::bar_chart, m)?)?;
     let experiments: Vec<&str> = experiments::reproduce::Report::Paper
         .experiments()

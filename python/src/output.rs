@@ -22,6 +22,36 @@ pub fn write_output(py: Python<'_>, path: PathBuf, contents: Vec<u8>) -> PyResul
     py.detach(|| files::write(path, &contents).or_value_error())
 }
 
+/// The most a sweep's config file may be: a study file's order of size (a sweep of the most
+/// combinations it allows is a few kilobytes).
+const MAX_CONFIG_BYTES: u64 = 2 << 20;
+
+/// The most a file a sweep's run reads (a recording of demonstrations) may be.
+const MAX_RUN_INPUT_BYTES: u64 = agent::demos::MAX_RECORDING_BYTES;
+
+/// The bytes of a sweep's config file, read through `files::open_bounded`: a pipe, a device
+/// or a file over 2 MiB is a `ValueError` at once, never read until memory runs out.
+#[pyfunction]
+pub fn read_config_file(py: Python<'_>, path: PathBuf) -> PyResult<Vec<u8>> {
+    py.detach(|| {
+        use std::io::Read;
+        let mut bytes = Vec::new();
+        let mut reader = files::open_bounded(&path, MAX_CONFIG_BYTES, "a sweep config").or_value_error()?;
+        reader
+            .read_to_end(&mut bytes)
+            .map_err(|e| files::FilesError::read(&path.display().to_string(), files::ReadProblem::Io(e.to_string())))
+            .or_value_error()?;
+        Ok(bytes)
+    })
+}
+
+/// The SHA-256 of a file a run reads, as hex (`files::digest_file`): part of a sweep run's
+/// key, so that a changed file is a new run.
+#[pyfunction]
+pub fn file_digest(py: Python<'_>, path: PathBuf) -> PyResult<String> {
+    py.detach(|| files::digest_file(&path, MAX_RUN_INPUT_BYTES, "a file a run reads").or_value_error())
+}
+
 /// Makes the folder `path` if it is missing and checks that it can be written; a
 /// `ValueError` naming the problem otherwise (a report's folder, before the run).
 #[pyfunction]

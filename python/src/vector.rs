@@ -10,7 +10,7 @@ use std::ops::Range;
 
 use pyo3::prelude::*;
 use pyo3::types::{IntoPyDict, PyDict, PyList};
-use sim::{Action, Autoreset, Observation, VecEnv, VecStepRef};
+use sim::{Action, Autoreset, Effect, Observation, VecEnv, VecStepRef};
 
 use crate::boundary::{OrValueError, guard, value_error};
 use crate::config::{self, ObsKind, World};
@@ -39,6 +39,7 @@ struct Slot<'a> {
     truncated: &'a mut bool,
     mask: &'a mut [i8],
     blocked: &'a mut bool,
+    illegal: &'a mut bool,
     pairs: &'a mut i64,
     goal: &'a mut [i64],
     goal_tower: &'a mut [i64],
@@ -92,23 +93,38 @@ impl Slot<'_> {
     }
 
     /// Writes `result`; returns, under same-step autoreset, the last observation of an
-    /// episode that ended in this step and whether that step's move was blocked.
-    fn write(&mut self, kind: ObsKind, result: &VecStepRef<'_>) -> Option<(Observation, bool)> {
+    /// episode that ended in this step and that step's flags (`blocked`, `illegal`).
+    fn write(&mut self, kind: ObsKind, result: &VecStepRef<'_>) -> Option<(Observation, Flags)> {
         self.write_obs(kind, result);
         let Some(outcome) = result.outcome else {
-            (*self.reward, *self.terminated, *self.truncated, *self.blocked) = (0.0, false, false, false);
+            (*self.reward, *self.terminated, *self.truncated) = (0.0, false, false);
+            (*self.blocked, *self.illegal) = (false, false);
             return None;
         };
         *self.reward = outcome.reward;
         *self.terminated = outcome.terminated;
         *self.truncated = outcome.truncated;
-        let blocked = outcome.blocked();
+        let flags = Flags {
+            blocked: outcome.blocked(),
+            illegal: outcome.effect == Effect::Refused,
+        };
         // The step's info is the reset's; the ended step's goes with its last observation,
         // as Gymnasium's same-step mode reports them.
-        *self.blocked = blocked && result.final_observation.is_none();
+        let own = result.final_observation.is_none();
+        *self.blocked = flags.blocked && own;
+        *self.illegal = flags.illegal && own;
         let last = result.final_observation?;
-        Some((last.clone(), blocked))
+        Some((last.clone(), flags))
     }
+}
+
+/// A step's flags in its info.
+#[derive(Clone, Copy)]
+struct Flags {
+    /// A held block's move was stopped.
+    blocked: bool,
+    /// The world's rules refused the action: the step changed nothing.
+    illegal: bool,
 }
 
 /// The part of every buffer that belongs to one of `VecEnv::chunks`' ranges, written by the
@@ -123,6 +139,7 @@ struct Chunk<'a> {
     truncations: &'a mut [bool],
     mask: &'a mut [i8],
     blocked: &'a mut [bool],
+    illegal: &'a mut [bool],
     pairs: &'a mut [i64],
     goal: &'a mut [i64],
     goal_tower: &'a mut [i64],
@@ -130,9 +147,9 @@ struct Chunk<'a> {
     obs_len: usize,
     actions: usize,
     blocks: usize,
-    /// `(index, last observation, blocked)` of each episode that ended in this step under
+    /// `(index, last observation, flags)` of each episode that ended in this step under
     /// same-step autoreset, in index order.
-    ended: Vec<(usize, Observation, bool)>,
+    ended: Vec<(usize, Observation, Flags)>,
 }
 
 enum ChunkObs<'a> {
@@ -170,12 +187,13 @@ impl Chunk<'_> {
             truncated: &mut self.truncations[i],
             mask: &mut self.mask[a * i..a * (i + 1)],
             blocked: &mut self.blocked[i],
+            illegal: &mut self.illegal[i],
             pairs: &mut self.pairs[i],
             goal: &mut self.goal[b * i..b * (i + 1)],
             goal_tower: &mut self.goal_tower[b * i..b * (i + 1)],
         };
-        if let Some((last, blocked)) = slot.write(kind, result) {
-            self.ended.push((self.start + i, last, blocked));
+        if let Some((last, flags)) = slot.write(kind, result) {
+            self.ended.push((self.start + i, last, flags));
         }
     }
 }
@@ -193,6 +211,7 @@ pub struct NativeVecEnv {
     truncations: Py<PyArray1<bool>>,
     action_mask: Py<PyArray2<i8>>,
     blocked: Py<PyArray1<bool>>,
+    illegal: Py<PyArray1<bool>>,
     pairs_in_place: Py<PyArray1<i64>>,
     goal: Py<PyArray2<i64>>,
     goal_tower: Py<PyArray2<i64>>,
@@ -206,6 +225,7 @@ struct Borrows<'py> {
     truncations: PyReadwriteArray1<'py, bool>,
     action_mask: PyReadwriteArray2<'py, i8>,
     blocked: PyReadwriteArray1<'py, bool>,
+    illegal: PyReadwriteArray1<'py, bool>,
     pairs_in_place: PyReadwriteArray1<'py, i64>,
     goal: PyReadwriteArray2<'py, i64>,
     goal_tower: PyReadwriteArray2<'py, i64>,
@@ -261,6 +281,7 @@ impl<'py> Borrows<'py> {
         let mut truncations = slice(&mut self.truncations);
         let mut mask = slice(&mut self.action_mask);
         let mut blocked = slice(&mut self.blocked);
+        let mut illegal = slice(&mut self.illegal);
         let mut pairs = slice(&mut self.pairs_in_place);
         let mut goal = slice(&mut self.goal);
         let mut goal_tower = slice(&mut self.goal_tower);
@@ -288,6 +309,7 @@ impl<'py> Borrows<'py> {
                     truncations: take(&mut truncations, n),
                     mask: take(&mut mask, n * actions),
                     blocked: take(&mut blocked, n),
+                    illegal: take(&mut illegal, n),
                     pairs: take(&mut pairs, n),
                     goal: take(&mut goal, n * blocks),
                     goal_tower: take(&mut goal_tower, n * blocks),
@@ -323,6 +345,7 @@ impl NativeVecEnv {
             truncations: self.truncations.bind(py).readwrite(),
             action_mask: self.action_mask.bind(py).readwrite(),
             blocked: self.blocked.bind(py).readwrite(),
+            illegal: self.illegal.bind(py).readwrite(),
             pairs_in_place: self.pairs_in_place.bind(py).readwrite(),
             goal: self.goal.bind(py).readwrite(),
             goal_tower: self.goal_tower.bind(py).readwrite(),
@@ -391,9 +414,11 @@ fn to_action(index: i64, blocks: usize) -> Result<Action, Refusal> {
 #[pymethods]
 impl NativeVecEnv {
     /// `num_envs` environments of one world, stepped on `threads` threads (1: on the
-    /// caller's thread; 0: one per core), with autoreset `next-step` or `same-step`.
+    /// caller's thread; 0: one per core), with autoreset `next-step` or `same-step`. An
+    /// action the world's rules refuse is a step that changes nothing (`info["illegal"]`),
+    /// or with `strict` a `ValueError` that steps nothing, as one environment's is.
     #[new]
-    #[pyo3(signature = (num_envs, world, obs="planes", threads=1, autoreset="next-step"))]
+    #[pyo3(signature = (num_envs, world, obs="planes", threads=1, autoreset="next-step", strict=false))]
     fn new(
         py: Python<'_>,
         num_envs: usize,
@@ -401,6 +426,7 @@ impl NativeVecEnv {
         obs: &str,
         threads: usize,
         autoreset: &str,
+        strict: bool,
     ) -> PyResult<Self> {
         let kind = config::obs_kind(obs)?;
         let mode = match autoreset {
@@ -418,7 +444,14 @@ impl NativeVecEnv {
         let config = world.config()?;
         let blocks = config.blocks;
         kind.check(config.grid, config.blocks).or_value_error()?;
-        let vec = guard(|| VecEnv::new(config.clone(), num_envs, threads).or_value_error())?.with_autoreset(mode);
+        let refusal = if strict {
+            sim::Refusal::Error
+        } else {
+            sim::Refusal::Step
+        };
+        let vec = guard(|| VecEnv::new(config.clone(), num_envs, threads).or_value_error())?
+            .with_autoreset(mode)
+            .with_refusal(refusal);
         let n = blocks;
         let obs = match kind.shape(config.grid, n) {
             Some(shape) => {
@@ -442,6 +475,7 @@ impl NativeVecEnv {
             truncations: PyArray1::zeros(py, num_envs, false).unbind(),
             action_mask: PyArray2::zeros(py, [num_envs, Action::count(blocks)], false).unbind(),
             blocked: PyArray1::zeros(py, num_envs, false).unbind(),
+            illegal: PyArray1::zeros(py, num_envs, false).unbind(),
             pairs_in_place: PyArray1::zeros(py, num_envs, false).unbind(),
             goal: PyArray2::zeros(py, [num_envs, blocks], false).unbind(),
             goal_tower: PyArray2::zeros(py, [num_envs, blocks], false).unbind(),
@@ -450,7 +484,7 @@ impl NativeVecEnv {
 
     /// The buffers every call writes into, by name: `obs` (an array, or a dict of arrays
     /// for `state`), `rewards`, `terminations`, `truncations`, `action_mask`, `blocked`,
-    /// `pairs_in_place`, `goal`, `goal_tower`.
+    /// `illegal`, `pairs_in_place`, `goal`, `goal_tower`.
     fn buffers<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
         match &self.obs {
@@ -474,6 +508,7 @@ impl NativeVecEnv {
         d.set_item("truncations", self.truncations.bind(py))?;
         d.set_item("action_mask", self.action_mask.bind(py))?;
         d.set_item("blocked", self.blocked.bind(py))?;
+        d.set_item("illegal", self.illegal.bind(py))?;
         d.set_item("pairs_in_place", self.pairs_in_place.bind(py))?;
         d.set_item("goal", self.goal.bind(py))?;
         d.set_item("goal_tower", self.goal_tower.bind(py))?;
@@ -525,12 +560,10 @@ impl NativeVecEnv {
             })
         })?;
         let ended = PyList::empty(py);
-        for (i, obs, blocked) in chunks.iter().flat_map(|c| &c.ended) {
-            ended.append((
-                i,
-                observe::to_python(py, self.kind, obs)?,
-                observe::info(py, obs, *blocked)?,
-            ))?;
+        for (i, obs, flags) in chunks.iter().flat_map(|c| &c.ended) {
+            let info = observe::info(py, obs, flags.blocked)?;
+            info.set_item("illegal", flags.illegal)?;
+            ended.append((i, observe::to_python(py, self.kind, obs)?, info))?;
         }
         Ok(ended)
     }

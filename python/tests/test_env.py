@@ -263,7 +263,8 @@ def test_bad_seeds_are_value_errors():
 @pytest.mark.parametrize("backend", ["physics", "grid"])
 def test_the_action_mask_is_the_set_of_actions_the_rust_rules_accept(profile, backend):
     env = blockstack.StackEnv(profile=profile, backend=backend, obs="state", goal="0,1,2")
-    probe = blockstack.StackEnv(profile=profile, backend=backend, obs="state", goal="0,1,2")
+    probe = blockstack.StackEnv(profile=profile, backend=backend, obs="state", goal="0,1,2", strict=True)
+    lenient = blockstack.StackEnv(profile=profile, backend=backend, obs="state", goal="0,1,2")
     rng = np.random.default_rng(5)
     _, info = env.reset(seed=8)
     for _ in range(60):
@@ -277,6 +278,9 @@ def test_the_action_mask_is_the_set_of_actions_the_rust_rules_accept(profile, ba
                 assert "not legal" in str(e) or "illegal" in str(e), e
                 accepted = False
             assert accepted == bool(info["action_mask"][action]), (cells, held, action)
+            # Without strict the same action is taken, as illegal exactly when refused.
+            lenient.reset(options={"cells": cells, "held": held, "goal": goal})
+            assert lenient.step(action)[4]["illegal"] == (not accepted), (cells, held, action)
         _, _, terminated, truncated, info = env.step(int(rng.choice(np.flatnonzero(info["action_mask"]))))
         if terminated or truncated:
             _, info = env.reset()
@@ -290,6 +294,13 @@ def test_the_original_profile_masks_by_the_papers_protocol():
     _, _, _, _, info = env.step(5)
     # Holding: the moves and drop only.
     assert info["action_mask"].tolist() == [1, 1, 1, 1, 1, 0, 0, 0]
+    # A pick while holding changes nothing and says so; strict=True refuses it instead.
+    before = env.state()
+    _, reward, _, _, info = env.step(6)
+    assert info["illegal"] and env.state() == before and reward == pytest.approx(-0.1)
+    strict = blockstack.StackEnv(profile="original", obs="state", goal="0,1,2", strict=True)
+    strict.reset(seed=3)
+    strict.step(5)
     with pytest.raises(ValueError) as e:
-        env.step(6)
+        strict.step(6)
     assert "paper" in str(e.value)

@@ -125,3 +125,38 @@ def test_read_recording_leaves_a_withdrawn_participant_out_and_checks_the_profil
     assert len(blockstack.read_recording(record, profile="spec")["actions"]) > 0
     with pytest.raises(ValueError, match="the free protocol; this run is of the paper protocol"):
         blockstack.read_recording(record, profile="original")
+
+
+@pytest.mark.parametrize(
+    "bad",
+    ["../../escape-v0", "blockstack/../../../esc-v0", "/abs/path-v0", "blockstack/stack/no-version", "a//b-v0", "./x-v0"],
+)
+def test_an_id_that_would_leave_the_datasets_folder_is_refused_before_anything_is_written(
+    bad, corrected, datasets, tmp_path
+):
+    record, _ = corrected
+    before = sorted(p.name for p in tmp_path.iterdir())
+    with pytest.raises(ValueError, match="not one blockstack writes"):
+        blockstack.to_minari([record], bad, reference_episodes=2)
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
+    assert not datasets.exists() or list(datasets.rglob("*")) == []
+
+
+def test_a_failed_export_leaves_nothing_and_the_id_stays_free(corrected, datasets, monkeypatch):
+    record, _ = corrected
+    real = minari.create_dataset_from_buffers
+
+    def fails_midway(**kwargs):
+        real(**kwargs)  # the dataset written in full, then a failure before it is complete
+        raise OSError("disk full")
+
+    monkeypatch.setattr(minari, "create_dataset_from_buffers", fails_midway)
+    with pytest.raises(OSError, match="disk full"):
+        blockstack.to_minari([record], "blockstack/stack/retry-v0", reference_episodes=2)
+    assert [p for p in datasets.rglob("*")] == [], "nothing left behind, not even a staging folder"
+    monkeypatch.setattr(minari, "create_dataset_from_buffers", real)
+    dataset = blockstack.to_minari([record], "blockstack/stack/retry-v0", reference_episodes=2)
+    assert dataset.total_episodes == 3
+    assert minari.load_dataset("blockstack/stack/retry-v0").total_episodes == 3
+    with pytest.raises(ValueError, match="exists already"):
+        blockstack.to_minari([record], "blockstack/stack/retry-v0", reference_episodes=2)

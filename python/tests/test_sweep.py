@@ -1,7 +1,9 @@
 """The Ray sweep: a small grid of training runs on a local Ray with 2 CPUs."""
 
 import csv
+import hashlib
 import json
+import os
 
 import pytest
 
@@ -37,6 +39,34 @@ def test_a_config_expands_to_every_combination(tmp_path):
     assert len(runs) == 4
     assert {(r["seed"], r["gamma"]) for r in runs} == {(1, 0.1), (1, 0.9), (2, 0.1), (2, 0.9)}
     assert all(r["final_replay"] and r["games"] == 5 for r in runs)
+
+
+def test_a_config_that_is_a_pipe_a_device_or_too_large_is_refused_before_it_is_read(tmp_path):
+    fifo = tmp_path / "c.toml"
+    os.mkfifo(fifo)
+    # No writer: opening the FIFO would wait for one; /dev/zero would be read until memory ran out.
+    for path in ("/dev/zero", str(fifo)):
+        with pytest.raises(ValueError, match="a pipe or a device, not a regular file"):
+            sweep.read_config(path)
+    big = tmp_path / "big.toml"
+    big.write_bytes(b"#" * (3 << 20))
+    with pytest.raises(ValueError, match="the most a sweep config can be"):
+        sweep.read_config(str(big))
+
+
+def test_a_run_is_keyed_by_the_contents_of_the_files_it_reads(tmp_path):
+    demos = tmp_path / "demos.jsonl"
+    demos.write_text("first")
+    flags = {"demos_file": str(demos), "seed": 1}
+    first = sweep.run_name("dqn", flags)
+    assert sweep.run_name("dqn", flags) == first
+    demos.write_text("second")
+    assert sweep.run_name("dqn", flags) != first, "a changed file is a new run"
+    # A run that reads no file keeps the name it had before files were keyed.
+    old = hashlib.sha256(json.dumps({"command": "train", "flags": {"seed": 1}}, sort_keys=True).encode()).hexdigest()[:12]
+    assert sweep.run_name("train", {"seed": 1}) == old
+    with pytest.raises(ValueError, match="missing"):
+        sweep.run_name("dqn", {"demos_file": str(tmp_path / "missing.jsonl")})
 
 
 def test_a_small_sweep_runs_on_a_local_ray_with_two_cpus(tmp_path):

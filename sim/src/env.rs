@@ -48,6 +48,27 @@ crate::names!(Backend { Physics = "physics", Grid = "grid" } unknown(name) -> Si
     }
 });
 
+/// What a step does with an action the world's rules refuse: one a restricting action
+/// protocol forbids in the current state (the paper protocol's pick while holding), or a
+/// block move that cannot be carried out (onto itself, from under another block).
+///
+/// The library's default is [`Refusal::Error`]: a planner, a replay or a learner that takes
+/// such an action has a bug, and says so. Gymnasium's contract is [`Refusal::Step`]: `step`
+/// accepts every element of the action space, so random agents, environment checkers and
+/// learners without masks can act; the action changes nothing, still counts as a step towards
+/// the horizon, gets the world's reward for a step that changes nothing (the reward model's
+/// for the action from the state to itself: under the `original` profile the authors' code's
+/// -0.1 for a step that leaves the state as it was), and says so in its effect,
+/// [`Effect::Refused`] (Python's `info["illegal"]`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Refusal {
+    /// An error, with nothing changed and no step counted.
+    #[default]
+    Error,
+    /// A step that changes nothing ([`Effect::Refused`]).
+    Step,
+}
+
 /// Where an episode's goal comes from.
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -267,7 +288,9 @@ impl Outcome {
 /// The result of a block move ([`Env::step_block_move`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct MoveStep {
-    /// The last gripper step the move took (its Drop, unless the episode ended first).
+    /// The last gripper step the move took (its Drop, unless the episode ended first), with
+    /// the reward of the whole move: the sum of its gripper steps' rewards, as a
+    /// macro-action's reward is.
     pub step: Step,
     /// How many gripper steps the move took.
     pub gripper_steps: u32,
@@ -311,7 +334,8 @@ enum Phase {
 ///
 /// The config's [`ActionProtocol`] decides which actions are legal ([`Env::legal_actions`],
 /// `info.action_mask`); under a restricting protocol an illegal action is an error that
-/// changes nothing. Its [`StartRule`] places the blocks at each reset, and its
+/// changes nothing, or a step that changes nothing under [`Refusal::Step`]
+/// ([`Env::with_refusal`]). Its [`StartRule`] places the blocks at each reset, and its
 /// [`Termination`] decides which step ends an episode.
 #[derive(Clone)]
 pub struct Env {
@@ -331,6 +355,8 @@ pub struct Env {
     /// The protocol's legal actions with nothing held (`[0]`) and with a block held
     /// (`[1]`): a protocol looks at nothing else, so a step looks its masks up.
     legal: [ActionMask; 2],
+    /// What a step does with an action the world's rules refuse.
+    refusal: Refusal,
 }
 
 impl Env {
@@ -372,7 +398,20 @@ impl Env {
             phase: Phase::NotReset,
             previous_action: None,
             legal,
+            refusal: Refusal::Error,
         })
+    }
+
+    /// This environment, doing with an action the world's rules refuse what `refusal` says
+    /// ([`Refusal`]; [`Refusal::Error`] unless set).
+    pub fn with_refusal(mut self, refusal: Refusal) -> Env {
+        self.refusal = refusal;
+        self
+    }
+
+    /// What a step does with an action the world's rules refuse.
+    pub fn refusal(&self) -> Refusal {
+        self.refusal
     }
 
     /// Starts an episode: draws the goal (if the config says so), then a start by the
@@ -432,7 +471,8 @@ impl Env {
     /// Takes one action. An error, with nothing changed (no step counted), if the episode
     /// has not started or has ended, if the action names a block that does not exist, or if
     /// the config's action protocol forbids it in the current state
-    /// ([`SimError::IllegalAction`]).
+    /// ([`SimError::IllegalAction`]; under [`Refusal::Step`] that is a step that changes
+    /// nothing instead).
     pub fn step(&mut self, action: Action) -> Result<Step> {
         let outcome = self.advance(action)?;
         Ok(outcome.into_step(self.observation(), self.legal_actions()))
@@ -448,10 +488,49 @@ impl Env {
         // Under `free` every action that exists is legal, and `act` refuses one that does
         // not before changing anything: the SPEC world's step pays for no check. In the side
         // view too the world's rules make an action outside the mask a no-op.
-        if !matches!(self.config.protocol, ActionProtocol::Free) {
-            self.check_legal(&self.now.state, action)?;
+        if !matches!(self.config.protocol, ActionProtocol::Free)
+            && let Err(e) = self.check_legal(&self.now.state, action)
+        {
+            return match self.refusal {
+                Refusal::Step if e.is_refusal() => Ok(self.refuse(action)),
+                _ => Err(e),
+            };
         }
         self.advance_checked(action)
+    }
+
+    /// The step that changes nothing ([`Refusal::Step`]): counted, with the reward of
+    /// `action` from the current state to itself and the episode's end rules.
+    fn refuse(&mut self, action: Action) -> Outcome {
+        self.steps += 1;
+        let (now, config) = (&self.now, &self.config);
+        let transition = Transition {
+            grid: config.grid,
+            view: config.view,
+            goal: &now.goal,
+            before: &now.state,
+            action,
+            previous_action: self.previous_action,
+            after: &now.state,
+        };
+        let reward = config.reward.reward(&transition);
+        let pairs_in_place = now.goal.pairs_in_place(&now.state);
+        // A running episode's goal does not hold, and nothing changed: only a termination
+        // by reward can end it here.
+        let terminated = config.termination.ends(reward, false);
+        let truncated = !terminated && self.steps >= config.horizon;
+        self.previous_action = Some(action);
+        if terminated || truncated {
+            self.phase = Phase::Over;
+        }
+        Outcome {
+            reward,
+            terminated,
+            truncated,
+            effect: Effect::Refused,
+            pairs_in_place,
+            steps: self.steps,
+        }
     }
 
     /// [`Env::advance`] for an action [`Env::check_action`] has accepted in the current
@@ -499,22 +578,41 @@ impl Env {
     /// [`block_move::expand`] gives, each one a step of the episode. An error, with nothing
     /// changed, if the episode is not running or the move cannot be carried out now. The
     /// episode may end before the move's last action (at the horizon); the result says how
-    /// many gripper steps were taken and holds the last one.
+    /// many gripper steps were taken and holds the last one, rewarded with the sum of their
+    /// rewards.
     ///
     /// The physics backend carries out every gripper action through rapier. The grid
-    /// backend, when the episode ends only at the goal and the move ends before the horizon,
-    /// carries the block straight to the cell the Drop releases it from and takes the Drop
-    /// as an ordinary step: the same world, step count and last step as every action one by
-    /// one (none of the actions before the Drop can end the episode: the goal cannot hold
-    /// while a block it names is held, nor start to hold while a block it leaves free moves),
-    /// at O(N + W) for the whole move instead of O(N) for each of its gripper steps.
+    /// backend, when the episode ends only at the goal, the move ends before the horizon and
+    /// the reward model pays the steps before the Drop a known amount (`sparse`: nothing;
+    /// `step-cost`: its cost each), carries the block straight to the cell the Drop releases
+    /// it from and takes the Drop as an ordinary step: the same world, step count, last step
+    /// and reward as every action one by one (none of the actions before the Drop can end the
+    /// episode: the goal cannot hold while a block it names is held, nor start to hold while
+    /// a block it leaves free moves), at O(N + W) for the whole move instead of O(N) for each
+    /// of its gripper steps.
     pub fn step_block_move(&mut self, mv: BlockMove) -> Result<MoveStep> {
         if self.config.view != View::Side {
             return Err(SimError::MovesNeedSideView);
         }
         self.check_running()?;
+        if self.refusal == Refusal::Step && block_move::route(&self.now.state, self.config.grid, mv).is_err() {
+            // One step that changes nothing, rewarded as a drop with nothing held (between
+            // moves nothing is held).
+            let outcome = self.refuse(Action::Drop);
+            return Ok(MoveStep {
+                step: outcome.into_step(self.observation(), self.legal_actions()),
+                gripper_steps: 1,
+            });
+        }
         let (termination, horizon, steps) = (self.config.termination, self.config.horizon, self.steps);
-        if let AnyWorld::Grid(world) = &mut self.world {
+        // What the reward model pays each step before the Drop, when it is known without
+        // taking them: the goal cannot hold while a block is carried.
+        let carried = match self.config.reward {
+            RewardModel::Sparse(_) => Some(0.0),
+            RewardModel::StepCost(c) => Some(c.cost),
+            _ => None,
+        };
+        if let (AnyWorld::Grid(world), Some(carried)) = (&mut self.world, carried) {
             let carry = block_move::route_in(world, mv)?;
             let len = carry.len() as u32;
             if matches!(termination, Termination::Goal) && steps + len <= horizon {
@@ -523,23 +621,28 @@ impl Env {
                 self.now.state = world.state();
                 self.steps += len - 1;
                 self.previous_action = Some(carry.across());
+                let mut step = self.step(Action::Drop)?;
+                step.reward += carried * f64::from(len - 1);
                 return Ok(MoveStep {
-                    step: self.step(Action::Drop)?,
+                    step,
                     gripper_steps: len,
                 });
             }
         }
         let actions = block_move::expand(&self.now.state, self.config.grid, mv)?;
         let mut last = None;
+        let mut reward = 0.0;
         for (k, &action) in actions.iter().enumerate() {
             let step = self.step(action)?;
+            reward += step.reward;
             let over = step.terminated || step.truncated;
             last = Some((step, k + 1));
             if over {
                 break;
             }
         }
-        let (step, taken) = last.expect("a move has at least a pick and a drop");
+        let (mut step, taken) = last.expect("a move has at least a pick and a drop");
+        step.reward = reward;
         Ok(MoveStep {
             step,
             gripper_steps: taken as u32,
@@ -557,10 +660,14 @@ impl Env {
     }
 
     /// `Ok` if [`Env::step`] would take `action` now; otherwise the error it would return
-    /// (episode not started or over, no such block, illegal under the action protocol).
+    /// (episode not started or over, no such block, illegal under the action protocol;
+    /// under [`Refusal::Step`] an illegal action is taken, as a step that changes nothing).
     pub fn check_action(&self, action: Action) -> Result<()> {
         self.check_running()?;
-        self.check_legal(&self.now.state, action)
+        match self.check_legal(&self.now.state, action) {
+            Err(e) if self.refusal == Refusal::Step && e.is_refusal() => Ok(()),
+            checked => checked,
+        }
     }
 
     /// An error unless an episode is running.

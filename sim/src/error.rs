@@ -355,6 +355,18 @@ pub enum SimError {
 }
 
 /// "nothing is held" or "block 2 is held".
+impl SimError {
+    /// Whether this is the world's rules refusing an action that exists (the action
+    /// protocol's, or the side view's): what [`Refusal::Step`](crate::Refusal::Step) takes
+    /// as a step that changes nothing.
+    pub fn is_refusal(&self) -> bool {
+        matches!(
+            self,
+            SimError::IllegalAction { .. } | SimError::IllegalInSideView { .. }
+        )
+    }
+}
+
 fn held_text(held: Option<BlockId>) -> String {
     match held {
         None => "nothing is held".into(),

@@ -79,7 +79,9 @@ pub mod world;
 pub use action::Action;
 pub use block_move::BlockMove;
 pub use coded_state::CodedState;
-pub use env::{Backend, DEFAULT_HORIZON, Env, EnvConfig, GoalSpec, Info, MIN_SIDE_FIT, MoveStep, Outcome, Step};
+pub use env::{
+    Backend, DEFAULT_HORIZON, Env, EnvConfig, GoalSpec, Info, MIN_SIDE_FIT, MoveStep, Outcome, Refusal, Step,
+};
 pub use error::{Result, SimError};
 pub use goal::Goal;
 pub use grid::{Cell, Direction, Grid, MAX_CELLS, MAX_SIDE};

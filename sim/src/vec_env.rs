@@ -3,7 +3,7 @@
 use std::ops::Range;
 
 use crate::action::Action;
-use crate::env::{Env, EnvConfig, Outcome, Step};
+use crate::env::{Env, EnvConfig, Outcome, Refusal, Step};
 use crate::error::{Result, SimError};
 use crate::observation::Observation;
 use crate::protocol::ActionMask;
@@ -119,6 +119,9 @@ fn parallel(team: Option<&Team>, envs: usize) -> Option<(&Team, usize)> {
 /// generator from there, so every environment plays its own fixed sequence of episodes.
 ///
 /// Autoreset: [`Autoreset::SameStep`] unless [`VecEnv::with_autoreset`] says otherwise.
+///
+/// Refused actions: an error that steps nothing, unless [`VecEnv::with_refusal`] makes each
+/// a step that changes nothing ([`Refusal`]), as one [`Env`] does.
 pub struct VecEnv {
     envs: Vec<Env>,
     /// `None` for one thread: the caller's thread steps the environments itself, which
@@ -158,6 +161,13 @@ impl VecEnv {
     /// The autoreset mode.
     pub fn autoreset(&self) -> Autoreset {
         self.autoreset
+    }
+
+    /// This vector environment, every environment doing with an action the world's rules
+    /// refuse what `refusal` says ([`Env::with_refusal`]).
+    pub fn with_refusal(mut self, refusal: Refusal) -> VecEnv {
+        self.envs = self.envs.into_iter().map(|env| env.with_refusal(refusal)).collect();
+        self
     }
 
     /// Number of environments.
@@ -375,8 +385,14 @@ impl VecEnv {
                     write(chunk, i, &first(env));
                     continue;
                 }
-                // The batch's check pass has converted and accepted the action.
-                let outcome = env.advance_checked(action(raw)?)?;
+                // The batch's check pass has converted and accepted the action; one the rules
+                // refuse is accepted only to be taken as a step that changes nothing, which
+                // `advance` decides.
+                let action = action(raw)?;
+                let outcome = match env.refusal() {
+                    Refusal::Error => env.advance_checked(action)?,
+                    Refusal::Step => env.advance(action)?,
+                };
                 let mut last = None;
                 if outcome.terminated || outcome.truncated {
                     match mode {

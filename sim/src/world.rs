@@ -27,6 +27,10 @@ pub enum Effect {
     Dropped,
     /// A pick of the block already held, or a drop with nothing held: nothing changes.
     Unchanged,
+    /// The world's rules refused the action (a restricting action protocol's, or a block
+    /// move that cannot be carried out) and an [`Env`](crate::Env) under
+    /// [`Refusal::Step`](crate::Refusal::Step) took it as a step that changes nothing.
+    Refused,
 }
 
 /// A world backend: blocks on a grid, one of them perhaps held.

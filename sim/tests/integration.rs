@@ -4,6 +4,7 @@
 mod env;
 mod original;
 mod physics_matches_grid;
+mod refusal;
 mod rules;
 mod side_view;
 mod towers;

@@ -341,30 +341,35 @@ fn a_reset_that_moves_a_block_onto_another_blocks_cell_leaves_no_contact_behind(
 }
 
 /// A block move's gripper actions carried out one by one: each an ordinary step of `env`,
-/// and each through `World::act` on `world`, until the episode ends. The last step and how
-/// many were taken.
+/// and each through `World::act` on `world`, until the episode ends. The last step, with the
+/// sum of the steps' rewards, and how many were taken.
 fn move_one_action_at_a_time(env: &mut Env, world: &mut GridWorld, mv: sim::BlockMove) -> (sim::Step, u32) {
     let actions = sim::block_move::expand(&env.state(), env.config().grid, mv).unwrap();
     let mut last = None;
+    let mut reward = 0.0;
     for (k, &a) in actions.iter().enumerate() {
         world.act(a).unwrap();
         let step = env.step(a).unwrap();
+        reward += step.reward;
         let over = step.terminated || step.truncated;
         last = Some((step, k as u32 + 1));
         if over {
             break;
         }
     }
-    last.unwrap()
+    let (mut step, taken) = last.unwrap();
+    step.reward = reward;
+    (step, taken)
 }
 
 proptest::proptest! {
     #![proptest_config(proptest::prelude::ProptestConfig::with_cases(200))]
 
     /// On the grid backend a block move goes straight to where its Drop releases the block
-    /// (O(N + W) for the move); the world, the step count and the last step are those of
-    /// `block_move::expand`'s gripper actions taken one by one through the rules, including
-    /// moves that the horizon cuts short.
+    /// (O(N + W) for the move); the world, the step count, the last step and the move's
+    /// reward (the sum of its steps') are those of `block_move::expand`'s gripper actions
+    /// taken one by one through the rules, including moves that the horizon cuts short, for
+    /// the rewards the fast path knows and one it does not.
     #[test]
     fn a_block_move_equals_its_gripper_actions_one_by_one(
         blocks in 1usize..14,
@@ -372,10 +377,13 @@ proptest::proptest! {
         extra_height in 0usize..3,
         horizon in 5u32..120,
         seed in 0u64..10_000,
+        reward in proptest::sample::select(vec!["sparse", "step-cost", "dense"]),
     ) {
         use rand::RngExt;
         let grid = Grid::new(blocks.max(2) + extra_width, blocks + 1 + extra_height).unwrap();
-        let mut fast = Env::new(EnvConfig { horizon, ..side(grid, blocks, Backend::Grid) }).unwrap();
+        // Dense shaping divides by the goal's chain length: one block has none.
+        let reward: sim::RewardModel = if blocks < 2 { "sparse" } else { reward }.parse().unwrap();
+        let mut fast = Env::new(EnvConfig { horizon, reward, ..side(grid, blocks, Backend::Grid) }).unwrap();
         fast.reset(seed);
         let mut slow = fast.clone();
         let mut world = GridWorld::new_in(View::Side, grid, fast.state()).unwrap();

@@ -26,6 +26,11 @@ pub enum Shape {
 /// The largest problem `generate` writes: ten times the competition's largest.
 pub const MAX_GENERATED_BLOCKS: usize = 100_000;
 
+/// The most blocks one `generate` writes in all its problems (about 60 bytes of PDDL a
+/// block: some 600 MB): a typo such as `--count 100000` on large problems is refused before
+/// anything is written, not found when the disk is full.
+pub const MAX_GENERATED_TOTAL: u64 = 10_000_000;
+
 /// Arguments of `blockstack generate`.
 #[derive(Debug, Args)]
 pub struct GenerateArgs {
@@ -46,8 +51,9 @@ pub struct GenerateArgs {
     /// do.
     #[arg(long, value_enum, default_value_t = Shape::Uniform)]
     pub shape: Shape,
-    /// The folder to write p01.pddl, p02.pddl, ... into (made if missing; files of the same
-    /// names are replaced).
+    /// The folder to write p01.pddl, p02.pddl, ... into (made if missing; regular files of the
+    /// same names are replaced; a link of one of those names is refused, before anything is
+    /// written).
     #[arg(long)]
     pub out: PathBuf,
 }
@@ -58,6 +64,15 @@ pub fn generate(args: GenerateArgs) -> Result<()> {
         args.view == View::Side,
         "--view top: PDDL describes the classic Blocks World, the side view; use --view side"
     );
+    let total = args.blocks.saturating_mul(args.count);
+    anyhow::ensure!(
+        total <= MAX_GENERATED_TOTAL,
+        "--blocks {} --count {} is {total} blocks in all, about {} GB of PDDL: generate writes at most \
+         {MAX_GENERATED_TOTAL} blocks in one run; write fewer or smaller problems",
+        args.blocks,
+        args.count,
+        total * 60 / 1_000_000_000
+    );
     files::prepare_folder(&args.out)?;
     let blocks = args.blocks as usize;
     let draw = |seed| match args.shape {
@@ -65,6 +80,20 @@ pub fn generate(args: GenerateArgs) -> Result<()> {
         Shape::Ipc => ipc_state(blocks, seed),
     };
     let digits = args.count.to_string().len().max(2);
+    let path_of = |k: u64| args.out.join(format!("p{:0digits$}.pddl", k + 1));
+    // A link among the names would send a problem outside the folder: every name is looked
+    // at before the first is written.
+    for k in 0..args.count {
+        let path = path_of(k);
+        if std::fs::symlink_metadata(&path).is_ok_and(|m| m.file_type().is_symlink()) {
+            anyhow::bail!(
+                "--out {}: {} is a link, and generate replaces only regular files in its folder: \
+                 remove the link or choose another folder",
+                args.out.display(),
+                path.display()
+            );
+        }
+    }
     let shape = args.shape.to_possible_value().expect("no variant is skipped");
     let bar = super::progress::bar(args.count, "problems");
     for k in 0..args.count {
@@ -78,8 +107,7 @@ pub fn generate(args: GenerateArgs) -> Result<()> {
             shape.get_name(),
             args.count
         );
-        let path = args.out.join(format!("p{id}.pddl"));
-        let out = OutputPath::check(&path)?;
+        let out = OutputPath::check(path_of(k))?;
         out.write(format!("{header}{problem}").as_bytes())
             .with_context(|| format!("problem {id}"))?;
         bar.inc(1);

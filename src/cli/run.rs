@@ -15,7 +15,7 @@ use super::solver_budget::SolverBudgetArg;
 use super::stdout::line;
 use super::world::{GoalArg, WorldArgs};
 use agent::eval::RunReport;
-use agent::{EpisodeStart, LearnerProfile, OracleKind, PlayingModel, PolicyKind, PolicyOptions};
+use agent::{EpisodeStart, OracleKind, PlayingModel, PolicyKind, PolicyOptions};
 use neural::AnyModel;
 
 /// Arguments of `blockstack run`.
@@ -152,7 +152,7 @@ pub fn run(args: RunArgs) -> Result<()> {
             Some(AnyModel::Relational(_)) => 0.0,
             _ => agent::profile::TEST_EPSILON,
         }),
-        oracle: args.oracle.unwrap_or(LearnerProfile::of(rules.profile).oracle),
+        oracle: args.oracle.unwrap_or(PolicyOptions::of_profile(rules.profile).oracle),
         node_budget: args.budget.budget(),
     };
     let model: Option<&dyn PlayingModel> = model.as_ref().map(|m| m as &dyn PlayingModel);

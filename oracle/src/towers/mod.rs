@@ -76,6 +76,6 @@ pub use near_optimal::NearOptimal;
 pub use plan::TowerPlan;
 pub use planner::BlockPlanner;
 pub use random::{ipc_state, nlm_state, random_goal, random_state};
-pub use side::{MovePlanner, block_move_of, gripper_actions, plan_side};
+pub use side::{MovePlanner, block_move_of, gripper_actions, next_block_move, plan_side};
 pub use space::{Distances, StateSpace};
 pub use state::{Move, Place, Table, Towers};

@@ -55,6 +55,19 @@ pub fn plan_side(planner: MovePlanner, grid: Grid, state: &State, goal: &Goal) -
     Ok(plan)
 }
 
+/// The first block move of `planner`'s plan from the side-view `state` to `goal` on `grid`
+/// ([`plan_side`]), as the world's block move ([`block_move_of`]: a move to the table goes
+/// to the leftmost empty column): the expert's next action where the actions are block
+/// moves. An error if the goal holds already, or as [`plan_side`] says.
+pub fn next_block_move(planner: MovePlanner, grid: Grid, state: &State, goal: &Goal) -> Result<BlockMove> {
+    let plan = plan_side(planner, grid, state, goal)?;
+    let first = plan
+        .moves
+        .first()
+        .ok_or_else(|| OracleError::GoalAlreadyHolds { goal: goal.to_string() })?;
+    block_move_of(state, grid, *first)
+}
+
 /// The gripper actions that carry out `plan` from the side-view `state` on `grid`, move
 /// after move: each is expanded by [`sim::block_move::expand`] (the fewest gripper actions
 /// for it) from the state the moves before it lead to, and a move to the table goes to the

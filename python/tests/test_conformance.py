@@ -1,0 +1,436 @@
+"""The conformance suite: every promise the library makes, over every world and every front
+end that offers it, so that a capability wired in at one edge and forgotten at another fails
+here, not in a user's hands.
+
+The worlds are every registered id crossed with the world keywords that change the rules:
+``profile`` (spec, original), ``protocol`` (free, paper), ``view`` (top, side), ``actions``
+(gripper, moves) and ``pddl=``. A combination an id refuses is listed with the words it is
+refused in (:data:`REFUSED`); every other one is a world of :data:`WORLDS`. The contracts:
+
+- **Gymnasium's**: ``check_env`` passes with no warning; ``step`` takes every element of the
+  action space; an action the rules refuse changes nothing, counts as a step, gets the
+  world's reward for a step that changes nothing and says ``info["illegal"]``, where
+  ``strict=True`` raises; every other step is the strict environment's. The vector env steps
+  as ``SyncVectorEnv`` of the same environments does, refused actions included.
+- **The expert's**: in every world the expert (``expert_action``) is legal in every state it
+  meets, reaches the goal, and takes as few steps as a breadth-first search over the world's
+  own legal actions; ``optimal_steps`` says that number, and ``demonstrations`` plays it.
+- **CLI = Python**: ``blockstack run --agent exact`` plays, step for step, what the Python
+  environment's expert plays from the same seeds.
+- **Files**: every reader, in the CLI and in Python, refuses a FIFO or a device at once.
+
+Breaking any one of them (a protocol the expert ignores, a refused action that raises, a
+reader that opens before it looks) fails a test here.
+"""
+
+from __future__ import annotations
+
+import collections
+import dataclasses
+import json
+import os
+import subprocess
+import sys
+import warnings
+from typing import Optional
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+from gymnasium.vector import AutoresetMode, SyncVectorEnv
+
+import blockstack
+from blockstack.vector import StackVectorEnv
+
+#: A small Blocks World task: c on a, b alone; the goal a on b on c.
+TASK = """(define (problem conformance) (:domain blocksworld) (:objects a b c)
+ (:init (arm-empty) (clear c) (on c a) (on-table a) (clear b) (on-table b))
+ (:goal (and (on a b) (on b c) (on-table c))))
+"""
+
+
+@dataclasses.dataclass(frozen=True)
+class World:
+    """One world: a registered id and the keywords that make it."""
+
+    env_id: str
+    keywords: tuple  # (name, value) pairs, hashable for pytest's ids
+
+    @property
+    def kwargs(self) -> dict:
+        return dict(self.keywords)
+
+    @property
+    def name(self) -> str:
+        return self.env_id.split("/")[1] + "(" + ", ".join(f"{k}={v}" for k, v in self.keywords) + ")"
+
+    @property
+    def view(self) -> str:
+        return "side" if self.env_id == blockstack.BLOCKS_WORLD_ID else self.kwargs.get("view", "top")
+
+    @property
+    def moves(self) -> bool:
+        return self.kwargs.get("actions") == "moves"
+
+    def make(self, task: Optional[str] = None, **extra):
+        kwargs = dict(self.kwargs, backend="grid", **extra)
+        if kwargs.pop("pddl", None):
+            kwargs["pddl"] = task
+        elif self.env_id != blockstack.GOAL_ENV_ID:
+            kwargs.setdefault("blocks", 2 if self.view == "top" else 3)
+        else:
+            kwargs.setdefault("blocks", 2)
+        return gym.make(self.env_id, **kwargs).unwrapped
+
+
+def _combinations():
+    """Every id with every value of the keywords it takes: ``(id, keywords)``."""
+    ids = {
+        blockstack.ENV_ID: ("profile", "protocol", "view", "actions"),
+        blockstack.BLOCKS_WORLD_ID: ("profile", "protocol", "actions", "pddl"),
+        blockstack.GOAL_ENV_ID: ("profile", "protocol", "view"),
+    }
+    values = {
+        "profile": ("spec", "original"),
+        "protocol": ("free", "paper"),
+        "view": ("top", "side"),
+        "actions": ("gripper", "moves"),
+        "pddl": (False, True),
+    }
+    for env_id, names in ids.items():
+        for chosen in __import__("itertools").product(*(values[n] for n in names)):
+            keywords = tuple((n, v) for n, v in zip(names, chosen) if not (n == "pddl" and not v))
+            yield env_id, keywords
+
+
+def _refusal(env_id: str, kw: dict) -> Optional[str]:
+    """The words a combination is refused in, or ``None`` for a world."""
+    side = env_id == blockstack.BLOCKS_WORLD_ID or kw.get("view") == "side"
+    if kw.get("actions") == "moves" and not side:
+        return 'needs view="side"'
+    if kw.get("profile") == "original" and side:
+        # The authors' start rule places blocks in the air: the side view starts from towers.
+        return "the paper start rule places blocks in the air"
+    return None
+
+
+WORLDS = [World(i, k) for i, k in _combinations() if _refusal(i, dict(k)) is None]
+REFUSED = [(World(i, k), _refusal(i, dict(k))) for i, k in _combinations() if _refusal(i, dict(k))]
+
+
+@pytest.fixture(scope="module")
+def task(tmp_path_factory) -> str:
+    path = tmp_path_factory.mktemp("conformance") / "task.pddl"
+    path.write_text(TASK)
+    return str(path)
+
+
+def by_name(worlds):
+    return pytest.mark.parametrize("world", worlds, ids=[w.name for w in worlds])
+
+
+def test_the_matrix_holds_every_world_and_names_every_refusal():
+    # 16 + 16 + 8 combinations, 8 + 8 + 6 of them worlds; a new keyword value grows these and
+    # the suite with them.
+    assert len(WORLDS) + len(REFUSED) == 40
+    assert len(WORLDS) == 22
+    assert {w.env_id for w in WORLDS} == {blockstack.ENV_ID, blockstack.BLOCKS_WORLD_ID, blockstack.GOAL_ENV_ID}
+
+
+@pytest.mark.parametrize("world, words", REFUSED, ids=[w.name for w, _ in REFUSED])
+def test_a_combination_no_world_has_is_refused_in_one_line(world, words, task):
+    with pytest.raises(ValueError) as e:
+        world.make(task)
+    assert words in str(e.value) and "\n" not in str(e.value)
+
+
+# Gymnasium's contract ----------------------------------------------------------------------
+
+
+@by_name(WORLDS)
+def test_check_env_passes_with_no_warning(world, task):
+    env = world.make(task)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        check_env(env, skip_render_check=True)
+    assert [str(w.message) for w in caught] == []
+
+
+def _native(env):
+    """The native environment under a Gymnasium class (the goal environment wraps one)."""
+    return env._native if hasattr(env, "_native") else env._env._native
+
+
+def _state(env):
+    cells, held, goal = _native(env).state()
+    return {"cells": [tuple(c) for c in cells], "held": held, "goal": list(goal)}
+
+
+def _same(a, b) -> bool:
+    if isinstance(a, dict):
+        return a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
+    return np.array_equal(np.asarray(a), np.asarray(b))
+
+
+@by_name(WORLDS)
+def test_every_action_of_the_space_is_taken_and_a_refused_one_changes_nothing(world, task):
+    env = world.make(task)
+    strict = world.make(task, strict=True)
+    env.action_space.seed(3)
+    env.reset(seed=3)
+    refused = taken = 0
+    for _ in range(150):
+        action = env.action_space.sample()
+        before = _state(env)
+        steps = _native(env).steps
+        strict.reset(options=before)
+        try:
+            expected = strict.step(action)
+        except ValueError as e:
+            expected = e
+        obs, reward, terminated, truncated, info = env.step(action)
+        if isinstance(expected, ValueError):
+            refused += 1
+            assert info["illegal"] and _state(env) == before, (world.name, action)
+            assert _native(env).steps == steps + 1, "a refused action counts towards the horizon"
+            assert not terminated
+        else:
+            taken += 1
+            assert not info["illegal"]
+            e_obs, e_reward, e_terminated, e_truncated, e_info = expected
+            assert _same(obs, e_obs) and reward == e_reward and terminated == e_terminated
+            assert info["action_mask"].tolist() == e_info["action_mask"].tolist()
+        if terminated or truncated:
+            env.reset()
+    assert taken > 0
+    if world.kwargs["protocol"] == "paper" or world.moves:
+        assert refused > 0, "the sample holds actions the rules refuse"
+
+
+@by_name([w for w in WORLDS if w.env_id == blockstack.ENV_ID and not w.moves])
+@pytest.mark.parametrize("mode", [AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP])
+def test_the_vector_env_steps_as_sync_vector_env_refused_actions_included(world, mode):
+    kwargs = dict(world.kwargs, backend="grid", blocks=2, horizon=25)
+    kwargs.pop("actions")
+    native = StackVectorEnv(3, autoreset_mode=mode, **kwargs)
+    sync = SyncVectorEnv([lambda: blockstack.StackEnv(**kwargs) for _ in range(3)], autoreset_mode=mode)
+    a, _ = native.reset(seed=9)
+    b, _ = sync.reset(seed=9)
+    assert np.array_equal(a, b)
+    rng = np.random.default_rng(1)
+    illegal = 0
+    for _ in range(80):
+        actions = rng.integers(0, native.single_action_space.n, size=3)
+        got = native.step(actions)
+        want = sync.step(actions)
+        for x, y in zip(got[:4], want[:4]):
+            assert np.array_equal(x, y)
+        assert np.array_equal(got[4]["illegal"], want[4]["illegal"])
+        illegal += int(got[4]["illegal"].sum())
+    if world.kwargs["protocol"] == "paper":
+        assert illegal > 0
+
+
+# The expert's contract ---------------------------------------------------------------------
+
+
+def _shortest(world, task, start) -> int:
+    """Breadth-first search over the world's own legal actions (its mask) from ``start``:
+    the fewest steps to a step that ends the episode at the goal."""
+    probe = world.make(task, strict=True, horizon=10_000)
+    key = lambda s: (tuple(s["cells"]), s["held"])  # noqa: E731
+    seen = {key(start)}
+    frontier = [start]
+    for depth in range(1, 60):
+        nxt = []
+        for state in frontier:
+            _, info = probe.reset(options=state)
+            for action in np.flatnonzero(info["action_mask"]):
+                probe.reset(options=state)
+                _, _, terminated, _, _ = probe.step(int(action))
+                if terminated:
+                    return depth
+                after = _state(probe)
+                if key(after) not in seen:
+                    seen.add(key(after))
+                    nxt.append(after)
+        frontier = nxt
+    raise AssertionError("no plan within 60 steps")
+
+
+@by_name(WORLDS)
+def test_the_expert_is_legal_reaches_the_goal_and_takes_the_fewest_steps(world, task):
+    env = world.make(task, horizon=500)
+    for seed in (1, 2):
+        _, info = env.reset(seed=seed)
+        start = _state(env)
+        fewest = _shortest(world, task, start)
+        assert env.optimal_steps() == fewest
+        steps = 0
+        while True:
+            action = env.expert_action()
+            assert info["action_mask"][action], (world.name, start, steps, action)
+            _, _, terminated, truncated, info = env.step(action)
+            steps += 1
+            assert not info["illegal"]
+            if terminated or truncated:
+                break
+        assert terminated and steps == fewest, (world.name, start, steps, fewest)
+
+
+# CLI = Python ------------------------------------------------------------------------------
+
+
+#: Every expert by the name ``run --agent`` and ``demonstrations(expert=...)`` take, by view.
+EXPERTS = {"top": ("exact", "oracle"), "side": ("exact", "exact-moves", "near-optimal", "oracle")}
+
+#: The gripper worlds that ``demonstrations`` plays (it takes world keywords, not a task).
+DEMONSTRATED = [
+    (w, e)
+    for w in WORLDS
+    if w.env_id != blockstack.GOAL_ENV_ID and not w.moves and "pddl" not in w.kwargs
+    for e in EXPERTS[w.view]
+]
+
+
+def _cli_episodes(cli, tmp_path, agent, flags, episodes, seed) -> dict:
+    """Each episode ``blockstack run --agent AGENT`` plays: its ``(action, reward)`` steps."""
+    out = tmp_path / f"{agent}.jsonl"
+    cli("run", "--agent", agent, "--episodes", episodes, "--seed", seed, "--trajectory", out, *flags)
+    played = collections.defaultdict(list)
+    for line in out.read_text().splitlines():
+        record = json.loads(line)
+        if record.get("type") == "step":
+            played[record["episode"]].append((record["action"], record["reward"]))
+    return played
+
+
+@pytest.mark.parametrize("world, expert", DEMONSTRATED, ids=[f"{w.name}-{e}" for w, e in DEMONSTRATED])
+def test_demonstrations_play_what_the_cli_plays_legally_to_the_goal(world, expert, cli, tmp_path, task):
+    kwargs = dict(world.kwargs, backend="grid", blocks=2 if world.view == "top" else 3, view=world.view)
+    kwargs.pop("actions", None)
+    demos = blockstack.demonstrations(3, expert=expert, obs="state", seed=5, **kwargs)
+    rows = np.arange(len(demos["actions"]))
+    assert demos["action_masks"][rows, demos["actions"]].all(), "every demonstrated action is legal"
+    # The oracle of the original profile is the authors' greedy walker, which can get stuck.
+    if not (expert == "oracle" and world.kwargs["profile"] == "original"):
+        assert demos["terminations"].sum() == 3, "every episode reaches the goal"
+    played = _cli_episodes(cli, tmp_path, expert, _cli_flags(world, task), 3, 5)
+    for k in range(3):
+        ours = demos["actions"][demos["episodes"] == k].tolist()
+        assert ours == [a for a, _ in played[k]], (world.name, expert, k)
+
+
+def _cli_flags(world, task) -> list:
+    kw = world.kwargs
+    flags = ["--backend", "grid", "--profile", kw.get("profile", "spec"), "--protocol", kw["protocol"]]
+    if kw.get("pddl"):
+        return flags + ["--pddl", task]
+    flags += ["--view", world.view, "--blocks", "2" if world.view == "top" else "3"]
+    return flags
+
+
+@by_name([w for w in WORLDS if w.env_id != blockstack.GOAL_ENV_ID])
+def test_the_cli_plays_what_the_python_expert_plays(world, task, cli, tmp_path):
+    """Gripper actions: the same actions and rewards, step for step. Block moves: the CLI's
+    fewest block moves carried out by the gripper (``exact-moves``) take the gripper steps
+    and earn the reward the moves environment reports for its expert's moves."""
+    agent = "exact-moves" if world.moves else "exact"
+    episodes = _cli_episodes(cli, tmp_path, agent, _cli_flags(world, task), 2, 5)
+    env = world.make(task)
+    for k in range(2):
+        env.reset(seed=blockstack.episode_seed(5, k))
+        played = []
+        while True:
+            _, reward, terminated, truncated, info = env.step(env.expert_action())
+            played.append((info.get("gripper_steps", 1), reward))
+            if terminated or truncated:
+                break
+        cli_steps = episodes[k]
+        assert sum(n for n, _ in played) == len(cli_steps), world.name
+        if world.moves:
+            assert len(played) == sum(a >= 5 for a, _ in cli_steps), "one pick (index 5 + block) a move"
+            assert sum(r for _, r in played) == pytest.approx(sum(r for _, r in cli_steps))
+        else:
+            assert [r for _, r in played] == pytest.approx([r for _, r in cli_steps])
+
+
+# Files -------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def fifo(tmp_path_factory) -> str:
+    folder = tmp_path_factory.mktemp("fifo")
+    path = folder / "input.pddl"
+    os.mkfifo(path)
+    return str(path)
+
+
+#: Every Python reader of a file, as a call on the path ``p``.
+PYTHON_READERS = {
+    "read_pddl": "blockstack.read_pddl(p)",
+    "BlocksWorld-v0(pddl=)": "blockstack.BlocksWorldEnv(pddl=p)",
+    "read_recording": "blockstack.read_recording(p)",
+    "load": "blockstack.load(p)",
+    "to_minari": "blockstack.to_minari([p], 'conformance/never-v0')",
+    "sweep config": "blockstack.sweep.read_config(p)",
+}
+
+
+@pytest.mark.parametrize("reader", sorted(PYTHON_READERS))
+@pytest.mark.parametrize("special", ["fifo", "/dev/zero"])
+def test_every_python_reader_refuses_a_fifo_or_a_device_at_once(reader, special, fifo, tmp_path):
+    path = fifo if special == "fifo" else special
+    # In a process of its own: a reader that opened a FIFO before looking would wait for a
+    # writer forever, and /dev/zero would be read until memory ran out.
+    script = (
+        "import sys, blockstack, blockstack.sweep\n"
+        "p = sys.argv[1]\n"
+        "try:\n"
+        f"    {PYTHON_READERS[reader]}\n"
+        "except ValueError as e:\n"
+        "    print(e)\n"
+    )
+    env = dict(os.environ, MINARI_DATASETS_PATH=str(tmp_path / "datasets"))
+    run = subprocess.run([sys.executable, "-c", script, path], capture_output=True, text=True, timeout=60, env=env)
+    assert run.returncode == 0, run.stderr
+    assert "pipe or a device" in run.stdout, run.stdout
+
+
+CLI_READERS = {
+    "solve --pddl": lambda p: ["solve", "--pddl", p],
+    "dqn --resume": lambda p: ["dqn", "--resume", p, "--out", "/tmp/never.safetensors"],
+    "dqn --demos-file": lambda p: ["dqn", "--demos-file", p, "--out", "/tmp/never.safetensors", "--steps", "1"],
+    "learn-from-demos": lambda p: ["learn-from-demos", p, "--model", p, "--out", "/tmp/never.safetensors"],
+    "run --pddl": lambda p: ["run", "--pddl", p],
+    "run --model": lambda p: ["run", "--agent", "q", "--model", p],
+    "eval --model": lambda p: ["eval", "--model", p],
+}
+
+
+@pytest.mark.parametrize("reader", sorted(CLI_READERS))
+@pytest.mark.parametrize("special", ["fifo", "/dev/zero"])
+def test_every_cli_reader_refuses_a_fifo_or_a_device_at_once(reader, special, fifo, tmp_path):
+    path = fifo if special == "fifo" else special
+    binary = os.environ.get("BLOCKSTACK_BIN", str(pathlib_root() / "target" / "release" / "blockstack"))
+    run = subprocess.run([binary, *CLI_READERS[reader](path)], capture_output=True, text=True, timeout=30)
+    assert run.returncode == 2, run.stderr
+    assert "pipe or a device" in run.stderr and run.stderr.count("\n") == 1, run.stderr
+
+
+def test_solve_all_refuses_a_fifo_among_its_tasks_and_goes_on(fifo, cli, tmp_path):
+    folder = tmp_path / "tasks"
+    folder.mkdir()
+    (folder / "p01.pddl").write_text(TASK)
+    os.symlink(fifo, folder / "p02.pddl")
+    out = json.loads(cli("solve-all", "--tasks", folder, "--json"))
+    rows = {row["task"]: row for row in out["tasks"]}
+    assert rows["p01.pddl"]["actions"] is not None
+    assert "pipe or a device" in rows["p02.pddl"]["error"]
+
+
+def pathlib_root():
+    import pathlib
+
+    return pathlib.Path(__file__).resolve().parents[2]
