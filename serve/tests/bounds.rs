@@ -297,3 +297,23 @@ async fn a_condition_that_cannot_run_is_refused_at_start() {
         "no recording was begun"
     );
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn every_answer_carries_the_pages_security_headers() {
+    let dir = tempfile::tempdir().unwrap();
+    let (addr, _) = start(quick(dir.path(), Limits::default())).await;
+    for path in ["/", "/assets/app.js", "/s/00000000000000000000000000000000", "/nowhere"] {
+        let (_, response) = http(addr, "GET", path, "").await;
+        let head = response.split("\r\n\r\n").next().unwrap().to_ascii_lowercase();
+        for header in [
+            "content-security-policy: default-src 'none'; script-src 'self'; style-src 'self'",
+            "x-frame-options: deny",
+            "referrer-policy: no-referrer",
+        ] {
+            assert!(head.contains(header), "{path}: {header} missing in {head}");
+        }
+    }
+    // An https page is not this http server's (P22): refused by scheme, as another port is.
+    let (status, _) = http_with(addr, "POST", "/join", "name=x", &format!("Origin: https://{addr}\r\n")).await;
+    assert_eq!(status, 403);
+}
