@@ -81,3 +81,69 @@ fn files_written_by_the_previous_release_still_read() {
         assert!(net.exists(), "{demos}");
     }
 }
+
+/// The fixture recording with `edit` applied to its session line, and with a `withdrawn`
+/// line appended when `withdrawn`, written into `dir` as `name`.
+fn recording_as(dir: &Path, name: &str, edit: impl Fn(&mut serde_json::Value), withdrawn: bool) -> PathBuf {
+    let text = std::fs::read_to_string(fixture("recording-v2.jsonl")).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let mut session: serde_json::Value = serde_json::from_str(&lines[0]).unwrap();
+    edit(&mut session);
+    lines[0] = session.to_string();
+    if withdrawn {
+        lines.push(r#"{"type":"withdrawn","at_ms":1764800009999}"#.into());
+    }
+    let file = dir.join(name);
+    std::fs::write(&file, lines.join("\n") + "\n").unwrap();
+    file
+}
+
+#[test]
+fn a_withdrawn_participants_recording_is_refused_by_every_reader_unless_audited() {
+    let dir = scratch("readers-withdrawn");
+    let withdrawn = recording_as(&dir, "w.jsonl", |_| {}, true);
+    let net = dir.join("net.safetensors");
+    refused_in_one_line(&dqn(&withdrawn, &net), "withdrew");
+    assert!(!net.exists());
+    let out = dir.join("learnt.safetensors");
+    let learn = cli("learn-from-demos")
+        .arg(path(&withdrawn))
+        .flag("model", path(&fixture("model.safetensors")))
+        .flag("out", path(&out));
+    refused_in_one_line(&learn.clone().run(), "--include-withdrawn");
+    assert!(!out.exists(), "nothing saved");
+    // An audit reads it, and says so in one line.
+    let o = learn.arg("--include-withdrawn").run();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.exists());
+    let err = stderr(&o);
+    assert_eq!(err.lines().filter(|l| l.contains("withdrew")).count(), 1, "{err}");
+}
+
+#[test]
+fn a_recording_of_another_world_is_refused_naming_both() {
+    let dir = scratch("readers-other-world");
+    // The same steps said to be of the side view, and of the paper's protocol.
+    let side = recording_as(&dir, "side.jsonl", |s| s["view"] = "side".into(), false);
+    let paper = recording_as(
+        &dir,
+        "paper.jsonl",
+        |s| {
+            s["version"] = 3.into();
+            s["world"] = serde_json::json!({"reward": "sparse", "protocol": "paper", "horizon": 1000});
+        },
+        false,
+    );
+    let net = dir.join("net.safetensors");
+    refused_in_one_line(&dqn(&side, &net), "the recording is of the side view");
+    refused_in_one_line(&dqn(&side, &net), "this run is of the top view");
+    refused_in_one_line(&dqn(&paper, &net), "the paper protocol; this run is of");
+    assert!(!net.exists());
+    let out = dir.join("learnt.safetensors");
+    let o = cli("learn-from-demos")
+        .arg(path(&side))
+        .flag("model", path(&fixture("model.safetensors")))
+        .flag("out", path(&out))
+        .run();
+    refused_in_one_line(&o, "the recording is of the side view");
+}

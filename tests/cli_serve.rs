@@ -47,3 +47,67 @@ fn a_setting_that_cannot_work_is_one_line_and_status_2() {
         assert!(err.contains(expected), "{args:?}: {err}");
     }
 }
+
+#[test]
+fn a_pilot_of_the_example_study_fills_the_researchers_page() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/study");
+    for file in ["crowd.toml", "consent.md", "instructions.md"] {
+        std::fs::copy(root.join(file), dir.path().join(file)).unwrap();
+    }
+    // The study's two models, small (the example's commands with fewer games).
+    for args in [
+        &["--goals", "0,1,2:2,1,0", "--out", "top.safetensors"][..],
+        &["--view", "side", "--out", "side.safetensors"][..],
+    ] {
+        let o = blockstack()
+            .current_dir(dir.path())
+            .args(["train", "--games", "200"])
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let record = dir.path().join("pilot");
+    let o = blockstack()
+        .current_dir(dir.path())
+        .args([
+            "pilot",
+            "--study",
+            "crowd.toml",
+            "--participants",
+            "4",
+            "--record-dir",
+            "pilot",
+            "--seed",
+            "2",
+        ])
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{out}{}", String::from_utf8_lossy(&o.stderr));
+    // A demonstrator finished with the code, one withdrew, a random player gave up.
+    assert!(
+        out.contains("demonstrator (careful expert)") && out.contains("completion code C7Q2XK"),
+        "{out}"
+    );
+    assert_eq!(out.matches("; withdrew").count(), 1, "{out}");
+    assert!(
+        out.contains("random player") && out.contains("left without finishing"),
+        "{out}"
+    );
+    // The researcher's page counts the three who stayed, of the study's 60; the withdrawn
+    // one is left out.
+    assert!(
+        out.contains("the researcher's page: 3 participants of at most 60; 1 withdrawn left out"),
+        "{out}"
+    );
+    let recordings = std::fs::read_dir(&record)
+        .unwrap()
+        .filter(|e| e.as_ref().unwrap().file_name().to_str().unwrap().starts_with('p'))
+        .count();
+    assert_eq!(
+        recordings, 4,
+        "the withdrawn one marked, not deleted (withdrawal = \"mark\")"
+    );
+}

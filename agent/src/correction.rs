@@ -375,7 +375,9 @@ pub struct SessionReport {
 /// [`policy_rng`]`(episode_seed(seed, k))` with probability `epsilon` of a random action.
 /// Every line is handed to the sink as it happens.
 pub struct CorrectionSession<S: DemoSink> {
-    agent: QAgent,
+    /// Shared with whoever gave it (a server's many participants start from one model)
+    /// until the session's first lesson copies it.
+    agent: std::sync::Arc<QAgent>,
     rule: CorrectionRule,
     world: EnvConfig,
     goals: Vec<Goal>,
@@ -423,7 +425,7 @@ impl<S: DemoSink> CorrectionSession<S> {
     /// and `model` are recorded as given (who corrects, which model file).
     #[allow(clippy::too_many_arguments, reason = "each is one documented setting of the session")]
     pub fn new(
-        agent: QAgent,
+        agent: impl Into<std::sync::Arc<QAgent>>,
         rule: CorrectionRule,
         world: EnvConfig,
         goals: Vec<Goal>,
@@ -447,7 +449,7 @@ impl<S: DemoSink> CorrectionSession<S> {
     /// them).
     #[allow(clippy::too_many_arguments, reason = "each is one documented setting of the session")]
     pub fn labelled(
-        agent: QAgent,
+        agent: impl Into<std::sync::Arc<QAgent>>,
         rule: CorrectionRule,
         world: EnvConfig,
         goals: Vec<Goal>,
@@ -456,6 +458,7 @@ impl<S: DemoSink> CorrectionSession<S> {
         labels: SessionLabels,
         mut sink: S,
     ) -> Result<Self> {
+        let agent = agent.into();
         rule.validate()?;
         check_epsilon(epsilon)?;
         if goals.is_empty() {
@@ -601,7 +604,7 @@ impl<S: DemoSink> CorrectionSession<S> {
         let step = env.step(action)?;
         let corrected = correction.is_some();
         self.rule.learn(
-            &mut self.agent,
+            std::sync::Arc::make_mut(&mut self.agent),
             &Experience {
                 obs: obs.clone(),
                 action,
@@ -730,7 +733,7 @@ impl<S: DemoSink> CorrectionSession<S> {
 
     /// Ends the session: the corrected agent, the sink, and the totals.
     pub fn finish(self) -> (QAgent, S, SessionReport) {
-        (self.agent, self.sink, self.report)
+        (std::sync::Arc::unwrap_or_clone(self.agent), self.sink, self.report)
     }
 }
 

@@ -6,9 +6,10 @@
 //!   shares) and follows the planner's plan, carried out by `sim`'s rules.
 //! - **Files.** A `blockstack-demos` recording (what `blockstack demo` and `blockstack
 //!   correct` record) or a trajectory file (`blockstack run --trajectory`), read by
-//!   `agent::demos::read_episodes`, the checked reader of each format that the Python
+//!   `agent::demos::read_admitted`, the checked reader of each format that the Python
 //!   package uses too (a file that does not replay by the rules is refused, naming the
-//!   line). A recording's corrections are demonstrated actions (the large-margin loss
+//!   line; so is a recording of another view, protocol, grid or block count than the run's,
+//!   and a withdrawn participant's). A recording's corrections are demonstrated actions (the large-margin loss
 //!   applies to them), the agent's own steps transitions like any other; every step of a
 //!   trajectory file is demonstrated.
 //!
@@ -22,7 +23,9 @@ use oracle::{ExactSolver, Oracle, Planner};
 use rayon::prelude::*;
 use sim::reward::Transition as RewardTransition;
 use sim::seeding::episode_seed;
-use sim::{Action, Env, Goal, Grid, GridWorld, Observation, State};
+use sim::{Action, Env, Goal, GridWorld, Observation, State};
+
+use agent::demos::{Admission, RunWorld};
 
 use crate::config::{DemoSource, DqnConfig};
 use crate::error::Result;
@@ -95,7 +98,7 @@ pub fn load(config: &DqnConfig) -> Result<Vec<DemoEpisode>> {
         DemoSource::None => Ok(Vec::new()),
         DemoSource::Exact(k) => planned(config, *k, &ExactSolver::new(config.world.grid)),
         DemoSource::Oracle(k) => planned(config, *k, &Oracle::new(config.world.grid)),
-        DemoSource::File(path) => read(Path::new(path), config.world.grid, config.world.blocks),
+        DemoSource::File(path) => read(Path::new(path), RunWorld::of(&config.world)),
     }
 }
 
@@ -131,9 +134,14 @@ pub fn planned<P: Planner + Sync>(config: &DqnConfig, count: u64, planner: &P) -
 }
 
 /// The demonstrations in the file at `path`, a `blockstack-demos` recording or a trajectory
-/// file, for `blocks` blocks on `grid` (module docs).
-pub fn read(path: &Path, grid: Grid, blocks: usize) -> Result<Vec<DemoEpisode>> {
-    Ok(agent::demos::read_episodes(path, Some((grid, blocks)))?
+/// file, of the run's `world` (module docs): a withdrawn participant's recording is refused.
+pub fn read(path: &Path, world: RunWorld) -> Result<Vec<DemoEpisode>> {
+    let admission = Admission {
+        world: Some(world),
+        include_withdrawn: false,
+    };
+    Ok(agent::demos::read_admitted(path, &admission)?
+        .read
         .into_iter()
         .map(DemoEpisode::from)
         .collect())
@@ -196,7 +204,7 @@ mod tests {
         let mut writer = sim::trajectory::TrajectoryWriter::create(&out).unwrap();
         let results = agent::play(&mut env, &mut policy, 3, 9, &mut writer).unwrap();
         writer.finish().unwrap();
-        let episodes = read(&path, c.world.grid, 3).unwrap();
+        let episodes = read(&path, RunWorld::of(&c.world)).unwrap();
         assert_eq!(episodes.len(), 3);
         for (e, r) in episodes.iter().zip(&results) {
             assert_eq!(
@@ -207,22 +215,22 @@ mod tests {
         let text = std::fs::read_to_string(&path).unwrap();
         let broken = text.replacen("\"action\":", "\"action\":1,\"x\":", 1);
         std::fs::write(&path, broken).unwrap();
-        let err = read(&path, c.world.grid, 3).unwrap_err().to_string();
+        let err = read(&path, RunWorld::of(&c.world)).unwrap_err().to_string();
         assert!(err.contains("line 2"), "{err}");
     }
 
     #[test]
     fn files_written_by_the_previous_release_read_as_demonstrations() {
-        let grid = Grid::default();
-        let recording = read(&testkit::fixture("recording-v2.jsonl"), grid, 3).unwrap();
+        let world = RunWorld::of(&config(DemoSource::None).world);
+        let recording = read(&testkit::fixture("recording-v2.jsonl"), world).unwrap();
         assert_eq!(recording.len(), 2, "one per episode line");
         assert!(recording.iter().any(|e| e.expert.iter().any(|&x| x)), "corrections");
         assert!(recording.iter().all(|e| e.goal.holds(e.states.last().unwrap())));
-        let trajectory = read(&testkit::fixture("trajectory.jsonl"), grid, 3).unwrap();
+        let trajectory = read(&testkit::fixture("trajectory.jsonl"), world).unwrap();
         assert_eq!(trajectory.len(), 3);
         assert!(trajectory.iter().all(|e| e.expert.iter().all(|&x| x)));
         // Another world than the learner's is refused.
-        let err = read(&testkit::fixture("trajectory-dense.jsonl"), grid, 3)
+        let err = read(&testkit::fixture("trajectory-dense.jsonl"), world)
             .unwrap_err()
             .to_string();
         assert!(err.contains("4 blocks on a 5x6 grid"), "{err}");
@@ -245,7 +253,9 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("t.jsonl");
         std::fs::write(&path, broken).unwrap();
-        let err = read(&path, Grid::default(), 3).unwrap_err().to_string();
+        let err = read(&path, RunWorld::of(&config(DemoSource::None).world))
+            .unwrap_err()
+            .to_string();
         assert!(
             err.contains(&format!("line {}", last + 2)) && err.contains("ended"),
             "{err}"

@@ -15,7 +15,8 @@ Ready for behaviour cloning (``observations`` -> ``actions``) or DQfD (add
 from __future__ import annotations
 
 import os
-from typing import Any, Union
+import warnings
+from typing import Any, Optional, Union
 
 from blockstack import _native
 from blockstack._checks import fits_in_memory, memory_bytes, observation_bytes, whole
@@ -56,21 +57,36 @@ def demonstrations(
     return _native.demonstrations(episodes, w, expert, seed, obs)
 
 
-def read_recording(path: Union[str, os.PathLike], obs: str = "planes", profile: str = "spec") -> dict:
+def read_recording(
+    path: Union[str, os.PathLike],
+    obs: str = "planes",
+    profile: Optional[str] = None,
+    *,
+    include_withdrawn: bool = False,
+) -> dict:
     """A recording the CLI wrote, as the arrays :func:`demonstrations` gives.
 
     Reads trajectory files (``blockstack run --trajectory FILE``) and demonstration
     recordings (``blockstack demo`` / ``correct --record FILE``); the lines tell which.
-    Recordings do not name their world: ``action_masks`` follow ``profile``'s protocol.
-    Every line is checked as ``blockstack dqn --demos-file`` checks it (the rules replayed,
-    rewards and end flags that some reward model and termination rule give, one world per
-    file): a file the CLI refuses raises ``ValueError`` with the CLI's message. A file
-    whose arrays would need more than the machine's memory is refused, saying how large
-    they would be, before they are made.
+    With ``profile``, a recording of another action protocol than the profile's
+    (``spec``: free, ``original``: the paper's) is refused, naming both, and
+    ``action_masks`` follow the profile's protocol; without it they follow the protocol
+    the recording names (free when it names none). Every line is checked as ``blockstack
+    dqn --demos-file`` checks it (the rules replayed, rewards and end flags that some
+    reward model and termination rule give, one world per file): a file the CLI refuses
+    raises ``ValueError`` with the CLI's message. A withdrawn participant's recording is
+    refused (``ValueError`` naming the withdrawal) unless ``include_withdrawn=True`` (an
+    audit; a warning says so). A file whose arrays would need more than the machine's
+    memory is refused, saying how large they would be, before they are made.
     """
     for name, value in (("obs", obs), ("profile", profile)):
-        if not isinstance(value, str):
+        if value is not None and not isinstance(value, str):
             raise ValueError(f"{name} is a name (text), not {value!r}")
     if not isinstance(path, (str, os.PathLike)):
         raise ValueError(f"path is a file name (text or a path), not {path!r}")
-    return _native.read_recording(os.fspath(path), obs, profile, memory_bytes())
+    if not isinstance(include_withdrawn, bool):
+        raise ValueError(f"include_withdrawn is True or False, not {include_withdrawn!r}")
+    arrays, note = _native.read_recording(os.fspath(path), obs, profile, memory_bytes(), include_withdrawn)
+    if note:
+        warnings.warn(note, stacklevel=2)
+    return arrays

@@ -33,6 +33,7 @@ import os
 import re
 import shutil
 import tempfile
+import warnings
 from pathlib import Path
 from typing import Iterable, List, Optional, Union
 
@@ -154,18 +155,21 @@ def _create_in_place(dataset_id: str, folder: Path, **create_args):
     return minari.load_dataset(dataset_id)
 
 
-def _episodes(paths: List[PathLike], obs: str, world: Optional[dict]) -> tuple[list, int]:
+def _episodes(paths: List[PathLike], obs: str, world: Optional[dict], include_withdrawn: bool) -> tuple[list, int]:
     """Every episode with a step of the recordings at ``paths``, each with its ``path``, and
-    how many recordings were left out as withdrawn; a ``ValueError`` for recordings of
-    several worlds, or of an older version that recorded no world when ``world`` is not
-    given."""
+    how many recordings were left out as withdrawn (a warning names them; only withdrawn
+    ones: a ``ValueError`` naming the withdrawal), unless ``include_withdrawn``; a
+    ``ValueError`` for recordings of several worlds, or of an older version that recorded
+    no world when ``world`` is not given."""
     episodes = []
-    left_out = 0
+    withdrawn = []
     for path in paths:
-        read = _native.recording_episodes(str(path), obs)
-        if read["withdrawn"]:
-            left_out += 1
+        read = _native.recording_episodes(str(path), obs, include_withdrawn)
+        if read["withdrawn"] and not include_withdrawn:
+            withdrawn.append(os.fspath(path))
             continue
+        if read["note"]:
+            warnings.warn(read["note"], stacklevel=3)
         for e in read["episodes"]:
             e["path"] = str(path)
             if e["world"] is None:
@@ -176,8 +180,16 @@ def _episodes(paths: List[PathLike], obs: str, world: Optional[dict]) -> tuple[l
                     )
                 e["world"] = dict(world)
         episodes.extend(read["episodes"])
+    left_out = len(withdrawn)
+    if withdrawn:
+        warnings.warn(f"left out {left_out} withdrawn participants' recordings: {', '.join(withdrawn)}", stacklevel=3)
+    if not episodes and withdrawn:
+        raise ValueError(
+            f"every recording given is a withdrawn participant's ({', '.join(withdrawn)}): left out of every "
+            "analysis; include_withdrawn=True reads them for an audit"
+        )
     if not episodes:
-        raise ValueError("the recordings hold no episode with a step (or every participant withdrew)")
+        raise ValueError("the recordings hold no episode with a step")
     first = episodes[0]
     for e in episodes[1:]:
         if _world_key(e) != _world_key(first):
@@ -237,6 +249,7 @@ def to_minari(
     reference_episodes: int = 100,
     seed: int = 0,
     world: Optional[dict] = None,
+    include_withdrawn: bool = False,
 ):
     """The recordings at ``paths`` (one path or several) as the Minari dataset
     ``dataset_id`` (``namespace/env/name-v0``, e.g. ``blockstack/stack/crowd-v0``), written
@@ -252,6 +265,8 @@ def to_minari(
     ...}``). Observations are stored as they are: Minari's writer would JPEG-encode
     image-like arrays (``paper-screen``), so it is told not to. ``reference_episodes``
     episodes from ``reference_episodes`` seeded starts (``seed``) give the reference scores.
+    Withdrawn participants' recordings are left out (a warning names them) unless
+    ``include_withdrawn=True`` (an audit).
     """
     try:
         import minari
@@ -264,7 +279,7 @@ def to_minari(
     folder = check_dataset_id(dataset_id)
     if isinstance(paths, (str, bytes)) or hasattr(paths, "__fspath__"):
         paths = [paths]
-    episodes, left_out = _episodes(list(paths), obs, world)
+    episodes, left_out = _episodes(list(paths), obs, world, include_withdrawn)
     kwargs = _env_kwargs(episodes[0], obs)
     registered = gym.spec(blockstack.ENV_ID)
     spec = gym.envs.registration.EnvSpec(

@@ -248,29 +248,41 @@ pub fn demonstrations<'py>(
 
 /// Reads a recording the CLI wrote into the arrays [`demonstrations`] gives: a trajectory
 /// file (`blockstack run --trajectory`) or a demonstration recording (`blockstack demo` /
-/// `correct --record`), told by the first line. Read by `agent::demos::read_episodes`, the
+/// `correct --record`), told by the first line. Read by `agent::demos::read_admitted`, the
 /// checked reader `blockstack dqn --demos-file` uses: a file the CLI refuses is a
 /// `ValueError` with the CLI's message, naming the line. A file holds one world (grid and
-/// block count). Recordings do not name the protocol they were played under: the
-/// `action_masks` are those of `profile`'s action protocol.
+/// block count). With `profile`, a recording of another protocol than the profile's is
+/// refused (naming both) and the `action_masks` are the profile's; without it they are
+/// the protocol the recording names (the free one when it names none). A withdrawn
+/// participant's recording is refused unless `include_withdrawn`; the second item is the
+/// line to say when it was read all the same.
 #[pyfunction]
 /// Reading happens on a thread of its own while this one looks for Ctrl-C every 100 ms, so
 /// a file that never comes (a FIFO with no writer) or a long read stops with
 /// `KeyboardInterrupt`; the abandoned reader ends when its file does.
 /// `max_bytes` bounds the arrays: a file whose arrays would need more is refused, saying
 /// how large they would be, before anything is allocated.
-#[pyo3(signature = (path, obs="planes", profile="spec", max_bytes=None))]
+#[pyo3(signature = (path, obs="planes", profile=None, max_bytes=None, include_withdrawn=false))]
 pub fn read_recording<'py>(
     py: Python<'py>,
     path: PathBuf,
     obs: &str,
-    profile: &str,
+    profile: Option<&str>,
     max_bytes: Option<u64>,
-) -> PyResult<Bound<'py, PyDict>> {
+    include_withdrawn: bool,
+) -> PyResult<(Bound<'py, PyDict>, Option<String>)> {
     let kind = config::obs_kind(obs)?;
-    let protocol = config::profile(profile)?.protocol();
-    let episodes = read_interruptibly(py, &path)?;
-    guard(|| {
+    let protocol = profile.map(config::profile).transpose()?.map(|p| p.protocol());
+    let admission = agent::demos::Admission {
+        world: protocol.map(|protocol| agent::demos::RunWorld {
+            protocol: Some(protocol),
+            ..agent::demos::RunWorld::default()
+        }),
+        include_withdrawn,
+    };
+    let admitted = read_in_thread(py, &path, move |p| agent::demos::read_admitted(p, &admission))?;
+    let (episodes, note) = (admitted.read, admitted.note);
+    let arrays = guard(|| {
         // The reader holds a file to one world, that of its first episode (which exists).
         let Some(first) = episodes.first() else {
             return Err(value_error(format!("{} holds no episode", path.display())));
@@ -288,11 +300,12 @@ pub fn read_recording<'py>(
         }
         let mut columns = Columns::default();
         for e in &episodes {
+            let recorded = e.world.as_ref().map_or(sim::ActionProtocol::Free, |w| w.protocol);
             let mut obs = Observation {
                 grid: e.grid,
                 state: e.start.clone(),
                 goal: e.goal.clone(),
-                protocol,
+                protocol: protocol.unwrap_or(recorded),
                 view: e.view,
             };
             for (k, step) in e.steps.iter().enumerate() {
@@ -314,7 +327,8 @@ pub fn read_recording<'py>(
             }
         }
         columns.into_dict(py, kind, grid, blocks)
-    })
+    })?;
+    Ok((arrays, note))
 }
 
 /// The episodes of a recording as the researcher's exports read them (Minari's
@@ -326,15 +340,35 @@ pub fn read_recording<'py>(
 /// (text), `view`, `grid`, `blocks`, `started_ms`, `ended` (by its rules), `participant`
 /// (a dict, or `None`) and `world` (`reward`, `protocol`, `horizon`, or `None` before
 /// recording version 3). Every line is checked; a bad one (the last line a kill cut short)
-/// is skipped, as the researcher's page does. Episodes without a step are left out.
+/// is skipped, as the researcher's page does. Episodes without a step are left out. A
+/// withdrawn participant's recording gives no episode (`withdrawn` says why) unless
+/// `include_withdrawn`.
 #[pyfunction]
-#[pyo3(signature = (path, obs="planes"))]
-pub fn recording_episodes<'py>(py: Python<'py>, path: PathBuf, obs: &str) -> PyResult<Bound<'py, PyDict>> {
+#[pyo3(signature = (path, obs="planes", include_withdrawn=false))]
+pub fn recording_episodes<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+    obs: &str,
+    include_withdrawn: bool,
+) -> PyResult<Bound<'py, PyDict>> {
     let kind = config::obs_kind(obs)?;
-    let read = read_in_thread(py, &path, |p| agent::demos::read_demonstrations(p, None))?;
+    let admission = agent::demos::Admission {
+        world: None,
+        include_withdrawn,
+    };
+    let mut read = read_in_thread(py, &path, |p| agent::demos::read_demonstrations(p, None))?;
+    // The one rule of every reader: a withdrawn recording is left out unless an audit asks.
+    let note = match admission.withdrawal(&path, read.withdrawn) {
+        Ok(note) => note,
+        Err(refused) => {
+            read.episodes.clear();
+            Some(refused.to_string())
+        }
+    };
     guard(|| {
         let out = PyDict::new(py);
         out.set_item("withdrawn", read.withdrawn)?;
+        out.set_item("note", note)?;
         let episodes = pyo3::types::PyList::empty(py);
         for e in &read.episodes {
             let Some(last) = e.steps.last() else { continue };
@@ -421,19 +455,13 @@ pub fn recording_episodes<'py>(py: Python<'py>, path: PathBuf, obs: &str) -> PyR
     })
 }
 
-/// [`agent::demos::read_episodes`] of `path` on a thread of its own, the caller checking for
-/// signals (Ctrl-C) every 100 ms: opening a FIFO blocks until a writer comes, which no
-/// signal check inside the reader could interrupt.
-fn read_interruptibly(py: Python<'_>, path: &std::path::Path) -> PyResult<Vec<agent::demos::DemoEpisode>> {
-    read_in_thread(py, path, |p| agent::demos::read_episodes(p, None))
-}
-
 /// `read(path)` on a thread of its own, the caller checking for signals (Ctrl-C) every
-/// 100 ms ([`read_interruptibly`]).
+/// 100 ms: opening a FIFO blocks until a writer comes, which no signal check inside the
+/// reader could interrupt.
 fn read_in_thread<T: Send + 'static>(
     py: Python<'_>,
     path: &std::path::Path,
-    read: fn(&std::path::Path) -> agent::Result<T>,
+    read: impl FnOnce(&std::path::Path) -> agent::Result<T> + Send + 'static,
 ) -> PyResult<T> {
     use std::sync::mpsc::{RecvTimeoutError, channel};
     let (sender, receiver) = channel();

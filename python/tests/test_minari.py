@@ -96,11 +96,35 @@ def test_withdrawn_participants_are_left_out(corrected, datasets, tmp_path):
     record, timed = corrected
     withdrawn = tmp_path / "withdrawn.jsonl"
     withdrawn.write_text(timed.read_text() + '{"type":"withdrawn","at_ms":1764800009999}\n')
-    dataset = blockstack.to_minari([record, withdrawn], "blockstack/stack/kept-v0", reference_episodes=2)
+    with pytest.warns(UserWarning, match=f"left out 1 withdrawn participants' recordings: {withdrawn}"):
+        dataset = blockstack.to_minari([record, withdrawn], "blockstack/stack/kept-v0", reference_episodes=2)
     assert dataset.total_episodes == 3
     assert "1 withdrawn" in dataset.storage.metadata["description"]
-    with pytest.raises(ValueError, match="no episode"):
+    # Given only withdrawn recordings: refused, naming the withdrawal.
+    with pytest.warns(UserWarning), pytest.raises(ValueError, match="withdrawn participant's"):
         blockstack.to_minari([withdrawn], "blockstack/stack/none-v0", reference_episodes=2)
+    # An audit reads them, and says so.
+    with pytest.warns(UserWarning, match="for an audit"):
+        audit = blockstack.to_minari(
+            [withdrawn], "blockstack/stack/audit-v0", reference_episodes=2, include_withdrawn=True
+        )
+    assert audit.total_episodes == 3
+
+
+def test_read_recording_leaves_a_withdrawn_participant_out_and_checks_the_profile(corrected, tmp_path):
+    record, timed = corrected
+    withdrawn = tmp_path / "withdrawn.jsonl"
+    withdrawn.write_text(timed.read_text() + '{"type":"withdrawn","at_ms":1764800009999}\n')
+    with pytest.raises(ValueError, match="withdrew from the study"):
+        blockstack.read_recording(withdrawn)
+    with pytest.warns(UserWarning, match="for an audit"):
+        audited = blockstack.read_recording(withdrawn, include_withdrawn=True)
+    assert len(audited["actions"]) == len(blockstack.read_recording(timed)["actions"]) > 0
+    # The recording names its protocol (free, the spec profile's): the original profile's
+    # run refuses it, naming both.
+    assert len(blockstack.read_recording(record, profile="spec")["actions"]) > 0
+    with pytest.raises(ValueError, match="the free protocol; this run is of the paper protocol"):
+        blockstack.read_recording(record, profile="original")
 
 
 @pytest.mark.parametrize(

@@ -329,13 +329,18 @@ async function withdraw(token) {
   if (!confirm("Withdraw from the study? What you did will not be used.")) return;
   const r = await fetch(`/api/withdraw/${token}`, { method: "POST" });
   if (!r.ok) { $("error").textContent = await r.text(); return; }
-  const { withdrawal } = await r.json();
+  const { withdrawal, completion } = await r.json();
   setRunning(false);
   if (socket) { socket.onclose = null; socket.close(); }
   show("withdrawn");
   $("withdrawntext").textContent = withdrawal === "delete"
     ? "Your recording was deleted. Thank you for your time; you may close this page."
     : "Your recording is marked withdrawn and left out of every analysis. Thank you for your time; you may close this page.";
+  // A study may give the completion code to those who withdraw too.
+  if (completion && completion.code) {
+    $("withdrawncodeline").hidden = false;
+    $("withdrawncode").textContent = completion.code;
+  }
 }
 
 // ---- A study's first pages -----------------------------------------------------------
@@ -363,10 +368,16 @@ async function arrive() {
     for (const [k, v] of Object.entries(ids)) hiddenField(form, k, v);
   }
   if (Object.keys(ids).length > 0) {
-    // A participant who comes back goes on with their session.
+    // A participant who comes back in the same browser goes on with their session: the
+    // server knows it by the token this browser keeps (a cookie), never by the ids.
     const r = await fetch("/api/resume", { method: "POST", body: new URLSearchParams(ids) });
-    if (r.ok) { location.href = `/s/${(await r.json()).token}`; return; }
-    if (r.status === 403) { show("withdrawn"); $("withdrawntext").textContent = await r.text(); return; }
+    const back = r.ok ? await r.json() : {};
+    if (back.token) { location.href = `/s/${back.token}`; return; }
+    if (back.withdrawn) {
+      show("withdrawn");
+      $("withdrawntext").textContent = "You withdrew from this study: nothing more is recorded for you.";
+      return;
+    }
     $("namebox").hidden = true;
   }
   const instructions = () => {
@@ -418,6 +429,10 @@ async function results(token) {
     const data = await r.json();
     const cap = data.max_participants ? `, ${data.admitted} of at most ${data.max_participants} participants` : "";
     $("study").textContent = `${data.study}: conditions ${data.conditions.join(", ")}${cap}`;
+    const left = data.table.withdrawn;
+    $("leftout").textContent = left
+      ? `${left} withdrawn participant${left === 1 ? "" : "s"} left out of these tables, the CSV and the replays.`
+      : "";
     cells($("conditions").querySelector("tbody"), data.table.conditions.map((c) => [
       c.condition, c.view, c.participants, c.episodes, share(c.success),
       c.steps_to_optimum === null ? "-" : `${c.steps_to_optimum.toFixed(2)}x`, c.corrections, ms(c.median_rt_ms),
@@ -437,6 +452,14 @@ async function results(token) {
         e.optimum === null ? "-" : e.optimum, e.ended ? (e.success ? "yes" : "no") : "unfinished", e.corrections,
         ms(e.duration_ms), ms(e.median_rt_ms), a];
     }));
+  };
+  $("resumeform").onsubmit = async (event) => {
+    event.preventDefault();
+    const r = await fetch(`/api/results/${token}/resume`, {
+      method: "POST",
+      body: new URLSearchParams({ participant: $("resumenumber").value }),
+    });
+    $("resumelink").textContent = r.ok ? (await r.json()).link : await r.text();
   };
   await refresh();
   setInterval(refresh, 2000);

@@ -31,8 +31,12 @@ pub struct Limits {
     pub max_message_bytes: usize,
     /// The largest WebSocket message or frame at all; a longer one ends the connection.
     pub max_frame_bytes: usize,
-    /// A session with no page connected for this long is let go.
+    /// A session let go after this long: one whose participant never took a step, this long
+    /// after it began (it recorded nothing); one that did, this long without a page.
     pub session_idle: Duration,
+    /// Joins one client address may make: a bucket of this many, refilled at this many a
+    /// minute (a study's `joins_per_minute`).
+    pub joins_per_minute: u32,
     /// A request whose head or body takes longer than this to arrive, or a page that does
     /// not read what it is sent for this long, is cut off.
     pub request_timeout: Duration,
@@ -49,8 +53,9 @@ pub struct Limits {
 
 impl Default for Limits {
     /// 100 sessions, 20 messages per second, messages of 1 KiB (a frame of 64 KiB),
-    /// sessions let go after 30 minutes without a page, requests cut off after 10 s, pages
-    /// after 90 s without an answer, 1,000 connections, a million states for a shortest plan.
+    /// sessions let go after 30 minutes without a step or a page, 20 joins a minute from one
+    /// address, requests cut off after 10 s, pages after 90 s without an answer, 1,000
+    /// connections, a million states for a shortest plan.
     fn default() -> Self {
         Limits {
             max_sessions: 100,
@@ -58,6 +63,7 @@ impl Default for Limits {
             max_message_bytes: 1024,
             max_frame_bytes: 64 * 1024,
             session_idle: Duration::from_secs(30 * 60),
+            joins_per_minute: 20,
             request_timeout: Duration::from_secs(10),
             socket_idle: Duration::from_secs(90),
             max_connections: 1000,
@@ -122,7 +128,7 @@ pub struct StudyFile {
     #[serde(default)]
     pub seed: Option<u64>,
     /// Participants admitted at most, over every run of the server on the same record
-    /// folder (at least 1).
+    /// folder (at least 1): those who took a step (a join that never acts takes no place).
     #[serde(default)]
     pub max_participants: Option<u64>,
     /// The consent form, Markdown (shown first; declining records nothing).
@@ -139,12 +145,35 @@ pub struct StudyFile {
     pub instructions_file: Option<PathBuf>,
     /// The URL parameters a crowd-sourcing platform sends, read into the recording's
     /// header (`["PROLIFIC_PID", "STUDY_ID", "SESSION_ID"]`, `["workerId", "assignmentId"]`):
-    /// the first one identifies the participant, who resumes on returning with it.
+    /// the first one identifies the participant: one who took part cannot join again as
+    /// new with it. (A participant resumes by the token their browser keeps, never by an
+    /// id: ids are not secrets.)
     #[serde(default)]
     pub participant_ids: Vec<String>,
-    /// The code shown when every episode is done (the platform's completion code).
+    /// Refuse a join that does not carry every one of `participant_ids`.
+    #[serde(default)]
+    pub require_ids: bool,
+    /// Minutes after which a session is let go: one that never took a step this long after
+    /// it began (nothing of it is on disk), one that did this long without a page (its
+    /// recording kept, the participant may come back). Default 30.
+    #[serde(default)]
+    pub idle_minutes: Option<u64>,
+    /// Joins one client address may make in a minute (a bucket of this many, refilled at
+    /// this rate). Default 20; behind a proxy every participant has the proxy's address.
+    #[serde(default)]
+    pub joins_per_minute: Option<u32>,
+    /// The code shown when every episode is done (the platform's completion code), only in
+    /// that participant's last view.
     #[serde(default)]
     pub completion_code: Option<String>,
+    /// Give each participant a code of their own instead of `completion_code` (listed in
+    /// the researcher's CSV, so claims can be checked); `{code}` in `completion_url` is
+    /// replaced by it.
+    #[serde(default)]
+    pub code_per_participant: bool,
+    /// Give the completion code (and link) to a participant who withdraws too.
+    #[serde(default)]
+    pub completion_on_withdrawal: bool,
     /// Where the page sends the participant when every episode is done (the platform's
     /// completion link).
     #[serde(default)]
@@ -226,6 +255,22 @@ impl StudyFile {
         }
         if let Some(code) = &study.completion_code {
             check_name(code).map_err(|e| err(format!("completion_code: {e}")))?;
+            if study.code_per_participant {
+                return Err(err(
+                    "give completion_code or code_per_participant = true, not both".into()
+                ));
+            }
+        }
+        if study.require_ids && study.participant_ids.is_empty() {
+            return Err(err("require_ids = true needs participant_ids to require".into()));
+        }
+        if study.idle_minutes == Some(0) {
+            return Err(err(
+                "idle_minutes = 0 lets every session go at once: give at least 1".into()
+            ));
+        }
+        if study.joins_per_minute == Some(0) {
+            return Err(err("joins_per_minute = 0 admits no one: give at least 1".into()));
         }
         if let Some(url) = &study.completion_url
             && (!(url.starts_with("https://") || url.starts_with("http://")) || url.contains(['"', '<', '>', ' ']))
@@ -289,7 +334,9 @@ impl std::str::FromStr for Withdrawal {
     }
 }
 
-/// A study's path for its participants: consent, instructions, ids, the end.
+/// A study's path for its participants: consent, instructions, ids, the end. What the
+/// page may show anyone (`GET /api/study`) is serialised; the completion code and link are
+/// not: they go only into a finished participant's last view.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct StudyPath {
     /// The study's name.
@@ -301,9 +348,20 @@ pub struct StudyPath {
     /// The URL parameters read as the participant's ids; the first identifies them.
     pub participant_ids: Vec<String>,
     /// The completion code.
+    #[serde(skip)]
     pub completion_code: Option<String>,
+    /// Each participant has a code of their own, which replaces `{code}` in the link.
+    #[serde(skip)]
+    pub code_per_participant: bool,
     /// The completion link.
+    #[serde(skip)]
     pub completion_url: Option<String>,
+    /// A participant who withdraws is given the code and link too.
+    #[serde(skip)]
+    pub completion_on_withdrawal: bool,
+    /// A join must carry every one of `participant_ids`.
+    #[serde(skip)]
+    pub require_ids: bool,
     /// What withdrawing does, if it is offered.
     pub withdrawal: Option<Withdrawal>,
 }
@@ -318,8 +376,9 @@ pub struct Condition {
     pub model_file: Option<String>,
     /// The agent that proposes in correct mode and learns from play and correct mode: the
     /// tabular model, or an untrained agent of the profile when there is none (a network
-    /// cannot be corrected by the tabular rule).
-    pub agent: QAgent,
+    /// cannot be corrected by the tabular rule). Shared by every participant's session
+    /// until their first lesson copies it.
+    pub agent: Arc<QAgent>,
     /// Whether `agent` is the condition's model (else an untrained stand-in).
     pub agent_is_model: bool,
     /// The world of play and correct mode.
@@ -442,7 +501,7 @@ impl Condition {
             name: name.to_string(),
             model_file: model.map(|p| p.display().to_string()),
             model: loaded.map(Arc::new),
-            agent,
+            agent: Arc::new(agent),
             agent_is_model,
             world,
             watch_world,
@@ -517,6 +576,10 @@ pub struct Plan {
     pub conditions: Vec<Arc<Condition>>,
     /// The study's `max_participants`.
     pub max_participants: Option<u64>,
+    /// The study's `idle_minutes`, as a time.
+    pub idle: Option<Duration>,
+    /// The study's `joins_per_minute`.
+    pub joins_per_minute: Option<u32>,
 }
 
 /// The agent that proposes and learns in a condition without a tabular model (a network
@@ -575,6 +638,8 @@ pub fn plan(config: &ServeConfig) -> Result<Plan> {
             },
             conditions: vec![Arc::new(c)],
             max_participants: None,
+            idle: None,
+            joins_per_minute: None,
         });
     };
     if config.model.is_some() || config.profile.is_some() || config.goals.is_some() {
@@ -631,7 +696,11 @@ pub fn plan(config: &ServeConfig) -> Result<Plan> {
                 .transpose()
                 .map_err(|e| err(format!("condition {}: {e}", c.name)))?,
         })
-        .map_err(|e| err(format!("condition {}: {e}", c.name)))?;
+        .map_err(|e| match e {
+            // Condition::prepare's own lines name the condition already (P22: not twice).
+            ServeError::Config(line) => err(line),
+            other => err(format!("condition {}: {other}", c.name)),
+        })?;
         conditions.push(Arc::new(prepared));
     }
     let text = |inline: &Option<String>, file: &Option<PathBuf>, what: &str| -> Result<Option<String>> {
@@ -654,7 +723,10 @@ pub fn plan(config: &ServeConfig) -> Result<Plan> {
         instructions: text(&study.instructions, &study.instructions_file, "instructions_file")?,
         participant_ids: study.participant_ids.clone(),
         completion_code: study.completion_code.clone(),
+        code_per_participant: study.code_per_participant,
         completion_url: study.completion_url.clone(),
+        completion_on_withdrawal: study.completion_on_withdrawal,
+        require_ids: study.require_ids,
         withdrawal: study
             .withdrawal
             .as_deref()
@@ -664,5 +736,7 @@ pub fn plan(config: &ServeConfig) -> Result<Plan> {
         path: path_of_study,
         conditions,
         max_participants: study.max_participants,
+        idle: study.idle_minutes.map(|m| Duration::from_secs(m.saturating_mul(60))),
+        joins_per_minute: study.joins_per_minute,
     })
 }

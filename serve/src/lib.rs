@@ -9,18 +9,25 @@
 //!
 //! - [`protocol`]: the messages between page and server.
 //! - [`participant`]: one participant's state machine, with no network in it.
-//! - `registry`: the participants held, numbered and balanced across restarts.
+//! - `registry`: the participants held, numbered and balanced across restarts; only those
+//!   who act count, and a session is reached by its token only.
+//! - `ledger`: what a study's record folder keeps beside the recordings: tokens and
+//!   withdrawn ids as keyed hashes, and the key of per-participant completion codes.
 //! - [`config`]: settings, the study file and the conditions it makes.
 //! - [`server`]: the routes, the WebSocket loop and the bounds.
 //! - [`results`]: the researcher's figures, CSV and replay, from the recordings on disk.
 //! - [`markdown`]: a study's consent and instructions, rendered safely.
 //! - [`curve`]: a training run's learning curve, live (`blockstack train ... --serve`).
+//! - [`pilot`](mod@pilot): simulated participants sent through the real server before a launch
+//!   (`blockstack pilot`).
 
 pub mod config;
 pub mod curve;
 pub mod error;
+mod ledger;
 pub mod markdown;
 pub mod participant;
+pub mod pilot;
 pub mod protocol;
 mod registry;
 pub mod results;
@@ -29,4 +36,5 @@ pub mod server;
 pub use config::{ConditionSpec, Limits, ServeConfig, StudyFile};
 pub use curve::{CurveHandle, CurvePoint, serve_curve};
 pub use error::{Result, ServeError};
+pub use pilot::{PilotConfig, PilotReport, pilot};
 pub use server::{Links, Server, run};

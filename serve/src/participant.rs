@@ -17,7 +17,7 @@ use std::sync::Arc;
 use agent::correction::{CorrectionSession, EpisodeEnd, PersonRole, PersonTurn, SessionLabels};
 use agent::demos::{DemoSink, ParticipantLine};
 use agent::{DemoRecord, DemoWriter};
-use files::Output;
+use files::{Output, OutputPath};
 use oracle::ExactSolver;
 use sim::render::{colour, label};
 use sim::seeding::{SimRng, episode_seed};
@@ -31,30 +31,77 @@ use crate::protocol::{ActionValue, ClientMessage, Completion, Mode, Progress, Vi
 const PROPOSAL_EPSILON: f64 = agent::profile::TEST_EPSILON;
 
 /// Where a participant's lines go: the recording file, or nowhere; counts what it wrote.
+///
+/// A new participant's file is made only with their first step: until then the session
+/// and episode lines wait in memory, so a join that never acts (a script's) leaves nothing
+/// on disk and counts towards nothing.
 pub struct Recorder {
+    /// Where the file is made at the first step, until it is.
+    target: Option<OutputPath>,
     writer: Option<DemoWriter<Output>>,
+    pending: Vec<DemoRecord>,
     lines: u64,
 }
 
 impl Recorder {
-    /// Records to `writer` (none: nothing is recorded).
+    /// Records to `writer` at once (none: nothing is recorded): a recording taken up again.
     pub fn new(writer: Option<DemoWriter<Output>>) -> Self {
-        Recorder { writer, lines: 0 }
+        Recorder {
+            target: None,
+            writer,
+            pending: Vec::new(),
+            lines: 0,
+        }
+    }
+
+    /// Records into `out`, made at the first step line (type docs).
+    pub fn at_first_step(out: OutputPath) -> Self {
+        Recorder {
+            target: Some(out),
+            ..Recorder::new(None)
+        }
     }
 
     /// Lines written and flushed.
     pub fn lines(&self) -> u64 {
         self.lines
     }
-}
 
-impl DemoSink for Recorder {
-    fn record(&mut self, line: &DemoRecord) -> agent::Result<()> {
+    /// Whether lines are recorded (now, or from the first step).
+    pub fn is_recording(&self) -> bool {
+        self.writer.is_some() || self.target.is_some()
+    }
+
+    /// Whether the recording's file exists (the participant took a step).
+    pub fn is_on_disk(&self) -> bool {
+        self.writer.is_some()
+    }
+
+    fn write(&mut self, line: &DemoRecord) -> agent::Result<()> {
         if let Some(w) = &mut self.writer {
             w.record(line)?;
             self.lines += 1;
         }
         Ok(())
+    }
+}
+
+impl DemoSink for Recorder {
+    fn record(&mut self, line: &DemoRecord) -> agent::Result<()> {
+        if self.writer.is_none()
+            && let Some(out) = &self.target
+        {
+            if !matches!(line, DemoRecord::Step(_)) {
+                self.pending.push(line.clone());
+                return Ok(());
+            }
+            self.writer = Some(DemoWriter::append(out)?);
+            self.target = None;
+            for waiting in std::mem::take(&mut self.pending) {
+                self.write(&waiting)?;
+            }
+        }
+        self.write(line)
     }
 }
 
@@ -85,6 +132,8 @@ pub struct Resumed {
 pub struct Participant {
     condition: Arc<Condition>,
     study: Arc<StudyPath>,
+    /// What the last view gives a participant who finished: their code and link.
+    completion: Completion,
     /// Totals of the earlier sessions of this participant's recording.
     before: Progress,
     mode: Mode,
@@ -102,17 +151,19 @@ pub type Outcome = std::result::Result<View, String>;
 impl Participant {
     /// A participant in `condition` of `study`, recording to `recorder` (its session line
     /// naming `who`, a study's participant), in the condition's first mode; going on from
-    /// `resumed` when an earlier session of the recording is taken up again.
+    /// `resumed` when an earlier session of the recording is taken up again. `completion`
+    /// is what their last view gives them once every episode is done.
     pub fn new(
         condition: Arc<Condition>,
         study: Arc<StudyPath>,
         recorder: Recorder,
         who: Option<ParticipantLine>,
         resumed: Option<Resumed>,
+        completion: Completion,
     ) -> agent::Result<Participant> {
         let c = &condition;
         let (agent, first_episode, before) = match resumed {
-            Some(r) => (r.agent, r.next_episode, r.progress),
+            Some(r) => (Arc::new(r.agent), r.next_episode, r.progress),
             None => (c.agent.clone(), 0, Progress::default()),
         };
         let labels = SessionLabels {
@@ -141,6 +192,7 @@ impl Participant {
             },
             before,
             study,
+            completion,
             condition,
             mode,
             session,
@@ -171,9 +223,18 @@ impl Participant {
         }
     }
 
-    /// Appends a line of the server's to the recording (a withdrawal).
+    /// Appends a line of the server's to the recording (a withdrawal), when the recording
+    /// is on disk: a participant who never took a step has none to mark.
     pub fn record(&mut self, line: &agent::DemoRecord) -> agent::Result<()> {
+        if !self.session.sink().is_on_disk() {
+            return Ok(());
+        }
         self.session.sink_mut().record(line)
+    }
+
+    /// What the participant is given at the end: their code and link.
+    pub fn completion(&self) -> &Completion {
+        &self.completion
     }
 
     /// Whether every episode asked for is done.
@@ -473,10 +534,8 @@ impl Participant {
             },
             done: self.is_done(),
             recording: self.session_recording(),
-            completion: self.is_done().then(|| Completion {
-                code: self.study.completion_code.clone(),
-                url: self.study.completion_url.clone(),
-            }),
+            // Only in the last view of a participant who finished: never before (issue 46).
+            completion: self.is_done().then(|| self.completion.clone()),
             withdrawal: self.study.withdrawal.is_some() && self.session_recording(),
         }
     }
@@ -486,7 +545,7 @@ impl Participant {
     }
 
     fn session_recording(&self) -> bool {
-        self.session_sink().writer.is_some()
+        self.session_sink().is_recording()
     }
 
     fn session_sink(&self) -> &Recorder {
@@ -521,7 +580,15 @@ mod tests {
             ..ConditionSpec::default()
         })
         .unwrap();
-        Participant::new(Arc::new(c), Arc::default(), Recorder::new(None), None, None).unwrap()
+        Participant::new(
+            Arc::new(c),
+            Arc::default(),
+            Recorder::new(None),
+            None,
+            None,
+            Completion::default(),
+        )
+        .unwrap()
     }
 
     fn act(p: &mut Participant, action: &str) -> Outcome {

@@ -3,7 +3,10 @@
 //! per episode ([`EpisodeRow`], the CSV download), the figures per condition
 //! ([`ConditionRow`]), and any episode step by step for the replay.
 //!
-//! A recording whose participant withdrew is left out of all of them. Each file is read
+//! A recording whose participant withdrew is left out of all of them, and the table counts
+//! how many were (the page says so in a line). A participant who finished every episode
+//! asked for has their completion code in the CSV, so that the lab can check the codes
+//! claimed on the platform (each their own with `code_per_participant`). Each file is read
 //! once per change (its length and time of change are remembered), and each start's
 //! shortest plan is searched once, so the page can ask every two seconds.
 //!
@@ -26,6 +29,7 @@ use sim::render::{colour, label};
 use sim::{EnvConfig, Goal, State, View};
 
 use crate::config::Condition;
+use crate::ledger::Codes;
 use crate::registry::{lock, recordings_in};
 
 /// One episode of one recording: a row of the CSV.
@@ -64,6 +68,9 @@ pub struct EpisodeRow {
     pub median_rt_ms: Option<u64>,
     /// The recording's file name.
     pub recording: String,
+    /// The completion code the participant was given, when they finished every episode
+    /// asked for.
+    pub completion_code: Option<String>,
 }
 
 /// The figures of one condition.
@@ -94,6 +101,8 @@ pub struct Table {
     pub conditions: Vec<ConditionRow>,
     /// Every episode with a step, by recording then episode.
     pub episodes: Vec<EpisodeRow>,
+    /// Recordings left out of every figure because their participant withdrew.
+    pub withdrawn: usize,
 }
 
 /// One recording read: its episodes' rows and reaction times, and the episodes to replay.
@@ -113,6 +122,8 @@ pub struct Figures {
     solver_budget: usize,
     /// The study's first `participant_ids`: the one shown as the participant's id.
     primary: Option<String>,
+    /// The participants' completion codes.
+    codes: Codes,
     read: Mutex<HashMap<PathBuf, Arc<Read>>>,
     optimum: Mutex<HashMap<(String, State, Goal), Option<u32>>>,
 }
@@ -120,18 +131,21 @@ pub struct Figures {
 impl Figures {
     /// The figures of the recordings in `dir`, for `conditions` (whose worlds the
     /// shortest plans are searched in, within `solver_budget` states); `primary` names the
-    /// id parameter shown as the participant's id.
-    pub fn new(
+    /// id parameter shown as the participant's id; `codes` gives each participant's
+    /// completion code.
+    pub(crate) fn new(
         dir: Option<PathBuf>,
         conditions: Vec<Arc<Condition>>,
         solver_budget: usize,
         primary: Option<String>,
+        codes: Codes,
     ) -> Figures {
         Figures {
             dir,
             conditions,
             solver_budget,
             primary,
+            codes,
             read: Mutex::new(HashMap::new()),
             optimum: Mutex::new(HashMap::new()),
         }
@@ -145,11 +159,13 @@ impl Figures {
         let mut episodes = Vec::new();
         let mut times: HashMap<String, Vec<u64>> = HashMap::new();
         let mut people: HashMap<String, std::collections::BTreeSet<u64>> = HashMap::new();
+        let mut withdrawn = 0;
         for found in recordings_in(dir) {
             let Some(read) = self.read(&found.path) else {
                 continue;
             };
             if read.withdrawn {
+                withdrawn += 1;
                 continue;
             }
             if let Some(p) = &found.participant {
@@ -186,24 +202,30 @@ impl Figures {
                 }
             })
             .collect();
-        Table { conditions, episodes }
+        Table {
+            conditions,
+            episodes,
+            withdrawn,
+        }
     }
 
     /// Episode `episode` of the recording `file` (a name in the record folder) for the
-    /// replay, or `None` when there is no such (or a withdrawn participant's).
-    pub fn replay(&self, file: &str, episode: u64) -> Option<Replay> {
-        let dir = self.dir.as_ref()?;
+    /// replay, or the line saying why not: there is no such, or its participant withdrew.
+    pub fn replay(&self, file: &str, episode: u64) -> Result<Replay, &'static str> {
+        const NONE: &str = "no such episode";
+        let dir = self.dir.as_ref().ok_or(NONE)?;
         let found = recordings_in(dir)
             .into_iter()
-            .find(|f| f.path.file_name().is_some_and(|n| n == file))?;
-        let read = self.read(&found.path)?;
+            .find(|f| f.path.file_name().is_some_and(|n| n == file))
+            .ok_or(NONE)?;
+        let read = self.read(&found.path).ok_or(NONE)?;
         if read.withdrawn {
-            return None;
+            return Err("this participant withdrew: their recording is left out of every analysis");
         }
-        let e = read.episodes.iter().find(|e| e.episode == episode)?;
-        let row = read.rows.iter().find(|r| r.episode == episode)?;
+        let e = read.episodes.iter().find(|e| e.episode == episode).ok_or(NONE)?;
+        let row = read.rows.iter().find(|r| r.episode == episode).ok_or(NONE)?;
         let cells = |s: &State| s.cells().iter().map(|c| [c.x, c.y]).collect::<Vec<_>>();
-        Some(Replay {
+        Ok(Replay {
             recording: file.to_string(),
             row: row.clone(),
             grid: [e.grid.width(), e.grid.height()],
@@ -251,6 +273,7 @@ impl Figures {
         }
         let demos = read_demonstrations(path, None).ok()?;
         let file = path.file_name()?.to_string_lossy().into_owned();
+        let code = self.code_of_finished(&demos.episodes);
         let mut rows = Vec::new();
         let mut reaction_times = Vec::new();
         for e in demos.episodes.iter().filter(|e| !e.steps.is_empty()) {
@@ -276,6 +299,7 @@ impl Figures {
                 duration_ms: last.time.t_ms,
                 median_rt_ms: median(rts),
                 recording: file.clone(),
+                completion_code: code.clone(),
             });
         }
         let read = Arc::new(Read {
@@ -288,6 +312,20 @@ impl Figures {
         });
         lock(&self.read).insert(path.to_path_buf(), read.clone());
         Some(read)
+    }
+
+    /// The completion code of the participant whose episodes are `episodes`, when they
+    /// ended every episode their condition asks for (as the page counts them).
+    fn code_of_finished(&self, episodes: &[DemoEpisode]) -> Option<String> {
+        let who = episodes.iter().find_map(|e| e.participant.as_ref())?;
+        let asked = self.conditions.iter().find(|c| c.name == who.condition)?.episodes;
+        let ended = episodes
+            .iter()
+            .filter(|e| e.steps.last().is_some_and(|s| s.terminated || s.truncated))
+            .count() as u64;
+        (asked > 0 && ended >= asked)
+            .then(|| self.codes.of(who.number))
+            .flatten()
     }
 
     /// The participant's platform id: the study's first id parameter's value (none when
@@ -351,7 +389,7 @@ fn median(mut values: Vec<u64>) -> Option<u64> {
 /// The table's episodes as CSV, one row per episode (a header first).
 pub fn csv(table: &Table) -> String {
     let mut out = String::from(
-        "participant,code,participant_id,condition,view,goal,episode,started_ms,steps,optimum,ended,success,corrections,duration_ms,median_rt_ms,recording\n",
+        "participant,code,participant_id,condition,view,goal,episode,started_ms,steps,optimum,ended,success,corrections,duration_ms,median_rt_ms,recording,completion_code\n",
     );
     let opt = |v: Option<u64>| v.map_or(String::new(), |v| v.to_string());
     for e in &table.episodes {
@@ -372,6 +410,7 @@ pub fn csv(table: &Table) -> String {
             opt(e.duration_ms),
             opt(e.median_rt_ms),
             e.recording.clone(),
+            e.completion_code.clone().unwrap_or_default(),
         ];
         let quoted: Vec<String> = fields.iter().map(|f| csv_field(f)).collect();
         out.push_str(&quoted.join(","));

@@ -1,15 +1,22 @@
 //! The HTTP side: the routes, the WebSocket loop and the bounds (docs/serve.md).
 //!
-//! - `GET /`: the page: a study's consent and instructions (`GET /api/study`), or a join
-//!   form; `POST /join` makes a participant session (the condition with the fewest
-//!   participants; a participant returning with the platform's id gets theirs back) and
-//!   sends the browser to `/s/TOKEN`; `POST /api/resume` finds a returning participant's.
+//! - `GET /`: the page: a study's consent and instructions (`GET /api/study`: never the
+//!   completion code), or a join form; `POST /join` makes a participant session (the
+//!   condition with the fewest participants), gives the browser its token in a cookie
+//!   (HttpOnly, SameSite=Strict) and sends it to `/s/TOKEN`; `POST /api/resume` answers the
+//!   token of the session the browser's cookie reaches, the same for every id it names.
 //! - `POST /api/withdraw/TOKEN`: the participant withdraws.
-//! - `GET /s/TOKEN`: the page; it opens `GET /ws/TOKEN`, the session's WebSocket.
+//! - `GET /s/TOKEN`: the page (the cookie set for a token that reaches a session); it opens
+//!   `GET /ws/TOKEN`, the session's WebSocket.
 //! - `GET /results/TOKEN` and `GET /api/results/TOKEN`: the researcher's page and its data,
-//!   behind a token of its own; `.../episodes.csv` one row per episode; `GET
-//!   /replay/TOKEN/FILE/EPISODE` (and `/api/replay/...`) an episode step by step.
+//!   behind a token of its own; `.../episodes.csv` one row per episode; `POST
+//!   .../resume` a resume link for a participant; `GET /replay/TOKEN/FILE/EPISODE` (and
+//!   `/api/replay/...`) an episode step by step.
 //! - `GET /assets/app.js`, `/assets/style.css`: compiled into the binary.
+//!
+//! Every answer carries a Content-Security-Policy that lets the page run only its own
+//! script and style, `X-Frame-Options: DENY` and `Referrer-Policy: no-referrer` (a session
+//! link never leaves in a `Referer`).
 //!
 //! Tokens are 128 bits from the operating system's generator (`rand::rng()`): the one place
 //! blockstack draws unseeded randomness, since a token that a seed could reproduce would
@@ -40,7 +47,7 @@ use serde::Serialize;
 use crate::config::{ServeConfig, plan};
 use crate::error::{Result, ServeError};
 use crate::protocol::{ClientMessage, ErrorMessage};
-use crate::registry::{Arrival, JoinRefused, Registry, Seating, SessionRow, Slot, SlotState, lock};
+use crate::registry::{Arrival, Bucket, JoinRefused, Registry, Seating, SessionRow, Slot, SlotState, lock};
 use crate::results::{Figures, Table};
 
 /// The page: one HTML file for every view (join, session, results, curve).
@@ -85,6 +92,11 @@ impl Server {
     /// address: every error a user can make is found here, before anyone connects.
     pub async fn bind(config: ServeConfig) -> Result<Server> {
         let plan = plan(&config)?;
+        let limits = crate::Limits {
+            session_idle: plan.idle.unwrap_or(config.limits.session_idle),
+            joins_per_minute: plan.joins_per_minute.unwrap_or(config.limits.joins_per_minute),
+            ..config.limits
+        };
         let record_dir = match &config.record_dir {
             Some(dir) => {
                 files::prepare_folder(dir)?;
@@ -100,20 +112,22 @@ impl Server {
                 addr: addr.to_string(),
                 source,
             })?;
-        let figures = Figures::new(
-            record_dir.clone(),
-            plan.conditions.clone(),
-            config.limits.solver_budget,
-            plan.path.participant_ids.first().cloned(),
-        );
         let seating = Seating {
-            conditions: plan.conditions,
-            record_dir,
-            limits: config.limits,
+            conditions: plan.conditions.clone(),
+            record_dir: record_dir.clone(),
+            limits,
             max_participants: plan.max_participants,
             study: Arc::new(plan.path),
+            keeps_ledger: config.study.is_some(),
         };
-        let registry = Registry::new(&seating);
+        let registry = Registry::new(&seating).map_err(ServeError::Config)?;
+        let figures = Figures::new(
+            record_dir,
+            plan.conditions,
+            limits.solver_budget,
+            seating.study.participant_ids.first().cloned(),
+            registry.codes(&seating.study),
+        );
         Ok(Server {
             listener,
             app: Arc::new(App {
@@ -123,6 +137,7 @@ impl Server {
                 registry: Mutex::new(registry),
                 figures,
                 connections: AtomicU64::new(0),
+                joins: Mutex::new(HashMap::new()),
             }),
         })
     }
@@ -173,8 +188,8 @@ impl Server {
                 .acquire_owned()
                 .await
                 .expect("the semaphore is never closed");
-            let stream = match self.listener.accept().await {
-                Ok((stream, _)) => stream,
+            let (stream, peer) = match self.listener.accept().await {
+                Ok(accepted) => accepted,
                 Err(_) => {
                     // Out of file descriptors, or a connection reset before it was
                     // accepted: wait a moment rather than spin.
@@ -182,7 +197,9 @@ impl Server {
                     continue;
                 }
             };
-            let service = hyper_util::service::TowerToHyperService::new(router.clone());
+            // Each request knows the address it came from (joins are bounded per address).
+            let service =
+                hyper_util::service::TowerToHyperService::new(router.clone().layer(axum::Extension(Peer(peer.ip()))));
             let app = app.clone();
             tokio::spawn(async move {
                 app.connections.fetch_add(1, Ordering::SeqCst);
@@ -222,12 +239,14 @@ async fn expire_sessions(app: Arc<App>) {
     }
 }
 
-/// `--public-url`: the base participants use, and its host name.
+/// `--public-url`: the base participants use, its host name and its origin.
 struct PublicUrl {
     /// `http://host[:port]`, no trailing slash.
     base: String,
     /// The host, lower case, without port.
     host: String,
+    /// The origin its pages have ([`origin_of`]).
+    origin: String,
 }
 
 impl PublicUrl {
@@ -242,11 +261,61 @@ impl PublicUrl {
             return Err(bad("give the address alone: a scheme, a host and perhaps a port"));
         }
         let host = host_name(authority).to_ascii_lowercase();
+        let scheme = if text.starts_with("https://") { "https" } else { "http" };
         Ok(PublicUrl {
             base: text.trim_end_matches('/').to_string(),
             host,
+            origin: origin_of(scheme, authority),
         })
     }
+}
+
+/// An origin as compared: `scheme://host[:port]`, lower case, the scheme's default port
+/// left out (a browser leaves it out of `Origin`, and `Host` may name it).
+fn origin_of(scheme: &str, authority: &str) -> String {
+    let (scheme, authority) = (scheme.to_ascii_lowercase(), authority.to_ascii_lowercase());
+    let default = if scheme == "https" { ":443" } else { ":80" };
+    let authority = authority.strip_suffix(default).unwrap_or(&authority);
+    format!("{scheme}://{authority}")
+}
+
+/// Whether a request (a WebSocket, a form) comes from our own page: a browser names the
+/// page's origin, whose scheme, host and port must be this server's as the browser reached
+/// it: `http://` and its `Host` (itself checked by [`guard`]), or the `--public-url`'s
+/// origin (a proxy serving https in front). A client that sends no `Origin` is not a
+/// browser, and no other site's page can make it act.
+///
+/// Our pages' `Referrer-Policy: no-referrer` makes a browser send `Origin: null` on their
+/// own POSTs (the Fetch standard's rule); such a request passes when the browser's fetch
+/// metadata says it is same-origin (`Sec-Fetch-Site`, which another site's page cannot
+/// set).
+fn same_origin(public: Option<&PublicUrl>, headers: &HeaderMap) -> bool {
+    let Some(origin) = headers.get(header::ORIGIN) else {
+        return true;
+    };
+    if origin == "null" {
+        return headers.get("sec-fetch-site").is_some_and(|site| site == "same-origin");
+    }
+    let host = headers.get(header::HOST).and_then(|h| h.to_str().ok());
+    let (Ok(origin), Some(host)) = (origin.to_str(), host) else {
+        return false;
+    };
+    let Some((scheme, authority)) = origin.split_once("://") else {
+        return false;
+    };
+    let origin = origin_of(scheme, authority);
+    origin == origin_of("http", host) || public.is_some_and(|p| p.origin == origin)
+}
+
+/// The session token a request's cookie holds, if any.
+fn cookie_token(headers: &HeaderMap) -> Option<String> {
+    headers
+        .get_all(header::COOKIE)
+        .iter()
+        .filter_map(|v| v.to_str().ok())
+        .flat_map(|v| v.split(';'))
+        .find_map(|pair| pair.trim().strip_prefix(COOKIE)?.strip_prefix('=').map(str::to_string))
+        .filter(|t| !t.is_empty())
 }
 
 /// The host of an `authority` (`name:port`, `[v6]:port`), without the port.
@@ -257,6 +326,10 @@ fn host_name(authority: &str) -> &str {
     authority.rsplit_once(':').map_or(authority, |(h, _)| h)
 }
 
+/// The address a request came from.
+#[derive(Clone, Copy, Debug)]
+struct Peer(IpAddr);
+
 /// The server's shared state.
 struct App {
     seating: Seating,
@@ -266,9 +339,58 @@ struct App {
     figures: Figures,
     /// Connections open now.
     connections: AtomicU64,
+    /// Joins each client address may still make ([`crate::Limits::joins_per_minute`]).
+    joins: Mutex<HashMap<IpAddr, Bucket>>,
 }
 
+/// The cookie that keeps a participant's session token in their browser.
+const COOKIE: &str = "blockstack_session";
+
+/// The page's security headers (module docs): its own script and style only (the consent's
+/// HTML is the server's, and nothing in it runs), no framing, no referrer.
+const SECURITY_HEADERS: [(&str, &str); 4] = [
+    (
+        "content-security-policy",
+        "default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self'; connect-src 'self'; \
+         form-action 'self'; base-uri 'none'; frame-ancestors 'none'",
+    ),
+    ("x-frame-options", "DENY"),
+    ("referrer-policy", "no-referrer"),
+    ("x-content-type-options", "nosniff"),
+];
+
 impl App {
+    /// Takes one of `peer`'s joins from its bucket; false when it has none left.
+    fn may_join(&self, peer: IpAddr) -> bool {
+        let capacity = self.seating.limits.joins_per_minute;
+        let per_second = f64::from(capacity) / 60.0;
+        let mut joins = lock(&self.joins);
+        // Forget the addresses whose buckets are full again: the map stays as small as the
+        // addresses that joined in the last minute.
+        if joins.len() > 10_000 {
+            joins.retain(|_, b| !b.is_full(capacity, per_second));
+        }
+        joins
+            .entry(peer)
+            .or_insert_with(|| Bucket::full(capacity))
+            .take(capacity, per_second)
+    }
+
+    /// Whether a request comes from our own page ([`same_origin`]).
+    fn same_origin(&self, headers: &HeaderMap) -> bool {
+        same_origin(self.public.as_ref(), headers)
+    }
+
+    /// The cookie that gives a browser the session `token`.
+    fn cookie(&self, token: &str) -> String {
+        let secure = if self.public.as_ref().is_some_and(|p| p.origin.starts_with("https://")) {
+            "; Secure"
+        } else {
+            ""
+        };
+        format!("{COOKIE}={token}; Path=/; Max-Age=2592000; HttpOnly; SameSite=Strict{secure}")
+    }
+
     fn is_researcher(&self, token: &str) -> bool {
         // Compared in constant time: the token is the page's only lock.
         let (a, b) = (token.as_bytes(), self.researcher.as_bytes());
@@ -289,48 +411,96 @@ impl App {
     }
 
     /// The answer to one text message of a session's page (runs on a blocking thread).
+    /// A participant's first step is counted before it is carried out (the study's cap
+    /// may refuse it) and noted in the ledger once it is on disk. The registry's lock is
+    /// never taken while the session's is held.
     fn answer(&self, slot: &Slot, text: &str) -> std::result::Result<String, String> {
+        if slot.expired.load(Ordering::SeqCst) {
+            let withdrawn = matches!(*lock(&slot.state), SlotState::Expired { withdrawn: true, .. });
+            return Err(if withdrawn { WITHDRAWN } else { EXPIRED }.into());
+        }
         slot.touch();
-        let mut state = lock(&slot.state);
-        let live = match &mut *state {
-            SlotState::Live(live) => live,
-            SlotState::Expired { withdrawn: true, .. } => return Err(WITHDRAWN.into()),
-            SlotState::Expired { .. } => return Err(EXPIRED.into()),
-        };
         let id = message_id(text);
         let limits = &self.seating.limits;
-        if !live.bucket.take(limits.actions_per_second) {
-            return Ok(error_line(
-                id,
-                format!(
-                    "too many messages: at most {} a second; nothing was done",
-                    limits.actions_per_second
-                ),
-            ));
+        let parsed = (text.len() <= limits.max_message_bytes)
+            .then(|| serde_json::from_str::<ClientMessage>(text))
+            .transpose();
+        let first = !slot.has_acted()
+            && matches!(
+                parsed,
+                Ok(Some(
+                    ClientMessage::Act { .. } | ClientMessage::Move { .. } | ClientMessage::Accept { .. }
+                ))
+            );
+        if first && let Err(full) = Registry::first_step(&self.registry, &self.seating, slot) {
+            return Ok(error_line(id, format!("{full}; nothing was done")));
         }
-        if text.len() > limits.max_message_bytes {
-            return Ok(error_line(
-                id,
-                format!(
-                    "a message of {} bytes is longer than the {} allowed; nothing was done",
-                    text.len(),
-                    limits.max_message_bytes
-                ),
-            ));
-        }
-        let message: ClientMessage = match serde_json::from_str(text) {
-            Ok(m) => m,
-            Err(e) => {
-                return Ok(error_line(
-                    id,
-                    format!("not a message of the protocol ({e}); nothing was done"),
-                ));
-            }
+        let (answer, stepped) = {
+            let mut state = lock(&slot.state);
+            let live = match &mut *state {
+                SlotState::Live(live) => live,
+                SlotState::Expired { withdrawn, .. } => {
+                    let gone = if *withdrawn { WITHDRAWN } else { EXPIRED };
+                    drop(state);
+                    if first {
+                        Registry::no_first_step(&self.registry, slot);
+                    }
+                    return Err(gone.into());
+                }
+            };
+            let steps = live.participant.progress().steps;
+            let answer = self.carry_out(live, id, text, parsed);
+            (answer, live.participant.progress().steps > steps)
         };
-        Ok(match live.participant.handle(&message) {
+        if first {
+            if stepped {
+                if let Err(e) = Registry::recorded(&self.registry, slot) {
+                    return Ok(error_line(
+                        id,
+                        format!("your step is recorded, but the way back to this session could not be noted: {e}"),
+                    ));
+                }
+            } else {
+                Registry::no_first_step(&self.registry, slot);
+            }
+        }
+        Ok(answer)
+    }
+
+    /// The answer to a message of a session held, `parsed` from `text` (`None`: too long).
+    fn carry_out(
+        &self,
+        live: &mut crate::registry::Live,
+        id: Option<u64>,
+        text: &str,
+        parsed: serde_json::Result<Option<ClientMessage>>,
+    ) -> String {
+        let limits = &self.seating.limits;
+        let rate = limits.actions_per_second;
+        if !live.bucket.take(rate, f64::from(rate)) {
+            return error_line(
+                id,
+                format!("too many messages: at most {rate} a second; nothing was done"),
+            );
+        }
+        let message = match parsed {
+            Ok(Some(m)) => m,
+            Ok(None) => {
+                return error_line(
+                    id,
+                    format!(
+                        "a message of {} bytes is longer than the {} allowed; nothing was done",
+                        text.len(),
+                        limits.max_message_bytes
+                    ),
+                );
+            }
+            Err(e) => return error_line(id, format!("not a message of the protocol ({e}); nothing was done")),
+        };
+        match live.participant.handle(&message) {
             Ok(view) => serde_json::to_string(&view).expect("views serialise"),
             Err(e) => error_line(id, format!("{e}; nothing was done")),
-        })
+        }
     }
 }
 
@@ -368,11 +538,12 @@ fn router(app: Arc<App>) -> Router {
         .route("/join", post(join))
         .route("/api/resume", post(resume))
         .route("/api/withdraw/{token}", post(withdraw))
-        .route("/s/{token}", get(page))
+        .route("/s/{token}", get(session_page))
         .route("/results/{token}", get(results_page))
         .route("/replay/{token}/{file}/{episode}", get(replay_page))
         .route("/api/results/{token}", get(results))
         .route("/api/results/{token}/episodes.csv", get(episodes_csv))
+        .route("/api/results/{token}/resume", post(resume_link))
         .route("/api/replay/{token}/{file}/{episode}", get(replay))
         .route("/ws/{token}", get(socket))
         .merge(asset_routes())
@@ -394,10 +565,15 @@ async fn guard(State(app): State<Arc<App>>, request: Request, next: Next) -> Res
         )
             .into_response();
     }
-    match tokio::time::timeout(app.seating.limits.request_timeout, next.run(request)).await {
+    let mut response = match tokio::time::timeout(app.seating.limits.request_timeout, next.run(request)).await {
         Ok(response) => response,
         Err(_) => (StatusCode::REQUEST_TIMEOUT, "the request took too long to arrive").into_response(),
+    };
+    let headers = response.headers_mut();
+    for (name, value) in SECURITY_HEADERS {
+        headers.insert(name, header::HeaderValue::from_static(value));
     }
+    response
 }
 
 /// The script and style sheet, compiled in.
@@ -417,8 +593,24 @@ async fn page() -> Html<&'static str> {
     Html(INDEX_HTML)
 }
 
+/// A session's page; a token that reaches a session is given to the browser as its
+/// cookie, so that the participant comes back to it from the study's link (a resume link
+/// the researcher issued does this in another browser).
+async fn session_page(State(app): State<Arc<App>>, Path(token): Path<String>) -> Response {
+    let found = tokio::task::spawn_blocking({
+        let (app, token) = (app.clone(), token.clone());
+        move || Registry::session(&app.registry, &app.seating, &token, None)
+    })
+    .await;
+    match found {
+        Ok(Ok(Some(_))) => ([(header::SET_COOKIE, app.cookie(&token))], Html(INDEX_HTML)).into_response(),
+        _ => Html(INDEX_HTML).into_response(),
+    }
+}
+
 /// What the page needs to lead a participant: the study's path (consent and
-/// instructions as safe HTML, the id parameters, what withdrawing does).
+/// instructions as safe HTML, the id parameters, what withdrawing does); never the
+/// completion code or link.
 async fn study(State(app): State<Arc<App>>) -> Response {
     json(app.seating.study.as_ref())
 }
@@ -441,48 +633,76 @@ fn arrival(fields: HashMap<String, String>) -> std::result::Result<Arrival, Stri
     Ok(arrival)
 }
 
+const WITHDREW: &str = "you withdrew from this study: nothing more is recorded for you";
+const EXISTS: &str = "a session of this study already exists for this participant id, begun in another browser \
+     or window: go on in the browser where you began it (open the study's link there again), or write to the \
+     researcher for a link that takes you back to it";
+
 fn refused(refusal: JoinRefused) -> Response {
     match refusal {
         JoinRefused::BadRequest(m) => (StatusCode::BAD_REQUEST, m).into_response(),
         JoinRefused::Full(m) => (StatusCode::SERVICE_UNAVAILABLE, m).into_response(),
-        JoinRefused::Withdrawn => (
-            StatusCode::FORBIDDEN,
-            "you withdrew from this study: nothing more is recorded for you",
-        )
-            .into_response(),
+        JoinRefused::Withdrawn => (StatusCode::FORBIDDEN, WITHDREW).into_response(),
+        JoinRefused::Exists => (StatusCode::CONFLICT, EXISTS).into_response(),
         JoinRefused::Failed(m) => (StatusCode::INTERNAL_SERVER_ERROR, m).into_response(),
     }
 }
 
-async fn join(State(app): State<Arc<App>>, headers: HeaderMap, Form(form): Form<HashMap<String, String>>) -> Response {
+async fn join(
+    State(app): State<Arc<App>>,
+    axum::Extension(Peer(peer)): axum::Extension<Peer>,
+    headers: HeaderMap,
+    Form(form): Form<HashMap<String, String>>,
+) -> Response {
     // Another site's page may not fill the server with sessions through its own form.
-    if !same_origin(&headers) {
+    if !app.same_origin(&headers) {
         return (
             StatusCode::FORBIDDEN,
             "a page of another origin may not begin a session",
         )
             .into_response();
     }
-    let arrival = match arrival(form) {
+    let mut arrival = match arrival(form) {
         Ok(a) => a,
         Err(m) => return (StatusCode::BAD_REQUEST, m).into_response(),
     };
-    let joined = tokio::task::spawn_blocking(move || Registry::join(&app.registry, &app.seating, arrival)).await;
+    arrival.token = cookie_token(&headers);
+    if !app.may_join(peer) {
+        return (
+            StatusCode::TOO_MANY_REQUESTS,
+            format!(
+                "too many sessions were begun from your address: at most {} a minute; wait a minute and try again",
+                app.seating.limits.joins_per_minute
+            ),
+        )
+            .into_response();
+    }
+    let joined = tokio::task::spawn_blocking({
+        let app = app.clone();
+        move || Registry::join(&app.registry, &app.seating, arrival)
+    })
+    .await;
     match joined {
-        Ok(Ok(token)) => Redirect::to(&format!("/s/{token}")).into_response(),
+        Ok(Ok(token)) => (
+            [(header::SET_COOKIE, app.cookie(&token))],
+            Redirect::to(&format!("/s/{token}")),
+        )
+            .into_response(),
         Ok(Err(refusal)) => refused(refusal),
         Err(e) => (StatusCode::INTERNAL_SERVER_ERROR, e.to_string()).into_response(),
     }
 }
 
-/// A participant who arrives with the platform's ids: their session's token when they
-/// return (`{"token": ...}`), 404 when they are new (the page shows the consent form).
+/// A participant who arrives with the platform's ids: the token of the session their
+/// browser's cookie reaches, when it is theirs (`{"token": ...}`), else `{"token": null}`,
+/// the same answer for an id that took part and one never seen (an id is no key to a
+/// session). `{"withdrawn": true}` when the cookie's participant withdrew.
 async fn resume(
     State(app): State<Arc<App>>,
     headers: HeaderMap,
     Form(form): Form<HashMap<String, String>>,
 ) -> Response {
-    if !same_origin(&headers) {
+    if !app.same_origin(&headers) {
         return (
             StatusCode::FORBIDDEN,
             "a page of another origin may not resume a session",
@@ -493,19 +713,30 @@ async fn resume(
         Ok(a) => a,
         Err(m) => return (StatusCode::BAD_REQUEST, m).into_response(),
     };
-    let found = tokio::task::spawn_blocking(move || Registry::returning(&app.registry, &app.seating, &arrival)).await;
+    let Some(token) = cookie_token(&headers) else {
+        return json(&serde_json::json!({ "token": null }));
+    };
+    let found = tokio::task::spawn_blocking(move || {
+        let id = app
+            .seating
+            .study
+            .participant_ids
+            .first()
+            .and_then(|key| arrival.ids.get(key).cloned());
+        Registry::session(&app.registry, &app.seating, &token, id.as_deref())
+    })
+    .await;
     match found {
-        Ok(Ok(Some(token))) => json(&serde_json::json!({ "token": token })),
-        Ok(Ok(None)) => (StatusCode::NOT_FOUND, "not a returning participant").into_response(),
-        Ok(Err(refusal)) => refused(refusal),
-        Err(e) => (StatusCode::INTERNAL_SERVER_ERROR, e.to_string()).into_response(),
+        Ok(Ok(Some(slot))) => json(&serde_json::json!({ "token": slot.token })),
+        Ok(Err(JoinRefused::Withdrawn)) => json(&serde_json::json!({ "token": null, "withdrawn": true })),
+        _ => json(&serde_json::json!({ "token": null })),
     }
 }
 
 /// The participant of `token` withdraws (the study says whether their recording is deleted
-/// or marked).
+/// or marked, and whether they get the completion code and link all the same).
 async fn withdraw(State(app): State<Arc<App>>, Path(token): Path<String>, headers: HeaderMap) -> Response {
-    if !same_origin(&headers) {
+    if !app.same_origin(&headers) {
         return (
             StatusCode::FORBIDDEN,
             "a page of another origin may not withdraw anyone",
@@ -514,7 +745,47 @@ async fn withdraw(State(app): State<Arc<App>>, Path(token): Path<String>, header
     }
     let done = tokio::task::spawn_blocking(move || Registry::withdraw(&app.registry, &app.seating, &token)).await;
     match done {
-        Ok(Ok(how)) => json(&serde_json::json!({ "withdrawal": how })),
+        Ok(Ok((how, completion))) => json(&serde_json::json!({ "withdrawal": how, "completion": completion })),
+        Ok(Err(m)) => (StatusCode::BAD_REQUEST, m).into_response(),
+        Err(e) => (StatusCode::INTERNAL_SERVER_ERROR, e.to_string()).into_response(),
+    }
+}
+
+/// A resume link for the participant numbered by the form's `participant` (the
+/// researcher's page): `{"link": ...}`, a fresh token that reaches their recording.
+async fn resume_link(
+    State(app): State<Arc<App>>,
+    Path(token): Path<String>,
+    headers: HeaderMap,
+    Form(form): Form<HashMap<String, String>>,
+) -> Response {
+    if !app.is_researcher(&token) {
+        return (StatusCode::NOT_FOUND, "unknown results link").into_response();
+    }
+    if !app.same_origin(&headers) {
+        return (StatusCode::FORBIDDEN, "a page of another origin may not ask for a link").into_response();
+    }
+    let Some(number) = form.get("participant").and_then(|n| n.trim().parse::<u64>().ok()) else {
+        return (StatusCode::BAD_REQUEST, "give the participant's number").into_response();
+    };
+    let base = match &app.public {
+        Some(public) => public.base.clone(),
+        None => format!(
+            "http://{}",
+            headers
+                .get(header::HOST)
+                .and_then(|h| h.to_str().ok())
+                .unwrap_or("127.0.0.1")
+        ),
+    };
+    let issued = tokio::task::spawn_blocking(move || Registry::resume_link(&app.registry, &app.seating, number)).await;
+    match issued {
+        Ok(Ok(Some(token))) => json(&serde_json::json!({ "link": format!("{base}/s/{token}") })),
+        Ok(Ok(None)) => (
+            StatusCode::NOT_FOUND,
+            format!("participant {number} has no recording here (they took no step)"),
+        )
+            .into_response(),
         Ok(Err(m)) => (StatusCode::BAD_REQUEST, m).into_response(),
         Err(e) => (StatusCode::INTERNAL_SERVER_ERROR, e.to_string()).into_response(),
     }
@@ -604,27 +875,8 @@ async fn replay(State(app): State<Arc<App>>, Path((token, file, episode)): Path<
         .await
         .expect("the replay is read without panicking");
     match found {
-        Some(replay) => json(&replay),
-        None => (StatusCode::NOT_FOUND, "no such episode").into_response(),
-    }
-}
-
-/// Whether a request (a WebSocket, the join form) comes from our own page: a browser names
-/// the page's origin, which must be this server as the browser reached it (its `Host`,
-/// itself checked by [`guard`]). A client that sends no `Origin` is not a browser, and no
-/// other site's page can make it act.
-fn same_origin(headers: &HeaderMap) -> bool {
-    let Some(origin) = headers.get(header::ORIGIN) else {
-        return true;
-    };
-    let host = headers.get(header::HOST).and_then(|h| h.to_str().ok());
-    let origin = origin.to_str().ok();
-    match (origin, host) {
-        (Some(origin), Some(host)) => origin
-            .strip_prefix("http://")
-            .or_else(|| origin.strip_prefix("https://"))
-            .is_some_and(|o| o.eq_ignore_ascii_case(host)),
-        _ => false,
+        Ok(replay) => json(&replay),
+        Err(why) => (StatusCode::NOT_FOUND, why).into_response(),
     }
 }
 
@@ -634,7 +886,7 @@ async fn socket(
     headers: HeaderMap,
     upgrade: WebSocketUpgrade,
 ) -> Response {
-    if !same_origin(&headers) {
+    if !app.same_origin(&headers) {
         return (
             StatusCode::FORBIDDEN,
             "a page of another origin may not open this session",
@@ -697,9 +949,26 @@ async fn send_within(socket: &mut WebSocket, limit: Duration, message: Message) 
 }
 
 async fn session_socket(mut socket: WebSocket, app: Arc<App>, token: String) {
-    let found = lock(&app.registry).find(&token);
-    let Some(slot) = found else {
-        return refuse(&mut socket, close::UNKNOWN_SESSION, UNKNOWN).await;
+    // Held, or taken up again from the recording the token reaches (let go, or an earlier
+    // run's).
+    let held = lock(&app.registry).find(&token);
+    let found = match held {
+        Some(slot) => Ok(Some(slot)),
+        None => {
+            let app = app.clone();
+            tokio::task::spawn_blocking(move || Registry::session(&app.registry, &app.seating, &token, None))
+                .await
+                .unwrap_or(Ok(None))
+        }
+    };
+    let slot = match found {
+        Ok(Some(slot)) => slot,
+        Ok(None) => return refuse(&mut socket, close::UNKNOWN_SESSION, UNKNOWN).await,
+        Err(JoinRefused::Withdrawn) => return refuse(&mut socket, close::UNKNOWN_SESSION, WITHDRAWN).await,
+        Err(JoinRefused::Full(m) | JoinRefused::Failed(m)) => {
+            return refuse(&mut socket, close::UNKNOWN_SESSION, &m).await;
+        }
+        Err(other) => return refuse(&mut socket, close::UNKNOWN_SESSION, &format!("{other:?}")).await,
     };
     // The newest page has the session: one that was frozen or lost keeps no lock on it.
     let page = NEXT_PAGE.fetch_add(1, Ordering::SeqCst);
@@ -808,13 +1077,42 @@ mod tests {
     }
 
     #[test]
-    fn only_the_servers_own_origin_passes() {
-        assert!(same_origin(&headers(None, "127.0.0.1:8080")));
-        assert!(same_origin(&headers(Some("http://127.0.0.1:8080"), "127.0.0.1:8080")));
-        assert!(same_origin(&headers(Some("https://Example.org"), "example.org")));
-        assert!(!same_origin(&headers(Some("http://127.0.0.1:8081"), "127.0.0.1:8080")));
-        assert!(!same_origin(&headers(Some("http://evil.example"), "127.0.0.1:8080")));
-        assert!(!same_origin(&headers(Some("null"), "127.0.0.1:8080")));
+    fn only_the_servers_own_origin_passes_by_scheme_host_and_port() {
+        let plain = |origin, host| same_origin(None, &headers(origin, host));
+        assert!(plain(None, "127.0.0.1:8080"));
+        assert!(plain(Some("http://127.0.0.1:8080"), "127.0.0.1:8080"));
+        assert!(plain(Some("http://LOCALHOST"), "localhost:80"));
+        // An https page is not this http server's (P22), nor another port or site.
+        assert!(!plain(Some("https://127.0.0.1:8080"), "127.0.0.1:8080"));
+        assert!(!plain(Some("https://Example.org"), "example.org"));
+        assert!(!plain(Some("http://127.0.0.1:8081"), "127.0.0.1:8080"));
+        assert!(!plain(Some("http://evil.example"), "127.0.0.1:8080"));
+        assert!(!plain(Some("null"), "127.0.0.1:8080"));
+        // A page of ours under no-referrer: null, and same-origin by the fetch metadata.
+        let mut ours = headers(Some("null"), "127.0.0.1:8080");
+        ours.insert("sec-fetch-site", "same-origin".parse().unwrap());
+        assert!(same_origin(None, &ours));
+        ours.insert("sec-fetch-site", "cross-site".parse().unwrap());
+        assert!(!same_origin(None, &ours));
+        // Behind a proxy serving https: the public URL's origin, its default port left out.
+        let public = PublicUrl::parse("https://Example.org/").unwrap();
+        let proxied = |origin, host| same_origin(Some(&public), &headers(origin, host));
+        assert!(proxied(Some("https://example.org"), "example.org"));
+        assert!(proxied(Some("https://example.org:443"), "127.0.0.1:8080"));
+        assert!(!proxied(Some("http://example.org:443"), "example.org"));
+        assert!(!proxied(Some("https://example.org:8443"), "example.org"));
+    }
+
+    #[test]
+    fn the_cookie_gives_back_the_session_token_only() {
+        let mut h = HeaderMap::new();
+        h.insert(header::COOKIE, "a=1; blockstack_session=abc123; b=2".parse().unwrap());
+        assert_eq!(cookie_token(&h).as_deref(), Some("abc123"));
+        h.insert(
+            header::COOKIE,
+            "blockstack_sessionx=1; blockstack_session=".parse().unwrap(),
+        );
+        assert_eq!(cookie_token(&h), None);
     }
 
     #[test]

@@ -91,17 +91,40 @@ async fn a_session_no_page_comes_back_to_is_let_go_and_frees_its_place() {
         ..Limits::default()
     };
     let (addr, _) = start(quick(dir.path(), limits)).await;
-    let first = join(addr, "a").await.unwrap();
+    // A participant who acted, then whose page went away.
+    let first = join_acting(addr, "a").await;
     // Held: the one place is taken.
     let (status, body) = join(addr, "b").await.unwrap_err();
     assert_eq!(status, 503, "{body}");
     tokio::time::sleep(Duration::from_millis(800)).await;
-    // Let go: its place is free, its recording kept, its link says what happened.
+    // Let go: its place is free, its recording kept.
     join(addr, "b").await.unwrap();
-    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
-    let mut gone = connect(addr, &first, None).await.unwrap();
-    let answer = receive(&mut gone).await;
-    assert!(answer["message"].as_str().unwrap().contains("not known"), "{answer}");
+    assert_eq!(recordings(dir.path()).len(), 1, "b took no step: nothing of b on disk");
+    // A session that never acted gives its place to a newcomer at once.
+    join(addr, "c").await.unwrap();
+    // The first participant's link takes their session up again from its recording.
+    let mut back = connect(addr, &first, None).await.unwrap();
+    let answer = receive(&mut back).await;
+    assert_eq!(answer["type"], "view", "{answer}");
+    assert_eq!(answer["progress"]["steps"], 1, "{answer}");
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_session_that_never_acts_is_let_go_and_leaves_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let limits = Limits {
+        session_idle: Duration::from_millis(200),
+        ..Limits::default()
+    };
+    let (addr, _) = start(quick(dir.path(), limits)).await;
+    let token = join(addr, "idle").await.unwrap();
+    // Its page stays connected: no step is what counts.
+    let mut socket = connect(addr, &token, None).await.unwrap();
+    receive(&mut socket).await;
+    tokio::time::sleep(Duration::from_millis(800)).await;
+    let answer = act(&mut socket, "pick 0").await;
+    assert_eq!(answer["type"], "error", "{answer}");
+    assert_eq!(recordings(dir.path()).len(), 0);
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -273,4 +296,24 @@ async fn a_condition_that_cannot_run_is_refused_at_start() {
         std::fs::read_dir(dir.path().join("rec")).map_or(true, |d| d.count() == 0),
         "no recording was begun"
     );
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn every_answer_carries_the_pages_security_headers() {
+    let dir = tempfile::tempdir().unwrap();
+    let (addr, _) = start(quick(dir.path(), Limits::default())).await;
+    for path in ["/", "/assets/app.js", "/s/00000000000000000000000000000000", "/nowhere"] {
+        let (_, response) = http(addr, "GET", path, "").await;
+        let head = response.split("\r\n\r\n").next().unwrap().to_ascii_lowercase();
+        for header in [
+            "content-security-policy: default-src 'none'; script-src 'self'; style-src 'self'",
+            "x-frame-options: deny",
+            "referrer-policy: no-referrer",
+        ] {
+            assert!(head.contains(header), "{path}: {header} missing in {head}");
+        }
+    }
+    // An https page is not this http server's (P22): refused by scheme, as another port is.
+    let (status, _) = http_with(addr, "POST", "/join", "name=x", &format!("Origin: https://{addr}\r\n")).await;
+    assert_eq!(status, 403);
 }

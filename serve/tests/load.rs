@@ -30,6 +30,8 @@ async fn fifty_participants_at_ten_actions_a_second() {
         record_dir: Some(dir.path().to_path_buf()),
         limits: Limits {
             max_sessions: participants as usize,
+            // Every simulated participant joins from this one address.
+            joins_per_minute: participants as u32,
             ..Limits::default()
         },
         ..ServeConfig::default()

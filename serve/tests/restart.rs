@@ -20,17 +20,20 @@ async fn numbering_the_cap_and_the_balance_go_on_after_a_restart() {
         ..ServeConfig::default()
     };
     let (first, _) = start(config()).await;
-    join(first, "x").await.unwrap();
-    join(first, "y").await.unwrap();
+    join_acting(first, "x").await;
+    join_acting(first, "y").await;
+    // Joins that never act count for nothing, and leave nothing behind.
+    for name in ["bot1", "bot2", "bot3", "bot4"] {
+        join(first, name).await.unwrap();
+    }
     // A second run on the same folder (the first could have been killed: nothing it held
     // in memory is needed).
     let (second, _) = start(config()).await;
-    join(second, "z").await.unwrap();
-    let mut names: Vec<String> = std::fs::read_dir(&record)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().into_string().unwrap())
+    join_acting(second, "z").await;
+    let names: Vec<String> = recordings(&record)
+        .iter()
+        .map(|p| p.file_name().unwrap().to_str().unwrap().to_string())
         .collect();
-    names.sort();
     // Numbers go on (never two p0000), and the condition no one has yet comes next.
     assert_eq!(names, ["p0000-a-x.jsonl", "p0001-a-b-y.jsonl", "p0002-c-z.jsonl"]);
     for (name, condition) in [("p0001-a-b-y.jsonl", "a-b"), ("p0002-c-z.jsonl", "c")] {
@@ -38,7 +41,7 @@ async fn numbering_the_cap_and_the_balance_go_on_after_a_restart() {
         assert_eq!(header["participant"]["condition"], condition);
     }
     // The cap of 4 counts the first run's participants: one more, then no one.
-    join(second, "w").await.unwrap();
+    join_acting(second, "w").await;
     let (status, body) = join(second, "v").await.unwrap_err();
     assert_eq!(status, 503, "{body}");
     assert!(body.contains("takes 4 participants"), "{body}");
@@ -113,8 +116,11 @@ async fn after_a_kill_every_acknowledged_line_is_kept_and_returning_participants
     // done, the cut one left unfinished on disk); a newcomer gets the next number and the
     // condition the balance asks for.
     let (_server, addr) = crate::session::child(&record, Some(&study));
-    let back = join_id(addr, "alpha").await;
-    let mut socket = connect(addr, &back, None).await.unwrap();
+    // Their platform id is no key to their session: a join with it is refused (409); the
+    // token their browser kept takes them back.
+    let (status, _) = http(addr, "POST", "/join", "PROLIFIC_PID=alpha").await;
+    assert_eq!(status, 409);
+    let mut socket = connect(addr, &first, None).await.unwrap();
     let resumed = receive(&mut socket).await;
     assert_eq!(resumed["condition"], "top");
     assert_eq!(resumed["progress"]["episodes_done"], 1);
@@ -134,6 +140,7 @@ async fn after_a_kill_every_acknowledged_line_is_kept_and_returning_participants
     let newcomer = join_id(addr, "gamma").await;
     let mut socket = connect(addr, &newcomer, None).await.unwrap();
     assert_eq!(receive(&mut socket).await["condition"], "top");
+    act(&mut socket, "pick 0").await;
     assert!(record.join("p0002-top.jsonl").exists());
-    assert_eq!(std::fs::read_dir(&record).unwrap().count(), 3);
+    assert_eq!(recordings(&record).len(), 3);
 }

@@ -99,7 +99,9 @@ async fn bad_input_gets_one_line_and_changes_nothing() {
     let (addr, _) = start(config(dir.path())).await;
     let token = join(addr, "").await.unwrap();
     let mut socket = connect(addr, &token, None).await.unwrap();
-    let first = receive(&mut socket).await;
+    receive(&mut socket).await;
+    // A step first: the recording is made with it.
+    let first = act(&mut socket, "pick 0").await;
     let path = only_recording(dir.path());
     let before = std::fs::read(&path).unwrap();
     let bad = [
@@ -143,7 +145,7 @@ async fn bad_input_gets_one_line_and_changes_nothing() {
     let now = ask(&mut socket, json!({"type": "mode", "mode": "play"})).await;
     assert_eq!(
         (now["blocks"].clone(), now["steps"].clone()),
-        (first["blocks"].clone(), json!(0))
+        (first["blocks"].clone(), json!(1))
     );
 
     // A message larger than the frame bound ends the connection.
@@ -178,7 +180,7 @@ async fn sessions_are_isolated_and_tokens_checked() {
         assert_eq!(status, 400, "{body}");
         assert!(body.contains("not a name"), "{body}");
     }
-    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+    assert_eq!(recordings(dir.path()).len(), 0, "nothing is on disk before a step");
 
     // A stale or made-up token: one clear error, then the connection closes with the
     // policy code (1008), never a second copy of the message.
@@ -213,15 +215,12 @@ async fn sessions_are_isolated_and_tokens_checked() {
         .unwrap()
         .map(|e| e.unwrap().path())
         .collect();
-    let alice_file = files
-        .iter()
-        .find(|p| p.to_str().unwrap().ends_with("alice.jsonl"))
-        .unwrap();
+    let alice_file = files.iter().find(|p| p.to_str().unwrap().ends_with("alice.jsonl"));
     let bob_file = files
         .iter()
         .find(|p| p.to_str().unwrap().ends_with("bob.jsonl"))
         .unwrap();
-    assert_eq!(lines(alice_file).len(), 2, "session and episode lines only");
+    assert!(alice_file.is_none(), "Alice took no step: no recording of hers");
     assert_eq!(lines(bob_file).len(), 4);
     // Both play the condition's seeded starts: the same first episode.
     assert_eq!(view_a["blocks"], view_b["blocks"]);
@@ -390,14 +389,18 @@ modes = ["correct", "play"]
     // Under the original profile a move with nothing held is refused, naming what is allowed.
     let refused = act(&mut views[1].1, "up").await;
     assert!(refused["message"].as_str().unwrap().contains("only pick"), "{refused}");
-    // The fourth is turned away.
-    let (status, body) = join(addr, "d").await.unwrap_err();
-    assert_eq!(status, 503, "{body}");
+    // A refused action is no step: b does not count yet; b and c act now.
+    for k in [1, 2] {
+        assert_eq!(act(&mut views[k].1, "pick 0").await["type"], "view");
+    }
     // Participant a finishes the one episode asked for.
     let (first, socket) = &mut views[0];
     let first = first.clone();
     let (_, last) = solve(socket, &first).await;
     assert_eq!(last["done"], true);
+    // Three acted: the fourth is turned away.
+    let (status, body) = join(addr, "d").await.unwrap_err();
+    assert_eq!(status, 503, "{body}");
     let after = ask(socket, json!({"type": "next"})).await;
     assert!(after["message"].as_str().unwrap().contains("finished"), "{after}");
     let api = results
@@ -413,7 +416,7 @@ modes = ["correct", "play"]
     assert_eq!(rows[0]["done"], true);
     assert_eq!(rows[0]["recording"], "p0000-solo-a.jsonl");
     assert_eq!(rows[1]["recording"], "p0001-teach-b.jsonl");
-    assert_eq!(std::fs::read_dir(&record).unwrap().count(), 3);
+    assert_eq!(recordings(&record).len(), 3);
 }
 
 #[tokio::test]
@@ -445,6 +448,8 @@ async fn a_study_that_cannot_work_is_refused_at_start() {
         .unwrap()
         .to_string();
         assert!(error.contains(expected), "{text} -> {error}");
+        // The condition is named once (P22: "condition a: condition a: ..." before).
+        assert!(error.matches("condition a:").count() <= 1, "{error}");
     }
 }
 

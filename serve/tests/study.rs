@@ -96,6 +96,8 @@ async fn a_crowd_participant_consents_plays_with_time_and_gets_the_completion_co
         page["participant_ids"],
         json!(["PROLIFIC_PID", "STUDY_ID", "SESSION_ID"])
     );
+    // The completion code is for those who finish, never for a visitor.
+    assert!(!response.contains("C0DE42"), "{response}");
     // Without consent, nothing begins; an id the study does not read is refused.
     assert_eq!(join_form(addr, "PROLIFIC_PID=abc").await.unwrap_err().0, 400);
     assert_eq!(join_form(addr, "consent=agree&workerId=abc").await.unwrap_err().0, 400);
@@ -103,7 +105,7 @@ async fn a_crowd_participant_consents_plays_with_time_and_gets_the_completion_co
         join_form(addr, "consent=agree&PROLIFIC_PID=a%2Fb").await.unwrap_err().0,
         400
     );
-    assert!(!dir.path().join("rec").exists() || std::fs::read_dir(dir.path().join("rec")).unwrap().count() == 0);
+    assert!(!dir.path().join("rec").exists() || recordings(&dir.path().join("rec")).is_empty());
 
     let token = join_form(addr, &ids("5f1a")).await.unwrap();
     let mut socket = connect(addr, &token, None).await.unwrap();
@@ -112,6 +114,7 @@ async fn a_crowd_participant_consents_plays_with_time_and_gets_the_completion_co
         (first["condition"].as_str(), first["withdrawal"].as_bool()),
         (Some("top"), Some(true))
     );
+    assert_eq!(first["completion"], Value::Null, "no code before the end");
     // The page's clock is recorded when it is believable.
     tokio::time::sleep(std::time::Duration::from_millis(60)).await;
     let picked = ask(&mut socket, json!({"type": "act", "action": "pick 0", "t_ms": 40})).await;
@@ -139,12 +142,20 @@ async fn a_crowd_participant_consents_plays_with_time_and_gets_the_completion_co
             .all(|s| s["received_ms"].as_u64().unwrap() >= lines[1]["started_ms"].as_u64().unwrap())
     );
 
-    // Returning with the same id: the same session, not a new one.
-    assert_eq!(join_form(addr, &ids("5f1a")).await.unwrap(), token);
-    let (status, response) = http(addr, "POST", "/api/resume", "PROLIFIC_PID=5f1a").await;
+    // Returning in the same browser (its cookie): the same session, not a new one. The id
+    // alone is no key: a join with it is refused, and /api/resume answers as for anyone.
+    let cookie = format!("Cookie: blockstack_session={token}\r\n");
+    let (status, response) = http_with(addr, "POST", "/join", &ids("5f1a"), &cookie).await;
+    assert_eq!(status, 303, "{response}");
+    assert!(response.contains(&format!("/s/{token}")), "{response}");
+    assert_eq!(join_form(addr, &ids("5f1a")).await.unwrap_err().0, 409);
+    let (status, response) = http_with(addr, "POST", "/api/resume", "PROLIFIC_PID=5f1a", &cookie).await;
     assert_eq!(status, 200);
     assert!(body_of(&response).contains(&token));
-    assert_eq!(http(addr, "POST", "/api/resume", "PROLIFIC_PID=new1").await.0, 404);
+    let (_, known) = http(addr, "POST", "/api/resume", "PROLIFIC_PID=5f1a").await;
+    let (_, unknown) = http(addr, "POST", "/api/resume", "PROLIFIC_PID=new1").await;
+    assert_eq!(body_of(&known), body_of(&unknown));
+    assert_eq!(body_of(&known), r#"{"token":null}"#);
 
     // The researcher's figures, CSV and replay.
     let api = results
@@ -249,14 +260,19 @@ async fn a_withdrawal_marks_or_deletes_and_leaves_the_participant_out() {
         act(&mut socket, "pick 0").await;
         let (status, response) = http(addr, "POST", &format!("/api/withdraw/{token}"), "").await;
         assert_eq!(status, 200, "{response}");
-        let files: Vec<_> = std::fs::read_dir(dir.path().join("rec")).unwrap().collect();
+        let files = recordings(&dir.path().join("rec"));
         match how {
             "mark" => {
                 let path = only_recording(&dir.path().join("rec"));
                 assert_eq!(lines(&path).last().unwrap()["type"], "withdrawn");
                 assert!(agent::demos::read_demonstrations(&path, None).unwrap().withdrawn);
             }
-            _ => assert!(files.is_empty(), "deleted"),
+            _ => {
+                assert!(files.is_empty(), "deleted");
+                // Nothing of w1 left but a keyed hash of the id.
+                let ledger = std::fs::read_to_string(dir.path().join("rec/.serve-ledger.jsonl")).unwrap();
+                assert!(!ledger.contains("w1") && !ledger.contains("p0000"), "{ledger}");
+            }
         }
         // The session is gone, the id refused, the figures leave it out, and the place in
         // the balance is free again.
@@ -272,6 +288,14 @@ async fn a_withdrawal_marks_or_deletes_and_leaves_the_participant_out() {
         let data: Value = serde_json::from_str(body_of(&response)).unwrap();
         assert_eq!(data["table"]["episodes"], json!([]), "{how}");
         assert_eq!(data["table"]["conditions"][0]["participants"], 0);
+        if how == "mark" {
+            // The page says one was left out; its replay says why.
+            assert_eq!(data["table"]["withdrawn"], 1);
+            let replay = api.replace("/api/results/", "/api/replay/") + "/p0000-top.jsonl/0";
+            let (status, response) = http(addr, "GET", &replay, "").await;
+            assert_eq!(status, 404);
+            assert!(response.contains("withdrew"), "{response}");
+        }
         let next = join_form(addr, &ids("w2")).await.unwrap();
         let mut socket = connect(addr, &next, None).await.unwrap();
         assert_eq!(receive(&mut socket).await["condition"], "top", "{how}");
@@ -304,4 +328,81 @@ async fn a_page_that_reconnects_mid_episode_loses_nothing() {
         .map(|l| l["step"].as_u64().unwrap())
         .collect();
     assert_eq!(steps, [1, 2, 3, 4]);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn own_codes_required_ids_and_a_code_for_those_who_withdraw() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("study.toml");
+    std::fs::write(
+        &path,
+        r#"
+participant_ids = ["PROLIFIC_PID", "STUDY_ID", "SESSION_ID"]
+require_ids = true
+code_per_participant = true
+completion_url = "https://app.example.org/done?cc={code}"
+completion_on_withdrawal = true
+withdrawal = "mark"
+idle_minutes = 45
+joins_per_minute = 5
+
+[[condition]]
+name = "top"
+episodes = 1
+goals = "0,1,2"
+modes = ["play"]
+"#,
+    )
+    .unwrap();
+    let config = ServeConfig {
+        study: Some(path),
+        record_dir: Some(dir.path().join("rec")),
+        ..ServeConfig::default()
+    };
+    let (addr, results) = start(config).await;
+    // Without every id the study names: refused.
+    let (status, response) = http(addr, "POST", "/join", "PROLIFIC_PID=a1").await;
+    assert_eq!(status, 400, "{response}");
+    assert!(response.contains("STUDY_ID"), "{response}");
+    // Two participants finish: each gets a code of their own, in the link too.
+    let mut codes = Vec::new();
+    for pid in ["a1", "b2"] {
+        let token = join_form(addr, &ids(pid)).await.unwrap();
+        let mut socket = connect(addr, &token, None).await.unwrap();
+        let view = receive(&mut socket).await;
+        let last = solve_view(&mut socket, &view).await;
+        let code = last["completion"]["code"].as_str().unwrap().to_string();
+        assert_eq!(code.len(), 8);
+        assert_eq!(
+            last["completion"]["url"].as_str().unwrap(),
+            format!("https://app.example.org/done?cc={code}")
+        );
+        codes.push(code);
+    }
+    assert_ne!(codes[0], codes[1]);
+    // The CSV lists each finished participant's code.
+    let api = results
+        .split_once(&addr.to_string())
+        .unwrap()
+        .1
+        .replace("/results/", "/api/results/");
+    let (_, response) = http(addr, "GET", &format!("{api}/episodes.csv"), "").await;
+    let csv = body_of(&response);
+    assert!(csv.lines().next().unwrap().ends_with(",completion_code"), "{csv}");
+    for code in &codes {
+        assert_eq!(csv.matches(code.as_str()).count(), 1, "{csv}");
+    }
+    // One who withdraws is given their code too (the study says so).
+    let token = join_form(addr, &ids("c3")).await.unwrap();
+    let mut socket = connect(addr, &token, None).await.unwrap();
+    receive(&mut socket).await;
+    act(&mut socket, "pick 0").await;
+    let (status, response) = http(addr, "POST", &format!("/api/withdraw/{token}"), "").await;
+    assert_eq!(status, 200, "{response}");
+    let answer: Value = serde_json::from_str(body_of(&response)).unwrap();
+    assert_eq!(answer["completion"]["code"].as_str().unwrap().len(), 8, "{answer}");
+    // The fifth join from this address within the minute is refused (joins_per_minute = 5:
+    // a1, b2, c3 and the refused one above made four).
+    assert!(join_form(addr, &ids("d4")).await.is_ok());
+    assert_eq!(join_form(addr, &ids("e5")).await.unwrap_err().0, 429);
 }

@@ -5,7 +5,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use agent::QAgent;
-use agent::demos::{BadLines, learn_from_file};
+use agent::demos::{Admission, BadLines, RunWorld, learn_admitted};
 use anyhow::{Context, Result};
 use clap::Args;
 use files::{OutputPath, refuse_same_file};
@@ -27,6 +27,10 @@ pub struct LearnFromDemosArgs {
     /// fail (stop, writing nothing).
     #[arg(long, default_value = "skip")]
     pub on_bad_line: BadLines,
+    /// Read a withdrawn participant's recording too, for an audit (by default it is
+    /// refused: a withdrawn participant is left out of every analysis).
+    #[arg(long)]
+    pub include_withdrawn: bool,
 }
 
 /// Replays, saves, and reports.
@@ -36,10 +40,23 @@ pub fn learn_from_demos(args: LearnFromDemosArgs) -> Result<()> {
     refuse_same_file(&args.out, &args.demos).context("--out and the recording")?;
     refuse_same_file(&args.out, &args.model).context("--out and --model")?;
     let mut agent = QAgent::load(&args.model)?;
-    let report = learn_from_file(&mut agent, &args.demos, args.on_bad_line)?;
+    // The model's view, grid and blocks; the protocol is the session's own (a model is
+    // corrected under either profile, and the session line names the rule it learnt by).
+    let admission = Admission {
+        world: Some(RunWorld {
+            protocol: None,
+            ..RunWorld::of(&agent::correction::session_world(&agent))
+        }),
+        include_withdrawn: args.include_withdrawn,
+    };
+    let admitted = learn_admitted(&mut agent, &args.demos, args.on_bad_line, &admission)?;
+    let report = admitted.read;
     {
         // Standard error may be gone: that must not cost the model.
         let mut err = std::io::stderr().lock();
+        if let Some(note) = &admitted.note {
+            let _ = writeln!(err, "{note}");
+        }
         for bad in &report.bad_lines {
             let _ = writeln!(err, "{}:{}: skipped: {}", args.demos.display(), bad.line, bad.reason);
         }

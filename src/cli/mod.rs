@@ -14,6 +14,7 @@ mod dqn;
 mod eval;
 mod generate;
 mod learn_from_demos;
+mod pilot;
 mod profile;
 mod progress;
 mod render;
@@ -69,6 +70,8 @@ pub enum Command {
     Dqn(Box<dqn::DqnArgs>),
     /// Serve a page where people play, watch and correct the agent in a browser; studies.
     Serve(serve::ServeArgs),
+    /// Pilot a study: simulated participants through the real server, before a launch.
+    Pilot(pilot::PilotArgs),
 }
 
 /// A flag's value that clap refused (`--view front`), as one line naming the flag, the value
@@ -113,5 +116,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::LearnFromDemos(args) => learn_from_demos::learn_from_demos(args),
         Command::Dqn(args) => dqn::dqn(*args),
         Command::Serve(args) => serve::serve(args),
+        Command::Pilot(args) => pilot::pilot(args),
     }
 }

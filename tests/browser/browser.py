@@ -4,6 +4,7 @@ Playwright, and waiting on the page's state (`view`) safely."""
 import os
 import pathlib
 import subprocess
+import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 BINARY = pathlib.Path(os.environ.get("BLOCKSTACK_BIN", ROOT / "target" / "release" / "blockstack"))
@@ -42,9 +43,26 @@ def view(page):
     return page.evaluate("view")
 
 
+def wait_until(page, condition, timeout=10_000):
+    """Waits until the JavaScript expression `condition` holds on the page. Polled with
+    `page.evaluate`, not `page.wait_for_function`: a string predicate of the latter runs
+    through `eval`, which the page's Content-Security-Policy refuses (as it should)."""
+    deadline = time.monotonic() + timeout / 1000
+    while True:
+        try:
+            if page.evaluate(condition):
+                return
+        except Exception as e:  # a navigation under way destroys the context: ask again
+            if "context" not in str(e).lower() and "navigat" not in str(e).lower():
+                raise
+        if time.monotonic() > deadline:
+            raise AssertionError(f"waited {timeout} ms for {condition} on {page.url}")
+        time.sleep(0.05)
+
+
 def wait_view(page, condition="true", timeout=10_000):
     """Waits until the page's script has made its view and `condition` (JavaScript) holds."""
-    page.wait_for_function(f"{READY} && ({condition})", timeout=timeout)
+    wait_until(page, f"{READY} && ({condition})", timeout)
 
 
 def start_server(*args):

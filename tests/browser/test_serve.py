@@ -15,7 +15,7 @@ import subprocess
 
 import pytest
 
-from browser import BINARY, CHROMIUM, SHOTS, action_name, run, start_server, view, wait_view
+from browser import BINARY, CHROMIUM, SHOTS, action_name, run, start_server, view, wait_until, wait_view
 
 pytest.importorskip("playwright.sync_api", reason="Playwright is not installed (pip install playwright)")
 if not CHROMIUM.exists():
@@ -103,7 +103,7 @@ def test_play_correct_and_watch_in_the_browser(server, page):
 
     # A key that names no block is refused on the page, and nothing changes.
     page.keyboard.press("ArrowUp")
-    page.wait_for_function("document.getElementById('error').textContent.length > 0")
+    wait_until(page, "document.getElementById('error').textContent.length > 0")
     assert "episode is over" in page.inner_text("#error")
 
     # Correct: accept the agent's proposal twice (Enter, then the button), then override
@@ -178,7 +178,7 @@ def test_play_correct_and_watch_in_the_browser(server, page):
 def test_results_page_lists_the_sessions(server, page):
     links, _, _ = server
     page.goto(links["researcher"])
-    page.wait_for_function("document.querySelectorAll('#sessions tbody tr').length > 0", timeout=10_000)
+    wait_until(page, "document.querySelectorAll('#sessions tbody tr').length > 0", timeout=10_000)
     row = page.inner_text("#sessions tbody tr")
     assert "tester" in row
     page.screenshot(path=str(SHOTS / "serve-results.png"))
@@ -202,7 +202,7 @@ def test_a_training_runs_curve_is_live(page, tmp_path):
             if line.startswith("learning curve: "):
                 url = line.split(": ", 1)[1].strip()
         page.goto(url)
-        page.wait_for_function("document.getElementById('curvenote').textContent.includes(' of 100000 games')", timeout=20_000)
+        wait_until(page, "document.getElementById('curvenote').textContent.includes(' of 100000 games')", timeout=20_000)
         page.wait_for_timeout(1500)
         assert "blockstack train" in page.inner_text("#curvetitle")
         page.screenshot(path=str(SHOTS / "serve-curve.png"))

@@ -21,7 +21,7 @@ import subprocess
 
 import pytest
 
-from browser import CHROMIUM, ROOT, SHOTS, action_name, run, start_server, view, wait_view
+from browser import CHROMIUM, ROOT, SHOTS, action_name, run, start_server, view, wait_until, wait_view
 
 pytest.importorskip("playwright.sync_api", reason="Playwright is not installed (pip install playwright)")
 if not CHROMIUM.exists():
@@ -177,12 +177,13 @@ def test_crowd_participants_consent_play_finish_resume_withdraw_and_decline(stud
     page.wait_for_selector("#withdrawn:not([hidden])")
 
     # D declines: nothing recorded.
-    files = sorted(record.iterdir())
+    everything = sorted(record.iterdir())
     arrive(page, study, "D1")
     page.wait_for_selector("#consent:not([hidden])")
     page.click("text=I do not agree")
     page.wait_for_selector("#declined:not([hidden])")
-    assert sorted(record.iterdir()) == files
+    assert sorted(record.iterdir()) == everything
+    files = sorted(record.glob("p*.jsonl"))
 
     # The recordings: three participants with their platform ids, C's marked withdrawn, every
     # step timed.
@@ -208,7 +209,7 @@ def test_the_researcher_sees_figures_replays_and_the_csv(study, page):
         pytest.skip("the participants' test did not finish")
     page.goto(study["links"]["researcher"])
     # C withdrew: left out. A's and B's episodes are the table's rows.
-    page.wait_for_function("document.querySelectorAll('#episodes tbody tr').length === 2", timeout=10_000)
+    wait_until(page, "document.querySelectorAll('#episodes tbody tr').length === 2", timeout=10_000)
     conditions = page.inner_text("#conditions tbody")
     assert "top-correct" in conditions and "side-play" in conditions
     page.screenshot(path=str(SHOTS / "study-results.png"), full_page=True)
@@ -227,10 +228,10 @@ def test_the_researcher_sees_figures_replays_and_the_csv(study, page):
     # A replay, step by step.
     page.locator("#episodes tbody tr a").first.click()
     page.wait_for_selector("#replay:not([hidden])", timeout=10_000)
-    page.wait_for_function("document.getElementById('replaystatus').textContent.length > 0", timeout=10_000)
+    wait_until(page, "document.getElementById('replaystatus').textContent.length > 0", timeout=10_000)
     before = page.inner_text("#replaystatus")
     page.click("#replaynext")
-    page.wait_for_function(
+    wait_until(page, 
         f"document.getElementById('replaystatus').textContent !== {json.dumps(before)}", timeout=10_000
     )
     page.screenshot(path=str(SHOTS / "study-replay.png"))

@@ -13,8 +13,9 @@ use std::path::Path;
 use sim::trajectory::Episode;
 use sim::{Action, Goal, Grid, Observation, State, View};
 
+use super::admission::Admission;
 use super::format::{DemoFile, EpisodeLine, ParticipantLine, SessionLine, WorldLine, demos_error};
-use super::replay::{BadLines, DemoLearner, StepTime, learn_from_reader};
+use super::replay::{BadLines, DemoLearner, StepTime, replay_reader};
 use crate::error::{AgentError, Result};
 use crate::rule::{CorrectionRule, Experience};
 
@@ -239,6 +240,18 @@ pub fn read_episodes(path: &Path, world: Option<(Grid, usize)>) -> Result<Vec<De
 
 /// The episodes of `file` (named `path` in errors), as [`read_episodes`] reads them.
 pub fn episodes_of(file: DemoFile, path: &Path, world: Option<(Grid, usize)>) -> Result<Vec<DemoEpisode>> {
+    Ok(collect_episodes(file, path, world, &Admission::default())?.0)
+}
+
+/// The episodes of `file` (named `path` in errors), as [`read_episodes`] reads them, its
+/// sessions checked by `admission`; and whether the recording says its participant
+/// withdrew.
+pub(crate) fn collect_episodes(
+    file: DemoFile,
+    path: &Path,
+    world: Option<(Grid, usize)>,
+    admission: &Admission,
+) -> Result<(Vec<DemoEpisode>, bool)> {
     let mut one = OneWorld {
         world,
         given: world.is_some(),
@@ -251,8 +264,8 @@ pub fn episodes_of(file: DemoFile, path: &Path, world: Option<(Grid, usize)>) ->
                 participant: None,
                 session_world: None,
             };
-            learn_from_reader(&mut collector, input, path, BadLines::Fail)?;
-            Ok(collector.episodes)
+            let report = replay_reader(&mut collector, input, path, BadLines::Fail, admission)?;
+            Ok((collector.episodes, report.withdrawn))
         }
         DemoFile::Trajectory(reader) => {
             let mut episodes = Vec::new();
@@ -271,7 +284,7 @@ pub fn episodes_of(file: DemoFile, path: &Path, world: Option<(Grid, usize)>) ->
             if episodes.iter().all(|e| e.steps.is_empty()) {
                 return Err(demos_error(path, "it holds no step to learn from"));
             }
-            Ok(episodes)
+            Ok((episodes, false))
         }
     }
 }

@@ -7,10 +7,12 @@
 //! either kind (recording or trajectory) into checked episodes for learners that are not
 //! the tabular agent (`neural`, the Python package).
 
+pub mod admission;
 pub mod episodes;
 pub mod format;
 pub mod replay;
 
+pub use admission::{Admission, Admitted, RunWorld, learn_admitted, read_admitted};
 pub use episodes::{DemoEpisode, DemoStep, Demonstrations, episodes_of, read_demonstrations, read_episodes};
 pub use format::{
     DEMOS_FORMAT, DEMOS_VERSION, DemoFile, DemoRecord, DemoSink, DemoWriter, EpisodeLine, MAX_LINE_BYTES,

@@ -36,6 +36,7 @@ use sim::reward::Transition;
 use sim::trajectory::Outcomes;
 use sim::{Action, ActionProtocol, Goal, Grid, GridWorld, Observation, State, View, World};
 
+use super::admission::Admission;
 use super::format::{
     DEMOS_FORMAT, DEMOS_VERSION, DemoRecord, EpisodeLine, MAX_LINE_BYTES, RawLine, RecordingLines, SessionLine,
     StepLine, demos_error,
@@ -214,6 +215,8 @@ impl DemoLearner for QAgent {
 pub struct Replay<'a, L: ?Sized = QAgent> {
     agent: &'a mut L,
     policy: BadLines,
+    /// The world each session must be of ([`Admission::check_session`]).
+    admission: Admission,
     name: String,
     session: Option<OpenSession>,
     episode: Option<OpenEpisode>,
@@ -226,11 +229,18 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
         Replay {
             agent,
             policy,
+            admission: Admission::default(),
             name: name.into(),
             session: None,
             episode: None,
             report: ReplayReport::default(),
         }
+    }
+
+    /// The replay taking only sessions `admission` takes (of the run's world).
+    pub fn admitting(mut self, admission: Admission) -> Self {
+        self.admission = admission;
+        self
     }
 
     /// Applies every line of `input`; with [`BadLines::Fail`], stops at the first bad line.
@@ -323,6 +333,8 @@ impl<'a, L: DemoLearner + ?Sized> Replay<'a, L> {
         }
         let grid = Grid::new(s.grid[0], s.grid[1])?;
         s.rule.validate()?;
+        // Nothing of a session of another world than the run's could be learnt.
+        self.admission.check_session(&s).map_err(LineError::fatal)?;
         // Nothing of a session for another world could be learnt.
         self.agent
             .check_world(grid, s.blocks)
@@ -562,7 +574,18 @@ pub fn learn_from_reader<L: DemoLearner + ?Sized>(
     path: &Path,
     policy: BadLines,
 ) -> Result<ReplayReport> {
-    let mut replay = Replay::new(agent, policy, &path.display().to_string());
+    replay_reader(agent, input, path, policy, &Admission::default())
+}
+
+/// [`learn_from_reader`], taking only sessions `admission` takes.
+pub(crate) fn replay_reader<L: DemoLearner + ?Sized>(
+    agent: &mut L,
+    input: impl BufRead,
+    path: &Path,
+    policy: BadLines,
+    admission: &Admission,
+) -> Result<ReplayReport> {
+    let mut replay = Replay::new(agent, policy, &path.display().to_string()).admitting(*admission);
     replay.read(input)?;
     let report = replay.finish();
     if report.steps == 0 {

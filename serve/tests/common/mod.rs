@@ -59,6 +59,17 @@ pub async fn join(addr: SocketAddr, name: &str) -> Result<String, (u16, String)>
     Ok(location.trim().strip_prefix("/s/").unwrap().to_string())
 }
 
+/// Joins as a participant (`name`) and takes a step (`pick 0`), so that they count; the
+/// session token.
+pub async fn join_acting(addr: SocketAddr, name: &str) -> String {
+    let token = join(addr, name).await.unwrap();
+    let mut socket = connect(addr, &token, None).await.unwrap();
+    receive(&mut socket).await;
+    let view = act(&mut socket, "pick 0").await;
+    assert_eq!(view["type"], "view", "{view}");
+    token
+}
+
 /// Opens the session `token`'s WebSocket, with the browser's `origin` if given.
 pub async fn connect(addr: SocketAddr, token: &str, origin: Option<&str>) -> Result<Socket, String> {
     let mut request = format!("ws://{addr}/ws/{token}").into_client_request().unwrap();
@@ -118,9 +129,20 @@ pub fn lines(path: &Path) -> Vec<Value> {
         .collect()
 }
 
+/// The recordings in `dir` (a study's ledger, a dot file, left out).
+pub fn recordings(dir: &Path) -> Vec<std::path::PathBuf> {
+    let mut files: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| !p.file_name().unwrap().to_str().unwrap().starts_with('.'))
+        .collect();
+    files.sort();
+    files
+}
+
 /// The only recording in `dir`.
 pub fn only_recording(dir: &Path) -> std::path::PathBuf {
-    let files: Vec<_> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).collect();
+    let files = recordings(dir);
     assert_eq!(files.len(), 1, "{files:?}");
     files[0].clone()
 }
