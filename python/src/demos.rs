@@ -338,8 +338,8 @@ pub fn read_recording<'py>(
 /// `person` (the person chose the step), `t_ms` (milliseconds since the episode's first
 /// view, -1 untimed) and `received_ms` (-1 untimed); and its `episode` number, `goal`
 /// (text), `view`, `grid`, `blocks`, `started_ms`, `ended` (by its rules), `participant`
-/// (a dict, or `None`) and `world` (`reward`, `protocol`, `horizon`, or `None` before
-/// recording version 3). Every line is checked; a bad one (the last line a kill cut short)
+/// (a dict, or `None`) and `world` (`reward`, `protocol`, `start`, `horizon`, or `None`
+/// before recording version 3; `start` is `uniform` in a version 3 recording). Every line is checked; a bad one (the last line a kill cut short)
 /// is skipped, as the researcher's page does. Episodes without a step are left out. A
 /// withdrawn participant's recording gives no episode (`withdrawn` says why) unless
 /// `include_withdrawn`.
@@ -443,6 +443,7 @@ pub fn recording_episodes<'py>(
                     let world = PyDict::new(py);
                     world.set_item("reward", &w.reward)?;
                     world.set_item("protocol", w.protocol.to_string())?;
+                    world.set_item("start", w.start.to_string())?;
                     world.set_item("horizon", w.horizon)?;
                     d.set_item("world", world)?;
                 }

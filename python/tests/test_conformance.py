@@ -434,3 +434,127 @@ def pathlib_root():
     import pathlib
 
     return pathlib.Path(__file__).resolve().parents[2]
+
+
+# Every recording exports -------------------------------------------------------------------
+#
+# Each writer of recordings (a study's server, through the pilot; a person in the terminal,
+# `demo`; a simulated demonstrator, `correct --record`) in each world it plays; the world's
+# command-line flags, the condition keys of a study, and the world the dataset must recover.
+# No writer plays a PDDL task (`run --pddl` writes trajectories, not recordings), so `pddl=`
+# has no pair here.
+
+#: name: (train and writer flags, study condition keys, recovered world keywords)
+RECORDED = {
+    "top spec free": ([], {"view": "top"}, {"view": "top", "protocol": "free", "start": "uniform"}),
+    "top spec paper": (["--protocol", "paper"], None, {"view": "top", "protocol": "paper", "start": "uniform"}),
+    "top original": (
+        ["--profile", "original"],
+        {"view": "top", "profile": "original"},
+        {"view": "top", "protocol": "paper", "start": "paper", "reward": "paper-code"},
+    ),
+    "side spec free": (["--view", "side"], {"view": "side"}, {"view": "side", "protocol": "free", "start": "uniform"}),
+}
+
+#: The writers and the worlds each plays (`correct`'s simulated demonstrators plan the top
+#: view only; a study's condition has a profile, not a protocol of its own).
+WRITERS = {
+    "correct": ("top spec free", "top spec paper", "top original"),
+    "demo": ("top spec free", "top spec paper", "top original", "side spec free"),
+    "serve": ("top spec free", "top original", "side spec free"),
+}
+
+EXPORTS = [(writer, world) for writer, worlds in WRITERS.items() for world in worlds]
+
+
+def _model(cli, folder, world) -> str:
+    model = folder / "model.safetensors"
+    cli("train", "--games", "60", "--backend", "grid", "--out", model, *RECORDED[world][0])
+    return str(model)
+
+
+def _write_with_correct(cli, folder, world) -> list:
+    record = folder / "correct.jsonl"
+    model = _model(cli, folder, world)
+    cli("correct", "--model", model, "--demonstrator", "1", "--demos", "2", "--out", folder / "c.safetensors",
+        "--record", record, *RECORDED[world][0])
+    return [record]
+
+
+def _write_with_demo(cli, folder, world) -> list:
+    import shutil
+    import time
+
+    if shutil.which("tmux") is None:
+        pytest.skip("tmux is not installed (.ci/run installs it)")
+    record = folder / "demo.jsonl"
+    model = _model(cli, folder, world)
+    flags = [f for f in RECORDED[world][0] if f not in ("--view", "side", "--profile", "original")]
+    socket = str(folder / "tmux.sock")
+    command = " ".join([_binary(), "demo", "--model", model, "--record", str(record), "--seed", "2", *flags])
+    tmux = lambda *a: subprocess.run(["tmux", "-S", socket, *a], capture_output=True, text=True, timeout=30)  # noqa: E731
+    assert tmux("new-session", "-d", "-s", "demo", "-x", "100", "-y", "40", command).returncode == 0
+    try:
+        deadline = time.monotonic() + 60
+        # Faster, then a person's correction (a drop), then the agent again, then quit.
+        tmux("send-keys", "-t", "demo", "+", "+", "+")
+        while time.monotonic() < deadline and (not record.exists() or record.read_text().count('"type":"step"') < 3):
+            time.sleep(0.1)
+        tmux("send-keys", "-t", "demo", "d")
+        count = record.read_text().count('"type":"step"')
+        while time.monotonic() < deadline and record.read_text().count('"type":"step"') < count + 3:
+            time.sleep(0.1)
+        tmux("send-keys", "-t", "demo", "q")
+        while time.monotonic() < deadline and tmux("has-session", "-t", "demo").returncode == 0:
+            time.sleep(0.1)
+    finally:
+        tmux("kill-server")
+    return [record]
+
+
+def _write_with_serve(cli, folder, world) -> list:
+    condition = dict(RECORDED[world][1], name="only", model="model.safetensors", goals="0,1,2", episodes=1)
+    if world.startswith("side"):
+        condition["goals"] = "0,1/2"
+    _model(cli, folder, world)
+    keys = "\n".join(f"{k} = {json.dumps(v)}" for k, v in condition.items())
+    (folder / "study.toml").write_text(
+        f'name = "conformance"\nseed = 3\nconsent = "You agree."\ninstructions = "Stack the blocks."\n'
+        f'participant_ids = ["PROLIFIC_PID"]\ncompletion_code = "C0NF0R"\n[[condition]]\n{keys}\n'
+    )
+    cli("pilot", "--study", folder / "study.toml", "--participants", "1", "--record-dir", folder / "r", "--seed", "1")
+    # The recordings, not the server's hidden ledger beside them.
+    return sorted((folder / "r").glob("p*.jsonl"))
+
+
+def _binary() -> str:
+    return os.environ.get("BLOCKSTACK_BIN", str(pathlib_root() / "target" / "release" / "blockstack"))
+
+
+@pytest.mark.parametrize("writer, world", EXPORTS, ids=[f"{w}-{x}" for w, x in EXPORTS])
+def test_every_recording_exports_to_a_dataset_of_its_own_world(writer, world, cli, tmp_path, monkeypatch):
+    pytest.importorskip("minari", reason="Minari is not installed (pip install 'minari[hdf5]')")
+    monkeypatch.setenv("MINARI_DATASETS_PATH", str(tmp_path / "datasets"))
+    write = {"correct": _write_with_correct, "demo": _write_with_demo, "serve": _write_with_serve}[writer]
+    recordings = write(cli, tmp_path, world)
+    dataset = blockstack.to_minari(recordings, f"conformance/{writer}-v0", obs="state", reference_episodes=2)
+    assert dataset.total_episodes >= 1
+    env = dataset.recover_environment().unwrapped
+    kept = {k: getattr(env.world, k) for k in RECORDED[world][2]}
+    assert kept == RECORDED[world][2], "the dataset's environment is the recordings' world"
+    # Each episode replays in the recovered environment: the same rewards and ends.
+    for episode in dataset.iterate_episodes():
+        o = episode.observations
+        held = int(o["held"][0])
+        towers = collections.defaultdict(list)
+        for block, tower in zip(o["goal"][0], o["goal_tower"][0]):
+            if block >= 0:
+                towers[int(tower)].append(str(int(block)))
+        goal = "/".join(",".join(towers[t]) for t in sorted(towers))
+        if len(towers) == 1 and len(towers[0]) < len(o["goal"][0]):
+            goal += "/"  # one tower that leaves blocks free
+        env.reset(options={"cells": [tuple(c) for c in o["blocks"][0]], "held": None if held < 0 else held,
+                           "goal": goal})
+        for action, reward, terminated in zip(episode.actions, episode.rewards, episode.terminations):
+            _, r, t, _, info = env.step(int(action))
+            assert r == pytest.approx(reward) and t == terminated and not info["illegal"], (writer, world)

@@ -78,7 +78,7 @@ def test_bad_recordings_and_arguments_are_value_errors(tmp_path):
         blockstack.read_recording(bad)
     with pytest.raises(ValueError, match="cannot read"):
         blockstack.read_recording(tmp_path / "missing.jsonl")
-    with pytest.raises(ValueError, match="choose one of exact, exact-moves, near-optimal, oracle"):
+    with pytest.raises(ValueError, match="choose one of exact, exact-moves, near-optimal, optimal, oracle"):
         blockstack.demonstrations(1, expert="human")
 
 

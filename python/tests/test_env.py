@@ -154,7 +154,7 @@ def test_solve_plans_block_moves_in_the_side_view():
         blockstack.solve([(0, 0), (0, 2)], "0,1", view="side")
     # The side view's oracle is the near-optimal planner.
     assert blockstack.solve(cells, "1,3,2/", view="side", solver="oracle") == near
-    with pytest.raises(ValueError, match="choose one of exact, exact-moves, near-optimal, oracle"):
+    with pytest.raises(ValueError, match="choose one of exact, exact-moves, near-optimal, optimal, oracle"):
         blockstack.solve(cells, "1,3,2/", view="side", solver="greedy")
 
 

@@ -43,5 +43,5 @@ def test_block_move_experts_are_refused_in_the_top_view_alike(cli, expert):
 
 
 def test_an_unknown_expert_is_refused_with_the_planners_names():
-    with pytest.raises(ValueError, match="choose one of exact, exact-moves, near-optimal, oracle"):
+    with pytest.raises(ValueError, match="choose one of exact, exact-moves, near-optimal, optimal, oracle"):
         blockstack.demonstrations(1, expert="human")

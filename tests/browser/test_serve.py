@@ -149,7 +149,7 @@ def test_play_correct_and_watch_in_the_browser(server, page):
     # The recording, line by line: the play episode's steps are what was pressed, the
     # correct episode's the proposals accepted and the overrides.
     lines = recording(record)
-    assert lines[0]["type"] == "session" and lines[0]["version"] == 3
+    assert lines[0]["type"] == "session" and lines[0]["version"] == 4
     episodes = [line for line in lines if line["type"] == "episode"]
     steps = [line for line in lines if line["type"] == "step"]
     assert [e["episode"] for e in episodes] == [0, 1]

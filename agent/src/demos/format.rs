@@ -1,10 +1,10 @@
-//! The recording format (`blockstack-demos`, version 3): its record types, its writer and
+//! The recording format (`blockstack-demos`, version 4): its record types, its writer and
 //! its bounded reader. Reading a recording needs neither the tabular learner nor a network:
 //! this module depends on `sim`, `serde` and `files` (and the leaf [`crate::rule`] for the
 //! `rule` field), so that every reader of recordings can use it.
 //!
 //! ```text
-//! {"type":"session","format":"blockstack-demos","version":3,"grid":[7,7],"blocks":3,"rule":{"margin":0.8,"learn_agent_steps":true},"demonstrator":"person","model":"agent.safetensors","model_id":"3f9c0a1b2d4e5f60"}
+//! {"type":"session","format":"blockstack-demos","version":4,"grid":[7,7],"blocks":3,"rule":{"margin":0.8,"learn_agent_steps":true},"demonstrator":"person","model":"agent.safetensors","model_id":"3f9c0a1b2d4e5f60"}
 //! {"type":"episode","episode":0,"seed":123,"goal":[0,1,2],"start":{"blocks":[[1,2],[4,0],[6,6]],"held":null},"started_ms":1764800000000}
 //! {"type":"step","episode":0,"step":1,"state":{"blocks":[[1,2],[4,0],[6,6]],"held":null},"proposed":"drop","action":"pick 1","correction":true,"reward":0.0,"next":{"blocks":[[1,2],[4,0],[6,6]],"held":1},"terminated":false,"truncated":false,"t_ms":2140,"received_ms":1764800002141}
 //! ```
@@ -59,8 +59,8 @@ pub use crate::rule::CorrectionRule;
 /// The `format` field of every session line.
 pub const DEMOS_FORMAT: &str = "blockstack-demos";
 
-/// The recording format version this build writes (it reads this one and versions 1 and 2).
-pub const DEMOS_VERSION: u32 = 3;
+/// The recording format version this build writes (it reads this one and versions 1 to 3).
+pub const DEMOS_VERSION: u32 = 4;
 
 /// The largest recording read: 1 GiB, some three million steps.
 pub const MAX_RECORDING_BYTES: u64 = 1 << 30;
@@ -136,7 +136,7 @@ pub struct SessionLine {
     pub world: Option<WorldLine>,
 }
 
-/// A session's world: its reward model, action protocol and horizon.
+/// A session's world: its reward model, action protocol, start rule and horizon.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct WorldLine {
@@ -144,6 +144,10 @@ pub struct WorldLine {
     pub reward: String,
     /// The action protocol.
     pub protocol: sim::ActionProtocol,
+    /// The start rule (version 4; `uniform` when a version 3 line leaves it out): with the
+    /// others, the whole of a profile's world, so an exporter makes the `original` world again.
+    #[serde(default)]
+    pub start: sim::StartRule,
     /// Steps before an episode is cut off.
     pub horizon: u32,
 }
@@ -154,6 +158,7 @@ impl WorldLine {
         WorldLine {
             reward: world.reward.name().into(),
             protocol: world.protocol,
+            start: world.start,
             horizon: world.horizon,
         }
     }

@@ -745,10 +745,11 @@ mod tests {
             assert!(err.contains("line 2"), "{err}");
         }
         // Another version is refused even when skipping bad lines.
-        let other = session.replace("\"version\":3", "\"version\":4");
+        let newer = DEMOS_VERSION + 1;
+        let other = session.replace(&format!("\"version\":{DEMOS_VERSION}"), &format!("\"version\":{newer}"));
         let mut replay = Replay::new(&mut agent, BadLines::Skip, "x.jsonl");
         let err = replay.read(other.as_bytes()).unwrap_err().to_string();
-        assert!(err.contains("version 4"), "{err}");
+        assert!(err.contains(&format!("version {newer}")), "{err}");
     }
 
     /// A recording's lines, and the same lines with `edit` applied to line `i` (from 0).
