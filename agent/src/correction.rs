@@ -1066,12 +1066,18 @@ mod tests {
         // Written and read back as JSON: the same line; a version-2 line without it reads as none.
         let text = serde_json::to_string(&DemoRecord::Session(header.clone())).unwrap();
         assert!(
-            text.contains(r#""world":{"reward":"step-cost","protocol":"paper","horizon":40}"#),
+            text.contains(r#""world":{"reward":"step-cost","protocol":"paper","start":"uniform","horizon":40}"#),
             "{text}"
         );
         let back: DemoRecord = serde_json::from_str(&text).unwrap();
         assert!(matches!(back, DemoRecord::Session(h) if h.world == Some(line)));
-        let old = text.replace(r#","world":{"reward":"step-cost","protocol":"paper","horizon":40}"#, "");
+        // A version-3 line names no start rule: read as uniform.
+        let v3 = text.replace(r#""start":"uniform","#, "");
+        assert!(matches!(serde_json::from_str(&v3).unwrap(), DemoRecord::Session(h) if h.world == Some(line.clone())));
+        let old = text.replace(
+            r#","world":{"reward":"step-cost","protocol":"paper","start":"uniform","horizon":40}"#,
+            "",
+        );
         let old: DemoRecord = serde_json::from_str(&old).unwrap();
         assert!(matches!(old, DemoRecord::Session(h) if h.world.is_none()));
     }
