@@ -25,6 +25,7 @@ use neural::{DemoSource, DqnConfig, NetConfig, NetKind, OptimizerKind, Preset, T
 use serde::{Deserialize, Serialize};
 use sim::{Goal, Profile, RewardModel, ScreenGoal};
 
+use super::Findings;
 use super::arms::{ArmResult, Goals, Row, Suite, Table, describe, suite_in};
 use super::shared::Shared;
 use super::text::num;
@@ -535,13 +536,10 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
         title: "Deep Q-learning from pixels and planes, and DQfD (section III-C)".into(),
         setup: setup(budget, &arms, &outcomes),
         tables: tables(ctx, budget, &arms, &outcomes)?,
-        curves: Vec::new(),
-        decomposition: None,
         paper_notes: Vec::new(),
         reading: reading(budget, &arms, &outcomes),
         figures: figures(budget, &arms, &outcomes),
-        blocks_world: None,
-        general: None,
+        findings: Findings::Tables,
     })
 }
 
