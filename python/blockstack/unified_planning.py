@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import os
 import tempfile
+import warnings
 from typing import IO, Callable, Optional
 
 import unified_planning as up
@@ -109,8 +110,12 @@ class BlockstackPlanner(Engine, OneshotPlannerMixin):
         timeout: Optional[float] = None,
         output_stream: Optional[IO[str]] = None,
     ) -> PlanGenerationResult:
+        if heuristic is not None:
+            warnings.warn("blockstack plans the Blocks World by its own bound: the heuristic is not used")
         time_limit = timeout if timeout is not None else self._time_limit
         if self._solver != "optimal":
+            if timeout is not None:
+                warnings.warn(f"the timeout is the optimal solver's time limit: solver={self._solver!r} does not use it")
             time_limit = None
         with tempfile.TemporaryDirectory(prefix="blockstack-up-") as folder:
             domain = os.path.join(folder, "domain.pddl")

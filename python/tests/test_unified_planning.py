@@ -72,7 +72,9 @@ def test_a_generated_task_is_proven_optimal_and_the_near_optimal_plan_is_satisfi
     problem = read("domain-pickup.pddl", task)
     optimal = solve(problem)
     assert optimal.status == Status.SOLVED_OPTIMALLY and valid(problem, optimal.plan)
-    near = solve(problem, solver="near-optimal")
+    with OneshotPlanner(name="blockstack", params={"solver": "near-optimal"}) as planner:
+        with pytest.warns(UserWarning, match="the timeout is the optimal solver's time limit"):
+            near = planner.solve(problem, timeout=5)
     assert near.status == Status.SOLVED_SATISFICING and valid(problem, near.plan)
     assert len(near.plan.actions) > len(optimal.plan.actions) == int(optimal.metrics["lower_bound"])
     assert near.metrics["cost"] != near.metrics["lower_bound"]
