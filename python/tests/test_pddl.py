@@ -137,3 +137,33 @@ def test_blocks_world_refuses_a_task_already_solved_in_one_value_error(tmp_path)
     assert blockstack.read_pddl(done)["plan"] == []
     with pytest.raises(ValueError, match="done.pddl: the task's start already meets its goal"):
         gymnasium.make("blockstack/BlocksWorld-v0", pddl=done)
+
+
+FIXTURES = __import__("pathlib").Path(__file__).resolve().parent / "fixtures"
+
+
+def test_solve_pddl_takes_the_domain_s_action_names_and_writes_the_plan_file(cli, tmp_path):
+    problem, domain = FIXTURES / "problem-pick-up.pddl", FIXTURES / "domain-pick-up.pddl"
+    plan_file = tmp_path / "plan.txt"
+    solved = blockstack.solve_pddl(problem, domain=domain, plan_file=plan_file)
+    assert solved["plan"][0].startswith(("(pick-up ", "(unstack ")), solved["plan"]
+    assert any(a.startswith("(put-down ") for a in solved["plan"]), solved["plan"]
+    assert plan_file.read_text() == solved["text"] == cli("solve", "--pddl", problem, "--domain", domain)
+    with pytest.raises(ValueError, match="the action move is not supported|is not one of the 4-operator"):
+        blockstack.solve_pddl(problem, domain=FIXTURES / "domain-gripper.pddl")
+    with pytest.raises(ValueError, match="is also the input"):
+        blockstack.solve_pddl(problem, domain=domain, plan_file=domain)
+    with pytest.raises(TypeError, match="plan_file is a file name"):
+        blockstack.solve_pddl(problem, plan_file=3)
+
+
+def test_an_empty_goal_is_the_empty_plan_and_no_episode_as_a_met_goal_is(tmp_path):
+    empty = tmp_path / "empty.pddl"
+    empty.write_text(
+        "(define (problem p) (:domain blocksworld) (:objects b1 b2)\n"
+        " (:init (arm-empty) (clear b1) (on b1 b2) (on-table b2))\n"
+        " (:goal (and)))"
+    )
+    assert blockstack.solve_pddl(empty)["plan"] == []
+    with pytest.raises(ValueError, match="empty.pddl: the task's start already meets its goal \\(which places no block\\)"):
+        gymnasium.make("blockstack/BlocksWorld-v0", pddl=empty)
