@@ -16,7 +16,9 @@ refused in (:data:`REFUSED`); every other one is a world of :data:`WORLDS`. The 
   meets, reaches the goal, and takes as few steps as a breadth-first search over the world's
   own legal actions; ``optimal_steps`` says that number, and ``demonstrations`` plays it.
 - **CLI = Python**: ``blockstack run --agent exact`` plays, step for step, what the Python
-  environment's expert plays from the same seeds.
+  environment's expert plays from the same seeds; ``solve_pddl`` and ``solve_all`` give what
+  ``blockstack solve --pddl`` and ``solve-all`` give, for every planner, with the domain file
+  of either spelling or none, and the plan file written by either is the same.
 - **Files**: every reader, in the CLI and in Python, refuses a FIFO or a device at once.
 
 Breaking any one of them (a protocol the expert ignores, a refused action that raises, a
@@ -558,3 +560,50 @@ def test_every_recording_exports_to_a_dataset_of_its_own_world(writer, world, cl
         for action, reward, terminated in zip(episode.actions, episode.rewards, episode.terminations):
             _, r, t, _, info = env.step(int(action))
             assert r == pytest.approx(reward) and t == terminated and not info["illegal"], (writer, world)
+
+
+# --- Planning a task: CLI = Python ---------------------------------------------------------
+
+FIXTURES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "fixtures")
+#: The planners a PDDL task is planned by (``blockstack solve --pddl --solver``).
+PDDL_SOLVERS = ("near-optimal", "optimal", "exact")
+#: A task with no domain file, and each spelling's problem with its domain.
+PDDL_TASKS = {
+    "no-domain": None,
+    "pickup": ("problem-pickup.pddl", "domain-pickup.pddl"),
+    "pick-up": ("problem-pick-up.pddl", "domain-pick-up.pddl"),
+}
+
+
+@pytest.mark.parametrize("solver", PDDL_SOLVERS)
+@pytest.mark.parametrize("spelling", sorted(PDDL_TASKS))
+def test_solve_pddl_plans_what_the_cli_plans(solver, spelling, task, cli, tmp_path):
+    files = PDDL_TASKS[spelling]
+    problem = task if files is None else os.path.join(FIXTURES, files[0])
+    domain = [] if files is None else ["--domain", os.path.join(FIXTURES, files[1])]
+    ours = blockstack.solve_pddl(problem, solver=solver, domain=None if files is None else domain[1],
+                                 plan_file=tmp_path / "python.plan")
+    theirs = json.loads(cli("solve", "--pddl", problem, "--solver", solver, *domain, "--json",
+                            "--plan-file", tmp_path / "cli.plan"))
+    assert ours["plan"] == theirs["plan"] and ours["cost"] == theirs["actions"]
+    assert ours["lower_bound"] == theirs["lower_bound"] <= ours["cost"]
+    assert (ours["optimal"], ours["certificate"]) == (theirs["optimal"], theirs["certificate"])
+    assert ours["text"] == cli("solve", "--pddl", problem, "--solver", solver, *domain)
+    assert (tmp_path / "python.plan").read_text() == (tmp_path / "cli.plan").read_text() == ours["text"]
+    if files is not None:
+        # The plan speaks the domain's own action names.
+        verbs = {a.strip("()").split()[0] for a in ours["plan"]}
+        assert verbs <= ({"pick-up", "put-down", "stack", "unstack"} if spelling == "pick-up"
+                         else {"pickup", "putdown", "stack", "unstack"})
+
+
+@pytest.mark.parametrize("solver", PDDL_SOLVERS)
+def test_solve_all_reports_what_the_cli_reports(solver, task, cli, tmp_path):
+    folder = tmp_path / "tasks"
+    cli("generate", "--blocks", 8, "--count", 2, "--seed", 5, "--shape", "ipc", "--out", folder)
+    ours = blockstack.solve_all(folder, solver=solver)
+    theirs = json.loads(cli("solve-all", "--tasks", folder, "--solver", solver, "--json"))
+    strip = lambda rows: [{k: v for k, v in r.items() if k != "seconds"} for r in rows]
+    assert strip(ours["tasks"]) == strip(theirs["tasks"]) and len(ours["tasks"]) == 2
+    assert {k: v for k, v in ours["overall"].items() if "second" not in k} == \
+        {k: v for k, v in theirs["overall"].items() if "second" not in k}
