@@ -89,11 +89,15 @@ fn check_agent_flags(args: &RunArgs) -> Result<()> {
         ),
     ];
     for (flag, given, owners) in agent_flags {
+        let names: Vec<&str> = owners.iter().map(|o| o.name()).collect();
+        let owners = match names.split_last() {
+            Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
+            _ => names.concat(),
+        };
         anyhow::ensure!(
-            !given || owners.contains(&args.agent),
-            "{flag} does not apply to --agent {}: it is for --agent {} only",
-            args.agent.name(),
-            owners.iter().map(|o| o.name()).collect::<Vec<_>>().join(" or ")
+            !given || names.contains(&args.agent.name()),
+            "{flag} does not apply to --agent {}: it is for --agent {owners} only",
+            args.agent.name()
         );
     }
     Ok(())
