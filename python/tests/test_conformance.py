@@ -20,6 +20,10 @@ refused in (:data:`REFUSED`); every other one is a world of :data:`WORLDS`. The 
   ``blockstack solve --pddl`` and ``solve-all`` give, for every planner, with the domain file
   of either spelling or none, and the plan file written by either is the same.
 - **Files**: every reader, in the CLI and in Python, refuses a FIFO or a device at once.
+- **Default play**: a model of every kind (``q``, ``dqn``, ``relational``) plays by default
+  with its own epsilon (its profile's test policy; greedy for a relational policy), reward
+  and world, the same in ``run``, ``eval`` and Python's ``load(...)``: leaving them out
+  plays what naming the model's own plays.
 
 Breaking any one of them (a protocol the expert ignores, a refused action that raises, a
 reader that opens before it looks) fails a test here.
@@ -607,3 +611,65 @@ def test_solve_all_reports_what_the_cli_reports(solver, task, cli, tmp_path):
     assert strip(ours["tasks"]) == strip(theirs["tasks"]) and len(ours["tasks"]) == 2
     assert {k: v for k, v in ours["overall"].items() if "second" not in k} == \
         {k: v for k, v in theirs["overall"].items() if "second" not in k}
+
+
+# Default play ------------------------------------------------------------------------------
+#
+# One small model of each kind; the tabular one and the network trained with a reward that is
+# not their profile's, so a front end that takes the profile's reward plays another game.
+
+#: Each kind's epsilon when nothing says otherwise.
+DEFAULT_EPSILON = {"q": 0.1, "dqn": 0.1, "relational": 0.0}
+
+#: A goal of each kind's world (the relational policy's is the side view of 6 blocks).
+DEFAULT_PLAY_GOAL = {"q": "0,1", "dqn": "0,1", "relational": "0,1,2/3,4,5"}
+
+
+@pytest.fixture(scope="module")
+def models(tmp_path_factory, cli) -> dict:
+    folder = tmp_path_factory.mktemp("default-play")
+    paths = {kind: str(folder / f"{kind}.safetensors") for kind in DEFAULT_EPSILON}
+    cli("train", "--blocks", "2", "--games", "100", "--reward", "dense", "--backend", "grid", "--out", paths["q"])
+    cli("dqn", "--preset", "dqn-planes", "--blocks", "2", "--steps", "60", "--reward", "dense", "--out", paths["dqn"])
+    cli("dqn", "--preset", "general", "--steps", "20", "--batch", "16", "--seed", "2", "--out", paths["relational"])
+    return paths
+
+
+@pytest.mark.parametrize("kind", sorted(DEFAULT_EPSILON))
+def test_default_play_run_plays_the_models_epsilon_reward_and_world(kind, models, cli, tmp_path):
+    model = blockstack.load(models[kind])
+    assert model.kind == kind and model.default_epsilon == DEFAULT_EPSILON[kind]
+    played = ["run", "--agent", kind, "--model", models[kind], "--episodes", "3", "--seed", "4", "--backend", "grid",
+              "--goal", DEFAULT_PLAY_GOAL[kind], "--json"]
+    default, named = tmp_path / "default.jsonl", tmp_path / "named.jsonl"
+    by_default = json.loads(cli(*played, "--trajectory", default))
+    by_name = json.loads(cli(*played, "--trajectory", named, "--epsilon", str(model.default_epsilon),
+                             "--reward", model.world["reward"], "--view", model.world["view"]))
+    assert by_default == by_name
+    assert default.read_bytes() == named.read_bytes(), "the same steps and rewards"
+    world = model.world
+    assert (by_default["blocks"], by_default["protocol"], by_default["start"]) == (
+        world["blocks"], world["protocol"], world["start"])
+
+
+@pytest.mark.parametrize("kind", sorted(DEFAULT_EPSILON))
+def test_default_play_eval_and_python_evaluate_play_the_models_epsilon(kind, models, cli):
+    model = blockstack.load(models[kind])
+    settings = {"episodes": 2, "seed": 3, "goals": DEFAULT_PLAY_GOAL[kind], "backend": "grid"}
+    by_cli = json.loads(cli("eval", "--model", models[kind], "--json",
+                            *[f"--{k}={v}" for k, v in settings.items()]))
+    assert by_cli["epsilon"] == DEFAULT_EPSILON[kind]
+    assert model.evaluate(**settings) == by_cli
+
+
+@pytest.mark.parametrize("kind", sorted(DEFAULT_EPSILON))
+def test_default_play_python_predict_plays_the_models_epsilon(kind, models):
+    model = blockstack.load(models[kind])
+    env = model.make_env(backend="grid")
+    assert env.world.reward == model.world["reward"]
+    obs, _ = env.reset(seed=5)
+    model.reset(5)
+    greedy = model.predict(obs)[0]
+    chosen = {model.predict(obs, deterministic=False)[0] for _ in range(200)}
+    # Greedy's epsilon is 0: the same move every time; 0.1 draws others among 200 calls.
+    assert (chosen == {greedy}) == (DEFAULT_EPSILON[kind] == 0.0), chosen
