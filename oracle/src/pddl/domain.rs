@@ -36,86 +36,11 @@ use std::path::Path;
 use crate::error::Result;
 
 use super::error::PddlError;
-use super::plan::Action;
-use super::problem::{Fact, Predicate};
 use super::sexpr::{self, Node};
+use super::vocabulary::{ActionNames, Fact, Operator, Predicate};
 
 /// The largest domain file read: 1 MiB (the domain is under 2 KiB).
 pub const MAX_DOMAIN_BYTES: u64 = 1 << 20;
-
-/// One of the domain's four actions, whatever the file calls it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Operator {
-    /// Take a clear block from the table.
-    Pickup,
-    /// Put the held block on the table.
-    Putdown,
-    /// Put the held block on a clear block.
-    Stack,
-    /// Take a clear block from the block it stands on.
-    Unstack,
-}
-
-impl Operator {
-    /// The four, in the order the tables of this module list them.
-    pub const ALL: [Operator; 4] = [Operator::Pickup, Operator::Putdown, Operator::Stack, Operator::Unstack];
-
-    /// The names a file may give it (lower case).
-    fn spellings(self) -> &'static [&'static str] {
-        match self {
-            Operator::Pickup => &["pickup", "pick-up"],
-            Operator::Putdown => &["putdown", "put-down"],
-            Operator::Stack => &["stack"],
-            Operator::Unstack => &["unstack"],
-        }
-    }
-
-    /// The operator a name spells, in either spelling.
-    pub fn of_name(name: &str) -> Option<Operator> {
-        let name = name.to_lowercase();
-        Operator::ALL
-            .into_iter()
-            .find(|op| op.spellings().contains(&name.as_str()))
-    }
-
-    /// Its number of parameters.
-    pub fn arity(self) -> usize {
-        match self {
-            Operator::Pickup | Operator::Putdown => 1,
-            Operator::Stack | Operator::Unstack => 2,
-        }
-    }
-
-    /// The action with parameter `i` standing for block `i`: the schema
-    /// [`Action::conditions`] instantiates.
-    fn schema(self) -> Action {
-        match self {
-            Operator::Pickup => Action::Pickup(0),
-            Operator::Putdown => Action::Putdown(0),
-            Operator::Stack => Action::Stack(0, 1),
-            Operator::Unstack => Action::Unstack(0, 1),
-        }
-    }
-}
-
-/// The names a plan gives the four actions: the domain file's, as it spells them.
-#[derive(Debug, Clone, PartialEq, Eq, Hash)]
-pub struct ActionNames([String; 4]);
-
-impl Default for ActionNames {
-    /// `pickup`, `putdown`, `stack`, `unstack`: the competition's spelling, used when no
-    /// domain file is given.
-    fn default() -> Self {
-        ActionNames(Operator::ALL.map(|op| op.spellings()[0].to_string()))
-    }
-}
-
-impl ActionNames {
-    /// The name of `op`.
-    pub fn of(&self, op: Operator) -> &str {
-        &self.0[op as usize]
-    }
-}
 
 /// A checked 4-operator Blocks World domain: its name and the names of its actions.
 #[derive(Debug, Clone, PartialEq, Eq)]

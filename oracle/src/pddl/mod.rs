@@ -91,11 +91,13 @@ pub mod plan;
 pub mod problem;
 mod sexpr;
 pub mod suite;
+pub mod vocabulary;
 pub mod world;
 
-pub use domain::{ActionNames, Domain, Operator};
+pub use domain::Domain;
 pub use error::PddlError;
-pub use plan::{Action, Conditions, PddlPlan, actions};
-pub use problem::{Fact, MAX_PROBLEM_BYTES, Problem};
+pub use plan::{PddlPlan, actions};
+pub use problem::{MAX_PROBLEM_BYTES, Problem};
 pub use suite::{BestKnown, SuiteReport, Summary, TaskRow};
+pub use vocabulary::{Action, ActionNames, Conditions, Fact, Operator};
 pub use world::SideTask;

@@ -17,82 +17,9 @@ use std::fmt::Write as _;
 use crate::error::Result;
 use crate::towers::{BlockPlanner, Certificate, Place, TowerPlan, Towers};
 
-use super::domain::{ActionNames, Operator};
 use super::error::PddlError;
-use super::problem::{Fact, Problem};
-
-/// One action of the 4-operator domain; blocks by index into [`Problem::block_names`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Action {
-    /// `(pickup x)`: take the clear block `x` from the table.
-    Pickup(usize),
-    /// `(putdown x)`: put the held block `x` on the table.
-    Putdown(usize),
-    /// `(stack x y)`: put the held block `x` on the clear block `y`.
-    Stack(usize, usize),
-    /// `(unstack x y)`: take the clear block `x` from `y`.
-    Unstack(usize, usize),
-}
-
-/// An action's precondition and effects, as facts over its blocks.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Conditions {
-    /// What must hold before.
-    pub pre: Vec<Fact>,
-    /// What holds after.
-    pub add: Vec<Fact>,
-    /// What no longer holds after (deleted before the adds, as STRIPS does).
-    pub del: Vec<Fact>,
-}
-
-impl Action {
-    /// Which of the four it is.
-    pub fn operator(self) -> Operator {
-        match self {
-            Action::Pickup(_) => Operator::Pickup,
-            Action::Putdown(_) => Operator::Putdown,
-            Action::Stack(..) => Operator::Stack,
-            Action::Unstack(..) => Operator::Unstack,
-        }
-    }
-
-    /// The action as PDDL, with the blocks' names and the domain's action names: `(stack
-    /// b4 b3)`.
-    pub fn to_pddl(self, blocks: &[String], actions: &ActionNames) -> String {
-        let name = actions.of(self.operator());
-        match self {
-            Action::Pickup(x) | Action::Putdown(x) => format!("({name} {})", blocks[x]),
-            Action::Stack(x, y) | Action::Unstack(x, y) => format!("({name} {} {})", blocks[x], blocks[y]),
-        }
-    }
-
-    /// Its precondition and effects: the 4-operator domain's rules, which the replay
-    /// applies and a domain file is checked against ([`super::Domain`]).
-    pub fn conditions(self) -> Conditions {
-        match self {
-            Action::Pickup(x) => Conditions {
-                pre: vec![Fact::Clear(x), Fact::OnTable(x), Fact::ArmEmpty],
-                add: vec![Fact::Holding(x)],
-                del: vec![Fact::Clear(x), Fact::OnTable(x), Fact::ArmEmpty],
-            },
-            Action::Putdown(x) => Conditions {
-                pre: vec![Fact::Holding(x)],
-                add: vec![Fact::Clear(x), Fact::ArmEmpty, Fact::OnTable(x)],
-                del: vec![Fact::Holding(x)],
-            },
-            Action::Stack(x, y) => Conditions {
-                pre: vec![Fact::Clear(y), Fact::Holding(x)],
-                add: vec![Fact::ArmEmpty, Fact::Clear(x), Fact::On(x, y)],
-                del: vec![Fact::Clear(y), Fact::Holding(x)],
-            },
-            Action::Unstack(x, y) => Conditions {
-                pre: vec![Fact::On(x, y), Fact::Clear(x), Fact::ArmEmpty],
-                add: vec![Fact::Holding(x), Fact::Clear(y)],
-                del: vec![Fact::On(x, y), Fact::Clear(x), Fact::ArmEmpty],
-            },
-        }
-    }
-}
+use super::problem::Problem;
+use super::vocabulary::{Action, Conditions, Fact, Operator};
 
 /// The actions that carry out `plan` from `start`: each move is `pickup` or `unstack` (from
 /// where the block stands then) and `putdown` or `stack`. An error at the first move that

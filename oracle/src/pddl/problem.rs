@@ -7,86 +7,14 @@ use std::path::Path;
 use crate::error::Result;
 use crate::towers::{TowerGoal, Towers};
 
-use super::domain::{ActionNames, Domain};
+use super::domain::Domain;
 use super::error::PddlError;
 use super::sexpr::{self, Node};
+use super::vocabulary::{ActionNames, Fact, Predicate};
 
 /// The largest problem file read: 64 MiB, about half a million blocks in the competition's
 /// layout (a 488-block task is 12 KiB). A larger file is refused before a byte is read.
 pub const MAX_PROBLEM_BYTES: u64 = 64 << 20;
-
-/// A fact of the 4-operator domain, its blocks by index into [`Problem::block_names`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Fact {
-    /// `(on x y)`: `x` stands on `y`.
-    On(usize, usize),
-    /// `(on-table x)`.
-    OnTable(usize),
-    /// `(clear x)`: nothing stands on `x` (and it is not held).
-    Clear(usize),
-    /// `(arm-empty)`.
-    ArmEmpty,
-    /// `(holding x)`.
-    Holding(usize),
-}
-
-/// A predicate of the 4-operator domain, whatever the file calls it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub(crate) enum Predicate {
-    On,
-    OnTable,
-    Clear,
-    ArmEmpty,
-    Holding,
-}
-
-impl Predicate {
-    /// The predicate a (lower-case) name spells: the competition's names, or the 2000
-    /// competition's `ontable` and `handempty`, which mean the same.
-    pub(crate) fn of_name(name: &str) -> Option<Predicate> {
-        Some(match name {
-            "on" => Predicate::On,
-            "on-table" | "ontable" => Predicate::OnTable,
-            "clear" => Predicate::Clear,
-            "arm-empty" | "handempty" => Predicate::ArmEmpty,
-            "holding" => Predicate::Holding,
-            _ => return None,
-        })
-    }
-
-    /// Its number of blocks.
-    pub(crate) fn arity(self) -> usize {
-        match self {
-            Predicate::On => 2,
-            Predicate::OnTable | Predicate::Clear | Predicate::Holding => 1,
-            Predicate::ArmEmpty => 0,
-        }
-    }
-
-    /// The fact of this predicate over `args` (as many as [`Predicate::arity`]).
-    pub(crate) fn fact(self, args: &[usize]) -> Fact {
-        match self {
-            Predicate::On => Fact::On(args[0], args[1]),
-            Predicate::OnTable => Fact::OnTable(args[0]),
-            Predicate::Clear => Fact::Clear(args[0]),
-            Predicate::ArmEmpty => Fact::ArmEmpty,
-            Predicate::Holding => Fact::Holding(args[0]),
-        }
-    }
-}
-
-impl Fact {
-    /// The fact as PDDL, with the blocks' names: `(on b3 b5)`.
-    pub fn to_pddl(self, names: &[String]) -> String {
-        match self {
-            Fact::On(x, y) => format!("(on {} {})", names[x], names[y]),
-            Fact::OnTable(x) => format!("(on-table {})", names[x]),
-            Fact::Clear(x) => format!("(clear {})", names[x]),
-            Fact::ArmEmpty => "(arm-empty)".into(),
-            Fact::Holding(x) => format!("(holding {})", names[x]),
-        }
-    }
-}
 
 /// A Blocks World problem of the 4-operator domain (`pickup`, `putdown`, `stack`,
 /// `unstack`), as the planning competitions write it: the blocks, the facts of the initial
