@@ -41,6 +41,7 @@ use sim::seeding::SimRng;
 
 use crate::error::{NeuralError, Result};
 use crate::kernels::{matmul, matmul_nt, matmul_tn, tanh_in_place};
+use crate::params::{NamedTensor, ParamStore, Slot};
 
 use super::graph::{Graph, NONE, TABLE};
 
@@ -84,19 +85,6 @@ const FEATURES: usize = 3;
 /// such a destination, moving the block to the table.
 const HEADS: usize = 3;
 
-/// Where a tensor lives in the flat parameter buffer.
-#[derive(Clone, Copy, Debug)]
-struct Slot {
-    offset: usize,
-    len: usize,
-}
-
-impl Slot {
-    fn range(self) -> std::ops::Range<usize> {
-        self.offset..self.offset + self.len
-    }
-}
-
 /// A cell: linear to `hidden`, ReLU, linear to `out`, tanh.
 #[derive(Clone, Copy, Debug)]
 struct Cell {
@@ -133,22 +121,13 @@ struct Slots {
     pair_out: Slot,
 }
 
-/// One tensor's name and shape, as a network file stores it.
-#[derive(Clone, Debug)]
-struct TensorInfo {
-    name: String,
-    shape: Vec<usize>,
-    slot: Slot,
-}
-
 /// A relational network (module docs): its shape and its parameters, one flat buffer laid
 /// out tensor after tensor in [`RelationalNet::tensors`]' order.
 #[derive(Clone, Debug)]
 pub struct RelationalNet {
     shape: Shape,
     slots: Slots,
-    tensors: Vec<TensorInfo>,
-    params: Vec<f32>,
+    store: ParamStore,
 }
 
 /// One cell's pass over its rows: inputs, hidden units (after ReLU), outputs (after tanh).
@@ -238,25 +217,15 @@ fn uniform(rng: &mut SimRng, n: usize, bound: f32) -> Vec<f32> {
 /// The tensors and parameters of a network being made.
 #[derive(Default)]
 struct Builder {
-    tensors: Vec<TensorInfo>,
-    params: Vec<f32>,
+    store: ParamStore,
 }
 
 impl Builder {
     /// A tensor of shape `dims`, uniform in `±1/sqrt(fan_in)`.
     fn add(&mut self, name: &str, dims: &[usize], fan_in: usize, rng: &mut SimRng) -> Slot {
         let len = dims.iter().product();
-        let slot = Slot {
-            offset: self.params.len(),
-            len,
-        };
-        self.params.extend(uniform(rng, len, 1.0 / (fan_in as f32).sqrt()));
-        self.tensors.push(TensorInfo {
-            name: name.to_string(),
-            shape: dims.to_vec(),
-            slot,
-        });
-        slot
+        let values = uniform(rng, len, 1.0 / (fan_in as f32).sqrt());
+        self.store.add(name, values, dims, false)
     }
 
     /// A cell of `inputs` inputs.
@@ -307,12 +276,10 @@ impl RelationalNet {
             pair_bias: b.add("pair.bias", &[s], 2 * d + 2, rng),
             pair_out: b.add("pair.linear2.weight", &[s], s, rng),
         };
-        let Builder { tensors, params } = b;
         Ok(RelationalNet {
             shape,
             slots,
-            tensors,
-            params,
+            store: b.store,
         })
     }
 
@@ -323,44 +290,28 @@ impl RelationalNet {
 
     /// The parameters, one flat buffer.
     pub fn params(&self) -> &[f32] {
-        &self.params
+        &self.store.params
     }
 
     /// The parameters, for the optimiser.
     pub fn params_mut(&mut self) -> &mut [f32] {
-        &mut self.params
+        &mut self.store.params
     }
 
     /// Every tensor's name, shape and values, in the buffer's order.
-    pub fn tensors(&self) -> impl Iterator<Item = crate::net::NamedTensor<'_>> {
-        self.tensors.iter().map(|t| crate::net::NamedTensor {
-            name: &t.name,
-            shape: &t.shape,
-            values: &self.params[t.slot.range()],
-        })
+    pub fn tensors(&self) -> impl Iterator<Item = NamedTensor<'_>> {
+        self.store.tensors()
     }
 
     /// Sets the tensor `name` from a file's values; an error if the network has no such
     /// tensor or it has another shape.
     pub fn set_tensor(&mut self, name: &str, shape: &[usize], values: &[f32]) -> Result<()> {
-        let t = self
-            .tensors
-            .iter()
-            .find(|t| t.name == name)
-            .ok_or_else(|| NeuralError::Mismatch(format!("the network has no tensor {name}")))?;
-        if t.shape != shape || values.len() != t.slot.len {
-            return Err(NeuralError::Mismatch(format!(
-                "tensor {name} is {:?} in the network and {shape:?} in the file",
-                t.shape
-            )));
-        }
-        self.params[t.slot.range()].copy_from_slice(values);
-        Ok(())
+        self.store.set_tensor(name, shape, values)
     }
 
     /// The number of tensors.
     pub fn tensor_count(&self) -> usize {
-        self.tensors.len()
+        self.store.tensors().count()
     }
 
     /// A pass over `graph`: every move's score, on the tape ([`Tape::scores`]), with what
@@ -372,7 +323,7 @@ impl RelationalNet {
     fn forward_any(&self, g: &Graph, t: &mut Tape) {
         let n = g.nodes();
         let d = self.shape.width;
-        let p = &self.params;
+        let p = &self.store.params;
         let sl = &self.slots;
         t.pos_up.resize(n, 0);
         t.pos_down.resize(n, 0);
@@ -542,7 +493,7 @@ impl RelationalNet {
             }
             return base;
         }
-        let p = &self.params;
+        let p = &self.store.params;
         let sl = &self.slots;
         let (px, qy) = (&t.px[x * s..(x + 1) * s], &t.qy[y * s..(y + 1) * s]);
         let (won, wunder, bias, out) = (
@@ -633,11 +584,11 @@ impl RelationalNet {
     }
 
     fn backward_any(&self, g: &Graph, t: &mut Tape, dscores: &[f32], grads: &mut [f32]) {
-        assert_eq!(grads.len(), self.params.len(), "a gradient per parameter");
+        assert_eq!(grads.len(), self.store.params.len(), "a gradient per parameter");
         assert_eq!(dscores.len(), g.moves.len(), "a score gradient per move");
         let n = g.nodes();
         let (d, s) = (self.shape.width, self.shape.score_hidden);
-        let p = &self.params;
+        let p = &self.store.params;
         let sl = &self.slots;
         // The scorer: per-block scores and the pair perceptron.
         fit(&mut t.dheads, n * HEADS);
@@ -992,20 +943,29 @@ mod tests {
         let eps = 1e-3f32;
         let mut off = Vec::new();
         for (i, &analytic) in grads.iter().enumerate() {
-            let keep = net.params[i];
-            net.params[i] = keep + eps;
+            let keep = net.params()[i];
+            net.params_mut()[i] = keep + eps;
             let plus = loss(&net, &g, &w);
-            net.params[i] = keep - eps;
+            net.params_mut()[i] = keep - eps;
             let minus = loss(&net, &g, &w);
-            net.params[i] = keep;
+            net.params_mut()[i] = keep;
             let numeric = (plus - minus) / (2.0 * f64::from(eps));
             let err = (numeric - f64::from(analytic)).abs() / (1e-2 + numeric.abs().max(f64::from(analytic).abs()));
             if err > 2e-2 {
-                let t = net.tensors.iter().find(|t| t.slot.range().contains(&i)).unwrap();
+                // The tensors lie one after another in the parameters.
+                let mut start = 0;
+                let t = net
+                    .tensors()
+                    .find(|t| {
+                        let hit = i < start + t.values.len();
+                        start += if hit { 0 } else { t.values.len() };
+                        hit
+                    })
+                    .unwrap();
                 off.push(format!(
                     "{}[{}]: numeric {numeric} analytic {analytic}",
                     t.name,
-                    i - t.slot.offset
+                    i - start
                 ));
             }
         }
