@@ -351,6 +351,13 @@ struct LayerBuffers {
 pub struct Workspace {
     batch: usize,
     layers: Vec<LayerBuffers>,
+    /// What the backward pass writes besides the layers' buffers.
+    back: BackBuffers,
+}
+
+/// The buffers of a backward pass that belong to no one layer.
+#[derive(Default)]
+struct BackBuffers {
     /// The gradient with respect to the current layer's output, and its input's.
     delta: Vec<f32>,
     delta_in: Vec<f32>,
@@ -752,8 +759,46 @@ impl QNet {
         let batch = ws.batch;
         assert_eq!(dq.len(), batch * self.actions, "one gradient per Q-value");
         assert_eq!(grad.len(), self.store.params.len(), "one gradient per parameter");
-        let Workspace {
-            layers,
+        let Workspace { layers, back, .. } = ws;
+        fit(&mut back.delta, dq.len());
+        back.delta.copy_from_slice(dq);
+        for (i, layer) in self.layers.iter().enumerate().rev() {
+            let (before, rest) = layers.split_at(i);
+            let input: &[f32] = before.last().map_or(x, |l| l.out.as_slice());
+            let pass = LayerPass {
+                i,
+                batch,
+                input,
+                buf: &rest[0],
+            };
+            let swap = match layer {
+                Layer::Conv { .. } => {
+                    self.conv_backward(layer, &pass, back, grad);
+                    true
+                }
+                Layer::Linear { .. } => self.linear_backward(layer, &pass, back, grad),
+            };
+            if swap {
+                std::mem::swap(&mut back.delta, &mut back.delta_in);
+            }
+        }
+    }
+
+    /// A convolution's backward pass: its parameters' gradients into `grad` and, below the
+    /// first layer, its input's gradient into `back.delta_in`.
+    fn conv_backward(&self, layer: &Layer, pass: &LayerPass<'_>, back: &mut BackBuffers, grad: &mut [f32]) {
+        let Layer::Conv {
+            geo,
+            out,
+            weight,
+            bias,
+            norm,
+        } = layer
+        else {
+            unreachable!("a convolution")
+        };
+        let LayerPass { i, batch, input, buf } = *pass;
+        let BackBuffers {
             delta,
             delta_in,
             cols,
@@ -761,147 +806,156 @@ impl QNet {
             dw_half,
             sums,
             coef,
+            ..
+        } = back;
+        let parts = kernels::parts(batch, MIN_HALF_WORK.div_ceil(layer.work()));
+        let half = kernels::part_start(batch, parts, 1);
+        let (positions, patch) = (geo.positions(), geo.patch());
+        match norm {
+            Some(n) => {
+                norm_backward(&self.store.params, n, buf, delta, sums, coef, grad);
+                // Batch normalisation subtracts the batch mean: the bias
+                // changes no output in training, and its gradient is 0
+                // (computed, it is rounding noise that Adam would turn
+                // into a random walk).
+                if let Some(bias) = bias {
+                    grad[bias.range()].fill(0.0);
+                }
+            }
+            None => {
+                relu_backward(delta, &buf.out);
+                if let Some(bias) = bias {
+                    sum_rows(delta, &mut grad[bias.range()]);
+                }
+            }
+        }
+        let w = &self.store.params[weight.range()];
+        let in_len = geo.input_len();
+        let chunk = chunk_samples(geo);
+        let chunk_len = chunk * positions * patch;
+        fit(dw_half, weight.len);
+        fit(cols, 2 * chunk_len);
+        let wants_input = i > 0;
+        if wants_input {
+            fit(dcols, 2 * chunk_len);
+            fit(delta_in, batch * in_len);
+        }
+        let (g0, g1) = (&mut grad[weight.range()], &mut dw_half[..]);
+        let (x0, x1) = input.split_at(half * in_len);
+        let (d0, d1) = delta.split_at(half * positions * out);
+        let (cols0, cols1) = cols.split_at_mut(chunk_len);
+        let (dc0, dc1, dx0, dx1) = if wants_input {
+            let (dc0, dc1) = dcols.split_at_mut(chunk_len);
+            let (dx0, dx1) = halves(delta_in, half * in_len, parts);
+            (dc0, dc1, dx0, dx1)
+        } else {
+            (&mut [][..], &mut [][..], &mut [][..], &mut [][..])
+        };
+        // The patches again, a few samples at a time (cheaper than keeping
+        // them all from the forward pass: they would not stay in cache).
+        let conv = |x: &[f32], cols: &mut [f32], d: &[f32], g: &mut [f32], dc: &mut [f32], dx: &mut [f32]| {
+            let chunks = x.chunks(chunk * in_len).zip(d.chunks(chunk * positions * out));
+            for (k, (xc, dch)) in chunks.enumerate() {
+                let samples = xc.len() / in_len;
+                let rows = samples * positions;
+                let cols = &mut cols[..rows * patch];
+                geo.im2col(xc, cols);
+                matmul_tn(g, cols, dch, (patch, rows, *out), k > 0);
+                if wants_input {
+                    let dc = &mut dc[..rows * patch];
+                    matmul_nt(dc, dch, w, (rows, *out, patch), false);
+                    let start = k * chunk * in_len;
+                    geo.col2im(dc, &mut dx[start..start + samples * in_len]);
+                }
+            }
+        };
+        kernels::both(
+            parts,
+            || conv(x0, cols0, d0, g0, dc0, dx0),
+            || conv(x1, cols1, d1, g1, dc1, dx1),
+        );
+        if parts == 2 {
+            for (g, &h) in grad[weight.range()].iter_mut().zip(dw_half.iter()) {
+                *g += h;
+            }
+        }
+    }
+
+    /// A linear layer's backward pass: its parameters' gradients into `grad` and, below the
+    /// first layer, its input's gradient; whether that gradient is in `back.delta_in` (to be
+    /// swapped into `back.delta`) rather than already in `back.delta`.
+    fn linear_backward(&self, layer: &Layer, pass: &LayerPass<'_>, back: &mut BackBuffers, grad: &mut [f32]) -> bool {
+        let Layer::Linear {
+            inputs,
+            out,
+            weight,
+            bias,
+            relu,
+            sparse,
+        } = layer
+        else {
+            unreachable!("a linear layer")
+        };
+        let LayerPass { i, batch, input, buf } = *pass;
+        let BackBuffers {
+            delta,
+            delta_in,
+            dw_half,
             by_input,
             input_start,
             ..
-        } = ws;
-        fit(delta, dq.len());
-        delta.copy_from_slice(dq);
-        for (i, layer) in self.layers.iter().enumerate().rev() {
-            let (before, rest) = layers.split_at(i);
-            let input: &[f32] = before.last().map_or(x, |l| l.out.as_slice());
-            let buf = &rest[0];
-            let parts = kernels::parts(batch, MIN_HALF_WORK.div_ceil(layer.work()));
-            let half = kernels::part_start(batch, parts, 1);
-            match layer {
-                Layer::Conv {
-                    geo,
-                    out,
-                    weight,
-                    bias,
-                    norm,
-                } => {
-                    let (positions, patch) = (geo.positions(), geo.patch());
-                    match norm {
-                        Some(n) => {
-                            norm_backward(&self.store.params, n, buf, delta, sums, coef, grad);
-                            // Batch normalisation subtracts the batch mean: the bias
-                            // changes no output in training, and its gradient is 0
-                            // (computed, it is rounding noise that Adam would turn
-                            // into a random walk).
-                            if let Some(bias) = bias {
-                                grad[bias.range()].fill(0.0);
-                            }
-                        }
-                        None => {
-                            relu_backward(delta, &buf.out);
-                            if let Some(bias) = bias {
-                                sum_rows(delta, &mut grad[bias.range()]);
-                            }
-                        }
-                    }
-                    let w = &self.store.params[weight.range()];
-                    let in_len = geo.input_len();
-                    let chunk = chunk_samples(geo);
-                    let chunk_len = chunk * positions * patch;
-                    fit(dw_half, weight.len);
-                    fit(cols, 2 * chunk_len);
-                    let wants_input = i > 0;
-                    if wants_input {
-                        fit(dcols, 2 * chunk_len);
-                        fit(delta_in, batch * in_len);
-                    }
-                    let (g0, g1) = (&mut grad[weight.range()], &mut dw_half[..]);
-                    let (x0, x1) = input.split_at(half * in_len);
-                    let (d0, d1) = delta.split_at(half * positions * out);
-                    let (cols0, cols1) = cols.split_at_mut(chunk_len);
-                    let (dc0, dc1, dx0, dx1) = if wants_input {
-                        let (dc0, dc1) = dcols.split_at_mut(chunk_len);
-                        let (dx0, dx1) = halves(delta_in, half * in_len, parts);
-                        (dc0, dc1, dx0, dx1)
-                    } else {
-                        (&mut [][..], &mut [][..], &mut [][..], &mut [][..])
-                    };
-                    // The patches again, a few samples at a time (cheaper than keeping
-                    // them all from the forward pass: they would not stay in cache).
-                    let conv =
-                        |x: &[f32], cols: &mut [f32], d: &[f32], g: &mut [f32], dc: &mut [f32], dx: &mut [f32]| {
-                            let chunks = x.chunks(chunk * in_len).zip(d.chunks(chunk * positions * out));
-                            for (k, (xc, dch)) in chunks.enumerate() {
-                                let samples = xc.len() / in_len;
-                                let rows = samples * positions;
-                                let cols = &mut cols[..rows * patch];
-                                geo.im2col(xc, cols);
-                                matmul_tn(g, cols, dch, (patch, rows, *out), k > 0);
-                                if wants_input {
-                                    let dc = &mut dc[..rows * patch];
-                                    matmul_nt(dc, dch, w, (rows, *out, patch), false);
-                                    let start = k * chunk * in_len;
-                                    geo.col2im(dc, &mut dx[start..start + samples * in_len]);
-                                }
-                            }
-                        };
-                    kernels::both(
-                        parts,
-                        || conv(x0, cols0, d0, g0, dc0, dx0),
-                        || conv(x1, cols1, d1, g1, dc1, dx1),
-                    );
-                    if parts == 2 {
-                        for (g, &h) in grad[weight.range()].iter_mut().zip(dw_half.iter()) {
-                            *g += h;
-                        }
-                    }
-                }
-                Layer::Linear {
-                    inputs,
-                    out,
-                    weight,
-                    bias,
-                    relu,
-                    sparse,
-                } => {
-                    if *relu {
-                        relu_backward(delta, &buf.out);
-                    }
-                    sum_rows(delta, &mut grad[bias.range()]);
-                    if *sparse {
-                        let g = &mut grad[weight.range()];
-                        sparse_weight_gradient(buf, delta, *inputs, g, by_input, input_start);
-                        if i == 0 {
-                            continue;
-                        }
-                        // After a convolution: the gradient of the non-zero inputs only (a
-                        // zero input is a ReLU's zero, whose own gradient is 0 anyway).
-                        fit(delta_in, batch * inputs);
-                        let w = &self.store.params[weight.range()];
-                        sparse_input_gradient(buf, delta, w, *inputs, delta_in);
-                        std::mem::swap(delta, delta_in);
-                        continue;
-                    }
-                    let x = input;
-                    let w = &self.store.params[weight.range()];
-                    fit(dw_half, weight.len);
-                    fit(delta_in, batch * inputs);
-                    let (x0, x1) = x.split_at(half * inputs);
-                    let (d0, d1) = delta.split_at(half * out);
-                    let (g0, g1) = (&mut grad[weight.range()], &mut dw_half[..]);
-                    let (dx0, dx1) = halves(delta_in, half * inputs, parts);
-                    let linear = |x: &[f32], d: &[f32], g: &mut [f32], dx: &mut [f32]| {
-                        let r = d.len() / out;
-                        matmul_tn(g, x, d, (*inputs, r, *out), false);
-                        matmul_nt(dx, d, w, (r, *out, *inputs), false);
-                    };
-                    kernels::both(parts, || linear(x0, d0, g0, dx0), || linear(x1, d1, g1, dx1));
-                    if parts == 2 {
-                        for (g, &h) in grad[weight.range()].iter_mut().zip(dw_half.iter()) {
-                            *g += h;
-                        }
-                    }
-                }
-            }
-            std::mem::swap(delta, delta_in);
+        } = back;
+        let parts = kernels::parts(batch, MIN_HALF_WORK.div_ceil(layer.work()));
+        let half = kernels::part_start(batch, parts, 1);
+        if *relu {
+            relu_backward(delta, &buf.out);
         }
+        sum_rows(delta, &mut grad[bias.range()]);
+        if *sparse {
+            let g = &mut grad[weight.range()];
+            sparse_weight_gradient(buf, delta, *inputs, g, by_input, input_start);
+            if i == 0 {
+                return false;
+            }
+            // After a convolution: the gradient of the non-zero inputs only (a
+            // zero input is a ReLU's zero, whose own gradient is 0 anyway).
+            fit(delta_in, batch * inputs);
+            let w = &self.store.params[weight.range()];
+            sparse_input_gradient(buf, delta, w, *inputs, delta_in);
+            std::mem::swap(delta, delta_in);
+            return false;
+        }
+        let x = input;
+        let w = &self.store.params[weight.range()];
+        fit(dw_half, weight.len);
+        fit(delta_in, batch * inputs);
+        let (x0, x1) = x.split_at(half * inputs);
+        let (d0, d1) = delta.split_at(half * out);
+        let (g0, g1) = (&mut grad[weight.range()], &mut dw_half[..]);
+        let (dx0, dx1) = halves(delta_in, half * inputs, parts);
+        let linear = |x: &[f32], d: &[f32], g: &mut [f32], dx: &mut [f32]| {
+            let r = d.len() / out;
+            matmul_tn(g, x, d, (*inputs, r, *out), false);
+            matmul_nt(dx, d, w, (r, *out, *inputs), false);
+        };
+        kernels::both(parts, || linear(x0, d0, g0, dx0), || linear(x1, d1, g1, dx1));
+        if parts == 2 {
+            for (g, &h) in grad[weight.range()].iter_mut().zip(dw_half.iter()) {
+                *g += h;
+            }
+        }
+        true
     }
+}
+
+/// Where a layer's backward pass stands: its index, the batch, its input and its buffers of
+/// the forward pass.
+#[derive(Clone, Copy)]
+struct LayerPass<'a> {
+    i: usize,
+    batch: usize,
+    input: &'a [f32],
+    buf: &'a LayerBuffers,
 }
 
 /// Batch normalisation on the batch's statistics, then ReLU: `pre` becomes `x_hat`.
