@@ -235,7 +235,7 @@ impl Trainer {
 
     /// [`Trainer::run_until`] on a thread of rayon's global pool while the pool's other
     /// threads stay awake to take the second halves of its splits
-    /// ([`crate::kernels::on_pool_awake`]), for a caller outside every pool (the command
+    /// ([`sim::team::on_pool_awake`]), for a caller outside every pool (the command
     /// line's main thread, Python's trainer); the same steps, so the same bits.
     ///
     /// Why: a network's passes are split in two halves ([`crate::kernels::join`]). Called
@@ -249,7 +249,7 @@ impl Trainer {
     where
         F: FnMut(&Progress) -> Result<()> + Send,
     {
-        crate::kernels::on_pool_awake(|| self.run_until(total, hooks))
+        sim::team::on_pool_awake(|| self.run_until(total, hooks))
     }
 
     /// One gradient step on the demonstrations alone.
