@@ -32,6 +32,11 @@ pub fn network_file(data: &[u8]) {
     let Ok(dqn) = neural::Dqn::read_from(data, "fuzz input") else {
         return;
     };
+    plays_its_world(&dqn);
+}
+
+/// `dqn`'s forward pass answers an observation of its world with one value per action.
+fn plays_its_world(dqn: &neural::Dqn) {
     let config = dqn.config();
     let goal = Goal::identity(config.blocks()).expect("a read config has a valid block count");
     let Ok(mut env) = sim::Env::new(config.env_config(goal)) else {
@@ -40,6 +45,53 @@ pub fn network_file(data: &[u8]) {
     let obs = env.reset(0);
     let values = dqn.q_values(&obs).expect("a network that reads plays its own world");
     assert_eq!(values.len(), Action::count(config.blocks()));
+}
+
+/// The relational network file reader ([`neural::relational::RelationalModel::read_from`]):
+/// any bytes give a network or an error; a network that reads plays a small problem to its
+/// end, reaching the goal or not, never failing.
+pub fn relational_file(data: &[u8]) {
+    let Ok(model) = neural::relational::RelationalModel::read_from(data, "fuzz input") else {
+        return;
+    };
+    let start = oracle::towers::random_state(5, 1);
+    let goal = oracle::towers::random_goal(5, 2, 5, 2).expect("a goal of 5 blocks");
+    model.play(&start, &goal).expect("a network that reads plays");
+}
+
+/// The PDDL problem reader ([`oracle::pddl::Problem::parse`]): any text gives a problem or an
+/// error; a problem that reads writes back (`Display`) to text that reads as the same problem.
+pub fn pddl_problem(data: &[u8]) {
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    if let Ok(problem) = oracle::pddl::Problem::parse(text) {
+        assert_eq!(problem.start().blocks(), problem.block_names().len());
+        let again = oracle::pddl::Problem::parse(&problem.to_string());
+        assert_eq!(again.as_ref().ok(), Some(&problem), "{again:?}");
+    }
+}
+
+/// The tabular checkpoint reader ([`agent::Trainer::read_checkpoint`]): any bytes give a run
+/// or an error; a run that reads holds a usable agent, as [`model_file`] checks one.
+pub fn train_checkpoint(data: &[u8]) {
+    let Ok(trainer) = agent::Trainer::read_checkpoint(data, "fuzz input") else {
+        return;
+    };
+    let agent = trainer.agent();
+    assert_eq!(agent.table().columns(), Action::count(agent.blocks()));
+    assert_eq!(agent.table().key_count(), agent.repr().key_count());
+}
+
+/// The network checkpoint reader ([`neural::Trainer::read_checkpoint`]): any bytes give a run
+/// or an error; a run that reads is within its plan, and its network plays its own world.
+pub fn dqn_checkpoint(data: &[u8]) {
+    let Ok(trainer) = neural::Trainer::read_checkpoint(data, "fuzz input") else {
+        return;
+    };
+    assert!(trainer.steps_done() <= trainer.total_steps());
+    let dqn = trainer.snapshot().expect("a run that reads has a network");
+    plays_its_world(&dqn);
 }
 
 /// The recording format's reader (`agent::demos::format`), with no learner: every line

@@ -9,12 +9,16 @@ type Check = fn(&[u8]);
 #[test]
 fn every_kept_fuzz_input_passes_its_targets_check() {
     let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/corpus");
-    let targets: [(&str, Check); 5] = [
+    let targets: [(&str, Check); 9] = [
         ("model_file", blockstack::fuzz_checks::model_file),
         ("network_file", blockstack::fuzz_checks::network_file),
         ("recording", blockstack::fuzz_checks::recording),
         ("trajectory", blockstack::fuzz_checks::trajectory),
         ("cli_parsers", blockstack::fuzz_checks::cli_parsers),
+        ("relational_file", blockstack::fuzz_checks::relational_file),
+        ("pddl_problem", blockstack::fuzz_checks::pddl_problem),
+        ("train_checkpoint", blockstack::fuzz_checks::train_checkpoint),
+        ("dqn_checkpoint", blockstack::fuzz_checks::dqn_checkpoint),
     ];
     for (target, check) in targets {
         let dir = corpus.join(target);

@@ -22,7 +22,6 @@
 //! The file is written through the output helper (atomically for a regular file), so a
 //! kill while it is written leaves the previous checkpoint whole.
 
-use std::collections::VecDeque;
 use std::io::Read;
 use std::path::Path;
 
@@ -34,7 +33,8 @@ use crate::error::{AgentError, Result};
 use crate::model::MAX_MODEL_BYTES;
 use crate::model::TrainingMeta;
 use crate::qlearning::QAgent;
-use crate::train::{RECENT_GAMES, TrainReport, Trainer};
+use crate::run::{RECENT_GAMES, Recent};
+use crate::train::{TrainReport, Trainer};
 
 /// The `format` of checkpoint files.
 pub const CHECKPOINT_FORMAT: &str = "blockstack-train-checkpoint";
@@ -144,13 +144,6 @@ impl Trainer {
         Ok(trainer)
     }
 
-    /// Whether a run checkpointed every `every` games writes its checkpoint now: after a
-    /// multiple of `every` games, and after the last.
-    pub fn checkpoint_due(&self, every: u64) -> bool {
-        let played = self.report.games;
-        played.is_multiple_of(every.max(1)) || played == self.config.games
-    }
-
     /// [`Trainer::resume`] from the bytes of a checkpoint, named `name` in errors.
     pub fn read_checkpoint(input: impl Read, name: &str) -> Result<Trainer> {
         let fail = |reason: String| AgentError::Checkpoint {
@@ -217,7 +210,7 @@ impl Trainer {
         };
         trainer.agent = agent;
         trainer.report = meta.report;
-        trainer.recent = VecDeque::from(meta.recent);
+        trainer.recent = Recent::of(meta.recent);
         Ok(trainer)
     }
 }

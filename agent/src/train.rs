@@ -14,8 +14,7 @@
 //! learner: the paper's learner in our world, or the paper's learner as its authors coded
 //! it.
 
-use std::collections::VecDeque;
-
+use files::OutputPath;
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
 use sim::seeding::episode_seed;
@@ -27,9 +26,7 @@ use crate::error::{AgentError, Result};
 use crate::memory::ReplayMemory;
 use crate::qlearning::{QAgent, TableStep};
 use crate::rollout::policy_rng;
-
-/// Games the progress figures look back over.
-pub const RECENT_GAMES: usize = 100;
+use crate::run::{self, Recent, RecentGames, RunHooks, Runnable};
 
 /// The most sweeps of the final experience replay.
 pub const MAX_REPLAY_SWEEPS: u32 = 1000;
@@ -41,23 +38,10 @@ pub struct Progress {
     pub games_played: u64,
     /// Games this call was asked to play, counting from the start of the run.
     pub games_target: u64,
-    /// Of the last (at most [`RECENT_GAMES`]) games, how many.
-    pub recent_games: usize,
-    /// Of those, how many reached the goal.
-    pub recent_successes: usize,
+    /// The last (at most [`RECENT_GAMES`](crate::run::RECENT_GAMES)) games, and how many reached the goal.
+    pub recent: RecentGames,
     /// Mean steps of the recent games that reached the goal (`None` if none did).
     pub recent_mean_steps: Option<f64>,
-}
-
-impl Progress {
-    /// The share of recent games that reached the goal, in `[0, 1]` (0 before any game).
-    pub fn recent_success_rate(&self) -> f64 {
-        if self.recent_games == 0 {
-            0.0
-        } else {
-            self.recent_successes as f64 / self.recent_games as f64
-        }
-    }
 }
 
 /// Totals of a training run.
@@ -93,7 +77,7 @@ pub struct Trainer {
     envs: Vec<Env>,
     pub(crate) report: TrainReport,
     /// Steps of the recent games, `None` for a game cut off.
-    pub(crate) recent: VecDeque<Option<u32>>,
+    pub(crate) recent: Recent<Option<u32>>,
     /// The current game's transitions, for backward replay.
     path: Vec<TableStep>,
     /// The oracle, when it assists.
@@ -137,7 +121,7 @@ impl Trainer {
             agent,
             envs,
             report: TrainReport::default(),
-            recent: VecDeque::with_capacity(RECENT_GAMES),
+            recent: Recent::default(),
             path: Vec::new(),
             oracle: (config.assist != Assist::None).then(|| match config.oracle {
                 OracleKind::Astar => {
@@ -185,41 +169,19 @@ impl Trainer {
     }
 
     /// Plays games until `total` have been played in all (the config's games become
-    /// `total`), the one loop of a whole run for the command line and Python: after each
-    /// game [`TrainHooks::after_game`] (progress, and stopping: its error ends the run),
-    /// and every [`TrainHooks::checkpoint_every`] games and after the last
-    /// [`TrainHooks::checkpoint`]. An error if `total` is below the games played already.
-    pub fn run_until(&mut self, total: u64, hooks: &mut dyn TrainHooks) -> Result<()> {
-        let played = self.report.games;
-        if total < played {
-            return Err(AgentError::Config(format!(
-                "{total} games in all: the run has played {played} already"
-            )));
-        }
-        self.set_games(total);
-        let every = hooks.checkpoint_every().filter(|&n| n > 0);
-        while self.report.games < total {
-            self.play_counted()?;
-            let games = self.report.games;
-            hooks.after_game(&self.progress(total))?;
-            if every.is_some_and(|n| games.is_multiple_of(n)) || (every.is_some() && games == total) {
-                hooks.checkpoint(self)?;
-            }
-        }
-        if every.is_some() && played == total {
-            // Nothing was left to play: the checkpoint still records the run as it stands.
-            hooks.checkpoint(self)?;
-        }
-        Ok(())
+    /// `total`): the one run loop ([`run::run_until`]), a game a unit, with `hooks`' progress,
+    /// stop and checkpoints. An error if `total` is below the games played already.
+    pub fn run_until<F>(&mut self, total: u64, hooks: &mut RunHooks<'_, F>) -> Result<()>
+    where
+        F: FnMut(&Progress) -> Result<()>,
+    {
+        run::run_until(self, total, hooks)
     }
 
     /// Plays the next game and counts it among the recent ones.
     fn play_counted(&mut self) -> Result<()> {
         let outcome = self.play_game()?;
-        if self.recent.len() == RECENT_GAMES {
-            self.recent.pop_front();
-        }
-        self.recent.push_back(outcome);
+        self.recent.push(outcome);
         Ok(())
     }
 
@@ -228,8 +190,7 @@ impl Trainer {
         Progress {
             games_played: self.report.games,
             games_target: target,
-            recent_games: self.recent.len(),
-            recent_successes: successes.len(),
+            recent: self.recent.count(Option::is_some),
             recent_mean_steps: (!successes.is_empty())
                 .then(|| successes.iter().map(|&s| f64::from(s)).sum::<f64>() / successes.len() as f64),
         }
@@ -393,29 +354,35 @@ fn replay(agent: &mut QAgent, memory: &ReplayMemory) -> u32 {
     MAX_REPLAY_SWEEPS
 }
 
-/// What a run does beside playing ([`Trainer::run_until`]): show progress, stop on the
-/// caller's word, write checkpoints. Every method has a default that does nothing.
-pub trait TrainHooks {
-    /// Called after every game with the run's progress; an error (say, Ctrl-C seen) stops
-    /// the run before the next game.
-    fn after_game(&mut self, _progress: &Progress) -> Result<()> {
-        Ok(())
+/// A game a unit: the tabular learner in the one run loop ([`run::run_until`]).
+impl Runnable for Trainer {
+    type Progress = Progress;
+    type Error = AgentError;
+
+    fn units_done(&self) -> u64 {
+        self.report.games
     }
 
-    /// Games between two checkpoints, counted from the run's first game; `None` (the
-    /// default) writes none.
-    fn checkpoint_every(&self) -> Option<u64> {
-        None
+    fn plan_to(&mut self, total: u64) -> Result<u64> {
+        let played = self.report.games;
+        if total < played {
+            return Err(AgentError::Config(format!(
+                "{total} games in all: the run has played {played} already"
+            )));
+        }
+        self.set_games(total);
+        Ok(total)
     }
 
-    /// Writes a checkpoint of `trainer` (`Trainer::write_checkpoint`).
-    fn checkpoint(&mut self, _trainer: &Trainer) -> Result<()> {
-        Ok(())
+    fn next_unit(&mut self, total: u64) -> Result<Progress> {
+        self.play_counted()?;
+        Ok(self.progress(total))
+    }
+
+    fn write_checkpoint(&self, out: &OutputPath) -> Result<()> {
+        Trainer::write_checkpoint(self, out)
     }
 }
-
-/// No hooks: a run that only plays.
-impl TrainHooks for () {}
 
 /// Trains an agent as `config` says, calling `progress` after every game.
 pub fn train(config: &TrainConfig, progress: Option<&mut dyn FnMut(&Progress)>) -> Result<Trained> {

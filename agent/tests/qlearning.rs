@@ -199,8 +199,8 @@ fn training_reports_progress_after_every_game() {
             .all(|(i, p)| p.games_played == i as u64 + 1 && p.games_target == 150)
     );
     let last = seen.last().unwrap();
-    assert_eq!(last.recent_games, 100);
-    assert!(last.recent_successes <= 100);
+    assert_eq!(last.recent.games, 100);
+    assert!(last.recent.successes <= 100);
     // Playing on continues the same run: 150 + 50 games equal 200 in one go.
     trainer.play_games(50, None).unwrap();
     let snapshot = trainer.snapshot();

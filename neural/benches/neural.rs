@@ -6,7 +6,7 @@
 //! each on 3 blocks; `<threads>` a rayon pool's size (the networks split
 //! large layers into two fixed halves, so it changes the time, never the result). The
 //! steps run as the trainer's loop does, with the pool's other threads kept awake
-//! (`neural::kernels::on_pool_awake`).
+//! (`sim::team::on_pool_awake`).
 //!
 //! - `network/<net>/<threads>`: the arithmetic of one DQfD step on inputs already encoded
 //!   (target and choosing passes on 128 next observations, training pass and backward pass
@@ -43,7 +43,7 @@ fn config(preset: Preset) -> DqnConfig {
 /// `f` as the trainer runs its loop: on a pool thread, the others awake
 /// (`Trainer::run_until_on_pool`).
 fn awake<R: Send>(f: impl FnOnce() -> R + Send) -> R {
-    neural::kernels::on_pool_awake(f)
+    sim::team::on_pool_awake(f)
 }
 
 fn pool(threads: usize) -> rayon::ThreadPool {

@@ -44,25 +44,25 @@
 //! It is written through the output helper (atomically for a regular file), so a kill while
 //! it is written leaves the previous checkpoint whole.
 
-use std::collections::{HashMap, HashSet, VecDeque};
+use std::collections::HashMap;
 use std::io::Read;
 use std::path::Path;
 
 use files::{Container, Expect, FilesError, OutputPath, Tensor};
 use rand::SeedableRng;
 use serde::{Deserialize, Serialize};
-use sim::seeding::{SimRng, episode_seed};
+use sim::seeding::SimRng;
 use sim::{Action, ActionProtocol, BlockId, Cell, Goal, Grid, Observation, State, View};
 
 use crate::config::DqnConfig;
 use crate::error::{NeuralError, Result};
-use crate::hindsight::Step;
 use crate::learner::{Learner, Losses};
 use crate::model::{StoredConfig, TrainReport};
 use crate::net::QNet;
 use crate::optim::Optimizer;
-use crate::replay::{NStep, NStepReturn, ReplayBuffer, Transition};
-use crate::train::{RECENT_GAMES, Trainer};
+use crate::replay::{NStepReturn, ReplayBuffer, Transition};
+use crate::train::Trainer;
+use agent::run::{RECENT_GAMES, Recent};
 
 /// The `format` of network training checkpoints.
 pub const CHECKPOINT_FORMAT: &str = "blockstack-dqn-checkpoint";
@@ -381,49 +381,13 @@ impl Trainer {
         config.validate().map_err(|e| fail(format!("its config: {e}")))?;
         let blocks = config.blocks();
 
-        let input = config.net.input(config.grid(), blocks)?;
-        let mut nets = Vec::new();
-        for prefix in ["online", "target"] {
-            let mut net = QNet::new(config.net, input, &mut sim::seeding::rng(0))?;
-            let names: Vec<String> = net.tensors().map(|t| t.name.to_string()).collect();
-            for tensor_name in names {
-                let full = format!("{prefix}/{tensor_name}");
-                let t = c
-                    .tensor(&full)
-                    .ok_or_else(|| corrupt(format!("it has no tensor {full}")))?;
-                let values = t.values::<f32>().ok_or_else(|| corrupt(format!("{full} is not F32")))?;
-                net.set_tensor(&tensor_name, t.shape(), &values)
-                    .map_err(|e| corrupt(e.to_string()))?;
-            }
-            nets.push(net);
-        }
-        let target = nets.pop().expect("two networks");
-        let online = nets.pop().expect("two networks");
+        let learner = read_learner(&c, &config, (meta.optimizer_steps, meta.gradient_steps), &corrupt)?;
         let f32s = |name: &str| -> Result<Vec<f32>> {
             c.tensor(name)
                 .ok_or_else(|| corrupt(format!("it has no tensor {name}")))?
                 .values::<f32>()
                 .ok_or_else(|| corrupt(format!("{name} is not F32")))
         };
-        let lr = match f32s("optimizer/lr")?[..] {
-            [lr] => lr,
-            _ => return Err(corrupt("optimizer/lr is not one value".into())),
-        };
-        let second = match c.tensor("optimizer/second") {
-            Some(_) => f32s("optimizer/second")?,
-            None => Vec::new(),
-        };
-        let optimizer = Optimizer::restore(
-            config.optimizer,
-            online.parameter_count(),
-            lr,
-            meta.optimizer_steps,
-            f32s("optimizer/first")?,
-            second,
-        )
-        .map_err(corrupt)?;
-        let learner = Learner::from_parts(online, target, optimizer, meta.gradient_steps);
-
         let bytes = |name: &str| -> Result<Vec<u8>> {
             c.tensor(name)
                 .ok_or_else(|| corrupt(format!("it has no tensor {name}")))?
@@ -489,7 +453,7 @@ impl Trainer {
         };
 
         let mut trainer = Trainer::assemble(config, learner, buffer, rng, meta.report)?;
-        trainer.recent = VecDeque::from(meta.recent);
+        trainer.recent = Recent::of(meta.recent);
         trainer.last_loss = loss;
         trainer.target_games = meta.target_games;
         if !game.is_empty() {
@@ -499,52 +463,85 @@ impl Trainer {
         Ok((trainer, meta.note))
     }
 
-    /// Puts the game being played back where it was: its environment reset from the game's
-    /// seed and `actions` replayed, its n-step window, visited states and hindsight record
-    /// rebuilt as [`Trainer`] built them.
+    /// Puts the game being played back where it was: it begins again and `actions` are
+    /// replayed through the steps a trainer takes ([`Trainer::begin_game`],
+    /// [`Trainer::take_step`]), which rebuild its environment, n-step window, visited states
+    /// and hindsight record as they were.
     fn replay_game(&mut self, actions: &[Action]) -> Result<()> {
         let k = self
             .report
             .games
             .checked_sub(1)
             .ok_or_else(|| NeuralError::Config("a game is being played, and no game has begun".into()))?;
-        let i = (k % self.envs.len() as u64) as usize;
-        let mut obs = self.envs[i].reset(episode_seed(self.config.seed, k));
-        self.visited = HashSet::new();
-        self.n_step = NStep::new(self.config.n_step, self.config.gamma);
+        let (i, mut obs) = self.begin_game(k);
         for (played, &action) in actions.iter().enumerate() {
-            if self.config.correct_loops {
-                self.visited.insert(obs.state.clone());
-            }
-            let step = self.envs[i].step(action)?;
+            self.revisits(&obs);
+            // Its finished transitions are in the buffer already.
+            let (step, _) = self.take_step(i, obs, action)?;
             if step.terminated || step.truncated {
                 return Err(NeuralError::Config(format!(
                     "its game in progress ends at its action {}, before its last",
                     played + 1
                 )));
             }
-            if self.config.hindsight > 0 {
-                self.game.push(Step {
-                    obs: obs.clone(),
-                    action,
-                    next: step.observation.clone(),
-                });
-            }
-            // Its finished transitions are in the buffer already.
-            let _ = self.n_step.push(
-                obs,
-                action,
-                step.reward as f32,
-                step.observation.clone(),
-                step.terminated,
-                false,
-            );
             obs = step.observation;
         }
-        self.actions = actions.to_vec();
         self.current = Some((i, obs));
         Ok(())
     }
+}
+
+/// The learner a checkpoint holds: its online and target networks and its optimiser, which
+/// have taken `steps` (the optimiser's, the learner's gradient steps); `corrupt` makes the
+/// error of a file that does not hold them.
+fn read_learner(
+    c: &Container,
+    config: &DqnConfig,
+    steps: (u64, u64),
+    corrupt: &dyn Fn(String) -> NeuralError,
+) -> Result<Learner> {
+    let input = config.net.input(config.grid(), config.blocks())?;
+    let mut nets = Vec::new();
+    for prefix in ["online", "target"] {
+        let mut net = QNet::new(config.net, input, &mut sim::seeding::rng(0))?;
+        let names: Vec<String> = net.tensors().map(|t| t.name.to_string()).collect();
+        for tensor_name in names {
+            let full = format!("{prefix}/{tensor_name}");
+            let t = c
+                .tensor(&full)
+                .ok_or_else(|| corrupt(format!("it has no tensor {full}")))?;
+            let values = t.values::<f32>().ok_or_else(|| corrupt(format!("{full} is not F32")))?;
+            net.set_tensor(&tensor_name, t.shape(), &values)
+                .map_err(|e| corrupt(e.to_string()))?;
+        }
+        nets.push(net);
+    }
+    let target = nets.pop().expect("two networks");
+    let online = nets.pop().expect("two networks");
+    let f32s = |name: &str| -> Result<Vec<f32>> {
+        c.tensor(name)
+            .ok_or_else(|| corrupt(format!("it has no tensor {name}")))?
+            .values::<f32>()
+            .ok_or_else(|| corrupt(format!("{name} is not F32")))
+    };
+    let lr = match f32s("optimizer/lr")?[..] {
+        [lr] => lr,
+        _ => return Err(corrupt("optimizer/lr is not one value".into())),
+    };
+    let second = match c.tensor("optimizer/second") {
+        Some(_) => f32s("optimizer/second")?,
+        None => Vec::new(),
+    };
+    let optimizer = Optimizer::restore(
+        config.optimizer,
+        online.parameter_count(),
+        lr,
+        steps.0,
+        f32s("optimizer/first")?,
+        second,
+    )
+    .map_err(corrupt)?;
+    Ok(Learner::from_parts(online, target, optimizer, steps.1))
 }
 
 /// The transitions of table `prefix` (module docs), checked against the run's world.

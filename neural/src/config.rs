@@ -312,6 +312,27 @@ impl DqnConfig {
         for goal in &self.goals {
             self.env_config(goal.clone()).validate()?;
         }
+        self.validate_sizes()?;
+        self.validate_learning()?;
+        if self.world.protocol != ActionProtocol::Free
+            && (self.correct_loops || matches!(self.demos, DemoSource::Exact(_) | DemoSource::Oracle(_)))
+        {
+            return bad(format!(
+                "the planners demonstrate in the free protocol (a pick may switch blocks), not the {} one: \
+                 drop their demonstrations and corrections, or choose the free protocol",
+                self.world.protocol
+            ));
+        }
+        if self.pretrain_steps > 0 && self.demos == DemoSource::None {
+            return bad("pre-training needs demonstrations (--demos or --demos-file)".into());
+        }
+        Ok(())
+    }
+
+    /// [`DqnConfig::validate`]'s sizes: the batch and the buffer, and what they and the
+    /// planned demonstrations would take in memory, checked before anything is allocated.
+    fn validate_sizes(&self) -> Result<()> {
+        let bad = |what: String| Err(NeuralError::Config(what));
         if self.batch == 0 {
             return bad("the batch must hold at least 1 transition".into());
         }
@@ -355,6 +376,13 @@ impl DqnConfig {
                 self.demos
             ));
         }
+        Ok(())
+    }
+
+    /// [`DqnConfig::validate`]'s learning settings: rates, discount, exploration, the
+    /// losses' weights, the n-step window, the gradient clip and the target's refresh.
+    fn validate_learning(&self) -> Result<()> {
+        let bad = |what: String| Err(NeuralError::Config(what));
         if self.train_every == 0 {
             return bad("train-every must be at least 1 step".into());
         }
@@ -399,20 +427,7 @@ impl DqnConfig {
                 bad("the target network must be refreshed every 1 or more".into())
             }
             _ => Ok(()),
-        }?;
-        if self.world.protocol != ActionProtocol::Free
-            && (self.correct_loops || matches!(self.demos, DemoSource::Exact(_) | DemoSource::Oracle(_)))
-        {
-            return bad(format!(
-                "the planners demonstrate in the free protocol (a pick may switch blocks), not the {} one: \
-                 drop their demonstrations and corrections, or choose the free protocol",
-                self.world.protocol
-            ));
         }
-        if self.pretrain_steps > 0 && self.demos == DemoSource::None {
-            return bad("pre-training needs demonstrations (--demos or --demos-file)".into());
-        }
-        Ok(())
     }
 }
 

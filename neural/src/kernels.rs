@@ -6,15 +6,13 @@
 //! optimiser) is a pass over memory. The products run on `gemm`'s single-threaded kernels
 //! (AVX2 + FMA here); the second core is used by splitting a batch into two fixed halves
 //! ([`join`]), whatever the number of threads, so one or two threads give the same bits. A
-//! training loop runs inside [`on_pool_awake`], so the second half of a split finds a thread
-//! awake to take it.
+//! training loop runs inside [`sim::team::on_pool_awake`] (the one home of keeping a pool's
+//! threads awake), so the second half of a split finds a thread awake to take it.
 //!
 //! Every pass runs with subnormal floats flushed to zero ([`without_subnormals`]): Adam's
 //! moments of weights that no input reaches decay into them over a few thousand steps, and
 //! an Intel core takes a slow assist on every subnormal operand (measured here: the
 //! small network's step went from 3 ms to 20 ms by step 4,000 of a run).
-
-use std::sync::atomic::{AtomicBool, Ordering};
 
 use gemm::{Parallelism, gemm};
 
@@ -308,52 +306,6 @@ pub fn both<A: FnOnce() + Send, B: FnOnce() + Send>(parts: usize, a: A, b: B) {
     }
 }
 
-/// Runs `f` on a thread of the current rayon pool (the global one outside every pool)
-/// while the pool's other threads stay awake until it returns, each looking for work
-/// ([`rayon::yield_now`]) and yielding its core between looks, so the halves [`join`]
-/// offers are taken at once. Nothing changes which half runs what, so results are the
-/// same bits.
-///
-/// Why: a training step is a few splits apart from serial stretches (the gradients' norm,
-/// the losses) of tens of microseconds, long enough for an idle rayon thread to go to
-/// sleep, and then each split pays a wake-up in the kernel (docs/performance.md
-/// measures it). The price is the other threads' cores for as long as `f` runs, when
-/// nothing else wants them.
-pub fn on_pool_awake<R: Send>(f: impl FnOnce() -> R + Send) -> R {
-    /// Ends the helpers when `f` returns or unwinds: the scope waits for them.
-    struct Done<'a>(&'a AtomicBool);
-    impl Drop for Done<'_> {
-        fn drop(&mut self) {
-            self.0.store(true, Ordering::Release);
-        }
-    }
-    let done = AtomicBool::new(false);
-    rayon::scope(|s| {
-        let runner = rayon::current_thread_index();
-        for _ in 1..rayon::current_num_threads() {
-            let done = &done;
-            s.spawn(move |_| {
-                // The thread running `f` can take this job while it waits for a half; it
-                // must not stay here.
-                if rayon::current_thread_index() == runner {
-                    return;
-                }
-                while !done.load(Ordering::Acquire) {
-                    // Between looks the core is offered to the scheduler: given back at
-                    // once when nothing else wants it, and shared when something does (a
-                    // pure spin made a run on a busy machine 1.8 times slower than no
-                    // helper at all: docs/performance.md).
-                    if rayon::yield_now() != Some(rayon::Yield::Executed) {
-                        std::thread::yield_now();
-                    }
-                }
-            });
-        }
-        let _done = Done(&done);
-        f()
-    })
-}
-
 /// Runs `f` with subnormal floats flushed to zero, as inputs and as results (the x86-64
 /// control bits FTZ and DAZ, PyTorch's `set_flush_denormal(True)`), and puts the thread's
 /// previous mode back after: a caller's own arithmetic, a Python interpreter's say, is left
@@ -394,7 +346,8 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_run_on_the_awake_pool_gives_its_result_and_its_splits_end() {
+    fn splits_on_the_awake_pool_give_their_results() {
+        use sim::team::on_pool_awake;
         let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
         let sums = pool.install(|| {
             on_pool_awake(|| {
@@ -407,21 +360,6 @@ mod tests {
             })
         });
         assert_eq!(sums, (0..200u64).map(|k| (0..2 * k).sum::<u64>()).sum::<u64>());
-        // Outside every pool and on a pool of one thread, the same.
-        assert_eq!(on_pool_awake(|| join(|| 1, || 2)), (1, 2));
-        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-        assert_eq!(one.install(|| on_pool_awake(|| join(|| 3, || 4))), (3, 4));
-    }
-
-    #[test]
-    fn a_panic_on_the_awake_pool_reaches_the_caller_and_frees_the_pool() {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
-        let caught = pool.install(|| {
-            std::panic::catch_unwind(|| on_pool_awake(|| join(|| 1, || -> i32 { panic!("a half failed") })))
-        });
-        assert!(caught.is_err());
-        // The helpers ended: the pool still runs work on both threads.
-        assert_eq!(pool.install(|| on_pool_awake(|| join(|| 5, || 6))), (5, 6));
     }
 
     fn naive(a: &[f32], b: &[f32], m: usize, k: usize, n: usize) -> Vec<f32> {

@@ -316,8 +316,60 @@ impl Learner {
         let spec = *self.online.input();
         let b = batch.len();
         let actions = self.online.actions();
+        self.targets(batch, config);
 
-        // Targets, without gradients: next observations, then the n-step ones.
+        // The online network's values, and the losses' gradient with respect to them.
+        self.encoder.encode(&spec, b, |i| &batch[i].obs, &mut self.x);
+        let q = self.online.forward_train(&self.x, &mut self.train_ws);
+        self.dq.clear();
+        self.dq.resize(b * actions, 0.0);
+        let mut losses = Losses::default();
+        let inv_b = 1.0 / b as f32;
+        let experts = batch.iter().filter(|t| t.expert).count();
+        let lambda_n = config.lambda_n_step as f32;
+        let lambda_margin = config.lambda_margin as f32;
+        for (i, t) in batch.iter().enumerate() {
+            let row = i * actions;
+            let taken = spec.column(&t.obs.goal, t.action);
+            let q_taken = q[row + taken];
+            let (l, g) = td_term(q_taken - self.y1[i], config.td_loss);
+            losses.td += l * inv_b;
+            self.dq[row + taken] += g * inv_b;
+            if dqfd {
+                let (l, g) = td_term(q_taken - self.yn[i], config.td_loss);
+                losses.n_step += l * inv_b;
+                self.dq[row + taken] += lambda_n * g * inv_b;
+                if t.expert {
+                    let weight = 1.0 / experts as f32;
+                    let allowed = spec.allowed_columns(&t.obs, config.mask_noops);
+                    let (j, best) = margin_term(&q[row..row + actions], taken, allowed, config.margin as f32);
+                    losses.margin += j * weight;
+                    self.dq[row + best] += lambda_margin * weight;
+                    self.dq[row + taken] -= lambda_margin * weight;
+                }
+            }
+        }
+        losses.total = losses.td;
+        if dqfd {
+            losses.total += losses.n_step * lambda_n;
+            if experts > 0 {
+                losses.total += losses.margin * lambda_margin;
+            }
+        }
+        self.online
+            .backward(&self.x, &mut self.train_ws, &self.dq, &mut self.grad);
+        losses
+    }
+
+    /// The TD targets of `batch`, without gradients: the one-step ones in `self.y1` and,
+    /// under the DQfD loss, the n-step ones in `self.yn`, from the target network's values
+    /// (with double DQN, at the online network's choices).
+    fn targets(&mut self, batch: &[&Transition], config: &DqnConfig) {
+        let dqfd = config.loss == LossKind::Dqfd;
+        let spec = *self.online.input();
+        let b = batch.len();
+        let actions = self.online.actions();
+        // Next observations, then the n-step ones.
         let next = |i: usize| {
             if i < b {
                 &batch[i].next
@@ -373,48 +425,6 @@ impl Learner {
                 self.yn.push(n.rewards + bootstrap);
             }
         }
-
-        // The online network's values, and the losses' gradient with respect to them.
-        self.encoder.encode(&spec, b, |i| &batch[i].obs, &mut self.x);
-        let q = self.online.forward_train(&self.x, &mut self.train_ws);
-        self.dq.clear();
-        self.dq.resize(b * actions, 0.0);
-        let mut losses = Losses::default();
-        let inv_b = 1.0 / b as f32;
-        let experts = batch.iter().filter(|t| t.expert).count();
-        let lambda_n = config.lambda_n_step as f32;
-        let lambda_margin = config.lambda_margin as f32;
-        for (i, t) in batch.iter().enumerate() {
-            let row = i * actions;
-            let taken = spec.column(&t.obs.goal, t.action);
-            let q_taken = q[row + taken];
-            let (l, g) = td_term(q_taken - self.y1[i], config.td_loss);
-            losses.td += l * inv_b;
-            self.dq[row + taken] += g * inv_b;
-            if dqfd {
-                let (l, g) = td_term(q_taken - self.yn[i], config.td_loss);
-                losses.n_step += l * inv_b;
-                self.dq[row + taken] += lambda_n * g * inv_b;
-                if t.expert {
-                    let weight = 1.0 / experts as f32;
-                    let allowed = spec.allowed_columns(&t.obs, config.mask_noops);
-                    let (j, best) = margin_term(&q[row..row + actions], taken, allowed, config.margin as f32);
-                    losses.margin += j * weight;
-                    self.dq[row + best] += lambda_margin * weight;
-                    self.dq[row + taken] -= lambda_margin * weight;
-                }
-            }
-        }
-        losses.total = losses.td;
-        if dqfd {
-            losses.total += losses.n_step * lambda_n;
-            if experts > 0 {
-                losses.total += losses.margin * lambda_margin;
-            }
-        }
-        self.online
-            .backward(&self.x, &mut self.train_ws, &self.dq, &mut self.grad);
-        losses
     }
 }
 

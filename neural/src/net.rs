@@ -74,6 +74,8 @@ use sim::{Action, SCREEN_CELL, ScreenGoal};
 use crate::error::{NeuralError, Result};
 use crate::input::{InputSpec, ObsKind};
 use crate::kernels::{self, ConvGeometry, matmul, matmul_nt, matmul_tn};
+pub use crate::params::NamedTensor;
+use crate::params::{ParamStore, Slot};
 
 /// Which network.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -252,19 +254,6 @@ const BN_EPS: f64 = 1e-5;
 /// costs more than it saves.
 const MIN_HALF_WORK: usize = 2_000_000;
 
-/// Where a tensor lives in a flat buffer.
-#[derive(Clone, Copy, Debug)]
-struct Slot {
-    offset: usize,
-    len: usize,
-}
-
-impl Slot {
-    fn range(self) -> std::ops::Range<usize> {
-        self.offset..self.offset + self.len
-    }
-}
-
 /// Batch normalisation's tensors: scale and shift among the parameters, the running
 /// statistics among the buffers.
 #[derive(Clone, Debug)]
@@ -317,27 +306,6 @@ impl Layer {
     }
 }
 
-/// A named tensor of a network file.
-#[derive(Clone, Debug)]
-struct TensorInfo {
-    name: String,
-    shape: Vec<usize>,
-    slot: Slot,
-    /// A batch-normalisation statistic (in the buffers), not a parameter.
-    buffer: bool,
-}
-
-/// One of a network's named tensors, as a network file stores it.
-#[derive(Clone, Copy, Debug)]
-pub struct NamedTensor<'a> {
-    /// Its name (`conv1.weight`, `linear2.bias`, `conv1.bn.running_mean`, ...).
-    pub name: &'a str,
-    /// Its shape.
-    pub shape: &'a [usize],
-    /// Its values, row-major.
-    pub values: &'a [f32],
-}
-
 /// A Q-network: one Q-value per action for a batch of inputs.
 ///
 /// Its parameters are one flat buffer ([`QNet::params`]), laid out tensor after tensor in
@@ -348,9 +316,7 @@ pub struct QNet {
     input: InputSpec,
     actions: usize,
     layers: Vec<Layer>,
-    tensors: Vec<TensorInfo>,
-    params: Vec<f32>,
-    buffers: Vec<f32>,
+    store: ParamStore,
 }
 
 /// The buffers of one layer's pass, kept for the backward pass.
@@ -385,6 +351,13 @@ struct LayerBuffers {
 pub struct Workspace {
     batch: usize,
     layers: Vec<LayerBuffers>,
+    /// What the backward pass writes besides the layers' buffers.
+    back: BackBuffers,
+}
+
+/// The buffers of a backward pass that belong to no one layer.
+#[derive(Default)]
+struct BackBuffers {
     /// The gradient with respect to the current layer's output, and its input's.
     delta: Vec<f32>,
     delta_in: Vec<f32>,
@@ -483,9 +456,7 @@ impl QNet {
             input,
             actions,
             layers: Vec::new(),
-            tensors: Vec::new(),
-            params: Vec::new(),
-            buffers: Vec::new(),
+            store: ParamStore::default(),
         };
         let mut width = input.len();
         // (kernel, stride, channels out) of each convolution.
@@ -509,19 +480,27 @@ impl QNet {
                 let patch = geo.patch();
                 let bound = 1.0 / (patch as f32).sqrt();
                 let name = format!("conv{}", i + 1);
-                let weight = net.add(
+                let weight = net.store.add(
                     &format!("{name}.weight"),
                     uniform(rng, patch * out, bound),
                     &[patch, out],
                     false,
                 );
-                let bias = (config.kind == NetKind::Paper)
-                    .then(|| net.add(&format!("{name}.bias"), uniform(rng, out, bound), &[out], false));
+                let bias = (config.kind == NetKind::Paper).then(|| {
+                    net.store
+                        .add(&format!("{name}.bias"), uniform(rng, out, bound), &[out], false)
+                });
                 let norm = config.batch_norm.then(|| Norm {
-                    gamma: net.add(&format!("{name}.bn.weight"), vec![1.0; out], &[out], false),
-                    beta: net.add(&format!("{name}.bn.bias"), vec![0.0; out], &[out], false),
-                    running_mean: net.add(&format!("{name}.bn.running_mean"), vec![0.0; out], &[out], true),
-                    running_var: net.add(&format!("{name}.bn.running_var"), vec![1.0; out], &[out], true),
+                    gamma: net
+                        .store
+                        .add(&format!("{name}.bn.weight"), vec![1.0; out], &[out], false),
+                    beta: net.store.add(&format!("{name}.bn.bias"), vec![0.0; out], &[out], false),
+                    running_mean: net
+                        .store
+                        .add(&format!("{name}.bn.running_mean"), vec![0.0; out], &[out], true),
+                    running_var: net
+                        .store
+                        .add(&format!("{name}.bn.running_var"), vec![1.0; out], &[out], true),
                 });
                 net.layers.push(Layer::Conv {
                     geo,
@@ -542,13 +521,15 @@ impl QNet {
             let (fan_in, out) = (w[0], w[1]);
             let bound = 1.0 / (fan_in as f32).sqrt();
             let name = format!("linear{}", i + 1);
-            let weight = net.add(
+            let weight = net.store.add(
                 &format!("{name}.weight"),
                 uniform(rng, fan_in * out, bound),
                 &[fan_in, out],
                 false,
             );
-            let bias = net.add(&format!("{name}.bias"), uniform(rng, out, bound), &[out], false);
+            let bias = net
+                .store
+                .add(&format!("{name}.bias"), uniform(rng, out, bound), &[out], false);
             net.layers.push(Layer::Linear {
                 inputs: fan_in,
                 out,
@@ -559,23 +540,6 @@ impl QNet {
             });
         }
         Ok(net)
-    }
-
-    /// Appends a named tensor to the parameters or the buffers.
-    fn add(&mut self, name: &str, values: Vec<f32>, shape: &[usize], buffer: bool) -> Slot {
-        let store = if buffer { &mut self.buffers } else { &mut self.params };
-        let slot = Slot {
-            offset: store.len(),
-            len: values.len(),
-        };
-        store.extend(values);
-        self.tensors.push(TensorInfo {
-            name: name.into(),
-            shape: shape.to_vec(),
-            slot,
-            buffer,
-        });
-        slot
     }
 
     /// The network's shape.
@@ -595,66 +559,39 @@ impl QNet {
 
     /// Every trainable value, tensor after tensor (the order of [`QNet::tensors`]).
     pub fn params(&self) -> &[f32] {
-        &self.params
+        &self.store.params
     }
 
     /// The trainable values, to update.
     pub fn params_mut(&mut self) -> &mut [f32] {
-        &mut self.params
+        &mut self.store.params
     }
 
     /// Batch normalisation's running statistics (empty without).
     pub fn buffers(&self) -> &[f32] {
-        &self.buffers
+        &self.store.buffers
     }
 
     /// Number of trainable values.
     pub fn parameter_count(&self) -> usize {
-        self.params.len()
+        self.store.params.len()
     }
 
     /// Every named tensor: parameters, then batch normalisation's running statistics.
     pub fn tensors(&self) -> impl Iterator<Item = NamedTensor<'_>> {
-        let params = self.tensors.iter().filter(|t| !t.buffer);
-        params
-            .chain(self.tensors.iter().filter(|t| t.buffer))
-            .map(|t| NamedTensor {
-                name: &t.name,
-                shape: &t.shape,
-                values: if t.buffer {
-                    &self.buffers[t.slot.range()]
-                } else {
-                    &self.params[t.slot.range()]
-                },
-            })
+        self.store.tensors()
     }
 
     /// Where the parameter `name` lives in [`QNet::params`] (`None` for a buffer or an
     /// unknown name).
     pub fn param_range(&self, name: &str) -> Option<std::ops::Range<usize>> {
-        self.tensors
-            .iter()
-            .find(|t| t.name == name && !t.buffer)
-            .map(|t| t.slot.range())
+        self.store.param_range(name)
     }
 
     /// Sets the tensor named `name` to `values` (a network file's); an error naming it if
     /// the network has no such tensor or its shape differs.
     pub fn set_tensor(&mut self, name: &str, shape: &[usize], values: &[f32]) -> Result<()> {
-        let t = self
-            .tensors
-            .iter()
-            .find(|t| t.name == name)
-            .ok_or_else(|| NeuralError::Mismatch(format!("the network has no tensor {name}")))?;
-        if t.shape != shape || values.len() != t.slot.len {
-            return Err(NeuralError::Mismatch(format!(
-                "tensor {name} is {:?} in the network and {shape:?} in the file",
-                t.shape
-            )));
-        }
-        let store = if t.buffer { &mut self.buffers } else { &mut self.params };
-        store[t.slot.range()].copy_from_slice(values);
-        Ok(())
+        self.store.set_tensor(name, shape, values)
     }
 
     /// An independent copy.
@@ -664,8 +601,7 @@ impl QNet {
 
     /// Sets every parameter and buffer to `other`'s (a network of the same shape).
     pub fn copy_from(&mut self, other: &QNet) {
-        self.params.copy_from_slice(&other.params);
-        self.buffers.copy_from_slice(&other.buffers);
+        self.store.copy_from(&other.store);
     }
 
     /// Q-values of the encoded `inputs` (`batch * input length` floats), batch
@@ -715,9 +651,9 @@ impl QNet {
                 let unbiased = if rows > 1 { rows as f64 / (rows - 1) as f64 } else { 1.0 };
                 let stats = buffers.mean.iter().zip(&buffers.var);
                 for (i, (&m, &v)) in stats.enumerate() {
-                    let rm = &mut self.buffers[n.running_mean.offset + i];
+                    let rm = &mut self.store.buffers[n.running_mean.offset + i];
                     *rm = *rm * (1.0 - BN_MOMENTUM) + m as f32 * BN_MOMENTUM;
-                    let rv = &mut self.buffers[n.running_var.offset + i];
+                    let rv = &mut self.store.buffers[n.running_var.offset + i];
                     *rv = *rv * (1.0 - BN_MOMENTUM) + (v * unbiased) as f32 * BN_MOMENTUM;
                 }
             }
@@ -752,8 +688,8 @@ impl QNet {
                     let chunk = chunk_samples(geo);
                     fit(&mut buf.cols, 2 * chunk * positions * patch);
                     fit(&mut buf.pre, batch * positions * out);
-                    let w = &self.params[weight.range()];
-                    let b = bias.map(|b| &self.params[b.range()]);
+                    let w = &self.store.params[weight.range()];
+                    let b = bias.map(|b| &self.store.params[b.range()]);
                     let (x0, x1) = input.split_at(half * in_len);
                     let (c0, c1) = buf.cols.split_at_mut(chunk * positions * patch);
                     let (z0, z1) = halves(&mut buf.pre, half * positions * out, parts);
@@ -772,8 +708,8 @@ impl QNet {
                     };
                     kernels::both(parts, || conv(x0, c0, z0), || conv(x1, c1, z1));
                     match norm {
-                        Some(n) if train => norm_train(&self.params, n, buf),
-                        Some(n) => norm_eval(&self.params, &self.buffers, n, buf),
+                        Some(n) if train => norm_train(&self.store.params, n, buf),
+                        Some(n) => norm_eval(&self.store.params, &self.store.buffers, n, buf),
                         None => {
                             for (o, &z) in buf.out.iter_mut().zip(&buf.pre) {
                                 *o = z.max(0.0);
@@ -789,8 +725,8 @@ impl QNet {
                     relu,
                     sparse,
                 } => {
-                    let w = &self.params[weight.range()];
-                    let b = &self.params[bias.range()];
+                    let w = &self.store.params[weight.range()];
+                    let b = &self.store.params[bias.range()];
                     if *sparse {
                         sparse_layer_forward(input, *inputs, w, b, buf, parts);
                     } else {
@@ -822,9 +758,47 @@ impl QNet {
     fn backward_pass(&self, x: &[f32], ws: &mut Workspace, dq: &[f32], grad: &mut [f32]) {
         let batch = ws.batch;
         assert_eq!(dq.len(), batch * self.actions, "one gradient per Q-value");
-        assert_eq!(grad.len(), self.params.len(), "one gradient per parameter");
-        let Workspace {
-            layers,
+        assert_eq!(grad.len(), self.store.params.len(), "one gradient per parameter");
+        let Workspace { layers, back, .. } = ws;
+        fit(&mut back.delta, dq.len());
+        back.delta.copy_from_slice(dq);
+        for (i, layer) in self.layers.iter().enumerate().rev() {
+            let (before, rest) = layers.split_at(i);
+            let input: &[f32] = before.last().map_or(x, |l| l.out.as_slice());
+            let pass = LayerPass {
+                i,
+                batch,
+                input,
+                buf: &rest[0],
+            };
+            let swap = match layer {
+                Layer::Conv { .. } => {
+                    self.conv_backward(layer, &pass, back, grad);
+                    true
+                }
+                Layer::Linear { .. } => self.linear_backward(layer, &pass, back, grad),
+            };
+            if swap {
+                std::mem::swap(&mut back.delta, &mut back.delta_in);
+            }
+        }
+    }
+
+    /// A convolution's backward pass: its parameters' gradients into `grad` and, below the
+    /// first layer, its input's gradient into `back.delta_in`.
+    fn conv_backward(&self, layer: &Layer, pass: &LayerPass<'_>, back: &mut BackBuffers, grad: &mut [f32]) {
+        let Layer::Conv {
+            geo,
+            out,
+            weight,
+            bias,
+            norm,
+        } = layer
+        else {
+            unreachable!("a convolution")
+        };
+        let LayerPass { i, batch, input, buf } = *pass;
+        let BackBuffers {
             delta,
             delta_in,
             cols,
@@ -832,147 +806,156 @@ impl QNet {
             dw_half,
             sums,
             coef,
+            ..
+        } = back;
+        let parts = kernels::parts(batch, MIN_HALF_WORK.div_ceil(layer.work()));
+        let half = kernels::part_start(batch, parts, 1);
+        let (positions, patch) = (geo.positions(), geo.patch());
+        match norm {
+            Some(n) => {
+                norm_backward(&self.store.params, n, buf, delta, sums, coef, grad);
+                // Batch normalisation subtracts the batch mean: the bias
+                // changes no output in training, and its gradient is 0
+                // (computed, it is rounding noise that Adam would turn
+                // into a random walk).
+                if let Some(bias) = bias {
+                    grad[bias.range()].fill(0.0);
+                }
+            }
+            None => {
+                relu_backward(delta, &buf.out);
+                if let Some(bias) = bias {
+                    sum_rows(delta, &mut grad[bias.range()]);
+                }
+            }
+        }
+        let w = &self.store.params[weight.range()];
+        let in_len = geo.input_len();
+        let chunk = chunk_samples(geo);
+        let chunk_len = chunk * positions * patch;
+        fit(dw_half, weight.len);
+        fit(cols, 2 * chunk_len);
+        let wants_input = i > 0;
+        if wants_input {
+            fit(dcols, 2 * chunk_len);
+            fit(delta_in, batch * in_len);
+        }
+        let (g0, g1) = (&mut grad[weight.range()], &mut dw_half[..]);
+        let (x0, x1) = input.split_at(half * in_len);
+        let (d0, d1) = delta.split_at(half * positions * out);
+        let (cols0, cols1) = cols.split_at_mut(chunk_len);
+        let (dc0, dc1, dx0, dx1) = if wants_input {
+            let (dc0, dc1) = dcols.split_at_mut(chunk_len);
+            let (dx0, dx1) = halves(delta_in, half * in_len, parts);
+            (dc0, dc1, dx0, dx1)
+        } else {
+            (&mut [][..], &mut [][..], &mut [][..], &mut [][..])
+        };
+        // The patches again, a few samples at a time (cheaper than keeping
+        // them all from the forward pass: they would not stay in cache).
+        let conv = |x: &[f32], cols: &mut [f32], d: &[f32], g: &mut [f32], dc: &mut [f32], dx: &mut [f32]| {
+            let chunks = x.chunks(chunk * in_len).zip(d.chunks(chunk * positions * out));
+            for (k, (xc, dch)) in chunks.enumerate() {
+                let samples = xc.len() / in_len;
+                let rows = samples * positions;
+                let cols = &mut cols[..rows * patch];
+                geo.im2col(xc, cols);
+                matmul_tn(g, cols, dch, (patch, rows, *out), k > 0);
+                if wants_input {
+                    let dc = &mut dc[..rows * patch];
+                    matmul_nt(dc, dch, w, (rows, *out, patch), false);
+                    let start = k * chunk * in_len;
+                    geo.col2im(dc, &mut dx[start..start + samples * in_len]);
+                }
+            }
+        };
+        kernels::both(
+            parts,
+            || conv(x0, cols0, d0, g0, dc0, dx0),
+            || conv(x1, cols1, d1, g1, dc1, dx1),
+        );
+        if parts == 2 {
+            for (g, &h) in grad[weight.range()].iter_mut().zip(dw_half.iter()) {
+                *g += h;
+            }
+        }
+    }
+
+    /// A linear layer's backward pass: its parameters' gradients into `grad` and, below the
+    /// first layer, its input's gradient; whether that gradient is in `back.delta_in` (to be
+    /// swapped into `back.delta`) rather than already in `back.delta`.
+    fn linear_backward(&self, layer: &Layer, pass: &LayerPass<'_>, back: &mut BackBuffers, grad: &mut [f32]) -> bool {
+        let Layer::Linear {
+            inputs,
+            out,
+            weight,
+            bias,
+            relu,
+            sparse,
+        } = layer
+        else {
+            unreachable!("a linear layer")
+        };
+        let LayerPass { i, batch, input, buf } = *pass;
+        let BackBuffers {
+            delta,
+            delta_in,
+            dw_half,
             by_input,
             input_start,
             ..
-        } = ws;
-        fit(delta, dq.len());
-        delta.copy_from_slice(dq);
-        for (i, layer) in self.layers.iter().enumerate().rev() {
-            let (before, rest) = layers.split_at(i);
-            let input: &[f32] = before.last().map_or(x, |l| l.out.as_slice());
-            let buf = &rest[0];
-            let parts = kernels::parts(batch, MIN_HALF_WORK.div_ceil(layer.work()));
-            let half = kernels::part_start(batch, parts, 1);
-            match layer {
-                Layer::Conv {
-                    geo,
-                    out,
-                    weight,
-                    bias,
-                    norm,
-                } => {
-                    let (positions, patch) = (geo.positions(), geo.patch());
-                    match norm {
-                        Some(n) => {
-                            norm_backward(&self.params, n, buf, delta, sums, coef, grad);
-                            // Batch normalisation subtracts the batch mean: the bias
-                            // changes no output in training, and its gradient is 0
-                            // (computed, it is rounding noise that Adam would turn
-                            // into a random walk).
-                            if let Some(bias) = bias {
-                                grad[bias.range()].fill(0.0);
-                            }
-                        }
-                        None => {
-                            relu_backward(delta, &buf.out);
-                            if let Some(bias) = bias {
-                                sum_rows(delta, &mut grad[bias.range()]);
-                            }
-                        }
-                    }
-                    let w = &self.params[weight.range()];
-                    let in_len = geo.input_len();
-                    let chunk = chunk_samples(geo);
-                    let chunk_len = chunk * positions * patch;
-                    fit(dw_half, weight.len);
-                    fit(cols, 2 * chunk_len);
-                    let wants_input = i > 0;
-                    if wants_input {
-                        fit(dcols, 2 * chunk_len);
-                        fit(delta_in, batch * in_len);
-                    }
-                    let (g0, g1) = (&mut grad[weight.range()], &mut dw_half[..]);
-                    let (x0, x1) = input.split_at(half * in_len);
-                    let (d0, d1) = delta.split_at(half * positions * out);
-                    let (cols0, cols1) = cols.split_at_mut(chunk_len);
-                    let (dc0, dc1, dx0, dx1) = if wants_input {
-                        let (dc0, dc1) = dcols.split_at_mut(chunk_len);
-                        let (dx0, dx1) = halves(delta_in, half * in_len, parts);
-                        (dc0, dc1, dx0, dx1)
-                    } else {
-                        (&mut [][..], &mut [][..], &mut [][..], &mut [][..])
-                    };
-                    // The patches again, a few samples at a time (cheaper than keeping
-                    // them all from the forward pass: they would not stay in cache).
-                    let conv =
-                        |x: &[f32], cols: &mut [f32], d: &[f32], g: &mut [f32], dc: &mut [f32], dx: &mut [f32]| {
-                            let chunks = x.chunks(chunk * in_len).zip(d.chunks(chunk * positions * out));
-                            for (k, (xc, dch)) in chunks.enumerate() {
-                                let samples = xc.len() / in_len;
-                                let rows = samples * positions;
-                                let cols = &mut cols[..rows * patch];
-                                geo.im2col(xc, cols);
-                                matmul_tn(g, cols, dch, (patch, rows, *out), k > 0);
-                                if wants_input {
-                                    let dc = &mut dc[..rows * patch];
-                                    matmul_nt(dc, dch, w, (rows, *out, patch), false);
-                                    let start = k * chunk * in_len;
-                                    geo.col2im(dc, &mut dx[start..start + samples * in_len]);
-                                }
-                            }
-                        };
-                    kernels::both(
-                        parts,
-                        || conv(x0, cols0, d0, g0, dc0, dx0),
-                        || conv(x1, cols1, d1, g1, dc1, dx1),
-                    );
-                    if parts == 2 {
-                        for (g, &h) in grad[weight.range()].iter_mut().zip(dw_half.iter()) {
-                            *g += h;
-                        }
-                    }
-                }
-                Layer::Linear {
-                    inputs,
-                    out,
-                    weight,
-                    bias,
-                    relu,
-                    sparse,
-                } => {
-                    if *relu {
-                        relu_backward(delta, &buf.out);
-                    }
-                    sum_rows(delta, &mut grad[bias.range()]);
-                    if *sparse {
-                        let g = &mut grad[weight.range()];
-                        sparse_weight_gradient(buf, delta, *inputs, g, by_input, input_start);
-                        if i == 0 {
-                            continue;
-                        }
-                        // After a convolution: the gradient of the non-zero inputs only (a
-                        // zero input is a ReLU's zero, whose own gradient is 0 anyway).
-                        fit(delta_in, batch * inputs);
-                        let w = &self.params[weight.range()];
-                        sparse_input_gradient(buf, delta, w, *inputs, delta_in);
-                        std::mem::swap(delta, delta_in);
-                        continue;
-                    }
-                    let x = input;
-                    let w = &self.params[weight.range()];
-                    fit(dw_half, weight.len);
-                    fit(delta_in, batch * inputs);
-                    let (x0, x1) = x.split_at(half * inputs);
-                    let (d0, d1) = delta.split_at(half * out);
-                    let (g0, g1) = (&mut grad[weight.range()], &mut dw_half[..]);
-                    let (dx0, dx1) = halves(delta_in, half * inputs, parts);
-                    let linear = |x: &[f32], d: &[f32], g: &mut [f32], dx: &mut [f32]| {
-                        let r = d.len() / out;
-                        matmul_tn(g, x, d, (*inputs, r, *out), false);
-                        matmul_nt(dx, d, w, (r, *out, *inputs), false);
-                    };
-                    kernels::both(parts, || linear(x0, d0, g0, dx0), || linear(x1, d1, g1, dx1));
-                    if parts == 2 {
-                        for (g, &h) in grad[weight.range()].iter_mut().zip(dw_half.iter()) {
-                            *g += h;
-                        }
-                    }
-                }
-            }
-            std::mem::swap(delta, delta_in);
+        } = back;
+        let parts = kernels::parts(batch, MIN_HALF_WORK.div_ceil(layer.work()));
+        let half = kernels::part_start(batch, parts, 1);
+        if *relu {
+            relu_backward(delta, &buf.out);
         }
+        sum_rows(delta, &mut grad[bias.range()]);
+        if *sparse {
+            let g = &mut grad[weight.range()];
+            sparse_weight_gradient(buf, delta, *inputs, g, by_input, input_start);
+            if i == 0 {
+                return false;
+            }
+            // After a convolution: the gradient of the non-zero inputs only (a
+            // zero input is a ReLU's zero, whose own gradient is 0 anyway).
+            fit(delta_in, batch * inputs);
+            let w = &self.store.params[weight.range()];
+            sparse_input_gradient(buf, delta, w, *inputs, delta_in);
+            std::mem::swap(delta, delta_in);
+            return false;
+        }
+        let x = input;
+        let w = &self.store.params[weight.range()];
+        fit(dw_half, weight.len);
+        fit(delta_in, batch * inputs);
+        let (x0, x1) = x.split_at(half * inputs);
+        let (d0, d1) = delta.split_at(half * out);
+        let (g0, g1) = (&mut grad[weight.range()], &mut dw_half[..]);
+        let (dx0, dx1) = halves(delta_in, half * inputs, parts);
+        let linear = |x: &[f32], d: &[f32], g: &mut [f32], dx: &mut [f32]| {
+            let r = d.len() / out;
+            matmul_tn(g, x, d, (*inputs, r, *out), false);
+            matmul_nt(dx, d, w, (r, *out, *inputs), false);
+        };
+        kernels::both(parts, || linear(x0, d0, g0, dx0), || linear(x1, d1, g1, dx1));
+        if parts == 2 {
+            for (g, &h) in grad[weight.range()].iter_mut().zip(dw_half.iter()) {
+                *g += h;
+            }
+        }
+        true
     }
+}
+
+/// Where a layer's backward pass stands: its index, the batch, its input and its buffers of
+/// the forward pass.
+#[derive(Clone, Copy)]
+struct LayerPass<'a> {
+    i: usize,
+    batch: usize,
+    input: &'a [f32],
+    buf: &'a LayerBuffers,
 }
 
 /// Batch normalisation on the batch's statistics, then ReLU: `pre` becomes `x_hat`.

@@ -12,7 +12,7 @@ use serde::Serialize;
 use serde::de::DeserializeOwned;
 
 use crate::error::{NeuralError, Result};
-use crate::net::NamedTensor;
+use crate::params::NamedTensor;
 
 /// Writes a network file of `expect`'s format and version to `path`: `metadata` and one
 /// `F32` tensor per item of `tensors`, through the project's output helper (atomically for a

@@ -7,7 +7,9 @@
 //! on the same machine and number of threads (a matrix product's sums may be split
 //! differently on another thread count).
 
-use std::collections::{HashSet, VecDeque};
+use std::collections::HashSet;
+
+use agent::run::{self, Recent, RecentGames, RunHooks, Runnable};
 
 use oracle::{ExactSolver, Oracle, Planner};
 use rand::RngExt;
@@ -22,10 +24,7 @@ use crate::learner::{Learner, Losses};
 use crate::mask::ActionSet;
 use crate::model::{Dqn, TrainReport};
 use crate::net::QNet;
-use crate::replay::{NStep, ReplayBuffer};
-
-/// Games the progress's success rate is taken over.
-pub const RECENT_GAMES: usize = 100;
+use crate::replay::{NStep, ReplayBuffer, Transition};
 
 /// Which part of training a progress report is from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -48,25 +47,12 @@ pub struct Progress {
     pub target: u64,
     /// Self-play games begun.
     pub games: u64,
-    /// Of the last (at most [`RECENT_GAMES`]) finished games, how many.
-    pub recent_games: usize,
-    /// Of those, how many reached the goal.
-    pub recent_successes: usize,
+    /// The last (at most [`RECENT_GAMES`](agent::run::RECENT_GAMES)) finished games, and how many reached the goal.
+    pub recent: RecentGames,
     /// The last gradient step's loss.
     pub loss: Losses,
     /// Gradient steps in all.
     pub gradient_steps: u64,
-}
-
-impl Progress {
-    /// The share of recent games that reached the goal (0 before any game ended).
-    pub fn recent_success_rate(&self) -> f64 {
-        if self.recent_games == 0 {
-            0.0
-        } else {
-            self.recent_successes as f64 / self.recent_games as f64
-        }
-    }
 }
 
 /// A training run in progress: pre-train, play some steps, look at (or evaluate) the
@@ -79,7 +65,7 @@ pub struct Trainer {
     /// Exploration and batch draws.
     pub(crate) rng: SimRng,
     pub(crate) report: TrainReport,
-    pub(crate) recent: VecDeque<bool>,
+    pub(crate) recent: Recent<bool>,
     /// The game being played: its environment and current observation.
     pub(crate) current: Option<(usize, Observation)>,
     pub(crate) n_step: NStep,
@@ -155,7 +141,7 @@ impl Trainer {
             envs,
             rng,
             report,
-            recent: VecDeque::new(),
+            recent: Recent::default(),
             current: None,
             last_loss: Losses::default(),
             target_games: 0,
@@ -237,48 +223,19 @@ impl Trainer {
         Ok(())
     }
 
-    /// Trains until `total` steps of the run are done (at most [`Trainer::total_steps`]),
-    /// the one loop of a whole run for the command line and Python: after each step, every
-    /// [`TrainHooks::checkpoint_every`] steps of the run (counted from its first) and after
-    /// the last, [`TrainHooks::checkpoint`]; then [`TrainHooks::after_step`] (progress, and
-    /// stopping: its error ends the run). A run with nothing left to train still writes its
-    /// checkpoint. An error if `total` is below the steps done already.
-    pub fn run_until(&mut self, total: u64, hooks: &mut dyn TrainHooks) -> Result<()> {
-        let total = total.min(self.total_steps());
-        let done = self.steps_done();
-        if total < done {
-            return Err(NeuralError::Config(format!(
-                "{total} steps in all: the run has done {done} already"
-            )));
-        }
-        let every = hooks.checkpoint_every().filter(|&n| n > 0);
-        let due = |steps: u64| every.is_some_and(|n| steps.is_multiple_of(n) || steps == total);
-        // Each phase's progress counts towards the phase's part of `total`.
-        let pretrain_target = total.min(self.config.pretrain_steps);
-        let play_target = total - pretrain_target;
-        while self.steps_done() < total {
-            let progress = if self.report.pretrain_steps < pretrain_target {
-                self.pretrain_step()?;
-                self.progress(Phase::Pretrain, self.report.pretrain_steps, pretrain_target)
-            } else {
-                self.play_step()?;
-                self.progress(Phase::SelfPlay, self.report.steps, play_target)
-            };
-            // The checkpoint first: a run stopped by the hook keeps the one it was due.
-            if due(self.steps_done()) {
-                hooks.checkpoint(self)?;
-            }
-            hooks.after_step(&progress)?;
-        }
-        if done == total && every.is_some() {
-            hooks.checkpoint(self)?;
-        }
-        Ok(())
+    /// Trains until `total` steps of the run are done (at most [`Trainer::total_steps`]):
+    /// the one run loop ([`agent::run::run_until`]), a step a unit, with `hooks`' progress,
+    /// stop and checkpoints. An error if `total` is below the steps done already.
+    pub fn run_until<F>(&mut self, total: u64, hooks: &mut RunHooks<'_, F>) -> Result<()>
+    where
+        F: FnMut(&Progress) -> Result<()>,
+    {
+        run::run_until(self, total, hooks)
     }
 
     /// [`Trainer::run_until`] on a thread of rayon's global pool while the pool's other
     /// threads stay awake to take the second halves of its splits
-    /// ([`crate::kernels::on_pool_awake`]), for a caller outside every pool (the command
+    /// ([`sim::team::on_pool_awake`]), for a caller outside every pool (the command
     /// line's main thread, Python's trainer); the same steps, so the same bits.
     ///
     /// Why: a network's passes are split in two halves ([`crate::kernels::join`]). Called
@@ -288,8 +245,11 @@ impl Trainer {
     /// thread, kept awake, takes it at once (docs/performance.md measures both). The
     /// hooks run on that thread, so they must be `Send`, and cannot look for Ctrl-C, which
     /// only the main thread sees: Python's trainer looks for it on its own thread meanwhile.
-    pub fn run_until_on_pool(&mut self, total: u64, hooks: &mut (dyn TrainHooks + Send)) -> Result<()> {
-        crate::kernels::on_pool_awake(|| self.run_until(total, hooks))
+    pub fn run_until_on_pool<F>(&mut self, total: u64, hooks: &mut RunHooks<'_, F>) -> Result<()>
+    where
+        F: FnMut(&Progress) -> Result<()> + Send,
+    {
+        sim::team::on_pool_awake(|| self.run_until(total, hooks))
     }
 
     /// One gradient step on the demonstrations alone.
@@ -355,8 +315,7 @@ impl Trainer {
             done,
             target,
             games: self.report.games,
-            recent_games: self.recent.len(),
-            recent_successes: self.recent.iter().filter(|&&s| s).count(),
+            recent: self.recent.count(|&reached| reached),
             loss: self.last_loss,
             gradient_steps: self.learner.gradient_steps(),
         }
@@ -368,43 +327,21 @@ impl Trainer {
             Some(c) => c,
             None => {
                 let k = self.report.games;
-                let i = (k % self.envs.len() as u64) as usize;
-                let obs = self.envs[i].reset(episode_seed(self.config.seed, k));
                 self.report.games += 1;
-                self.visited.clear();
-                self.corrected = false;
-                self.game.clear();
-                self.actions.clear();
-                (i, obs)
+                self.begin_game(k)
             }
         };
-        if self.config.correct_loops && !self.visited.insert(obs.state.clone()) && !self.corrected {
+        if self.revisits(&obs) && !self.corrected {
             self.correct(&obs)?;
             self.corrected = true;
         }
         let action = self.choose(&obs)?;
-        let step = self.envs[env_index].step(action)?;
-        self.actions.push(action);
-        self.report.steps += 1;
-        let done = step.terminated || step.truncated;
-        if self.config.hindsight > 0 {
-            self.game.push(Step {
-                obs: obs.clone(),
-                action,
-                next: step.observation.clone(),
-            });
-        }
-        if let Some(t) = self.n_step.push(
-            obs,
-            action,
-            step.reward as f32,
-            step.observation.clone(),
-            step.terminated,
-            false,
-        ) {
+        let (step, finished) = self.take_step(env_index, obs, action)?;
+        if let Some(t) = finished {
             self.buffer.push(t);
         }
-        if done {
+        self.report.steps += 1;
+        if step.terminated || step.truncated {
             for t in self.n_step.finish() {
                 self.buffer.push(t);
             }
@@ -412,10 +349,7 @@ impl Trainer {
                 self.buffer.push(t);
                 self.report.relabelled += 1;
             }
-            self.recent.push_back(step.terminated);
-            if self.recent.len() > RECENT_GAMES {
-                self.recent.pop_front();
-            }
+            self.recent.push(step.terminated);
             self.report.successes += u64::from(step.terminated);
             self.current = None;
             self.actions.clear();
@@ -429,6 +363,56 @@ impl Trainer {
             self.current = Some((env_index, step.observation));
         }
         Ok(())
+    }
+
+    /// Begins game `k` of the run: its environment (goal `k` modulo the goals) reset from
+    /// the game's seed and the game's bookkeeping emptied; the environment's index and the
+    /// first observation. A trainer's new game and a checkpoint's game in progress
+    /// ([`crate::checkpoint`]) both begin here.
+    pub(crate) fn begin_game(&mut self, k: u64) -> (usize, Observation) {
+        let i = (k % self.envs.len() as u64) as usize;
+        let obs = self.envs[i].reset(episode_seed(self.config.seed, k));
+        self.visited.clear();
+        self.corrected = false;
+        self.game.clear();
+        self.actions.clear();
+        (i, obs)
+    }
+
+    /// Whether the current game comes back to `obs`'s state, which it notes among the
+    /// game's states; always false without loop correction (nothing is noted).
+    pub(crate) fn revisits(&mut self, obs: &Observation) -> bool {
+        self.config.correct_loops && !self.visited.insert(obs.state.clone())
+    }
+
+    /// Plays `action` from `obs` in environment `env_index` and keeps the game's
+    /// bookkeeping (its actions, its hindsight record, its n-step window): the step, and the
+    /// transition the window completes, if any. A trainer's step and a checkpoint's replay
+    /// of its game in progress both step here, so they keep the same books.
+    pub(crate) fn take_step(
+        &mut self,
+        env_index: usize,
+        obs: Observation,
+        action: Action,
+    ) -> Result<(sim::Step, Option<Transition>)> {
+        let step = self.envs[env_index].step(action)?;
+        self.actions.push(action);
+        if self.config.hindsight > 0 {
+            self.game.push(Step {
+                obs: obs.clone(),
+                action,
+                next: step.observation.clone(),
+            });
+        }
+        let finished = self.n_step.push(
+            obs,
+            action,
+            step.reward as f32,
+            step.observation.clone(),
+            step.terminated,
+            false,
+        );
+        Ok((step, finished))
     }
 
     /// The agent came back to `obs`: the demonstrator plans from there and its plan joins
@@ -462,29 +446,43 @@ impl Trainer {
     }
 }
 
-/// What a run does beside training ([`Trainer::run_until`]): show progress, stop on the
-/// caller's word, write checkpoints. Every method has a default that does nothing.
-pub trait TrainHooks {
-    /// Called after every step with the run's progress; an error (say, Ctrl-C seen) stops
-    /// the run before the next step.
-    fn after_step(&mut self, _progress: &Progress) -> Result<()> {
-        Ok(())
+/// A step a unit (pre-training gradient steps, then self-play environment steps): the
+/// network's learner in the one run loop ([`agent::run::run_until`]). Each phase's progress
+/// counts towards the phase's part of the total.
+impl Runnable for Trainer {
+    type Progress = Progress;
+    type Error = NeuralError;
+
+    fn units_done(&self) -> u64 {
+        self.steps_done()
     }
 
-    /// Steps between two checkpoints, counted from the run's first step; `None` (the
-    /// default) writes none.
-    fn checkpoint_every(&self) -> Option<u64> {
-        None
+    fn plan_to(&mut self, total: u64) -> Result<u64> {
+        let total = total.min(self.total_steps());
+        let done = self.steps_done();
+        if total < done {
+            return Err(NeuralError::Config(format!(
+                "{total} steps in all: the run has done {done} already"
+            )));
+        }
+        Ok(total)
     }
 
-    /// Writes a checkpoint of `trainer` ([`Trainer::write_checkpoint`]).
-    fn checkpoint(&mut self, _trainer: &Trainer) -> Result<()> {
-        Ok(())
+    fn next_unit(&mut self, total: u64) -> Result<Progress> {
+        let pretrain_target = total.min(self.config.pretrain_steps);
+        if self.report.pretrain_steps < pretrain_target {
+            self.pretrain_step()?;
+            Ok(self.progress(Phase::Pretrain, self.report.pretrain_steps, pretrain_target))
+        } else {
+            self.play_step()?;
+            Ok(self.progress(Phase::SelfPlay, self.report.steps, total - pretrain_target))
+        }
+    }
+
+    fn write_checkpoint(&self, out: &files::OutputPath) -> Result<()> {
+        Trainer::write_checkpoint(self, out)
     }
 }
-
-/// No hooks: a run that only trains.
-impl TrainHooks for () {}
 
 /// Trains as `config` says; `progress` is told after every step.
 pub fn train(config: DqnConfig, progress: &mut dyn FnMut(&Progress)) -> Result<Dqn> {
@@ -514,32 +512,20 @@ mod tests {
         }
     }
 
-    /// Hooks that note the steps at each checkpoint and each progress report, and stop the
-    /// run after `stop_after` steps.
-    #[derive(Default)]
-    struct Notes {
-        every: Option<u64>,
+    /// Hooks that note each progress report, and stop the run after `stop_after` steps.
+    fn notes(
+        reports: &mut Vec<(Phase, u64, u64)>,
         stop_after: Option<u64>,
-        checkpoints: Vec<u64>,
-        reports: Vec<(Phase, u64, u64)>,
-    }
-
-    impl TrainHooks for Notes {
-        fn after_step(&mut self, p: &Progress) -> Result<()> {
-            self.reports.push((p.phase, p.done, p.target));
-            match self.stop_after {
-                Some(n) if self.reports.len() as u64 == n => Err(agent::AgentError::Interrupted.into()),
-                _ => Ok(()),
-            }
-        }
-
-        fn checkpoint_every(&self) -> Option<u64> {
-            self.every
-        }
-
-        fn checkpoint(&mut self, trainer: &Trainer) -> Result<()> {
-            self.checkpoints.push(trainer.steps_done());
-            Ok(())
+    ) -> RunHooks<'static, impl FnMut(&Progress) -> Result<()>> {
+        RunHooks {
+            after: move |p: &Progress| {
+                reports.push((p.phase, p.done, p.target));
+                match stop_after {
+                    Some(n) if reports.len() as u64 == n => Err(agent::AgentError::Interrupted.into()),
+                    _ => Ok(()),
+                }
+            },
+            checkpoints: None,
         }
     }
 
@@ -548,61 +534,45 @@ mod tests {
     }
 
     #[test]
-    fn run_until_checkpoints_every_n_steps_and_at_the_end() {
+    fn run_until_takes_the_steps_run_takes_and_reports_each_phase() {
         let mut trainer = Trainer::new(small()).unwrap();
-        let mut notes = Notes {
-            every: Some(10),
-            ..Notes::default()
-        };
-        trainer.run_until(trainer.total_steps(), &mut notes).unwrap();
-        assert_eq!(notes.checkpoints, [10, 20, 30, 40, 42]);
+        let mut reports = Vec::new();
+        trainer
+            .run_until(trainer.total_steps(), &mut notes(&mut reports, None))
+            .unwrap();
         // Each phase's progress counts towards the phase's own end.
-        assert_eq!(notes.reports.len(), 42);
-        assert_eq!(notes.reports[0], (Phase::Pretrain, 1, 12));
-        assert_eq!(notes.reports[11], (Phase::Pretrain, 12, 12));
-        assert_eq!(notes.reports[12], (Phase::SelfPlay, 1, 30));
-        assert_eq!(notes.reports[41], (Phase::SelfPlay, 30, 30));
+        assert_eq!(reports.len(), 42);
+        assert_eq!(reports[0], (Phase::Pretrain, 1, 12));
+        assert_eq!(reports[11], (Phase::Pretrain, 12, 12));
+        assert_eq!(reports[12], (Phase::SelfPlay, 1, 30));
+        assert_eq!(reports[41], (Phase::SelfPlay, 30, 30));
         // The steps are the ones `run` takes.
         let mut whole = Trainer::new(small()).unwrap();
         whole.train_until(whole.total_steps(), &mut |_| {}).unwrap();
         assert_eq!(weights(&trainer), weights(&whole));
         assert_eq!(trainer.report(), whole.report());
+        assert!(
+            trainer.run_until(5, &mut RunHooks::quiet(None)).is_err(),
+            "below the steps done"
+        );
     }
 
     #[test]
-    fn a_resumed_run_keeps_the_cadence_and_one_with_nothing_left_still_checkpoints() {
+    fn a_run_stopped_by_its_hook_keeps_the_checkpoint_due_at_its_step() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = files::OutputPath::check(dir.path().join("ck")).unwrap();
         let mut trainer = Trainer::new(small()).unwrap();
-        trainer.run_until(20, &mut ()).unwrap();
-        let mut notes = Notes {
-            every: Some(10),
-            ..Notes::default()
+        let mut reports = Vec::new();
+        let mut hooks = RunHooks {
+            checkpoints: agent::Checkpoints::to(Some(&out), 10),
+            ..notes(&mut reports, Some(20))
         };
-        trainer.run_until(trainer.total_steps(), &mut notes).unwrap();
-        assert_eq!(notes.checkpoints, [30, 40, 42]);
-        let mut again = Notes {
-            every: Some(10),
-            ..Notes::default()
-        };
-        trainer.run_until(trainer.total_steps(), &mut again).unwrap();
-        assert_eq!((again.checkpoints, again.reports.len()), (vec![42], 0));
-        assert!(trainer.run_until(5, &mut ()).is_err(), "below the steps done");
-    }
-
-    #[test]
-    fn a_hooks_error_stops_the_run_after_its_step() {
-        let mut trainer = Trainer::new(small()).unwrap();
-        let mut notes = Notes {
-            every: Some(10),
-            stop_after: Some(20),
-            ..Notes::default()
-        };
-        let stopped = trainer.run_until(trainer.total_steps(), &mut notes);
+        let stopped = trainer.run_until(trainer.total_steps(), &mut hooks);
         assert!(matches!(
             stopped,
             Err(NeuralError::Agent(agent::AgentError::Interrupted))
         ));
         assert_eq!(trainer.steps_done(), 20);
-        // The checkpoint due at the step the run stopped after was written.
-        assert_eq!(notes.checkpoints, [10, 20]);
+        assert_eq!(Trainer::resume(out.path()).unwrap().steps_done(), 20);
     }
 }

@@ -14,7 +14,7 @@ use sim::{Goal, RewardModel};
 
 use crate::boundary::{OrValueError, guard, raise_signal, signal_checker};
 use crate::config;
-use crate::training::{Interruptible, RunOutputs, eval_items, run_outputs};
+use crate::training::{RunOutputs, eval_items, run_outputs};
 
 /// A setting given by name (`None` keeps the preset's).
 fn named<T: std::str::FromStr>(name: Option<&str>) -> PyResult<Option<T>>
@@ -254,13 +254,12 @@ fn run_interruptible(trainer: &mut Trainer, outputs: &RunOutputs) -> PyResult<()
             let _ended = ended;
             trainer.run_until_on_pool(
                 total,
-                &mut Interruptible {
-                    check: || match stop.load(Ordering::Acquire) {
-                        true => Err(agent::AgentError::Interrupted),
+                &mut agent::RunHooks {
+                    after: |_: &neural::Progress| match stop.load(Ordering::Acquire) {
+                        true => Err(agent::AgentError::Interrupted.into()),
                         false => Ok(()),
                     },
-                    checkpoint: outputs.checkpoint.as_ref().map(|(_, out)| out),
-                    every: outputs.every,
+                    checkpoints: agent::Checkpoints::to(outputs.checkpoint.as_ref().map(|(_, out)| out), outputs.every),
                 },
             )
         });

@@ -5,8 +5,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use agent::eval::{EvalOverrides, EvalReport};
-use agent::{Assist, TrainConfig, TrainHooks, TrainOverrides, Trainer};
-use files::OutputPath;
+use agent::{Assist, Checkpoints, RunHooks, TrainConfig, TrainOverrides, Trainer};
 use neural::AnyModel;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -14,52 +13,6 @@ use sim::{Backend, Goal, RewardModel, View};
 
 use crate::boundary::{OrValueError, guard, raise_signal, signal_checker, value_error};
 use crate::config;
-
-/// Training hooks, of the tabular trainer and the network's alike, that stop the run when
-/// Ctrl-C is seen ([`signal_checker`]) and write its checkpoint every `every` games or steps
-/// and after the last, when it has one.
-pub(crate) struct Interruptible<'a, F> {
-    /// The signal check, called after every game or step.
-    pub check: F,
-    /// Where the checkpoint goes, if the run has one.
-    pub checkpoint: Option<&'a OutputPath>,
-    /// Games or steps between two checkpoints.
-    pub every: u64,
-}
-
-impl<F: FnMut() -> agent::Result<()>> TrainHooks for Interruptible<'_, F> {
-    fn after_game(&mut self, _: &agent::Progress) -> agent::Result<()> {
-        (self.check)()
-    }
-
-    fn checkpoint_every(&self) -> Option<u64> {
-        self.checkpoint.map(|_| self.every)
-    }
-
-    fn checkpoint(&mut self, trainer: &Trainer) -> agent::Result<()> {
-        match self.checkpoint {
-            Some(out) => trainer.write_checkpoint(out),
-            None => Ok(()),
-        }
-    }
-}
-
-impl<F: FnMut() -> agent::Result<()>> neural::TrainHooks for Interruptible<'_, F> {
-    fn after_step(&mut self, _: &neural::Progress) -> neural::Result<()> {
-        Ok((self.check)()?)
-    }
-
-    fn checkpoint_every(&self) -> Option<u64> {
-        self.checkpoint.map(|_| self.every)
-    }
-
-    fn checkpoint(&mut self, trainer: &neural::Trainer) -> neural::Result<()> {
-        match self.checkpoint {
-            Some(out) => trainer.write_checkpoint(out),
-            None => Ok(()),
-        }
-    }
-}
 
 /// A setting given by name (`None` keeps the profile's and preset's).
 fn named<T: std::str::FromStr>(name: Option<&str>) -> PyResult<Option<T>>
@@ -207,14 +160,16 @@ fn run_tabular(config: &TrainConfig, outputs: &RunOutputs, eval: &EvalOverrides,
     // The run's one loop (`Trainer::run_until`), with Ctrl-C looked for every 100 ms
     // (the GIL taken back only for that): it stops a long run with KeyboardInterrupt.
     let mut signal = None;
-    let ran = trainer.run_until(
-        config.games,
-        &mut Interruptible {
-            check: signal_checker(&mut signal),
-            checkpoint: outputs.checkpoint.as_ref().map(|(_, out)| out),
-            every: outputs.every,
-        },
-    );
+    let ran = {
+        let mut check = signal_checker(&mut signal);
+        trainer.run_until(
+            config.games,
+            &mut RunHooks {
+                after: |_: &agent::Progress| check(),
+                checkpoints: Checkpoints::to(outputs.checkpoint.as_ref().map(|(_, out)| out), outputs.every),
+            },
+        )
+    };
     ran.map_err(|e| raise_signal(signal, e))?;
     let trained = trainer.finish();
     let seconds = clock.elapsed().as_secs_f64();

@@ -68,7 +68,7 @@ pub mod screen;
 pub mod seeding;
 pub mod start;
 pub mod state;
-mod team;
+pub mod team;
 pub mod termination;
 pub mod trajectory;
 pub mod uniform;

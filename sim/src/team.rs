@@ -1,16 +1,31 @@
-//! The caller's thread and a pool's workers sharing one batch, call after call.
+//! Keeping a pool's threads awake, the one home of it: for a caller outside every pool that
+//! hands out batches call after call (`Team`, the vector env's), and for a loop run on a
+//! pool whose splits must find the other threads awake ([`on_pool_awake`], the network
+//! trainer's).
+//!
+//! # A team: the caller's thread and a pool's workers sharing one batch, call after call
 //!
 //! Why not `rayon::ThreadPool::install`: a vector env's step at 1,024 environments takes a
 //! few hundred microseconds, and `install` hands the whole batch to pool threads that have
 //! gone to sleep since the last call, then puts the caller to sleep until they finish. On
 //! a virtual machine each wake-up costs tens of microseconds, a large share of such a call
-//! (docs/performance.md measures it). A [`Team`] runs the first part of a batch on the
+//! (docs/performance.md measures it). A `Team` runs the first part of a batch on the
 //! caller's thread while its workers take the others, waits for them by spinning (they are
-//! at most a wake-up behind), and keeps its workers spinning for [`WARM_FOR`] after each
+//! at most a wake-up behind), and keeps its workers spinning for `WARM_FOR` after each
 //! call, so a call that follows soon finds them awake; OpenMP's default wait policy spins
 //! the same way before it sleeps. It hands the parts out with `spawn` and counts them back
 //! itself: at the end of a `rayon::scope` the caller can still miss the last part's signal
 //! by a few instructions and sleep until it is woken.
+//!
+//! # A loop on an awake pool
+//!
+//! A network's training step forks and joins a few times, between serial stretches long
+//! enough for an idle rayon thread to go to sleep; [`on_pool_awake`] runs the loop on a pool
+//! thread and keeps the others looking for work (yielding their cores between looks) until it
+//! ends. A team would not do here: the splits happen inside the loop, on its thread.
+//!
+//! The team's `unsafe` lifetime erasure is checked under Miri (docs/development.md, "Unsafe
+//! code under Miri"): its tests run there.
 
 use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};
 use std::sync::Arc;
@@ -150,6 +165,52 @@ fn wait_for(ended: &AtomicUsize, parts: usize) {
     }
 }
 
+/// Runs `f` on a thread of the current rayon pool (the global one outside every pool)
+/// while the pool's other threads stay awake until it returns, each looking for work
+/// ([`rayon::yield_now`]) and yielding its core between looks, so the halves a `rayon::join`
+/// offers (the network kernels' splits, `neural::kernels::join`) are taken at once. Nothing changes which half runs what, so results are the
+/// same bits.
+///
+/// Why: a training step is a few splits apart from serial stretches (the gradients' norm,
+/// the losses) of tens of microseconds, long enough for an idle rayon thread to go to
+/// sleep, and then each split pays a wake-up in the kernel (docs/performance.md
+/// measures it). The price is the other threads' cores for as long as `f` runs, when
+/// nothing else wants them.
+pub fn on_pool_awake<R: Send>(f: impl FnOnce() -> R + Send) -> R {
+    /// Ends the helpers when `f` returns or unwinds: the scope waits for them.
+    struct Done<'a>(&'a AtomicBool);
+    impl Drop for Done<'_> {
+        fn drop(&mut self) {
+            self.0.store(true, Ordering::Release);
+        }
+    }
+    let done = AtomicBool::new(false);
+    rayon::scope(|s| {
+        let runner = rayon::current_thread_index();
+        for _ in 1..rayon::current_num_threads() {
+            let done = &done;
+            s.spawn(move |_| {
+                // The thread running `f` can take this job while it waits for a half; it
+                // must not stay here.
+                if rayon::current_thread_index() == runner {
+                    return;
+                }
+                while !done.load(Ordering::Acquire) {
+                    // Between looks the core is offered to the scheduler: given back at
+                    // once when nothing else wants it, and shared when something does (a
+                    // pure spin made a run on a busy machine 1.8 times slower than no
+                    // helper at all: docs/performance.md).
+                    if rayon::yield_now() != Some(rayon::Yield::Executed) {
+                        std::thread::yield_now();
+                    }
+                }
+            });
+        }
+        let _done = Done(&done);
+        f()
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -217,5 +278,36 @@ mod tests {
                 "nothing stepped after a refusal"
             );
         }
+    }
+
+    #[test]
+    fn a_run_on_the_awake_pool_gives_its_result_and_its_splits_end() {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        let sums = pool.install(|| {
+            on_pool_awake(|| {
+                (0..200)
+                    .map(|k: u64| {
+                        let (a, b) = rayon::join(|| (0..k).sum::<u64>(), || (k..2 * k).sum::<u64>());
+                        a + b
+                    })
+                    .sum::<u64>()
+            })
+        });
+        assert_eq!(sums, (0..200u64).map(|k| (0..2 * k).sum::<u64>()).sum::<u64>());
+        // Outside every pool and on a pool of one thread, the same.
+        assert_eq!(on_pool_awake(|| rayon::join(|| 1, || 2)), (1, 2));
+        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        assert_eq!(one.install(|| on_pool_awake(|| rayon::join(|| 3, || 4))), (3, 4));
+    }
+
+    #[test]
+    fn a_panic_on_the_awake_pool_reaches_the_caller_and_frees_the_pool() {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        let caught = pool.install(|| {
+            std::panic::catch_unwind(|| on_pool_awake(|| rayon::join(|| 1, || -> i32 { panic!("a half failed") })))
+        });
+        assert!(caught.is_err());
+        // The helpers ended: the pool still runs work on both threads.
+        assert_eq!(pool.install(|| on_pool_awake(|| rayon::join(|| 5, || 6))), (5, 6));
     }
 }

@@ -252,29 +252,6 @@ fn flag(setting: &str) -> String {
     format!("--{}", setting.replace('_', "-"))
 }
 
-/// The command's part in a run ([`neural::Trainer::run_until_on_pool`]): the progress bar,
-/// and the checkpoint every `every` steps when one is asked for.
-struct Hooks<'a> {
-    show: &'a mut (dyn FnMut(&Progress) + Send),
-    checkpoint: Option<&'a files::OutputPath>,
-    every: u64,
-}
-
-impl neural::TrainHooks for Hooks<'_> {
-    fn after_step(&mut self, progress: &Progress) -> neural::Result<()> {
-        (self.show)(progress);
-        Ok(())
-    }
-
-    fn checkpoint_every(&self) -> Option<u64> {
-        self.checkpoint.map(|_| self.every)
-    }
-
-    fn checkpoint(&mut self, trainer: &neural::Trainer) -> neural::Result<()> {
-        self.checkpoint.map_or(Ok(()), |out| trainer.write_checkpoint(out))
-    }
-}
-
 /// A network run's checkpoints.
 const KIND: CheckpointKind = CheckpointKind {
     format: neural::checkpoint::CHECKPOINT_FORMAT,
@@ -360,17 +337,20 @@ pub fn dqn(args: DqnArgs) -> Result<()> {
                 Phase::SelfPlay => format!(
                     "{} games, last {}: {:.0}% reached the goal, loss {:.4}, {rate:.0} {unit}",
                     p.games,
-                    p.recent_games,
-                    100.0 * p.recent_success_rate(),
+                    p.recent.games,
+                    100.0 * p.recent.success_rate(),
                     p.loss.total
                 ),
             });
         }
     };
-    let mut hooks = Hooks {
-        show: &mut show,
-        checkpoint: checkpoint.as_ref(),
-        every: c.checkpoint_every.unwrap_or(neural::checkpoint::DEFAULT_EVERY),
+    let every = c.checkpoint_every.unwrap_or(neural::checkpoint::DEFAULT_EVERY);
+    let mut hooks = agent::RunHooks {
+        after: |p: &Progress| {
+            show(p);
+            Ok(())
+        },
+        checkpoints: agent::Checkpoints::to(checkpoint.as_ref(), every),
     };
     trainer.run_until_on_pool(trainer.total_steps(), &mut hooks)?;
     let dqn = trainer.finish()?;

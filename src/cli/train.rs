@@ -188,21 +188,20 @@ impl TrainArgs {
     }
 }
 
-/// What `train` does beside playing: the progress bar and the live curve, and checkpoints.
+/// What `train` shows of a run: the progress bar and the live curve.
 struct Shown<'a> {
     bar: &'a ProgressBar,
     curve: Option<&'a serve::CurveHandle>,
-    checkpoint: Option<&'a files::OutputPath>,
-    every: u64,
 }
 
-impl agent::TrainHooks for Shown<'_> {
-    fn after_game(&mut self, p: &agent::Progress) -> agent::Result<()> {
+impl Shown<'_> {
+    /// Shows the run's progress after a game.
+    fn after_game(&self, p: &agent::Progress) -> agent::Result<()> {
         if p.games_played.is_multiple_of(64) || p.games_played == p.games_target {
             if let Some(curve) = self.curve {
                 curve.push(serve::CurvePoint {
                     games: p.games_played,
-                    success_rate: p.recent_success_rate(),
+                    success_rate: p.recent.success_rate(),
                     mean_steps: p.recent_mean_steps,
                 });
             }
@@ -210,22 +209,11 @@ impl agent::TrainHooks for Shown<'_> {
             let steps = p.recent_mean_steps.map_or("-".to_string(), |s| format!("{s:.1}"));
             self.bar.set_message(format!(
                 "last {}: {:.0}% reached the goal, {steps} mean steps",
-                p.recent_games,
-                100.0 * p.recent_success_rate()
+                p.recent.games,
+                100.0 * p.recent.success_rate()
             ));
         }
         Ok(())
-    }
-
-    fn checkpoint_every(&self) -> Option<u64> {
-        self.checkpoint.map(|_| self.every)
-    }
-
-    fn checkpoint(&mut self, trainer: &Trainer) -> agent::Result<()> {
-        match self.checkpoint {
-            Some(out) => trainer.write_checkpoint(out),
-            None => Ok(()),
-        }
     }
 }
 
@@ -274,14 +262,17 @@ pub fn train(args: TrainArgs) -> Result<()> {
         None => None,
     };
     let clock = Instant::now();
-    let mut hooks = Shown {
+    let shown = Shown {
         bar: &bar,
         curve: curve.as_ref(),
-        checkpoint: checkpoint.as_ref(),
-        every: args
-            .checkpointing
-            .checkpoint_every
-            .unwrap_or(agent::checkpoint::DEFAULT_EVERY),
+    };
+    let every = args
+        .checkpointing
+        .checkpoint_every
+        .unwrap_or(agent::checkpoint::DEFAULT_EVERY);
+    let mut hooks = agent::RunHooks {
+        after: |p: &agent::Progress| shown.after_game(p),
+        checkpoints: agent::Checkpoints::to(checkpoint.as_ref(), every),
     };
     trainer.run_until(total, &mut hooks)?;
     let config = trainer.config().clone();

@@ -159,7 +159,17 @@ impl RelationalModel {
     /// large, truncated, corrupt, of another format or version, or if its tensors do not fit
     /// its config.
     pub fn load(path: &Path) -> Result<RelationalModel> {
-        let file = NetFile::open(path, &EXPECT)?;
+        RelationalModel::from_file(&NetFile::open(path, &EXPECT)?)
+    }
+
+    /// Reads a relational network from the bytes of its file, named `name` in errors, with
+    /// the checks of [`RelationalModel::load`] (the fuzz target `relational_file` feeds it).
+    pub fn read_from(input: impl std::io::Read, name: &str) -> Result<RelationalModel> {
+        RelationalModel::from_file(&NetFile::read_from(input, name, &EXPECT)?)
+    }
+
+    /// The network a file read as a container holds, checked against its config.
+    fn from_file(file: &NetFile) -> Result<RelationalModel> {
         let Metadata { config, report } = file.metadata()?;
         file.config_checked(config.validate())?;
         let mut net = RelationalNet::new(config.shape, &mut sim::seeding::rng(0))?;

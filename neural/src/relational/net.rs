@@ -41,6 +41,7 @@ use sim::seeding::SimRng;
 
 use crate::error::{NeuralError, Result};
 use crate::kernels::{matmul, matmul_nt, matmul_tn, tanh_in_place};
+use crate::params::{NamedTensor, ParamStore, Slot};
 
 use super::graph::{Graph, NONE, TABLE};
 
@@ -84,19 +85,6 @@ const FEATURES: usize = 3;
 /// such a destination, moving the block to the table.
 const HEADS: usize = 3;
 
-/// Where a tensor lives in the flat parameter buffer.
-#[derive(Clone, Copy, Debug)]
-struct Slot {
-    offset: usize,
-    len: usize,
-}
-
-impl Slot {
-    fn range(self) -> std::ops::Range<usize> {
-        self.offset..self.offset + self.len
-    }
-}
-
 /// A cell: linear to `hidden`, ReLU, linear to `out`, tanh.
 #[derive(Clone, Copy, Debug)]
 struct Cell {
@@ -133,22 +121,13 @@ struct Slots {
     pair_out: Slot,
 }
 
-/// One tensor's name and shape, as a network file stores it.
-#[derive(Clone, Debug)]
-struct TensorInfo {
-    name: String,
-    shape: Vec<usize>,
-    slot: Slot,
-}
-
 /// A relational network (module docs): its shape and its parameters, one flat buffer laid
 /// out tensor after tensor in [`RelationalNet::tensors`]' order.
 #[derive(Clone, Debug)]
 pub struct RelationalNet {
     shape: Shape,
     slots: Slots,
-    tensors: Vec<TensorInfo>,
-    params: Vec<f32>,
+    store: ParamStore,
 }
 
 /// One cell's pass over its rows: inputs, hidden units (after ReLU), outputs (after tanh).
@@ -238,25 +217,15 @@ fn uniform(rng: &mut SimRng, n: usize, bound: f32) -> Vec<f32> {
 /// The tensors and parameters of a network being made.
 #[derive(Default)]
 struct Builder {
-    tensors: Vec<TensorInfo>,
-    params: Vec<f32>,
+    store: ParamStore,
 }
 
 impl Builder {
     /// A tensor of shape `dims`, uniform in `±1/sqrt(fan_in)`.
     fn add(&mut self, name: &str, dims: &[usize], fan_in: usize, rng: &mut SimRng) -> Slot {
         let len = dims.iter().product();
-        let slot = Slot {
-            offset: self.params.len(),
-            len,
-        };
-        self.params.extend(uniform(rng, len, 1.0 / (fan_in as f32).sqrt()));
-        self.tensors.push(TensorInfo {
-            name: name.to_string(),
-            shape: dims.to_vec(),
-            slot,
-        });
-        slot
+        let values = uniform(rng, len, 1.0 / (fan_in as f32).sqrt());
+        self.store.add(name, values, dims, false)
     }
 
     /// A cell of `inputs` inputs.
@@ -307,12 +276,10 @@ impl RelationalNet {
             pair_bias: b.add("pair.bias", &[s], 2 * d + 2, rng),
             pair_out: b.add("pair.linear2.weight", &[s], s, rng),
         };
-        let Builder { tensors, params } = b;
         Ok(RelationalNet {
             shape,
             slots,
-            tensors,
-            params,
+            store: b.store,
         })
     }
 
@@ -323,44 +290,28 @@ impl RelationalNet {
 
     /// The parameters, one flat buffer.
     pub fn params(&self) -> &[f32] {
-        &self.params
+        &self.store.params
     }
 
     /// The parameters, for the optimiser.
     pub fn params_mut(&mut self) -> &mut [f32] {
-        &mut self.params
+        &mut self.store.params
     }
 
     /// Every tensor's name, shape and values, in the buffer's order.
-    pub fn tensors(&self) -> impl Iterator<Item = crate::net::NamedTensor<'_>> {
-        self.tensors.iter().map(|t| crate::net::NamedTensor {
-            name: &t.name,
-            shape: &t.shape,
-            values: &self.params[t.slot.range()],
-        })
+    pub fn tensors(&self) -> impl Iterator<Item = NamedTensor<'_>> {
+        self.store.tensors()
     }
 
     /// Sets the tensor `name` from a file's values; an error if the network has no such
     /// tensor or it has another shape.
     pub fn set_tensor(&mut self, name: &str, shape: &[usize], values: &[f32]) -> Result<()> {
-        let t = self
-            .tensors
-            .iter()
-            .find(|t| t.name == name)
-            .ok_or_else(|| NeuralError::Mismatch(format!("the network has no tensor {name}")))?;
-        if t.shape != shape || values.len() != t.slot.len {
-            return Err(NeuralError::Mismatch(format!(
-                "tensor {name} is {:?} in the network and {shape:?} in the file",
-                t.shape
-            )));
-        }
-        self.params[t.slot.range()].copy_from_slice(values);
-        Ok(())
+        self.store.set_tensor(name, shape, values)
     }
 
     /// The number of tensors.
     pub fn tensor_count(&self) -> usize {
-        self.tensors.len()
+        self.store.tensors().count()
     }
 
     /// A pass over `graph`: every move's score, on the tape ([`Tape::scores`]), with what
@@ -372,7 +323,7 @@ impl RelationalNet {
     fn forward_any(&self, g: &Graph, t: &mut Tape) {
         let n = g.nodes();
         let d = self.shape.width;
-        let p = &self.params;
+        let p = &self.store.params;
         let sl = &self.slots;
         t.pos_up.resize(n, 0);
         t.pos_down.resize(n, 0);
@@ -395,98 +346,89 @@ impl RelationalNet {
         matmul(&mut t.h0, &t.features, &p[sl.embed_w.range()], (n, FEATURES, d), true);
         tanh_in_place(&mut t.h0);
         t.rounds.resize_with(self.shape.rounds, RoundTape::default);
-        let half = d / 2;
         for r in 0..self.shape.rounds {
             let (done, rest) = t.rounds.split_at_mut(r);
             let h: &[f32] = if r == 0 { &t.h0 } else { &done[r - 1].goal.o };
-            let round = &mut rest[0];
-            let row = |_: &[f32], b: usize| b * d..(b + 1) * d;
-            // Up the towers: a local term per block, then its running min / max from the
-            // table up.
-            let up = &sl.up;
-            round.up.reserve(n, up);
-            for b in 0..n {
-                let x = &mut round.up.x[b * up.inputs..(b + 1) * up.inputs];
-                x[..d].copy_from_slice(&h[row(h, b)]);
-                let below = g.below[b];
-                x[d..2 * d].copy_from_slice(if below == NONE {
-                    &p[sl.table_up.range()]
-                } else {
-                    &h[row(h, below as usize)]
-                });
-                x[2 * d] = flag(g.stands_as_goal(b));
-            }
-            cell_forward(p, up, &mut round.up, 0, n);
-            scan(
-                &g.up_order,
-                &g.below,
-                &round.up.o,
-                d,
-                half,
-                &mut round.u,
-                &mut round.u_src,
-            );
-            // Down the towers: a local term per block, then its running min / max from the
-            // top down.
-            let down = &sl.down;
-            round.down.reserve(n, down);
-            for b in 0..n {
-                let x = &mut round.down.x[b * down.inputs..(b + 1) * down.inputs];
-                x[..d].copy_from_slice(&h[row(h, b)]);
-                x[d..2 * d].copy_from_slice(&round.u[row(h, b)]);
-                let above = g.above[b];
-                if above == NONE {
-                    x[2 * d..3 * d].copy_from_slice(&p[sl.clear_down.range()]);
-                    x[3 * d] = 0.0;
-                } else {
-                    x[2 * d..3 * d].copy_from_slice(&h[row(h, above as usize)]);
-                    x[3 * d] = flag(g.stands_as_goal(above as usize));
-                }
-            }
-            cell_forward(p, down, &mut round.down, 0, n);
-            scan(
-                &g.down_order,
-                &g.above,
-                &round.down.o,
-                d,
-                half,
-                &mut round.v,
-                &mut round.v_src,
-            );
-            // Across the goal.
-            let goal = &sl.goal;
-            round.goal.reserve(n, goal);
-            let (u, v) = (&round.u, &round.v);
-            for b in 0..n {
-                let x = &mut round.goal.x[b * goal.inputs..(b + 1) * goal.inputs];
-                x[..d].copy_from_slice(&h[row(h, b)]);
-                x[d..2 * d].copy_from_slice(&u[row(h, b)]);
-                x[2 * d..3 * d].copy_from_slice(&v[row(h, b)]);
-                let gb = g.goal_below[b];
-                match gb {
-                    TABLE => x[3 * d..5 * d].copy_from_slice(&p[sl.goal_table.range()]),
-                    NONE => x[3 * d..5 * d].copy_from_slice(&p[sl.goal_free.range()]),
-                    _ => {
-                        x[3 * d..4 * d].copy_from_slice(&u[row(h, gb as usize)]);
-                        x[4 * d..5 * d].copy_from_slice(&v[row(h, gb as usize)]);
-                    }
-                }
-                let ga = g.goal_above[b];
-                if ga == NONE {
-                    x[5 * d..7 * d].copy_from_slice(&p[sl.goal_top.range()]);
-                } else {
-                    x[5 * d..6 * d].copy_from_slice(&u[row(h, ga as usize)]);
-                    x[6 * d..7 * d].copy_from_slice(&v[row(h, ga as usize)]);
-                }
-                x[7 * d] = flag(g.stands_as_goal(b));
-                x[7 * d + 1] = if ga == NONE {
-                    0.0
-                } else {
-                    flag(g.stands_as_goal(ga as usize))
-                };
-            }
-            cell_forward(p, goal, &mut round.goal, 0, n);
+            self.round_forward(g, h, &mut rest[0]);
         }
+        self.scores_forward(g, t);
+    }
+
+    /// One round (module docs) from the node vectors `h`: up the towers, down, across the
+    /// goal; its values on `round`.
+    fn round_forward(&self, g: &Graph, h: &[f32], round: &mut RoundTape) {
+        let n = g.nodes();
+        let d = self.shape.width;
+        let half = d / 2;
+        let p = &self.store.params;
+        let sl = &self.slots;
+        let row = |_: &[f32], b: usize| b * d..(b + 1) * d;
+        // Up the towers: a local term per block, then its running min / max from the
+        // table up.
+        let up = &sl.up;
+        round.up.reserve(n, up);
+        for b in 0..n {
+            let x = &mut round.up.x[b * up.inputs..(b + 1) * up.inputs];
+            x[..d].copy_from_slice(&h[row(h, b)]);
+            let below = g.below[b];
+            x[d..2 * d].copy_from_slice(if below == NONE {
+                &p[sl.table_up.range()]
+            } else {
+                &h[row(h, below as usize)]
+            });
+            x[2 * d] = flag(g.stands_as_goal(b));
+        }
+        cell_forward(p, up, &mut round.up, 0, n);
+        scan(
+            &g.up_order,
+            &g.below,
+            &round.up.o,
+            d,
+            half,
+            &mut round.u,
+            &mut round.u_src,
+        );
+        // Down the towers: a local term per block, then its running min / max from the
+        // top down.
+        let down = &sl.down;
+        round.down.reserve(n, down);
+        for b in 0..n {
+            let x = &mut round.down.x[b * down.inputs..(b + 1) * down.inputs];
+            x[..d].copy_from_slice(&h[row(h, b)]);
+            x[d..2 * d].copy_from_slice(&round.u[row(h, b)]);
+            let above = g.above[b];
+            if above == NONE {
+                x[2 * d..3 * d].copy_from_slice(&p[sl.clear_down.range()]);
+                x[3 * d] = 0.0;
+            } else {
+                x[2 * d..3 * d].copy_from_slice(&h[row(h, above as usize)]);
+                x[3 * d] = flag(g.stands_as_goal(above as usize));
+            }
+        }
+        cell_forward(p, down, &mut round.down, 0, n);
+        scan(
+            &g.down_order,
+            &g.above,
+            &round.down.o,
+            d,
+            half,
+            &mut round.v,
+            &mut round.v_src,
+        );
+        // Across the goal.
+        let goal = &sl.goal;
+        round.goal.reserve(n, goal);
+        self.goal_inputs(g, h, round);
+        cell_forward(p, goal, &mut round.goal, 0, n);
+    }
+
+    /// The per-block scores, the pair perceptron's halves and every listed move's score,
+    /// from the last round's node vectors.
+    fn scores_forward(&self, g: &Graph, t: &mut Tape) {
+        let n = g.nodes();
+        let d = self.shape.width;
+        let p = &self.store.params;
+        let sl = &self.slots;
         // The per-block scores and the pair perceptron's halves.
         let h: &[f32] = match t.rounds.last() {
             Some(r) => &r.goal.o,
@@ -521,6 +463,46 @@ impl RelationalNet {
         }
     }
 
+    /// The inputs of the cell across the goal, by node: its vector, its up and down values,
+    /// and those of the blocks the goal puts under and over it (learnt vectors where there
+    /// are none), and whether the goal's `on` holds under it and over it.
+    fn goal_inputs(&self, g: &Graph, h: &[f32], round: &mut RoundTape) {
+        let d = self.shape.width;
+        let p = &self.store.params;
+        let sl = &self.slots;
+        let goal = &sl.goal;
+        let row = |b: usize| b * d..(b + 1) * d;
+        let (u, v) = (&round.u, &round.v);
+        for b in 0..g.nodes() {
+            let x = &mut round.goal.x[b * goal.inputs..(b + 1) * goal.inputs];
+            x[..d].copy_from_slice(&h[row(b)]);
+            x[d..2 * d].copy_from_slice(&u[row(b)]);
+            x[2 * d..3 * d].copy_from_slice(&v[row(b)]);
+            let gb = g.goal_below[b];
+            match gb {
+                TABLE => x[3 * d..5 * d].copy_from_slice(&p[sl.goal_table.range()]),
+                NONE => x[3 * d..5 * d].copy_from_slice(&p[sl.goal_free.range()]),
+                _ => {
+                    x[3 * d..4 * d].copy_from_slice(&u[row(gb as usize)]);
+                    x[4 * d..5 * d].copy_from_slice(&v[row(gb as usize)]);
+                }
+            }
+            let ga = g.goal_above[b];
+            if ga == NONE {
+                x[5 * d..7 * d].copy_from_slice(&p[sl.goal_top.range()]);
+            } else {
+                x[5 * d..6 * d].copy_from_slice(&u[row(ga as usize)]);
+                x[6 * d..7 * d].copy_from_slice(&v[row(ga as usize)]);
+            }
+            x[7 * d] = flag(g.stands_as_goal(b));
+            x[7 * d + 1] = if ga == NONE {
+                0.0
+            } else {
+                flag(g.stands_as_goal(ga as usize))
+            };
+        }
+    }
+
     /// The score of moving `x` to `y` (a node or [`TABLE`]) from a pass's per-block values:
     /// `a_x + b_y + r(x, y)`, `r` the pair perceptron where the goal relates the two blocks
     /// (0 elsewhere), or `t_x` to the table. `act` receives the pair perceptron's hidden
@@ -542,7 +524,7 @@ impl RelationalNet {
             }
             return base;
         }
-        let p = &self.params;
+        let p = &self.store.params;
         let sl = &self.slots;
         let (px, qy) = (&t.px[x * s..(x + 1) * s], &t.qy[y * s..(y + 1) * s]);
         let (won, wunder, bias, out) = (
@@ -633,11 +615,58 @@ impl RelationalNet {
     }
 
     fn backward_any(&self, g: &Graph, t: &mut Tape, dscores: &[f32], grads: &mut [f32]) {
-        assert_eq!(grads.len(), self.params.len(), "a gradient per parameter");
+        assert_eq!(grads.len(), self.store.params.len(), "a gradient per parameter");
         assert_eq!(dscores.len(), g.moves.len(), "a score gradient per move");
         let n = g.nodes();
         let (d, s) = (self.shape.width, self.shape.score_hidden);
-        let p = &self.params;
+        let p = &self.store.params;
+        let sl = &self.slots;
+        self.moves_backward(g, t, dscores, grads);
+        let h: &[f32] = match t.rounds.last() {
+            Some(r) => &r.goal.o,
+            None => &t.h0,
+        };
+        matmul_tn(&mut grads[sl.head_out.range()], &t.k, &t.dheads, (s, n, HEADS), true);
+        fit(&mut t.dk, n * s);
+        matmul_nt(&mut t.dk, &t.dheads, &p[sl.head_out.range()], (n, HEADS, s), false);
+        for (g, &a) in t.dk.iter_mut().zip(&t.k) {
+            if a <= 0.0 {
+                *g = 0.0;
+            }
+        }
+        matmul_tn(&mut grads[sl.head_w.range()], h, &t.dk, (d, n, s), true);
+        add_row_sums(&mut grads[sl.head_b.range()], &t.dk);
+        matmul_tn(&mut grads[sl.pair_x.range()], h, &t.dpx, (d, n, s), true);
+        matmul_tn(&mut grads[sl.pair_y.range()], h, &t.dqy, (d, n, s), true);
+        fit(&mut t.dh, n * d);
+        matmul_nt(&mut t.dh, &t.dk, &p[sl.head_w.range()], (n, s, d), false);
+        matmul_nt(&mut t.dh, &t.dpx, &p[sl.pair_x.range()], (n, s, d), true);
+        matmul_nt(&mut t.dh, &t.dqy, &p[sl.pair_y.range()], (n, s, d), true);
+        // The rounds, last first: `dh` holds the gradient of the round's output.
+        for r in (0..self.shape.rounds).rev() {
+            self.round_backward(g, r, t, grads);
+        }
+        // The embedding.
+        for (dh, &h0) in t.dh.iter_mut().zip(&t.h0) {
+            *dh *= 1.0 - h0 * h0;
+        }
+        matmul_tn(
+            &mut grads[sl.embed_w.range()],
+            &t.features,
+            &t.dh,
+            (FEATURES, n, d),
+            true,
+        );
+        add_row_sums(&mut grads[sl.embed_b.range()], &t.dh);
+    }
+
+    /// The listed moves' part of the backward pass: from each move's score gradient
+    /// `dscores`, the gradients of the per-block scores and of the pair perceptron's halves
+    /// (on `t`), and of the pair perceptron's own parameters (into `grads`).
+    fn moves_backward(&self, g: &Graph, t: &mut Tape, dscores: &[f32], grads: &mut [f32]) {
+        let n = g.nodes();
+        let s = self.shape.score_hidden;
+        let p = &self.store.params;
         let sl = &self.slots;
         // The scorer: per-block scores and the pair perceptron.
         fit(&mut t.dheads, n * HEADS);
@@ -679,108 +708,82 @@ impl RelationalNet {
                 grads[sl.pair_bias.offset + j] += dpre;
             }
         }
-        let h: &[f32] = match t.rounds.last() {
-            Some(r) => &r.goal.o,
-            None => &t.h0,
-        };
-        matmul_tn(&mut grads[sl.head_out.range()], &t.k, &t.dheads, (s, n, HEADS), true);
-        fit(&mut t.dk, n * s);
-        matmul_nt(&mut t.dk, &t.dheads, &p[sl.head_out.range()], (n, HEADS, s), false);
-        for (g, &a) in t.dk.iter_mut().zip(&t.k) {
-            if a <= 0.0 {
-                *g = 0.0;
+    }
+
+    /// Round `r`'s backward pass: from the gradient of its output in `t.dh` to that of its
+    /// input, left in `t.dh`, adding its parameters' gradients into `grads`.
+    fn round_backward(&self, g: &Graph, r: usize, t: &mut Tape, grads: &mut [f32]) {
+        let n = g.nodes();
+        let d = self.shape.width;
+        let p = &self.store.params;
+        let sl = &self.slots;
+        let round = &t.rounds[r];
+        // Across the goal.
+        let goal = &sl.goal;
+        fit(&mut t.dx, n * goal.inputs);
+        cell_backward(p, goal, &round.goal, 0, n, &mut t.dh, &mut t.dx, &mut t.dhid, grads);
+        fit(&mut t.du, n * d);
+        fit(&mut t.dv, n * d);
+        t.du.fill(0.0);
+        t.dv.fill(0.0);
+        // The gradient of the round's input h, gathered from the three cells.
+        fit(&mut t.din, n * d);
+        t.din.fill(0.0);
+        for b in 0..n {
+            let dx = &t.dx[b * goal.inputs..(b + 1) * goal.inputs];
+            add_into(&mut t.din, b, &dx[..d]);
+            add_into(&mut t.du, b, &dx[d..2 * d]);
+            add_into(&mut t.dv, b, &dx[2 * d..3 * d]);
+            let gb = g.goal_below[b];
+            match gb {
+                TABLE => add_slice(&mut grads[sl.goal_table.range()], &dx[3 * d..5 * d]),
+                NONE => add_slice(&mut grads[sl.goal_free.range()], &dx[3 * d..5 * d]),
+                _ => {
+                    add_into(&mut t.du, gb as usize, &dx[3 * d..4 * d]);
+                    add_into(&mut t.dv, gb as usize, &dx[4 * d..5 * d]);
+                }
+            }
+            let ga = g.goal_above[b];
+            if ga == NONE {
+                add_slice(&mut grads[sl.goal_top.range()], &dx[5 * d..7 * d]);
+            } else {
+                add_into(&mut t.du, ga as usize, &dx[5 * d..6 * d]);
+                add_into(&mut t.dv, ga as usize, &dx[6 * d..7 * d]);
             }
         }
-        matmul_tn(&mut grads[sl.head_w.range()], h, &t.dk, (d, n, s), true);
-        add_row_sums(&mut grads[sl.head_b.range()], &t.dk);
-        matmul_tn(&mut grads[sl.pair_x.range()], h, &t.dpx, (d, n, s), true);
-        matmul_tn(&mut grads[sl.pair_y.range()], h, &t.dqy, (d, n, s), true);
-        fit(&mut t.dh, n * d);
-        matmul_nt(&mut t.dh, &t.dk, &p[sl.head_w.range()], (n, s, d), false);
-        matmul_nt(&mut t.dh, &t.dpx, &p[sl.pair_x.range()], (n, s, d), true);
-        matmul_nt(&mut t.dh, &t.dqy, &p[sl.pair_y.range()], (n, s, d), true);
-        // The rounds, last first: `dh` holds the gradient of the round's output.
-        for r in (0..self.shape.rounds).rev() {
-            let round = &t.rounds[r];
-            // Across the goal.
-            let goal = &sl.goal;
-            fit(&mut t.dx, n * goal.inputs);
-            cell_backward(p, goal, &round.goal, 0, n, &mut t.dh, &mut t.dx, &mut t.dhid, grads);
-            fit(&mut t.du, n * d);
-            fit(&mut t.dv, n * d);
-            t.du.fill(0.0);
-            t.dv.fill(0.0);
-            // The gradient of the round's input h, gathered from the three cells.
-            fit(&mut t.din, n * d);
-            t.din.fill(0.0);
-            for b in 0..n {
-                let dx = &t.dx[b * goal.inputs..(b + 1) * goal.inputs];
-                add_into(&mut t.din, b, &dx[..d]);
-                add_into(&mut t.du, b, &dx[d..2 * d]);
-                add_into(&mut t.dv, b, &dx[2 * d..3 * d]);
-                let gb = g.goal_below[b];
-                match gb {
-                    TABLE => add_slice(&mut grads[sl.goal_table.range()], &dx[3 * d..5 * d]),
-                    NONE => add_slice(&mut grads[sl.goal_free.range()], &dx[3 * d..5 * d]),
-                    _ => {
-                        add_into(&mut t.du, gb as usize, &dx[3 * d..4 * d]);
-                        add_into(&mut t.dv, gb as usize, &dx[4 * d..5 * d]);
-                    }
-                }
-                let ga = g.goal_above[b];
-                if ga == NONE {
-                    add_slice(&mut grads[sl.goal_top.range()], &dx[5 * d..7 * d]);
-                } else {
-                    add_into(&mut t.du, ga as usize, &dx[5 * d..6 * d]);
-                    add_into(&mut t.dv, ga as usize, &dx[6 * d..7 * d]);
-                }
+        // Down: through the scan to the local terms, then the cell.
+        let down = &sl.down;
+        fit(&mut t.dg, n * d);
+        scan_backward(&round.v_src, &t.dv, d, &mut t.dg);
+        fit(&mut t.dx, n * down.inputs);
+        cell_backward(p, down, &round.down, 0, n, &mut t.dg, &mut t.dx, &mut t.dhid, grads);
+        for b in 0..n {
+            let dx = &t.dx[b * down.inputs..(b + 1) * down.inputs];
+            add_into(&mut t.din, b, &dx[..d]);
+            add_into(&mut t.du, b, &dx[d..2 * d]);
+            let above = g.above[b];
+            if above == NONE {
+                add_slice(&mut grads[sl.clear_down.range()], &dx[2 * d..3 * d]);
+            } else {
+                add_into(&mut t.din, above as usize, &dx[2 * d..3 * d]);
             }
-            // Down: through the scan to the local terms, then the cell.
-            let down = &sl.down;
-            fit(&mut t.dg, n * d);
-            scan_backward(&round.v_src, &t.dv, d, &mut t.dg);
-            fit(&mut t.dx, n * down.inputs);
-            cell_backward(p, down, &round.down, 0, n, &mut t.dg, &mut t.dx, &mut t.dhid, grads);
-            for b in 0..n {
-                let dx = &t.dx[b * down.inputs..(b + 1) * down.inputs];
-                add_into(&mut t.din, b, &dx[..d]);
-                add_into(&mut t.du, b, &dx[d..2 * d]);
-                let above = g.above[b];
-                if above == NONE {
-                    add_slice(&mut grads[sl.clear_down.range()], &dx[2 * d..3 * d]);
-                } else {
-                    add_into(&mut t.din, above as usize, &dx[2 * d..3 * d]);
-                }
-            }
-            // Up: through the scan, then the cell.
-            let up = &sl.up;
-            scan_backward(&round.u_src, &t.du, d, &mut t.dg);
-            fit(&mut t.dx, n * up.inputs);
-            cell_backward(p, up, &round.up, 0, n, &mut t.dg, &mut t.dx, &mut t.dhid, grads);
-            for b in 0..n {
-                let dx = &t.dx[b * up.inputs..(b + 1) * up.inputs];
-                add_into(&mut t.din, b, &dx[..d]);
-                let below = g.below[b];
-                if below == NONE {
-                    add_slice(&mut grads[sl.table_up.range()], &dx[d..2 * d]);
-                } else {
-                    add_into(&mut t.din, below as usize, &dx[d..2 * d]);
-                }
-            }
-            std::mem::swap(&mut t.dh, &mut t.din);
         }
-        // The embedding.
-        for (dh, &h0) in t.dh.iter_mut().zip(&t.h0) {
-            *dh *= 1.0 - h0 * h0;
+        // Up: through the scan, then the cell.
+        let up = &sl.up;
+        scan_backward(&round.u_src, &t.du, d, &mut t.dg);
+        fit(&mut t.dx, n * up.inputs);
+        cell_backward(p, up, &round.up, 0, n, &mut t.dg, &mut t.dx, &mut t.dhid, grads);
+        for b in 0..n {
+            let dx = &t.dx[b * up.inputs..(b + 1) * up.inputs];
+            add_into(&mut t.din, b, &dx[..d]);
+            let below = g.below[b];
+            if below == NONE {
+                add_slice(&mut grads[sl.table_up.range()], &dx[d..2 * d]);
+            } else {
+                add_into(&mut t.din, below as usize, &dx[d..2 * d]);
+            }
         }
-        matmul_tn(
-            &mut grads[sl.embed_w.range()],
-            &t.features,
-            &t.dh,
-            (FEATURES, n, d),
-            true,
-        );
-        add_row_sums(&mut grads[sl.embed_b.range()], &t.dh);
+        std::mem::swap(&mut t.dh, &mut t.din);
     }
 }
 
@@ -992,20 +995,29 @@ mod tests {
         let eps = 1e-3f32;
         let mut off = Vec::new();
         for (i, &analytic) in grads.iter().enumerate() {
-            let keep = net.params[i];
-            net.params[i] = keep + eps;
+            let keep = net.params()[i];
+            net.params_mut()[i] = keep + eps;
             let plus = loss(&net, &g, &w);
-            net.params[i] = keep - eps;
+            net.params_mut()[i] = keep - eps;
             let minus = loss(&net, &g, &w);
-            net.params[i] = keep;
+            net.params_mut()[i] = keep;
             let numeric = (plus - minus) / (2.0 * f64::from(eps));
             let err = (numeric - f64::from(analytic)).abs() / (1e-2 + numeric.abs().max(f64::from(analytic).abs()));
             if err > 2e-2 {
-                let t = net.tensors.iter().find(|t| t.slot.range().contains(&i)).unwrap();
+                // The tensors lie one after another in the parameters.
+                let mut start = 0;
+                let t = net
+                    .tensors()
+                    .find(|t| {
+                        let hit = i < start + t.values.len();
+                        start += if hit { 0 } else { t.values.len() };
+                        hit
+                    })
+                    .unwrap();
                 off.push(format!(
                     "{}[{}]: numeric {numeric} analytic {analytic}",
                     t.name,
-                    i - t.slot.offset
+                    i - start
                 ));
             }
         }
