@@ -101,6 +101,14 @@ pub struct TaskRow {
     pub lower_bound: Option<usize>,
     /// The cost above the bound (0: proven optimal).
     pub gap: Option<usize>,
+    /// The bound's first part, in block moves (`towers::Certificate`): the blocks not in
+    /// their final position.
+    pub misplaced: Option<usize>,
+    /// The bound's second part: the blocks forced to move twice.
+    pub forced: Option<usize>,
+    /// The bound's third part: the smallest set of the other blocks that breaks every
+    /// deadlock (a bound on its size when the proof did not close).
+    pub breakers: Option<usize>,
     /// Whether the plan is proven optimal.
     pub optimal: Option<bool>,
     /// The best known cost, if a file of them gives one.
@@ -219,6 +227,9 @@ fn plan_task(folder: &Path, path: &Path, planner: &dyn BlockPlanner, best_known:
         actions: None,
         lower_bound: None,
         gap: None,
+        misplaced: None,
+        forced: None,
+        breakers: None,
         optimal: None,
         best_known: best,
         ratio: None,
@@ -235,6 +246,9 @@ fn plan_task(folder: &Path, path: &Path, planner: &dyn BlockPlanner, best_known:
             row.actions = Some(plan.cost());
             row.lower_bound = Some(plan.lower_bound_cost());
             row.gap = Some(plan.cost() - plan.lower_bound_cost());
+            row.misplaced = Some(plan.certificate.misplaced);
+            row.forced = Some(plan.certificate.forced);
+            row.breakers = Some(plan.certificate.breakers);
             row.optimal = Some(plan.is_optimal());
             row.ratio = best.filter(|&b| b > 0).map(|b| plan.cost() as f64 / b as f64);
         }
