@@ -1070,7 +1070,7 @@ mod tests {
             "{text}"
         );
         let back: DemoRecord = serde_json::from_str(&text).unwrap();
-        assert!(matches!(back, DemoRecord::Session(h) if h.world == Some(line)));
+        assert!(matches!(back, DemoRecord::Session(h) if h.world == Some(line.clone())));
         // A version-3 line names no start rule: read as uniform.
         let v3 = text.replace(r#""start":"uniform","#, "");
         assert!(matches!(serde_json::from_str(&v3).unwrap(), DemoRecord::Session(h) if h.world == Some(line.clone())));
