@@ -115,10 +115,23 @@ impl Graph {
     /// Applies the reductions (module docs, step 1) until none applies; the vertices they
     /// put in the solution are pushed onto `taken`.
     fn reduce(&mut self, taken: &mut Vec<usize>) {
+        self.reduce_until(taken, None);
+    }
+
+    /// [`Graph::reduce`], stopped at `deadline` if one is given: a graph reduced in part is
+    /// the same problem, only larger (thousands of uniform blocks take longer than a time
+    /// limit to reduce). Whether it finished.
+    fn reduce_until(&mut self, taken: &mut Vec<usize>, deadline: Option<Instant>) -> bool {
         loop {
-            self.reduce_vertices(taken);
-            if !(self.drop_dominated_edges() | self.drop_acyclic_edges() | self.take_cores(taken)) {
-                return;
+            if !self.reduce_vertices(taken, deadline) {
+                return false;
+            }
+            // The edge reductions cost a pass over every edge's rows; past the largest part
+            // searched (thousands of uniform blocks) they are not worth it.
+            if self.alive.len() > MAX_COMPONENT
+                || !(self.drop_dominated_edges() | self.drop_acyclic_edges() | self.take_cores(taken))
+            {
+                return true;
             }
         }
     }
@@ -213,10 +226,16 @@ impl Graph {
         took
     }
 
-    /// The reductions on single vertices (loops, no edge in or out, one edge in or out).
-    fn reduce_vertices(&mut self, taken: &mut Vec<usize>) {
+    /// The reductions on single vertices (loops, no edge in or out, one edge in or out);
+    /// whether they finished before `deadline`.
+    fn reduce_vertices(&mut self, taken: &mut Vec<usize>, deadline: Option<Instant>) -> bool {
         let mut work: Vec<usize> = self.alive.iter().collect();
+        let mut popped = 0usize;
         while let Some(v) = work.pop() {
+            popped += 1;
+            if popped.is_multiple_of(1024) && deadline.is_some_and(|d| Instant::now() >= d) {
+                return false;
+            }
             if !self.alive.contains(v) {
                 continue;
             }
@@ -242,6 +261,7 @@ impl Graph {
                 self.merge_into_succ(v, u);
             }
         }
+        true
     }
 
     /// Puts `v` out of every solution: every edge into it is joined to every edge out of
@@ -357,9 +377,11 @@ pub const MAX_COMPONENT: usize = 2_000;
 pub(crate) fn minimum_fvs(succ: Vec<BitSet>, deadline: Instant) -> Fvs {
     let mut graph = Graph::new(succ);
     let mut taken = Vec::new();
-    graph.reduce(&mut taken);
+    // Stopped at the deadline, the graph may keep a loop outside every component searched:
+    // no set of its own then, only the bound.
+    let reduced = graph.reduce_until(&mut taken, Some(deadline));
     let mut lower_bound = taken.len();
-    let mut set = Some(taken);
+    let mut set = reduced.then_some(taken);
     for comp in graph.components() {
         let local = graph.restricted(&comp);
         if comp.len() > MAX_COMPONENT {
