@@ -115,7 +115,7 @@ fn flags_that_do_not_apply_are_refused_naming_the_flag() {
         (&["render", "--reward", "sparse"], "--reward does not apply to render"),
         (
             &["run", "--agent", "random", "--epsilon", "5"],
-            "--epsilon does not apply to --agent random: it is for --agent q or dqn only",
+            "--epsilon does not apply to --agent random: it is for --agent q, dqn or relational only",
         ),
         (
             &["run", "--agent", "oracle", "--model", "m.st"],

@@ -75,7 +75,8 @@ fn a_run_resumed_from_its_checkpoint_ends_with_the_same_model() {
     // The physics backend, the paper's learner; and the authors' schedule, whose table
     // remembers the entries it has seen.
     for (profile, games) in [("spec", 200), ("original", 40)] {
-        let (whole, resumed, ck) = (dir.join("w2.st"), dir.join("r2.st"), dir.join("ck2"));
+        // A checkpoint file each: one run's checkpoint is not written over by another's.
+        let (whole, resumed, ck) = (dir.join("w2.st"), dir.join("r2.st"), dir.join(format!("ck-{profile}")));
         let run = ["--profile", profile, "--goals", "0,1,2:1,0,2"];
         train(&[&run[..], &["--games", &games.to_string(), "--out", path(&whole)]].concat());
         train(
@@ -341,4 +342,112 @@ fn network_checkpoint_misuse_is_one_line_and_exit_status_2() {
         "{}",
         stderr(&o)
     );
+}
+
+#[test]
+fn checkpoint_writes_only_over_nothing_or_a_checkpoint_of_the_same_run() {
+    let dir = scratch("checkpoint-destination");
+    let (network, ck, text) = (dir.join("net.st"), dir.join("ck"), dir.join("notes.txt"));
+    let run = |steps: &str, checkpoint: &Path, out: &Path| {
+        blockstack(&[
+            "dqn",
+            "--preset",
+            "dqn-planes",
+            "--blocks",
+            "2",
+            "--steps",
+            steps,
+            "--checkpoint",
+            path(checkpoint),
+            "--out",
+            path(out),
+        ])
+    };
+    assert!(run("50", &ck, &network).status.success());
+    std::fs::write(&text, "not a checkpoint").unwrap();
+    let tabular = dir.join("q.st");
+    train(&["--games", "5", "--backend", "grid", "--out", path(&tabular)]);
+    // A trained network, another run's checkpoint, a tabular model, a file of text: each
+    // refused in one line naming it and what it holds, and left as it was.
+    for (target, steps, says) in [
+        (&network, "50", "a blockstack-dqn file (a trained network)"),
+        (&ck, "60", "a checkpoint of another run"),
+        (&tabular, "50", "a blockstack-q-agent file (a trained tabular model)"),
+        (&text, "50", "not a checkpoint"),
+    ] {
+        let before = std::fs::read(target).unwrap();
+        let o = run(steps, target, &dir.join("new.st"));
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.contains(path(target)) && err.contains(says), "{err}");
+        assert!(
+            std::fs::read(target).unwrap() == before,
+            "{} was changed",
+            target.display()
+        );
+        assert!(!dir.join("new.st").exists());
+    }
+    // The same run's checkpoint is written over; so is the resumed run's own file.
+    assert!(run("50", &ck, &dir.join("again.st")).status.success());
+    let o = blockstack(&["dqn", "--resume", path(&ck), "--out", path(&dir.join("resumed.st"))]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // `train` keeps the same rule with the same flags.
+    let o = blockstack(&[
+        "train",
+        "--games",
+        "5",
+        "--checkpoint",
+        path(&network),
+        "--out",
+        path(&dir.join("q2.st")),
+    ]);
+    let err = stderr(&o);
+    assert!(
+        o.status.code() == Some(2) && err.contains("a trained network") && err.lines().count() == 1,
+        "{err}"
+    );
+    let o = blockstack(&[
+        "train",
+        "--games",
+        "5",
+        "--checkpoint",
+        path(&ck),
+        "--out",
+        path(&dir.join("q2.st")),
+    ]);
+    assert!(stderr(&o).contains("another learner's checkpoint"), "{}", stderr(&o));
+}
+
+#[test]
+fn a_device_or_a_checkpoint_where_a_model_belongs_is_named_for_what_it_is() {
+    let dir = scratch("checkpoint-readers");
+    let ck = dir.join("ck");
+    dqn(&[
+        "--preset",
+        "dqn-planes",
+        "--blocks",
+        "2",
+        "--steps",
+        "20",
+        "--checkpoint",
+        path(&ck),
+        "--out",
+        path(&dir.join("m.st")),
+    ]);
+    let o = blockstack(&["dqn", "--resume", "/dev/zero", "--out", path(&dir.join("z.st"))]);
+    let err = stderr(&o);
+    assert!(
+        o.status.code() == Some(2) && err.contains("a pipe or a device") && err.lines().count() == 1,
+        "{err}"
+    );
+    for agent in ["dqn", "q"] {
+        let o = blockstack(&["run", "--agent", agent, "--model", path(&ck)]);
+        let err = stderr(&o);
+        assert!(
+            err.contains("a training checkpoint (blockstack-dqn-checkpoint), not a model")
+                && !err.contains("blockstack-q-agent"),
+            "{err}"
+        );
+    }
 }

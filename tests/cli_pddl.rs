@@ -22,7 +22,7 @@ fn actions(plan: &str) -> Vec<String> {
     for a in &actions {
         let words: Vec<&str> = a.trim_start_matches('(').trim_end_matches(')').split(' ').collect();
         let arity = match words[0] {
-            "pickup" | "putdown" => 1,
+            "pickup" | "putdown" | "pick-up" | "put-down" => 1,
             "stack" | "unstack" => 2,
             other => panic!("{other} in {plan}"),
         };
@@ -270,7 +270,6 @@ fn run_plays_a_problem_from_its_start_towards_its_goal() {
     let problem = dir.join("p01.pddl");
     // Every planner agent reaches the task's goal in every episode.
     let mut steps = std::collections::BTreeMap::new();
-    let mut goal = String::new();
     for agent in ["exact", "exact-moves", "near-optimal", "oracle"] {
         let r = run_pddl(&problem, agent, &[]).json();
         assert_eq!(
@@ -284,7 +283,12 @@ fn run_plays_a_problem_from_its_start_towards_its_goal() {
             "{agent}: {r}"
         );
         steps.insert(agent, r["mean_steps"].as_f64().unwrap());
-        goal = r["goal"].as_str().unwrap().to_string();
+        // The report names the task, not its towers (a big task's goal is kilobytes).
+        assert_eq!(
+            r["goal"].as_str(),
+            Some(format!("the task's ({})", path(&problem)).as_str()),
+            "{r}"
+        );
     }
     // Every episode starts from the task's start, and the exact agent takes as few gripper
     // steps as the exact solver finds from there.
@@ -297,6 +301,21 @@ fn run_plays_a_problem_from_its_start_towards_its_goal() {
         .filter(|v| v.get("start").is_some())
         .collect();
     assert_eq!(episodes.len(), 3);
+    // The episode's goal, as `--goal` writes it: towers bottom to top, `/` between them.
+    let towers: Vec<String> = episodes[0]["goal"]["towers"]
+        .as_array()
+        .expect("the episode's goal")
+        .iter()
+        .map(|t| {
+            t.as_array()
+                .unwrap()
+                .iter()
+                .map(|b| b.to_string())
+                .collect::<Vec<_>>()
+                .join(",")
+        })
+        .collect();
+    let goal = towers.join("/");
     assert!(episodes.iter().all(|e| e["start"] == episodes[0]["start"]), "{text}");
     let start: Vec<String> = episodes[0]["start"]
         .as_array()
@@ -391,4 +410,221 @@ fn run_refuses_a_problem_with_flags_of_another_world_in_one_line() {
         e.contains("big.pddl") && e.contains("10001") && e.trim_end().lines().count() == 1,
         "{e}"
     );
+}
+
+/// A fixture of the Python package's tests (`python/tests/fixtures`), shared here.
+fn fixture(name: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("python/tests/fixtures")
+        .join(name)
+}
+
+#[test]
+fn a_domain_file_names_the_plans_actions_and_anything_else_is_refused() {
+    let problem = fixture("problem-pick-up.pddl");
+    let plain = cli("solve").flag("pddl", path(&problem)).ok();
+    let hyphenated = cli("solve")
+        .flag("pddl", path(&problem))
+        .flag("domain", path(&fixture("domain-pick-up.pddl")))
+        .ok();
+    let (plain, hyphenated) = (actions(&plain), actions(&hyphenated));
+    assert!(plain.iter().any(|a| a.starts_with("(pickup ")), "{plain:?}");
+    assert!(hyphenated.iter().any(|a| a.starts_with("(pick-up ")), "{hyphenated:?}");
+    assert!(hyphenated.iter().any(|a| a.starts_with("(put-down ")), "{hyphenated:?}");
+    let renamed: Vec<String> = plain
+        .iter()
+        .map(|a| a.replace("(pickup", "(pick-up").replace("(putdown", "(put-down"))
+        .collect();
+    assert_eq!(renamed, hyphenated);
+    // The other spelling's domain, and its problem.
+    let json = cli("solve")
+        .flag("pddl", path(&fixture("problem-pickup.pddl")))
+        .flag("domain", path(&fixture("domain-pickup.pddl")))
+        .args(&["--json", "--solver", "optimal"])
+        .json();
+    assert_eq!(json["optimal"], true, "{json}");
+    let refused = |c: Cli, expect: &str| {
+        let o = c.run();
+        let err = stderr(&o);
+        assert!(o.status.code() == Some(2) && err.contains(expect), "{err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    };
+    refused(
+        cli("solve")
+            .flag("pddl", path(&fixture("problem-pickup.pddl")))
+            .flag("domain", path(&fixture("domain-gripper.pddl"))),
+        "the predicate (at-robby ?r) is not one of the 4-operator Blocks World's",
+    );
+    refused(
+        cli("solve")
+            .flag("pddl", path(&fixture("problem-pickup.pddl")))
+            .flag("domain", path(&fixture("domain-pick-up.pddl"))),
+        "the problem is of the domain blocksworld, but the domain file defines BLOCKS",
+    );
+    refused(
+        cli("solve").flag("pddl", path(&fixture("problem-gripper.pddl"))),
+        "(:domain gripper) is not the Blocks World",
+    );
+    refused(
+        cli("solve")
+            .flag("pddl", path(&fixture("domain-pickup.pddl")))
+            .flag("domain", path(&fixture("domain-pickup.pddl"))),
+        "this is a domain file: give the problem file",
+    );
+    let o = blockstack(&[
+        "solve",
+        "--domain",
+        path(&fixture("domain-pickup.pddl")),
+        "--start",
+        "0,0",
+        "--goal",
+        "0",
+    ]);
+    assert!(stderr(&o).contains("--domain goes with --pddl"), "{}", stderr(&o));
+}
+
+#[test]
+fn the_plan_file_holds_what_solve_prints_and_only_a_regular_file_is_written() {
+    let dir = scratch("pddl-plan-file");
+    let problem = fixture("problem-pick-up.pddl");
+    let domain = fixture("domain-pick-up.pddl");
+    let printed = cli("solve")
+        .flag("pddl", path(&problem))
+        .flag("domain", path(&domain))
+        .ok();
+    let plan = dir.join("plan.txt");
+    std::fs::write(&plan, "an older plan").unwrap();
+    let said = cli("solve")
+        .flag("pddl", path(&problem))
+        .flag("domain", path(&domain))
+        .flag("plan-file", path(&plan))
+        .ok();
+    assert_eq!(std::fs::read_to_string(&plan).unwrap(), printed);
+    assert!(
+        said.starts_with(&format!("wrote the plan to {}: cost ", path(&plan))),
+        "{said}"
+    );
+    assert_eq!(said.lines().count(), 1, "{said}");
+    // --json prints its report as without the file.
+    let json = cli("solve")
+        .flag("pddl", path(&problem))
+        .flag("plan-file", path(&dir.join("p.txt")))
+        .arg("--json")
+        .json();
+    let written = std::fs::read_to_string(dir.join("p.txt")).unwrap();
+    assert_eq!(json["plan"].as_array().unwrap().len(), actions(&written).len());
+    let refused = |c: Cli, expect: &str| {
+        let o = c.run();
+        let err = stderr(&o);
+        assert!(o.status.code() == Some(2) && err.contains(expect), "{err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    };
+    let fifo = dir.join("pipe");
+    assert!(
+        std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .unwrap()
+            .success()
+    );
+    refused(
+        cli("solve").flag("pddl", path(&problem)).flag("plan-file", path(&fifo)),
+        "it is a named pipe, not a regular file",
+    );
+    refused(
+        cli("solve").flag("pddl", path(&problem)).flag("plan-file", path(&dir)),
+        "--plan-file",
+    );
+    let copy = dir.join("copy.pddl");
+    std::fs::copy(&problem, &copy).unwrap();
+    refused(
+        cli("solve").flag("pddl", path(&copy)).flag("plan-file", path(&copy)),
+        "is also the input",
+    );
+    assert_eq!(std::fs::read(&copy).unwrap(), std::fs::read(&problem).unwrap());
+}
+
+#[test]
+fn what_other_tools_write_in_a_problem_is_read_or_refused_by_name() {
+    let dir = scratch("pddl-other-tools");
+    let write = |name: &str, text: &str| {
+        let file = dir.join(name);
+        std::fs::write(&file, text).unwrap();
+        file
+    };
+    let metric = write(
+        "metric.pddl",
+        "(define (problem m) (:domain blocksworld) (:objects a - block b - (either block thing))
+          (:init (= (total-cost) 0) (arm-empty) (clear a) (on a b) (on-table b))
+          (:goal (and (on b a) (on-table a))) (:metric minimize (total-cost)))",
+    );
+    assert_eq!(actions(&cli("solve").flag("pddl", path(&metric)).ok()).len(), 4);
+    let synonyms = write(
+        "ipc2000.pddl",
+        "(define (problem s) (:domain BLOCKS) (:objects a b)
+          (:init (handempty) (clear a) (on a b) (ontable b)) (:goal (and (on b a) (ontable a))))",
+    );
+    assert_eq!(actions(&cli("solve").flag("pddl", path(&synonyms)).ok()).len(), 4);
+    let logistics = write(
+        "logistics.pddl",
+        "(define (problem l) (:domain logistics) (:objects a) (:init (arm-empty) (clear a) (on-table a)) (:goal (and (on-table a))))",
+    );
+    let o = cli("solve").flag("pddl", path(&logistics)).run();
+    assert!(
+        stderr(&o).contains("line 1: (:domain logistics) is not the Blocks World"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn a_task_with_nothing_to_play_is_solved_by_the_empty_plan_and_not_played() {
+    let dir = scratch("pddl-nothing");
+    let head = "(define (problem p) (:domain blocksworld) (:objects b1 b2)
+      (:init (arm-empty) (clear b2) (on b2 b1) (on-table b1))";
+    for (name, goal, says) in [
+        (
+            "met.pddl",
+            "(:goal (and (on b2 b1) (on-table b1))))",
+            "its goal, so there is no episode to play",
+        ),
+        (
+            "empty.pddl",
+            "(:goal (and)))",
+            "its goal (which places no block), so there is no episode to play",
+        ),
+    ] {
+        let file = dir.join(name);
+        std::fs::write(&file, format!("{head} {goal}")).unwrap();
+        let plan = cli("solve").flag("pddl", path(&file)).ok();
+        assert_eq!(plan, "; cost = 0 (unit cost)\n; lower bound = 0\n; optimal\n");
+        let o = run_pddl(&file, "near-optimal", &[]).run();
+        let e = stderr(&o);
+        assert!(
+            o.status.code() == Some(2) && e.contains(&format!("{name}: the task's start already meets")),
+            "{e}"
+        );
+        assert!(e.contains(says) && e.trim_end().lines().count() == 1, "{e}");
+    }
+}
+
+#[test]
+fn run_refuses_a_start_rule_and_says_when_the_horizon_is_too_short() {
+    let problem = fixture("problem-pickup.pddl");
+    let o = blockstack(&["run", "--pddl", path(&problem), "--start", "uniform"]);
+    let e = stderr(&o);
+    assert!(
+        o.status.code() == Some(2) && e.contains("cannot be used with") && e.contains("--start"),
+        "{e}"
+    );
+    let o = run_pddl(&problem, "near-optimal", &["--horizon", "5"]).run();
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    assert!(
+        e.contains("the horizon of 5 steps is shorter than the near-optimal plan of this task (")
+            && e.contains("give --horizon "),
+        "{e}"
+    );
+    let o = run_pddl(&problem, "near-optimal", &[]).run();
+    assert!(!stderr(&o).contains("horizon"), "{}", stderr(&o));
 }

@@ -5,7 +5,9 @@
 //!   on an older toolchain failed to build while the docs said it would);
 //! - the README's crate table and docs/architecture.md's crate list name exactly the
 //!   workspace's crates (`serve` was missing from both);
-//! - docs/cli.md's command table names exactly the binary's subcommands.
+//! - docs/cli.md's command table names exactly the binary's subcommands;
+//! - the README's crate table says which crates each crate uses, as its Cargo.toml does
+//!   (a map drawn by hand once showed arrows no manifest had).
 
 use std::collections::BTreeSet;
 use std::path::PathBuf;
@@ -148,18 +150,61 @@ fn first_spans(text: &str, prefix: &str) -> BTreeSet<String> {
 }
 
 #[test]
-fn the_crate_maps_name_every_crate() {
+fn the_architecture_lists_every_crate() {
+    let architecture = read("docs/architecture.md");
+    let list = &architecture[..architecture.find("## ").unwrap_or(architecture.len())];
+    assert_eq!(
+        first_spans(list, "- "),
+        workspace_crates(),
+        "docs/architecture.md's crate list"
+    );
+}
+
+/// The crates of the workspace a crate's manifest lists under `[dependencies]` (not the
+/// tests' or the build's): `name.workspace = true`, `name = { workspace = true, ... }` or
+/// `name = { path = ... }`.
+fn uses(manifest: &str, crates: &BTreeSet<String>) -> BTreeSet<String> {
+    let section = manifest.split("\n[dependencies]\n").nth(1).unwrap_or_default();
+    let section = &section[..section.find("\n[").unwrap_or(section.len())];
+    section
+        .lines()
+        .filter_map(|l| l.split(['.', '=', ' ']).next())
+        .filter(|name| crates.contains(*name))
+        .map(str::to_string)
+        .collect()
+}
+
+#[test]
+fn the_crate_table_says_what_each_crate_uses() {
     let crates = workspace_crates();
     let readme = read("README.md");
     let table = readme
-        .split("| crate | what it holds |")
+        .split("| crate | uses | what it holds |")
         .nth(1)
-        .expect("the README has a crate table");
+        .expect("the README's crate table has a column of the crates each uses");
     let table = &table[..table.find("\n\n").unwrap_or(table.len())];
-    assert_eq!(first_spans(table, "| "), crates, "the README's crate table");
-    let architecture = read("docs/architecture.md");
-    let list = &architecture[..architecture.find("## ").unwrap_or(architecture.len())];
-    assert_eq!(first_spans(list, "- "), crates, "docs/architecture.md's crate list");
+    let mut checked = BTreeSet::new();
+    for row in table.lines().filter(|l| l.starts_with("| `")) {
+        let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+        let name = cells[1].trim_matches('`');
+        let stated: BTreeSet<String> = cells[2].split('`').skip(1).step_by(2).map(str::to_string).collect();
+        let manifest = if name == "blockstack" {
+            "Cargo.toml".to_string()
+        } else {
+            format!("{name}/Cargo.toml")
+        };
+        assert_eq!(
+            stated,
+            uses(&read(&manifest), &crates),
+            "the README's crate table: what `{name}` uses"
+        );
+        checked.insert(name.to_string());
+    }
+    assert_eq!(
+        checked,
+        workspace_crates(),
+        "the README's crate table has a row per crate"
+    );
 }
 
 #[test]

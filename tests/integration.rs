@@ -21,5 +21,6 @@ mod common;
 mod docs_anchors;
 mod docs_maps;
 mod fuzz_corpus;
+mod imports;
 mod readme_results;
 mod tui_tmux;

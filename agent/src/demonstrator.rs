@@ -14,7 +14,7 @@
 //! - **Impatience.** With probability [`DemonstratorProfile::takeover`] it takes the step
 //!   whatever the agent proposed.
 //!
-//! When it steps in it chooses its [`PlannerKind`]'s next action, except that with probability
+//! When it steps in it chooses its [`DemonstratorPlanner`]'s next action, except that with probability
 //! [`DemonstratorProfile::slip`] it presses a wrong key: a uniformly drawn other action.
 //!
 //! It plays by the observation's action protocol like the agent: its planners plan under it
@@ -45,10 +45,12 @@ use crate::error::{AgentError, Result};
 /// How many recent states of the episode a demonstrator that notices loops remembers.
 pub const LOOP_WINDOW: usize = 8;
 
-/// The planner a demonstrator acts with.
+/// The planner a demonstrator takes its own gripper steps from, step by step under the
+/// world's protocol: two of [`oracle::PlannerKind`]'s, the only ones that plan single steps
+/// in the top view, where demonstrators correct.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
-pub enum PlannerKind {
+pub enum DemonstratorPlanner {
     /// The exact solver's shortest plan.
     Exact,
     /// The centroid + A* oracle (sound, a few steps longer than shortest at times).
@@ -67,7 +69,7 @@ pub struct DemonstratorProfile {
     /// Probability of taking a step whatever the proposal, in `[0, 1]`.
     pub takeover: f64,
     /// What it plans its own actions with.
-    pub planner: PlannerKind,
+    pub planner: DemonstratorPlanner,
     /// Probability that a chosen action is a wrong one, in `[0, 1]`.
     pub slip: f64,
 }
@@ -84,9 +86,15 @@ impl DemonstratorProfile {
             slip,
         };
         match number {
-            1 => Ok(profile("careful expert", 1.0, 0.0, PlannerKind::Exact, 0.0)),
-            2 => Ok(profile("attentive amateur", 0.5, 0.02, PlannerKind::Oracle, 0.05)),
-            3 => Ok(profile("distracted", 0.15, 0.05, PlannerKind::Oracle, 0.15)),
+            1 => Ok(profile("careful expert", 1.0, 0.0, DemonstratorPlanner::Exact, 0.0)),
+            2 => Ok(profile(
+                "attentive amateur",
+                0.5,
+                0.02,
+                DemonstratorPlanner::Oracle,
+                0.05,
+            )),
+            3 => Ok(profile("distracted", 0.15, 0.05, DemonstratorPlanner::Oracle, 0.15)),
             _ => Err(AgentError::Config(format!(
                 "there is no demonstrator {number}: choose 1, 2 or 3"
             ))),
@@ -196,11 +204,11 @@ impl Demonstrator {
     /// The demonstrator's own action in `obs`: its planner's, or a slip.
     fn choose(&mut self, obs: &Observation) -> Result<Action> {
         let planned = match self.profile.planner {
-            PlannerKind::Exact => self
+            DemonstratorPlanner::Exact => self
                 .exact
                 .with_protocol(obs.protocol)
                 .next_action(&obs.state, &obs.goal)?,
-            PlannerKind::Oracle => self
+            DemonstratorPlanner::Oracle => self
                 .oracle
                 .with_protocol(obs.protocol)
                 .next_action(&obs.state, &obs.goal)?,

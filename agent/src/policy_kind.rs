@@ -7,7 +7,10 @@
 //! [`oracle::PlannerKind`]'s: `exact` is the fewest gripper steps in both views,
 //! `exact-moves` the fewest block moves carried out by the gripper (side view),
 //! `near-optimal` the near-optimal block-move planner carried out (side view), `optimal`
-//! the optimal block-move solver carried out (side view) and `oracle` the view's oracle. `q` and `dqn` play a trained model ([`PlayingModel`]).
+//! the optimal block-move solver carried out (side view) and `oracle` the view's oracle. `q`,
+//! `dqn` and `relational` play a trained model of their kind ([`PlayingModel`]); `dqn`, the
+//! name earlier releases gave every model `blockstack dqn` writes, plays a relational policy
+//! too ([`PolicyKind::plays`]).
 //!
 //! A planner plays by planning from the state it sees and following its plan
 //! ([`PlannerPolicy`]; in the side view the block-move planners plan again at each move,
@@ -43,9 +46,11 @@ pub enum PolicyKind {
     Q,
     /// A trained network.
     Dqn,
+    /// A trained relational policy of block moves (`blockstack dqn --preset general`).
+    Relational,
 }
 
-sim::names!(PolicyKind { Random = "random", Oracle = "oracle", Exact = "exact", ExactMoves = "exact-moves", NearOptimal = "near-optimal", Optimal = "optimal", Q = "q", Dqn = "dqn" } unknown(text) -> AgentError {
+sim::names!(PolicyKind { Random = "random", Oracle = "oracle", Exact = "exact", ExactMoves = "exact-moves", NearOptimal = "near-optimal", Optimal = "optimal", Q = "q", Dqn = "dqn", Relational = "relational" } unknown(text) -> AgentError {
     AgentError::Config(format!("unknown agent {text:?}: choose one of {}", PolicyKind::NAMES.join(", ")))
 });
 
@@ -61,10 +66,11 @@ impl From<PlannerKind> for PolicyKind {
     }
 }
 
-/// A trained model that plays: what [`PolicyKind::Q`] and [`PolicyKind::Dqn`] need. A
-/// tabular agent is one; so is `neural`'s model of either kind.
+/// A trained model that plays: what [`PolicyKind::Q`], [`PolicyKind::Dqn`] and
+/// [`PolicyKind::Relational`] need. A tabular agent is one; so is `neural`'s model of every
+/// kind.
 pub trait PlayingModel {
-    /// [`PolicyKind::Q`] or [`PolicyKind::Dqn`].
+    /// [`PolicyKind::Q`], [`PolicyKind::Dqn`] or [`PolicyKind::Relational`].
     fn kind(&self) -> PolicyKind;
 
     /// Its name in reports.
@@ -120,13 +126,19 @@ impl PolicyKind {
             PolicyKind::NearOptimal => Some(PlannerKind::NearOptimal),
             PolicyKind::Optimal => Some(PlannerKind::Optimal),
             PolicyKind::Oracle => Some(PlannerKind::Oracle),
-            PolicyKind::Random | PolicyKind::Q | PolicyKind::Dqn => None,
+            PolicyKind::Random | PolicyKind::Q | PolicyKind::Dqn | PolicyKind::Relational => None,
         }
     }
 
     /// Whether it plays a trained model.
     pub const fn needs_model(self) -> bool {
-        matches!(self, PolicyKind::Q | PolicyKind::Dqn)
+        matches!(self, PolicyKind::Q | PolicyKind::Dqn | PolicyKind::Relational)
+    }
+
+    /// Whether this agent plays a model of kind `model`: its own kind, and for `dqn` (every
+    /// model `blockstack dqn` writes, as earlier releases named them) a relational policy too.
+    pub fn plays(self, model: PolicyKind) -> bool {
+        model == self || (self == PolicyKind::Dqn && model == PolicyKind::Relational)
     }
 
     /// The random agent or a planner, playing `world` (its grid, view and protocol); an
@@ -153,9 +165,9 @@ impl PolicyKind {
         })
     }
 
-    /// This agent playing `world`: [`PolicyKind::expert`], or for `q` and `dqn` `model`
-    /// playing with [`PolicyOptions::epsilon`] (an error without a model, or with a model
-    /// of the other kind).
+    /// This agent playing `world`: [`PolicyKind::expert`], or for a trained agent `model`
+    /// playing with [`PolicyOptions::epsilon`] (an error without a model, or with a model it
+    /// does not play, [`PolicyKind::plays`]).
     pub fn policy<'a>(
         self,
         world: &EnvConfig,
@@ -170,7 +182,7 @@ impl PolicyKind {
                 "the {self} agent plays a trained model: give it one"
             )));
         };
-        if model.kind() != self {
+        if !self.plays(model.kind()) {
             return Err(AgentError::ModelMismatch(format!(
                 "{} is a {} model, not what the {self} agent plays",
                 model.model_name(),

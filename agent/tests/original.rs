@@ -5,7 +5,7 @@
 use crate::common::temp_path;
 
 use agent::correction::{CorrectionConfig, CorrectionRule, person_steps, session_world};
-use agent::demonstrator::PlannerKind;
+use agent::demonstrator::DemonstratorPlanner;
 use agent::{
     Assist, DemoRecord, Demonstrator, DemonstratorProfile, ExactPolicy, OraclePolicy, PaperOraclePolicy, Policy,
     QAgent, QParams, RandomPolicy, ReprKind, Schedule, Summary, TrainConfig,
@@ -306,7 +306,7 @@ proptest! {
             legal(&o, q.greedy_action(&o, &mut rng).unwrap())?;
         }
         // Demonstrators that always step in, both planners, slipping or not.
-        for (planner, slip) in [(PlannerKind::Exact, 0.0), (PlannerKind::Oracle, 0.0), (PlannerKind::Exact, 1.0), (PlannerKind::Oracle, 1.0)] {
+        for (planner, slip) in [(DemonstratorPlanner::Exact, 0.0), (DemonstratorPlanner::Oracle, 0.0), (DemonstratorPlanner::Exact, 1.0), (DemonstratorPlanner::Oracle, 1.0)] {
             let profile = DemonstratorProfile {
                 name: "test".into(),
                 attention: 1.0,

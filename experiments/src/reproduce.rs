@@ -497,8 +497,9 @@ impl Figure {
     }
 }
 
-/// One experiment's results, ready for the report.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+/// One experiment's results, ready for the report: what every experiment has (its setup,
+/// tables, reading and pictures), and [`Findings`], what is its own.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Experiment {
     /// "E1" to "E10".
     pub id: String,
@@ -508,23 +509,72 @@ pub struct Experiment {
     pub setup: Vec<Setting>,
     /// Its tables, ours beside the paper's.
     pub tables: Vec<Table>,
-    /// Its learning curves (E4).
-    pub curves: Vec<Curve>,
-    /// The gap between the two worlds, rule by rule (E1).
-    pub decomposition: Option<Decomposition>,
     /// Where the paper's own figures cannot hold, each computed from them (E3's p-value).
     pub paper_notes: Vec<String>,
     /// One line saying what the figures show, computed from them.
     pub reading: String,
     /// Its pictures.
     pub figures: Vec<Figure>,
-    /// E9's problems, grouped, and the physics against the grid model (absent from the
-    /// other experiments' results).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub blocks_world: Option<BlocksWorld>,
-    /// E10's training and problems by size (absent from the other experiments' results).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub general: Option<General>,
+    /// What this experiment alone measures.
+    pub findings: Findings,
+}
+
+/// What one experiment measures beyond the tables every experiment has: each experiment's
+/// own result, so that none carries the others' fields.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Findings {
+    /// Tables only (E2, E3, E5 to E8).
+    Tables,
+    /// E1: the gap between the two worlds, rule by rule.
+    Decomposition(Decomposition),
+    /// E4: the learning curves.
+    Curves(Vec<Curve>),
+    /// E9: the problems, grouped, and the physics against the grid model.
+    BlocksWorld(BlocksWorld),
+    /// E10: the general policy's training and problems by size.
+    General(General),
+}
+
+/// `results.json` keeps the layout it had before [`Findings`]: `curves` and
+/// `decomposition` in every experiment (empty when not its own), `blocks_world` and
+/// `general` only in E9's and E10's.
+impl Serialize for Experiment {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let f = &self.findings;
+        let own = usize::from(matches!(f, Findings::BlocksWorld(_) | Findings::General(_)));
+        let mut s = serializer.serialize_struct("Experiment", 9 + own)?;
+        s.serialize_field("id", &self.id)?;
+        s.serialize_field("title", &self.title)?;
+        s.serialize_field("setup", &self.setup)?;
+        s.serialize_field("tables", &self.tables)?;
+        let no_curves: &[Curve] = &[];
+        s.serialize_field(
+            "curves",
+            if let Findings::Curves(c) = f {
+                c.as_slice()
+            } else {
+                no_curves
+            },
+        )?;
+        s.serialize_field(
+            "decomposition",
+            &if let Findings::Decomposition(d) = f {
+                Some(d)
+            } else {
+                None
+            },
+        )?;
+        s.serialize_field("paper_notes", &self.paper_notes)?;
+        s.serialize_field("reading", &self.reading)?;
+        s.serialize_field("figures", &self.figures)?;
+        match f {
+            Findings::BlocksWorld(w) => s.serialize_field("blocks_world", w)?,
+            Findings::General(g) => s.serialize_field("general", g)?,
+            _ => {}
+        }
+        s.end()
+    }
 }
 
 /// The whole run's results: what `results.json` holds.

@@ -98,6 +98,28 @@ impl OutputPath {
         })
     }
 
+    /// Classifies `path` as [`OutputPath::check`] does, and accepts only a regular file or
+    /// a new path (links followed), never standard output or a special file: for a file
+    /// that replaces the one before it whole (a plan file), which a pipe or a device would
+    /// not hold.
+    pub fn check_regular(path: impl AsRef<Path>) -> Result<OutputPath> {
+        let out = OutputPath::check(&path)?;
+        let kind = match &out.destination {
+            Destination::File { .. } => return Ok(out),
+            Destination::Stdout => "standard output",
+            Destination::Special { kind, .. } => match kind {
+                Special::CharDevice => "a character device",
+                Special::BlockDevice => "a block device",
+                Special::Fifo => "a named pipe",
+                Special::Socket => "a socket",
+            },
+        };
+        Err(FilesError::destination(
+            path.as_ref(),
+            format!("it is {kind}, not a regular file: give a regular file or a new path"),
+        ))
+    }
+
     /// The path as given.
     pub fn path(&self) -> &Path {
         &self.path

@@ -279,3 +279,30 @@ fn stale_temporary_files_of_the_same_destination_are_removed_by_the_next_write()
     assert!(!left(&names[0]));
     assert_eq!(std::fs::read(dir.join("out.st")).unwrap(), b"new");
 }
+
+#[test]
+fn check_regular_takes_files_and_new_paths_and_refuses_the_rest() {
+    let dir = scratch("regular_only");
+    let file = dir.join("plan.txt");
+    assert!(OutputPath::check_regular(&file).is_ok(), "a new path");
+    fs::write(&file, "old").unwrap();
+    let link = dir.join("link.txt");
+    std::os::unix::fs::symlink(&file, &link).unwrap();
+    OutputPath::check_regular(&link).unwrap().write(b"new").unwrap();
+    assert_eq!(fs::read_to_string(&file).unwrap(), "new");
+    assert!(fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+    let fifo = dir.join("pipe");
+    assert!(
+        Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .expect("mkfifo runs")
+            .success()
+    );
+    let err = OutputPath::check_regular(&fifo).unwrap_err().to_string();
+    assert!(err.contains("it is a named pipe, not a regular file"), "{err}");
+    let err = OutputPath::check_regular("-").unwrap_err().to_string();
+    assert!(err.contains("it is standard output, not a regular file"), "{err}");
+    let err = OutputPath::check_regular(&dir).unwrap_err().to_string();
+    assert!(err.starts_with(&format!("cannot write {}", dir.display())), "{err}");
+}

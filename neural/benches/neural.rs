@@ -27,7 +27,7 @@ use sim::Env;
 const NETS: [(&str, Preset); 3] = [
     ("small", Preset::DqfdPlanes),
     ("paper", Preset::PaperDqfd),
-    ("conv", Preset::Pixels),
+    ("conv", Preset::DqfdScreen),
 ];
 
 fn config(preset: Preset) -> DqnConfig {

@@ -1,4 +1,4 @@
-//! A model file of either kind, loaded and played through one type.
+//! A model file of any kind (tabular, network, relational), loaded and played through one type.
 //!
 //! `blockstack train` writes tabular Q-agents ([`agent::QAgent`]), `blockstack dqn` writes
 //! networks ([`Dqn`]) and, with `--preset general`, relational policies
@@ -6,7 +6,21 @@
 //! [`AnyModel::load`] reads the header and the file with the reader of its kind, so that
 //! `blockstack eval`, `blockstack run --model`, Python's `blockstack.load` and the
 //! experiments all load, describe and play a model the same way. It lives in `neural`
-//! because `neural` is the lowest crate that knows both kinds.
+//! because `neural` is the lowest crate that knows every kind.
+//!
+//! # The default-play rule
+//!
+//! A loaded model knows how it plays when nothing says otherwise, and every front end
+//! (`run`, `eval`, Python's `Model`, `serve`'s worlds) asks it rather than keeping a rule of
+//! its own:
+//!
+//! - its **epsilon** ([`AnyModel::default_epsilon`]): the test policy of its profile (the
+//!   paper's 0.1) for a Q-agent or a network; 0 (greedy) for a relational policy, which is
+//!   measured greedy;
+//! - its **world** ([`AnyModel::world`]): the one it trained in, with games of at most 1000
+//!   steps ending at the goal;
+//! - its **reward** and rules ([`AnyModel::parts`]): its training world's reward, action
+//!   protocol and start rule (a tabular model's file that does not say: its profile's).
 
 use std::path::Path;
 
@@ -46,8 +60,9 @@ fn relational_world(model: &RelationalModel) -> EnvConfig {
 
 impl AnyModel {
     /// Reads the model file at `path`, whichever kind it is: the container names its format
-    /// in its header; anything that is not a network file is read as a tabular model (whose
-    /// reader says what is wrong with a file that is neither). A pipe, socket or device is
+    /// in its header; a training checkpoint is refused in its own format's name; anything
+    /// else is read as a tabular model (whose reader says what is wrong with a file that is
+    /// none). A pipe, socket or device is
     /// refused before it is opened, whoever asks (the command line, Python, `serve`): the
     /// file is read twice (its header says which reader reads it), a pipe's second reading
     /// finds it empty, and opening a pipe with no writer would wait forever.
@@ -57,6 +72,20 @@ impl AnyModel {
             Some(format) if format == FORMAT => Ok(AnyModel::Dqn(Box::new(Dqn::load(path)?))),
             Some(format) if format == crate::relational::model::FORMAT => {
                 Ok(AnyModel::Relational(Box::new(RelationalModel::load(path)?)))
+            }
+            // A run's checkpoint is not a model: say so in its own format's name, not the
+            // tabular reader's.
+            Some(format)
+                if format == crate::checkpoint::CHECKPOINT_FORMAT || format == agent::checkpoint::CHECKPOINT_FORMAT =>
+            {
+                Err(AgentError::Model {
+                    path: path.display().to_string(),
+                    reason: format!(
+                        "it is a training checkpoint ({format}), not a model: `--resume` continues its run, \
+                         which saves its model with --out"
+                    ),
+                }
+                .into())
             }
             _ => Ok(AnyModel::Q(Box::new(QAgent::load(path)?))),
         }
@@ -90,13 +119,14 @@ impl AnyModel {
         }
     }
 
-    /// The reward it was trained with, when the file says (a relational policy learnt from
-    /// the optimum's moves, not from a reward).
-    pub fn training_reward(&self) -> Option<RewardModel> {
+    /// The probability of a random legal action it plays with unless told otherwise (the
+    /// default-play rule, module docs): 0 for a relational policy, else its profile's test
+    /// epsilon.
+    pub fn default_epsilon(&self) -> f64 {
         match self {
-            AnyModel::Q(q) => q.training().map(|t| t.world.reward),
-            AnyModel::Dqn(d) => Some(d.config().world.reward),
-            AnyModel::Relational(_) => None,
+            // Measured greedy: a random block move only spoils its plan.
+            AnyModel::Relational(_) => 0.0,
+            AnyModel::Q(_) | AnyModel::Dqn(_) => agent::LearnerProfile::of(self.profile()).test_epsilon,
         }
     }
 
@@ -110,15 +140,16 @@ impl AnyModel {
     }
 
     /// The profile parts of its training world, as a run starts from them before its own
-    /// flags: a tabular model's protocol and start rule with its profile's reward; a
-    /// network's protocol and reward in the `spec` profile's world (`blockstack dqn` trains
-    /// there, from uniform starts).
+    /// flags (the default-play rule, module docs): a tabular model's protocol, start rule and
+    /// reward under its profile; a network's or relational policy's protocol and reward in
+    /// the `spec` profile's world (`blockstack dqn` trains there, from uniform starts).
     pub fn parts(&self) -> ProfileParts {
         let world = self.world();
         match self {
             AnyModel::Q(_) => ProfileParts {
                 protocol: world.protocol,
                 start: world.start,
+                reward: world.reward,
                 ..ProfileParts::of(self.profile())
             },
             AnyModel::Dqn(_) | AnyModel::Relational(_) => ProfileParts {
@@ -150,8 +181,8 @@ impl AnyModel {
     }
 
     /// The evaluation `overrides` describe in the model's own world ([`AnyModel::world`]):
-    /// its size and view (another is refused), its rules ([`AnyModel::parts`]) under the
-    /// profile and rules named, its training reward unless a profile or reward is named,
+    /// its size and view (another is refused), its rules and reward ([`AnyModel::parts`])
+    /// under the profile, rules and reward named,
     /// games of at most 1000 steps on the physics backend unless named; every goal of its
     /// world unless goals are named. `blockstack eval`, Python's `Model.evaluate` and
     /// `blockstack.train(eval_episodes=...)` all plan their evaluation here.
@@ -163,16 +194,10 @@ impl AnyModel {
             Some(goals) => goals.clone(),
             None => Goal::all_in(own.view, own.blocks)?,
         };
-        let rules = self.parts().overridden(o.profile, o.protocol, o.start, None);
-        // The reward only sums up in trajectories: the model's own unless asked otherwise.
-        let reward = o.reward.unwrap_or(match (o.profile, self.training_reward()) {
-            (None, Some(r)) => r,
-            _ => rules.reward,
-        });
+        let rules = self.parts().overridden(o.profile, o.protocol, o.start, o.reward);
         let world = EnvConfig {
             horizon: o.horizon.unwrap_or(sim::DEFAULT_HORIZON),
             backend: o.backend.unwrap_or(Backend::Physics),
-            reward,
             ..rules.apply(own)
         };
         world.validate()?;
@@ -307,7 +332,8 @@ impl PlayingModel for AnyModel {
     fn kind(&self) -> PolicyKind {
         match self {
             AnyModel::Q(_) => PolicyKind::Q,
-            AnyModel::Dqn(_) | AnyModel::Relational(_) => PolicyKind::Dqn,
+            AnyModel::Dqn(_) => PolicyKind::Dqn,
+            AnyModel::Relational(_) => PolicyKind::Relational,
         }
     }
 

@@ -419,61 +419,6 @@ impl DqnConfig {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::preset::Preset;
-
-    #[test]
-    fn sizes_that_cannot_be_allocated_are_refused_up_front() {
-        let base = || DqnConfig::preset(Preset::DqnPlanes, 3).unwrap();
-        let refused = |c: DqnConfig, words: &str| {
-            let e = c.validate().unwrap_err().to_string();
-            assert!(e.contains(words), "{e}");
-        };
-        refused(
-            DqnConfig {
-                batch: 1_000_000_000_000,
-                ..base()
-            },
-            "--batch 1000000000000",
-        );
-        refused(
-            DqnConfig {
-                batch: 1_000_000,
-                buffer: 1_000_000,
-                ..base()
-            },
-            "--batch 1000000",
-        );
-        refused(
-            DqnConfig {
-                batch: 2_000,
-                buffer: 1_000,
-                ..base()
-            },
-            "larger than the buffer",
-        );
-        refused(
-            DqnConfig {
-                demos: DemoSource::Exact(1_000_000_000),
-                ..base()
-            },
-            "--demos exact:1000000000",
-        );
-        refused(
-            DqnConfig {
-                buffer: usize::MAX,
-                steps: u64::MAX,
-                ..base()
-            },
-            "--buffer",
-        );
-        // A large buffer is fine when the run is too short to fill it.
-        DqnConfig {
-            buffer: usize::MAX,
-            ..base()
-        }
-        .validate()
-        .unwrap();
-    }
 
     #[test]
     fn demonstration_sources_read_and_print() {

@@ -40,6 +40,16 @@ pub enum NeuralError {
     /// A network used with a world it was not made for.
     #[error("the network does not fit: {0}")]
     Mismatch(String),
+    /// A setting the `general` preset (the relational policy) does not take, by its name in
+    /// [`crate::DqnOverrides`]; `blockstack dqn` names the flag instead.
+    #[error(
+        "{setting} does not apply to the general preset (a relational policy learnt from the optimum): it takes {}",
+        crate::preset::GENERAL_SETTINGS.join(", ")
+    )]
+    NotForGeneral {
+        /// The setting given.
+        setting: &'static str,
+    },
     /// A demonstration file that cannot be used (names the file and the line).
     #[error("demonstrations {path}: {reason}")]
     Demos {

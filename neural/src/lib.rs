@@ -47,5 +47,5 @@ pub use input::ObsKind;
 pub use model::{Dqn, DqnPolicy, TrainReport};
 pub use net::{NetConfig, NetKind};
 pub use optim::OptimizerKind;
-pub use preset::{DqnOverrides, Preset};
+pub use preset::{DqnOverrides, Preset, Recipe};
 pub use train::{Phase, Progress, TrainHooks, Trainer, train};

@@ -514,7 +514,10 @@ mod tests {
     #[test]
     fn the_stored_config_gives_back_the_config_and_leaves_out_defaults() {
         for name in crate::preset::Preset::ALL {
-            let config = DqnConfig::preset(name, 3).unwrap();
+            let Ok(config) = DqnConfig::preset(name, 3) else {
+                assert_eq!(name, crate::preset::Preset::General, "only general trains no network");
+                continue;
+            };
             let json = serde_json::to_string(&StoredConfig::of(&config)).unwrap();
             // The fields added since the first files are absent at their defaults.
             assert!(!json.contains("\"start\":\""), "{name}");

@@ -8,8 +8,9 @@
 //!    ([`Preset::default_for`]);
 //! 2. every **explicit setting** ([`DqnOverrides`]) beats it.
 //!
-//! Both front ends call [`DqnConfig::resolve`], so the same settings give the same network
-//! file, byte for byte.
+//! Both front ends call [`Recipe::resolve`] (a network's run through [`DqnConfig::resolve`],
+//! the `general` preset's relational policy through [`general_config`]), so the same settings
+//! give the same model file, byte for byte.
 //!
 //! # Presets
 //!
@@ -38,28 +39,34 @@
 //! - `her-planes`: `dqn-planes` with hindsight relabelling (HER, Andrychowicz et al. 2017,
 //!   [`crate::hindsight`]): no demonstrations; every step stored again with 4 goals that
 //!   stood later in its game.
-//! - `dqfd-pixels`: `dqfd-planes` on the paper's screen with the paper's network (batch
+//! - `dqfd-paper-screen` (called `dqfd-pixels` before; the old name is still read):
+//!   `dqfd-planes` on the paper's screen with the paper's network (batch
 //!   normalisation): the paper's network and input, our learner. Its budget is a few
 //!   thousand steps (a step of that network costs twenty times one of ours): 1,000
 //!   demonstrations, 6,000 pre-training and 6,000 self-play steps on 2 blocks (epsilon
 //!   falling over the first 2,000); 5,000 and 15,000 on more (epsilon over 7,500).
-//! - `pixels`: `dqfd-planes`, every setting and budget, with the `conv` network on the
-//!   compact screen ([`sim::screen`]): pixels at four a cell, every block in the colour of
+//! - `dqfd-screen` (called `pixels` before; the old name is still read): `dqfd-planes`,
+//!   every setting and budget, with the `conv` network on the compact screen ([`sim::screen`]): pixels at four a cell, every block in the colour of
 //!   its place in the goal, read by a convolution of one cell ([`crate::net::NetKind::Conv`]).
 //!   `--screen paper` puts the same network and learner on the paper's own screen (the
 //!   goal a picture in the corner), a convolution of one of its cells ([`crate::net::conv_cell`]).
+//! - `general`: not a Q-network but the relational policy of block moves in the side view
+//!   ([`crate::relational`]), learnt from the optimum on problems of 2 to 6 blocks, that plays
+//!   any number of blocks ([`RelationalConfig::general`]). It takes only the settings in
+//!   [`GENERAL_SETTINGS`]; any other is refused, naming it ([`NeuralError::NotForGeneral`]).
 //!
 //! Why each of our choices, measured, is in the E8 section of `blockstack reproduce --only
 //! E8 --long`'s report.
 
 use serde::{Deserialize, Serialize};
-use sim::{ActionProtocol, Backend, EnvConfig, Goal, GoalSpec, Grid, RewardModel, ScreenGoal};
+use sim::{ActionProtocol, Backend, EnvConfig, Goal, GoalSpec, Grid, RewardModel, ScreenGoal, View};
 
 use crate::config::{DemoSource, DqnConfig, Epsilon, LossKind, TargetEvery, TdLoss};
 use crate::error::{NeuralError, Result};
 use crate::input::{self, ObsKind};
 use crate::net::{NetConfig, NetKind};
 use crate::optim::OptimizerKind;
+use crate::relational::RelationalConfig;
 
 /// The blocks of a run whose settings do not say.
 pub const DEFAULT_BLOCKS: usize = 3;
@@ -79,9 +86,13 @@ pub enum Preset {
     /// `dqn-planes` with hindsight relabelling.
     HerPlanes,
     /// `dqfd-planes`' learner with the paper's network on the paper's screen.
-    DqfdPixels,
+    #[serde(alias = "dqfd-pixels")]
+    DqfdPaperScreen,
     /// `dqfd-planes`' learner with the `conv` network on the compact screen.
-    Pixels,
+    #[serde(alias = "pixels")]
+    DqfdScreen,
+    /// The relational policy of block moves ([`crate::relational`]), not a Q-network.
+    General,
 }
 
 sim::names!(Preset {
@@ -90,8 +101,13 @@ sim::names!(Preset {
     DqnPlanes = "dqn-planes",
     DqfdPlanes = "dqfd-planes",
     HerPlanes = "her-planes",
-    DqfdPixels = "dqfd-pixels",
-    Pixels = "pixels",
+    DqfdPaperScreen = "dqfd-paper-screen",
+    DqfdScreen = "dqfd-screen",
+    General = "general",
+} aliases {
+    // Their names before each said its screen (docs/results/dqn's records use them).
+    "dqfd-pixels" => DqfdPaperScreen,
+    "pixels" => DqfdScreen,
 } unknown(name) -> NeuralError {
     NeuralError::Config(format!("unknown preset {name:?}: choose {}", Preset::NAMES.join(", ")))
 });
@@ -103,7 +119,7 @@ impl Preset {
         match (obs, dqfd) {
             (ObsKind::PaperScreen, false) => Preset::Paper,
             (ObsKind::PaperScreen, true) => Preset::PaperDqfd,
-            (ObsKind::Screen, _) => Preset::Pixels,
+            (ObsKind::Screen, _) => Preset::DqfdScreen,
             (_, false) => Preset::DqnPlanes,
             (_, true) => Preset::DqfdPlanes,
         }
@@ -111,7 +127,8 @@ impl Preset {
 }
 
 /// The settings a user gave explicitly; `None` keeps what the preset says. The field names
-/// are `blockstack dqn`'s flags and Python's keyword arguments.
+/// are `blockstack dqn`'s flags and Python's keyword arguments (`--demos-file` is
+/// `demos_file`, given here as [`DemoSource::File`]).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct DqnOverrides {
     /// `--preset` (default [`Preset::default_for`] the observation and the loss).
@@ -174,8 +191,98 @@ pub struct DqnOverrides {
     pub backend: Option<Backend>,
     /// `--protocol`.
     pub protocol: Option<ActionProtocol>,
+    /// `--view`: a network learns the top view, the relational policy the side view; the
+    /// other is refused.
+    pub view: Option<View>,
     /// `--seed` (default 1).
     pub seed: Option<u64>,
+}
+
+/// What a run trains: a Q-network's run, or the `general` preset's relational policy.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Recipe {
+    /// A deep Q-network (every preset but `general`).
+    Network(Box<DqnConfig>),
+    /// The relational policy of block moves (`general`).
+    Relational(RelationalConfig),
+}
+
+impl Recipe {
+    /// The run the settings describe: the relational policy's ([`general_config`]) for the
+    /// `general` preset, else the network's ([`DqnConfig::resolve`]). `blockstack dqn` and
+    /// Python's `train_dqn` both call it.
+    pub fn resolve(settings: &DqnOverrides) -> Result<Recipe> {
+        match settings.preset {
+            Some(Preset::General) => Ok(Recipe::Relational(general_config(settings)?)),
+            _ => Ok(Recipe::Network(Box::new(DqnConfig::resolve(settings)?))),
+        }
+    }
+}
+
+/// The settings the `general` preset takes, by their names in [`DqnOverrides`] (the flags
+/// and keyword arguments): the most blocks of a training problem, the gradient steps per
+/// DAgger iteration, the batch, the learning rates, the hidden width and the seed.
+pub const GENERAL_SETTINGS: [&str; 7] = ["blocks", "steps", "batch", "lr", "lr_final", "hidden", "seed"];
+
+/// The `general` preset's relational policy with the settings it takes
+/// ([`GENERAL_SETTINGS`]), checked; any other setting given is refused, naming it.
+pub fn general_config(s: &DqnOverrides) -> Result<RelationalConfig> {
+    let given = [
+        ("obs", s.obs.is_some()),
+        ("net", s.net.is_some()),
+        ("loss", s.loss.is_some()),
+        ("goals", s.goals.is_some()),
+        ("grid", s.grid.is_some()),
+        ("pretrain", s.pretrain.is_some()),
+        ("demos", s.demos.is_some()),
+        ("reward", s.reward.is_some()),
+        ("gamma", s.gamma.is_some()),
+        ("optimizer", s.optimizer.is_some()),
+        ("td_loss", s.td_loss.is_some()),
+        ("buffer", s.buffer.is_some()),
+        ("double", s.double.is_some()),
+        ("mask_noops", s.mask_noops.is_some()),
+        ("batch_norm", s.batch_norm.is_some()),
+        ("screen", s.screen.is_some()),
+        ("margin", s.margin.is_some()),
+        ("hindsight", s.hindsight.is_some()),
+        ("demo_share", s.demo_share.is_some()),
+        ("horizon", s.horizon.is_some()),
+        ("backend", s.backend.is_some()),
+        ("protocol", s.protocol.is_some()),
+        ("view", s.view == Some(View::Top)),
+    ];
+    if let Some(&(setting, _)) = given.iter().find(|(_, g)| *g) {
+        let setting = match (setting, &s.demos) {
+            // A recording is its own flag.
+            ("demos", Some(DemoSource::File(_))) => "demos_file",
+            _ => setting,
+        };
+        return Err(NeuralError::NotForGeneral { setting });
+    }
+    let mut c = RelationalConfig::general();
+    c.seed = s.seed.unwrap_or(1);
+    if let Some(b) = s.blocks {
+        c.max_blocks = b;
+    }
+    if let Some(steps) = s.steps {
+        c.steps = steps;
+    }
+    if let Some(b) = s.batch {
+        c.batch = b;
+    }
+    if let Some(lr) = s.lr {
+        c.lr_final *= lr / c.lr;
+        c.lr = lr;
+    }
+    if let Some(lr) = s.lr_final {
+        c.lr_final = lr;
+    }
+    if let Some(h) = s.hidden {
+        c.shape.hidden = h;
+    }
+    c.validate()?;
+    Ok(c)
 }
 
 /// The network of `kind` as a preset would build it: the paper's with its batch
@@ -205,6 +312,13 @@ impl DqnConfig {
     /// setting), checked.
     pub fn resolve(settings: &DqnOverrides) -> Result<DqnConfig> {
         let s = settings;
+        if s.view == Some(View::Side) {
+            return Err(NeuralError::Config(
+                "view side: a network learns the top view only (train a tabular learner for the side view, \
+                 or the relational policy: the general preset)"
+                    .into(),
+            ));
+        }
         if let Some(obs) = s.obs {
             input::check_network_obs(obs)?;
         }
@@ -346,10 +460,16 @@ impl DqnConfig {
         })
     }
 
-    /// The preset `preset` for `blocks` blocks, every goal, seed 1.
+    /// The preset `preset` for `blocks` blocks, every goal, seed 1; an error for `general`,
+    /// which trains no network ([`Recipe::resolve`]).
     pub fn preset(preset: Preset, blocks: usize) -> Result<DqnConfig> {
         let paper = DqnConfig::paper(blocks)?;
         Ok(match preset {
+            Preset::General => {
+                return Err(NeuralError::Config(
+                    "the general preset trains a relational policy, not a network".into(),
+                ));
+            }
             Preset::Paper => paper,
             Preset::PaperDqfd => DqnConfig {
                 demos: DemoSource::Exact(500),
@@ -361,8 +481,8 @@ impl DqnConfig {
             Preset::DqnPlanes => DqnConfig::dqn_planes(paper),
             Preset::DqfdPlanes => DqnConfig::dqfd_planes(paper),
             Preset::HerPlanes => DqnConfig::her_planes(paper),
-            Preset::DqfdPixels => DqnConfig::dqfd_pixels(paper),
-            Preset::Pixels => DqnConfig::pixels(paper),
+            Preset::DqfdPaperScreen => DqnConfig::dqfd_paper_screen(paper),
+            Preset::DqfdScreen => DqnConfig::dqfd_screen(paper),
         })
     }
 
@@ -393,7 +513,7 @@ impl DqnConfig {
         }
     }
 
-    fn dqfd_pixels(paper: DqnConfig) -> DqnConfig {
+    fn dqfd_paper_screen(paper: DqnConfig) -> DqnConfig {
         let blocks = paper.world.blocks;
         // A DQfD step of the paper network costs about 40 ms here, a step of the small one
         // 2 ms: a budget of minutes buys a few thousand steps, so the demonstrations carry
@@ -420,7 +540,7 @@ impl DqnConfig {
         }
     }
 
-    fn pixels(paper: DqnConfig) -> DqnConfig {
+    fn dqfd_screen(paper: DqnConfig) -> DqnConfig {
         let planes = DqnConfig::dqfd_planes(paper).with_net(NetConfig::conv());
         // On 2 blocks two thirds of the planes' budget reach every goal on every test start
         // (1,000 of 1,000 at 1.000x with 20,000 + 20,000 steps, docs/results/dqn), in about
@@ -476,8 +596,10 @@ mod tests {
     #[test]
     fn every_preset_is_valid_and_the_paper_is_the_papers() {
         for preset in Preset::ALL {
-            DqnConfig::preset(preset, 3).unwrap().validate().unwrap();
             assert_eq!(preset.name().parse::<Preset>().unwrap(), preset);
+            if preset != Preset::General {
+                DqnConfig::preset(preset, 3).unwrap().validate().unwrap();
+            }
         }
         let p = DqnConfig::preset(Preset::Paper, 3).unwrap();
         assert_eq!(
@@ -486,12 +608,16 @@ mod tests {
         );
         assert_eq!(p.optimizer, OptimizerKind::Rmsprop);
         assert_eq!(p.world.reward.name(), "sparse");
+        // The names before each said its screen are still read.
+        assert_eq!("pixels".parse::<Preset>().unwrap(), Preset::DqfdScreen);
+        assert_eq!("dqfd-pixels".parse::<Preset>().unwrap(), Preset::DqfdPaperScreen);
+        assert!(!Preset::NAMES.contains(&"pixels"));
         let e = "nope".parse::<Preset>().unwrap_err().to_string();
         assert!(e.contains("unknown preset") && e.contains("dqfd-planes"), "{e}");
     }
 
     #[test]
-    fn dqfd_planes_budget_grows_with_the_blocks_and_pixels_keep_their_own() {
+    fn dqfd_planes_budget_grows_with_the_blocks_and_the_screens_keep_their_own() {
         let budget = |preset, blocks| {
             let c = DqnConfig::preset(preset, blocks).unwrap();
             (c.demos, c.pretrain_steps, c.steps)
@@ -510,12 +636,15 @@ mod tests {
                 (DemoSource::Exact(40_000), 360_000, 360_000)
             );
             assert_eq!(
-                budget(Preset::DqfdPixels, blocks),
+                budget(Preset::DqfdPaperScreen, blocks),
                 (DemoSource::Exact(5_000), 15_000, 15_000)
             );
         }
-        assert_eq!(budget(Preset::Pixels, 2), (DemoSource::Exact(10_000), 20_000, 20_000));
-        assert_eq!(budget(Preset::Pixels, 3), budget(Preset::DqfdPlanes, 3));
+        assert_eq!(
+            budget(Preset::DqfdScreen, 2),
+            (DemoSource::Exact(10_000), 20_000, 20_000)
+        );
+        assert_eq!(budget(Preset::DqfdScreen, 3), budget(Preset::DqfdPlanes, 3));
     }
 
     #[test]
@@ -600,5 +729,137 @@ mod tests {
             let e = DqnConfig::resolve(&bad).unwrap_err().to_string();
             assert!(e.contains(says), "{e}");
         }
+    }
+
+    #[test]
+    fn the_general_preset_resolves_to_the_relational_policy_with_the_settings_it_takes() {
+        let general = |o: DqnOverrides| {
+            Recipe::resolve(&DqnOverrides {
+                preset: Some(Preset::General),
+                ..o
+            })
+        };
+        assert_eq!(
+            general(DqnOverrides::default()).unwrap(),
+            Recipe::Relational(RelationalConfig::general())
+        );
+        let Recipe::Relational(c) = general(DqnOverrides {
+            blocks: Some(4),
+            steps: Some(20),
+            lr: Some(6e-3),
+            seed: Some(9),
+            view: Some(View::Side),
+            ..DqnOverrides::default()
+        })
+        .unwrap() else {
+            panic!("not the relational policy")
+        };
+        assert_eq!((c.max_blocks, c.steps, c.seed), (4, 20, 9));
+        assert!((c.lr_final - 6e-4).abs() < 1e-12, "{}", c.lr_final);
+        for (bad, setting) in [
+            (
+                DqnOverrides {
+                    gamma: Some(0.9),
+                    ..DqnOverrides::default()
+                },
+                "gamma",
+            ),
+            (
+                DqnOverrides {
+                    demos: Some(DemoSource::File("d.jsonl".into())),
+                    ..DqnOverrides::default()
+                },
+                "demos_file",
+            ),
+            (
+                DqnOverrides {
+                    view: Some(View::Top),
+                    ..DqnOverrides::default()
+                },
+                "view",
+            ),
+        ] {
+            match general(bad) {
+                Err(NeuralError::NotForGeneral { setting: s }) => assert_eq!(s, setting),
+                other => panic!("{other:?}"),
+            }
+        }
+        assert!(
+            general(DqnOverrides {
+                blocks: Some(9),
+                ..DqnOverrides::default()
+            })
+            .is_err()
+        );
+        // A network's run is the network resolver's; the side view is not a network's.
+        assert_eq!(
+            Recipe::resolve(&DqnOverrides::default()).unwrap(),
+            Recipe::Network(Box::new(DqnConfig::preset(Preset::DqnPlanes, 3).unwrap()))
+        );
+        let side = DqnOverrides {
+            view: Some(View::Side),
+            ..DqnOverrides::default()
+        };
+        assert!(
+            Recipe::resolve(&side)
+                .unwrap_err()
+                .to_string()
+                .contains("top view only")
+        );
+        assert!(DqnConfig::preset(Preset::General, 3).is_err());
+    }
+
+    #[test]
+    fn sizes_that_cannot_be_allocated_are_refused_up_front() {
+        let base = || DqnConfig::preset(Preset::DqnPlanes, 3).unwrap();
+        let refused = |c: DqnConfig, words: &str| {
+            let e = c.validate().unwrap_err().to_string();
+            assert!(e.contains(words), "{e}");
+        };
+        refused(
+            DqnConfig {
+                batch: 1_000_000_000_000,
+                ..base()
+            },
+            "--batch 1000000000000",
+        );
+        refused(
+            DqnConfig {
+                batch: 1_000_000,
+                buffer: 1_000_000,
+                ..base()
+            },
+            "--batch 1000000",
+        );
+        refused(
+            DqnConfig {
+                batch: 2_000,
+                buffer: 1_000,
+                ..base()
+            },
+            "larger than the buffer",
+        );
+        refused(
+            DqnConfig {
+                demos: DemoSource::Exact(1_000_000_000),
+                ..base()
+            },
+            "--demos exact:1000000000",
+        );
+        refused(
+            DqnConfig {
+                buffer: usize::MAX,
+                steps: u64::MAX,
+                ..base()
+            },
+            "--buffer",
+        );
+        // A large buffer is fine when the run is too short to fill it.
+        DqnConfig {
+            buffer: usize::MAX,
+            ..base()
+        }
+        .validate()
+        .unwrap();
     }
 }

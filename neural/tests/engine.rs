@@ -474,8 +474,8 @@ fn one_thread_or_two_train_the_same_network_bit_for_bit() {
     for (preset, screen, batch) in [
         (neural::Preset::DqfdPlanes, None, 64),
         (neural::Preset::PaperDqfd, None, 16),
-        (neural::Preset::Pixels, None, 64),
-        (neural::Preset::Pixels, Some(ScreenGoal::Paper), 64),
+        (neural::Preset::DqfdScreen, None, 64),
+        (neural::Preset::DqfdScreen, Some(ScreenGoal::Paper), 64),
     ] {
         let one = trained(preset, screen, batch, 1);
         assert_eq!(one, trained(preset, screen, batch, 2), "{preset} {screen:?}");

@@ -42,7 +42,7 @@ fn the_conv_network_on_the_papers_screen_acts_on_it_as_on_the_state() {
 /// the state, among every action or some.
 fn acts_on_its_picture_as_on_the_state(net: NetConfig, kind: ObsKind) {
     use rand::RngExt;
-    let dqn = untrained(neural::Preset::Pixels, net);
+    let dqn = untrained(neural::Preset::DqfdScreen, net);
     assert_eq!(dqn.picture(), Some(kind));
     let input = *dqn.net().input();
     let count = Action::count(3);
@@ -99,7 +99,7 @@ fn acts_on_its_picture_as_on_the_state(net: NetConfig, kind: ObsKind) {
 #[test]
 fn networks_that_no_environment_shows_refuse_a_picture() {
     let strip = untrained(
-        neural::Preset::Pixels,
+        neural::Preset::DqfdScreen,
         NetConfig {
             screen: ScreenGoal::Strip,
             ..small_conv()

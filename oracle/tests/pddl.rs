@@ -75,7 +75,8 @@ fn a_huge_file_is_refused_before_it_is_read() {
 #[test]
 fn legal_pddl_other_tools_write_is_read() {
     let files = corpus("good");
-    let upper = Problem::read(&files[1]).unwrap();
+    let named = |name: &str| files.iter().find(|f| f.ends_with(name)).unwrap().clone();
+    let upper = Problem::read(&named("upper_case.pddl")).unwrap();
     assert_eq!(upper.name(), "BLOCKS-3-0");
     assert_eq!(upper.block_names(), ["C", "A", "B"]);
     // A on B; C alone. Goal: C on B on A.
@@ -89,7 +90,7 @@ fn legal_pddl_other_tools_write_is_read() {
     );
     upper.replay(&actions).unwrap();
 
-    let partial = Problem::read(&files[0]).unwrap();
+    let partial = Problem::read(&named("partial_goal.pddl")).unwrap();
     // b1 on b2 on b3; b4. Goal: b2 on b1 on the table; b3 and b4 free.
     assert!(!partial.goal().is_named(2) && !partial.goal().is_named(3));
     let exact = ExactMoves::new().solve(partial.start(), partial.goal()).unwrap();
@@ -97,6 +98,57 @@ fn legal_pddl_other_tools_write_is_read() {
     partial
         .replay(&pddl::actions(partial.start(), &exact).unwrap())
         .unwrap();
+
+    // ontable and handempty, (either ...) types, a unit-cost metric and its initial cost.
+    let other = Problem::read(&named("other_tools.pddl")).unwrap();
+    assert_eq!(other.block_names(), ["a", "b"]);
+    assert_eq!(other.start().towers(), vec![vec![0, 1]]);
+    assert_eq!(other.goal().towers(), [vec![1, 0]]);
+    assert!(other.init_facts().contains(&Fact::ArmEmpty));
+}
+
+#[test]
+fn a_domain_file_gives_the_plan_its_action_names_and_must_be_the_problems() {
+    let hyphenated = pddl::Domain::parse(
+        "(define (domain BLOCKS) (:requirements :strips :typing) (:types block)
+          (:predicates (on ?x - block ?y - block) (ontable ?x - block) (clear ?x - block) (handempty) (holding ?x - block))
+          (:action pick-up :parameters (?x - block) :precondition (and (clear ?x) (ontable ?x) (handempty))
+            :effect (and (not (ontable ?x)) (not (clear ?x)) (not (handempty)) (holding ?x)))
+          (:action put-down :parameters (?x - block) :precondition (holding ?x)
+            :effect (and (not (holding ?x)) (clear ?x) (handempty) (ontable ?x)))
+          (:action stack :parameters (?x - block ?y - block) :precondition (and (holding ?x) (clear ?y))
+            :effect (and (not (holding ?x)) (not (clear ?y)) (clear ?x) (handempty) (on ?x ?y)))
+          (:action unstack :parameters (?x - block ?y - block) :precondition (and (on ?x ?y) (clear ?x) (handempty))
+            :effect (and (holding ?x) (clear ?y) (not (clear ?x)) (not (handempty)) (not (on ?x ?y)))))",
+    )
+    .unwrap();
+    let text = "(define (problem p) (:domain blocks) (:objects b1 b2 b3)
+      (:init (handempty) (clear b3) (on b3 b1) (ontable b1) (clear b2) (ontable b2))
+      (:goal (and (on b1 b2) (ontable b2))))";
+    let problem = Problem::parse_in(text, "p.pddl", Some(&hyphenated)).unwrap();
+    let plan = problem.solve(&NearOptimal::new()).unwrap();
+    let printed = plan.text(&problem);
+    assert!(
+        printed.starts_with("(unstack b3 b1)\n(put-down b3)\n(pick-up b1)\n(stack b1 b2)\n"),
+        "{printed}"
+    );
+    // The plan reads back, in either spelling, and replays.
+    assert_eq!(problem.parse_plan(&printed).unwrap(), plan.actions);
+    let plain = Problem::parse(text).unwrap();
+    assert_eq!(plain.parse_plan(&printed).unwrap(), plan.actions);
+    assert!(plain.plan_text(&plan.actions).contains("(putdown b3)"));
+    // A problem of another domain than the file's is refused, naming both.
+    let err = Problem::parse_in(
+        &text.replace("(:domain blocks)", "(:domain bw)"),
+        "p.pddl",
+        Some(&hyphenated),
+    )
+    .unwrap_err()
+    .to_string();
+    assert_eq!(
+        err,
+        "p.pddl, line 1: the problem is of the domain bw, but the domain file defines BLOCKS"
+    );
 }
 
 #[test]

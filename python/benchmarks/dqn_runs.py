@@ -119,6 +119,20 @@ def table(_args: argparse.Namespace) -> None:
     print(f"wrote {(RESULTS / 'README.md').relative_to(ROOT)}")
 
 
+#: Presets renamed since records were made, by their old names: a record keeps the command
+#: it ran; the table shows it with today's name (the same preset, the same network).
+RENAMED_PRESETS = {"pixels": "dqfd-screen", "dqfd-pixels": "dqfd-paper-screen"}
+
+
+def current_command(command: str) -> str:
+    """``command`` with each renamed preset (:data:`RENAMED_PRESETS`) under today's name."""
+    words = command.split(" ")
+    for k in range(1, len(words)):
+        if words[k - 1] == "--preset" and words[k] in RENAMED_PRESETS:
+            words[k] = RENAMED_PRESETS[words[k]]
+    return " ".join(words)
+
+
 def render_table() -> str:
     """docs/results/dqn/README.md as the records beside it make it."""
     rows = []
@@ -131,7 +145,7 @@ def render_table() -> str:
         reached = games - e["failures"]
         worst = min(g["episodes"] - g["failures"] for g in e["per_goal"]) / min(g["episodes"] for g in e["per_goal"])
         rows.append(
-            f"| `{r['name']}` | `{t['command']}` | {100 * reached / games:.1f} % ({reached:,} of {games:,}) "
+            f"| `{r['name']}` | `{current_command(t['command'])}` | {100 * reached / games:.1f} % ({reached:,} of {games:,}) "
             f"| {100 * worst:.1f} % | {e['mean_ratio_to_optimum']:.3f}x | {minutes(t['wall_seconds'])} "
             f"| {t['user_seconds']:,.0f} s | {t['other_cores_busy']:.2f} |"
         )
@@ -145,7 +159,10 @@ def render_table() -> str:
             "Reached: games that reached the goal; worst goal: the lowest per-goal share; ratio: steps",
             "over the shortest plan, over the games that reached the goal; wall and user CPU: the",
             "training alone; others: cores kept busy by other processes while it trained, on average",
-            "(0 on a quiet machine; the machine's cores are in each record).",
+            "(0 on a quiet machine; the machine's cores are in each record). A record made before a",
+            "preset was renamed keeps its command; the table shows it with today's name ("
+            + ", ".join(f"`{old}` is `{new}`" for old, new in RENAMED_PRESETS.items())
+            + ").",
             "",
             "| run | training | reached | worst goal | ratio | wall | user CPU | others |",
             "|---|---|---|---|---|---|---|---|",

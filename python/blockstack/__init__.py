@@ -20,7 +20,7 @@ the classic Blocks World seen from the side) with Gymnasium::
 - :func:`demonstrations` and :func:`read_recording`: expert trajectories, and the CLI's
   recordings, as dicts of numpy arrays; :func:`to_minari`: recordings as a Minari
   dataset for offline learners.
-- :func:`load`: a trained model file of either kind, played and evaluated with
+- :func:`load`: a trained model file of any kind (q, dqn, relational), played and evaluated with
   Stable-Baselines3's conventions (:class:`Model`).
 - :func:`train`: the Rust tabular trainer, in-process; ``python -m blockstack.sweep`` runs
   grids of it on Ray.

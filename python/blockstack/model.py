@@ -37,9 +37,6 @@ from blockstack import _native
 from blockstack._checks import U32_MAX, whole, whole_numbers
 from blockstack.env import StackEnv
 
-# The test policy's exploration when ``deterministic=False`` (the paper's test epsilon).
-TEST_EPSILON = 0.1
-
 
 class Model:
     """A trained model read from a file (:func:`load`)."""
@@ -55,6 +52,13 @@ class Model:
         """``q`` (a tabular Q-agent), ``dqn`` (a network) or ``relational`` (a relational
         policy of block moves)."""
         return self._native.kind
+
+    @property
+    def default_epsilon(self) -> float:
+        """The probability of a random legal action the model plays with unless told
+        otherwise, as ``blockstack run`` and ``blockstack eval`` play it: its profile's test
+        policy (0.1) for a tabular model or a network, 0 for a relational policy."""
+        return self._native.default_epsilon
 
     @property
     def name(self) -> str:
@@ -101,8 +105,10 @@ class Model:
         grid: Optional[Tuple[int, int]] = None,
         info: Optional[dict] = None,
     ) -> Tuple[int, None]:
-        """``(action, None)``: the greedy action, or with ``deterministic=False`` a random
-        legal action with probability 0.1 (the paper's test policy). ``state`` and
+        """``(action, None)``: the greedy action, or with ``deterministic=False`` the model's
+        default play, as ``blockstack run`` plays it: a random legal action with probability
+        :attr:`default_epsilon` (0.1 for a tabular model or a network, the paper's test policy;
+        a relational policy plays greedy). ``state`` and
         ``episode_start`` are Stable-Baselines3's arguments for recurrent policies, unused
         here.
 
@@ -111,10 +117,10 @@ class Model:
         a relational policy the action is a block move of an environment with
         ``actions="moves"`` on ``grid`` (default: the model's world's grid). For a network on
         pixels ``observation`` may be the picture it reads (the environment's
-        ``paper-screen``, or ``screen`` for a ``pixels`` network) with the step's ``info``
+        ``paper-screen``, or ``screen`` for a ``dqfd-screen`` network) with the step's ``info``
         (its ``goal``, ``goal_tower`` and ``action_mask``): greedy among the legal actions,
         since the no-op mask ``blockstack run`` adds needs the state."""
-        epsilon = 0.0 if deterministic else TEST_EPSILON
+        epsilon = 0.0 if deterministic else self.default_epsilon
         if isinstance(observation, np.ndarray) and self.picture is not None:
             if info is None or not {"goal", "action_mask"} <= set(info):
                 raise ValueError(
@@ -161,22 +167,26 @@ class Model:
         episodes: int = 500,
         seed: int = 2,
         goals: Optional[str] = None,
-        epsilon: float = TEST_EPSILON,
+        epsilon: Optional[float] = None,
         backend: str = "physics",
         horizon: int = 1000,
     ) -> dict:
         """Plays ``episodes`` seeded starts on each goal (``goals`` ``:``-separated, default
-        every goal) in the model's own world and returns what ``blockstack eval --model PATH
-        --json`` prints with the same settings."""
+        every goal) in the model's own world, with ``epsilon`` (default :attr:`default_epsilon`,
+        as ``eval``'s), and returns what ``blockstack eval --model PATH --json`` prints with the
+        same settings."""
         episodes = whole("episodes", episodes)
         seed = whole("seed", seed)
         horizon = whole("horizon", horizon, 0, U32_MAX)
-        if isinstance(epsilon, bool) or not isinstance(epsilon, (int, float, np.integer, np.floating)):
+        if epsilon is not None and (
+            isinstance(epsilon, bool) or not isinstance(epsilon, (int, float, np.integer, np.floating))
+        ):
             raise ValueError(f"epsilon is a probability (a number in [0, 1]), not {epsilon!r}")
         for name, value in (("goals", goals), ("backend", backend)):
             if value is not None and not isinstance(value, str):
                 raise ValueError(f"{name} is text, not {value!r}")
-        return json.loads(self._native.evaluate(episodes, seed, goals, float(epsilon), backend, horizon))
+        epsilon = None if epsilon is None else float(epsilon)
+        return json.loads(self._native.evaluate(episodes, seed, goals, epsilon, backend, horizon))
 
 
 def _whole_array(name: str, value: Any) -> np.ndarray:

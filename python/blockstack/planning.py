@@ -84,7 +84,7 @@ def _name(name: str, value) -> Optional[str]:
 
 
 def solve_pddl(path, solver: Optional[str] = None, model=None, budget: Optional[int] = None,
-               time_limit: Optional[float] = None) -> dict:
+               time_limit: Optional[float] = None, domain=None, plan_file=None) -> dict:
     """The plan of the PDDL problem ``path``, as ``blockstack solve --pddl`` makes it: by the
     planner ``solver`` names (``"near-optimal"``, the default, ``"optimal"`` or ``"exact"``)
     or by the relational policy in the model file ``model``, checked by replaying it over
@@ -92,11 +92,19 @@ def solve_pddl(path, solver: Optional[str] = None, model=None, budget: Optional[
     (no plan costs less), ``optimal`` (the cost meets the bound), ``certificate`` (the
     bound's parts in block moves: ``misplaced``, ``forced``, ``breakers``), ``plan`` (the
     actions) and ``text`` (the plan file). ``budget`` is the exact solver's states,
-    ``time_limit`` the optimal solver's seconds. A file or option refused is a
-    ``ValueError``.
+    ``time_limit`` the optimal solver's seconds.
+
+    ``domain`` is the problem's domain file, as ``blockstack solve --domain`` reads it: the
+    4-operator Blocks World in either spelling (``pickup``/``putdown`` or
+    ``pick-up``/``put-down``), whose action names the plan takes. ``plan_file`` is a file
+    the plan text is written to, as ``--plan-file`` writes it (atomically; only a regular
+    file or a new path). A file or option refused is a ``ValueError``.
     """
     model = None if model is None else _path("model", model)
-    return _native.solve_pddl(_path("path", path), _name("solver", solver), model, budget, time_limit)
+    domain = None if domain is None else _path("domain", domain)
+    plan_file = None if plan_file is None else _path("plan_file", plan_file)
+    return _native.solve_pddl(_path("path", path), _name("solver", solver), model, budget, time_limit,
+                              domain, plan_file)
 
 
 def solve_all(folder, solver: Optional[str] = None, model=None, bounds=None, budget: Optional[int] = None,

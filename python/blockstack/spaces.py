@@ -27,7 +27,7 @@ def observation_space(obs: str, blocks: int, grid: Tuple[int, int]) -> spaces.Sp
     - ``frame``: ``Box`` of ``uint8``, the rendered picture ``(height, width, 3)``, the goal
       drawn beside the grid (what ``render_mode="rgb_array"`` returns).
     - ``paper-screen``: ``Box`` of ``uint8``, ``(100, 100, 3)``: the paper's DQN input.
-    - ``screen``: ``Box`` of ``uint8``, ``(4H, 4W, 3)``: the compact screen of the ``pixels``
+    - ``screen``: ``Box`` of ``uint8``, ``(4H, 4W, 3)``: the compact screen of the ``dqfd-screen``
       networks, every block in the colour of its place in the goal.
     - ``state``: ``Dict`` of ``blocks`` (``(N, 2)`` int64 cells), ``held`` (the held block's
       id, -1 for none), ``goal`` (``(N,)`` int64: the goal's blocks tower by tower, each

@@ -9,7 +9,8 @@ defaults): ``train``, shared by every run, and ``sweep``, whose every flag is a 
 combination of their values is one run. ``command`` in ``train`` says which trainer:
 ``"train"`` (the default: :func:`blockstack.train`, ``blockstack train``'s flags) or
 ``"dqn"`` (:func:`blockstack.train_dqn`, ``blockstack dqn``'s flags: any preset and
-flag). Both take ``checkpoint_every`` and evaluate each run with ``eval_episodes``,
+flag). Every run's flags and files are checked before Ray starts, by its trainer itself
+(``check=True``: the resolver and readers the run uses), in one line naming the config file. Both take ``checkpoint_every`` and evaluate each run with ``eval_episodes``,
 ``eval_goals``, ``eval_seed`` and ``eval_epsilon``::
 
     [train]
@@ -67,7 +68,7 @@ import time
 from typing import Any, Dict, List, Optional, Tuple
 
 from blockstack import _native, _ray
-from blockstack.training import check_dqn_settings, check_settings
+from blockstack.training import DQN_SETTINGS, SETTINGS, check_dqn_settings, check_settings
 
 #: The most runs one sweep may have: combinations are counted before any is built.
 MAX_RUNS = 100_000
@@ -77,6 +78,9 @@ COMMANDS = ("train", "dqn")
 
 #: Flags the sweep sets for each run itself.
 OWN_FLAGS = ("out", "checkpoint", "resume")
+
+#: The trainers' keyword that checks a run without training it (:func:`check_runs`).
+CHECK_FLAG = "check"
 
 #: Flags that name a file a run reads: its contents are part of the run's key.
 FILE_FLAGS = ("demos_file",)
@@ -139,18 +143,51 @@ def command_of(config: Dict[str, Dict[str, Any]]) -> str:
     return config["train"].get("command", "train")
 
 
-def runs(config: Dict[str, Dict[str, Any]]) -> List[Dict[str, Any]]:
+def settings_of(command: str) -> List[str]:
+    """The settings a sweep's config may give ``command``'s runs: the trainer's, but the
+    files the sweep sets itself and the check it makes."""
+    names = SETTINGS if command == "train" else DQN_SETTINGS
+    return [n for n in names if n not in OWN_FLAGS and n != CHECK_FLAG]
+
+
+def runs(config: Dict[str, Dict[str, Any]], path: Optional[str] = None) -> List[Dict[str, Any]]:
     """The flags of every run: each combination of the sweep's values over the shared flags,
-    each checked as its trainer checks its settings before training."""
+    each checked as its trainer checks its settings before training. A ``ValueError`` names
+    the config file ``path`` (when given) and the flag."""
+    where = f"{path}: " if path else ""
     command = command_of(config)
     check = check_settings if command == "train" else check_dqn_settings
     shared = {k: v for k, v in config["train"].items() if k != "command"}
     swept = config["sweep"]
     own = sorted(set(OWN_FLAGS) & (set(shared) | set(swept)))
     if own:
-        raise ValueError(f"{', '.join(own)}: the sweep sets each run's files itself (see --storage)")
+        raise ValueError(f"{where}{', '.join(own)}: the sweep sets each run's files itself (see --storage)")
+    allowed = settings_of(command)
+    unknown = sorted((set(shared) | set(swept)) - set(allowed))
+    if unknown:
+        raise ValueError(
+            f"{where}unknown flag(s) {', '.join(unknown)} for command {command!r}: the flags are {', '.join(allowed)}"
+        )
     names = list(swept)
-    return [check(dict(shared, **dict(zip(names, values)))) for values in itertools.product(*swept.values())]
+    try:
+        return [check(dict(shared, **dict(zip(names, values)))) for values in itertools.product(*swept.values())]
+    except ValueError as e:
+        raise ValueError(f"{where}{e}") from None
+
+
+def check_runs(command: str, all_runs: List[Dict[str, Any]], swept: List[str], path: str) -> None:
+    """Every run's settings resolved and its files read by the trainer itself
+    (``check=True``: the same resolver and readers the run uses, training nothing), so that
+    a run that would fail on its flags or files fails here, before Ray starts: a
+    ``ValueError`` naming the config file ``path`` and the run."""
+    import blockstack
+
+    trainer = blockstack.train if command == "train" else blockstack.train_dqn
+    for flags in all_runs:
+        try:
+            trainer(**flags, **{CHECK_FLAG: True})
+        except ValueError as e:
+            raise ValueError(f"{path}: run {_describe(flags, swept)}: {e}") from None
 
 
 def run_name(command: str, flags: Dict[str, Any]) -> str:
@@ -247,7 +284,8 @@ def main(argv=None) -> int:
             raise ValueError(f"--retries must be 0 or more, not {args.retries}")
         config = read_config(args.config)
         command = command_of(config)
-        all_runs = runs(config)
+        all_runs = runs(config, args.config)
+        check_runs(command, all_runs, list(config["sweep"]), args.config)
         names = [run_name(command, flags) for flags in all_runs]
         _native.check_output(args.out)  # before any run, not after all of them
         _native.check_folder(storage)

@@ -371,89 +371,103 @@ pub fn recording_episodes<'py>(
         out.set_item("note", note)?;
         let episodes = pyo3::types::PyList::empty(py);
         for e in &read.episodes {
-            let Some(last) = e.steps.last() else { continue };
-            let blocks = e.goal.block_count();
-            let protocol = e.world.as_ref().map_or(sim::ActionProtocol::Free, |w| w.protocol);
-            let first = Observation {
-                grid: e.grid,
-                state: e.start.clone(),
-                goal: e.goal.clone(),
-                protocol,
-                view: e.view,
-            };
-            let observations: Vec<Observation> = std::iter::once(first.clone())
-                .chain(e.steps.iter().map(|s| Observation {
-                    state: s.state.clone(),
-                    ..first.clone()
-                }))
-                .collect();
-            let ended = last.terminated || last.truncated;
-            let n = e.steps.len();
-            let d = PyDict::new(py);
-            d.set_item("observations", encode(py, kind, &observations, e.grid, blocks)?)?;
-            d.set_item(
-                "actions",
-                PyArray1::from_vec(py, e.steps.iter().map(|s| s.action.index() as i64).collect()),
-            )?;
-            d.set_item(
-                "rewards",
-                PyArray1::from_vec(py, e.steps.iter().map(|s| s.reward).collect()),
-            )?;
-            d.set_item(
-                "terminations",
-                PyArray1::from_vec(py, e.steps.iter().map(|s| s.terminated).collect()),
-            )?;
-            // Cut short (a crash, the person switching modes): truncated at its last step.
-            let truncations: Vec<bool> = e
-                .steps
-                .iter()
-                .enumerate()
-                .map(|(k, s)| s.truncated || (!ended && k + 1 == n))
-                .collect();
-            d.set_item("truncations", PyArray1::from_vec(py, truncations))?;
-            d.set_item(
-                "person",
-                PyArray1::from_vec(py, e.steps.iter().map(|s| s.demonstrated).collect()),
-            )?;
-            let time = |f: fn(&agent::demos::DemoStep) -> Option<u64>| -> Vec<i64> {
-                e.steps.iter().map(|s| f(s).map_or(-1, |t| t as i64)).collect()
-            };
-            d.set_item("t_ms", PyArray1::from_vec(py, time(|s| s.time.t_ms)))?;
-            d.set_item("received_ms", PyArray1::from_vec(py, time(|s| s.time.received_ms)))?;
-            d.set_item("episode", e.episode)?;
-            d.set_item("goal", e.goal.to_string())?;
-            d.set_item("view", e.view.to_string())?;
-            d.set_item("grid", (e.grid.width(), e.grid.height()))?;
-            d.set_item("blocks", blocks)?;
-            d.set_item("started_ms", e.started_ms)?;
-            d.set_item("ended", ended)?;
-            match &e.participant {
-                Some(p) => {
-                    let who = PyDict::new(py);
-                    who.set_item("number", p.number)?;
-                    who.set_item("condition", &p.condition)?;
-                    who.set_item("code", &p.code)?;
-                    who.set_item("ids", p.ids.clone())?;
-                    d.set_item("participant", who)?;
-                }
-                None => d.set_item("participant", py.None())?,
+            if let Some(d) = episode_dict(py, kind, e)? {
+                episodes.append(d)?;
             }
-            match &e.world {
-                Some(w) => {
-                    let world = PyDict::new(py);
-                    world.set_item("reward", &w.reward)?;
-                    world.set_item("protocol", w.protocol.to_string())?;
-                    world.set_item("start", w.start.to_string())?;
-                    world.set_item("horizon", w.horizon)?;
-                    d.set_item("world", world)?;
-                }
-                None => d.set_item("world", py.None())?,
-            }
-            episodes.append(d)?;
         }
         out.set_item("episodes", episodes)?;
         Ok(out)
     })
+}
+
+/// One episode of a recording as [`recording_episodes`] gives it, its observations encoded
+/// as `kind`; `None` for an episode without a step.
+fn episode_dict<'py>(
+    py: Python<'py>,
+    kind: ObsKind,
+    e: &agent::demos::DemoEpisode,
+) -> PyResult<Option<Bound<'py, PyDict>>> {
+    let Some(last) = e.steps.last() else {
+        return Ok(None);
+    };
+    let blocks = e.goal.block_count();
+    let protocol = e.world.as_ref().map_or(sim::ActionProtocol::Free, |w| w.protocol);
+    let first = Observation {
+        grid: e.grid,
+        state: e.start.clone(),
+        goal: e.goal.clone(),
+        protocol,
+        view: e.view,
+    };
+    let observations: Vec<Observation> = std::iter::once(first.clone())
+        .chain(e.steps.iter().map(|s| Observation {
+            state: s.state.clone(),
+            ..first.clone()
+        }))
+        .collect();
+    let ended = last.terminated || last.truncated;
+    let n = e.steps.len();
+    let d = PyDict::new(py);
+    d.set_item("observations", encode(py, kind, &observations, e.grid, blocks)?)?;
+    d.set_item(
+        "actions",
+        PyArray1::from_vec(py, e.steps.iter().map(|s| s.action.index() as i64).collect()),
+    )?;
+    d.set_item(
+        "rewards",
+        PyArray1::from_vec(py, e.steps.iter().map(|s| s.reward).collect()),
+    )?;
+    d.set_item(
+        "terminations",
+        PyArray1::from_vec(py, e.steps.iter().map(|s| s.terminated).collect()),
+    )?;
+    // Cut short (a crash, the person switching modes): truncated at its last step.
+    let truncations: Vec<bool> = e
+        .steps
+        .iter()
+        .enumerate()
+        .map(|(k, s)| s.truncated || (!ended && k + 1 == n))
+        .collect();
+    d.set_item("truncations", PyArray1::from_vec(py, truncations))?;
+    d.set_item(
+        "person",
+        PyArray1::from_vec(py, e.steps.iter().map(|s| s.demonstrated).collect()),
+    )?;
+    let time = |f: fn(&agent::demos::DemoStep) -> Option<u64>| -> Vec<i64> {
+        e.steps.iter().map(|s| f(s).map_or(-1, |t| t as i64)).collect()
+    };
+    d.set_item("t_ms", PyArray1::from_vec(py, time(|s| s.time.t_ms)))?;
+    d.set_item("received_ms", PyArray1::from_vec(py, time(|s| s.time.received_ms)))?;
+    d.set_item("episode", e.episode)?;
+    d.set_item("goal", e.goal.to_string())?;
+    d.set_item("view", e.view.to_string())?;
+    d.set_item("grid", (e.grid.width(), e.grid.height()))?;
+    d.set_item("blocks", blocks)?;
+    d.set_item("started_ms", e.started_ms)?;
+    d.set_item("ended", ended)?;
+    match &e.participant {
+        Some(p) => {
+            let who = PyDict::new(py);
+            who.set_item("number", p.number)?;
+            who.set_item("condition", &p.condition)?;
+            who.set_item("code", &p.code)?;
+            who.set_item("ids", p.ids.clone())?;
+            d.set_item("participant", who)?;
+        }
+        None => d.set_item("participant", py.None())?,
+    }
+    match &e.world {
+        Some(w) => {
+            let world = PyDict::new(py);
+            world.set_item("reward", &w.reward)?;
+            world.set_item("protocol", w.protocol.to_string())?;
+            world.set_item("start", w.start.to_string())?;
+            world.set_item("horizon", w.horizon)?;
+            d.set_item("world", world)?;
+        }
+        None => d.set_item("world", py.None())?,
+    }
+    Ok(Some(d))
 }
 
 /// `read(path)` on a thread of its own, the caller checking for signals (Ctrl-C) every

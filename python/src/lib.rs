@@ -14,7 +14,7 @@
 //! - [`demos`]: expert demonstrations and recorded episodes as arrays.
 //! - [`training`]: the tabular trainer, in-process (`blockstack.train`, the Ray sweep).
 //! - [`dqn`]: the network trainer, in-process (`blockstack.train_dqn`).
-//! - [`model`]: a model file of either kind, loaded, played and evaluated (`blockstack.load`).
+//! - [`model`]: a model file of any kind (q, dqn, relational), loaded, played and evaluated (`blockstack.load`).
 //! - [`output`]: files written through the `files` crate (the sweep's table).
 //! - [`reproduce`]: the reproduction (`experiments`), its E8 arms run where a callable
 //!   says (`python -m blockstack.reproduce --ray`).

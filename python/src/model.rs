@@ -1,4 +1,4 @@
-//! Trained models from Python: either kind of model file (`neural::AnyModel`), its world,
+//! Trained models from Python: every kind of model file (`neural::AnyModel`), its world,
 //! its actions and its evaluation, behind `blockstack.load`.
 
 use std::path::PathBuf;
@@ -16,7 +16,7 @@ use crate::config::World;
 use crate::env::state_from;
 use crate::observe;
 
-/// A model file of either kind, loaded: `blockstack.Model` wraps it.
+/// A model file of any kind, loaded: `blockstack.Model` wraps it.
 #[pyclass(module = "blockstack._native")]
 pub struct NativeModel {
     model: AnyModel,
@@ -50,6 +50,15 @@ impl NativeModel {
             AnyModel::Dqn(_) => "dqn",
             AnyModel::Relational(_) => "relational",
         }
+    }
+
+    /// The probability of a random legal action the model plays with unless told otherwise
+    /// (`neural::AnyModel::default_epsilon`, as `blockstack run` and `eval` play it): its
+    /// profile's test policy (0.1) for a tabular model or a network, 0 for a relational
+    /// policy.
+    #[getter]
+    fn default_epsilon(&self) -> f64 {
+        self.model.default_epsilon()
     }
 
     /// The environment observation a network on pixels reads (`paper-screen`, or `screen`
@@ -221,9 +230,10 @@ impl NativeModel {
 
     /// Evaluates the model in its own world as `blockstack eval --json` does with the same
     /// settings, and returns that JSON text: `episodes` seeded starts from base seed `seed`
-    /// on each goal (`goals` `:`-separated, default every goal), with `epsilon`, on the
+    /// on each goal (`goals` `:`-separated, default every goal), with `epsilon` (default the
+    /// model's own, as `eval`'s), on the
     /// `backend`, games cut at `horizon`. The GIL is released.
-    #[pyo3(signature = (episodes=500, seed=2, goals=None, epsilon=0.1, backend="physics", horizon=1000))]
+    #[pyo3(signature = (episodes=500, seed=2, goals=None, epsilon=None, backend="physics", horizon=1000))]
     #[allow(clippy::too_many_arguments)]
     fn evaluate(
         &self,
@@ -231,7 +241,7 @@ impl NativeModel {
         episodes: u64,
         seed: u64,
         goals: Option<&str>,
-        epsilon: f64,
+        epsilon: Option<f64>,
         backend: &str,
         horizon: u32,
     ) -> PyResult<String> {
@@ -250,9 +260,12 @@ impl NativeModel {
         py.detach(|| {
             guard(|| {
                 let mut signal = None;
-                let evaluated = self
-                    .model
-                    .evaluate(&plan, &self.path, epsilon, &mut signal_checker(&mut signal));
+                let evaluated = self.model.evaluate(
+                    &plan,
+                    &self.path,
+                    epsilon.unwrap_or(self.model.default_epsilon()),
+                    &mut signal_checker(&mut signal),
+                );
                 let evaluation = evaluated.map_err(|e| raise_signal(signal, e))?;
                 serde_json::to_string(&evaluation.report).or_value_error()
             })

@@ -4,7 +4,7 @@
 
 use std::time::Duration;
 
-use oracle::pddl::{BestKnown, PddlPlan, Problem};
+use oracle::pddl::{BestKnown, Domain, PddlPlan, Problem};
 use oracle::towers::Place;
 use oracle::{Cost, CountedPlan, ExactSolver, PlanOptions, PlannerKind};
 use pyo3::prelude::*;
@@ -115,7 +115,7 @@ pub fn read_pddl<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Bou
 
 /// The plan's actions as PDDL.
 fn actions_of(problem: &Problem, plan: &PddlPlan) -> Vec<String> {
-    plan.actions.iter().map(|a| a.to_pddl(problem.block_names())).collect()
+    plan.actions.iter().map(|&a| problem.action_text(a)).collect()
 }
 
 /// The planner of a task: `solver` by name, or the relational policy of the model file
@@ -147,9 +147,12 @@ fn task_planner(
 /// `optimal` (the cost meets the bound), `certificate` (the bound's parts in block moves:
 /// `misplaced`, `forced`, `breakers`), `plan` (the actions as PDDL) and `text` (the plan
 /// file `blockstack solve --pddl` prints). `budget` is the exact solver's, `time_limit`
-/// (seconds) the optimal solver's.
+/// (seconds) the optimal solver's. `domain` is the problem's domain file, checked to be the
+/// 4-operator Blocks World, whose action names the plan takes; `plan_file` a file the plan
+/// text is written to (atomically; a regular file or a new path), as `--plan-file`.
 #[pyfunction]
-#[pyo3(signature = (path, solver=None, model=None, budget=None, time_limit=None))]
+#[pyo3(signature = (path, solver=None, model=None, budget=None, time_limit=None, domain=None, plan_file=None))]
+#[allow(clippy::too_many_arguments)]
 pub fn solve_pddl<'py>(
     py: Python<'py>,
     path: std::path::PathBuf,
@@ -157,12 +160,30 @@ pub fn solve_pddl<'py>(
     model: Option<std::path::PathBuf>,
     budget: Option<usize>,
     time_limit: Option<f64>,
+    domain: Option<std::path::PathBuf>,
+    plan_file: Option<std::path::PathBuf>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let planner = task_planner(solver, model, budget, time_limit)?;
     let (problem, plan) = py.detach(|| {
         guard(|| {
-            let problem = Problem::read(&path).or_value_error()?;
+            // The plan file is checked before planning, as the command does.
+            let out = plan_file
+                .as_deref()
+                .map(|out| -> PyResult<files::OutputPath> {
+                    let checked = files::OutputPath::check_regular(out).or_value_error()?;
+                    files::refuse_same_file(out, &path).or_value_error()?;
+                    if let Some(domain) = &domain {
+                        files::refuse_same_file(out, domain).or_value_error()?;
+                    }
+                    Ok(checked)
+                })
+                .transpose()?;
+            let domain = domain.as_deref().map(Domain::read).transpose().or_value_error()?;
+            let problem = Problem::read_in(&path, domain.as_ref()).or_value_error()?;
             let plan = problem.solve(planner.as_ref()).or_value_error()?;
+            if let Some(out) = &out {
+                out.write(plan.text(&problem).as_bytes()).or_value_error()?;
+            }
             Ok((problem, plan))
         })
     })?;
@@ -227,17 +248,11 @@ pub fn pddl_task<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Bou
     let task = py.detach(|| {
         guard(|| {
             let problem = Problem::read(&path).or_value_error()?;
-            let task = problem
+            // A task with nothing to play is refused there, as `run --pddl` refuses it: a
+            // Gymnasium reset cannot return an episode that is already over.
+            problem
                 .side_task()
-                .map_err(|e| value_error(format!("{}: {e}", path.display())))?;
-            // A Gymnasium reset cannot return an episode that is already over.
-            if task.goal.holds_in(View::Side, &task.start) {
-                return Err(value_error(format!(
-                    "{}: the task's start already meets its goal, so there is no episode to play (blockstack.read_pddl gives its empty plan)",
-                    path.display()
-                )));
-            }
-            Ok(task)
+                .map_err(|e| value_error(format!("{}: {e}", path.display())))
         })
     })?;
     let out = PyDict::new(py);

@@ -77,6 +77,9 @@ where
 /// --seed EVAL_SEED` plays, as `eval` does. `out` saves the model file (its folder is
 /// checked before training).
 ///
+/// With `check=True` it trains nothing: the settings are resolved and checked, and the dict
+/// holds `describe` alone (what the Ray sweep calls for every run before Ray starts).
+///
 /// Returns a dict: the config's settings, the training totals (`games`, `successes`,
 /// `steps`, `assisted_steps`, `replay_sweeps`, `train_seconds`) and, with an evaluation,
 /// `eval_episodes`, `eval_failures`, `eval_mean_steps`, `eval_median_steps`,
@@ -90,7 +93,7 @@ where
 /// stopped; a checkpoint of another run is a `ValueError`. The dict's `resumed_at` is the
 /// games the run had played when this call took it up (0 for a new run).
 #[pyfunction]
-#[pyo3(signature = (*, blocks=3, grid=None, profile=None, preset=None, protocol=None, start=None, repr=None, reward=None, schedule=None, oracle=None, oscillation=None, goals=None, games=None, seed=1, alpha=None, gamma=None, epsilon=None, initial_q=None, exploring_starts=false, backward_replay=None, final_replay=None, assist="none", horizon=None, backend="physics", view="top", eval_episodes=0, eval_goals=None, eval_seed=2, eval_epsilon=0.1, out=None, checkpoint=None, checkpoint_every=None))]
+#[pyo3(signature = (*, blocks=3, grid=None, profile=None, preset=None, protocol=None, start=None, repr=None, reward=None, schedule=None, oracle=None, oscillation=None, goals=None, games=None, seed=1, alpha=None, gamma=None, epsilon=None, initial_q=None, exploring_starts=false, backward_replay=None, final_replay=None, assist="none", horizon=None, backend="physics", view="top", eval_episodes=0, eval_goals=None, eval_seed=2, eval_epsilon=0.1, out=None, checkpoint=None, checkpoint_every=None, check=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn train<'py>(
     py: Python<'py>,
@@ -126,12 +129,9 @@ pub fn train<'py>(
     out: Option<PathBuf>,
     checkpoint: Option<PathBuf>,
     checkpoint_every: Option<u64>,
+    check: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let RunOutputs {
-        out: out_path,
-        checkpoint,
-        every,
-    } = run_outputs(out, checkpoint, checkpoint_every, agent::checkpoint::DEFAULT_EVERY)?;
+    let outputs = run_outputs(out, checkpoint, checkpoint_every, agent::checkpoint::DEFAULT_EVERY)?;
     let overrides = TrainOverrides {
         profile: named(profile)?,
         preset: named(preset)?,
@@ -167,65 +167,95 @@ pub fn train<'py>(
         Some(text) => Goal::parse_list(text, blocks).or_value_error()?,
         None => config.goals.clone(),
     };
-    let (trained, seconds, evaluation, resumed_at) = py.detach(|| {
-        guard(|| {
-            let clock = Instant::now();
-            let mut trainer = match &checkpoint {
-                Some((path, _)) if path.exists() => Trainer::resume_run(path, &config).or_value_error()?,
-                _ => Trainer::new(config.clone()).or_value_error()?,
-            };
-            let resumed_at = trainer.report().games;
-            // The run's one loop (`Trainer::run_until`), with Ctrl-C looked for every 100 ms
-            // (the GIL taken back only for that): it stops a long run with KeyboardInterrupt.
-            let mut signal = None;
-            let ran = trainer.run_until(
-                config.games,
-                &mut Interruptible {
-                    check: signal_checker(&mut signal),
-                    checkpoint: checkpoint.as_ref().map(|(_, out)| out),
-                    every,
-                },
-            );
-            ran.map_err(|e| raise_signal(signal, e))?;
-            let trained = trainer.finish();
-            let seconds = clock.elapsed().as_secs_f64();
-            // Evaluated as `blockstack eval` and `Model.evaluate` evaluate a model file (the
-            // one plan builder, `AnyModel::eval_plan_with`): in the training world, on its
-            // backend, games ending at the goal within the paper's 1000 steps.
-            let model = AnyModel::Q(Box::new(trained.agent));
-            let evaluation = if eval_episodes > 0 {
-                let plan = model
-                    .eval_plan_with(&EvalOverrides {
-                        goals: Some(eval_goals),
-                        episodes: eval_episodes,
-                        seed: eval_seed,
-                        backend: Some(config.world.backend),
-                        ..EvalOverrides::default()
-                    })
-                    .or_value_error()?;
-                let mut signal = None;
-                let evaluated = model.evaluate(&plan, "", eval_epsilon, &mut signal_checker(&mut signal));
-                Some(evaluated.map_err(|e| raise_signal(signal, e))?.report)
-            } else {
-                None
-            };
-            let AnyModel::Q(agent) = model else {
-                unreachable!("made a tabular model above")
-            };
-            if let Some(out) = &out_path {
-                let bytes = agent.to_bytes().map_err(value_error)?;
-                out.write(&bytes).or_value_error()?;
-            }
-            let trained = agent::Trained {
-                agent: *agent,
-                report: trained.report,
-            };
-            Ok((trained, seconds, evaluation, resumed_at))
-        })
-    })?;
+    if check {
+        let d = PyDict::new(py);
+        let describe = format!(
+            "a {} Q-learner on {} blocks, {} games, seed {}",
+            config.repr.name(),
+            config.world.blocks,
+            config.games,
+            config.seed
+        );
+        d.set_item("describe", describe)?;
+        return Ok(d);
+    }
+    let eval = EvalOverrides {
+        goals: Some(eval_goals),
+        episodes: eval_episodes,
+        seed: eval_seed,
+        backend: Some(config.world.backend),
+        ..EvalOverrides::default()
+    };
+    let (trained, seconds, evaluation, resumed_at) =
+        py.detach(|| guard(|| run_tabular(&config, &outputs, &eval, eval_epsilon)))?;
+    tabular_dict(py, &config, &trained, seconds, resumed_at, evaluation)
+}
+
+/// What a tabular run gives back: the trained agent and its totals, the seconds it took,
+/// its evaluation, and the games it had played when it was taken up from its checkpoint.
+type TabularRun = (agent::Trained, f64, Option<EvalReport>, u64);
+
+/// The tabular run of `config`: trained (from the checkpoint, if it holds this run), then
+/// evaluated as `eval` plans (no episodes, no evaluation) and saved.
+fn run_tabular(config: &TrainConfig, outputs: &RunOutputs, eval: &EvalOverrides, epsilon: f64) -> PyResult<TabularRun> {
+    let clock = Instant::now();
+    let mut trainer = match &outputs.checkpoint {
+        Some((path, _)) if path.exists() => Trainer::resume_run(path, config).or_value_error()?,
+        _ => Trainer::new(config.clone()).or_value_error()?,
+    };
+    let resumed_at = trainer.report().games;
+    // The run's one loop (`Trainer::run_until`), with Ctrl-C looked for every 100 ms
+    // (the GIL taken back only for that): it stops a long run with KeyboardInterrupt.
+    let mut signal = None;
+    let ran = trainer.run_until(
+        config.games,
+        &mut Interruptible {
+            check: signal_checker(&mut signal),
+            checkpoint: outputs.checkpoint.as_ref().map(|(_, out)| out),
+            every: outputs.every,
+        },
+    );
+    ran.map_err(|e| raise_signal(signal, e))?;
+    let trained = trainer.finish();
+    let seconds = clock.elapsed().as_secs_f64();
+    // Evaluated as `blockstack eval` and `Model.evaluate` evaluate a model file (the
+    // one plan builder, `AnyModel::eval_plan_with`): in the training world, on its
+    // backend, games ending at the goal within the paper's 1000 steps.
+    let model = AnyModel::Q(Box::new(trained.agent));
+    let evaluation = if eval.episodes > 0 {
+        let plan = model.eval_plan_with(eval).or_value_error()?;
+        let mut signal = None;
+        let evaluated = model.evaluate(&plan, "", epsilon, &mut signal_checker(&mut signal));
+        Some(evaluated.map_err(|e| raise_signal(signal, e))?.report)
+    } else {
+        None
+    };
+    let AnyModel::Q(agent) = model else {
+        unreachable!("made a tabular model above")
+    };
+    if let Some(out) = &outputs.out {
+        let bytes = agent.to_bytes().map_err(value_error)?;
+        out.write(&bytes).or_value_error()?;
+    }
+    let trained = agent::Trained {
+        agent: *agent,
+        report: trained.report,
+    };
+    Ok((trained, seconds, evaluation, resumed_at))
+}
+
+/// A tabular run's dict (`train`'s docs).
+fn tabular_dict<'py>(
+    py: Python<'py>,
+    config: &TrainConfig,
+    trained: &agent::Trained,
+    seconds: f64,
+    resumed_at: u64,
+    evaluation: Option<EvalReport>,
+) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("profile", config.profile.to_string())?;
-    d.set_item("blocks", blocks)?;
+    d.set_item("blocks", config.world.blocks)?;
     d.set_item("grid", config.world.grid.to_string())?;
     d.set_item("repr", config.repr.name())?;
     d.set_item("reward", config.world.reward.to_string())?;
@@ -233,7 +263,7 @@ pub fn train<'py>(
         "goals",
         config.goals.iter().map(Goal::to_string).collect::<Vec<_>>().join(":"),
     )?;
-    d.set_item("seed", seed)?;
+    d.set_item("seed", config.seed)?;
     d.set_item("alpha", config.params.alpha)?;
     d.set_item("gamma", config.params.gamma)?;
     d.set_item("epsilon", config.params.epsilon)?;

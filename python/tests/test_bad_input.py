@@ -208,7 +208,7 @@ def test_sweep_configs_that_are_not_tables_are_one_line_errors(tmp_path, capsys)
         ("e.json", "{", "e.json: "),
         ("f.json", json.dumps({"sweep": {f"f{i}": list(range(10)) for i in range(9)}}), "1,000,000,000 combinations"),
         ("g.json", json.dumps({"train": {"seed": -1}, "sweep": {"gamma": [0.1]}}), "seed=-1 is out of range"),
-        ("h.json", json.dumps({"train": {"gamess": 1}, "sweep": {"gamma": [0.1]}}), "unknown setting"),
+        ("h.json", json.dumps({"train": {"gamess": 1}, "sweep": {"gamma": [0.1]}}), "unknown flag(s) gamess"),
     ]:
         path = tmp_path / name
         path.write_text(text)

@@ -16,8 +16,14 @@ refused in (:data:`REFUSED`); every other one is a world of :data:`WORLDS`. The 
   meets, reaches the goal, and takes as few steps as a breadth-first search over the world's
   own legal actions; ``optimal_steps`` says that number, and ``demonstrations`` plays it.
 - **CLI = Python**: ``blockstack run --agent exact`` plays, step for step, what the Python
-  environment's expert plays from the same seeds.
+  environment's expert plays from the same seeds; ``solve_pddl`` and ``solve_all`` give what
+  ``blockstack solve --pddl`` and ``solve-all`` give, for every planner, with the domain file
+  of either spelling or none, and the plan file written by either is the same.
 - **Files**: every reader, in the CLI and in Python, refuses a FIFO or a device at once.
+- **Default play**: a model of every kind (``q``, ``dqn``, ``relational``) plays by default
+  with its own epsilon (its profile's test policy; greedy for a relational policy), reward
+  and world, the same in ``run``, ``eval`` and Python's ``load(...)``: leaving them out
+  plays what naming the model's own plays.
 
 Breaking any one of them (a protocol the expert ignores, a refused action that raises, a
 reader that opens before it looks) fails a test here.
@@ -558,3 +564,112 @@ def test_every_recording_exports_to_a_dataset_of_its_own_world(writer, world, cl
         for action, reward, terminated in zip(episode.actions, episode.rewards, episode.terminations):
             _, r, t, _, info = env.step(int(action))
             assert r == pytest.approx(reward) and t == terminated and not info["illegal"], (writer, world)
+
+
+# --- Planning a task: CLI = Python ---------------------------------------------------------
+
+FIXTURES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "fixtures")
+#: The planners a PDDL task is planned by (``blockstack solve --pddl --solver``).
+PDDL_SOLVERS = ("near-optimal", "optimal", "exact")
+#: A task with no domain file, and each spelling's problem with its domain.
+PDDL_TASKS = {
+    "no-domain": None,
+    "pickup": ("problem-pickup.pddl", "domain-pickup.pddl"),
+    "pick-up": ("problem-pick-up.pddl", "domain-pick-up.pddl"),
+}
+
+
+@pytest.mark.parametrize("solver", PDDL_SOLVERS)
+@pytest.mark.parametrize("spelling", sorted(PDDL_TASKS))
+def test_solve_pddl_plans_what_the_cli_plans(solver, spelling, task, cli, tmp_path):
+    files = PDDL_TASKS[spelling]
+    problem = task if files is None else os.path.join(FIXTURES, files[0])
+    domain = [] if files is None else ["--domain", os.path.join(FIXTURES, files[1])]
+    ours = blockstack.solve_pddl(problem, solver=solver, domain=None if files is None else domain[1],
+                                 plan_file=tmp_path / "python.plan")
+    theirs = json.loads(cli("solve", "--pddl", problem, "--solver", solver, *domain, "--json",
+                            "--plan-file", tmp_path / "cli.plan"))
+    assert ours["plan"] == theirs["plan"] and ours["cost"] == theirs["actions"]
+    assert ours["lower_bound"] == theirs["lower_bound"] <= ours["cost"]
+    assert (ours["optimal"], ours["certificate"]) == (theirs["optimal"], theirs["certificate"])
+    assert ours["text"] == cli("solve", "--pddl", problem, "--solver", solver, *domain)
+    assert (tmp_path / "python.plan").read_text() == (tmp_path / "cli.plan").read_text() == ours["text"]
+    if files is not None:
+        # The plan speaks the domain's own action names.
+        verbs = {a.strip("()").split()[0] for a in ours["plan"]}
+        assert verbs <= ({"pick-up", "put-down", "stack", "unstack"} if spelling == "pick-up"
+                         else {"pickup", "putdown", "stack", "unstack"})
+
+
+@pytest.mark.parametrize("solver", PDDL_SOLVERS)
+def test_solve_all_reports_what_the_cli_reports(solver, task, cli, tmp_path):
+    folder = tmp_path / "tasks"
+    cli("generate", "--blocks", 8, "--count", 2, "--seed", 5, "--shape", "ipc", "--out", folder)
+    ours = blockstack.solve_all(folder, solver=solver)
+    theirs = json.loads(cli("solve-all", "--tasks", folder, "--solver", solver, "--json"))
+    strip = lambda rows: [{k: v for k, v in r.items() if k != "seconds"} for r in rows]
+    assert strip(ours["tasks"]) == strip(theirs["tasks"]) and len(ours["tasks"]) == 2
+    assert {k: v for k, v in ours["overall"].items() if "second" not in k} == \
+        {k: v for k, v in theirs["overall"].items() if "second" not in k}
+
+
+# Default play ------------------------------------------------------------------------------
+#
+# One small model of each kind; the tabular one and the network trained with a reward that is
+# not their profile's, so a front end that takes the profile's reward plays another game.
+
+#: Each kind's epsilon when nothing says otherwise.
+DEFAULT_EPSILON = {"q": 0.1, "dqn": 0.1, "relational": 0.0}
+
+#: A goal of each kind's world (the relational policy's is the side view of 6 blocks).
+DEFAULT_PLAY_GOAL = {"q": "0,1", "dqn": "0,1", "relational": "0,1,2/3,4,5"}
+
+
+@pytest.fixture(scope="module")
+def models(tmp_path_factory, cli) -> dict:
+    folder = tmp_path_factory.mktemp("default-play")
+    paths = {kind: str(folder / f"{kind}.safetensors") for kind in DEFAULT_EPSILON}
+    cli("train", "--blocks", "2", "--games", "100", "--reward", "dense", "--backend", "grid", "--out", paths["q"])
+    cli("dqn", "--preset", "dqn-planes", "--blocks", "2", "--steps", "60", "--reward", "dense", "--out", paths["dqn"])
+    cli("dqn", "--preset", "general", "--steps", "20", "--batch", "16", "--seed", "2", "--out", paths["relational"])
+    return paths
+
+
+@pytest.mark.parametrize("kind", sorted(DEFAULT_EPSILON))
+def test_default_play_run_plays_the_models_epsilon_reward_and_world(kind, models, cli, tmp_path):
+    model = blockstack.load(models[kind])
+    assert model.kind == kind and model.default_epsilon == DEFAULT_EPSILON[kind]
+    played = ["run", "--agent", kind, "--model", models[kind], "--episodes", "3", "--seed", "4", "--backend", "grid",
+              "--goal", DEFAULT_PLAY_GOAL[kind], "--json"]
+    default, named = tmp_path / "default.jsonl", tmp_path / "named.jsonl"
+    by_default = json.loads(cli(*played, "--trajectory", default))
+    by_name = json.loads(cli(*played, "--trajectory", named, "--epsilon", str(model.default_epsilon),
+                             "--reward", model.world["reward"], "--view", model.world["view"]))
+    assert by_default == by_name
+    assert default.read_bytes() == named.read_bytes(), "the same steps and rewards"
+    world = model.world
+    assert (by_default["blocks"], by_default["protocol"], by_default["start"]) == (
+        world["blocks"], world["protocol"], world["start"])
+
+
+@pytest.mark.parametrize("kind", sorted(DEFAULT_EPSILON))
+def test_default_play_eval_and_python_evaluate_play_the_models_epsilon(kind, models, cli):
+    model = blockstack.load(models[kind])
+    settings = {"episodes": 2, "seed": 3, "goals": DEFAULT_PLAY_GOAL[kind], "backend": "grid"}
+    by_cli = json.loads(cli("eval", "--model", models[kind], "--json",
+                            *[f"--{k}={v}" for k, v in settings.items()]))
+    assert by_cli["epsilon"] == DEFAULT_EPSILON[kind]
+    assert model.evaluate(**settings) == by_cli
+
+
+@pytest.mark.parametrize("kind", sorted(DEFAULT_EPSILON))
+def test_default_play_python_predict_plays_the_models_epsilon(kind, models):
+    model = blockstack.load(models[kind])
+    env = model.make_env(backend="grid")
+    assert env.world.reward == model.world["reward"]
+    obs, _ = env.reset(seed=5)
+    model.reset(5)
+    greedy = model.predict(obs)[0]
+    chosen = {model.predict(obs, deterministic=False)[0] for _ in range(200)}
+    # Greedy's epsilon is 0: the same move every time; 0.1 draws others among 200 calls.
+    assert (chosen == {greedy}) == (DEFAULT_EPSILON[kind] == 0.0), chosen

@@ -81,7 +81,7 @@ def pixel_network(tmp_path_factory, cli):
     # Without the no-op mask, which a picture cannot give, so that the network plays the
     # same actions on its picture as on the state.
     path = tmp_path_factory.mktemp("pixels") / "pixels.safetensors"
-    cli("dqn", "--preset", "pixels", "--blocks", "2", "--demos", "exact:10", "--pretrain", "30", "--steps", "60",
+    cli("dqn", "--preset", "dqfd-screen", "--blocks", "2", "--demos", "exact:10", "--pretrain", "30", "--steps", "60",
         "--hidden", "16", "--mask-noops", "false", "--seed", "3", "--out", path)
     return path
 
@@ -112,7 +112,7 @@ def test_the_pixels_network_on_the_papers_screen_plays_on_it(tmp_path):
     # Trained by Python's trainer with screen="paper": it reads the environment's
     # paper-screen observation, and plays on it what it plays on the state.
     path = tmp_path / "paper.safetensors"
-    blockstack.train_dqn(preset="pixels", blocks=2, screen="paper", demos="exact:10", pretrain=20, steps=30,
+    blockstack.train_dqn(preset="dqfd-screen", blocks=2, screen="paper", demos="exact:10", pretrain=20, steps=30,
                          hidden=16, mask_noops=False, seed=3, out=str(path))
     model = blockstack.load(path)
     assert model.picture == "paper-screen"

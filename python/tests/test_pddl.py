@@ -1,7 +1,6 @@
 """``blockstack.read_pddl``, ``solve_pddl`` and ``solve_all``: the planning competitions'
 Blocks World problems from Python."""
 
-import json
 
 import gymnasium
 import pytest
@@ -32,25 +31,14 @@ def test_a_generated_problem_reads_with_its_towers_and_a_plan_that_reaches_its_g
         assert all(below[b] == (tower[i - 1] if i else None) for i, b in enumerate(tower))
 
 
-def test_solve_pddl_and_solve_all_are_the_cli_s(cli, tmp_path):
-    cli("generate", "--blocks", 10, "--count", 2, "--seed", 5, "--shape", "ipc", "--out", tmp_path / "tasks")
-    task = tmp_path / "tasks" / "p01.pddl"
-    for solver in ("near-optimal", "optimal", "exact"):
-        ours = blockstack.solve_pddl(task, solver=solver)
-        theirs = json.loads(cli("solve", "--pddl", task, "--solver", solver, "--json"))
-        assert ours["plan"] == theirs["plan"] and ours["cost"] == theirs["actions"]
-        assert ours["lower_bound"] == theirs["lower_bound"] <= ours["cost"]
-        assert ours["optimal"] == theirs["optimal"]
-        assert ours["text"] == cli("solve", "--pddl", task, "--solver", solver)
+def test_the_optimal_solver_proves_the_exact_solvers_cost_and_names_its_limits(cli, tmp_path):
+    # CLI = Python for every solver is the conformance suite's (test_conformance.py).
+    cli("generate", "--blocks", 10, "--count", 1, "--seed", 5, "--shape", "ipc", "--out", tmp_path)
+    task = tmp_path / "p01.pddl"
     proven = blockstack.solve_pddl(task, solver="optimal", time_limit=30)
     assert proven["optimal"] and proven["cost"] == blockstack.solve_pddl(task, solver="exact")["cost"]
     c = proven["certificate"]
     assert 2 * (c["misplaced"] + c["forced"] + c["breakers"]) == proven["lower_bound"]
-    report = blockstack.solve_all(tmp_path / "tasks", solver="optimal")
-    assert report["overall"]["tasks"] == 2 and report["overall"]["optimal"] == 2
-    cli_report = json.loads(cli("solve-all", "--tasks", tmp_path / "tasks", "--solver", "optimal", "--json"))
-    strip = lambda rows: [{k: v for k, v in r.items() if k != "seconds"} for r in rows]
-    assert strip(report["tasks"]) == strip(cli_report["tasks"])
     with pytest.raises(ValueError, match="time limit is the optimal solver's"):
         blockstack.solve_pddl(task, solver="exact", time_limit=1)
     with pytest.raises(ValueError, match="unknown planner"):
@@ -137,3 +125,33 @@ def test_blocks_world_refuses_a_task_already_solved_in_one_value_error(tmp_path)
     assert blockstack.read_pddl(done)["plan"] == []
     with pytest.raises(ValueError, match="done.pddl: the task's start already meets its goal"):
         gymnasium.make("blockstack/BlocksWorld-v0", pddl=done)
+
+
+FIXTURES = __import__("pathlib").Path(__file__).resolve().parent / "fixtures"
+
+
+def test_solve_pddl_takes_the_domain_s_action_names_and_writes_the_plan_file(cli, tmp_path):
+    problem, domain = FIXTURES / "problem-pick-up.pddl", FIXTURES / "domain-pick-up.pddl"
+    plan_file = tmp_path / "plan.txt"
+    solved = blockstack.solve_pddl(problem, domain=domain, plan_file=plan_file)
+    assert solved["plan"][0].startswith(("(pick-up ", "(unstack ")), solved["plan"]
+    assert any(a.startswith("(put-down ") for a in solved["plan"]), solved["plan"]
+    assert plan_file.read_text() == solved["text"] == cli("solve", "--pddl", problem, "--domain", domain)
+    with pytest.raises(ValueError, match="the action move is not supported|is not one of the 4-operator"):
+        blockstack.solve_pddl(problem, domain=FIXTURES / "domain-gripper.pddl")
+    with pytest.raises(ValueError, match="is also the input"):
+        blockstack.solve_pddl(problem, domain=domain, plan_file=domain)
+    with pytest.raises(TypeError, match="plan_file is a file name"):
+        blockstack.solve_pddl(problem, plan_file=3)
+
+
+def test_an_empty_goal_is_the_empty_plan_and_no_episode_as_a_met_goal_is(tmp_path):
+    empty = tmp_path / "empty.pddl"
+    empty.write_text(
+        "(define (problem p) (:domain blocksworld) (:objects b1 b2)\n"
+        " (:init (arm-empty) (clear b1) (on b1 b2) (on-table b2))\n"
+        " (:goal (and)))"
+    )
+    assert blockstack.solve_pddl(empty)["plan"] == []
+    with pytest.raises(ValueError, match="empty.pddl: the task's start already meets its goal \\(which places no block\\)"):
+        gymnasium.make("blockstack/BlocksWorld-v0", pddl=empty)

@@ -146,10 +146,40 @@ def test_a_sweep_of_networks_names_its_command(tmp_path):
     assert sweep.command_of(sweep.read_config(str(config))) == "dqn"
     for bad, message in [
         ({"train": {"command": "tune"}}, "choose \"train\" or \"dqn\""),
-        ({"train": {"command": "dqn", "games": 5}}, "unknown setting"),
+        ({"train": {"command": "dqn", "games": 5}}, "unknown flag"),
         ({"train": {"out": "m.st"}}, "sets each run's files itself"),
         ({"sweep": {"command": ["train", "dqn"]}}, "command is not swept"),
     ]:
         config.write_text(json.dumps(bad))
         with pytest.raises(ValueError, match=message):
             sweep.runs(sweep.read_config(str(config)))
+
+
+@pytest.mark.parametrize(
+    "train, words",
+    [
+        ({"command": "dqn", "steps": 10, "demos_file": "missing.jsonl"}, "missing.jsonl"),
+        ({"command": "dqn", "steps": 10, "demos_file": "/dev/zero"}, "a pipe or a device"),
+        ({"command": "dqn", "steps": 10, "demos_file": "."}, "directory"),
+        ({"command": "dqn", "preset": "dqn-planes", "blocks": 17}, "17"),
+        ({"command": "train", "blocks": 17}, "17"),
+        ({"command": "dqn", "preset": "general", "gamma": 0.5}, "gamma does not apply to the general preset"),
+        ({"command": "dqn", "shiny": 1}, "unknown flag(s) shiny"),
+        ({"command": "train", "shiny": 1}, "unknown flag(s) shiny"),
+    ],
+)
+def test_a_sweeps_flags_and_files_are_refused_before_ray_starts(train, words, tmp_path, capsys, monkeypatch):
+    def no_ray():
+        raise AssertionError("Ray was started for a config that cannot run")
+
+    monkeypatch.setattr(sweep._ray, "import_ray", no_ray)
+    monkeypatch.chdir(tmp_path)
+    config = tmp_path / "c.json"
+    config.write_text(json.dumps({"train": train, "sweep": {"seed": [1, 2]}}))
+    assert sweep.main([str(config), "--out", str(tmp_path / "r.csv")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and str(config) in err and words in err, err
+    if "unknown" in words:
+        listed = err.strip().split("the flags are ")[1].split(", ")
+        assert "eval_episodes" in listed
+        assert not set(listed) & {"out", "checkpoint", "resume", "check"}, listed

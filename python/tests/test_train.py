@@ -71,9 +71,10 @@ DQN_SETTINGS = [
          "--buffer", "500"],
         dict(preset="her-planes", blocks=2, grid=(5, 5), steps=150, hidden=16, buffer=500),
     ),
-    # The conv network on the compact screen, the goal as a strip.
+    # The conv network on the compact screen, the goal as a strip; the preset by its old name
+    # in Python, its new one on the command line: the same preset.
     (
-        ["--preset", "pixels", "--blocks", "2", "--demos", "exact:10", "--pretrain", "20", "--steps", "80",
+        ["--preset", "dqfd-screen", "--blocks", "2", "--demos", "exact:10", "--pretrain", "20", "--steps", "80",
          "--hidden", "16", "--screen", "strip"],
         dict(preset="pixels", blocks=2, demos="exact:10", pretrain=20, steps=80, hidden=16, screen="strip"),
     ),

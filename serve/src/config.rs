@@ -322,17 +322,9 @@ pub enum Withdrawal {
     Mark,
 }
 
-impl std::str::FromStr for Withdrawal {
-    type Err = String;
-
-    fn from_str(text: &str) -> std::result::Result<Withdrawal, String> {
-        match text {
-            "delete" => Ok(Withdrawal::Delete),
-            "mark" => Ok(Withdrawal::Mark),
-            _ => Err(format!("{text:?} is not a withdrawal: delete or mark")),
-        }
-    }
-}
+sim::names!(Withdrawal { Delete = "delete", Mark = "mark" } unknown(text) -> String {
+    format!("{text:?} is not a withdrawal: delete or mark")
+});
 
 /// A study's path for its participants: consent, instructions, ids, the end. What the
 /// page may show anyone (`GET /api/study`) is serialised; the completion code and link are

@@ -22,30 +22,11 @@ pub enum Mode {
     Correct,
 }
 
-impl Mode {
-    /// Every mode, in the order the page offers them.
-    pub const ALL: [Mode; 3] = [Mode::Play, Mode::Watch, Mode::Correct];
-
-    /// The mode's name in messages and study files.
-    pub fn name(self) -> &'static str {
-        match self {
-            Mode::Play => "play",
-            Mode::Watch => "watch",
-            Mode::Correct => "correct",
-        }
-    }
-}
-
-impl std::str::FromStr for Mode {
-    type Err = String;
-
-    fn from_str(text: &str) -> Result<Mode, String> {
-        Mode::ALL
-            .into_iter()
-            .find(|m| m.name() == text)
-            .ok_or_else(|| format!("{text:?} is not a mode: play, watch or correct"))
-    }
-}
+// Every mode, in the order the page offers them (`Mode::ALL`), and its name in messages and
+// study files.
+sim::names!(Mode { Play = "play", Watch = "watch", Correct = "correct" } unknown(text) -> String {
+    format!("{text:?} is not a mode: play, watch or correct")
+});
 
 /// A message from the page.
 #[derive(Clone, Debug, PartialEq, Deserialize)]

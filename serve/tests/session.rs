@@ -69,7 +69,7 @@ async fn a_person_plays_an_episode_and_every_step_is_recorded() {
         lines.len()
     );
     assert_eq!(lines[0]["type"], "session");
-    assert_eq!(lines[0]["version"], 3);
+    assert_eq!(lines[0]["version"], agent::demos::DEMOS_VERSION);
     assert_eq!(lines[0]["demonstrator"], "person");
     assert_eq!(lines[1]["type"], "episode");
     let steps: Vec<&Value> = lines[2..].iter().collect();

@@ -21,9 +21,24 @@
 /// assert_eq!(Colour::NAMES, ["red", "blue"]);
 /// assert!("green".parse::<Colour>().unwrap_err().contains("green"));
 /// ```
+///
+/// A value renamed keeps its old name as an alias, read but never written or listed:
+///
+/// ```
+/// #[derive(Clone, Copy, Debug, PartialEq)]
+/// enum Colour { Crimson, Blue }
+/// sim::names!(Colour { Crimson = "crimson", Blue = "blue" } aliases { "red" => Crimson }
+///     unknown(text) -> String { format!("unknown colour {text:?}") });
+/// assert_eq!("red".parse::<Colour>(), Ok(Colour::Crimson));
+/// assert_eq!(Colour::Crimson.to_string(), "crimson");
+/// assert_eq!(Colour::NAMES, ["crimson", "blue"]);
+/// ```
 #[macro_export]
 macro_rules! names {
     ($ty:ident { $($variant:ident = $name:literal),+ $(,)? } unknown($text:ident) -> $err:ty { $make:expr }) => {
+        $crate::names!($ty { $($variant = $name),+ } aliases {} unknown($text) -> $err { $make });
+    };
+    ($ty:ident { $($variant:ident = $name:literal),+ $(,)? } aliases { $($alias:literal => $aliased:ident),* $(,)? } unknown($text:ident) -> $err:ty { $make:expr }) => {
         impl $ty {
             /// Every value, in the order of `NAMES`.
             pub const ALL: [$ty; [$($name),+].len()] = [$($ty::$variant),+];
@@ -51,6 +66,7 @@ macro_rules! names {
             fn from_str($text: &str) -> ::core::result::Result<$ty, $err> {
                 match $text {
                     $($name => Ok($ty::$variant),)+
+                    $($alias => Ok($ty::$aliased),)*
                     _ => Err($make),
                 }
             }

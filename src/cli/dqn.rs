@@ -5,14 +5,15 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use clap::{ArgGroup, Args};
+use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use neural::relational::{RelationalConfig, RelationalModel};
 use neural::{
-    DemoSource, DqnConfig, DqnOverrides, LossKind, NetKind, ObsKind, OptimizerKind, Phase, Preset, Progress, TdLoss,
+    DemoSource, DqnOverrides, LossKind, NetKind, ObsKind, OptimizerKind, Phase, Preset, Progress, Recipe, TdLoss,
 };
-use sim::{Goal, ScreenGoal, View};
+use sim::{Goal, ScreenGoal};
 
+use super::checkpoint::{CheckpointArgs, CheckpointKind};
 use super::stdout::line;
 use super::world::WorldArgs;
 
@@ -54,7 +55,15 @@ const RUN_FLAGS: [&str; 32] = [
 
 /// Arguments of `blockstack dqn`. Every setting starts from a preset and may be changed.
 #[derive(Debug, Args)]
-#[command(group(ArgGroup::new("checkpointing").args(["checkpoint", "resume"]).multiple(true)))]
+#[command(mut_arg("checkpoint_every", |a| a.help(
+    "Steps (pre-training gradient steps, then self-play steps) between two checkpoints [default: 10000]"
+)))]
+#[command(mut_arg("resume", |a| a.conflicts_with_all(RUN_FLAGS).help(
+    "Continue the run in this checkpoint file, with its settings, to its end; it goes on writing checkpoints to the \
+     same file unless --checkpoint names another. The flags that set up a run (--steps included: the learning rate \
+     falls over the planned steps) are refused with it: the network it saves is the one the run would have saved had \
+     it never stopped, byte for byte."
+)))]
 #[command(mut_arg("blocks", |a| a.help("Number of blocks [default: 3; with --preset general, the most blocks of a training problem: 6]")))]
 #[command(mut_arg("grid", |a| a.help("Grid size, WxH [default: 7x7]")))]
 #[command(mut_arg("reward", |a| a.help("Reward model: sparse, dense, paper or step-cost [default: the preset's]")))]
@@ -67,14 +76,15 @@ pub struct DqnArgs {
     /// Start from this preset: paper (the paper's DQN on pixels), paper-dqfd (the same with
     /// DQfD on 500 exact-solver demonstrations), dqn-planes (ours, no demonstrations),
     /// dqfd-planes (ours with DQfD: the recommended recipe), her-planes (ours without
-    /// demonstrations, with hindsight relabelling), dqfd-pixels (our DQfD recipe with the
-    /// paper network on the paper screen), pixels (our DQfD recipe with the conv network on
-    /// the compact screen), general (a relational policy of block moves in the side view
+    /// demonstrations, with hindsight relabelling), dqfd-paper-screen (our DQfD recipe with
+    /// the paper network on the paper screen; earlier releases called it dqfd-pixels),
+    /// dqfd-screen (our DQfD recipe with the conv network on the compact screen; earlier
+    /// releases called it pixels), general (a relational policy of block moves in the side view
     /// that plays any number of blocks, learnt from the optimum on up to 6; it takes
     /// --blocks, --steps, --batch, --lr, --lr-final, --hidden and --seed). Default: from
     /// --obs and --loss.
     #[arg(long)]
-    pub preset: Option<String>,
+    pub preset: Option<Preset>,
     /// What the network sees: role-planes, paper-screen or screen (default: the preset's,
     /// else role-planes). Earlier releases called the first two planes and pixels.
     #[arg(long)]
@@ -165,107 +175,17 @@ pub struct DqnArgs {
     /// Where to write the network.
     #[arg(long)]
     pub out: PathBuf,
-    /// Write the run to this checkpoint file every --checkpoint-every steps and when it ends
-    /// (atomically: a kill loses at most the steps since the last one): its networks,
-    /// optimiser, replay buffer and demonstrations, generator and the game being played;
-    /// `dqn --resume FILE` continues it.
-    #[arg(long, value_name = "FILE")]
-    pub checkpoint: Option<PathBuf>,
-    /// Steps (pre-training gradient steps, then self-play steps) between two checkpoints
-    /// [default: 10000]
-    #[arg(long, value_name = "N", requires = "checkpointing", value_parser = clap::value_parser!(u64).range(1..))]
-    pub checkpoint_every: Option<u64>,
-    /// Continue the run in this checkpoint file, with its settings, to its end; it goes on
-    /// writing checkpoints to the same file unless --checkpoint names another. The flags that
-    /// set up a run (--steps included: the learning rate falls over the planned steps) are
-    /// refused with it: the network it saves is the one the run would have saved had it never
-    /// stopped, byte for byte.
-    #[arg(long, value_name = "FILE", conflicts_with_all = RUN_FLAGS)]
-    pub resume: Option<PathBuf>,
+    #[command(flatten)]
+    pub checkpointing: CheckpointArgs,
 }
 
-/// The preset that trains a relational policy ([`neural::relational`]), not a Q-network.
-pub const GENERAL: &str = "general";
-
 impl DqnArgs {
-    /// The relational policy's training config (`--preset general`): the preset's, with
-    /// the few flags it takes; any other flag given is refused, naming it.
-    pub fn general_config(&self) -> Result<RelationalConfig> {
-        let given = [
-            ("--obs", self.obs.is_some()),
-            ("--net", self.net.is_some()),
-            ("--loss", self.loss.is_some()),
-            ("--goals", self.goals.is_some()),
-            ("--grid", self.world.grid.is_some()),
-            ("--pretrain", self.pretrain.is_some()),
-            ("--demos", self.demos.is_some()),
-            ("--demos-file", self.demos_file.is_some()),
-            ("--reward", self.world.reward.is_some()),
-            ("--gamma", self.gamma.is_some()),
-            ("--optimizer", self.optimizer.is_some()),
-            ("--td-loss", self.td_loss.is_some()),
-            ("--buffer", self.buffer.is_some()),
-            ("--double", self.double.is_some()),
-            ("--mask-noops", self.mask_noops.is_some()),
-            ("--batch-norm", self.batch_norm.is_some()),
-            ("--screen", self.screen.is_some()),
-            ("--margin", self.margin.is_some()),
-            ("--hindsight", self.hindsight.is_some()),
-            ("--demo-share", self.demo_share.is_some()),
-            ("--horizon", self.world.horizon.is_some()),
-            ("--backend", self.world.backend.is_some()),
-            ("--view top", self.world.view == Some(sim::View::Top)),
-            ("--protocol", self.protocol.is_some()),
-        ];
-        if let Some((flag, _)) = given.iter().find(|(_, g)| *g) {
-            anyhow::bail!(
-                "{flag} does not apply to --preset general (a relational policy learnt from the optimum): \
-                 it takes --blocks, --steps, --batch, --lr, --lr-final, --hidden and --seed"
-            );
-        }
-        let mut c = RelationalConfig::general();
-        c.seed = self.seed;
-        if let Some(b) = self.world.blocks {
-            c.max_blocks = b;
-        }
-        if let Some(s) = self.steps {
-            c.steps = s;
-        }
-        if let Some(b) = self.batch {
-            c.batch = b;
-        }
-        if let Some(lr) = self.lr {
-            c.lr_final *= lr / c.lr;
-            c.lr = lr;
-        }
-        if let Some(lr) = self.lr_final {
-            c.lr_final = lr;
-        }
-        if let Some(h) = self.hidden {
-            c.shape.hidden = h;
-        }
-        c.validate()?;
-        Ok(c)
-    }
-
-    /// The training config these arguments describe: the library's resolver
-    /// ([`DqnConfig::resolve`]: the preset, then each flag given).
-    pub fn config(&self) -> Result<DqnConfig> {
+    /// The settings these arguments give, by name ([`DqnOverrides`]): what Python's
+    /// `train_dqn` takes as keyword arguments.
+    pub fn overrides(&self) -> Result<DqnOverrides> {
         let w = &self.world;
-        anyhow::ensure!(
-            w.view.is_none_or(|v| v == View::Top),
-            "--view side: a network learns the top view only (train a tabular learner for the side view: \
-             blockstack train --view side, or the relational policy: blockstack dqn --preset general)"
-        );
-        let preset = match self.preset.as_deref() {
-            Some(name) => Some(
-                name.parse::<Preset>()
-                    .map_err(|e| anyhow::anyhow!("{e}, or {GENERAL} (the relational policy)"))?,
-            ),
-            None => None,
-        };
-        let overrides = DqnOverrides {
-            preset,
+        Ok(DqnOverrides {
+            preset: self.preset,
             obs: self.obs,
             net: self.net,
             loss: self.loss,
@@ -301,16 +221,35 @@ impl DqnArgs {
             horizon: w.horizon,
             backend: w.backend,
             protocol: self.protocol,
+            view: w.view,
             seed: Some(self.seed),
-        };
-        DqnConfig::resolve(&overrides).map_err(|e| match e {
+        })
+    }
+
+    /// What these arguments train: the library's resolver ([`Recipe::resolve`]: the
+    /// preset, then each flag given), its refusals in the flags' words.
+    pub fn recipe(&self) -> Result<Recipe> {
+        Recipe::resolve(&self.overrides()?).map_err(|e| match e {
             // The goals were the default's: say which flag chooses others.
             neural::NeuralError::Sim(sim::SimError::TooManyGoals { .. }) if self.goals.is_none() => {
                 anyhow::Error::new(e).context("without --goals every goal is used")
             }
+            neural::NeuralError::NotForGeneral { setting } => anyhow::anyhow!(
+                "{} does not apply to --preset general (a relational policy learnt from the optimum): it takes {}",
+                match setting {
+                    "view" => "--view top".to_string(),
+                    s => flag(s),
+                },
+                neural::preset::GENERAL_SETTINGS.map(flag).join(", ")
+            ),
             e => e.into(),
         })
     }
+}
+
+/// The flag of a setting named as [`DqnOverrides`] names it.
+fn flag(setting: &str) -> String {
+    format!("--{}", setting.replace('_', "-"))
 }
 
 /// The command's part in a run ([`neural::Trainer::run_until_on_pool`]): the progress bar,
@@ -336,6 +275,12 @@ impl neural::TrainHooks for Hooks<'_> {
     }
 }
 
+/// A network run's checkpoints.
+const KIND: CheckpointKind = CheckpointKind {
+    format: neural::checkpoint::CHECKPOINT_FORMAT,
+    unit: "steps",
+};
+
 /// How often the progress bar is redrawn, in steps.
 const DRAW_EVERY: u64 = 100;
 
@@ -344,40 +289,39 @@ const DRAW_EVERY: u64 = 100;
 pub fn dqn(args: DqnArgs) -> Result<()> {
     // Before minutes of work, not after.
     let out = files::OutputPath::check(&args.out)?;
-    if args.preset.as_deref() == Some(GENERAL) {
-        anyhow::ensure!(
-            args.checkpoint.is_none() && args.resume.is_none(),
-            "--checkpoint and --resume are a network run's: --preset general trains in minutes and writes none"
-        );
-        super::stdout::claim_for_data(&[Some(&out)])?;
-        return general(&args);
-    }
-    let checkpoint_path = args.checkpoint.as_ref().or(args.resume.as_ref());
-    let checkpoint = checkpoint_path.map(files::OutputPath::check).transpose()?;
-    anyhow::ensure!(
-        !checkpoint.as_ref().is_some_and(files::OutputPath::is_stdout),
-        "--checkpoint -: a checkpoint is written again every N steps, so it must be a file"
-    );
-    super::stdout::claim_for_data(&[Some(&out), checkpoint.as_ref()])?;
+    let c = &args.checkpointing;
+    // A resumed run takes its settings from its checkpoint.
+    let config = match &c.resume {
+        Some(_) => None,
+        None => match args.recipe()? {
+            Recipe::Network(config) => Some(config),
+            Recipe::Relational(config) => {
+                anyhow::ensure!(
+                    c.checkpoint.is_none(),
+                    "--checkpoint is a network run's: --preset general trains in minutes and writes none"
+                );
+                super::stdout::claim_for_data(&[Some(&out)])?;
+                return general(&args, &config);
+            }
+        },
+    };
+    let checkpoint = c.output(&args.out, &out, &KIND)?;
     if let Some(demos) = &args.demos_file {
         files::refuse_same_file(&args.out, demos).context("--out and --demos-file")?;
     }
-    if let Some(path) = checkpoint_path {
-        match (&args.checkpoint, files::refuse_same_file(&args.out, path)) {
-            (_, Ok(())) => {}
-            // The checkpoint is written as well as read: it is not only an input.
-            (Some(_), Err(_)) => anyhow::bail!(
-                "--out {} and --checkpoint {} are the same file: the network and the checkpoint need a file each",
-                args.out.display(),
-                path.display()
-            ),
-            (None, Err(e)) => return Err(anyhow::Error::new(e).context("--out and --resume")),
-        }
-    }
     let clock = Instant::now();
-    let mut trainer = match &args.resume {
-        Some(path) => neural::Trainer::resume(path)?,
-        None => neural::Trainer::new(args.config()?)?,
+    // A resumed run is read first: its settings say which checkpoint is its own.
+    let resumed = c.resume.as_deref().map(neural::Trainer::resume).transpose()?;
+    let settings = resumed
+        .as_ref()
+        .map_or_else(|| config.as_deref().cloned(), |t| Some(t.config().clone()));
+    if let Some(settings) = &settings {
+        c.refuse_other_files(&KIND, |path| neural::Trainer::resume_run(path, settings).is_ok())?;
+    }
+    let mut trainer = match (resumed, config) {
+        (Some(trainer), _) => trainer,
+        (None, Some(config)) => neural::Trainer::new(*config)?,
+        (None, None) => anyhow::bail!("--resume or the run's settings: neither was given"),
     };
     let config = trainer.config().clone();
     let resumed_at = trainer.steps_done();
@@ -426,7 +370,7 @@ pub fn dqn(args: DqnArgs) -> Result<()> {
     let mut hooks = Hooks {
         show: &mut show,
         checkpoint: checkpoint.as_ref(),
-        every: args.checkpoint_every.unwrap_or(neural::checkpoint::DEFAULT_EVERY),
+        every: c.checkpoint_every.unwrap_or(neural::checkpoint::DEFAULT_EVERY),
     };
     trainer.run_until_on_pool(trainer.total_steps(), &mut hooks)?;
     let dqn = trainer.finish()?;
@@ -445,14 +389,14 @@ pub fn dqn(args: DqnArgs) -> Result<()> {
     }
     let r = dqn.report();
     line(format_args!("trained {}: {}", dqn.name(), config.describe()))?;
-    if let Some(path) = &args.resume {
+    if let Some(path) = &c.resume {
         line(format_args!(
             "resumed at step {resumed_at} of {} from {}",
             config.pretrain_steps + config.steps,
             path.display()
         ))?;
     }
-    let made = match &args.resume {
+    let made = match &c.resume {
         Some(_) => format!("{demo_seconds:.1} s to read the checkpoint"),
         None => format!("{demo_seconds:.1} s to make"),
     };
@@ -482,15 +426,14 @@ pub fn dqn(args: DqnArgs) -> Result<()> {
 
 /// `--preset general`: trains the relational policy, showing a progress bar on a terminal
 /// (one tick per DAgger iteration), and saves it.
-fn general(args: &DqnArgs) -> Result<()> {
-    let config = args.general_config()?;
+fn general(args: &DqnArgs, config: &RelationalConfig) -> Result<()> {
     let clock = Instant::now();
     let bar = ProgressBar::new(config.iterations);
     bar.set_style(
         ProgressStyle::with_template("DAgger {bar:30} {pos}/{len}  {msg}  [{elapsed_precise}, eta {eta}]")
             .expect("a valid template"),
     );
-    let model = RelationalModel::train(&config, &mut |r| {
+    let model = RelationalModel::train(config, &mut |r| {
         bar.set_position(r.iteration);
         bar.set_message(format!(
             "{} examples, loss {:.4}, {:.1}% of games reached the goal",

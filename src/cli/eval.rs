@@ -22,7 +22,8 @@ use super::world::WorldArgs;
 #[command(mut_arg("reward", |a| a.help("Reward model summed in the episodes: sparse, dense, paper, step-cost or paper-code [default: the model's training reward, or --profile's]")))]
 #[command(mut_arg("view", |a| a.help("The world: the model's (the other is refused) [default: the model's]")))]
 pub struct EvalArgs {
-    /// The model file to evaluate: a tabular agent (`train`) or a network (`dqn`).
+    /// The model file to evaluate: a tabular agent (`train`), a network (`dqn`) or a
+    /// relational policy (`dqn --preset general`).
     #[arg(long)]
     pub model: PathBuf,
     /// Goals to evaluate on, separated by ':', e.g. 2,1,0:1,2,0 (default: every goal of the
@@ -35,9 +36,11 @@ pub struct EvalArgs {
     /// Base seed: episode k of every goal starts from seed episode_seed(seed, k).
     #[arg(long, default_value_t = 2)]
     pub seed: u64,
-    /// Probability of a random legal action (the paper's test policy: 0.1; 0 is greedy).
-    #[arg(long, default_value_t = agent::profile::TEST_EPSILON)]
-    pub epsilon: f64,
+    /// Probability of a random legal action; 0 is greedy [default: the model's own: its
+    /// profile's test policy, 0.1, for a tabular model or a network; 0 for a relational
+    /// policy]
+    #[arg(long)]
+    pub epsilon: Option<f64>,
     #[command(flatten)]
     pub world: WorldArgs,
     /// Print the result as one JSON object.
@@ -92,7 +95,7 @@ pub fn eval(args: EvalArgs) -> Result<()> {
         .evaluate_with(
             &plan,
             &args.model.display().to_string(),
-            args.epsilon,
+            args.epsilon.unwrap_or(model.default_epsilon()),
             &solver,
             &mut || {
                 bar.inc(1);

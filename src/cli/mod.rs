@@ -8,6 +8,7 @@
 use clap::{Parser, Subcommand};
 use experiments::reproduce::Report;
 
+mod checkpoint;
 mod correct;
 mod demo;
 mod dqn;

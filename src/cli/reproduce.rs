@@ -23,7 +23,7 @@ pub struct ReproduceArgs {
     /// Small counts, to check the pipeline in a minute; not the real figures.
     #[arg(long)]
     pub quick: bool,
-    /// The long budgets: for reproduce, E8's paper pixel runs, `pixels` arms and whole
+    /// The long budgets: for reproduce, E8's paper pixel runs, `dqfd-screen` arms and whole
     /// ablation (about an hour on 2 cores, against minutes for the default run, which trains
     /// E8's plane arms only); for benchmark, E9's and E10's full problem counts.
     #[arg(long, conflicts_with = "quick")]

@@ -25,7 +25,8 @@ pub struct RunArgs {
     /// near-optimal planner from the side), exact (the fewest gripper steps, in either view),
     /// exact-moves (the fewest block moves carried out by the gripper; side view),
     /// near-optimal (the near-optimal block-move planner carried out; side view), q (a
-    /// tabular model, --model) or dqn (a network, --model).
+    /// tabular model, --model), dqn (a network, --model) or relational (a relational policy,
+    /// `dqn --preset general`, --model; `dqn` plays one too, as earlier releases named it).
     #[arg(long, default_value = "random")]
     pub agent: PolicyKind,
     #[command(flatten)]
@@ -53,28 +54,34 @@ pub struct RunArgs {
     /// Print the result as one JSON object.
     #[arg(long)]
     pub json: bool,
-    /// The model file the `q` or `dqn` agent plays (see `blockstack train`, `blockstack dqn`).
-    #[arg(long, required_if_eq_any([("agent", "q"), ("agent", "dqn")]))]
+    /// The model file the `q`, `dqn` or `relational` agent plays (see `blockstack train`,
+    /// `blockstack dqn`).
+    #[arg(long, required_if_eq_any([("agent", "q"), ("agent", "dqn"), ("agent", "relational")]))]
     pub model: Option<PathBuf>,
-    /// The `q` or `dqn` agent's probability of a random legal action [default: the paper's
-    /// test policy: 0.1; 0 for a relational policy (`dqn --preset general`)]
+    /// A trained agent's probability of a random legal action [default: the model's own:
+    /// its profile's test policy, 0.1, for a tabular model or a network; 0 for a relational
+    /// policy]
     #[arg(long)]
     pub epsilon: Option<f64>,
     #[command(flatten)]
     pub budget: SolverBudgetArg,
     /// Play a Blocks World problem in PDDL (the planning competitions' 4-operator domain)
     /// in the side view: every episode starts from its start state towards its goal, on the
-    /// side view's default grid for its blocks.
-    #[arg(long, value_name = "PROBLEM.pddl", conflicts_with_all = ["goal", "blocks", "grid"])]
+    /// side view's default grid for its blocks. A task whose start already meets its goal
+    /// has no episode to play and is refused.
+    #[arg(long, value_name = "PROBLEM.pddl", conflicts_with_all = ["goal", "blocks", "grid", "start"])]
     pub pddl: Option<PathBuf>,
 }
+
+/// The agents that play a model file.
+const MODEL_AGENTS: [PolicyKind; 3] = [PolicyKind::Q, PolicyKind::Dqn, PolicyKind::Relational];
 
 /// Refuses, naming the flag, a flag given for an agent that does not use it (it would be
 /// ignored, and the run would not be what was asked).
 fn check_agent_flags(args: &RunArgs) -> Result<()> {
     let agent_flags: [(&str, bool, &[PolicyKind]); 4] = [
-        ("--model", args.model.is_some(), &[PolicyKind::Q, PolicyKind::Dqn]),
-        ("--epsilon", args.epsilon.is_some(), &[PolicyKind::Q, PolicyKind::Dqn]),
+        ("--model", args.model.is_some(), &MODEL_AGENTS),
+        ("--epsilon", args.epsilon.is_some(), &MODEL_AGENTS),
         ("--oracle", args.oracle.is_some(), &[PolicyKind::Oracle]),
         (
             "--solver-budget",
@@ -83,11 +90,15 @@ fn check_agent_flags(args: &RunArgs) -> Result<()> {
         ),
     ];
     for (flag, given, owners) in agent_flags {
+        let names: Vec<&str> = owners.iter().map(|o| o.name()).collect();
+        let owners = match names.split_last() {
+            Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
+            _ => names.concat(),
+        };
         anyhow::ensure!(
-            !given || owners.contains(&args.agent),
-            "{flag} does not apply to --agent {}: it is for --agent {} only",
-            args.agent.name(),
-            owners.iter().map(|o| o.name()).collect::<Vec<_>>().join(" or ")
+            !given || names.contains(&args.agent.name()),
+            "{flag} does not apply to --agent {}: it is for --agent {owners} only",
+            args.agent.name()
         );
     }
     Ok(())
@@ -107,7 +118,7 @@ pub fn run(args: RunArgs) -> Result<()> {
         Some(path) => {
             let model = super::eval::load_model(path)?;
             anyhow::ensure!(
-                model.kind() == args.agent,
+                args.agent.plays(model.kind()),
                 "{} holds a {} model, not what --agent {} plays",
                 path.display(),
                 model.name(),
@@ -147,11 +158,12 @@ pub fn run(args: RunArgs) -> Result<()> {
             .map_err(|e| anyhow::anyhow!("{e} (leave --view out to play its own)"))?;
     }
     let options = PolicyOptions {
-        // A relational policy plays greedily unless asked: it is measured greedy.
-        epsilon: args.epsilon.unwrap_or(match model {
-            Some(AnyModel::Relational(_)) => 0.0,
-            _ => agent::profile::TEST_EPSILON,
-        }),
+        // The model's own unless asked (the default-play rule, `neural::any`).
+        epsilon: args.epsilon.unwrap_or(
+            model
+                .as_ref()
+                .map_or(agent::profile::TEST_EPSILON, AnyModel::default_epsilon),
+        ),
         oracle: args.oracle.unwrap_or(PolicyOptions::of_profile(rules.profile).oracle),
         node_budget: args.budget.budget(),
     };
@@ -163,6 +175,9 @@ pub fn run(args: RunArgs) -> Result<()> {
     let mut env = Env::new(config.clone())?;
     let mut trajectory = trajectory_out.as_ref().map(TrajectoryWriter::create).transpose()?;
     let bar = super::progress::bar(args.episodes, "episodes");
+    if let Some(task) = &task {
+        warn_short_horizon(task, &config)?;
+    }
     let start = task
         .as_ref()
         .map_or(EpisodeStart::Drawn, |t| EpisodeStart::Given(&t.start, &t.goal));
@@ -186,9 +201,11 @@ pub fn run(args: RunArgs) -> Result<()> {
     };
     // No timings, so two runs compare equal; `eval --json` holds the same fields and more.
     let mut report = RunReport::new(policy.name(), &config, rules.profile, goal, args.seed, &results);
-    if task.is_some() {
+    if let Some(path) = &args.pddl {
         // Not the start rule's draw: every episode began at the task's start.
         report.start = "pddl".into();
+        // The task's goal, not its towers: a 2,000-block goal is a line of 8 KB.
+        report.goal = Some(format!("the task's ({})", path.display()));
     }
     if args.json {
         line(serde_json::to_string(&report)?)?;
@@ -215,6 +232,25 @@ fn pddl_task(path: &Path, world: &WorldArgs) -> Result<SideTask> {
     );
     let problem = Problem::read(path)?;
     problem.side_task().with_context(|| format!("{}", path.display()))
+}
+
+/// Says on standard error when the horizon is shorter than the near-optimal planner's plan
+/// of `task` in gripper steps (what `--agent near-optimal` plays): its episodes would be
+/// cut off before the goal, and every one counted a failure.
+fn warn_short_horizon(task: &SideTask, config: &EnvConfig) -> Result<()> {
+    let solver = oracle::ExactSolver::new(config.grid).with_view(View::Side);
+    let steps = oracle::PlannerKind::NearOptimal
+        .plan_steps(&solver, &task.start, &task.goal)?
+        .len();
+    if (config.horizon as usize) < steps {
+        let _ = writeln!(
+            std::io::stderr(),
+            "blockstack: note: the horizon of {} steps is shorter than the near-optimal plan of this task ({steps} steps), \
+             so episodes end before the goal: give --horizon {steps} or more",
+            config.horizon
+        );
+    }
+    Ok(())
 }
 
 /// The world of `task` (its blocks, grid and goal, the side view), the other flags over

@@ -7,7 +7,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 use std::path::{Path, PathBuf};
 
-use oracle::pddl::Problem;
+use oracle::pddl::{Domain, Problem};
 use oracle::towers::{Certificate, CertifiedPlan, Place};
 use oracle::{Cost, CountedPlan, OracleError, PlannerKind};
 use serde::Serialize;
@@ -32,6 +32,16 @@ pub struct SolveArgs {
     /// default here), optimal or exact.
     #[arg(long, value_name = "PROBLEM.pddl", conflicts_with_all = ["start", "goal", "held", "grid", "view", "cost", "protocol"])]
     pub pddl: Option<PathBuf>,
+    /// With --pddl: the problem's domain file, checked to be the 4-operator Blocks World
+    /// (in either spelling: pickup/putdown or pick-up/put-down); the plan names its actions
+    /// as the domain does, and the problem must name this domain.
+    #[arg(long, value_name = "DOMAIN.pddl", requires = "pddl")]
+    pub domain: Option<PathBuf>,
+    /// With --pddl: write the plan to this file (replaced atomically; a regular file or a
+    /// new path only), in the format printed without it, and print one line saying what
+    /// was written (with --json, the JSON report as without it).
+    #[arg(long, value_name = "FILE", requires = "pddl")]
+    pub plan_file: Option<PathBuf>,
     /// The block held at the start (default: none; in the side view only with --cost steps
     /// --solver exact).
     #[arg(long)]
@@ -91,6 +101,15 @@ struct SolveReport {
 pub fn solve(args: SolveArgs) -> Result<()> {
     if let Some(path) = &args.pddl {
         return solve_pddl(path, &args);
+    }
+    // clap's `requires` does not hold these to --pddl here (start and goal are required
+    // unless it is given), so they are checked by hand.
+    for (flag, given) in [
+        ("--domain", args.domain.is_some()),
+        ("--plan-file", args.plan_file.is_some()),
+        ("--model", args.model.is_some()),
+    ] {
+        anyhow::ensure!(!given, "{flag} goes with --pddl PROBLEM.pddl");
     }
     let solver = args.solver.unwrap_or(PlannerKind::Exact);
     anyhow::ensure!(
@@ -313,8 +332,25 @@ fn solve_pddl(path: &Path, args: &SolveArgs) -> Result<()> {
     let planner = args
         .budget
         .task_planner(args.time_limit, args.solver, args.model.as_deref())?;
-    let problem = Problem::read(path)?;
+    // The plan file is checked before planning: a wrong destination fails at once.
+    let plan_file = args
+        .plan_file
+        .as_deref()
+        .map(|out| -> Result<files::OutputPath> {
+            let checked = files::OutputPath::check_regular(out).context("--plan-file")?;
+            files::refuse_same_file(out, path).context("--plan-file and --pddl")?;
+            if let Some(domain) = &args.domain {
+                files::refuse_same_file(out, domain).context("--plan-file and --domain")?;
+            }
+            Ok(checked)
+        })
+        .transpose()?;
+    let domain = args.domain.as_deref().map(Domain::read).transpose()?;
+    let problem = Problem::read_in(path, domain.as_ref())?;
     let plan = problem.solve(planner.as_ref()).map_err(|e| args.budget.explain(e))?;
+    if let Some(out) = &plan_file {
+        out.write(plan.text(&problem).as_bytes())?;
+    }
     if args.json {
         let report = PddlPlanReport {
             moves: plan.moves.len(),
@@ -323,9 +359,17 @@ fn solve_pddl(path: &Path, args: &SolveArgs) -> Result<()> {
             certificate: CertificateReport::of(plan.certificate),
             optimal: plan.is_optimal(),
             solver: planner.name().to_string(),
-            plan: plan.actions.iter().map(|a| a.to_pddl(problem.block_names())).collect(),
+            plan: plan.actions.iter().map(|&a| problem.action_text(a)).collect(),
         };
         line(serde_json::to_string(&report)?)
+    } else if let Some(out) = &plan_file {
+        line(format_args!(
+            "wrote the plan to {}: cost {}, lower bound {}{}",
+            out.path().display(),
+            plan.cost(),
+            plan.lower_bound_cost(),
+            if plan.is_optimal() { ", optimal" } else { "" }
+        ))
     } else {
         super::stdout::text(&plan.text(&problem))
     }

@@ -6,13 +6,14 @@ use std::time::Instant;
 
 use agent::{Assist, OracleKind, Oscillation, Preset, ReprKind, Schedule, TrainConfig, TrainOverrides, Trainer};
 use anyhow::{Context, Result};
-use clap::{ArgGroup, Args};
+use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use sim::Goal;
 
 use super::profile::{PlayRulesArgs, ProfileArg};
 use super::world::WorldArgs;
 
+use super::checkpoint::{CheckpointArgs, CheckpointKind};
 use super::stdout::line;
 
 /// The flags that set up a run, which `--resume` takes from its checkpoint instead.
@@ -45,8 +46,13 @@ const RUN_FLAGS: [&str; 24] = [
 
 /// Arguments of `blockstack train`.
 #[derive(Debug, Args)]
-#[command(group(ArgGroup::new("checkpointing").args(["checkpoint", "resume"]).multiple(true)))]
 #[command(mut_arg("blocks", |a| a.help("Number of blocks [default: 3]")))]
+#[command(mut_arg("checkpoint_every", |a| a.help("Games between two checkpoints [default: 1000]")))]
+#[command(mut_arg("resume", |a| a.conflicts_with_all(RUN_FLAGS).help(
+    "Continue the run in this checkpoint file, with its settings, to --games games in all (default: the total it \
+     was started with); it goes on writing checkpoints to the same file unless --checkpoint names another. The flags \
+     that set up a run are refused with it: the checkpoint fixes them, so the run ends as if it had never stopped."
+)))]
 #[command(mut_arg("grid", |a| a.help("Grid size, WxH [default: 7x7]")))]
 #[command(mut_arg("reward", |a| a.help("Reward model: sparse, dense, paper, step-cost or paper-code [default: the preset's: paper under spec, paper-code under original, step-cost under --preset optimal]")))]
 #[command(mut_arg("horizon", |a| a.help("Steps before a training game is cut off [default: the schedule's: 1000 under spec, 5000 (1000 with 2 blocks) under paper-code]")))]
@@ -128,20 +134,8 @@ pub struct TrainArgs {
     /// Where to write the trained model (a .safetensors file; checked before training).
     #[arg(long)]
     pub out: PathBuf,
-    /// Write the run to this checkpoint file every --checkpoint-every games and when the
-    /// last game is played (atomically: a kill loses at most the games since the last one);
-    /// `train --resume FILE` continues it.
-    #[arg(long, value_name = "FILE")]
-    pub checkpoint: Option<PathBuf>,
-    /// Games between two checkpoints [default: 1000]
-    #[arg(long, value_name = "N", requires = "checkpointing", value_parser = clap::value_parser!(u64).range(1..))]
-    pub checkpoint_every: Option<u64>,
-    /// Continue the run in this checkpoint file, with its settings, to --games games in all
-    /// (default: the total it was started with); it goes on writing checkpoints to the same
-    /// file unless --checkpoint names another. The flags that set up a run are refused with it:
-    /// the checkpoint fixes them, so the run ends as if it had never stopped.
-    #[arg(long, value_name = "FILE", conflicts_with_all = RUN_FLAGS)]
-    pub resume: Option<PathBuf>,
+    #[command(flatten)]
+    pub checkpointing: CheckpointArgs,
     /// Show the learning curve live in a browser, served on this loopback port while the run
     /// lasts (0: any free port; the link is printed on standard error).
     #[arg(long, value_name = "PORT", num_args = 0..=1, default_missing_value = "8080")]
@@ -235,33 +229,24 @@ impl agent::TrainHooks for Shown<'_> {
     }
 }
 
+/// A tabular run's checkpoints.
+const KIND: CheckpointKind = CheckpointKind {
+    format: agent::checkpoint::CHECKPOINT_FORMAT,
+    unit: "games",
+};
+
 /// Trains (or resumes a checkpointed run), showing a progress bar on a terminal, writing
 /// checkpoints if asked, and saves the model.
 pub fn train(args: TrainArgs) -> Result<()> {
     let out = files::OutputPath::check(&args.out)?;
-    let checkpoint_path = args.checkpoint.as_ref().or(args.resume.as_ref());
-    let checkpoint = checkpoint_path.map(files::OutputPath::check).transpose()?;
-    anyhow::ensure!(
-        !checkpoint.as_ref().is_some_and(files::OutputPath::is_stdout),
-        "--checkpoint -: a checkpoint is written again every N games, so it must be a file"
-    );
-    super::stdout::claim_for_data(&[Some(&out), checkpoint.as_ref()])?;
-    if let Some(path) = checkpoint_path {
-        match (&args.checkpoint, files::refuse_same_file(&args.out, path)) {
-            (_, Ok(())) => {}
-            // The checkpoint is written as well as read: it is not only an input.
-            (Some(_), Err(_)) => anyhow::bail!(
-                "--out {} and --checkpoint {} are the same file: the model and the checkpoint need a file each",
-                args.out.display(),
-                path.display()
-            ),
-            (None, Err(e)) => return Err(anyhow::Error::new(e).context("--out and --resume")),
-        }
-    }
-    let mut trainer = match &args.resume {
+    let checkpoint = args.checkpointing.output(&args.out, &out, &KIND)?;
+    let mut trainer = match &args.checkpointing.resume {
         Some(path) => Trainer::resume(path)?,
         None => Trainer::new(args.config()?)?,
     };
+    let config = trainer.config().clone();
+    args.checkpointing
+        .refuse_other_files(&KIND, |path| Trainer::resume_run(path, &config).is_ok())?;
     let total = args.games.unwrap_or(trainer.config().games);
     let played = trainer.report().games;
     anyhow::ensure!(
@@ -293,7 +278,10 @@ pub fn train(args: TrainArgs) -> Result<()> {
         bar: &bar,
         curve: curve.as_ref(),
         checkpoint: checkpoint.as_ref(),
-        every: args.checkpoint_every.unwrap_or(agent::checkpoint::DEFAULT_EVERY),
+        every: args
+            .checkpointing
+            .checkpoint_every
+            .unwrap_or(agent::checkpoint::DEFAULT_EVERY),
     };
     trainer.run_until(total, &mut hooks)?;
     let config = trainer.config().clone();

@@ -1,9 +1,6 @@
 //! What the command-line tests share: running the binary, reading what it printed, and
 //! scratch folders.
 
-// Each test binary uses its own subset of these helpers.
-#![allow(dead_code)]
-
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 

@@ -18,9 +18,7 @@ use std::path::Path;
 
 use sim::{ActionProtocol, EnvConfig, Grid, View};
 
-use super::episodes::{DemoEpisode, collect_episodes};
 use super::format::{SessionLine, demos_error};
-use super::replay::{BadLines, DemoLearner, ReplayReport, replay_reader};
 use crate::error::Result;
 
 /// The world a run plays: what a recording it reads must be of. A part left `None` is
@@ -148,47 +146,10 @@ pub struct Admitted<T> {
     pub note: Option<String>,
 }
 
-/// The episodes of the demonstrations file at `path` (a recording or a trajectory file,
-/// every line checked, as `read_episodes` reads them) when `admission` takes it (module
-/// docs).
-pub fn read_admitted(path: &Path, admission: &Admission) -> Result<Admitted<Vec<DemoEpisode>>> {
-    let world = admission.world.and_then(|w| w.grid.zip(w.blocks));
-    let (episodes, withdrawn) = collect_episodes(super::format::open(path)?, path, world, admission)?;
-    if let Some(run) = admission.world
-        && let Some(e) = episodes.iter().find(|e| run.view.is_some_and(|v| v != e.view))
-    {
-        // A trajectory file names its view per episode (a recording's session was checked).
-        return Err(demos_error(
-            path,
-            &format!(
-                "episode {}: the file is of the {} view; this run is of {run}",
-                e.episode, e.view
-            ),
-        ));
-    }
-    let note = admission.withdrawal(path, withdrawn)?;
-    Ok(Admitted { read: episodes, note })
-}
-
-/// Replays the recording at `path` into `agent` (as `learn_from_file` does) when
-/// `admission` takes it (module docs). A withdrawn recording refused has been replayed
-/// into `agent` already: the caller keeps nothing of it.
-pub fn learn_admitted<L: DemoLearner + ?Sized>(
-    agent: &mut L,
-    path: &Path,
-    policy: BadLines,
-    admission: &Admission,
-) -> Result<Admitted<ReplayReport>> {
-    super::format::refuse_model_file(path)?;
-    let file = files::open_bounded(path, super::format::MAX_RECORDING_BYTES, "a recording")?;
-    let report = replay_reader(agent, std::io::BufReader::new(file), path, policy, admission)?;
-    let note = admission.withdrawal(path, report.withdrawn)?;
-    Ok(Admitted { read: report, note })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::demos::read_admitted;
 
     fn world(view: View, blocks: usize, protocol: Option<ActionProtocol>) -> RunWorld {
         RunWorld {

@@ -13,7 +13,7 @@ use std::path::Path;
 use sim::trajectory::Episode;
 use sim::{Action, Goal, Grid, Observation, State, View};
 
-use super::admission::Admission;
+use super::admission::{Admission, Admitted};
 use super::format::{DemoFile, EpisodeLine, ParticipantLine, SessionLine, WorldLine, demos_error};
 use super::replay::{BadLines, DemoLearner, StepTime, replay_reader};
 use crate::error::{AgentError, Result};
@@ -287,4 +287,26 @@ pub(crate) fn collect_episodes(
             Ok((episodes, false))
         }
     }
+}
+
+/// The episodes of the demonstrations file at `path` (a recording or a trajectory file,
+/// every line checked, as `read_episodes` reads them) when `admission` takes it (module
+/// docs).
+pub fn read_admitted(path: &Path, admission: &Admission) -> Result<Admitted<Vec<DemoEpisode>>> {
+    let world = admission.world.and_then(|w| w.grid.zip(w.blocks));
+    let (episodes, withdrawn) = collect_episodes(super::format::open(path)?, path, world, admission)?;
+    if let Some(run) = admission.world
+        && let Some(e) = episodes.iter().find(|e| run.view.is_some_and(|v| v != e.view))
+    {
+        // A trajectory file names its view per episode (a recording's session was checked).
+        return Err(demos_error(
+            path,
+            &format!(
+                "episode {}: the file is of the {} view; this run is of {run}",
+                e.episode, e.view
+            ),
+        ));
+    }
+    let note = admission.withdrawal(path, withdrawn)?;
+    Ok(Admitted { read: episodes, note })
 }

@@ -12,13 +12,15 @@ pub mod episodes;
 pub mod format;
 pub mod replay;
 
-pub use admission::{Admission, Admitted, RunWorld, learn_admitted, read_admitted};
-pub use episodes::{DemoEpisode, DemoStep, Demonstrations, episodes_of, read_demonstrations, read_episodes};
+pub use admission::{Admission, Admitted, RunWorld};
+pub use episodes::{
+    DemoEpisode, DemoStep, Demonstrations, episodes_of, read_admitted, read_demonstrations, read_episodes,
+};
 pub use format::{
     DEMOS_FORMAT, DEMOS_VERSION, DemoFile, DemoRecord, DemoSink, DemoWriter, EpisodeLine, MAX_LINE_BYTES,
     MAX_RECORDING_BYTES, ParticipantLine, SessionLine, StateLine, StepLine, WithdrawnLine, WorldLine, open, unix_ms,
 };
 pub use replay::{
-    BadLine, BadLines, DemoLearner, Replay, ReplayReport, StepTime, learn_from_file, learn_from_reader,
+    BadLine, BadLines, DemoLearner, Replay, ReplayReport, StepTime, learn_admitted, learn_from_file, learn_from_reader,
     learn_from_records,
 };

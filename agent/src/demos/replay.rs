@@ -36,7 +36,7 @@ use sim::reward::Transition;
 use sim::trajectory::Outcomes;
 use sim::{Action, ActionProtocol, Goal, Grid, GridWorld, Observation, State, View, World};
 
-use super::admission::Admission;
+use super::admission::{Admission, Admitted};
 use super::format::{
     DEMOS_FORMAT, DEMOS_VERSION, DemoRecord, EpisodeLine, MAX_LINE_BYTES, RawLine, RecordingLines, SessionLine,
     StepLine, demos_error,
@@ -606,6 +606,22 @@ pub fn learn_from_records(agent: &mut QAgent, records: &[DemoRecord]) -> Result<
         replay.line(&serde_json::to_string(record).expect("records serialise"))?;
     }
     Ok(replay.finish())
+}
+
+/// Replays the recording at `path` into `agent` (as `learn_from_file` does) when
+/// `admission` takes it (module docs). A withdrawn recording refused has been replayed
+/// into `agent` already: the caller keeps nothing of it.
+pub fn learn_admitted<L: DemoLearner + ?Sized>(
+    agent: &mut L,
+    path: &Path,
+    policy: BadLines,
+    admission: &Admission,
+) -> Result<Admitted<ReplayReport>> {
+    super::format::refuse_model_file(path)?;
+    let file = files::open_bounded(path, super::format::MAX_RECORDING_BYTES, "a recording")?;
+    let report = replay_reader(agent, std::io::BufReader::new(file), path, policy, admission)?;
+    let note = admission.withdrawal(path, report.withdrawn)?;
+    Ok(Admitted { read: report, note })
 }
 
 #[cfg(test)]

@@ -10,7 +10,7 @@ use serde::Serialize;
 use sim::{ActionProtocol, EnvConfig, Goal, Profile, StartRule};
 
 use super::paper::{MeanOver, PaperRow, PaperTable};
-use super::spread::PaperInside;
+use super::spread::{PaperInside, Placement};
 use super::{ProgressSink, Result};
 use plots::{Arm, BoxPlot};
 use stats::{Method, TestResult};
@@ -152,6 +152,28 @@ pub struct ArmResult {
 }
 
 impl ArmResult {
+    /// Where `paper`'s figures fall against this arm's replicates; `None` if the paper
+    /// gives no figure to place or the arm has no replicate.
+    pub fn paper_inside(&self, paper: &PaperRow) -> Option<PaperInside> {
+        let arm = self;
+        let failure_rate = match (paper.failures, paper.games) {
+            (Some(f), Some(n)) if n > 0 => {
+                Placement::of(f64::from(f) / f64::from(n), &arm.failure_rate_per_replicate())
+            }
+            _ => None,
+        };
+        let ours: Vec<f64> = match paper.mean_over {
+            MeanOver::FailuresAtHorizon => arm.mean_steps_failures_at_horizon_per_replicate.clone(),
+            MeanOver::Successes => arm.mean_steps_per_replicate.iter().flatten().copied().collect(),
+        };
+        let mean_steps = paper.mean_steps.and_then(|m| Placement::of(m, &ours));
+        (failure_rate.is_some() || mean_steps.is_some()).then_some(PaperInside {
+            failure_rate,
+            mean_steps,
+            mean_over: paper.mean_over,
+        })
+    }
+
     /// The figures of `replicates` (each one agent's results on the same suite, whose
     /// shortest plans are `optimum`; empty for none).
     pub fn of(
@@ -407,7 +429,7 @@ impl Row {
     ) -> Row {
         let measured = |m: Option<(ArmResult, Vec<Option<TestOutcome>>)>| {
             m.map(|(arm, tests)| Measured {
-                paper_inside: paper.as_ref().and_then(|p| PaperInside::of(p, &arm)),
+                paper_inside: paper.as_ref().and_then(|p| arm.paper_inside(p)),
                 arm,
                 tests,
             })
@@ -532,6 +554,7 @@ pub fn steps_box_plot(title: String, rows: &[Row], replicates: usize, suite: &Su
 #[cfg(test)]
 mod tests {
     use super::*;
+    use sim::{Cell, State};
 
     fn suite(goals: Goals) -> Suite {
         suite_in(Profile::Spec, 3, goals, 4, 9)
@@ -606,5 +629,59 @@ mod tests {
         for (r, &v) in random.iter().zip(&arm.steps) {
             assert_eq!(v, if r.reached_goal { f64::from(r.steps) } else { 3.0 });
         }
+    }
+
+    fn game(steps: u32, reached_goal: bool) -> EpisodeResult {
+        EpisodeResult {
+            episode: 0,
+            seed: 0,
+            goal: "1,0".parse::<Goal>().unwrap(),
+            start: State::new(&[Cell::new(0, 0), Cell::new(3, 0)], None).unwrap(),
+            steps,
+            reached_goal,
+            total_reward: 0.0,
+        }
+    }
+
+    #[test]
+    fn the_papers_row_is_placed_replicate_by_replicate() {
+        // Two replicates of two games: failure rates 0.5 and 0, mean steps* 505 and 15.
+        let replicates = [
+            vec![game(10, true), game(7, false)],
+            vec![game(10, true), game(20, true)],
+        ];
+        let arm = ArmResult::of("q", "q", Some(0.1), &replicates, &[], 1000);
+        let row = |failures, mean| PaperRow {
+            arm: "q",
+            failures: Some(failures),
+            games: Some(4),
+            mean_steps: Some(mean),
+            mean_over: MeanOver::FailuresAtHorizon,
+            p_value: None,
+        };
+        let inside = arm.paper_inside(&row(1, 300.0)).unwrap();
+        let f = inside.failure_rate.unwrap();
+        assert_eq!((f.paper, f.spread.low, f.spread.high, f.inside), (0.25, 0.0, 0.5, true));
+        let m = inside.mean_steps.unwrap();
+        assert_eq!((m.spread.low, m.spread.high), (15.0, 505.0));
+        // Over successes (E2's reading): 10 and 15.
+        let successes = PaperRow {
+            failures: None,
+            mean_over: MeanOver::Successes,
+            ..row(0, 12.0)
+        };
+        let inside = arm.paper_inside(&successes).unwrap();
+        assert_eq!(inside.failure_rate, None);
+        let m = inside.mean_steps.unwrap();
+        assert_eq!((m.spread.low, m.spread.high, m.inside), (10.0, 15.0, true));
+        assert!(inside.all_inside());
+        let outside = arm.paper_inside(&row(3, 300.0)).unwrap();
+        assert!(!outside.failure_rate.unwrap().inside && !outside.all_inside());
+        let no_figures = PaperRow {
+            failures: None,
+            mean_steps: None,
+            ..row(0, 0.0)
+        };
+        assert_eq!(arm.paper_inside(&no_figures), None);
     }
 }

@@ -14,6 +14,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 use sim::{ActionProtocol, Profile, StartRule};
 
+use super::Findings;
 use super::arms::{ArmResult, Goals, Row, Rules, Suite, Table, describe, mean_of};
 use super::shared::Shared;
 use super::text::{num, paper_against};
@@ -164,13 +165,10 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
             tests: Vec::new(),
             rows: vec![row],
         }],
-        curves: Vec::new(),
-        decomposition: Some(Decomposition { worlds, gaps }),
         paper_notes: Vec::new(),
         reading,
         figures: Vec::new(),
-        blocks_world: None,
-        general: None,
+        findings: Findings::Decomposition(Decomposition { worlds, gaps }),
     })
 }
 

@@ -32,6 +32,7 @@ use serde::Serialize;
 use sim::seeding::episode_seed;
 
 use super::Budget;
+use super::Findings;
 use super::shared::Shared;
 use super::text::num;
 use super::{Context, Drawing, Experiment, Figure, Result, Setting};
@@ -322,13 +323,10 @@ fn experiment(ctx: &Context, model: &RelationalModel, g: General) -> Experiment 
         title: "One learned policy for the classic Blocks World at every size (ours)".into(),
         setup: setup(ctx, model, &g),
         tables: Vec::new(),
-        curves: Vec::new(),
-        decomposition: None,
         paper_notes: Vec::new(),
         reading: reading(&g),
         figures: charts(ctx, &g),
-        blocks_world: None,
-        general: Some(g),
+        findings: Findings::General(g),
     }
 }
 
@@ -571,7 +569,9 @@ mod tests {
     fn e10_alone_trains_plays_every_size_and_is_seeded() {
         let e = quick();
         assert_eq!(e.id, "E10");
-        let g = e.general.as_ref().unwrap();
+        let Findings::General(g) = &e.findings else {
+            panic!("E10 reports its training")
+        };
         assert_eq!(
             g.uniform.iter().map(|r| r.blocks).collect::<Vec<_>>(),
             sizes(Budget::Quick, &SIZES)

@@ -3,6 +3,7 @@
 
 use sim::{Goal, Profile};
 
+use super::Findings;
 use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, describe, mean_of, play_replicates, suite_in};
 use super::shared::Shared;
 use super::text::{mean_name, num, paper_against, significance, world_name};
@@ -152,12 +153,9 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
             tests: vec!["Wilcoxon vs epsilon 0.01".into()],
             rows,
         }],
-        curves: Vec::new(),
-        decomposition: None,
         paper_notes: Vec::new(),
         reading,
         figures: Vec::new(),
-        blocks_world: None,
-        general: None,
+        findings: Findings::Tables,
     })
 }

@@ -6,8 +6,9 @@
 use agent::{QAgent, RandomPolicy};
 use sim::Profile;
 
+use super::Findings;
 use super::arms::{ArmResult, Goals, Row, Suite, Table, TestOutcome, describe, mean_of, play_replicates, suite_in};
-use super::shared::Shared;
+use super::shared::{Shared, ours_description};
 use super::text::{num, p_value, paper_against, significance, world_name};
 use super::{Context, Experiment, HORIZON, Result, Setting, WORLDS, goals, paper, paper_learner};
 
@@ -133,13 +134,10 @@ pub(super) fn run(ctx: &Context, shared: &Shared) -> Result<Experiment> {
             tests: vec!["KS vs random".into()],
             rows,
         }],
-        curves: Vec::new(),
-        decomposition: None,
         paper_notes: vec![paper_ks_note()?],
         reading,
         figures: Vec::new(),
-        blocks_world: None,
-        general: None,
+        findings: Findings::Tables,
     })
 }
 
@@ -260,34 +258,6 @@ fn paper_ks_note() -> Result<String> {
         bound.statistic,
         p_value(bound.p_value),
     ))
-}
-
-/// What our learner is, from its recorded training.
-pub(super) fn ours_description(ours: &QAgent) -> String {
-    match ours.training() {
-        Some(t) => {
-            let replays: Vec<&str> = [(t.backward_replay, "backward replay"), (t.final_replay, "final replay")]
-                .iter()
-                .filter(|(on, _)| *on)
-                .map(|&(_, name)| name)
-                .collect();
-            format!(
-                "{} representation, {} reward, alpha {}, gamma {}, epsilon {}{}, {} training games on {} (seed {}), \
-                 {} backend",
-                t.repr,
-                t.world.reward,
-                t.params.alpha,
-                t.params.gamma,
-                t.params.epsilon,
-                replays.iter().map(|r| format!(", {r}")).collect::<String>(),
-                t.games,
-                t.goals.iter().map(ToString::to_string).collect::<Vec<_>>().join(" "),
-                t.seed,
-                t.world.backend
-            )
-        }
-        None => ours.name(),
-    }
 }
 
 #[cfg(test)]

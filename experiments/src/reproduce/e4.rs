@@ -9,8 +9,9 @@ use agent::{EpisodeResult, TrainConfig};
 use rayon::prelude::*;
 use sim::{Goal, Profile};
 
+use super::Findings;
 use super::arms::{ArmResult, Goals, Row, Suite, Table, describe, suite_in};
-use super::shared::{Shared, train_along};
+use super::shared::{Shared, curve_suite, train_along};
 use super::text::{mean_name, num, percent};
 use super::{Context, Curve, CurvePoint, Drawing, Experiment, Figure, Result, Setting, paper, paper_learner};
 use plots::{LearningCurve, LearningPoint, LearningSeries, SeriesStyle};
@@ -21,11 +22,6 @@ pub(super) fn jobs(ctx: &Context) -> u64 {
     let scale = &ctx.scale;
     let original = scale.replicates * scale.original_curve.len() * (1 + paper::FIG3.len());
     (original + 2 * scale.curve_replicates * scale.paper_curve.len()) as u64
-}
-
-/// The SPEC world's test games at every point: all goals, drawn per game.
-pub(super) fn suite(ctx: &Context) -> Suite {
-    suite_in(Profile::Spec, 3, Goals::Drawn, ctx.scale.test_games, ctx.seeds.test)
 }
 
 /// The original world's test games at every point: the paper's 100, goal drawn per game.
@@ -90,7 +86,7 @@ fn paper_curves(ctx: &Context) -> Result<PaperCurves> {
 
 /// The paper's learner in the SPEC world, every replicate trained on all six goals in turn.
 fn spec_curve(ctx: &Context) -> Result<Curve> {
-    let suite = suite(ctx);
+    let suite = curve_suite(ctx);
     let schedule = &ctx.scale.paper_curve;
     let all = Goal::all(3)?;
     let eps = ctx.test_epsilon();
@@ -313,13 +309,10 @@ fn experiment(ctx: &Context, paper_curves: PaperCurves, ours: Curve) -> Experime
         title: "Learning curve, 3 blocks (Fig. 3)".into(),
         setup: setup(ctx, &curves),
         tables: vec![table],
-        curves,
-        decomposition: None,
         paper_notes: Vec::new(),
         reading,
         figures,
-        blocks_world: None,
-        general: None,
+        findings: Findings::Curves(curves),
     }
 }
 

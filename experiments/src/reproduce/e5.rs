@@ -10,6 +10,7 @@
 use agent::{Assist, OracleKind, Oscillation};
 use sim::{Goal, Profile};
 
+use super::Findings;
 use super::arms::{
     ArmResult, Goals, Row, Suite, Table, TestOutcome, describe, play_replicates, steps_box_plot, suite_in,
 };
@@ -172,13 +173,10 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
                 rows: short_rows,
             },
         ],
-        curves: Vec::new(),
-        decomposition: None,
         paper_notes: Vec::new(),
         reading,
         figures: vec![figure],
-        blocks_world: None,
-        general: None,
+        findings: Findings::Tables,
     })
 }
 

@@ -8,6 +8,7 @@ use agent::{CorrectionConfig, DemonstratorProfile, QAgent};
 use rayon::prelude::*;
 use sim::{Goal, Profile};
 
+use super::Findings;
 use super::arms::{
     ArmResult, Goals, Row, Suite, Table, TestOutcome, describe, play_replicates, steps_box_plot, suite_in,
 };
@@ -282,13 +283,10 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
             },
         ],
         tables,
-        curves: Vec::new(),
-        decomposition: None,
         paper_notes: Vec::new(),
         reading,
         figures,
-        blocks_world: None,
-        general: None,
+        findings: Findings::Tables,
     })
 }
 

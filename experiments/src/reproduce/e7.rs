@@ -7,8 +7,9 @@ use rayon::prelude::*;
 use sim::{Goal, Profile};
 
 use super::arms::{ArmResult, Goals, Row, Rules, Suite, Table, TestOutcome, describe, mean_of};
-use super::e3::ours_description;
-use super::shared::Shared;
+
+use super::Findings;
+use super::shared::{Shared, ours_description};
 use super::text::{num, significance};
 use super::{Context, Drawing, Experiment, Figure, HORIZON, Result, Setting};
 use crate::episode::EpisodeFrames;
@@ -175,13 +176,10 @@ pub(super) fn run(ctx: &Context, shared: &Shared) -> Result<Experiment> {
             tests: vec!["Wilcoxon vs Q paper".into(), "Wilcoxon vs exact".into()],
             rows,
         }],
-        curves: Vec::new(),
-        decomposition: None,
         paper_notes: Vec::new(),
         reading,
         figures,
-        blocks_world: None,
-        general: None,
+        findings: Findings::Tables,
     })
 }
 

@@ -25,6 +25,7 @@ use neural::{DemoSource, DqnConfig, NetConfig, NetKind, OptimizerKind, Preset, T
 use serde::{Deserialize, Serialize};
 use sim::{Goal, Profile, RewardModel, ScreenGoal};
 
+use super::Findings;
 use super::arms::{ArmResult, Goals, Row, Suite, Table, describe, suite_in};
 use super::shared::Shared;
 use super::text::num;
@@ -155,9 +156,9 @@ fn arms(budget: Budget, seed: u64) -> Result<Vec<Arm>> {
     let paper2 = preset(Preset::Paper, 2, seed, 1.0)?;
     let paper_dqfd2 = preset(Preset::PaperDqfd, 2, seed, 1.0)?;
     // Our learner on the paper's pixels and network: what the screen and the network cost.
-    let ours_pixels2 = preset(Preset::DqfdPixels, 2, seed, 1.0)?;
+    let ours_pixels2 = preset(Preset::DqfdPaperScreen, 2, seed, 1.0)?;
     let ours3 = dqfd_planes3(seed, 1.0)?;
-    let pixels3 = preset(Preset::Pixels, 3, seed, 1.0)?;
+    let pixels3 = preset(Preset::DqfdScreen, 3, seed, 1.0)?;
     arms.extend([
         arm("paper: DQN, pixels, 2 blocks", Part::Paper, paper2),
         arm("paper: DQfD, pixels, 2 blocks", Part::Paper, paper_dqfd2),
@@ -535,13 +536,10 @@ pub(super) fn run(ctx: &Context, _: &Shared) -> Result<Experiment> {
         title: "Deep Q-learning from pixels and planes, and DQfD (section III-C)".into(),
         setup: setup(budget, &arms, &outcomes),
         tables: tables(ctx, budget, &arms, &outcomes)?,
-        curves: Vec::new(),
-        decomposition: None,
         paper_notes: Vec::new(),
         reading: reading(budget, &arms, &outcomes),
         figures: figures(budget, &arms, &outcomes),
-        blocks_world: None,
-        general: None,
+        findings: Findings::Tables,
     })
 }
 
@@ -782,7 +780,10 @@ mod tests {
         // The pixels preset's 3-block arm, at its full budget, only under --long.
         let pixels = long.iter().find(|a| a.name == PIXELS3).unwrap();
         assert_eq!(pixels.config.net.kind, NetKind::Conv);
-        assert_eq!(pixels.config.steps, DqnConfig::preset(Preset::Pixels, 3).unwrap().steps);
+        assert_eq!(
+            pixels.config.steps,
+            DqnConfig::preset(Preset::DqfdScreen, 3).unwrap().steps
+        );
         assert!(arms(Budget::Default, 1).unwrap().iter().all(|a| a.name != PIXELS3));
         // The costliest arm starts first: the one on the paper's screen, then the paper
         // network's.

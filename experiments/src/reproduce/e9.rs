@@ -35,6 +35,7 @@ use sim::seeding::{self, episode_seed};
 use sim::{Action, Backend, Env, EnvConfig, Goal, GoalSpec, Grid, Observation, State, Step, View};
 
 use super::Budget;
+use super::Findings;
 use super::shared::Shared;
 use super::text::num;
 use super::{Context, Drawing, Experiment, Figure, HORIZON, Result, Setting};
@@ -571,13 +572,10 @@ fn experiment(ctx: &Context, world: BlocksWorld, learner: &TrainConfig) -> Exper
         title: "The classic Blocks World, seen from the side (ours)".into(),
         setup: setup(ctx, &world, learner),
         tables: Vec::new(),
-        curves: Vec::new(),
-        decomposition: None,
         paper_notes: Vec::new(),
         reading: reading(&world),
         figures: figures(&world),
-        blocks_world: Some(world),
-        general: None,
+        findings: Findings::BlocksWorld(world),
     }
 }
 
@@ -892,7 +890,9 @@ mod tests {
     fn e9_alone_draws_its_problems_plans_them_and_the_planners_reach_every_goal() {
         let e = quick();
         assert_eq!(e.id, "E9");
-        let world = e.blocks_world.as_ref().unwrap();
+        let Findings::BlocksWorld(world) = &e.findings else {
+            panic!("E9 reports its problems")
+        };
         let per = problems_per_cell(Budget::Quick) as usize;
         assert_eq!(world.problems.len(), BLOCKS.len() * MAX_TOWERS * per);
         for p in &world.problems {

@@ -11,12 +11,12 @@ use super::ran::Ran;
 use super::spread::Spread;
 use super::summary::summary;
 use super::text::{ALPHA, failures, num, p_value, verdict};
-use super::{
-    BlocksWorld, Curve, Decomposition, Drawing, Experiment, General, Group, Report, ReproduceError, Reproduction,
-    Result, SizeFigures,
-};
+use super::{Curve, Decomposition, Drawing, Experiment, Findings, Report, ReproduceError, Reproduction, Result};
 use crate::episode::{GifOptions, episode_gif};
 use plots::{bar_chart, box_plot, curves_chart, learning_curve};
+
+mod blocks_world;
+mod general;
 
 /// The files a report is made of.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -288,17 +288,12 @@ fn experiment(md: &mut String, e: &Experiment) {
     for t in &e.tables {
         table(md, t);
     }
-    if let Some(w) = &e.blocks_world {
-        blocks_world(md, w);
-    }
-    if let Some(g) = &e.general {
-        general(md, g);
-    }
-    if let Some(d) = &e.decomposition {
-        decomposition(md, d);
-    }
-    for c in &e.curves {
-        curve(md, c);
+    match &e.findings {
+        Findings::Tables => {}
+        Findings::BlocksWorld(w) => blocks_world::tables(md, w),
+        Findings::General(g) => general::tables(md, g),
+        Findings::Decomposition(d) => decomposition(md, d),
+        Findings::Curves(curves) => curves.iter().for_each(|c| curve(md, c)),
     }
     for note in &e.paper_notes {
         let _ = writeln!(md, "\n**The paper's own figures.** {note}");
@@ -515,189 +510,6 @@ fn decomposition(md: &mut String, d: &Decomposition) {
     }
 }
 
-/// E9's tables: the problems grouped three ways, and physics against the grid model.
-fn blocks_world(md: &mut String, w: &BlocksWorld) {
-    let grid = |blocks: usize| {
-        let g = super::e9::grid_for(blocks);
-        format!("{} x {}", g.width(), g.height())
-    };
-    groups(
-        md,
-        "By stacking steps (the fewest block moves)",
-        "stacking steps",
-        &w.by_stacking_steps,
-        None,
-    );
-    groups(md, "By number of blocks", "blocks", &w.by_blocks, Some(&grid));
-    groups(md, "By number of goal towers", "towers", &w.by_towers, None);
-    let _ = writeln!(md, "\n### Physics against the grid model\n");
-    let head = cells([
-        "blocks",
-        "grid",
-        "episodes",
-        "same starts",
-        "random steps",
-        "same outcome",
-        "drops",
-        "landed on the same cell",
-        "physics errors",
-    ]);
-    let rows = w.agreement.iter().map(|a| {
-        vec![
-            a.blocks.to_string(),
-            a.grid.clone(),
-            a.episodes.to_string(),
-            a.same_starts.to_string(),
-            a.steps.to_string(),
-            a.same_steps.to_string(),
-            a.drops.to_string(),
-            a.same_landings.to_string(),
-            a.physics_errors.to_string(),
-        ]
-    });
-    markdown_table(md, &head, rows);
-    for e in w.agreement.iter().filter_map(|a| a.first_error.as_ref()) {
-        let _ = writeln!(md, "\nThe first physics error: {e}.");
-    }
-}
-
-/// A table of E9's groups, keyed by `key`, with a grid column when `grid` is given. Block
-/// moves and gripper steps are over the games that reached the goal.
-fn groups(md: &mut String, title: &str, key: &str, groups: &[Group], grid: Option<&dyn Fn(usize) -> String>) {
-    let _ = writeln!(md, "\n### {title}\n");
-    let mut agents: Vec<&str> = Vec::new();
-    for a in groups.iter().flat_map(|g| &g.agents) {
-        if !agents.contains(&a.agent.as_str()) {
-            agents.push(&a.agent);
-        }
-    }
-    let mut head = vec![key.to_string()];
-    if grid.is_some() {
-        head.push("grid".into());
-    }
-    head.extend(
-        [
-            "problems",
-            "fewest moves",
-            "near-optimal plan",
-            "× fewest (worst)",
-            "fewest gripper steps",
-        ]
-        .map(String::from),
-    );
-    for a in &agents {
-        head.extend(
-            ["reached", "moves × fewest", "gripper steps", "steps × fewest"].map(|figure| format!("{a}: {figure}")),
-        );
-    }
-    let rows = groups.iter().map(|g| {
-        let mut cells = vec![g.key.to_string()];
-        if let Some(grid) = grid {
-            cells.push(grid(g.key));
-        }
-        cells.extend([
-            g.problems.to_string(),
-            num(Some(g.fewest_moves), 2),
-            num(Some(g.near_optimal_moves), 2),
-            format!(
-                "{} ({})",
-                num(Some(g.near_optimal_ratio), 3),
-                num(Some(g.near_optimal_worst), 2)
-            ),
-            num(g.fewest_steps, 1),
-        ]);
-        for a in &agents {
-            match g.agents.iter().find(|f| f.agent == *a) {
-                Some(f) => cells.extend([
-                    format!("{:.1}%", 100.0 * f.success),
-                    num(f.moves_ratio, 3),
-                    num(f.mean_steps, 1),
-                    num(f.steps_ratio, 3),
-                ]),
-                None => cells.extend(["-".to_string(), "-".into(), "-".into(), "-".into()]),
-            }
-        }
-        cells
-    });
-    markdown_table(md, &head, rows);
-}
-
-/// E10's tables: the uniform problems by size, those of a few blocks against the fewest
-/// moves, and NLM's generator beside NLM's figures.
-fn general(md: &mut String, g: &General) {
-    let solved = |r: &SizeFigures| format!("{:.1}%", 100.0 * r.success);
-    let _ = writeln!(md, "\n### Uniform problems, by number of blocks\n");
-    let head = cells([
-        "blocks",
-        "problems",
-        "solved",
-        "policy: mean moves",
-        "near-optimal: mean moves",
-        "× near-optimal",
-        "worst × near-optimal",
-        "optimum proven",
-        "policy × optimum",
-        "near-optimal × optimum",
-    ]);
-    let rows = g.uniform.iter().map(|r| {
-        vec![
-            r.blocks.to_string(),
-            r.problems.to_string(),
-            solved(r),
-            num(r.mean_moves, 2),
-            num(r.near_optimal_moves, 2),
-            num(r.near_optimal_ratio, 4),
-            num(r.worst_ratio, 3),
-            format!("{}%", num(Some(100.0 * r.proven), 1)),
-            num(r.optimum_ratio, 4),
-            num(r.near_optimal_optimum_ratio, 4),
-        ]
-    });
-    markdown_table(md, &head, rows);
-    let _ = writeln!(md, "\n### A few blocks, against the fewest moves\n");
-    let head = cells([
-        "blocks",
-        "problems",
-        "solved",
-        "fewest moves",
-        "policy × fewest",
-        "near-optimal × fewest",
-    ]);
-    let rows = g.exact.iter().map(|r| {
-        vec![
-            r.blocks.to_string(),
-            r.problems.to_string(),
-            solved(r),
-            num(r.fewest_moves, 2),
-            num(r.fewest_ratio, 4),
-            num(r.near_optimal_fewest_ratio, 4),
-        ]
-    });
-    markdown_table(md, &head, rows);
-    let _ = writeln!(md, "\n### Neural Logic Machines' generator\n");
-    let head = cells([
-        "blocks",
-        "problems",
-        "solved",
-        "policy: mean moves",
-        "near-optimal: mean moves",
-        "NLM (published): solved",
-        "NLM: mean moves",
-    ]);
-    let rows = g.nlm.iter().map(|r| {
-        vec![
-            r.blocks.to_string(),
-            r.problems.to_string(),
-            solved(r),
-            num(r.mean_moves, 2),
-            num(r.near_optimal_moves, 2),
-            r.published.map_or("-".into(), |p| format!("{:.0}%", 100.0 * p.0)),
-            num(r.published.map(|p| p.1), 1),
-        ]
-    });
-    markdown_table(md, &head, rows);
-}
-
 fn curve(md: &mut String, c: &Curve) {
     let _ = writeln!(
         md,
@@ -733,140 +545,7 @@ fn curve(md: &mut String, c: &Curve) {
 
 #[cfg(test)]
 mod tests {
-    use super::super::e9::{AgentFigures, Agreement};
-    use super::super::e10::TrainingFigures;
     use super::*;
-
-    fn size(blocks: usize, fewest: Option<f64>, published: Option<(f64, f64)>) -> SizeFigures {
-        SizeFigures {
-            blocks,
-            problems: 4,
-            success: 0.75,
-            mean_moves: Some(12.0),
-            near_optimal_moves: Some(13.5),
-            near_optimal_ratio: Some(0.888_888),
-            worst_ratio: None,
-            fewest_moves: fewest,
-            fewest_ratio: fewest.map(|f| 12.0 / f),
-            near_optimal_fewest_ratio: fewest.map(|f| 13.5 / f),
-            proven: 1.0,
-            optimum_moves: fewest,
-            optimum_ratio: fewest.map(|f| 12.0 / f),
-            near_optimal_optimum_ratio: fewest.map(|f| 13.5 / f),
-            published,
-        }
-    }
-
-    #[test]
-    fn e10s_tables_read_as_the_report_has_them() {
-        let g = General {
-            training: TrainingFigures {
-                config: neural::relational::RelationalConfig::general(),
-                examples: 0,
-                last_success: 0.0,
-                last_moves_ratio: 0.0,
-            },
-            uniform: vec![size(10, None, None)],
-            exact: vec![size(4, Some(8.0), None)],
-            nlm: vec![size(12, None, Some((1.0, 20.3))), size(50, None, None)],
-        };
-        let mut md = String::new();
-        general(&mut md, &g);
-        assert_eq!(
-            md,
-            "\n### Uniform problems, by number of blocks\n\n\
-             | blocks | problems | solved | policy: mean moves | near-optimal: mean moves | × near-optimal | worst × \
-             near-optimal | optimum proven | policy × optimum | near-optimal × optimum |\n\
-             |---|---|---|---|---|---|---|---|---|---|\n\
-             | 10 | 4 | 75.0% | 12.00 | 13.50 | 0.8889 | - | 100.0% | - | - |\n\
-             \n### A few blocks, against the fewest moves\n\n\
-             | blocks | problems | solved | fewest moves | policy × fewest | near-optimal × fewest |\n\
-             |---|---|---|---|---|---|\n\
-             | 4 | 4 | 75.0% | 8.00 | 1.5000 | 1.6875 |\n\
-             \n### Neural Logic Machines' generator\n\n\
-             | blocks | problems | solved | policy: mean moves | near-optimal: mean moves | NLM (published): solved | \
-             NLM: mean moves |\n|---|---|---|---|---|---|---|\n\
-             | 12 | 4 | 75.0% | 12.00 | 13.50 | 100% | 20.3 |\n\
-             | 50 | 4 | 75.0% | 12.00 | 13.50 | - | - |\n"
-        );
-    }
-
-    #[test]
-    fn e9s_tables_read_as_the_report_has_them() {
-        let agent = |name: &str| AgentFigures {
-            agent: name.into(),
-            games: 2,
-            success: 0.5,
-            mean_moves: Some(3.0),
-            moves_ratio: Some(1.25),
-            mean_steps: Some(14.0),
-            steps_ratio: None,
-            physics_errors: 0,
-        };
-        let group = |key: usize, agents: Vec<AgentFigures>| Group {
-            key,
-            problems: 2,
-            fewest_moves: 2.5,
-            near_optimal_moves: 3.0,
-            near_optimal_ratio: 1.2,
-            near_optimal_worst: 1.5,
-            fewest_steps: None,
-            agents,
-        };
-        let w = BlocksWorld {
-            problems_per_cell: 2,
-            backend: sim::Backend::Physics,
-            by_blocks: vec![
-                group(3, vec![agent("exact"), agent("learner")]),
-                group(4, vec![agent("exact")]),
-            ],
-            by_towers: vec![group(1, vec![agent("exact")])],
-            by_stacking_steps: vec![group(2, vec![agent("exact")])],
-            agreement: vec![Agreement {
-                blocks: 3,
-                grid: "3 x 4".into(),
-                episodes: 5,
-                same_starts: 5,
-                steps: 100,
-                same_steps: 99,
-                drops: 20,
-                same_landings: 19,
-                physics_errors: 1,
-                first_error: Some("episode 7, step 3: not at rest".into()),
-            }],
-            problems: Vec::new(),
-        };
-        let mut md = String::new();
-        blocks_world(&mut md, &w);
-        let exact = "| exact: reached | exact: moves × fewest | exact: gripper steps | exact: steps × fewest";
-        let figures = "| problems | fewest moves | near-optimal plan | × fewest (worst) | fewest gripper steps ";
-        let played = "| 50.0% | 1.250 | 14.0 | - |";
-        let grid = |n: usize| {
-            let g = super::super::e9::grid_for(n);
-            format!("{} x {}", g.width(), g.height())
-        };
-        let expected = format!(
-            "\n### By stacking steps (the fewest block moves)\n\n\
-             | stacking steps {figures}{exact} |\n|---|---|---|---|---|---|---|---|---|---|\n\
-             | 2 | 2 | 2.50 | 3.00 | 1.200 (1.50) | - {played}\n\
-             \n### By number of blocks\n\n\
-             | blocks | grid {figures}{exact} | learner: reached | learner: moves × fewest | learner: gripper steps | \
-             learner: steps × fewest |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n\
-             | 3 | {} | 2 | 2.50 | 3.00 | 1.200 (1.50) | - {played} 50.0% | 1.250 | 14.0 | - |\n\
-             | 4 | {} | 2 | 2.50 | 3.00 | 1.200 (1.50) | - {played} - | - | - | - |\n\
-             \n### By number of goal towers\n\n\
-             | towers {figures}{exact} |\n|---|---|---|---|---|---|---|---|---|---|\n\
-             | 1 | 2 | 2.50 | 3.00 | 1.200 (1.50) | - {played}\n\
-             \n### Physics against the grid model\n\n\
-             | blocks | grid | episodes | same starts | random steps | same outcome | drops | landed on the same cell | \
-             physics errors |\n|---|---|---|---|---|---|---|---|---|\n\
-             | 3 | 3 x 4 | 5 | 5 | 100 | 99 | 20 | 19 | 1 |\n\
-             \nThe first physics error: episode 7, step 3: not at rest.\n",
-            grid(3),
-            grid(4)
-        );
-        assert_eq!(md, expected);
-    }
 
     #[test]
     fn anchors_are_githubs() {

@@ -11,9 +11,8 @@
 use agent::{Assist, EpisodeResult, QAgent, TrainConfig, Trainer};
 use sim::{Goal, Profile};
 
-use super::arms::{ArmResult, Suite, describe};
-use super::e3::ours_description;
-use super::{Context, Curve, CurvePoint, Result, e4};
+use super::arms::{ArmResult, Goals, Suite, describe, suite_in};
+use super::{Context, Curve, CurvePoint, Result};
 
 /// A part of the shared stage.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -121,7 +120,7 @@ fn ours_config(ctx: &Context) -> TrainConfig {
 
 /// Trains our learner, testing it along the way: the trained agent and its curve.
 fn train_ours_along(ctx: &Context) -> Result<(QAgent, Curve)> {
-    let suite = e4::suite(ctx);
+    let suite = curve_suite(ctx);
     let schedule = &ctx.scale.ours_curve;
     let eps = ctx.test_epsilon();
     let (agent, tests) = train_along(ctx, STAGE, ours_config(ctx), schedule, &suite, &[eps])?;
@@ -175,4 +174,36 @@ pub(super) fn train_along(
         agent = Some(snapshot);
     }
     Ok((agent.expect("a schedule has points"), tests))
+}
+/// The SPEC world's test games at every point: all goals, drawn per game.
+pub(super) fn curve_suite(ctx: &Context) -> Suite {
+    suite_in(Profile::Spec, 3, Goals::Drawn, ctx.scale.test_games, ctx.seeds.test)
+}
+
+/// What our learner is, from its recorded training.
+pub(super) fn ours_description(ours: &QAgent) -> String {
+    match ours.training() {
+        Some(t) => {
+            let replays: Vec<&str> = [(t.backward_replay, "backward replay"), (t.final_replay, "final replay")]
+                .iter()
+                .filter(|(on, _)| *on)
+                .map(|&(_, name)| name)
+                .collect();
+            format!(
+                "{} representation, {} reward, alpha {}, gamma {}, epsilon {}{}, {} training games on {} (seed {}), \
+                 {} backend",
+                t.repr,
+                t.world.reward,
+                t.params.alpha,
+                t.params.gamma,
+                t.params.epsilon,
+                replays.iter().map(|r| format!(", {r}")).collect::<String>(),
+                t.games,
+                t.goals.iter().map(ToString::to_string).collect::<Vec<_>>().join(" "),
+                t.seed,
+                t.world.backend
+            )
+        }
+        None => ours.name(),
+    }
 }

@@ -20,8 +20,7 @@
 
 use serde::Serialize;
 
-use super::arms::ArmResult;
-use super::paper::{MeanOver, PaperRow};
+use super::paper::MeanOver;
 
 /// The range of one figure over our replicates.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -77,7 +76,7 @@ pub struct Placement {
 }
 
 impl Placement {
-    fn of(paper: f64, ours: &[f64]) -> Option<Placement> {
+    pub(super) fn of(paper: f64, ours: &[f64]) -> Option<Placement> {
         let spread = Spread::of(ours)?;
         Some(Placement {
             paper,
@@ -100,27 +99,6 @@ pub struct PaperInside {
 }
 
 impl PaperInside {
-    /// `paper`'s figures against `arm`'s replicates; `None` if the paper gives no figure
-    /// to place or the arm has no replicate.
-    pub fn of(paper: &PaperRow, arm: &ArmResult) -> Option<PaperInside> {
-        let failure_rate = match (paper.failures, paper.games) {
-            (Some(f), Some(n)) if n > 0 => {
-                Placement::of(f64::from(f) / f64::from(n), &arm.failure_rate_per_replicate())
-            }
-            _ => None,
-        };
-        let ours: Vec<f64> = match paper.mean_over {
-            MeanOver::FailuresAtHorizon => arm.mean_steps_failures_at_horizon_per_replicate.clone(),
-            MeanOver::Successes => arm.mean_steps_per_replicate.iter().flatten().copied().collect(),
-        };
-        let mean_steps = paper.mean_steps.and_then(|m| Placement::of(m, &ours));
-        (failure_rate.is_some() || mean_steps.is_some()).then_some(PaperInside {
-            failure_rate,
-            mean_steps,
-            mean_over: paper.mean_over,
-        })
-    }
-
     /// The placements there are: failure rate, then mean steps.
     pub fn placements(&self) -> impl Iterator<Item = Placement> + '_ {
         self.failure_rate.iter().chain(&self.mean_steps).copied()
@@ -135,20 +113,6 @@ impl PaperInside {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use agent::EpisodeResult;
-    use sim::{Cell, Goal, State};
-
-    fn game(steps: u32, reached_goal: bool) -> EpisodeResult {
-        EpisodeResult {
-            episode: 0,
-            seed: 0,
-            goal: "1,0".parse::<Goal>().unwrap(),
-            start: State::new(&[Cell::new(0, 0), Cell::new(3, 0)], None).unwrap(),
-            steps,
-            reached_goal,
-            total_reward: 0.0,
-        }
-    }
 
     #[test]
     fn the_range_holds_its_ends_and_its_coverage_grows_with_replicates() {
@@ -160,47 +124,5 @@ mod tests {
         assert_eq!(Spread::of(&[7.0]).unwrap().coverage(), 0.0);
         assert_eq!(Spread::coverage_of(39), 0.95);
         assert_eq!(Spread::of(&[]), None);
-    }
-
-    #[test]
-    fn the_papers_row_is_placed_replicate_by_replicate() {
-        // Two replicates of two games: failure rates 0.5 and 0, mean steps* 505 and 15.
-        let replicates = [
-            vec![game(10, true), game(7, false)],
-            vec![game(10, true), game(20, true)],
-        ];
-        let arm = ArmResult::of("q", "q", Some(0.1), &replicates, &[], 1000);
-        let row = |failures, mean| PaperRow {
-            arm: "q",
-            failures: Some(failures),
-            games: Some(4),
-            mean_steps: Some(mean),
-            mean_over: MeanOver::FailuresAtHorizon,
-            p_value: None,
-        };
-        let inside = PaperInside::of(&row(1, 300.0), &arm).unwrap();
-        let f = inside.failure_rate.unwrap();
-        assert_eq!((f.paper, f.spread.low, f.spread.high, f.inside), (0.25, 0.0, 0.5, true));
-        let m = inside.mean_steps.unwrap();
-        assert_eq!((m.spread.low, m.spread.high), (15.0, 505.0));
-        // Over successes (E2's reading): 10 and 15.
-        let successes = PaperRow {
-            failures: None,
-            mean_over: MeanOver::Successes,
-            ..row(0, 12.0)
-        };
-        let inside = PaperInside::of(&successes, &arm).unwrap();
-        assert_eq!(inside.failure_rate, None);
-        let m = inside.mean_steps.unwrap();
-        assert_eq!((m.spread.low, m.spread.high, m.inside), (10.0, 15.0, true));
-        assert!(inside.all_inside());
-        let outside = PaperInside::of(&row(3, 300.0), &arm).unwrap();
-        assert!(!outside.failure_rate.unwrap().inside && !outside.all_inside());
-        let no_figures = PaperRow {
-            failures: None,
-            mean_steps: None,
-            ..row(0, 0.0)
-        };
-        assert_eq!(PaperInside::of(&no_figures, &arm), None);
     }
 }

@@ -16,6 +16,7 @@
 
 pub mod graph;
 pub mod model;
+pub mod move_policy;
 pub mod net;
 pub mod train;
 
@@ -25,6 +26,7 @@ pub fn move_limit(blocks: usize) -> usize {
     4 * blocks
 }
 
-pub use model::{Game, MovePolicy, RelationalModel, RelationalPolicy};
+pub use model::{Game, RelationalModel, RelationalPolicy};
+pub use move_policy::MovePolicy;
 pub use net::{RelationalNet, Shape};
 pub use train::{IterationReport, RelationalConfig};

@@ -17,7 +17,7 @@ use std::path::Path;
 
 use agent::Policy;
 use files::container::Expect;
-use oracle::towers::{BlockPlanner, Move, Place, Table, TowerGoal, TowerPlan, Towers, TowersError};
+use oracle::towers::{BlockPlanner, Move, Table, TowerGoal, TowerPlan, Towers, TowersError};
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
 use sim::block_move::{self, BlockMove};
@@ -27,8 +27,8 @@ use sim::{Action, Observation, View};
 use crate::error::{NeuralError, Result};
 use crate::netfile::{self, NetFile};
 
-use super::graph::{Graph, TABLE};
-use super::net::{RelationalNet, Tape};
+use super::move_policy::MovePolicy;
+use super::net::RelationalNet;
 use super::train::{IterationReport, RelationalConfig};
 
 /// The format name of a relational network file.
@@ -199,41 +199,6 @@ impl BlockPlanner for RelationalModel {
             .into());
         }
         Ok(TowerPlan { moves: game.moves })
-    }
-}
-
-/// The greedy choice of block moves: one forward pass per move, the legal move with the
-/// highest score ([`RelationalNet::best_move`]). It keeps its buffers from one choice to the
-/// next.
-pub struct MovePolicy<'n> {
-    net: &'n RelationalNet,
-    tape: Tape,
-}
-
-impl<'n> MovePolicy<'n> {
-    /// The policy of `net`.
-    pub fn new(net: &'n RelationalNet) -> MovePolicy<'n> {
-        MovePolicy { net, tape: Tape::new() }
-    }
-
-    /// The move it makes from `state` towards `goal` on `table` (a move to the table only
-    /// where a column is free); `None` if the goal holds or no move is legal.
-    pub fn choose(&mut self, state: &Towers, goal: &TowerGoal, table: Table) -> Option<Move> {
-        if goal.holds(state) {
-            return None;
-        }
-        let graph = Graph::of([(state, goal)]);
-        self.net.forward(&graph, &mut self.tape);
-        let table_free = table.has_free_column(state.tower_count());
-        let (x, to) = self.net.best_move(&graph, &self.tape, 0, table_free)?;
-        Some(Move {
-            block: x as usize,
-            to: if to == TABLE {
-                Place::Table
-            } else {
-                Place::On(to as usize)
-            },
-        })
     }
 }
 

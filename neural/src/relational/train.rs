@@ -24,7 +24,7 @@ use crate::error::{NeuralError, Result};
 use crate::optim::{Optimizer, OptimizerKind};
 
 use super::graph::Graph;
-use super::model::MovePolicy;
+use super::move_policy::MovePolicy;
 use super::net::{RelationalNet, Shape, Tape};
 
 /// A training run of the relational policy.

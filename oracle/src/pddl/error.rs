@@ -56,6 +56,16 @@ pub enum PddlError {
         /// The folder's path.
         folder: String,
     },
+    /// A task to play whose start already meets its goal (an empty goal included): its
+    /// plan is empty, but an episode cannot begin over (`run --pddl`, `BlocksWorld-v0`).
+    #[error(
+        "the task's start already meets its goal{}, so there is no episode to play (its plan is empty, as solve --pddl prints it)",
+        if *empty_goal { " (which places no block)" } else { "" }
+    )]
+    NothingToPlay {
+        /// Whether the goal places no block at all.
+        empty_goal: bool,
+    },
     /// A plan after which a fact of the goal does not hold.
     #[error("after the plan's {steps} steps the goal's {fact} does not hold")]
     GoalNotReached {

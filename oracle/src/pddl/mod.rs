@@ -16,9 +16,18 @@
 //!  (:goal (and (on b1 b2) (on-table b2))))
 //! ```
 //!
-//! Case is ignored, `;` starts a comment, `(:requirements ...)` and object types are
-//! skipped. Block `i` is the `i`-th object of `:objects`, and the names are kept for the
-//! plans written back ([`Problem::block_names`]).
+//! Case is ignored, `;` starts a comment, `(:requirements ...)` and object types (`-
+//! block`, `- (either block thing)`) are skipped, and so are `(:metric minimize
+//! (total-cost))` and an init's `(= (total-cost) 0)`: every action costs 1. The 2000
+//! competition's `ontable` and `handempty` are read as `on-table` and `arm-empty`. Block `i`
+//! is the `i`-th object of `:objects`, and the names are kept for the plans written back
+//! ([`Problem::block_names`]).
+//!
+//! The problem's `(:domain NAME)` must be a Blocks World's: the domain file's name when one
+//! is given ([`Problem::read_in`] with a [`Domain`], checked to be the 4-operator domain
+//! in either spelling, `pickup`/`putdown` or `pick-up`/`put-down`; its action names are the
+//! plan's), else a name holding `block`. A problem of another domain is refused, never
+//! planned as blocks.
 //!
 //! The initial state must be one state of the world: every block placed once (on the table
 //! or on one block), no cycle of `on`, `clear` exactly where nothing stands, the arm empty.
@@ -76,6 +85,7 @@
 //! # Ok::<(), oracle::OracleError>(())
 //! ```
 
+pub mod domain;
 pub mod error;
 pub mod plan;
 pub mod problem;
@@ -83,8 +93,9 @@ mod sexpr;
 pub mod suite;
 pub mod world;
 
+pub use domain::{ActionNames, Domain, Operator};
 pub use error::PddlError;
-pub use plan::{Action, PddlPlan, actions};
+pub use plan::{Action, Conditions, PddlPlan, actions};
 pub use problem::{Fact, MAX_PROBLEM_BYTES, Problem};
 pub use suite::{BestKnown, SuiteReport, Summary, TaskRow};
 pub use world::SideTask;

@@ -17,6 +17,7 @@ use std::fmt::Write as _;
 use crate::error::Result;
 use crate::towers::{BlockPlanner, Certificate, Place, TowerPlan, Towers};
 
+use super::domain::{ActionNames, Operator};
 use super::error::PddlError;
 use super::problem::{Fact, Problem};
 
@@ -33,14 +34,62 @@ pub enum Action {
     Unstack(usize, usize),
 }
 
+/// An action's precondition and effects, as facts over its blocks.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Conditions {
+    /// What must hold before.
+    pub pre: Vec<Fact>,
+    /// What holds after.
+    pub add: Vec<Fact>,
+    /// What no longer holds after (deleted before the adds, as STRIPS does).
+    pub del: Vec<Fact>,
+}
+
 impl Action {
-    /// The action as PDDL, with the blocks' names: `(stack b4 b3)`.
-    pub fn to_pddl(self, names: &[String]) -> String {
+    /// Which of the four it is.
+    pub fn operator(self) -> Operator {
         match self {
-            Action::Pickup(x) => format!("(pickup {})", names[x]),
-            Action::Putdown(x) => format!("(putdown {})", names[x]),
-            Action::Stack(x, y) => format!("(stack {} {})", names[x], names[y]),
-            Action::Unstack(x, y) => format!("(unstack {} {})", names[x], names[y]),
+            Action::Pickup(_) => Operator::Pickup,
+            Action::Putdown(_) => Operator::Putdown,
+            Action::Stack(..) => Operator::Stack,
+            Action::Unstack(..) => Operator::Unstack,
+        }
+    }
+
+    /// The action as PDDL, with the blocks' names and the domain's action names: `(stack
+    /// b4 b3)`.
+    pub fn to_pddl(self, blocks: &[String], actions: &ActionNames) -> String {
+        let name = actions.of(self.operator());
+        match self {
+            Action::Pickup(x) | Action::Putdown(x) => format!("({name} {})", blocks[x]),
+            Action::Stack(x, y) | Action::Unstack(x, y) => format!("({name} {} {})", blocks[x], blocks[y]),
+        }
+    }
+
+    /// Its precondition and effects: the 4-operator domain's rules, which the replay
+    /// applies and a domain file is checked against ([`super::Domain`]).
+    pub fn conditions(self) -> Conditions {
+        match self {
+            Action::Pickup(x) => Conditions {
+                pre: vec![Fact::Clear(x), Fact::OnTable(x), Fact::ArmEmpty],
+                add: vec![Fact::Holding(x)],
+                del: vec![Fact::Clear(x), Fact::OnTable(x), Fact::ArmEmpty],
+            },
+            Action::Putdown(x) => Conditions {
+                pre: vec![Fact::Holding(x)],
+                add: vec![Fact::Clear(x), Fact::ArmEmpty, Fact::OnTable(x)],
+                del: vec![Fact::Holding(x)],
+            },
+            Action::Stack(x, y) => Conditions {
+                pre: vec![Fact::Clear(y), Fact::Holding(x)],
+                add: vec![Fact::ArmEmpty, Fact::Clear(x), Fact::On(x, y)],
+                del: vec![Fact::Clear(y), Fact::Holding(x)],
+            },
+            Action::Unstack(x, y) => Conditions {
+                pre: vec![Fact::On(x, y), Fact::Clear(x), Fact::ArmEmpty],
+                add: vec![Fact::Holding(x), Fact::Clear(y)],
+                del: vec![Fact::On(x, y), Fact::Clear(x), Fact::ArmEmpty],
+            },
         }
     }
 }
@@ -126,12 +175,17 @@ impl Problem {
         })
     }
 
+    /// `action` as PDDL, with the problem's block names and its domain's action names.
+    pub fn action_text(&self, action: Action) -> String {
+        action.to_pddl(self.block_names(), self.action_names())
+    }
+
     /// `actions` in the competition's plan format: one per line, then `; cost = N (unit
-    /// cost)`.
+    /// cost)`; the actions named as the problem's domain names them.
     pub fn plan_text(&self, actions: &[Action]) -> String {
         let mut out = String::new();
-        for a in actions {
-            out.push_str(&a.to_pddl(self.block_names()));
+        for &a in actions {
+            out.push_str(&self.action_text(a));
             out.push('\n');
         }
         let _ = writeln!(out, "; cost = {} (unit cost)", actions.len());
@@ -139,7 +193,7 @@ impl Problem {
     }
 
     /// The actions of a plan in the competition's format (blank lines and `;` comments
-    /// skipped, case ignored).
+    /// skipped, case ignored; either spelling of the actions' names).
     pub fn parse_plan(&self, text: &str) -> Result<Vec<Action>> {
         let index: std::collections::HashMap<String, usize> = self
             .block_names()
@@ -165,11 +219,12 @@ impl Problem {
                     .copied()
                     .ok_or_else(|| err(format!("{line} names {w}, which the problem does not declare")))
             };
-            let action = match words.as_slice() {
-                [name, x] if name == "pickup" => Action::Pickup(block(x)?),
-                [name, x] if name == "putdown" => Action::Putdown(block(x)?),
-                [name, x, y] if name == "stack" => Action::Stack(block(x)?, block(y)?),
-                [name, x, y] if name == "unstack" => Action::Unstack(block(x)?, block(y)?),
+            let op = words.first().and_then(|w| Operator::of_name(w));
+            let action = match (op, words.as_slice()) {
+                (Some(Operator::Pickup), [_, x]) => Action::Pickup(block(x)?),
+                (Some(Operator::Putdown), [_, x]) => Action::Putdown(block(x)?),
+                (Some(Operator::Stack), [_, x, y]) => Action::Stack(block(x)?, block(y)?),
+                (Some(Operator::Unstack), [_, x, y]) => Action::Unstack(block(x)?, block(y)?),
                 _ => {
                     return Err(err(format!(
                         "{line} is not an action of the 4-operator domain: (pickup x), (putdown x), (stack x y), (unstack x y)"
@@ -189,32 +244,11 @@ impl Problem {
         let names = self.block_names();
         let mut facts: HashSet<Fact> = self.init_facts().iter().copied().collect();
         for (i, &a) in actions.iter().enumerate() {
-            let (pre, add, del) = match a {
-                Action::Pickup(x) => (
-                    vec![Fact::Clear(x), Fact::OnTable(x), Fact::ArmEmpty],
-                    vec![Fact::Holding(x)],
-                    vec![Fact::Clear(x), Fact::OnTable(x), Fact::ArmEmpty],
-                ),
-                Action::Putdown(x) => (
-                    vec![Fact::Holding(x)],
-                    vec![Fact::Clear(x), Fact::ArmEmpty, Fact::OnTable(x)],
-                    vec![Fact::Holding(x)],
-                ),
-                Action::Stack(x, y) => (
-                    vec![Fact::Clear(y), Fact::Holding(x)],
-                    vec![Fact::ArmEmpty, Fact::Clear(x), Fact::On(x, y)],
-                    vec![Fact::Clear(y), Fact::Holding(x)],
-                ),
-                Action::Unstack(x, y) => (
-                    vec![Fact::On(x, y), Fact::Clear(x), Fact::ArmEmpty],
-                    vec![Fact::Holding(x), Fact::Clear(y)],
-                    vec![Fact::On(x, y), Fact::Clear(x), Fact::ArmEmpty],
-                ),
-            };
+            let Conditions { pre, add, del } = a.conditions();
             if let Some(missing) = pre.iter().find(|f| !facts.contains(f)) {
                 return Err(PddlError::NotApplicable {
                     step: i + 1,
-                    action: a.to_pddl(names),
+                    action: self.action_text(a),
                     reason: format!("{} does not hold", missing.to_pddl(names)),
                 }
                 .into());

@@ -7,6 +7,7 @@ use std::path::Path;
 use crate::error::Result;
 use crate::towers::{TowerGoal, Towers};
 
+use super::domain::{ActionNames, Domain};
 use super::error::PddlError;
 use super::sexpr::{self, Node};
 
@@ -27,6 +28,51 @@ pub enum Fact {
     ArmEmpty,
     /// `(holding x)`.
     Holding(usize),
+}
+
+/// A predicate of the 4-operator domain, whatever the file calls it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub(crate) enum Predicate {
+    On,
+    OnTable,
+    Clear,
+    ArmEmpty,
+    Holding,
+}
+
+impl Predicate {
+    /// The predicate a (lower-case) name spells: the competition's names, or the 2000
+    /// competition's `ontable` and `handempty`, which mean the same.
+    pub(crate) fn of_name(name: &str) -> Option<Predicate> {
+        Some(match name {
+            "on" => Predicate::On,
+            "on-table" | "ontable" => Predicate::OnTable,
+            "clear" => Predicate::Clear,
+            "arm-empty" | "handempty" => Predicate::ArmEmpty,
+            "holding" => Predicate::Holding,
+            _ => return None,
+        })
+    }
+
+    /// Its number of blocks.
+    pub(crate) fn arity(self) -> usize {
+        match self {
+            Predicate::On => 2,
+            Predicate::OnTable | Predicate::Clear | Predicate::Holding => 1,
+            Predicate::ArmEmpty => 0,
+        }
+    }
+
+    /// The fact of this predicate over `args` (as many as [`Predicate::arity`]).
+    pub(crate) fn fact(self, args: &[usize]) -> Fact {
+        match self {
+            Predicate::On => Fact::On(args[0], args[1]),
+            Predicate::OnTable => Fact::OnTable(args[0]),
+            Predicate::Clear => Fact::Clear(args[0]),
+            Predicate::ArmEmpty => Fact::ArmEmpty,
+            Predicate::Holding => Fact::Holding(args[0]),
+        }
+    }
 }
 
 impl Fact {
@@ -55,6 +101,7 @@ pub struct Problem {
     goal_facts: Vec<Fact>,
     start: Towers,
     goal: TowerGoal,
+    actions: ActionNames,
 }
 
 /// Where the reader is, for messages.
@@ -74,7 +121,26 @@ impl Source<'_> {
 }
 
 /// Names of the predicates read, for messages.
-const PREDICATES: &str = "on, on-table, clear, arm-empty and holding";
+const PREDICATES: &str = "on, on-table, clear, arm-empty and holding (ontable and handempty, the 2000 competition's names, are read as on-table and arm-empty)";
+
+/// The text of the file at `path`, at most `bound` bytes (refused before a byte is read),
+/// `what` it is for messages; an error for a file that is not UTF-8.
+pub(crate) fn read_text(path: &Path, bound: u64, what: &'static str) -> Result<String> {
+    use std::io::Read;
+    let shown = path.display().to_string();
+    let mut bytes = Vec::new();
+    files::open_bounded(path, bound, what)
+        .map_err(PddlError::from)?
+        .read_to_end(&mut bytes)
+        .map_err(|e| PddlError::from(files::FilesError::read(&shown, files::ReadProblem::Io(e.to_string()))))?;
+    String::from_utf8(bytes).map_err(|e| {
+        PddlError::from(files::FilesError::read(
+            &shown,
+            files::ReadProblem::Io(format!("it is not UTF-8 text (byte {})", e.utf8_error().valid_up_to())),
+        ))
+        .into()
+    })
+}
 
 impl Problem {
     /// The problem `name` from `start` to `goal`, its blocks named `b1`, `b2`, ... (block `i`
@@ -102,26 +168,24 @@ impl Problem {
             goal_facts,
             start,
             goal,
+            actions: ActionNames::default(),
         })
     }
 
     /// Reads the problem file at `path`, at most [`MAX_PROBLEM_BYTES`]; every refusal names
-    /// the file, the line and the problem.
+    /// the file, the line and the problem. With no domain file, the problem's `(:domain
+    /// NAME)` must name a Blocks World (a name holding `block`, as `blocksworld` and
+    /// `BLOCKS` do) and its plans use the competition's action names.
     pub fn read(path: &Path) -> Result<Problem> {
-        use std::io::Read;
+        Problem::read_in(path, None)
+    }
+
+    /// Reads the problem file at `path` of the domain `domain` (if given): the problem
+    /// must name that domain, and its plans use the domain's action names.
+    pub fn read_in(path: &Path, domain: Option<&Domain>) -> Result<Problem> {
         let shown = path.display().to_string();
-        let mut bytes = Vec::new();
-        files::open_bounded(path, MAX_PROBLEM_BYTES, "a PDDL problem")
-            .map_err(PddlError::from)?
-            .read_to_end(&mut bytes)
-            .map_err(|e| PddlError::from(files::FilesError::read(&shown, files::ReadProblem::Io(e.to_string()))))?;
-        let text = String::from_utf8(bytes).map_err(|e| {
-            PddlError::from(files::FilesError::read(
-                &shown,
-                files::ReadProblem::Io(format!("it is not UTF-8 text (byte {})", e.utf8_error().valid_up_to())),
-            ))
-        })?;
-        Problem::parse_named(&text, &shown)
+        let text = read_text(path, MAX_PROBLEM_BYTES, "a PDDL problem")?;
+        Problem::parse_in(&text, &shown, domain)
     }
 
     /// The problem in `text` (named "the problem" in errors).
@@ -131,8 +195,14 @@ impl Problem {
 
     /// The problem in `text`, named `file` in errors.
     pub fn parse_named(text: &str, file: &str) -> Result<Problem> {
+        Problem::parse_in(text, file, None)
+    }
+
+    /// The problem in `text`, named `file` in errors, of the domain `domain` if given
+    /// ([`Problem::read_in`]).
+    pub fn parse_in(text: &str, file: &str, domain: Option<&Domain>) -> Result<Problem> {
         let src = Source { file };
-        let top = sexpr::parse(text).or_else(|(line, reason)| src.err(line, reason))?;
+        let top = sexpr::parse(text, "problem").or_else(|(line, reason)| src.err(line, reason))?;
         let Node::List { items, line } = &top else {
             unreachable!("sexpr::parse returns a list")
         };
@@ -151,7 +221,7 @@ impl Problem {
             }
             _ => return src.err(*line, "a problem file starts (define (problem NAME) ...)"),
         };
-        let mut domain = None;
+        let mut domain_name = None;
         let mut objects = None;
         let mut init = None;
         let mut goal = None;
@@ -163,16 +233,20 @@ impl Problem {
                 );
             };
             let slot = match parts.first().and_then(Node::key) {
-                Some(":domain") => &mut domain,
+                Some(":domain") => &mut domain_name,
                 Some(":objects") => &mut objects,
                 Some(":init") => &mut init,
                 Some(":goal") => &mut goal,
                 Some(":requirements") => continue,
+                Some(":metric") => {
+                    check_metric(&src, section)?;
+                    continue;
+                }
                 _ => {
                     return src.err(
                         *line,
                         format!(
-                            "the section {} is not read: a Blocks World problem has :domain, :objects, :init and :goal",
+                            "the section {} is not read: a Blocks World problem has :domain, :objects, :init, :goal and at most (:metric minimize (total-cost))",
                             section.shown()
                         ),
                     );
@@ -183,8 +257,11 @@ impl Problem {
             }
             *slot = Some((&parts[1..], *line));
         }
-        let domain = match domain {
-            Some(([Node::Name { text, .. }], _)) => text.clone(),
+        let domain_name = match domain_name {
+            Some(([Node::Name { text, .. }], at)) => {
+                check_domain_name(&src, text, domain, at)?;
+                text.clone()
+            }
             Some((_, line)) => return src.err(line, "(:domain NAME) takes one name"),
             None => return src.err(*line, "the problem has no (:domain ...) section"),
         };
@@ -200,6 +277,7 @@ impl Problem {
         };
         let init_facts = init
             .iter()
+            .filter(|node| !is_initial_cost(node))
             .map(|node| read_fact(&src, &blocks, node, "init"))
             .collect::<Result<Vec<(Fact, usize)>>>()?;
         let goal_facts = match goal {
@@ -211,12 +289,13 @@ impl Problem {
         let tower_goal = read_goal_towers(&src, &names, &goal_facts, goal_line)?;
         Ok(Problem {
             name,
-            domain,
+            domain: domain_name,
             blocks: names,
             init: init_facts.into_iter().map(|(f, _)| f).collect(),
             goal_facts: goal_facts.into_iter().map(|(f, _)| f).collect(),
             start,
             goal: tower_goal,
+            actions: domain.map_or_else(ActionNames::default, |d| d.actions().clone()),
         })
     }
 
@@ -254,6 +333,59 @@ impl Problem {
     pub fn goal(&self) -> &TowerGoal {
         &self.goal
     }
+
+    /// The names its plans give the actions: its domain file's, or the competition's.
+    pub fn action_names(&self) -> &ActionNames {
+        &self.actions
+    }
+}
+
+/// The problem's `(:domain NAME)`: the domain file's name if one is given, else a Blocks
+/// World's (a name holding `block`); anything else is another domain, not read as this one.
+fn check_domain_name(src: &Source<'_>, name: &str, domain: Option<&Domain>, line: usize) -> Result<()> {
+    match domain {
+        Some(d) if !d.name().eq_ignore_ascii_case(name) => src.err(
+            line,
+            format!("the problem is of the domain {name}, but the domain file defines {}", d.name()),
+        ),
+        Some(_) => Ok(()),
+        None if name.to_lowercase().contains("block") => Ok(()),
+        None => src.err(
+            line,
+            format!(
+                "(:domain {name}) is not the Blocks World, the one domain blockstack plans; if it is the Blocks World under another name, give its domain file with it"
+            ),
+        ),
+    }
+}
+
+/// `(:metric minimize (total-cost))`: the Blocks World's actions cost 1 each, so the plan
+/// with the fewest actions is the cheapest and the metric changes nothing. Any other
+/// metric is refused.
+fn check_metric(src: &Source<'_>, section: &Node) -> Result<()> {
+    let Node::List { items, line } = section else {
+        unreachable!("a section is a list")
+    };
+    let total_cost =
+        |n: &Node| matches!(n, Node::List { items, .. } if items.len() == 1 && items[0].key() == Some("total-cost"));
+    match items.as_slice() {
+        [_, how, cost] if how.key() == Some("minimize") && total_cost(cost) => Ok(()),
+        _ => src.err(
+            *line,
+            format!(
+                "the metric {} is not read: blockstack minimizes the number of actions, (:metric minimize (total-cost)) of unit costs",
+                section.shown()
+            ),
+        ),
+    }
+}
+
+/// `(= (total-cost) N)` in the init: the starting cost of a problem with a metric, which
+/// says nothing of the blocks.
+fn is_initial_cost(node: &Node) -> bool {
+    matches!(node, Node::List { items, .. }
+        if items.len() == 3 && items[0].key() == Some("=")
+            && matches!(&items[1], Node::List { items, .. } if items.len() == 1 && items[0].key() == Some("total-cost")))
 }
 
 /// The facts of `towers` (each bottom to top), tower by tower from the top: `clear` of
@@ -287,8 +419,22 @@ fn read_objects(src: &Source<'_>, nodes: &[Node], line: usize) -> Result<Objects
     while i < nodes.len() {
         match &nodes[i] {
             Node::Name { key, .. } if key == "-" => {
-                if !matches!(nodes.get(i + 1), Some(Node::Name { .. })) {
-                    return src.err(nodes[i].line(), "'-' in :objects must be followed by a type name");
+                // A type, or several (`(either block thing)`): the blocks are blocks whatever
+                // their type says.
+                let typed = match nodes.get(i + 1) {
+                    Some(Node::Name { .. }) => true,
+                    Some(Node::List { items, .. }) => {
+                        items.first().and_then(Node::key) == Some("either")
+                            && items.len() > 1
+                            && items[1..].iter().all(|t| t.key().is_some())
+                    }
+                    None => false,
+                };
+                if !typed {
+                    return src.err(
+                        nodes[i].line(),
+                        "'-' in :objects must be followed by a type name or (either TYPE ...)",
+                    );
                 }
                 i += 2;
                 continue;
@@ -347,11 +493,9 @@ fn read_fact(src: &Source<'_>, blocks: &Objects, node: &Node, part: &str) -> Res
             format!("{} in the {part} is not a fact such as (on b1 b2)", node.shown()),
         );
     };
-    let arity = match predicate {
-        "on" => 2,
-        "on-table" | "clear" | "holding" => 1,
-        "arm-empty" => 0,
-        "not" | "or" | "imply" | "exists" | "forall" | "when" | "=" => {
+    let fact_of = match Predicate::of_name(predicate) {
+        Some(p) => p,
+        None if matches!(predicate, "not" | "or" | "imply" | "exists" | "forall" | "when" | "=") => {
             return src.err(
                 line,
                 format!(
@@ -360,31 +504,28 @@ fn read_fact(src: &Source<'_>, blocks: &Objects, node: &Node, part: &str) -> Res
                 ),
             );
         }
-        other => {
+        None => {
             return src.err(
                 line,
                 format!(
-                    "unknown predicate {other} in {}: the 4-operator Blocks World has {PREDICATES}",
+                    "unknown predicate {predicate} in {}: the 4-operator Blocks World has {PREDICATES}",
                     node.shown()
                 ),
             );
         }
     };
+    let arity = fact_of.arity();
     if items.len() != arity + 1 {
         return src.err(
             line,
             format!("{} takes {arity} block(s), not {}", node.shown(), items.len() - 1),
         );
     }
-    let arg = |i: usize| block_of(src, blocks, &items[i], node);
-    let fact = match predicate {
-        "on" => Fact::On(arg(1)?, arg(2)?),
-        "on-table" => Fact::OnTable(arg(1)?),
-        "clear" => Fact::Clear(arg(1)?),
-        "holding" => Fact::Holding(arg(1)?),
-        _ => Fact::ArmEmpty,
-    };
-    Ok((fact, line))
+    let args = items[1..]
+        .iter()
+        .map(|arg| block_of(src, blocks, arg, node))
+        .collect::<Result<Vec<usize>>>()?;
+    Ok((fact_of.fact(&args), line))
 }
 
 /// The goal's facts: one fact, or `(and ...)` of facts (nested `and`s flattened).

@@ -77,9 +77,10 @@ impl Node {
 /// atom); anything far deeper is not one.
 pub(crate) const MAX_DEPTH: usize = 32;
 
-/// The one top-level list of `text`; `Err((line, reason))` for anything else: an
-/// unbalanced parenthesis, nesting past [`MAX_DEPTH`], no list, or more than one.
-pub(crate) fn parse(text: &str) -> Result<Node, (usize, String)> {
+/// The one top-level list of `text`, a `what` file (`problem` or `domain`, for messages);
+/// `Err((line, reason))` for anything else: an unbalanced parenthesis, nesting past
+/// [`MAX_DEPTH`], no list, or more than one.
+pub(crate) fn parse(text: &str, what: &str) -> Result<Node, (usize, String)> {
     // Open lists, innermost last, each with the line of its '('.
     let mut open: Vec<(Vec<Node>, usize)> = Vec::new();
     let mut top: Vec<Node> = Vec::new();
@@ -93,7 +94,7 @@ pub(crate) fn parse(text: &str) -> Result<Node, (usize, String)> {
                 if open.len() == MAX_DEPTH {
                     return Err((
                         line,
-                        format!("lists nest deeper than {MAX_DEPTH}: this is not a problem file"),
+                        format!("lists nest deeper than {MAX_DEPTH}: this is not a {what} file"),
                     ));
                 }
                 open.push((Vec::new(), line));
@@ -136,10 +137,10 @@ pub(crate) fn parse(text: &str) -> Result<Node, (usize, String)> {
     match (top.next(), top.next()) {
         (None, _) => Err((
             line,
-            "the file holds no list: a problem is (define (problem NAME) ...)".into(),
+            format!("the file holds no list: a {what} is (define ({what} NAME) ...)"),
         )),
         (Some(node), None) => Ok(node),
-        (Some(_), Some(extra)) => Err((extra.line(), "a second list after the problem's (define ...)".into())),
+        (Some(_), Some(extra)) => Err((extra.line(), format!("a second list after the {what}'s (define ...)"))),
     }
 }
 
@@ -156,7 +157,7 @@ mod tests {
 
     #[test]
     fn reads_lists_names_comments_and_case() {
-        let node = parse("; head\n(Define (a B)(c) ; note (x\n d)").unwrap();
+        let node = parse("; head\n(Define (a B)(c) ; note (x\n d)", "problem").unwrap();
         assert_eq!(keys(&node), "[define [a b] [c] d]");
         assert_eq!(node.line(), 2);
         let Node::List { items, .. } = &node else { panic!() };
@@ -166,11 +167,16 @@ mod tests {
 
     #[test]
     fn refuses_unbalanced_deep_empty_and_extra_text() {
-        assert_eq!(parse("(a\n(b)").unwrap_err().0, 1);
-        assert!(parse("(a))").unwrap_err().1.contains("closes no"));
-        assert!(parse(&"(".repeat(100)).unwrap_err().1.contains("nest deeper"));
-        assert!(parse("; nothing").unwrap_err().1.contains("no list"));
-        assert!(parse("(a) (b)").unwrap_err().1.contains("second list"));
-        assert!(parse("x (a)").unwrap_err().1.contains("outside any list"));
+        assert_eq!(parse("(a\n(b)", "problem").unwrap_err().0, 1);
+        assert!(parse("(a))", "problem").unwrap_err().1.contains("closes no"));
+        assert!(
+            parse(&"(".repeat(100), "problem")
+                .unwrap_err()
+                .1
+                .contains("nest deeper")
+        );
+        assert!(parse("; nothing", "problem").unwrap_err().1.contains("no list"));
+        assert!(parse("(a) (b)", "problem").unwrap_err().1.contains("second list"));
+        assert!(parse("x (a)", "problem").unwrap_err().1.contains("outside any list"));
     }
 }

@@ -10,7 +10,7 @@ use sim::{Goal, Grid, State, View};
 
 use crate::error::Result;
 
-use super::Problem;
+use super::{PddlError, Problem};
 
 /// A problem as a side-view world: the grid, the start and the goal.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -25,8 +25,15 @@ pub struct SideTask {
 
 impl Problem {
     /// The side-view world of this problem. An error naming the limit for a task of more
-    /// blocks than the side view holds.
+    /// blocks than the side view holds, and one for a task whose start already meets its
+    /// goal (an empty goal too): its plan is empty, but an episode cannot begin over.
     pub fn side_task(&self) -> Result<SideTask> {
+        if self.goal().holds(self.start()) {
+            return Err(PddlError::NothingToPlay {
+                empty_goal: self.goal().towers().is_empty(),
+            }
+            .into());
+        }
         let blocks = self.start().blocks();
         let grid = Grid::side_default(blocks);
         View::Side.check_world(grid, blocks)?;
@@ -56,5 +63,18 @@ mod tests {
         // One tower that leaves a block free is written with a `/`.
         assert_eq!(task.goal.to_string(), "1,0/");
         assert!(!task.goal.holds_in(View::Side, &task.start));
+    }
+
+    #[test]
+    fn a_task_with_nothing_to_play_is_refused_with_one_message() {
+        let head = "(define (problem p) (:domain blocksworld) (:objects b1 b2)
+              (:init (arm-empty) (clear b2) (on b2 b1) (on-table b1))";
+        let met = Problem::parse(&format!("{head} (:goal (and (on b2 b1) (on-table b1))))")).unwrap();
+        let empty = Problem::parse(&format!("{head} (:goal (and)))")).unwrap();
+        for (problem, says) in [(met, "its goal, so"), (empty, "its goal (which places no block), so")] {
+            let err = problem.side_task().unwrap_err().to_string();
+            assert!(err.contains(says), "{err}");
+            assert!(err.contains("there is no episode to play"), "{err}");
+        }
     }
 }

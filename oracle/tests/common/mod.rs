@@ -1,8 +1,6 @@
 //! Helpers shared by the oracle's integration tests: an independent breadth-first search
 //! over every state, and state enumeration.
 
-#![allow(dead_code)] // Each test file uses its own part.
-
 use std::collections::VecDeque;
 
 use sim::{Action, ActionProtocol, BlockId, Cell, Goal, Grid, GridWorld, State, World};
