@@ -144,6 +144,24 @@ fn generate_writes_problems_that_solve_and_solve_all_plans_a_folder() {
             .iter()
             .all(|t| t["error"].is_string() || t["gap"] == 0)
     );
+    // The optimal solver's report is the optima another planner is set against.
+    let optima = dir.join("optima.json");
+    std::fs::write(&optima, proven.to_string()).unwrap();
+    let against = cli("solve-all")
+        .flag("tasks", path(&dir.join("tasks")))
+        .flag("optima", path(&optima))
+        .arg("--json")
+        .json();
+    for t in against["tasks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|t| t["error"].is_null())
+    {
+        assert!(t["optimum"].as_u64().is_some(), "{t}");
+        assert!(t["over_optimum"].as_f64().unwrap() >= 1.0, "{t}");
+    }
+    assert!(against["overall"]["mean_over_optimum"].as_f64().unwrap() >= 1.0);
     let table = cli("solve-all").flag("tasks", path(&dir.join("tasks"))).ok();
     assert!(
         table.contains("near-optimal plans, each replayed over its file's facts"),

@@ -51,10 +51,10 @@ fn named_paths(used: &str) -> Vec<String> {
 /// The file module a path names from `module`, if any: the longest prefix that is a file.
 fn target(module: &[String], path: &str, files: &BTreeSet<Vec<String>>) -> Option<Vec<String>> {
     let mut parts: Vec<&str> = path.split("::").collect();
-    let mut base: Vec<String> = match parts.first()? {
-        &"crate" => Vec::new(),
-        &"self" => module.to_vec(),
-        &"super" => module.to_vec(),
+    let mut base: Vec<String> = match *parts.first()? {
+        "crate" => Vec::new(),
+        "self" => module.to_vec(),
+        "super" => module.to_vec(),
         _ => return None,
     };
     while parts.first() == Some(&"super") {

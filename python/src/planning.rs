@@ -221,8 +221,16 @@ pub fn solve_all(
     py.detach(|| {
         guard(|| {
             let known = bounds.as_deref().map(BestKnown::read).transpose().or_value_error()?;
-            let report =
-                oracle::pddl::suite::run(&folder, planner.as_ref(), known.as_ref(), &mut |_, _| {}).or_value_error()?;
+            let report = oracle::pddl::suite::run(
+                &folder,
+                planner.as_ref(),
+                oracle::pddl::suite::Yardsticks {
+                    best_known: known.as_ref(),
+                    optima: None,
+                },
+                &mut |_, _| {},
+            )
+            .or_value_error()?;
             serde_json::to_string(&report).or_value_error()
         })
     })

@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Args;
 use oracle::PlannerKind;
-use oracle::pddl::suite::{self, BestKnown, SuiteReport};
+use oracle::pddl::suite::{self, BestKnown, SuiteReport, Yardsticks};
 
 use super::solver_budget::{SolverBudgetArg, TimeLimitArg};
 use super::stdout::line;
@@ -26,6 +26,11 @@ pub struct SolveAllArgs {
     /// entry its path ends with.
     #[arg(long, value_name = "upper_bounds.json")]
     pub bounds: Option<PathBuf>,
+    /// Proven optima: the JSON report of `solve-all --solver optimal --json` (as
+    /// docs/results/ipc/optima.json); each plan is set against its task's optimum where that
+    /// report proved it.
+    #[arg(long, value_name = "optima.json")]
+    pub optima: Option<PathBuf>,
     /// The planner: near-optimal (at most twice the optimum, any size), optimal (the
     /// fewest moves with its proof within --time-limit, else its best plan and bound) or
     /// exact (the fewest moves; refuses what its budget cannot finish); exact-moves and
@@ -58,8 +63,18 @@ pub fn solve_all(args: SolveAllArgs) -> Result<()> {
         .map(BestKnown::read)
         .transpose()
         .context("--bounds")?;
+    let optima = args
+        .optima
+        .as_deref()
+        .map(BestKnown::read_optima)
+        .transpose()
+        .context("--optima")?;
+    let against = Yardsticks {
+        best_known: best_known.as_ref(),
+        optima: optima.as_ref(),
+    };
     let mut bar = None;
-    let report = suite::run(&args.tasks, planner.as_ref(), best_known.as_ref(), &mut |_, total| {
+    let report = suite::run(&args.tasks, planner.as_ref(), against, &mut |_, total| {
         bar.get_or_insert_with(|| super::progress::bar(total as u64, "tasks"))
             .inc(1);
     })
@@ -78,12 +93,23 @@ fn print_report(r: &SuiteReport) -> Result<()> {
     let width = r.tasks.iter().map(|t| t.task.len()).max().unwrap_or(4).max(4);
     let opt = |v: Option<usize>| v.map_or("-".to_string(), |v| v.to_string());
     line(format_args!(
-        "{:width$}  {:>6}  {:>6}  {:>7}  {:>7}  {:>4}  {:>7}  {:>10}  {:>6}  {:>8}",
-        "task", "blocks", "moves", "actions", "l.bound", "gap", "optimal", "best known", "ratio", "seconds"
+        "{:width$}  {:>6}  {:>6}  {:>7}  {:>7}  {:>4}  {:>7}  {:>10}  {:>6}  {:>7}  {:>6}  {:>8}",
+        "task",
+        "blocks",
+        "moves",
+        "actions",
+        "l.bound",
+        "gap",
+        "optimal",
+        "best known",
+        "ratio",
+        "optimum",
+        "/ opt.",
+        "seconds"
     ))?;
     for t in &r.tasks {
         line(format_args!(
-            "{:width$}  {:>6}  {:>6}  {:>7}  {:>7}  {:>4}  {:>7}  {:>10}  {:>6}  {:>8.3}{}",
+            "{:width$}  {:>6}  {:>6}  {:>7}  {:>7}  {:>4}  {:>7}  {:>10}  {:>6}  {:>7}  {:>6}  {:>8.3}{}",
             t.task,
             opt(t.blocks),
             opt(t.moves),
@@ -93,6 +119,8 @@ fn print_report(r: &SuiteReport) -> Result<()> {
             t.optimal.map_or("-", |o| if o { "yes" } else { "no" }),
             t.best_known.map_or("-".to_string(), |b| b.to_string()),
             t.ratio.map_or("-".to_string(), |x| format!("{x:.3}")),
+            t.optimum.map_or("-".to_string(), |o| o.to_string()),
+            t.over_optimum.map_or("-".to_string(), |x| format!("{x:.3}")),
             t.seconds,
             t.error.as_deref().map_or(String::new(), |e| format!("  {e}"))
         ))?;
@@ -100,17 +128,26 @@ fn print_report(r: &SuiteReport) -> Result<()> {
     line("")?;
     line(format_args!(
         "{} plans, each replayed over its file's facts; gap = actions - lower bound (0: proven optimal); \
-         ratio = actions / best known",
+         ratio = actions / best known; / opt. = actions / proven optimum",
         r.solver
     ))?;
     line(format_args!(
-        "{:8}  {:>5}  {:>6}  {:>7}  {:>7}  {:>10}  {:>9}  {:>14}",
-        "group", "tasks", "solved", "optimal", "bounded", "mean ratio", "max ratio", "mean / l.bound"
+        "{:8}  {:>5}  {:>6}  {:>7}  {:>7}  {:>10}  {:>9}  {:>14}  {:>10}  {:>9}",
+        "group",
+        "tasks",
+        "solved",
+        "optimal",
+        "bounded",
+        "mean ratio",
+        "max ratio",
+        "mean / l.bound",
+        "mean / opt",
+        "max / opt"
     ))?;
     for s in r.groups.iter().chain(std::iter::once(&r.overall)) {
         let f = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.4}"));
         line(format_args!(
-            "{:8}  {:>5}  {:>6}  {:>7}  {:>7}  {:>10}  {:>9}  {:>14}",
+            "{:8}  {:>5}  {:>6}  {:>7}  {:>7}  {:>10}  {:>9}  {:>14}  {:>10}  {:>9}",
             s.group,
             s.tasks,
             s.solved,
@@ -118,7 +155,9 @@ fn print_report(r: &SuiteReport) -> Result<()> {
             s.bounded,
             f(s.mean_ratio),
             f(s.max_ratio),
-            f(s.mean_over_bound)
+            f(s.mean_over_bound),
+            f(s.mean_over_optimum),
+            f(s.max_over_optimum)
         ))?;
     }
     Ok(())

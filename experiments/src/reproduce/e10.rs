@@ -5,7 +5,8 @@
 //! problems of 10 to 500 blocks; its block moves are set against the near-optimal planner's
 //! (`oracle::towers::NearOptimal`, GN1 of Slaney & Thiebaux) on the same problems, and
 //! against the fewest moves (`oracle::towers::ExactMoves`) where those are found, up to 8
-//! blocks. Neural Logic Machines (Dong et al., "Neural Logic Machines", ICLR 2019) report
+//! blocks, and against the optimum the optimal solver proves (`oracle::towers::OptimalMoves`,
+//! within its default time limit) at every size. Neural Logic Machines (Dong et al., "Neural Logic Machines", ICLR 2019) report
 //! their figures on problems from their own generator: the policy plays that generator's
 //! problems too, beside NLM's published figures.
 //!
@@ -25,7 +26,7 @@
 //! in circles fails.
 
 use neural::relational::{RelationalConfig, RelationalModel};
-use oracle::towers::{ExactMoves, NearOptimal, TowerGoal, Towers, nlm_state, random_state};
+use oracle::towers::{ExactMoves, NearOptimal, OptimalMoves, TowerGoal, Towers, nlm_state, random_state};
 use rayon::prelude::*;
 use serde::Serialize;
 use sim::seeding::episode_seed;
@@ -137,6 +138,8 @@ pub struct Solved {
     pub near_optimal: u32,
     /// The fewest moves, where searched.
     pub fewest: Option<u32>,
+    /// The optimum, where the optimal solver proved it.
+    pub optimum: Option<u32>,
     /// The policy's moves, if it reached the goal within the move limit.
     pub policy: Option<u32>,
 }
@@ -165,6 +168,14 @@ pub struct SizeFigures {
     pub fewest_ratio: Option<f64>,
     /// The near-optimal planner's moves over the fewest, over the same problems.
     pub near_optimal_fewest_ratio: Option<f64>,
+    /// Share of the problems whose optimum the optimal solver proved.
+    pub proven: f64,
+    /// The mean proven optimum over the solved problems, when every one is proven.
+    pub optimum_moves: Option<f64>,
+    /// The policy's moves over the optimum, summed over the solved problems.
+    pub optimum_ratio: Option<f64>,
+    /// The near-optimal planner's moves over the optimum, over the same problems.
+    pub near_optimal_optimum_ratio: Option<f64>,
     /// The family's published figures, where there are (NLM's): share solved and mean moves.
     pub published: Option<(f64, f64)>,
 }
@@ -247,11 +258,14 @@ fn play(model: &RelationalModel, family: Family, blocks: usize, seed: u64, exact
     let fewest = exact
         .then(|| ExactMoves::new().solve(&start, &goal).map(|p| p.len() as u32))
         .transpose()?;
+    let certified = OptimalMoves::new().solve(&start, &goal)?;
+    let optimum = certified.is_optimal().then_some(certified.plan.len() as u32);
     let game = model.play(&start, &goal)?;
     Ok(Solved {
         blocks,
         near_optimal,
         fewest,
+        optimum,
         policy: game.reached.then_some(game.moves.len() as u32),
     })
 }
@@ -270,6 +284,7 @@ fn figures(blocks: usize, solved: &[Solved], published: Option<(f64, f64)>) -> S
     let policy = sum(&|s| s.policy);
     let near = sum(&|s| Some(s.near_optimal));
     let fewest = sum(&|s| s.fewest);
+    let optimum = sum(&|s| s.optimum);
     SizeFigures {
         blocks,
         problems: solved.len(),
@@ -289,6 +304,14 @@ fn figures(blocks: usize, solved: &[Solved], published: Option<(f64, f64)>) -> S
         fewest_moves: mean(fewest),
         fewest_ratio: ratio(policy, fewest),
         near_optimal_fewest_ratio: ratio(near, fewest),
+        proven: if solved.is_empty() {
+            0.0
+        } else {
+            solved.iter().filter(|s| s.optimum.is_some()).count() as f64 / solved.len() as f64
+        },
+        optimum_moves: mean(optimum),
+        optimum_ratio: ratio(policy, optimum),
+        near_optimal_optimum_ratio: ratio(near, optimum),
         published,
     }
 }
@@ -345,7 +368,9 @@ fn reading(g: &General) -> String {
     format!(
         "Trained on problems of 2 to {} blocks, the policy solved {}% of {uniform_problems} uniform problems of {} \
          blocks greedily, with no search, in {}x the near-optimal planner's block moves (by size; {} at {} blocks); \
-         on {} to {} blocks it took {}x the fewest moves, the near-optimal planner {}x. On NLM's generator: {nlm}.",
+         on {} to {} blocks it took {}x the fewest moves, the near-optimal planner {}x. Against the optimum, proven \
+         for {}% of the uniform problems: the policy {}x, the near-optimal planner {}x (by size). On NLM's \
+         generator: {nlm}.",
         c.max_blocks,
         num(Some(100.0 * uniform_success), 2),
         g.uniform
@@ -360,7 +385,17 @@ fn reading(g: &General) -> String {
         g.exact.last().map_or(0, |r| r.blocks),
         range(&g.exact, &|r| r.fewest_ratio),
         range(&g.exact, &|r| r.near_optimal_fewest_ratio),
+        num(Some(100.0 * proven_share(&g.uniform)), 2),
+        range(&g.uniform, &|r| r.optimum_ratio),
+        range(&g.uniform, &|r| r.near_optimal_optimum_ratio),
     )
+}
+
+/// The share of `rows`' problems whose optimum was proven.
+fn proven_share(rows: &[SizeFigures]) -> f64 {
+    let problems: usize = rows.iter().map(|r| r.problems).sum();
+    let proven: f64 = rows.iter().map(|r| r.proven * r.problems as f64).sum();
+    if problems == 0 { 0.0 } else { proven / problems as f64 }
 }
 
 /// The chart: the policy's block moves against the near-optimal planner's, by size.

@@ -9,6 +9,9 @@
 //!   competition's `solutions/upper_bounds.json` is (`{"blocksworld/testing/easy/p01.pddl":
 //!   10, ...}`). A task takes the entry its path ends with; of several, the most specific
 //!   (the one of most path components), so `sub/p01.pddl` is not given `p01.pddl`'s cost.
+//! - Proven optima are read from a report of the optimal solver (`solve-all --solver optimal
+//!   --json`): its tasks proven optimal, with their cost, matched to a task as best known
+//!   costs are. Every plan is then set against its task's optimum too.
 //! - A task that cannot be read or planned is a row with its error; the others go on.
 
 use std::collections::BTreeMap;
@@ -46,6 +49,34 @@ impl BestKnown {
                 reason: e.to_string(),
             })?;
         BestKnown::parse(&text, &shown)
+    }
+
+    /// The proven optima of a report of the optimal solver (module docs), at most
+    /// [`MAX_BOUNDS_BYTES`]: the cost of each task it proved optimal, by its path.
+    pub fn read_optima(path: &Path) -> Result<BestKnown> {
+        let shown = path.display().to_string();
+        let mut text = String::new();
+        files::open_bounded(path, MAX_BOUNDS_BYTES, "a report of proven optima")
+            .map_err(PddlError::from)?
+            .read_to_string(&mut text)
+            .map_err(|e| PddlError::Bounds {
+                file: shown.clone(),
+                reason: e.to_string(),
+            })?;
+        let bad = |reason: String| PddlError::Bounds {
+            file: shown.clone(),
+            reason,
+        };
+        let report: serde_json::Value = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
+        let tasks = report["tasks"]
+            .as_array()
+            .ok_or_else(|| bad("no list of \"tasks\": not a report of `solve-all --json`".into()))?;
+        let costs = tasks
+            .iter()
+            .filter(|t| t["optimal"].as_bool() == Some(true))
+            .filter_map(|t| Some((t["task"].as_str()?.to_string(), t["actions"].as_u64()?)))
+            .collect();
+        Ok(BestKnown { costs })
     }
 
     /// The costs in `text` (named `file` in errors).
@@ -101,12 +132,24 @@ pub struct TaskRow {
     pub lower_bound: Option<usize>,
     /// The cost above the bound (0: proven optimal).
     pub gap: Option<usize>,
+    /// The bound's first part, in block moves (`towers::Certificate`): the blocks not in
+    /// their final position.
+    pub misplaced: Option<usize>,
+    /// The bound's second part: the blocks forced to move twice.
+    pub forced: Option<usize>,
+    /// The bound's third part: the smallest set of the other blocks that breaks every
+    /// deadlock (a bound on its size when the proof did not close).
+    pub breakers: Option<usize>,
     /// Whether the plan is proven optimal.
     pub optimal: Option<bool>,
     /// The best known cost, if a file of them gives one.
     pub best_known: Option<u64>,
     /// `actions / best_known`.
     pub ratio: Option<f64>,
+    /// The task's proven optimum, if a report of them gives one.
+    pub optimum: Option<u64>,
+    /// `actions / optimum`.
+    pub over_optimum: Option<f64>,
     /// Seconds spent reading, planning and checking the task (the machine's, not a result).
     pub seconds: f64,
     /// Why the task has no plan.
@@ -132,6 +175,10 @@ pub struct Summary {
     pub max_ratio: Option<f64>,
     /// The mean of `actions / lower_bound` over the solved tasks (1: all proven optimal).
     pub mean_over_bound: Option<f64>,
+    /// The mean of `actions / optimum` over the solved tasks with a known optimum.
+    pub mean_over_optimum: Option<f64>,
+    /// The largest such ratio.
+    pub max_over_optimum: Option<f64>,
     /// Actions over all solved tasks.
     pub actions: usize,
 }
@@ -149,6 +196,7 @@ impl Summary {
             })
             .collect();
         let mean = |v: &[f64]| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
+        let over_optimum: Vec<f64> = rows.iter().filter_map(|r| r.over_optimum).collect();
         Summary {
             group: group.to_string(),
             tasks: rows.len(),
@@ -158,6 +206,8 @@ impl Summary {
             mean_ratio: mean(&ratios),
             max_ratio: ratios.iter().copied().reduce(f64::max),
             mean_over_bound: mean(&over),
+            mean_over_optimum: mean(&over_optimum),
+            max_over_optimum: over_optimum.iter().copied().reduce(f64::max),
             actions: rows.iter().filter_map(|r| r.actions).sum(),
         }
     }
@@ -176,18 +226,28 @@ pub struct SuiteReport {
     pub overall: Summary,
 }
 
+/// What each plan is set against besides its own bound: best known costs and proven optima
+/// (module docs), where given.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Yardsticks<'a> {
+    /// Best known costs.
+    pub best_known: Option<&'a BestKnown>,
+    /// Proven optima.
+    pub optima: Option<&'a BestKnown>,
+}
+
 /// Plans every task below `folder` with `planner` (module docs), calling `progress` after
 /// each; an error only if the folder cannot be walked or holds no task.
 pub fn run(
     folder: &Path,
     planner: &dyn BlockPlanner,
-    best_known: Option<&BestKnown>,
+    against: Yardsticks,
     progress: &mut dyn FnMut(&TaskRow, usize),
 ) -> Result<SuiteReport> {
     let paths = find_tasks(folder)?;
     let mut rows = Vec::with_capacity(paths.len());
     for path in &paths {
-        let row = plan_task(folder, path, planner, best_known);
+        let row = plan_task(folder, path, planner, against);
         progress(&row, paths.len());
         rows.push(row);
     }
@@ -206,11 +266,12 @@ pub fn run(
 }
 
 /// The row of the task at `path` below `folder`.
-fn plan_task(folder: &Path, path: &Path, planner: &dyn BlockPlanner, best_known: Option<&BestKnown>) -> TaskRow {
+fn plan_task(folder: &Path, path: &Path, planner: &dyn BlockPlanner, against: Yardsticks) -> TaskRow {
     let started = Instant::now();
     let rel = path.strip_prefix(folder).unwrap_or(path);
     let group = rel.parent().map(|p| p.display().to_string()).filter(|g| !g.is_empty());
-    let best = best_known.and_then(|b| b.of(path));
+    let best = against.best_known.and_then(|b| b.of(path));
+    let optimum = against.optima.and_then(|o| o.of(path));
     let mut row = TaskRow {
         task: rel.display().to_string(),
         group: group.unwrap_or_else(|| ".".into()),
@@ -219,9 +280,14 @@ fn plan_task(folder: &Path, path: &Path, planner: &dyn BlockPlanner, best_known:
         actions: None,
         lower_bound: None,
         gap: None,
+        misplaced: None,
+        forced: None,
+        breakers: None,
         optimal: None,
         best_known: best,
         ratio: None,
+        optimum,
+        over_optimum: None,
         seconds: 0.0,
         error: None,
     };
@@ -235,8 +301,12 @@ fn plan_task(folder: &Path, path: &Path, planner: &dyn BlockPlanner, best_known:
             row.actions = Some(plan.cost());
             row.lower_bound = Some(plan.lower_bound_cost());
             row.gap = Some(plan.cost() - plan.lower_bound_cost());
+            row.misplaced = Some(plan.certificate.misplaced);
+            row.forced = Some(plan.certificate.forced);
+            row.breakers = Some(plan.certificate.breakers);
             row.optimal = Some(plan.is_optimal());
             row.ratio = best.filter(|&b| b > 0).map(|b| plan.cost() as f64 / b as f64);
+            row.over_optimum = optimum.filter(|&o| o > 0).map(|o| plan.cost() as f64 / o as f64);
         }
         Err(e) => row.error = Some(e.to_string()),
     }
@@ -276,7 +346,11 @@ mod tests {
         std::os::unix::fs::symlink(dir, dir.join("easy/self")).unwrap();
         let known = BestKnown::parse(r#"{"easy/p01.pddl": 8}"#, "b.json").unwrap();
         let mut seen = 0;
-        let report = run(dir, &OptimalMoves::new(), Some(&known), &mut |_, _| seen += 1).unwrap();
+        let against = Yardsticks {
+            best_known: Some(&known),
+            optima: None,
+        };
+        let report = run(dir, &OptimalMoves::new(), against, &mut |_, _| seen += 1).unwrap();
         assert_eq!(seen, 2);
         let names: Vec<&str> = report.tasks.iter().map(|t| t.task.as_str()).collect();
         assert_eq!(names, ["bad.pddl", "easy/p01.pddl"]);
@@ -292,16 +366,32 @@ mod tests {
             (2, 1, 1)
         );
         assert_eq!(report.groups.len(), 2);
-        // The near-optimal planner is measured against the bound that takes no search.
-        let near = run(dir, &NearOptimal::new(), None, &mut |_, _| {}).unwrap();
+        // The near-optimal planner is measured against the bound that takes no search, and
+        // against the optima the optimal solver's report proved.
+        let path = dir.join("optima.json");
+        std::fs::write(&path, serde_json::to_string(&report).unwrap()).unwrap();
+        let optima = BestKnown::read_optima(&path).unwrap();
+        assert_eq!(optima.of(&dir.join("easy/p01.pddl")), Some(4));
+        let against = Yardsticks {
+            best_known: None,
+            optima: Some(&optima),
+        };
+        let near = run(dir, &NearOptimal::new(), against, &mut |_, _| {}).unwrap();
         assert_eq!(near.solver, "near-optimal");
-        assert!(near.tasks[1].lower_bound.unwrap() <= near.tasks[1].actions.unwrap());
+        let row = &near.tasks[1];
+        assert!(row.lower_bound.unwrap() <= row.actions.unwrap());
+        assert_eq!(row.optimum, Some(4));
+        assert_eq!(row.over_optimum, Some(row.actions.unwrap() as f64 / 4.0));
+        assert_eq!(near.overall.mean_over_optimum, row.over_optimum);
+        std::fs::write(&path, "{}").unwrap();
+        let err = BestKnown::read_optima(&path).unwrap_err().to_string();
+        assert!(err.contains("solve-all --json"), "{err}");
     }
 
     #[test]
     fn an_empty_folder_is_refused() {
         let tmp = tempfile::tempdir().unwrap();
-        let err = run(tmp.path(), &NearOptimal::new(), None, &mut |_, _| {})
+        let err = run(tmp.path(), &NearOptimal::new(), Yardsticks::default(), &mut |_, _| {})
             .unwrap_err()
             .to_string();
         assert!(err.contains("holds no .pddl problem"), "{err}");

@@ -43,6 +43,18 @@ impl BitSet {
         }
     }
 
+    /// Removes every member of `other` (of the same bound).
+    pub(crate) fn difference_with(&mut self, other: &BitSet) {
+        for (a, b) in self.words.iter_mut().zip(&other.words) {
+            *a &= !b;
+        }
+    }
+
+    /// Whether every member is one of `other` (of the same bound).
+    pub(crate) fn is_subset(&self, other: &BitSet) -> bool {
+        self.words.iter().zip(&other.words).all(|(a, b)| a & !b == 0)
+    }
+
     /// How many members.
     pub(crate) fn len(&self) -> usize {
         self.words.iter().map(|w| w.count_ones() as usize).sum()

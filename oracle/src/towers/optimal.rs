@@ -363,6 +363,38 @@ mod tests {
         }
     }
 
+    /// The state space of `blocks` blocks, made once per size for every case.
+    fn space(blocks: usize) -> &'static crate::towers::StateSpace {
+        static SPACES: [std::sync::OnceLock<crate::towers::StateSpace>; 9] = [const { std::sync::OnceLock::new() }; 9];
+        SPACES[blocks].get_or_init(|| crate::towers::StateSpace::new(blocks).unwrap())
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(120))]
+
+        /// On every size the whole state space holds (up to 8 blocks), the optimal solver's
+        /// plan is as long as the fewest moves a breadth-first search over every state finds,
+        /// and its certificate's bound, with no search's help, is that number too.
+        #[test]
+        fn the_optimum_and_its_bound_are_the_breadth_first_searchs(
+            blocks in 1usize..=8,
+            stacks in 1usize..=3,
+            named in 1usize..=8,
+            seed in any::<u64>(),
+        ) {
+            let named = named.min(blocks);
+            let stacks = stacks.min(named);
+            let start = random_state(blocks, seed);
+            let goal = random_goal(blocks, stacks, named, seed ^ 0xbf5).unwrap();
+            let space = space(blocks);
+            let fewest = space.distances(&goal).unwrap().of(space, &start).unwrap() as usize;
+            let solved = OptimalMoves::new().solve(&start, &goal).unwrap();
+            prop_assert!(goal.holds(&solved.plan.replay(&start, Table::Unbounded).unwrap()));
+            prop_assert_eq!(solved.plan.len(), fewest);
+            prop_assert_eq!(solved.certificate.lower_bound(), fewest);
+        }
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(40))]
 

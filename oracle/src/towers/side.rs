@@ -62,10 +62,24 @@ pub fn plan_side_certified(planner: MovePlanner, grid: Grid, state: &State, goal
         ),
         MovePlanner::Optimal => OptimalMoves::new().solve(&start, &towers)?,
     };
+    // Each block's height in its tower, kept per move (only a clear block moves, so no
+    // other block's changes): checking the whole towers after every move made a plan of
+    // N blocks cost O(N^2).
+    let mut height = vec![0usize; start.blocks()];
+    for tower in start.towers() {
+        for (y, &b) in tower.iter().enumerate() {
+            height[b] = y + 1;
+        }
+    }
+    let mut tallest = height.iter().copied().max().unwrap_or(0);
     let mut now = start;
     for &mv in &certified.plan.moves {
         now.apply(mv, table)?;
-        let tallest = now.towers().iter().map(Vec::len).max().unwrap_or(0);
+        height[mv.block] = match mv.to {
+            Place::On(target) => height[target] + 1,
+            Place::Table => 1,
+        };
+        tallest = tallest.max(height[mv.block]);
         if tallest > grid.height() {
             return Err(TowersError::TooTall {
                 tallest,

@@ -21,6 +21,9 @@ pub(super) fn tables(md: &mut String, g: &General) {
         "near-optimal: mean moves",
         "× near-optimal",
         "worst × near-optimal",
+        "optimum proven",
+        "policy × optimum",
+        "near-optimal × optimum",
     ]);
     let rows = g.uniform.iter().map(|r| {
         vec![
@@ -31,6 +34,9 @@ pub(super) fn tables(md: &mut String, g: &General) {
             num(r.near_optimal_moves, 2),
             num(r.near_optimal_ratio, 4),
             num(r.worst_ratio, 3),
+            format!("{}%", num(Some(100.0 * r.proven), 1)),
+            num(r.optimum_ratio, 4),
+            num(r.near_optimal_optimum_ratio, 4),
         ]
     });
     markdown_table(md, &head, rows);
@@ -95,6 +101,10 @@ mod tests {
             fewest_moves: fewest,
             fewest_ratio: fewest.map(|f| 12.0 / f),
             near_optimal_fewest_ratio: fewest.map(|f| 13.5 / f),
+            proven: 1.0,
+            optimum_moves: fewest,
+            optimum_ratio: fewest.map(|f| 12.0 / f),
+            near_optimal_optimum_ratio: fewest.map(|f| 13.5 / f),
             published,
         }
     }
@@ -118,8 +128,9 @@ mod tests {
             md,
             "\n### Uniform problems, by number of blocks\n\n\
              | blocks | problems | solved | policy: mean moves | near-optimal: mean moves | × near-optimal | worst × \
-             near-optimal |\n|---|---|---|---|---|---|---|\n\
-             | 10 | 4 | 75.0% | 12.00 | 13.50 | 0.8889 | - |\n\
+             near-optimal | optimum proven | policy × optimum | near-optimal × optimum |\n\
+             |---|---|---|---|---|---|---|---|---|---|\n\
+             | 10 | 4 | 75.0% | 12.00 | 13.50 | 0.8889 | - | 100.0% | - | - |\n\
              \n### A few blocks, against the fewest moves\n\n\
              | blocks | problems | solved | fewest moves | policy × fewest | near-optimal × fewest |\n\
              |---|---|---|---|---|---|\n\
