@@ -64,6 +64,7 @@ import itertools
 import json
 import os
 import sys
+import tempfile
 import time
 from typing import Any, Dict, List, Optional, Tuple
 
@@ -183,11 +184,14 @@ def check_runs(command: str, all_runs: List[Dict[str, Any]], swept: List[str], p
     import blockstack
 
     trainer = blockstack.train if command == "train" else blockstack.train_dqn
-    for flags in all_runs:
-        try:
-            trainer(**flags, **{CHECK_FLAG: True})
-        except ValueError as e:
-            raise ValueError(f"{path}: run {_describe(flags, swept)}: {e}") from None
+    # With the files the sweep gives every run (in a scratch folder: nothing is written), so
+    # that a setting that needs them (checkpoint_every) is checked as the run will use it.
+    with tempfile.TemporaryDirectory() as scratch:
+        for flags in all_runs:
+            try:
+                trainer(**flags, **_files(scratch), **{CHECK_FLAG: True})
+            except ValueError as e:
+                raise ValueError(f"{path}: run {_describe(flags, swept)}: {e}") from None
 
 
 def run_name(command: str, flags: Dict[str, Any]) -> str:
@@ -202,6 +206,11 @@ def run_name(command: str, flags: Dict[str, Any]) -> str:
     return hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:12]
 
 
+def _files(folder: str) -> Dict[str, str]:
+    """The files the sweep gives a run whose folder is ``folder`` (:data:`OWN_FLAGS`)."""
+    return dict(out=os.path.join(folder, "model.safetensors"), checkpoint=os.path.join(folder, "checkpoint.safetensors"))
+
+
 def _run(command: str, flags: Dict[str, Any], folder: str) -> Dict[str, Any]:
     """One run, in a Ray worker: its row from ``result.json`` if it ended before, else
     trained (from its checkpoint, if it has one), with the row written there."""
@@ -212,9 +221,8 @@ def _run(command: str, flags: Dict[str, Any], folder: str) -> Dict[str, Any]:
         with open(result) as f:
             return json.load(f)
     os.makedirs(folder, exist_ok=True)
-    files = dict(out=os.path.join(folder, "model.safetensors"), checkpoint=os.path.join(folder, "checkpoint.safetensors"))
     trainer = blockstack.train if command == "train" else blockstack.train_dqn
-    row = trainer(**flags, **files)
+    row = trainer(**flags, **_files(folder))
     row["run"] = os.path.basename(folder)
     _native.write_output(result, json.dumps(row).encode())
     return row

@@ -374,8 +374,12 @@ def fifo(tmp_path_factory) -> str:
 
 
 #: Every Python reader of a file, as a call on the path ``p``.
+#: A problem of the domain file a reader is given (``--domain``, ``domain=``).
+DOMAIN_PROBLEM = os.path.join(os.path.dirname(os.path.abspath(__file__)), "fixtures", "problem-pickup.pddl")
+
 PYTHON_READERS = {
     "read_pddl": "blockstack.read_pddl(p)",
+    "solve_pddl(domain=)": f"blockstack.solve_pddl({DOMAIN_PROBLEM!r}, domain=p)",
     "BlocksWorld-v0(pddl=)": "blockstack.BlocksWorldEnv(pddl=p)",
     "read_recording": "blockstack.read_recording(p)",
     "load": "blockstack.load(p)",
@@ -406,6 +410,7 @@ def test_every_python_reader_refuses_a_fifo_or_a_device_at_once(reader, special,
 
 CLI_READERS = {
     "solve --pddl": lambda p: ["solve", "--pddl", p],
+    "solve --domain": lambda p: ["solve", "--pddl", DOMAIN_PROBLEM, "--domain", p],
     "dqn --resume": lambda p: ["dqn", "--resume", p, "--out", "/tmp/never.safetensors"],
     "dqn --demos-file": lambda p: ["dqn", "--demos-file", p, "--out", "/tmp/never.safetensors", "--steps", "1"],
     "learn-from-demos": lambda p: ["learn-from-demos", p, "--model", p, "--out", "/tmp/never.safetensors"],
@@ -423,6 +428,17 @@ def test_every_cli_reader_refuses_a_fifo_or_a_device_at_once(reader, special, fi
     run = subprocess.run([binary, *CLI_READERS[reader](path)], capture_output=True, text=True, timeout=30)
     assert run.returncode == 2, run.stderr
     assert "pipe or a device" in run.stderr and run.stderr.count("\n") == 1, run.stderr
+
+
+@pytest.mark.parametrize("special", ["fifo", "/dev/null"])
+def test_a_plan_file_is_written_only_to_a_regular_file_or_a_new_path(special, fifo, cli, tmp_path):
+    path = fifo if special == "fifo" else special
+    binary = os.environ.get("BLOCKSTACK_BIN", str(pathlib_root() / "target" / "release" / "blockstack"))
+    run = subprocess.run([binary, "solve", "--pddl", DOMAIN_PROBLEM, "--plan-file", path], capture_output=True,
+                         text=True, timeout=30)
+    assert run.returncode == 2 and "not a regular file" in run.stderr and run.stderr.count("\n") == 1, run.stderr
+    with pytest.raises(ValueError, match="not a regular file"):
+        blockstack.solve_pddl(DOMAIN_PROBLEM, plan_file=path)
 
 
 def test_solve_all_refuses_a_fifo_among_its_tasks_and_goes_on(fifo, cli, tmp_path):

@@ -99,11 +99,16 @@ def test_a_failed_run_keeps_the_finished_ones_and_is_named(tmp_path, capsys):
     pytest.importorskip("ray")
     config = tmp_path / "sweep.json"
     config.write_text(json.dumps({"train": {"blocks": 2, "goals": "0,1", "games": 5, "backend": "grid"},
-                                  "sweep": {"reward": ["sparse", "shiny"]}}))
-    out = tmp_path / "results.csv"
-    assert sweep.main([str(config), "--num-cpus", "2", "--out", str(out)]) == 1
+                                  "sweep": {"reward": ["sparse", "dense"]}}))
+    out, storage = tmp_path / "results.csv", tmp_path / "runs"
+    # Flags are checked before Ray starts; what fails in a run is its folder: here the dense
+    # run's checkpoint is not a checkpoint.
+    dense = next(f for f in sweep.runs(sweep.read_config(str(config))) if f["reward"] == "dense")
+    (storage / sweep.run_name("train", dense)).mkdir(parents=True)
+    (storage / sweep.run_name("train", dense) / "checkpoint.safetensors").write_text("not a checkpoint")
+    assert sweep.main([str(config), "--num-cpus", "2", "--out", str(out), "--storage", str(storage)]) == 1
     captured = capsys.readouterr()
-    assert "run reward=shiny failed" in captured.err and "cannot read reward" in captured.err
+    assert "run reward=dense failed" in captured.err and "checkpoint.safetensors" in captured.err, captured.err
     rows = list(csv.DictReader(out.open()))
     assert [r["reward"] for r in rows] == ["sparse"]
     assert "sparse" in captured.out

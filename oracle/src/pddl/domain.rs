@@ -35,8 +35,7 @@ use std::path::Path;
 
 use crate::error::Result;
 
-use super::error::PddlError;
-use super::sexpr::{self, Node};
+use super::sexpr::{self, Node, Source};
 use super::vocabulary::{ActionNames, Fact, Operator, Predicate};
 
 /// The largest domain file read: 1 MiB (the domain is under 2 KiB).
@@ -47,22 +46,6 @@ pub const MAX_DOMAIN_BYTES: u64 = 1 << 20;
 pub struct Domain {
     name: String,
     actions: ActionNames,
-}
-
-/// Where the reader is, for messages.
-struct Source<'a> {
-    file: &'a str,
-}
-
-impl Source<'_> {
-    fn err<T>(&self, line: usize, reason: impl Into<String>) -> Result<T> {
-        Err(PddlError::Invalid {
-            file: self.file.to_string(),
-            line,
-            reason: reason.into(),
-        }
-        .into())
-    }
 }
 
 /// What the domain is, for refusals.

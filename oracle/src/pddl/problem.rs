@@ -9,7 +9,7 @@ use crate::towers::{TowerGoal, Towers};
 
 use super::domain::Domain;
 use super::error::PddlError;
-use super::sexpr::{self, Node};
+use super::sexpr::{self, Node, Source};
 use super::vocabulary::{ActionNames, Fact, Predicate};
 
 /// The largest problem file read: 64 MiB, about half a million blocks in the competition's
@@ -30,22 +30,6 @@ pub struct Problem {
     start: Towers,
     goal: TowerGoal,
     actions: ActionNames,
-}
-
-/// Where the reader is, for messages.
-struct Source<'a> {
-    file: &'a str,
-}
-
-impl Source<'_> {
-    fn err<T>(&self, line: usize, reason: impl Into<String>) -> Result<T> {
-        Err(PddlError::Invalid {
-            file: self.file.to_string(),
-            line,
-            reason: reason.into(),
-        }
-        .into())
-    }
 }
 
 /// Names of the predicates read, for messages.

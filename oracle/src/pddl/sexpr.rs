@@ -73,6 +73,23 @@ impl Node {
     }
 }
 
+/// Where a reader is, for messages: the file being read.
+pub(crate) struct Source<'a> {
+    pub(crate) file: &'a str,
+}
+
+impl Source<'_> {
+    /// The error of a file that is not what its reader takes, at `line`.
+    pub(crate) fn err<T>(&self, line: usize, reason: impl Into<String>) -> crate::error::Result<T> {
+        Err(super::error::PddlError::Invalid {
+            file: self.file.to_string(),
+            line,
+            reason: reason.into(),
+        }
+        .into())
+    }
+}
+
 /// The deepest nesting read: a problem file nests five deep (`define`, `:goal`, `and`, an
 /// atom); anything far deeper is not one.
 pub(crate) const MAX_DEPTH: usize = 32;
