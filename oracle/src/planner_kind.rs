@@ -39,7 +39,7 @@ use crate::towers::{
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PlanOptions {
     /// The most states the exact search generates
-    /// ([`DEFAULT_MOVE_BUDGET`](crate::towers::DEFAULT_MOVE_BUDGET) by default).
+    /// ([`DEFAULT_MOVE_BUDGET`] by default).
     pub budget: Option<usize>,
     /// How long the optimal solver searches for its proof
     /// ([`DEFAULT_TIME_LIMIT`](crate::towers::optimal::DEFAULT_TIME_LIMIT) by default).

@@ -160,3 +160,26 @@ def test_a_failed_export_leaves_nothing_and_the_id_stays_free(corrected, dataset
     assert minari.load_dataset("blockstack/stack/retry-v0").total_episodes == 3
     with pytest.raises(ValueError, match="exists already"):
         blockstack.to_minari([record], "blockstack/stack/retry-v0", reference_episodes=2)
+
+
+def test_recordings_of_two_worlds_name_both_files_and_an_old_one_is_given_its_world(corrected, datasets, tmp_path):
+    record, _ = corrected
+    rows = [json.loads(line) for line in record.read_text().splitlines()]
+    # The same episodes, but a session line that says another horizon: another world.
+    other = tmp_path / "other.jsonl"
+    other.write_text("".join(
+        json.dumps(dict(r, world=dict(r["world"], horizon=r["world"]["horizon"] + 1)) if r["type"] == "session" else
+                   r) + "\n" for r in rows))
+    with pytest.raises(ValueError, match="is of another world than") as refused:
+        blockstack.to_minari([record, other], "blockstack/stack/two-worlds-v0")
+    assert str(other) in str(refused.value) and str(record) in str(refused.value)
+    assert not (datasets / "blockstack" / "stack" / "two-worlds-v0").exists()
+    # A version-2 recording does not say its world: refused without world=, and exported with
+    # the world given, whose reward the recovered environment plays.
+    old = tmp_path / "old.jsonl"
+    session = {k: v for k, v in rows[0].items() if k != "world"}
+    old.write_text("".join(json.dumps(r) + "\n" for r in [dict(session, version=2), *rows[1:]]))
+    with pytest.raises(ValueError, match="version 1 or 2"):
+        blockstack.to_minari(old, "blockstack/stack/old-v0")
+    dataset = blockstack.to_minari(old, "blockstack/stack/old-v0", world=rows[0]["world"])
+    assert dataset.recover_environment().spec.kwargs["reward"] == rows[0]["world"]["reward"]
