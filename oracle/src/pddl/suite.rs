@@ -36,33 +36,32 @@ pub struct BestKnown {
     costs: BTreeMap<String, u64>,
 }
 
+/// The text of the file at `path` (`what` it is, for messages), at most
+/// [`MAX_BOUNDS_BYTES`], and its name as shown in messages.
+fn read_bounded(path: &Path, what: &'static str) -> Result<(String, String)> {
+    let shown = path.display().to_string();
+    let mut text = String::new();
+    files::open_bounded(path, MAX_BOUNDS_BYTES, what)
+        .map_err(PddlError::from)?
+        .read_to_string(&mut text)
+        .map_err(|e| PddlError::Bounds {
+            file: shown.clone(),
+            reason: e.to_string(),
+        })?;
+    Ok((text, shown))
+}
+
 impl BestKnown {
     /// Reads a file of best known costs, at most [`MAX_BOUNDS_BYTES`].
     pub fn read(path: &Path) -> Result<BestKnown> {
-        let shown = path.display().to_string();
-        let mut text = String::new();
-        files::open_bounded(path, MAX_BOUNDS_BYTES, "a file of best known costs")
-            .map_err(PddlError::from)?
-            .read_to_string(&mut text)
-            .map_err(|e| PddlError::Bounds {
-                file: shown.clone(),
-                reason: e.to_string(),
-            })?;
+        let (text, shown) = read_bounded(path, "a file of best known costs")?;
         BestKnown::parse(&text, &shown)
     }
 
     /// The proven optima of a report of the optimal solver (module docs), at most
     /// [`MAX_BOUNDS_BYTES`]: the cost of each task it proved optimal, by its path.
     pub fn read_optima(path: &Path) -> Result<BestKnown> {
-        let shown = path.display().to_string();
-        let mut text = String::new();
-        files::open_bounded(path, MAX_BOUNDS_BYTES, "a report of proven optima")
-            .map_err(PddlError::from)?
-            .read_to_string(&mut text)
-            .map_err(|e| PddlError::Bounds {
-                file: shown.clone(),
-                reason: e.to_string(),
-            })?;
+        let (text, shown) = read_bounded(path, "a report of proven optima")?;
         let bad = |reason: String| PddlError::Bounds {
             file: shown.clone(),
             reason,
