@@ -19,7 +19,8 @@ refused in (:data:`REFUSED`); every other one is a world of :data:`WORLDS`. The 
   environment's expert plays from the same seeds; ``solve_pddl`` and ``solve_all`` give what
   ``blockstack solve --pddl`` and ``solve-all`` give, for every planner, with the domain file
   of either spelling or none, and the plan file written by either is the same.
-- **Files**: every reader, in the CLI and in Python, refuses a FIFO or a device at once.
+- **Files**: every reader, in the CLI and in Python, refuses a FIFO or a device at once, and
+  no trainer's checkpoint writes over a trained model.
 - **Default play**: a model of every kind (``q``, ``dqn``, ``relational``) plays by default
   with its own epsilon (its profile's test policy; greedy for a relational policy), reward
   and world, the same in ``run``, ``eval`` and Python's ``load(...)``: leaving them out
@@ -439,6 +440,26 @@ def test_a_plan_file_is_written_only_to_a_regular_file_or_a_new_path(special, fi
     assert run.returncode == 2 and "not a regular file" in run.stderr and run.stderr.count("\n") == 1, run.stderr
     with pytest.raises(ValueError, match="not a regular file"):
         blockstack.solve_pddl(DOMAIN_PROBLEM, plan_file=path)
+
+
+@pytest.mark.parametrize("trainer", ["train", "dqn"])
+def test_a_checkpoint_never_writes_over_a_trained_model(trainer, cli, tmp_path):
+    # The file a run would destroy: a trained model of the other learner's kind too.
+    model = tmp_path / "model.safetensors"
+    cli("train", "--blocks", 2, "--goals", "0,1", "--games", 20, "--backend", "grid", "--out", model)
+    before = model.read_bytes()
+    flags = (["train", "--blocks", 2, "--goals", "0,1", "--games", 20, "--backend", "grid"] if trainer == "train"
+             else ["dqn", "--preset", "dqn-planes", "--blocks", 2, "--steps", 10])
+    binary = os.environ.get("BLOCKSTACK_BIN", str(pathlib_root() / "target" / "release" / "blockstack"))
+    run = subprocess.run([binary, *map(str, flags), "--out", str(tmp_path / "new.safetensors"), "--checkpoint",
+                          str(model)], capture_output=True, text=True, timeout=120)
+    assert run.returncode != 0 and str(model) in run.stderr, run.stderr
+    with pytest.raises(ValueError, match=str(model.name)):
+        if trainer == "train":
+            blockstack.train(blocks=2, goals="0,1", games=20, backend="grid", checkpoint=model)
+        else:
+            blockstack.train_dqn(preset="dqn-planes", blocks=2, steps=10, checkpoint=model)
+    assert model.read_bytes() == before
 
 
 def test_solve_all_refuses_a_fifo_among_its_tasks_and_goes_on(fifo, cli, tmp_path):
