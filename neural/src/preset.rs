@@ -51,7 +51,7 @@
 //!   `--screen paper` puts the same network and learner on the paper's own screen (the
 //!   goal a picture in the corner), a convolution of one of its cells ([`crate::net::conv_cell`]).
 //! - `general`: not a Q-network but the relational policy of block moves in the side view
-//!   ([`crate::relational`]), learnt from the optimum on problems of 2 to 6 blocks, that plays
+//!   ([`crate::relational`]), learnt from the optimum on problems of 2 to 20 blocks, that plays
 //!   any number of blocks ([`RelationalConfig::general`]). It takes only the settings in
 //!   [`GENERAL_SETTINGS`]; any other is refused, naming it ([`NeuralError::NotForGeneral`]).
 //!
@@ -786,7 +786,7 @@ mod tests {
         }
         assert!(
             general(DqnOverrides {
-                blocks: Some(9),
+                blocks: Some(65),
                 ..DqnOverrides::default()
             })
             .is_err()

@@ -668,7 +668,7 @@ def models(tmp_path_factory, cli) -> dict:
     paths = {kind: str(folder / f"{kind}.safetensors") for kind in DEFAULT_EPSILON}
     cli("train", "--blocks", "2", "--games", "100", "--reward", "dense", "--backend", "grid", "--out", paths["q"])
     cli("dqn", "--preset", "dqn-planes", "--blocks", "2", "--steps", "60", "--reward", "dense", "--out", paths["dqn"])
-    cli("dqn", "--preset", "general", "--steps", "20", "--batch", "16", "--seed", "2", "--out", paths["relational"])
+    cli("dqn", "--preset", "general", "--blocks", "6", "--steps", "20", "--batch", "16", "--seed", "2", "--out", paths["relational"])
     return paths
 
 

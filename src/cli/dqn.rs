@@ -80,7 +80,7 @@ pub struct DqnArgs {
     /// the paper network on the paper screen; earlier releases called it dqfd-pixels),
     /// dqfd-screen (our DQfD recipe with the conv network on the compact screen; earlier
     /// releases called it pixels), general (a relational policy of block moves in the side view
-    /// that plays any number of blocks, learnt from the optimum on up to 6; it takes
+    /// that plays any number of blocks, learnt from the optimum on up to 20; it takes
     /// --blocks, --steps, --batch, --lr, --lr-final, --hidden and --seed). Default: from
     /// --obs and --loss.
     #[arg(long)]

@@ -1,7 +1,7 @@
 //! E10 (ours, issue 29): one learned policy for the classic Blocks World at every size.
 //!
 //! The relational policy (`blockstack dqn --preset general`, [`neural::relational`]) is
-//! trained on problems of at most 6 blocks, then plays, greedily and with no search, random
+//! trained on problems of at most 20 blocks, then plays, greedily and with no search, random
 //! problems of 10 to 500 blocks; its block moves are set against the near-optimal planner's
 //! (`oracle::towers::NearOptimal`, GN1 of Slaney & Thiebaux) on the same problems, and
 //! against the fewest moves (`oracle::towers::ExactMoves`) where those are found, up to 8
@@ -187,7 +187,7 @@ pub struct TrainingFigures {
     pub config: RelationalConfig,
     /// Labelled examples at the end.
     pub examples: u64,
-    /// The last DAgger iteration's games (2 to 6 blocks): share that reached the goal.
+    /// The last DAgger iteration's games (2 to `config.max_blocks` blocks): share that reached the goal.
     pub last_success: f64,
     /// Their moves over the fewest.
     pub last_moves_ratio: f64,

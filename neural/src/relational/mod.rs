@@ -1,6 +1,6 @@
 //! A learned block-move policy for the classic Blocks World at any number of blocks.
 //!
-//! One network, trained on problems of at most 6 blocks, plays problems of hundreds: its
+//! One network, trained on problems of at most 20 blocks, plays problems of hundreds: its
 //! input is only the domain's raw relations (`on`, `on-table`, `clear`, and the goal's `on`
 //! and `on-table`), and one forward pass chooses one block move, greedily, with no search.
 //!
