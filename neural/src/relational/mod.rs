@@ -15,6 +15,7 @@
 //! what it reaches, in docs/dqn.md ("The general policy").
 
 pub mod graph;
+pub mod incremental;
 pub mod model;
 pub mod move_policy;
 pub mod net;
@@ -26,6 +27,7 @@ pub fn move_limit(blocks: usize) -> usize {
     4 * blocks
 }
 
+pub use incremental::LivePass;
 pub use model::{Game, RelationalModel, RelationalPolicy};
 pub use move_policy::MovePolicy;
 pub use net::{RelationalNet, Shape};
