@@ -70,3 +70,66 @@ fn one_move_between(from: &Towers, to: &Towers) -> Option<Option<Move>> {
         _ => None,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::relational::graph::{Graph, TABLE};
+    use crate::relational::net::{Shape, Tape};
+    use oracle::towers::{Place, random_state};
+    use proptest::prelude::*;
+
+    /// The move of a full pass over `state`.
+    fn full_pass_move(net: &RelationalNet, state: &Towers, goal: &TowerGoal, table: Table) -> Option<Move> {
+        if goal.holds(state) {
+            return None;
+        }
+        let graph = Graph::of([(state, goal)]);
+        let mut tape = Tape::new();
+        net.forward(&graph, &mut tape);
+        let (x, to) = net.best_move(&graph, &tape, 0, table.has_free_column(state.tower_count()))?;
+        Some(Move {
+            block: x as usize,
+            to: if to == TABLE {
+                Place::Table
+            } else {
+                Place::On(to as usize)
+            },
+        })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(32))]
+
+        /// Asked about states one move apart, two moves apart, the same state again, a new
+        /// state or a new goal, the policy chooses what a full pass over that state does.
+        #[test]
+        fn it_chooses_as_a_full_pass_whatever_it_is_asked_next(weights in 0u64..1000, n in 2usize..40, seed in 0u64..1000, steps in proptest::collection::vec(0u8..5, 1..30)) {
+            let shape = Shape { width: 6, hidden: 5, score_hidden: 4, rounds: 2 };
+            let net = RelationalNet::new(shape, &mut sim::seeding::rng(weights)).unwrap();
+            let mut policy = MovePolicy::new(&net);
+            let mut goal = TowerGoal::new(&random_state(n, seed ^ 1).towers()).unwrap();
+            let mut state = random_state(n, seed);
+            let mut rng = sim::seeding::rng(seed);
+            for (i, step) in steps.into_iter().enumerate() {
+                let table = Table::Unbounded;
+                prop_assert_eq!(policy.choose(&state, &goal, table), full_pass_move(&net, &state, &goal, table));
+                let random_move = |state: &mut Towers, rng: &mut sim::seeding::SimRng| {
+                    let legal = state.moves(table);
+                    let mv = legal[rand::RngExt::random_range(rng, 0..legal.len())];
+                    state.apply(mv, table).unwrap();
+                };
+                match step {
+                    0 => {}
+                    1 => state = random_state(n, seed + i as u64 + 7),
+                    2 => goal = TowerGoal::new(&random_state(n, seed + i as u64 + 9).towers()).unwrap(),
+                    3 => {
+                        random_move(&mut state, &mut rng);
+                        random_move(&mut state, &mut rng);
+                    }
+                    _ => random_move(&mut state, &mut rng),
+                }
+            }
+        }
+    }
+}
