@@ -21,7 +21,7 @@
 //! and the next round starts from the blocks whose output changed. A value counts as changed
 //! when its bits do: a running minimum or maximum often stops changing a few blocks from the
 //! move, so most of a tower keeps its values. Then the per-block heads of the blocks whose
-//! final vector changed, and the sets [`Picks`] keeps for the best move.
+//! final vector changed, and the sets the best move is read from.
 //!
 //! # Bit for bit the full pass's values
 //!
@@ -33,18 +33,26 @@
 //! rows or columns, a product of more than 512 inner terms is cut where its cache sizes
 //! say. So the evaluator pads a product of a few rows to the size class of the full pass's
 //! product over N rows, or, where that is a small product (N of at most 256 over the
-//! columns: a few dozen blocks), recomputes every row ([`batch`]). The tests compare every
+//! columns: a few dozen blocks), recomputes every row. The tests compare every
 //! value with a full pass after every move of random walks, and every move of whole games
 //! with the full pass's, on random shapes.
 //!
 //! # The best move without a scan
 //!
-//! [`super::net::RelationalNet::best_move`] looks at every clear block. [`Picks`] keeps the
+//! [`super::net::RelationalNet::best_move`] looks at every clear block. The live pass keeps the
 //! clear blocks sorted by each of their three per-block scores, and the moves between blocks
 //! the goal relates sorted by score, each updated for the blocks a move touched. The best
 //! move onto an unrelated block is, for all but the few blocks related to the best
 //! destination, the block with the best score for moving onto it, so it is read from the
 //! first entries of two sets.
+//!
+//! # What it costs
+//!
+//! With one round, a move changes the values of the two towers it touched and of their goal
+//! partners: a game is about linear in the blocks. With two, what the first round changed,
+//! scattered over the goal partners' towers, spreads in the second through those towers and
+//! their partners, to a large part of the blocks while towers are tall, so a game stays
+//! superlinear (docs/dqn.md, "Playing 10,000 blocks", and docs/results/general).
 
 use std::cmp::Reverse;
 use std::collections::BTreeSet;
