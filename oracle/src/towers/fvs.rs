@@ -412,10 +412,10 @@ pub(crate) fn minimum_fvs(succ: Vec<BitSet>, deadline: Instant) -> Fvs {
 /// A cycle, as its vertices sorted.
 type Cycle = Vec<usize>;
 
-/// The lightest cycle through `v` in `adj` lighter than `limit`, vertices weighted by
-/// `weight` (Dijkstra from `v` back to it, no path as heavy as `limit` followed), with its
-/// weight.
-fn lightest_cycle(adj: &[Vec<usize>], v: usize, weight: &[f64], limit: f64) -> Option<(f64, Cycle)> {
+/// The lightest cycle through `v` in `adj` lighter than `limit` among the vertices `rank`
+/// puts no earlier than `v`, vertices weighted by `weight` (Dijkstra from `v` back to it, no path as
+/// heavy as `limit` followed), with its weight.
+fn lightest_cycle(adj: &[Vec<usize>], v: usize, weight: &[f64], limit: f64, rank: &[usize]) -> Option<(f64, Cycle)> {
     use std::cmp::Reverse;
     use std::collections::BinaryHeap;
     let k = adj.len();
@@ -437,7 +437,7 @@ fn lightest_cycle(adj: &[Vec<usize>], v: usize, weight: &[f64], limit: f64) -> O
                 continue;
             }
             let nd = d + weight[w];
-            if nd < dist[w] && nd < limit {
+            if nd < dist[w] && nd < limit && rank[w] >= rank[v] {
                 dist[w] = nd;
                 parent[w] = u;
                 heap.push((Reverse(Ordered(nd)), w));
@@ -469,7 +469,7 @@ fn disjoint_cycles(graph: &Graph, deadline: Instant) -> usize {
         if !graph.alive.contains(v) {
             continue;
         }
-        if let Some((_, c)) = lightest_cycle(&graph.adjacency(), v, &ones, f64::INFINITY) {
+        if let Some((_, c)) = lightest_cycle(&graph.adjacency(), v, &ones, f64::INFINITY, &vec![0; k]) {
             c.iter().for_each(|&u| graph.remove(u));
             count += 1;
         }
@@ -684,9 +684,16 @@ impl Search {
             }
             let weight = packing.vertex_values();
             let mut added = false;
+            // Each cycle lighter than one is found from its first vertex in the order of
+            // weight, through the vertices after it only: the vertices of weight zero, first,
+            // are the only ones searched through widely.
+            let mut order: Vec<usize> = graph.alive.iter().collect();
+            order.sort_by(|&a, &b| weight[a].total_cmp(&weight[b]).then(a.cmp(&b)));
+            let mut rank = vec![0; k];
+            order.iter().enumerate().for_each(|(i, &v)| rank[v] = i);
             for v in graph.alive.iter() {
                 if weight[v] < 1.0 - 1e-7
-                    && let Some((w, c)) = lightest_cycle(&adj, v, &weight, 1.0 - 1e-7)
+                    && let Some((w, c)) = lightest_cycle(&adj, v, &weight, 1.0 - 1e-7, &rank)
                     && w < 1.0 - 1e-7
                 {
                     added |= packing.add_column(c, Shape::Cycle, &is_taken);
