@@ -691,19 +691,26 @@ impl Search {
             order.sort_by(|&a, &b| weight[a].total_cmp(&weight[b]).then(a.cmp(&b)));
             let mut rank = vec![0; k];
             order.iter().enumerate().for_each(|(i, &v)| rank[v] = i);
+            // Once a cycle is found, this round looks for cycles only: cliques and odd
+            // cycles, dearer to search, wait for a round with no cycle to add.
+            let mut cycles_only = false;
             for v in graph.alive.iter() {
                 if weight[v] < 1.0 - 1e-7
                     && let Some((w, c)) = lightest_cycle(&adj, v, &weight, 1.0 - 1e-7, &rank)
                     && w < 1.0 - 1e-7
                 {
                     added |= packing.add_column(c, Shape::Cycle, &is_taken);
+                    cycles_only = true;
+                }
+                if cycles_only {
+                    continue;
                 }
                 let clique = greedy_clique(&two_way, v, &weight);
                 let need = clique.len() as f64 - 1.0;
                 if clique.len() >= 3 && clique.iter().map(|&u| weight[u]).sum::<f64>() < need - 1e-7 {
                     added |= packing.add_column(clique, Shape::Clique, &is_taken);
                 }
-                if let Some(odd) = lightest_odd_cycle(&two_way, v, &weight) {
+                if let Some(odd) = lightest_odd_cycle(&two_way, v, &weight, &rank) {
                     let need = odd.len().div_ceil(2) as f64;
                     if odd.len() >= 5 && odd.iter().map(|&u| weight[u]).sum::<f64>() < need - 1e-7 {
                         added |= packing.add_column(odd, Shape::OddCycle, &is_taken);
@@ -738,8 +745,10 @@ enum Shape {
 /// where every two-way edge is covered): one lighter than one is an odd cycle the values
 /// cover too little. Found as a lightest path from `v` back to itself through an odd number
 /// of edges (Dijkstra over vertex and parity); the closed walk found holds an odd simple
-/// cycle no heavier, which is returned, its vertices sorted.
-fn lightest_odd_cycle(two_way: &[BitSet], v: usize, weight: &[f64]) -> Option<Cycle> {
+/// cycle no heavier, which is returned, its vertices sorted. Only the vertices `rank` puts
+/// no earlier than `v` are passed through: every odd cycle lighter than one is still found,
+/// from its first vertex.
+fn lightest_odd_cycle(two_way: &[BitSet], v: usize, weight: &[f64], rank: &[usize]) -> Option<Cycle> {
     use std::cmp::Reverse;
     use std::collections::BinaryHeap;
     let k = two_way.len();
@@ -757,7 +766,7 @@ fn lightest_odd_cycle(two_way: &[BitSet], v: usize, weight: &[f64]) -> Option<Cy
             break;
         }
         let (u, parity) = (state / 2, state % 2);
-        for w in two_way[u].iter() {
+        for w in two_way[u].iter().filter(|&w| rank[w] >= rank[v]) {
             let next = 2 * w + (1 - parity);
             let nd = d + (weight[u] + weight[w] - 1.0).max(0.0);
             if nd < dist[next] {
@@ -1335,16 +1344,20 @@ mod tests {
         assert_eq!(brute_force(&adj), 3);
         let weight = vec![0.5; 5];
         let two_way = rows(&adj);
-        assert_eq!(lightest_odd_cycle(&two_way, 2, &weight), Some(vec![0, 1, 2, 3, 4]));
+        assert_eq!(
+            lightest_odd_cycle(&two_way, 2, &weight, &[0; 5]),
+            Some(vec![0, 1, 2, 3, 4])
+        );
         // A ring of six is covered by half its vertices: no odd cycle to find.
         let even: Vec<Vec<usize>> = (0..6).map(|v| vec![(v + 1) % 6, (v + 5) % 6]).collect();
-        assert_eq!(lightest_odd_cycle(&rows(&even), 0, &[0.5; 6]), None);
+        assert_eq!(lightest_odd_cycle(&rows(&even), 0, &[0.5; 6], &[0; 6]), None);
         let far = Instant::now() + std::time::Duration::from_secs(60);
         let mut graph = Graph::new(rows(&adj));
         graph.reduce(&mut Vec::new());
         assert_eq!(graph.alive.len(), 5);
         let root = Search::new(far).relaxation(&graph, &[], None, f64::INFINITY).unwrap();
-        assert!(root.bound > 3.0 - 1e-6, "bound {}", root.bound);
+        // The right-hand sides are perturbed by up to a millionth (ties in the ratio test).
+        assert!(root.bound > 3.0 - 1e-5, "bound {}", root.bound);
         let found = minimum_fvs(rows(&adj), far);
         assert_eq!((found.lower_bound, found.set.map(|s| s.len())), (3, Some(3)));
     }
