@@ -13,8 +13,8 @@
 //!
 //! # One vigil, one policy
 //!
-//! While a [`Vigil`] is held, and for [`WARM_FOR`] after its last hold ends, a helper job on
-//! each of the pool's other threads looks for work ([`rayon::yield_now`]: a spawned part, the
+//! While a [`Vigil`] is held, and for a while after its last hold ends (its one parameter),
+//! a helper job on each of the pool's other threads looks for work ([`rayon::yield_now`]: a spawned part, the
 //! other half of a `rayon::join`) and, when there is none, yields its core to the scheduler
 //! before it looks again. OpenMP's default wait policy keeps its threads the same way before
 //! they sleep. The core is offered, not spun on: given back at once when nothing else wants
@@ -28,6 +28,9 @@
 //!   [`WARM_FOR`] (a Python caller's own work between two steps) finds them awake.
 //! - [`on_pool_awake`] holds a vigil over the current pool while a loop runs on one of its
 //!   threads: the splits happen inside the loop, on that thread, which a team could not do.
+//!   Its helpers go as the loop ends, since no call follows: kept [`WARM_FOR`] longer, they
+//!   made the neural bench's `train_step/small/2` vary from sample to sample where it had not
+//!   (docs/performance.md).
 //!
 //! # The team's hand-off
 //!
@@ -48,17 +51,19 @@ use std::time::{Duration, Instant};
 
 use crate::error::{Result, SimError};
 
-/// How long a vigil's helpers stay awake after its last hold ends: longer than a Python
-/// caller's own work between two steps, short enough that a caller that has stopped gets
-/// the cores back at once.
+/// How long a team's workers stay awake after a call: longer than a Python caller's own
+/// work between two steps, short enough that a caller that has stopped gets the cores back
+/// at once. A loop on an awake pool lets its helpers go when it ends: no call follows.
 pub(crate) const WARM_FOR: Duration = Duration::from_micros(200);
 
 /// Spins of a team caller's wait before it starts yielding its core.
 const SPINS_BEFORE_YIELD: u32 = 1 << 12;
 
-/// Keeps a pool's other threads looking for work while it is held and for [`WARM_FOR`]
-/// after the last hold ends, a helper job on each ([`Vigil::hold`]).
+/// Keeps a pool's other threads looking for work while it is held and for `warm_for` after
+/// the last hold ends, a helper job on each ([`Vigil::hold`]).
 struct Vigil {
+    /// How long the helpers stay after the last hold ends.
+    warm_for: Duration,
     /// Holds in force.
     holds: AtomicUsize,
     /// When the last hold ended, in nanoseconds since `epoch`.
@@ -69,7 +74,7 @@ struct Vigil {
     helpers: AtomicUsize,
 }
 
-/// A hold on a [`Vigil`]: its helpers stay awake while this lives, and [`WARM_FOR`] after.
+/// A hold on a [`Vigil`]: its helpers stay awake while this lives, and its `warm_for` after.
 struct Hold<'a>(&'a Vigil);
 
 impl Drop for Hold<'_> {
@@ -82,8 +87,10 @@ impl Drop for Hold<'_> {
 }
 
 impl Vigil {
-    fn new() -> Arc<Vigil> {
+    /// A vigil whose helpers stay `warm_for` after its last hold ends.
+    fn new(warm_for: Duration) -> Arc<Vigil> {
         Arc::new(Vigil {
+            warm_for,
             holds: AtomicUsize::new(0),
             released: AtomicU64::new(0),
             epoch: Instant::now(),
@@ -121,18 +128,23 @@ impl Vigil {
             if rayon::yield_now() == Some(rayon::Yield::Executed) {
                 continue;
             }
-            if !self.awake_at(self.since_epoch()) {
+            if !self.awake() {
                 return;
             }
             std::thread::yield_now();
         }
     }
 
+    /// Whether the helpers stay awake now: the clock is read only once no hold is in force.
+    fn awake(&self) -> bool {
+        self.holds.load(Ordering::Acquire) > 0 || self.awake_at(self.since_epoch())
+    }
+
     /// Whether the helpers stay awake at `now` (nanoseconds since the epoch): while held,
-    /// and for [`WARM_FOR`] after the last hold ended.
+    /// and for `warm_for` after the last hold ended.
     fn awake_at(&self, now: u64) -> bool {
         self.holds.load(Ordering::Acquire) > 0
-            || now.saturating_sub(self.released.load(Ordering::Acquire)) < WARM_FOR.as_nanos() as u64
+            || now.saturating_sub(self.released.load(Ordering::Acquire)) < self.warm_for.as_nanos() as u64
     }
 
     fn since_epoch(&self) -> u64 {
@@ -160,7 +172,7 @@ impl Team {
             })?;
         Ok(Team {
             pool,
-            vigil: Vigil::new(),
+            vigil: Vigil::new(WARM_FOR),
         })
     }
 
@@ -262,12 +274,13 @@ fn wait_for(ended: &AtomicUsize, parts: usize) {
 /// Why: a training step is a few splits apart from serial stretches (the gradients' norm,
 /// the losses) of tens of microseconds, long enough for an idle rayon thread to go to
 /// sleep, and then each split pays a wake-up in the kernel (docs/performance.md measures
-/// it). The price is the other threads' cores for as long as `f` runs (and [`WARM_FOR`]
-/// after), offered to the scheduler between looks.
+/// it). The price is the other threads' cores for as long as `f` runs, offered to the
+/// scheduler between looks.
 pub fn on_pool_awake<R: Send>(f: impl FnOnce() -> R + Send) -> R {
     // A scope without spawns: the way onto a pool thread from outside every pool.
     rayon::scope(|_| {
-        let vigil = Vigil::new();
+        // No call follows the loop: the helpers go when it ends.
+        let vigil = Vigil::new(Duration::ZERO);
         let _hold = vigil.hold(
             rayon::current_num_threads().saturating_sub(1),
             rayon::current_thread_index(),
@@ -281,8 +294,7 @@ pub fn on_pool_awake<R: Send>(f: impl FnOnce() -> R + Send) -> R {
 mod tests {
     use super::*;
 
-    /// Rounds of the tests that repeat: fewer under Miri, which runs them a thousand times
-    /// slower.
+    /// Rounds of the tests that repeat: fewer under Miri, which interprets every step.
     const ROUNDS: u64 = if cfg!(miri) { 4 } else { 50 };
 
     /// Waits until every helper of `vigil` has ended.
@@ -363,7 +375,7 @@ mod tests {
 
     #[test]
     fn a_vigil_is_awake_while_held_and_for_warm_for_after_its_last_hold() {
-        let vigil = Vigil::new();
+        let vigil = Vigil::new(WARM_FOR);
         let warm = WARM_FOR.as_nanos() as u64;
         let (first, second) = (vigil.hold(0, None, |_| {}), vigil.hold(0, None, |_| {}));
         drop(first);
@@ -378,7 +390,7 @@ mod tests {
     #[test]
     fn a_hold_spawns_only_the_missing_helpers_and_they_end_after_it() {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
-        let vigil = Vigil::new();
+        let vigil = Vigil::new(WARM_FOR);
         let spawned = AtomicUsize::new(0);
         let spawn = |helper: Box<dyn FnOnce() + Send>| {
             spawned.fetch_add(1, Ordering::SeqCst);
