@@ -13,8 +13,14 @@
 //! tower however tall, so the same weights serve any size. How it learns is in [`train`]
 //! (imitation of the optimum with DAgger); the file it is saved in, in [`model`]; why and
 //! what it reaches, in docs/dqn.md ("The general policy").
+//!
+//! A game does not pass over every block for every move: [`incremental`] keeps one pass up
+//! to date, recomputing after a move only the values whose inputs it changed, with the same
+//! bits as a full pass, so the policy plays thousands of blocks (docs/dqn.md, "Playing
+//! 10,000 blocks").
 
 pub mod graph;
+pub mod incremental;
 pub mod model;
 pub mod move_policy;
 pub mod net;
@@ -26,6 +32,7 @@ pub fn move_limit(blocks: usize) -> usize {
     4 * blocks
 }
 
+pub use incremental::LivePass;
 pub use model::{Game, RelationalModel, RelationalPolicy};
 pub use move_policy::MovePolicy;
 pub use net::{RelationalNet, Shape};

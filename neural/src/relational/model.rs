@@ -27,6 +27,7 @@ use sim::{Action, Observation, View};
 use crate::error::{NeuralError, Result};
 use crate::netfile::{self, NetFile};
 
+use super::incremental::LivePass;
 use super::move_policy::MovePolicy;
 use super::net::RelationalNet;
 use super::train::{IterationReport, RelationalConfig};
@@ -116,20 +117,21 @@ impl RelationalModel {
 
     /// Plays the policy greedily from `start` to `goal` on an unbounded table, for at most
     /// [`super::move_limit`] moves; an error if the goal names a block the state lacks.
+    ///
+    /// One pass over the blocks, then each move updates only what it changed
+    /// ([`LivePass`]).
     pub fn play(&self, start: &Towers, goal: &TowerGoal) -> Result<Game> {
-        goal.check_blocks(start.blocks())?;
-        let mut chooser = self.move_policy();
-        let mut state = start.clone();
+        let mut live = LivePass::new(&self.net, start, goal)?;
         let mut moves = Vec::new();
-        while moves.len() < super::move_limit(start.blocks()) {
-            let Some(mv) = chooser.choose(&state, goal, Table::Unbounded) else {
+        while moves.len() < super::move_limit(start.blocks()) && !live.goal_holds() {
+            let Some(mv) = live.best_move(true) else {
                 break;
             };
-            state.apply(mv, Table::Unbounded)?;
+            live.apply(mv, Table::Unbounded)?;
             moves.push(mv);
         }
         Ok(Game {
-            reached: goal.holds(&state),
+            reached: live.goal_holds(),
             moves,
         })
     }

@@ -79,11 +79,11 @@ impl Shape {
 }
 
 /// Node input features: on-table, clear, the goal's on-table.
-const FEATURES: usize = 3;
+pub(super) const FEATURES: usize = 3;
 
 /// Per-block scores: moving the block onto a block the goal does not relate it to, being
 /// such a destination, moving the block to the table.
-const HEADS: usize = 3;
+pub(super) const HEADS: usize = 3;
 
 /// A cell: linear to `hidden`, ReLU, linear to `out`, tanh.
 #[derive(Clone, Copy, Debug)]
@@ -132,10 +132,31 @@ pub struct RelationalNet {
 
 /// One cell's pass over its rows: inputs, hidden units (after ReLU), outputs (after tanh).
 #[derive(Default, Debug)]
-struct CellTape {
-    x: Vec<f32>,
+pub(super) struct CellTape {
+    /// The inputs, a row per node.
+    pub(super) x: Vec<f32>,
     h: Vec<f32>,
-    o: Vec<f32>,
+    /// The outputs, a row per node.
+    pub(super) o: Vec<f32>,
+}
+
+/// A round's cells.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum CellKind {
+    /// Up the towers.
+    Up,
+    /// Down the towers.
+    Down,
+    /// Across the goal.
+    Goal,
+}
+
+/// Where [`RelationalNet::head_rows`] writes.
+pub(super) struct HeadRows<'a> {
+    pub(super) k: &'a mut [f32],
+    pub(super) heads: &'a mut [f32],
+    pub(super) px: &'a mut [f32],
+    pub(super) qy: &'a mut [f32],
 }
 
 /// One round's three cells (by node) and the two scans: their values and, for every
@@ -197,6 +218,27 @@ impl Tape {
     /// The scores of the last pass, one per move of the graph.
     pub fn scores(&self) -> &[f32] {
         &self.scores
+    }
+
+    /// The last pass's embedding, a row per node.
+    pub(super) fn embedding(&self) -> &[f32] {
+        &self.h0
+    }
+
+    /// Round `r`'s values in the last pass, a row per node: the up cell's outputs, the up
+    /// pass, the down cell's outputs, the down pass, and the round's output.
+    pub(super) fn round_values(&self, r: usize) -> [&[f32]; 5] {
+        let round = &self.rounds[r];
+        [&round.up.o, &round.u, &round.down.o, &round.v, &round.goal.o]
+    }
+
+    /// The last pass's per-block values a move's score is read from.
+    pub(super) fn values(&self) -> Values<'_> {
+        Values {
+            heads: &self.heads,
+            px: &self.px,
+            qy: &self.qy,
+        }
     }
 }
 
@@ -323,8 +365,6 @@ impl RelationalNet {
     fn forward_any(&self, g: &Graph, t: &mut Tape) {
         let n = g.nodes();
         let d = self.shape.width;
-        let p = &self.store.params;
-        let sl = &self.slots;
         t.pos_up.resize(n, 0);
         t.pos_down.resize(n, 0);
         for (i, &b) in g.up_order.iter().enumerate() {
@@ -336,15 +376,10 @@ impl RelationalNet {
         // Embedding.
         fit(&mut t.features, n * FEATURES);
         for b in 0..n {
-            let f = &mut t.features[b * FEATURES..(b + 1) * FEATURES];
-            f[0] = flag(g.below[b] == NONE);
-            f[1] = flag(g.above[b] == NONE);
-            f[2] = flag(g.goal_below[b] == TABLE);
+            node_features(g, b, &mut t.features[b * FEATURES..(b + 1) * FEATURES]);
         }
         fit(&mut t.h0, n * d);
-        fill_rows(&mut t.h0, &p[sl.embed_b.range()]);
-        matmul(&mut t.h0, &t.features, &p[sl.embed_w.range()], (n, FEATURES, d), true);
-        tanh_in_place(&mut t.h0);
+        self.embed_rows(&t.features, n, &mut t.h0);
         t.rounds.resize_with(self.shape.rounds, RoundTape::default);
         for r in 0..self.shape.rounds {
             let (done, rest) = t.rounds.split_at_mut(r);
@@ -362,21 +397,12 @@ impl RelationalNet {
         let half = d / 2;
         let p = &self.store.params;
         let sl = &self.slots;
-        let row = |_: &[f32], b: usize| b * d..(b + 1) * d;
         // Up the towers: a local term per block, then its running min / max from the
         // table up.
         let up = &sl.up;
         round.up.reserve(n, up);
         for b in 0..n {
-            let x = &mut round.up.x[b * up.inputs..(b + 1) * up.inputs];
-            x[..d].copy_from_slice(&h[row(h, b)]);
-            let below = g.below[b];
-            x[d..2 * d].copy_from_slice(if below == NONE {
-                &p[sl.table_up.range()]
-            } else {
-                &h[row(h, below as usize)]
-            });
-            x[2 * d] = flag(g.stands_as_goal(b));
+            self.up_input(g, h, b, &mut round.up.x[b * up.inputs..(b + 1) * up.inputs]);
         }
         cell_forward(p, up, &mut round.up, 0, n);
         scan(
@@ -394,16 +420,7 @@ impl RelationalNet {
         round.down.reserve(n, down);
         for b in 0..n {
             let x = &mut round.down.x[b * down.inputs..(b + 1) * down.inputs];
-            x[..d].copy_from_slice(&h[row(h, b)]);
-            x[d..2 * d].copy_from_slice(&round.u[row(h, b)]);
-            let above = g.above[b];
-            if above == NONE {
-                x[2 * d..3 * d].copy_from_slice(&p[sl.clear_down.range()]);
-                x[3 * d] = 0.0;
-            } else {
-                x[2 * d..3 * d].copy_from_slice(&h[row(h, above as usize)]);
-                x[3 * d] = flag(g.stands_as_goal(above as usize));
-            }
+            self.down_input(g, h, &round.u, b, x);
         }
         cell_forward(p, down, &mut round.down, 0, n);
         scan(
@@ -426,9 +443,6 @@ impl RelationalNet {
     /// from the last round's node vectors.
     fn scores_forward(&self, g: &Graph, t: &mut Tape) {
         let n = g.nodes();
-        let d = self.shape.width;
-        let p = &self.store.params;
-        let sl = &self.slots;
         // The per-block scores and the pair perceptron's halves.
         let h: &[f32] = match t.rounds.last() {
             Some(r) => &r.goal.o,
@@ -436,15 +450,16 @@ impl RelationalNet {
         };
         let s = self.shape.score_hidden;
         fit(&mut t.k, n * s);
-        fill_rows(&mut t.k, &p[sl.head_b.range()]);
-        matmul(&mut t.k, h, &p[sl.head_w.range()], (n, d, s), true);
-        t.k.iter_mut().for_each(|v| *v = v.max(0.0));
         fit(&mut t.heads, n * HEADS);
-        matmul(&mut t.heads, &t.k, &p[sl.head_out.range()], (n, s, HEADS), false);
         fit(&mut t.px, n * s);
         fit(&mut t.qy, n * s);
-        matmul(&mut t.px, h, &p[sl.pair_x.range()], (n, d, s), false);
-        matmul(&mut t.qy, h, &p[sl.pair_y.range()], (n, d, s), false);
+        let out = HeadRows {
+            k: &mut t.k,
+            heads: &mut t.heads,
+            px: &mut t.px,
+            qy: &mut t.qy,
+        };
+        self.head_rows(h, n, out);
         // The listed moves' scores.
         let m = g.moves.len();
         fit(&mut t.act, m * s);
@@ -463,51 +478,149 @@ impl RelationalNet {
         }
     }
 
-    /// The inputs of the cell across the goal, by node: its vector, its up and down values,
-    /// and those of the blocks the goal puts under and over it (learnt vectors where there
-    /// are none), and whether the goal's `on` holds under it and over it.
+    /// The inputs of the cell across the goal, by node ([`RelationalNet::goal_input`]).
     fn goal_inputs(&self, g: &Graph, h: &[f32], round: &mut RoundTape) {
+        let inputs = self.slots.goal.inputs;
+        for b in 0..g.nodes() {
+            let x = &mut round.goal.x[b * inputs..(b + 1) * inputs];
+            self.goal_input(g, h, &round.u, &round.v, b, x);
+        }
+    }
+
+    /// Node `b`'s input to the cell up the towers, into `x`: its vector, its support's (a
+    /// learnt vector for the table), and whether it stands as the goal wants.
+    pub(super) fn up_input(&self, g: &Graph, h: &[f32], b: usize, x: &mut [f32]) {
+        let d = self.shape.width;
+        let p = &self.store.params;
+        x[..d].copy_from_slice(&h[b * d..(b + 1) * d]);
+        let below = g.below[b];
+        x[d..2 * d].copy_from_slice(if below == NONE {
+            &p[self.slots.table_up.range()]
+        } else {
+            let below = below as usize;
+            &h[below * d..(below + 1) * d]
+        });
+        x[2 * d] = flag(g.stands_as_goal(b));
+    }
+
+    /// Node `b`'s input to the cell down the towers, into `x`: its vector, its up value,
+    /// and the vector of the block on it (a learnt vector above a clear block) with whether
+    /// that block stands as the goal wants.
+    pub(super) fn down_input(&self, g: &Graph, h: &[f32], u: &[f32], b: usize, x: &mut [f32]) {
+        let d = self.shape.width;
+        let p = &self.store.params;
+        let row = |b: usize| b * d..(b + 1) * d;
+        x[..d].copy_from_slice(&h[row(b)]);
+        x[d..2 * d].copy_from_slice(&u[row(b)]);
+        let above = g.above[b];
+        if above == NONE {
+            x[2 * d..3 * d].copy_from_slice(&p[self.slots.clear_down.range()]);
+            x[3 * d] = 0.0;
+        } else {
+            x[2 * d..3 * d].copy_from_slice(&h[row(above as usize)]);
+            x[3 * d] = flag(g.stands_as_goal(above as usize));
+        }
+    }
+
+    /// Node `b`'s input to the cell across the goal, into `x`: its vector, its up and down
+    /// values, and those of the blocks the goal puts under and over it (learnt vectors where
+    /// there are none), and whether the goal's `on` holds under it and over it.
+    pub(super) fn goal_input(&self, g: &Graph, h: &[f32], u: &[f32], v: &[f32], b: usize, x: &mut [f32]) {
         let d = self.shape.width;
         let p = &self.store.params;
         let sl = &self.slots;
-        let goal = &sl.goal;
         let row = |b: usize| b * d..(b + 1) * d;
-        let (u, v) = (&round.u, &round.v);
-        for b in 0..g.nodes() {
-            let x = &mut round.goal.x[b * goal.inputs..(b + 1) * goal.inputs];
-            x[..d].copy_from_slice(&h[row(b)]);
-            x[d..2 * d].copy_from_slice(&u[row(b)]);
-            x[2 * d..3 * d].copy_from_slice(&v[row(b)]);
-            let gb = g.goal_below[b];
-            match gb {
-                TABLE => x[3 * d..5 * d].copy_from_slice(&p[sl.goal_table.range()]),
-                NONE => x[3 * d..5 * d].copy_from_slice(&p[sl.goal_free.range()]),
-                _ => {
-                    x[3 * d..4 * d].copy_from_slice(&u[row(gb as usize)]);
-                    x[4 * d..5 * d].copy_from_slice(&v[row(gb as usize)]);
-                }
+        x[..d].copy_from_slice(&h[row(b)]);
+        x[d..2 * d].copy_from_slice(&u[row(b)]);
+        x[2 * d..3 * d].copy_from_slice(&v[row(b)]);
+        let gb = g.goal_below[b];
+        match gb {
+            TABLE => x[3 * d..5 * d].copy_from_slice(&p[sl.goal_table.range()]),
+            NONE => x[3 * d..5 * d].copy_from_slice(&p[sl.goal_free.range()]),
+            _ => {
+                x[3 * d..4 * d].copy_from_slice(&u[row(gb as usize)]);
+                x[4 * d..5 * d].copy_from_slice(&v[row(gb as usize)]);
             }
-            let ga = g.goal_above[b];
-            if ga == NONE {
-                x[5 * d..7 * d].copy_from_slice(&p[sl.goal_top.range()]);
-            } else {
-                x[5 * d..6 * d].copy_from_slice(&u[row(ga as usize)]);
-                x[6 * d..7 * d].copy_from_slice(&v[row(ga as usize)]);
-            }
-            x[7 * d] = flag(g.stands_as_goal(b));
-            x[7 * d + 1] = if ga == NONE {
-                0.0
-            } else {
-                flag(g.stands_as_goal(ga as usize))
-            };
         }
+        let ga = g.goal_above[b];
+        if ga == NONE {
+            x[5 * d..7 * d].copy_from_slice(&p[sl.goal_top.range()]);
+        } else {
+            x[5 * d..6 * d].copy_from_slice(&u[row(ga as usize)]);
+            x[6 * d..7 * d].copy_from_slice(&v[row(ga as usize)]);
+        }
+        x[7 * d] = flag(g.stands_as_goal(b));
+        x[7 * d + 1] = if ga == NONE {
+            0.0
+        } else {
+            flag(g.stands_as_goal(ga as usize))
+        };
+    }
+
+    /// The embedding of `rows` nodes' features (`FEATURES` a row, [`node_features`]) into
+    /// `h0` (`width` a row).
+    pub(super) fn embed_rows(&self, features: &[f32], rows: usize, h0: &mut [f32]) {
+        let d = self.shape.width;
+        let p = &self.store.params;
+        let h0 = &mut h0[..rows * d];
+        fill_rows(h0, &p[self.slots.embed_b.range()]);
+        matmul(h0, features, &p[self.slots.embed_w.range()], (rows, FEATURES, d), true);
+        tanh_in_place(h0);
+    }
+
+    /// The cell `kind`'s pass over the first `rows` rows of `tape` (inputs already there,
+    /// [`CellTape::reserve`]d for them).
+    pub(super) fn cell_rows(&self, kind: CellKind, tape: &mut CellTape, rows: usize) {
+        cell_forward(&self.store.params, self.cell(kind), tape, 0, rows);
+    }
+
+    /// The cell of `kind`.
+    fn cell(&self, kind: CellKind) -> &Cell {
+        match kind {
+            CellKind::Up => &self.slots.up,
+            CellKind::Down => &self.slots.down,
+            CellKind::Goal => &self.slots.goal,
+        }
+    }
+
+    /// The inputs of the cell of `kind`.
+    pub(super) fn cell_inputs(&self, kind: CellKind) -> usize {
+        self.cell(kind).inputs
+    }
+
+    /// The matrix products the cell of `kind` is made of, each as (inner size, columns).
+    pub(super) fn cell_products(&self, kind: CellKind) -> [(usize, usize); 2] {
+        let c = self.cell(kind);
+        [(c.inputs, c.hidden), (c.hidden, c.out)]
+    }
+
+    /// The per-block heads of `rows` node vectors `h`: the head's hidden units (into `k`,
+    /// `score_hidden` a row), its three scores (`heads`) and the pair perceptron's two halves
+    /// (`px`, `qy`, `score_hidden` a row).
+    pub(super) fn head_rows(&self, h: &[f32], rows: usize, out: HeadRows<'_>) {
+        let (d, s) = (self.shape.width, self.shape.score_hidden);
+        let p = &self.store.params;
+        let sl = &self.slots;
+        let k = &mut out.k[..rows * s];
+        fill_rows(k, &p[sl.head_b.range()]);
+        matmul(k, h, &p[sl.head_w.range()], (rows, d, s), true);
+        k.iter_mut().for_each(|v| *v = v.max(0.0));
+        matmul(out.heads, k, &p[sl.head_out.range()], (rows, s, HEADS), false);
+        matmul(out.px, h, &p[sl.pair_x.range()], (rows, d, s), false);
+        matmul(out.qy, h, &p[sl.pair_y.range()], (rows, d, s), false);
+    }
+
+    /// The matrix products of [`RelationalNet::head_rows`], each as (inner size, columns).
+    pub(super) fn head_products(&self) -> [(usize, usize); 4] {
+        let (d, s) = (self.shape.width, self.shape.score_hidden);
+        [(d, s), (s, HEADS), (d, s), (d, s)]
     }
 
     /// The score of moving `x` to `y` (a node or [`TABLE`]) from a pass's per-block values:
     /// `a_x + b_y + r(x, y)`, `r` the pair perceptron where the goal relates the two blocks
     /// (0 elsewhere), or `t_x` to the table. `act` receives the pair perceptron's hidden
     /// units (zero where it is not run).
-    fn score(&self, g: &Graph, t: Values<'_>, x: u32, y: u32, act: Option<&mut [f32]>) -> f32 {
+    pub(super) fn score(&self, g: &Graph, t: Values<'_>, x: u32, y: u32, act: Option<&mut [f32]>) -> f32 {
         let (x, s) = (x as usize, self.shape.score_hidden);
         if y == TABLE {
             if let Some(act) = act {
@@ -789,13 +902,18 @@ impl RelationalNet {
 
 /// The per-node values a move's score is read from.
 #[derive(Clone, Copy)]
-struct Values<'a> {
-    heads: &'a [f32],
-    px: &'a [f32],
-    qy: &'a [f32],
+pub(super) struct Values<'a> {
+    pub(super) heads: &'a [f32],
+    pub(super) px: &'a [f32],
+    pub(super) qy: &'a [f32],
 }
 
 impl CellTape {
+    /// Makes room for `n` rows of the cell of `kind` of `net`.
+    pub(super) fn reserve_for(&mut self, net: &RelationalNet, kind: CellKind, n: usize) {
+        self.reserve(n, net.cell(kind));
+    }
+
     /// Makes room for `n` rows of `cell`.
     fn reserve(&mut self, n: usize, cell: &Cell) {
         fit(&mut self.x, n * cell.inputs);
@@ -856,7 +974,7 @@ fn scan(order: &[u32], prev: &[u32], terms: &[f32], d: usize, half: usize, out: 
         let p = p as usize;
         for c in 0..d {
             let (before, now) = (out[p * d + c], here[c]);
-            let take = if c < half { now < before } else { now > before };
+            let take = extends(c, half, now, before);
             if take {
                 out[b * d + c] = now;
                 src[b * d + c] = b as u32;
@@ -866,6 +984,20 @@ fn scan(order: &[u32], prev: &[u32], terms: &[f32], d: usize, half: usize, out: 
             }
         }
     }
+}
+
+/// Whether channel `c`'s running value along a tower moves from `before` to `now`: a
+/// running minimum in channels `..half`, a maximum in the others (the earlier value on a
+/// tie).
+pub(super) fn extends(c: usize, half: usize, now: f32, before: f32) -> bool {
+    if c < half { now < before } else { now > before }
+}
+
+/// A node's input features, into `f`: on-table, clear, the goal's on-table.
+pub(super) fn node_features(g: &Graph, b: usize, f: &mut [f32]) {
+    f[0] = flag(g.below[b] == NONE);
+    f[1] = flag(g.above[b] == NONE);
+    f[2] = flag(g.goal_below[b] == TABLE);
 }
 
 /// The gradient of [`scan`]'s local terms (into `dterms`, overwritten) from its values'
