@@ -1,5 +1,5 @@
-//! Keeping a pool's threads awake, the one home of it. One mechanism, a [`Vigil`], serves
-//! both callers: the vector env's [`Team`], a caller outside every pool that hands out a
+//! Keeping a pool's threads awake, the one home of it. One mechanism, a `Vigil`, serves
+//! both callers: the vector env's `Team`, a caller outside every pool that hands out a
 //! batch call after call, and the network trainer's loop run on a pool ([`on_pool_awake`]),
 //! whose splits must find the other threads awake.
 //!
@@ -13,23 +13,23 @@
 //!
 //! # One vigil, one policy
 //!
-//! While a [`Vigil`] is held, and for a while after its last hold ends (its one parameter),
-//! a helper job on each of the pool's other threads looks for work ([`rayon::yield_now`]: a spawned part, the
-//! other half of a `rayon::join`) and, when there is none, yields its core to the scheduler
-//! before it looks again. OpenMP's default wait policy keeps its threads the same way before
-//! they sleep. The core is offered, not spun on: given back at once when nothing else wants
-//! it, and shared when something does (a pure spin made a training run on a busy machine 1.8
-//! times slower than no helper at all: docs/performance.md). The helpers never carry work
-//! of their own, so whether they are awake changes how soon a part starts, never what it
-//! computes: the same bits either way.
+//! While a `Vigil` is held, and for a while after its last hold ends (its one parameter), a
+//! helper job on each of the pool's other threads looks for work ([`rayon::yield_now`]: a
+//! spawned part, the other half of a `rayon::join`) and, when there is none, yields its core
+//! to the scheduler before it looks again. OpenMP's default wait policy keeps its threads
+//! the same way before they sleep. The core is offered, not spun on: given back at once when
+//! nothing else wants it, and shared when something does (a pure spin made a training run on
+//! a busy machine 1.8 times slower than no helper at all: docs/performance.md). The helpers
+//! never carry work of their own, so whether they are awake changes how soon a part starts,
+//! never what it computes: the same bits either way.
 //!
-//! - A [`Team`] holds its vigil for each call: the caller's thread runs the first part of
+//! - A `Team` holds its vigil for each call: the caller's thread runs the first part of
 //!   a batch while the pool's threads take the others, and a call that follows within
-//!   [`WARM_FOR`] (a Python caller's own work between two steps) finds them awake.
+//!   `WARM_FOR` (a Python caller's own work between two steps) finds them awake.
 //! - [`on_pool_awake`] holds a vigil over the current pool while a loop runs on one of its
 //!   threads: the splits happen inside the loop, on that thread, which a team could not do.
-//!   Its helpers go as the loop ends, since no call follows: kept [`WARM_FOR`] longer, they
-//!   made the neural bench's `train_step/small/2` vary from sample to sample where it had not
+//!   Its helpers go as the loop ends, since no call follows: kept `WARM_FOR` longer, they
+//!   made the neural bench's `train_step/small/2` slower in alternated runs
 //!   (docs/performance.md).
 //!
 //! # The team's hand-off
@@ -267,7 +267,7 @@ fn wait_for(ended: &AtomicUsize, parts: usize) {
 }
 
 /// Runs `f` on a thread of the current rayon pool (the global one outside every pool)
-/// while a [`Vigil`] keeps the pool's other threads awake, so the halves a `rayon::join`
+/// while a `Vigil` keeps the pool's other threads awake, so the halves a `rayon::join`
 /// offers (the network kernels' splits, `neural::kernels::join`) are taken at once. Nothing
 /// changes which half runs what, so results are the same bits.
 ///
