@@ -1,31 +1,48 @@
-//! Keeping a pool's threads awake, the one home of it: for a caller outside every pool that
-//! hands out batches call after call (`Team`, the vector env's), and for a loop run on a
-//! pool whose splits must find the other threads awake ([`on_pool_awake`], the network
-//! trainer's).
+//! Keeping a pool's threads awake, the one home of it. One mechanism, a `Vigil`, serves
+//! both callers: the vector env's `Team`, a caller outside every pool that hands out a
+//! batch call after call, and the network trainer's loop run on a pool ([`on_pool_awake`]),
+//! whose splits must find the other threads awake.
 //!
-//! # A team: the caller's thread and a pool's workers sharing one batch, call after call
+//! # Why keep threads awake
 //!
-//! Why not `rayon::ThreadPool::install`: a vector env's step at 1,024 environments takes a
-//! few hundred microseconds, and `install` hands the whole batch to pool threads that have
-//! gone to sleep since the last call, then puts the caller to sleep until they finish. On
-//! a virtual machine each wake-up costs tens of microseconds, a large share of such a call
-//! (docs/performance.md measures it). A `Team` runs the first part of a batch on the
-//! caller's thread while its workers take the others, waits for them by spinning (they are
-//! at most a wake-up behind), and keeps its workers spinning for `WARM_FOR` after each
-//! call, so a call that follows soon finds them awake; OpenMP's default wait policy spins
-//! the same way before it sleeps. It hands the parts out with `spawn` and counts them back
-//! itself: at the end of a `rayon::scope` the caller can still miss the last part's signal
-//! by a few instructions and sleep until it is woken.
+//! A rayon thread with nothing to do goes to sleep soon, and waking it costs tens of
+//! microseconds on a virtual machine (docs/performance.md measures it). A vector env's
+//! step at 1,024 environments takes a few hundred microseconds, and a training step is a
+//! few splits apart from serial stretches of tens of microseconds: either would pay a
+//! wake-up a hand-off, a large share of it.
 //!
-//! # A loop on an awake pool
+//! # One vigil, one policy
 //!
-//! A network's training step forks and joins a few times, between serial stretches long
-//! enough for an idle rayon thread to go to sleep; [`on_pool_awake`] runs the loop on a pool
-//! thread and keeps the others looking for work (yielding their cores between looks) until it
-//! ends. A team would not do here: the splits happen inside the loop, on its thread.
+//! While a `Vigil` is held, and for a while after its last hold ends (its one parameter), a
+//! helper job on each of the pool's other threads looks for work ([`rayon::yield_now`]: a
+//! spawned part, the other half of a `rayon::join`) and, when there is none, yields its core
+//! to the scheduler before it looks again. OpenMP's default wait policy keeps its threads
+//! the same way before they sleep. The core is offered, not spun on: given back at once when
+//! nothing else wants it, and shared when something does (a pure spin made a training run on
+//! a busy machine 1.8 times slower than no helper at all: docs/performance.md). The helpers
+//! never carry work of their own, so whether they are awake changes how soon a part starts,
+//! never what it computes: the same bits either way.
 //!
-//! The team's `unsafe` lifetime erasure is checked under Miri (docs/development.md, "Unsafe
-//! code under Miri"): its tests run there.
+//! - A `Team` holds its vigil for each call: the caller's thread runs the first part of
+//!   a batch while the pool's threads take the others, and a call that follows within
+//!   `WARM_FOR` (a Python caller's own work between two steps) finds them awake.
+//! - [`on_pool_awake`] holds a vigil over the current pool while a loop runs on one of its
+//!   threads: the splits happen inside the loop, on that thread, which a team could not do.
+//!   Its helpers go as the loop ends, since no call follows: kept `WARM_FOR` longer, they
+//!   made the neural bench's `train_step/small/2` slower in alternated runs
+//!   (docs/performance.md).
+//!
+//! # The team's hand-off
+//!
+//! Why not `rayon::ThreadPool::install`: it hands the whole batch to the pool and puts the
+//! caller to sleep until the pool finishes. A team's caller runs a part itself and waits for
+//! the others by spinning (the helpers are at most a look behind). It hands the parts out
+//! with `spawn` and counts them back itself, which needs the one `unsafe` of the module (a
+//! part's borrowed lifetime erased for the pool, as `rayon::scope` does inside): at the end
+//! of a `rayon::scope` the caller can still miss the last part's signal by a few
+//! instructions and sleep until it is woken. The module's tests run under Miri
+//! (docs/development.md, "Unsafe code under Miri"), which checks every access the parts make
+//! against the lifetimes of what they borrow.
 
 use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};
 use std::sync::Arc;
@@ -34,20 +51,113 @@ use std::time::{Duration, Instant};
 
 use crate::error::{Result, SimError};
 
-/// How long the workers spin after a call, waiting for the next one: longer than a
-/// Python caller's own work between two steps, short enough that a caller that has
-/// stopped stepping gets its cores back at once.
+/// How long a team's workers stay awake after a call: longer than a Python caller's own
+/// work between two steps, short enough that a caller that has stopped gets the cores back
+/// at once. A loop on an awake pool lets its helpers go when it ends: no call follows.
 pub(crate) const WARM_FOR: Duration = Duration::from_micros(200);
 
-/// Spins of the caller's wait before it starts yielding its core.
+/// Spins of a team caller's wait before it starts yielding its core.
 const SPINS_BEFORE_YIELD: u32 = 1 << 12;
+
+/// Keeps a pool's other threads looking for work while it is held and for `warm_for` after
+/// the last hold ends, a helper job on each ([`Vigil::hold`]).
+struct Vigil {
+    /// How long the helpers stay after the last hold ends.
+    warm_for: Duration,
+    /// Holds in force.
+    holds: AtomicUsize,
+    /// When the last hold ended, in nanoseconds since `epoch`.
+    released: AtomicU64,
+    /// The zero of `released`.
+    epoch: Instant,
+    /// Helpers spawned that have not ended: a hold spawns the missing ones.
+    helpers: AtomicUsize,
+}
+
+/// A hold on a [`Vigil`]: its helpers stay awake while this lives, and its `warm_for` after.
+struct Hold<'a>(&'a Vigil);
+
+impl Drop for Hold<'_> {
+    fn drop(&mut self) {
+        // The time first: a helper that sees no hold then sees this time.
+        let now = self.0.since_epoch();
+        self.0.released.store(now, Ordering::Release);
+        self.0.holds.fetch_sub(1, Ordering::AcqRel);
+    }
+}
+
+impl Vigil {
+    /// A vigil whose helpers stay `warm_for` after its last hold ends.
+    fn new(warm_for: Duration) -> Arc<Vigil> {
+        Arc::new(Vigil {
+            warm_for,
+            holds: AtomicUsize::new(0),
+            released: AtomicU64::new(0),
+            epoch: Instant::now(),
+            helpers: AtomicUsize::new(0),
+        })
+    }
+
+    /// Holds the vigil, and has `spawn` start helpers until `threads` are awake. `runner` is
+    /// the pool thread (by index) that holds it, if any: a helper that lands there leaves at
+    /// once, since that thread has its own work and would otherwise never return to it.
+    fn hold(
+        self: &Arc<Self>,
+        threads: usize,
+        runner: Option<usize>,
+        spawn: impl Fn(Box<dyn FnOnce() + Send>),
+    ) -> Hold<'_> {
+        self.holds.fetch_add(1, Ordering::AcqRel);
+        while self.helpers.load(Ordering::Acquire) < threads {
+            self.helpers.fetch_add(1, Ordering::AcqRel);
+            let vigil = Arc::clone(self);
+            spawn(Box::new(move || {
+                if rayon::current_thread_index() != runner {
+                    vigil.look_for_work();
+                }
+                vigil.helpers.fetch_sub(1, Ordering::AcqRel);
+            }));
+        }
+        Hold(self)
+    }
+
+    /// The helpers' loop: runs the pool's pending jobs, and yields the core when there are
+    /// none, while the vigil is awake.
+    fn look_for_work(&self) {
+        loop {
+            if rayon::yield_now() == Some(rayon::Yield::Executed) {
+                continue;
+            }
+            if !self.awake() {
+                return;
+            }
+            std::thread::yield_now();
+        }
+    }
+
+    /// Whether the helpers stay awake now: the clock is read only once no hold is in force.
+    fn awake(&self) -> bool {
+        self.holds.load(Ordering::Acquire) > 0 || self.awake_at(self.since_epoch())
+    }
+
+    /// Whether the helpers stay awake at `now` (nanoseconds since the epoch): while held,
+    /// and for `warm_for` after the last hold ended.
+    fn awake_at(&self, now: u64) -> bool {
+        self.holds.load(Ordering::Acquire) > 0
+            || now.saturating_sub(self.released.load(Ordering::Acquire)) < self.warm_for.as_nanos() as u64
+    }
+
+    fn since_epoch(&self) -> u64 {
+        u64::try_from(self.epoch.elapsed().as_nanos()).unwrap_or(u64::MAX)
+    }
+}
 
 /// The caller's thread and `threads - 1` pool workers, sharing each batch of parts.
 pub(crate) struct Team {
     /// The workers: one fewer than the team, since the caller's thread takes a part.
     pool: rayon::ThreadPool,
-    /// Counts the calls; a worker spinning after one stops when the next begins.
-    calls: Arc<AtomicU64>,
+    /// Keeps the workers awake during a call and for [`WARM_FOR`] after.
+    vigil: Arc<Vigil>,
 }
 
 impl Team {
@@ -62,7 +172,7 @@ impl Team {
             })?;
         Ok(Team {
             pool,
-            calls: Arc::new(AtomicU64::new(0)),
+            vigil: Vigil::new(WARM_FOR),
         })
     }
 
@@ -74,7 +184,6 @@ impl Team {
     /// `f` of every part, in order: the first on the caller's thread, the others on the
     /// workers. A panic in any part reaches the caller once every part has ended.
     pub(crate) fn run<T: Send, R: Send>(&self, parts: Vec<T>, f: impl Fn(T) -> R + Sync) -> Vec<R> {
-        let call = self.calls.fetch_add(1, Ordering::AcqRel) + 1;
         let mut parts = parts.into_iter();
         let Some(first) = parts.next() else {
             return Vec::new();
@@ -93,14 +202,19 @@ impl Team {
             // outlive it: this call returns only after `ended` counts every job (the wait
             // below), each job counts itself after its last use of them, and nothing
             // between here and the wait can unwind (the caller's part runs inside
-            // `catch_unwind`). Erasing the lifetime is what `rayon::scope` does inside;
-            // its own end, though, can put the caller to sleep for a wake-up.
+            // `catch_unwind`, and the hold only spawns 'static helpers). Erasing the lifetime
+            // is what `rayon::scope` does inside; its own end, though, can put the caller to
+            // sleep for a wake-up.
             let job: Box<dyn FnOnce() + Send + 'static> = unsafe { std::mem::transmute(job) };
             self.pool.spawn(job);
         }
+        // After the parts: a worker woken for a part takes it before any helper.
+        let hold = self
+            .vigil
+            .hold(self.pool.current_num_threads(), None, |helper| self.pool.spawn(helper));
         let head = catch_unwind(AssertUnwindSafe(|| f(first)));
         wait_for(&ended, others.len());
-        self.keep_warm(call);
+        drop(hold);
         std::iter::once(head)
             .chain(others.into_iter().map(|r| r.expect("every job counted itself")))
             .map(|r| r.unwrap_or_else(|panic| resume_unwind(panic)))
@@ -136,23 +250,10 @@ impl Team {
         let stepped = outcomes.into_iter().collect::<Result<Vec<_>, E>>()?;
         Ok(stepped.into_iter().map(|r| r.expect("no part refused")).collect())
     }
-
-    /// Has every worker spin until the next call begins or [`WARM_FOR`] has passed.
-    fn keep_warm(&self, call: u64) {
-        for _ in 0..self.pool.current_num_threads() {
-            let calls = Arc::clone(&self.calls);
-            self.pool.spawn(move || {
-                let start = Instant::now();
-                while calls.load(Ordering::Acquire) == call && start.elapsed() < WARM_FOR {
-                    std::hint::spin_loop();
-                }
-            });
-        }
-    }
 }
 
-/// Waits until `ended` counts `parts`: the workers are at most a wake-up behind, so the
-/// caller spins, and yields its core only if they are later than that.
+/// Waits until `ended` counts `parts`: the workers are at most a look behind, so the caller
+/// spins, and yields its core only if they are later than that.
 fn wait_for(ended: &AtomicUsize, parts: usize) {
     let mut spins = 0;
     while ended.load(Ordering::Acquire) < parts {
@@ -166,47 +267,25 @@ fn wait_for(ended: &AtomicUsize, parts: usize) {
 }
 
 /// Runs `f` on a thread of the current rayon pool (the global one outside every pool)
-/// while the pool's other threads stay awake until it returns, each looking for work
-/// ([`rayon::yield_now`]) and yielding its core between looks, so the halves a `rayon::join`
-/// offers (the network kernels' splits, `neural::kernels::join`) are taken at once. Nothing changes which half runs what, so results are the
-/// same bits.
+/// while a `Vigil` keeps the pool's other threads awake, so the halves a `rayon::join`
+/// offers (the network kernels' splits, `neural::kernels::join`) are taken at once. Nothing
+/// changes which half runs what, so results are the same bits.
 ///
 /// Why: a training step is a few splits apart from serial stretches (the gradients' norm,
 /// the losses) of tens of microseconds, long enough for an idle rayon thread to go to
-/// sleep, and then each split pays a wake-up in the kernel (docs/performance.md
-/// measures it). The price is the other threads' cores for as long as `f` runs, when
-/// nothing else wants them.
+/// sleep, and then each split pays a wake-up in the kernel (docs/performance.md measures
+/// it). The price is the other threads' cores for as long as `f` runs, offered to the
+/// scheduler between looks.
 pub fn on_pool_awake<R: Send>(f: impl FnOnce() -> R + Send) -> R {
-    /// Ends the helpers when `f` returns or unwinds: the scope waits for them.
-    struct Done<'a>(&'a AtomicBool);
-    impl Drop for Done<'_> {
-        fn drop(&mut self) {
-            self.0.store(true, Ordering::Release);
-        }
-    }
-    let done = AtomicBool::new(false);
-    rayon::scope(|s| {
-        let runner = rayon::current_thread_index();
-        for _ in 1..rayon::current_num_threads() {
-            let done = &done;
-            s.spawn(move |_| {
-                // The thread running `f` can take this job while it waits for a half; it
-                // must not stay here.
-                if rayon::current_thread_index() == runner {
-                    return;
-                }
-                while !done.load(Ordering::Acquire) {
-                    // Between looks the core is offered to the scheduler: given back at
-                    // once when nothing else wants it, and shared when something does (a
-                    // pure spin made a run on a busy machine 1.8 times slower than no
-                    // helper at all: docs/performance.md).
-                    if rayon::yield_now() != Some(rayon::Yield::Executed) {
-                        std::thread::yield_now();
-                    }
-                }
-            });
-        }
-        let _done = Done(&done);
+    // A scope without spawns: the way onto a pool thread from outside every pool.
+    rayon::scope(|_| {
+        // No call follows the loop: the helpers go when it ends.
+        let vigil = Vigil::new(Duration::ZERO);
+        let _hold = vigil.hold(
+            rayon::current_num_threads().saturating_sub(1),
+            rayon::current_thread_index(),
+            rayon::spawn,
+        );
         f()
     })
 }
@@ -215,11 +294,21 @@ pub fn on_pool_awake<R: Send>(f: impl FnOnce() -> R + Send) -> R {
 mod tests {
     use super::*;
 
+    /// Rounds of the tests that repeat: fewer under Miri, which interprets every step.
+    const ROUNDS: u64 = if cfg!(miri) { 4 } else { 50 };
+
+    /// Waits until every helper of `vigil` has ended.
+    fn until_asleep(vigil: &Vigil) {
+        while vigil.helpers.load(Ordering::Acquire) > 0 {
+            std::thread::yield_now();
+        }
+    }
+
     #[test]
     fn every_part_runs_once_and_results_keep_their_order() {
         let team = Team::new(2).unwrap();
         assert_eq!(team.threads(), 2);
-        for round in 0..50u64 {
+        for round in 0..ROUNDS {
             let parts: Vec<u64> = (0..5).map(|i| i + round).collect();
             let threads = std::sync::Mutex::new(std::collections::HashSet::new());
             let out = team.run(parts.clone(), |p| {
@@ -231,6 +320,10 @@ mod tests {
                 threads.lock().unwrap().contains(&std::thread::current().id()),
                 "the caller takes a part"
             );
+            if round % 2 == 1 {
+                // The next call finds the workers asleep: it wakes them.
+                until_asleep(&team.vigil);
+            }
         }
         assert!(team.run(Vec::<u8>::new(), |p| p).is_empty());
     }
@@ -281,11 +374,53 @@ mod tests {
     }
 
     #[test]
+    fn a_vigil_is_awake_while_held_and_for_warm_for_after_its_last_hold() {
+        let vigil = Vigil::new(WARM_FOR);
+        let warm = WARM_FOR.as_nanos() as u64;
+        let (first, second) = (vigil.hold(0, None, |_| {}), vigil.hold(0, None, |_| {}));
+        drop(first);
+        assert!(vigil.awake_at(u64::MAX), "one hold is still in force");
+        drop(second);
+        let released = vigil.released.load(Ordering::Acquire);
+        assert!(vigil.awake_at(released));
+        assert!(vigil.awake_at(released + warm - 1));
+        assert!(!vigil.awake_at(released + warm));
+    }
+
+    #[test]
+    fn a_hold_spawns_only_the_missing_helpers_and_they_end_after_it() {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        let vigil = Vigil::new(WARM_FOR);
+        let spawned = AtomicUsize::new(0);
+        let spawn = |helper: Box<dyn FnOnce() + Send>| {
+            spawned.fetch_add(1, Ordering::SeqCst);
+            pool.spawn(helper);
+        };
+        let hold = vigil.hold(2, None, spawn);
+        assert_eq!(spawned.load(Ordering::SeqCst), 2);
+        // While held, the helpers take the pool's work and stay.
+        let (tx, rx) = std::sync::mpsc::channel();
+        pool.spawn(move || tx.send(7).unwrap());
+        assert_eq!(rx.recv().unwrap(), 7);
+        let again = vigil.hold(2, None, spawn);
+        assert_eq!(spawned.load(Ordering::SeqCst), 2, "both helpers are still awake");
+        drop((hold, again));
+        until_asleep(&vigil);
+        drop(vigil.hold(2, None, spawn));
+        assert_eq!(
+            spawned.load(Ordering::SeqCst),
+            4,
+            "a hold after they ended wakes two more"
+        );
+        until_asleep(&vigil);
+    }
+
+    #[test]
     fn a_run_on_the_awake_pool_gives_its_result_and_its_splits_end() {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
         let sums = pool.install(|| {
             on_pool_awake(|| {
-                (0..200)
+                (0..4 * ROUNDS)
                     .map(|k: u64| {
                         let (a, b) = rayon::join(|| (0..k).sum::<u64>(), || (k..2 * k).sum::<u64>());
                         a + b
@@ -293,7 +428,7 @@ mod tests {
                     .sum::<u64>()
             })
         });
-        assert_eq!(sums, (0..200u64).map(|k| (0..2 * k).sum::<u64>()).sum::<u64>());
+        assert_eq!(sums, (0..4 * ROUNDS).map(|k| (0..2 * k).sum::<u64>()).sum::<u64>());
         // Outside every pool and on a pool of one thread, the same.
         assert_eq!(on_pool_awake(|| rayon::join(|| 1, || 2)), (1, 2));
         let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
@@ -307,7 +442,7 @@ mod tests {
             std::panic::catch_unwind(|| on_pool_awake(|| rayon::join(|| 1, || -> i32 { panic!("a half failed") })))
         });
         assert!(caught.is_err());
-        // The helpers ended: the pool still runs work on both threads.
+        // The hold ended with the panic: the pool still runs work on both threads.
         assert_eq!(pool.install(|| on_pool_awake(|| rayon::join(|| 5, || 6))), (5, 6));
     }
 }

@@ -111,9 +111,9 @@ fn parallel(team: Option<&Team>, envs: usize) -> Option<(&Team, usize)> {
 ///
 /// Threads: a batch of [`PARALLEL_FROM_ENVS`] or more is cut into one contiguous chunk per
 /// thread, so each thread hands off once per call and walks its environments in memory
-/// order; the caller's thread steps the first chunk, and the pool's workers spin briefly
-/// between calls so the next finds them awake (the `team` module). A smaller batch stays on
-/// the caller's thread.
+/// order; the caller's thread steps the first chunk, and the pool's workers stay awake for
+/// a moment after a call, so the next finds them ready (the `team` module). A smaller batch
+/// stays on the caller's thread.
 ///
 /// Seeds: environment `i` is reset with `base_seed + i`, and each continues its own
 /// generator from there, so every environment plays its own fixed sequence of episodes.
