@@ -144,6 +144,11 @@ fn generate_writes_problems_that_solve_and_solve_all_plans_a_folder() {
             .iter()
             .all(|t| t["error"].is_string() || t["gap"] == 0)
     );
+    // Each task's CPU time on the one thread that planned it, beside its wall time.
+    for t in proven["tasks"].as_array().unwrap() {
+        let (cpu, wall) = (t["cpu_seconds"].as_f64().unwrap(), t["seconds"].as_f64().unwrap());
+        assert!((0.0..=wall + 1e-3).contains(&cpu), "{t}");
+    }
     // The optimal solver's report is the optima another planner is set against.
     let optima = dir.join("optima.json");
     std::fs::write(&optima, proven.to_string()).unwrap();
@@ -164,7 +169,8 @@ fn generate_writes_problems_that_solve_and_solve_all_plans_a_folder() {
     assert!(against["overall"]["mean_over_optimum"].as_f64().unwrap() >= 1.0);
     let table = cli("solve-all").flag("tasks", path(&dir.join("tasks"))).ok();
     assert!(
-        table.contains("near-optimal plans, each replayed over its file's facts"),
+        table.contains("near-optimal plans, each replayed over its file's facts")
+            && table.lines().next().unwrap().ends_with("seconds    cpu s."),
         "{table}"
     );
 }

@@ -93,7 +93,7 @@ fn print_report(r: &SuiteReport) -> Result<()> {
     let width = r.tasks.iter().map(|t| t.task.len()).max().unwrap_or(4).max(4);
     let opt = |v: Option<usize>| v.map_or("-".to_string(), |v| v.to_string());
     line(format_args!(
-        "{:width$}  {:>6}  {:>6}  {:>7}  {:>7}  {:>4}  {:>7}  {:>10}  {:>6}  {:>7}  {:>6}  {:>8}",
+        "{:width$}  {:>6}  {:>6}  {:>7}  {:>7}  {:>4}  {:>7}  {:>10}  {:>6}  {:>7}  {:>6}  {:>8}  {:>8}",
         "task",
         "blocks",
         "moves",
@@ -105,11 +105,12 @@ fn print_report(r: &SuiteReport) -> Result<()> {
         "ratio",
         "optimum",
         "/ opt.",
-        "seconds"
+        "seconds",
+        "cpu s."
     ))?;
     for t in &r.tasks {
         line(format_args!(
-            "{:width$}  {:>6}  {:>6}  {:>7}  {:>7}  {:>4}  {:>7}  {:>10}  {:>6}  {:>7}  {:>6}  {:>8.3}{}",
+            "{:width$}  {:>6}  {:>6}  {:>7}  {:>7}  {:>4}  {:>7}  {:>10}  {:>6}  {:>7}  {:>6}  {:>8.3}  {:>8.3}{}",
             t.task,
             opt(t.blocks),
             opt(t.moves),
@@ -122,13 +123,15 @@ fn print_report(r: &SuiteReport) -> Result<()> {
             t.optimum.map_or("-".to_string(), |o| o.to_string()),
             t.over_optimum.map_or("-".to_string(), |x| format!("{x:.3}")),
             t.seconds,
+            t.cpu_seconds,
             t.error.as_deref().map_or(String::new(), |e| format!("  {e}"))
         ))?;
     }
     line("")?;
     line(format_args!(
         "{} plans, each replayed over its file's facts; gap = actions - lower bound (0: proven optimal); \
-         ratio = actions / best known; / opt. = actions / proven optimum",
+         ratio = actions / best known; / opt. = actions / proven optimum; \
+         seconds = wall time, cpu s. = CPU time of the one thread that planned the task",
         r.solver
     ))?;
     line(format_args!(
