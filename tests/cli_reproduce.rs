@@ -305,10 +305,14 @@ fn the_quick_benchmark_holds_e9_and_e10() {
     }
     for row in e10["exact"].as_array().unwrap() {
         // Over the problems the policy solved: at the quick budget's tiny training it may
-        // solve none of a size, and then there is no ratio.
+        // solve none of a size, or only a problem whose start meets its goal (no move to
+        // divide by), and then there is no ratio.
         match row["near_optimal_fewest_ratio"].as_f64() {
             Some(near) => assert!((1.0..=2.0).contains(&near), "{row}"),
-            None => assert_eq!(row["success"].as_f64(), Some(0.0), "{row}"),
+            None => assert!(
+                row["success"].as_f64() == Some(0.0) || row["fewest_moves"].as_f64() == Some(0.0),
+                "{row}"
+            ),
         }
     }
     assert_eq!(e10["nlm"][1]["published"][1], 85.8);
