@@ -686,31 +686,33 @@ impl Picks {
     }
 }
 
+/// The move a full pass over `state` chooses, every value computed afresh: what the live
+/// pass's tests (and `MovePolicy`'s) compare with.
+#[cfg(test)]
+pub(super) fn full_pass_move(net: &RelationalNet, state: &Towers, goal: &TowerGoal, table: Table) -> Option<Move> {
+    if goal.holds(state) {
+        return None;
+    }
+    let graph = Graph::of([(state, goal)]);
+    let mut tape = Tape::new();
+    net.forward(&graph, &mut tape);
+    let (x, to) = net.best_move(&graph, &tape, 0, table.has_free_column(state.tower_count()))?;
+    Some(Move {
+        block: x as usize,
+        to: if to == TABLE {
+            Place::Table
+        } else {
+            Place::On(to as usize)
+        },
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::relational::Shape;
     use oracle::towers::{random_goal, random_state};
     use proptest::prelude::*;
-
-    /// The full pass's move: every value computed afresh.
-    fn full_pass_move(net: &RelationalNet, state: &Towers, goal: &TowerGoal, table: Table) -> Option<Move> {
-        if goal.holds(state) {
-            return None;
-        }
-        let graph = Graph::of([(state, goal)]);
-        let mut tape = Tape::new();
-        net.forward(&graph, &mut tape);
-        let (x, to) = net.best_move(&graph, &tape, 0, table.has_free_column(state.tower_count()))?;
-        Some(Move {
-            block: x as usize,
-            to: if to == TABLE {
-                Place::Table
-            } else {
-                Place::On(to as usize)
-            },
-        })
-    }
 
     /// Whether every value the live pass holds has the bits of a full pass over its state.
     fn same_as_full_pass(live: &LivePass<'_>, goal: &TowerGoal) -> std::result::Result<(), String> {

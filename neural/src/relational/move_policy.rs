@@ -74,29 +74,10 @@ fn one_move_between(from: &Towers, to: &Towers) -> Option<Option<Move>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::relational::graph::{Graph, TABLE};
-    use crate::relational::net::{Shape, Tape};
-    use oracle::towers::{Place, random_state};
+    use crate::relational::incremental::full_pass_move;
+    use crate::relational::net::Shape;
+    use oracle::towers::random_state;
     use proptest::prelude::*;
-
-    /// The move of a full pass over `state`.
-    fn full_pass_move(net: &RelationalNet, state: &Towers, goal: &TowerGoal, table: Table) -> Option<Move> {
-        if goal.holds(state) {
-            return None;
-        }
-        let graph = Graph::of([(state, goal)]);
-        let mut tape = Tape::new();
-        net.forward(&graph, &mut tape);
-        let (x, to) = net.best_move(&graph, &tape, 0, table.has_free_column(state.tower_count()))?;
-        Some(Move {
-            block: x as usize,
-            to: if to == TABLE {
-                Place::Table
-            } else {
-                Place::On(to as usize)
-            },
-        })
-    }
 
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(32))]
