@@ -283,6 +283,19 @@ impl<'n> LivePass<'n> {
 
     /// Brings the relations and every value up to date after `mv` (module docs).
     fn update(&mut self, mv: Move) {
+        let moved = self.relink(mv);
+        self.embed(moved);
+        for r in 0..self.rounds.len() {
+            self.update_round(r, moved);
+        }
+        self.update_heads();
+        self.update_picks(moved);
+    }
+
+    /// Moves `mv`'s block in the relations and in the count of unmet goal facts; the blocks
+    /// whose relations changed: (the moved block, the one it left, the one it landed on),
+    /// [`NONE`] for the table.
+    fn relink(&mut self, mv: Move) -> [u32; 3] {
         let g = &mut self.graph;
         let x = mv.block;
         let from = g.below[x];
@@ -304,14 +317,14 @@ impl<'n> LivePass<'n> {
             (true, false, true) => self.unmet -= 1,
             _ => {}
         }
-        let x = x as u32;
-        let moved = [x, from, to];
-        let g = &self.graph;
-        let net = self.net;
-        let shape = net.shape();
-        let (d, half) = (shape.width, shape.width / 2);
-        let w = &mut self.work;
-        // The embedding of the three blocks whose relations changed.
+        [x as u32, from, to]
+    }
+
+    /// The embedding of the blocks whose relations changed; they start the first round's
+    /// changed set.
+    fn embed(&mut self, moved: [u32; 3]) {
+        let (g, net, w) = (&self.graph, self.net, &mut self.work);
+        let d = net.shape().width;
         w.changed.clear();
         w.dirty.clear();
         moved.iter().for_each(|&b| w.dirty.insert(b));
@@ -324,105 +337,117 @@ impl<'n> LivePass<'n> {
         w.rows.resize(rows * d, 0.0);
         net.embed_rows(&w.features, rows, &mut w.rows);
         write_rows(nodes, &w.rows, &mut self.h0, d, &mut w.changed);
-        for r in 0..self.rounds.len() {
-            let (done, rest) = self.rounds.split_at_mut(r);
-            let h: &[f32] = if r == 0 { &self.h0 } else { &done[r - 1].out };
-            let round = &mut rest[0];
-            // Up: the cells, then the pass from each changed term upwards.
-            w.dirty.clear();
-            for &b in &w.changed.list {
-                w.dirty.insert(b);
-                w.dirty.insert(g.above[b as usize]);
-            }
-            w.dirty.insert(x);
-            w.terms.clear();
-            recompute(
-                net,
-                CellKind::Up,
-                &w.all,
-                &w.dirty.list,
-                &mut w.cell,
-                &mut round.up,
-                &mut w.terms,
-                |b, row| net.up_input(g, h, b, row),
-            );
-            w.terms.insert(x);
-            w.u.clear();
-            let mut scratch = std::mem::take(&mut w.rows);
-            for &b in &w.terms.list {
-                walk(
-                    b,
-                    (&g.below, &g.above),
-                    &round.up,
-                    &mut round.u,
-                    (d, half),
-                    &mut scratch,
-                    &mut w.u,
-                );
-            }
-            // Down: the cells, then the pass from each changed term downwards.
-            w.dirty.clear();
-            for &b in &w.changed.list {
-                w.dirty.insert(b);
-                w.dirty.insert(g.below[b as usize]);
-            }
-            w.u.list.iter().for_each(|&b| w.dirty.insert(b));
-            w.dirty.insert(from);
-            w.dirty.insert(to);
-            w.terms.clear();
-            let u = &round.u;
-            recompute(
-                net,
-                CellKind::Down,
-                &w.all,
-                &w.dirty.list,
-                &mut w.cell,
-                &mut round.down,
-                &mut w.terms,
-                |b, row| net.down_input(g, h, u, b, row),
-            );
-            w.terms.insert(from);
-            w.terms.insert(to);
-            w.v.clear();
-            for &b in &w.terms.list {
-                walk(
-                    b,
-                    (&g.above, &g.below),
-                    &round.down,
-                    &mut round.v,
-                    (d, half),
-                    &mut scratch,
-                    &mut w.v,
-                );
-            }
-            w.rows = scratch;
-            // Across the goal.
-            w.dirty.clear();
-            w.changed.list.iter().for_each(|&b| w.dirty.insert(b));
-            for &b in w.u.list.iter().chain(&w.v.list) {
-                w.dirty.insert(b);
-                w.dirty.insert(g.goal_below[b as usize]);
-                w.dirty.insert(g.goal_above[b as usize]);
-            }
-            w.dirty.insert(x);
-            w.dirty.insert(g.goal_below[x as usize]);
-            w.next.clear();
-            let (u, v) = (&round.u, &round.v);
-            recompute(
-                net,
-                CellKind::Goal,
-                &w.all,
-                &w.dirty.list,
-                &mut w.cell,
-                &mut round.out,
-                &mut w.next,
-                |b, row| net.goal_input(g, h, u, v, b, row),
-            );
-            std::mem::swap(&mut w.changed, &mut w.next);
+    }
+
+    /// Round `r`'s values recomputed where their inputs changed: the blocks the previous
+    /// round changed (in `work.changed`) and the `moved` ones; leaves in `work.changed` the
+    /// blocks whose output this round changed.
+    fn update_round(&mut self, r: usize, [x, from, to]: [u32; 3]) {
+        let (g, net, w) = (&self.graph, self.net, &mut self.work);
+        let d = net.shape().width;
+        let half = d / 2;
+        let (done, rest) = self.rounds.split_at_mut(r);
+        let h: &[f32] = if r == 0 { &self.h0 } else { &done[r - 1].out };
+        let round = &mut rest[0];
+        // Up: the cells, then the pass from each changed term upwards.
+        w.dirty.clear();
+        for &b in &w.changed.list {
+            w.dirty.insert(b);
+            w.dirty.insert(g.above[b as usize]);
         }
-        // The heads of the blocks whose final vector changed.
+        w.dirty.insert(x);
+        w.terms.clear();
+        recompute(
+            net,
+            CellKind::Up,
+            &w.all,
+            &w.dirty.list,
+            &mut w.cell,
+            &mut round.up,
+            &mut w.terms,
+            |b, row| net.up_input(g, h, b, row),
+        );
+        w.terms.insert(x);
+        w.u.clear();
+        let mut scratch = std::mem::take(&mut w.rows);
+        for &b in &w.terms.list {
+            walk(
+                b,
+                (&g.below, &g.above),
+                &round.up,
+                &mut round.u,
+                (d, half),
+                &mut scratch,
+                &mut w.u,
+            );
+        }
+        // Down: the cells, then the pass from each changed term downwards.
+        w.dirty.clear();
+        for &b in &w.changed.list {
+            w.dirty.insert(b);
+            w.dirty.insert(g.below[b as usize]);
+        }
+        w.u.list.iter().for_each(|&b| w.dirty.insert(b));
+        w.dirty.insert(from);
+        w.dirty.insert(to);
+        w.terms.clear();
+        let u = &round.u;
+        recompute(
+            net,
+            CellKind::Down,
+            &w.all,
+            &w.dirty.list,
+            &mut w.cell,
+            &mut round.down,
+            &mut w.terms,
+            |b, row| net.down_input(g, h, u, b, row),
+        );
+        w.terms.insert(from);
+        w.terms.insert(to);
+        w.v.clear();
+        for &b in &w.terms.list {
+            walk(
+                b,
+                (&g.above, &g.below),
+                &round.down,
+                &mut round.v,
+                (d, half),
+                &mut scratch,
+                &mut w.v,
+            );
+        }
+        w.rows = scratch;
+        // Across the goal.
+        w.dirty.clear();
+        w.changed.list.iter().for_each(|&b| w.dirty.insert(b));
+        for &b in w.u.list.iter().chain(&w.v.list) {
+            w.dirty.insert(b);
+            w.dirty.insert(g.goal_below[b as usize]);
+            w.dirty.insert(g.goal_above[b as usize]);
+        }
+        w.dirty.insert(x);
+        w.dirty.insert(g.goal_below[x as usize]);
+        w.next.clear();
+        let (u, v) = (&round.u, &round.v);
+        recompute(
+            net,
+            CellKind::Goal,
+            &w.all,
+            &w.dirty.list,
+            &mut w.cell,
+            &mut round.out,
+            &mut w.next,
+            |b, row| net.goal_input(g, h, u, v, b, row),
+        );
+        std::mem::swap(&mut w.changed, &mut w.next);
+    }
+
+    /// The heads of the blocks whose final vector changed (`work.changed`).
+    fn update_heads(&mut self) {
+        let (net, w) = (self.net, &mut self.work);
+        let shape = net.shape();
+        let (d, s) = (shape.width, shape.score_hidden);
         let h: &[f32] = self.rounds.last().map_or(&self.h0, |r| &r.out);
-        let s = shape.score_hidden;
         let (list, rows) = batch(&w.changed.list, &w.all, &net.head_products());
         w.rows.clear();
         w.rows.resize(rows * d, 0.0);
@@ -441,7 +466,12 @@ impl<'n> LivePass<'n> {
             self.px[b * s..(b + 1) * s].copy_from_slice(&px[i * s..(i + 1) * s]);
             self.qy[b * s..(b + 1) * s].copy_from_slice(&qy[i * s..(i + 1) * s]);
         }
-        // The sets the best move is read from, for every block touched.
+    }
+
+    /// The sets the best move is read from, for every block touched: the `moved` ones and
+    /// those whose heads changed, and their goal partners' related moves.
+    fn update_picks(&mut self, moved: [u32; 3]) {
+        let (g, net, w) = (&self.graph, self.net, &mut self.work);
         moved.iter().for_each(|&b| w.changed.insert(b));
         w.dirty.clear();
         for &b in &w.changed.list {
