@@ -363,12 +363,6 @@ mod tests {
         }
     }
 
-    /// The state space of `blocks` blocks, made once per size for every case.
-    fn space(blocks: usize) -> &'static crate::towers::StateSpace {
-        static SPACES: [std::sync::OnceLock<crate::towers::StateSpace>; 9] = [const { std::sync::OnceLock::new() }; 9];
-        SPACES[blocks].get_or_init(|| crate::towers::StateSpace::new(blocks).unwrap())
-    }
-
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(120))]
 
@@ -386,7 +380,7 @@ mod tests {
             let stacks = stacks.min(named);
             let start = random_state(blocks, seed);
             let goal = random_goal(blocks, stacks, named, seed ^ 0xbf5).unwrap();
-            let space = space(blocks);
+            let space = crate::towers::space::shared_space(blocks);
             let fewest = space.distances(&goal).unwrap().of(space, &start).unwrap() as usize;
             let solved = OptimalMoves::new().solve(&start, &goal).unwrap();
             prop_assert!(goal.holds(&solved.plan.replay(&start, Table::Unbounded).unwrap()));

@@ -78,12 +78,6 @@ mod tests {
         }
     }
 
-    /// The state space of `blocks` blocks, made once per size for every case.
-    fn space(blocks: usize) -> &'static StateSpace {
-        static SPACES: [std::sync::OnceLock<StateSpace>; 8] = [const { std::sync::OnceLock::new() }; 8];
-        SPACES[blocks].get_or_init(|| StateSpace::new(blocks).unwrap())
-    }
-
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(300))]
 
@@ -100,7 +94,7 @@ mod tests {
             let stacks = stacks.min(named);
             let state = random_state(blocks, seed);
             let goal = random_goal(blocks, stacks, named, seed ^ 0x1abe1).unwrap();
-            let space = space(blocks);
+            let space = crate::towers::space::shared_space(blocks);
             let distances = space.distances(&goal).unwrap();
             let (here, moves) = optimal_first_moves(&OptimalMoves::new(), &state, &goal).unwrap().unwrap();
             prop_assert_eq!(here as u32, distances.of(space, &state).unwrap());

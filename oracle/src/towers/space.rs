@@ -194,6 +194,14 @@ fn key(state: &Towers) -> u64 {
     })
 }
 
+/// The state space of `blocks` blocks (at most 8), made once per size for every test that
+/// asks: the solvers' tests compare with it, and making one of 8 blocks takes a while.
+#[cfg(test)]
+pub(crate) fn shared_space(blocks: usize) -> &'static StateSpace {
+    static SPACES: [std::sync::OnceLock<StateSpace>; 9] = [const { std::sync::OnceLock::new() }; 9];
+    SPACES[blocks].get_or_init(|| StateSpace::new(blocks).unwrap())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
