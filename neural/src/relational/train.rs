@@ -255,18 +255,24 @@ pub fn train(
         for k in 0..config.rollouts {
             let seed = episode_seed(episode_seed(config.seed, 3), iteration * 10_000_000 + k);
             let (start, goal) = random_problem(config.max_blocks, config.partial_goals, seed);
-            let Some((fewest, _)) = labeller.label(&start, &goal)? else {
+            let Some((fewest, first)) = labeller.label(&start, &goal)? else {
                 continue;
             };
             played += 1;
             let mut state = start.clone();
+            // The start's example is the one just labelled: its proofs are not made twice.
+            let mut known = Some(first);
             let mut moves = 0;
             let limit = super::move_limit(start.blocks());
             while moves < limit {
                 if goal.holds(&state) {
                     break;
                 }
-                data.extend(labeller.label(&state, &goal)?.map(|(_, e)| e));
+                let example = match known.take() {
+                    Some(example) => Some(example),
+                    None => labeller.label(&state, &goal)?.map(|(_, e)| e),
+                };
+                data.extend(example);
                 let mv = policy
                     .choose(&state, &goal, Table::Unbounded)
                     .expect("a legal move where the goal does not hold");
