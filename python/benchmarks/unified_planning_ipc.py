@@ -1,12 +1,13 @@
 """blockstack as a Unified Planning Framework engine on a folder of competition tasks.
 
-    python python/benchmarks/unified_planning_ipc.py --tasks blocksworld/testing \\
+    python BLOCKSTACK/python/benchmarks/unified_planning_ipc.py --tasks blocksworld/testing \\
         --domain blocksworld/domain.pddl [--time-limit 60] [--out unified-planning.json]
 
 Run from the root of a checkout of the planning competition's repository (the tasks are not
-shipped here). Every ``*.pddl`` task under ``--tasks`` (sorted by path) is read by UPF's own
-``PDDLReader`` with ``--domain``, planned through UPF by the engine the package registers
-(``OneshotPlanner(name="blockstack")``, the optimal solver with ``--time-limit`` seconds), and
+shipped here); ``BLOCKSTACK`` is this repository's checkout. Every ``*.pddl`` task under
+``--tasks`` (sorted by path) is read by UPF's own ``PDDLReader`` with ``--domain``, planned
+through UPF by the engine the package registers (``OneshotPlanner(name="blockstack")``, the
+optimal solver with ``--time-limit`` seconds), and
 its plan checked by UPF's own ``PlanValidator``. Prints one line per task and a summary, and
 writes the same as JSON to ``--out``: for each task its status, plan length, lower bound,
 whether UPF found the plan valid, and the seconds of the engine's ``solve`` call (wall time,
